@@ -1,0 +1,479 @@
+//! Group actions on meshes: for every group element `g`, the orthogonal matrix `R_g` and the
+//! node permutation `π_g` with `R_g X_i = X_{π_g(i)}`, and the induced triangle permutation.
+
+use crate::mesh::{Mesh, Vec3};
+use crate::MeshError;
+use std::collections::HashMap;
+use symmetry::{Group, Invariant, Matrix3};
+
+/// Relative tolerance (to the mesh size) for `R_g X_i = X_{π_g(i)}`.
+pub const ACTION_TOL: f64 = 1e-10;
+
+/// A group acting on a mesh by permuting its nodes and triangles.
+#[derive(Debug, Clone)]
+pub struct GroupAction {
+    group: Group,
+    node_perm: Vec<Vec<usize>>,
+    triangle_perm: Vec<Vec<usize>>,
+}
+
+/// A mesh together with the group that maps it onto itself.
+#[derive(Debug, Clone)]
+pub struct SymmetricMesh {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Its symmetry group acting on nodes and triangles.
+    pub action: GroupAction,
+}
+
+/// What [`SymmetricMesh::verify`] measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Verification {
+    /// Largest `|R_g X_i − X_{π_g(i)}|` over all g and i, relative to the mesh size.
+    pub max_position_error: f64,
+    /// True if the mesh is closed.
+    pub closed: bool,
+    /// Number of boundary loops.
+    pub boundary_loops: usize,
+}
+
+/// Finds nodes near a point with a uniform hash grid.
+pub(crate) struct NodeLocator {
+    cell: f64,
+    grid: HashMap<[i64; 3], Vec<usize>>,
+}
+
+impl NodeLocator {
+    pub(crate) fn new(nodes: &[Vec3], cell: f64) -> Self {
+        let mut loc = Self {
+            cell,
+            grid: HashMap::new(),
+        };
+        for (i, x) in nodes.iter().enumerate() {
+            loc.insert(i, x);
+        }
+        loc
+    }
+
+    fn key(&self, x: &Vec3) -> [i64; 3] {
+        [0, 1, 2].map(|k| (x[k] / self.cell).floor() as i64)
+    }
+
+    pub(crate) fn insert(&mut self, i: usize, x: &Vec3) {
+        let key = self.key(x);
+        self.grid.entry(key).or_default().push(i);
+    }
+
+    /// The node nearest to `x` among those within one cell, with its distance.
+    pub(crate) fn nearest(&self, nodes: &[Vec3], x: &Vec3) -> Option<(usize, f64)> {
+        let k = self.key(x);
+        let mut best: Option<(usize, f64)> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(list) = self.grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        for &i in list {
+                            let d = (nodes[i] - x).norm();
+                            if best.is_none_or(|(_, bd)| d < bd) {
+                                best = Some((i, d));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// The permutation a matrix induces on the nodes, if it maps every node onto a node within
+/// `tol`; `None` otherwise.
+fn node_permutation(mesh: &Mesh, loc: &NodeLocator, r: &Matrix3, tol: f64) -> Option<Vec<usize>> {
+    let perm: Vec<usize> = mesh
+        .nodes
+        .iter()
+        .map(|x| {
+            loc.nearest(&mesh.nodes, &(r * x))
+                .filter(|&(_, d)| d <= tol)
+                .map(|(j, _)| j)
+        })
+        .collect::<Option<_>>()?;
+    let mut hit = vec![false; perm.len()];
+    for &j in &perm {
+        if std::mem::replace(&mut hit[j], true) {
+            return None;
+        }
+    }
+    Some(perm)
+}
+
+fn triangle_key(t: &[usize; 3]) -> [usize; 3] {
+    let mut k = *t;
+    k.sort_unstable();
+    k
+}
+
+/// Triangles by their sorted node triple.
+fn triangle_index(mesh: &Mesh) -> HashMap<[usize; 3], usize> {
+    mesh.triangles
+        .iter()
+        .enumerate()
+        .map(|(t, tri)| (triangle_key(tri), t))
+        .collect()
+}
+
+/// The permutation of triangles induced by a node permutation, if every image is a triangle
+/// of the mesh with the orientation a symmetry gives it: the same cyclic order for a proper
+/// rotation (det R = 1), the reverse for an improper element (det R = −1), because the
+/// element maps the surface's normal field onto itself.
+fn triangle_permutation(
+    mesh: &Mesh,
+    index: &HashMap<[usize; 3], usize>,
+    perm: &[usize],
+    proper: bool,
+) -> Result<Vec<usize>, String> {
+    mesh.triangles
+        .iter()
+        .enumerate()
+        .map(|(t, tri)| {
+            let image = tri.map(|i| perm[i]);
+            let &u = index
+                .get(&triangle_key(&image))
+                .ok_or_else(|| format!("the image of triangle {t} is not a triangle"))?;
+            let target = mesh.triangles[u];
+            let shift = (0..3).find(|&s| target[s] == image[0]).unwrap_or(0);
+            let same_order = target[(shift + 1) % 3] == image[1];
+            if same_order != proper {
+                return Err(format!(
+                    "triangle {t} maps onto triangle {u} with the wrong orientation"
+                ));
+            }
+            Ok(u)
+        })
+        .collect()
+}
+
+fn tolerance(mesh: &Mesh) -> f64 {
+    ACTION_TOL * mesh.size().max(f64::MIN_POSITIVE)
+}
+
+fn locator(mesh: &Mesh) -> NodeLocator {
+    let cell = (mesh.min_edge() * 0.25).max(tolerance(mesh) * 4.0);
+    NodeLocator::new(&mesh.nodes, cell)
+}
+
+impl GroupAction {
+    /// Finds, for every element of `group`, the node and triangle permutations it induces on
+    /// `mesh`; fails (naming the element) if some element does not map the mesh onto itself.
+    pub fn compute(mesh: &Mesh, group: Group) -> Result<Self, MeshError> {
+        let tol = tolerance(mesh);
+        let loc = locator(mesh);
+        let index = triangle_index(mesh);
+        let mut node_perm = Vec::with_capacity(group.order());
+        let mut triangle_perm = Vec::with_capacity(group.order());
+        for (g, r) in group.elements().iter().enumerate() {
+            let perm = node_permutation(mesh, &loc, r, tol).ok_or_else(|| {
+                MeshError::Symmetry(format!(
+                    "element {g} of {} does not map the nodes onto nodes",
+                    group.name()
+                ))
+            })?;
+            let tri =
+                triangle_permutation(mesh, &index, &perm, r.determinant() > 0.0).map_err(|m| {
+                    MeshError::Symmetry(format!("element {g} of {}: {m}", group.name()))
+                })?;
+            node_perm.push(perm);
+            triangle_perm.push(tri);
+        }
+        Ok(Self {
+            group,
+            node_perm,
+            triangle_perm,
+        })
+    }
+
+    /// The acting group.
+    pub fn group(&self) -> &Group {
+        &self.group
+    }
+
+    /// `π_g`: node `i` is mapped to node `node_perm(g)[i]`.
+    pub fn node_perm(&self, g: usize) -> &[usize] {
+        &self.node_perm[g]
+    }
+
+    /// Triangle `t` is mapped to triangle `triangle_perm(g)[t]`.
+    pub fn triangle_perm(&self, g: usize) -> &[usize] {
+        &self.triangle_perm[g]
+    }
+
+    /// Node orbits, each sorted, in order of their smallest node.
+    pub fn node_orbits(&self) -> Vec<Vec<usize>> {
+        let n = self.node_perm.first().map_or(0, Vec::len);
+        let mut orbit_of = vec![usize::MAX; n];
+        let mut orbits = Vec::new();
+        for i in 0..n {
+            if orbit_of[i] != usize::MAX {
+                continue;
+            }
+            let mut orbit: Vec<usize> = self.node_perm.iter().map(|p| p[i]).collect();
+            orbit.sort_unstable();
+            orbit.dedup();
+            for &j in &orbit {
+                orbit_of[j] = orbits.len();
+            }
+            orbits.push(orbit);
+        }
+        orbits
+    }
+
+    /// The same action restricted to the subgroup that keeps `keep` (a scene's loads and
+    /// boundary conditions); the subgroup carries its own irreps and name.
+    pub fn restrict(&self, keep: &[Invariant]) -> Result<Self, MeshError> {
+        let sub = self
+            .group
+            .stabilizer(keep)
+            .map_err(|e| MeshError::Symmetry(e.to_string()))?;
+        Ok(Self {
+            node_perm: sub
+                .parent_index
+                .iter()
+                .map(|&g| self.node_perm[g].clone())
+                .collect(),
+            triangle_perm: sub
+                .parent_index
+                .iter()
+                .map(|&g| self.triangle_perm[g].clone())
+                .collect(),
+            group: sub.group,
+        })
+    }
+}
+
+impl SymmetricMesh {
+    /// Pairs a mesh with a group, computing the action; fails if the group is not a symmetry.
+    pub fn new(mesh: Mesh, group: Group) -> Result<Self, MeshError> {
+        let action = GroupAction::compute(&mesh, group)?;
+        Ok(Self { mesh, action })
+    }
+
+    /// The symmetry group.
+    pub fn group(&self) -> &Group {
+        self.action.group()
+    }
+
+    /// Verifies everything a symmetric mesh promises:
+    /// - `R_g X_i = X_{π_g(i)}` to [`ACTION_TOL`] relative to the mesh size;
+    /// - each `π_g` is a permutation and triangles map onto triangles, with the orientation
+    ///   a symmetry of the normal field gives them;
+    /// - `π_{gh} = π_g ∘ π_h` (the action is a homomorphism), and likewise for triangles;
+    /// - named node sets are mapped onto themselves;
+    /// - the mesh is a connected, consistently oriented 2-manifold; a closed mesh encloses a
+    ///   positive volume (outward orientation).
+    pub fn verify(&self) -> Result<Verification, MeshError> {
+        let mesh = &self.mesh;
+        let group = self.group();
+        let fail = |m: String| Err(MeshError::Symmetry(m));
+        let topo = mesh.topology()?;
+        if topo.closed && mesh.volume() <= 0.0 {
+            return Err(MeshError::Topology(
+                "the closed mesh is not outward oriented (its volume is not positive)".into(),
+            ));
+        }
+        let size = mesh.size().max(f64::MIN_POSITIVE);
+        let mut max_err: f64 = 0.0;
+        let n = mesh.nodes.len();
+        let index = triangle_index(mesh);
+        for g in 0..group.order() {
+            let perm = self.action.node_perm(g);
+            if perm.len() != n {
+                return fail(format!("element {g}: the permutation has the wrong length"));
+            }
+            let mut hit = vec![false; n];
+            for (i, &j) in perm.iter().enumerate() {
+                if j >= n || std::mem::replace(&mut hit[j], true) {
+                    return fail(format!("element {g} does not permute the nodes"));
+                }
+                let err = (group.element(g) * mesh.nodes[i] - mesh.nodes[j]).norm() / size;
+                max_err = max_err.max(err);
+            }
+            let tri =
+                triangle_permutation(mesh, &index, perm, group.element(g).determinant() > 0.0)
+                    .map_err(|m| MeshError::Symmetry(format!("element {g}: {m}")))?;
+            if tri != self.action.triangle_perm(g) {
+                return fail(format!("element {g}: stored triangle permutation is wrong"));
+            }
+            for (name, set) in &mesh.boundaries {
+                if set.iter().any(|&i| set.binary_search(&perm[i]).is_err()) {
+                    return fail(format!(
+                        "element {g} does not map node set '{name}' onto itself"
+                    ));
+                }
+            }
+        }
+        if max_err > ACTION_TOL {
+            return fail(format!(
+                "R_g X_i differs from X_pi(i) by {max_err:.3e} of the mesh size (tolerance {ACTION_TOL:.0e})"
+            ));
+        }
+        for g in 0..group.order() {
+            for h in 0..group.order() {
+                let gh = group.mul(g, h);
+                let (pg, ph, pgh) = (
+                    self.action.node_perm(g),
+                    self.action.node_perm(h),
+                    self.action.node_perm(gh),
+                );
+                if (0..n).any(|i| pgh[i] != pg[ph[i]]) {
+                    return fail(format!("pi_(gh) != pi_g o pi_h for g = {g}, h = {h}"));
+                }
+            }
+        }
+        Ok(Verification {
+            max_position_error: max_err,
+            closed: topo.closed,
+            boundary_loops: topo.boundary_loops.len(),
+        })
+    }
+
+    /// Builds a symmetric mesh from a fundamental domain: every triangle of `domain` is copied
+    /// by every element of `group` (orientation reversed for improper elements), nodes that
+    /// land within the tolerance of an existing node are merged onto it, and named node sets
+    /// are copied along. Images of the domain therefore coincide to rounding.
+    pub fn replicate(domain: &Mesh, group: Group) -> Result<Self, MeshError> {
+        let tol = 1e-8 * domain.min_edge();
+        let mut nodes: Vec<Vec3> = Vec::new();
+        let mut loc = NodeLocator::new(&[], (domain.min_edge() * 0.25).max(tol * 4.0));
+        let mut triangles = Vec::new();
+        let mut seen: HashMap<[usize; 3], usize> = HashMap::new();
+        let mut sets: HashMap<String, Vec<usize>> = HashMap::new();
+        for r in group.elements() {
+            let map: Vec<usize> = domain
+                .nodes
+                .iter()
+                .map(|x| {
+                    let y = r * x;
+                    match loc.nearest(&nodes, &y) {
+                        Some((j, d)) if d <= tol => j,
+                        _ => {
+                            nodes.push(y);
+                            loc.insert(nodes.len() - 1, &y);
+                            nodes.len() - 1
+                        }
+                    }
+                })
+                .collect();
+            let proper = r.determinant() > 0.0;
+            for tri in &domain.triangles {
+                let mut t = tri.map(|i| map[i]);
+                if !proper {
+                    t.swap(1, 2);
+                }
+                if seen.insert(triangle_key(&t), triangles.len()).is_none() {
+                    triangles.push(t);
+                }
+            }
+            for (name, set) in &domain.boundaries {
+                sets.entry(name.clone())
+                    .or_default()
+                    .extend(set.iter().map(|&i| map[i]));
+            }
+        }
+        let mut mesh = Mesh::new(nodes, triangles)?;
+        for (name, set) in sets {
+            mesh.set_boundary(name, set);
+        }
+        Self::new(mesh, group)
+    }
+
+    /// Symmetries of the mesh that the declared group lacks (hidden symmetry), described in
+    /// words; empty when the group is the mesh's full symmetry among the candidates.
+    ///
+    /// Candidates: for a group containing `I`, all of `Ih` (a maximal finite group). Otherwise
+    /// every rotation about z and every vertical mirror that maps one reference node onto a node
+    /// of its own ring, each also combined with the horizontal mirror z → −z. Any symmetry that
+    /// keeps the z-axis is among them, so for discs and truncated spheres the search is
+    /// exhaustive.
+    pub fn hidden_symmetries(&self) -> Vec<String> {
+        let candidates = if self.group().order() >= 60 {
+            Group::icosahedral_full()
+                .elements()
+                .iter()
+                .enumerate()
+                .map(|(g, r)| (format!("element {g} of Ih"), *r))
+                .collect()
+        } else {
+            candidates_about_z(&self.mesh)
+        };
+        let tol = tolerance(&self.mesh);
+        let loc = locator(&self.mesh);
+        let index = triangle_index(&self.mesh);
+        let mut found: Vec<String> = candidates
+            .iter()
+            .filter(|(_, r)| self.group().find(r).is_none())
+            .filter(|(_, r)| {
+                node_permutation(&self.mesh, &loc, r, tol).is_some_and(|perm| {
+                    triangle_permutation(&self.mesh, &index, &perm, r.determinant() > 0.0).is_ok()
+                })
+            })
+            .map(|(name, _)| name.clone())
+            .collect();
+        found.dedup();
+        found
+    }
+}
+
+/// Rotations about z and vertical mirrors (each alone and with z → −z) that map a reference
+/// node (the off-axis node nearest the axis, then lowest index) onto a node of its ring.
+fn candidates_about_z(mesh: &Mesh) -> Vec<(String, Matrix3)> {
+    let tol = tolerance(mesh);
+    let radius = |x: &Vec3| x.x.hypot(x.y);
+    let Some(i0) = (0..mesh.nodes.len())
+        .filter(|&i| radius(&mesh.nodes[i]) > 1e3 * tol)
+        .min_by(|&a, &b| radius(&mesh.nodes[a]).total_cmp(&radius(&mesh.nodes[b])))
+    else {
+        return Vec::new();
+    };
+    let x0 = mesh.nodes[i0];
+    let (r0, t0) = (radius(&x0), x0.y.atan2(x0.x));
+    let flip = Matrix3::from_diagonal(&Vec3::new(1.0, 1.0, -1.0));
+    let mut out = Vec::new();
+    for x in &mesh.nodes {
+        if (radius(x) - r0).abs() > 1e3 * tol {
+            continue;
+        }
+        let flipped = (x.z + x0.z).abs() <= 1e3 * tol;
+        if (x.z - x0.z).abs() > 1e3 * tol && !flipped {
+            continue;
+        }
+        let t = x.y.atan2(x.x);
+        let (rot_angle, mirror_angle) = (t - t0, 0.5 * (t + t0));
+        let (c, s) = (rot_angle.cos(), rot_angle.sin());
+        let rot = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+        let (c2, s2) = ((2.0 * mirror_angle).cos(), (2.0 * mirror_angle).sin());
+        let mirror = Matrix3::new(c2, s2, 0.0, s2, -c2, 0.0, 0.0, 0.0, 1.0);
+        let deg = |a: f64| a.to_degrees().rem_euclid(360.0);
+        let tail = if flipped {
+            " combined with z -> -z"
+        } else {
+            ""
+        };
+        let (rot, mirror) = if flipped {
+            (flip * rot, flip * mirror)
+        } else {
+            (rot, mirror)
+        };
+        out.push((
+            format!("rotation by {:.4} deg about z{tail}", deg(rot_angle)),
+            rot,
+        ));
+        out.push((
+            format!(
+                "mirror through z at {:.4} deg from x{tail}",
+                deg(mirror_angle).rem_euclid(180.0)
+            ),
+            mirror,
+        ));
+    }
+    out
+}

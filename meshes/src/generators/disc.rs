@@ -1,0 +1,1 @@
+//! TODO(generators helper): disc generator.

@@ -1,0 +1,1 @@
+//! TODO(generators helper): icosphere generator.

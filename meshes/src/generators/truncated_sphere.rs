@@ -1,0 +1,1 @@
+//! TODO(generators helper): truncated_sphere generator.

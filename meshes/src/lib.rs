@@ -1,0 +1,41 @@
+//! Symmetric triangle surface meshes that carry their own symmetry group.
+//!
+//! A generator returns a [`SymmetricMesh`]: the [`Mesh`] (nodes, triangles, named boundary
+//! node sets) and its [`GroupAction`] — for every element g of a [`symmetry::Group`], the
+//! orthogonal matrix `R_g` and the node permutation `π_g` with `R_g X_i = X_{π_g(i)}`.
+//! Meshes are built from a fundamental domain replicated by the group
+//! ([`SymmetricMesh::replicate`]), so images coincide to rounding, and every action can be
+//! checked with [`SymmetricMesh::verify`]. [`SymmetricMesh::hidden_symmetries`] finds symmetry
+//! a mesh has but does not declare.
+//!
+//! This crate knows groups but no physics.
+
+mod action;
+pub mod generators;
+mod mesh;
+pub mod write;
+
+pub use action::{GroupAction, SymmetricMesh, Verification, ACTION_TOL};
+pub use mesh::{Mesh, Topology, Vec3};
+
+/// Errors from building, verifying, reading or writing meshes.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// Bad input to a generator or constructor (names the bad value).
+    #[error("{0}")]
+    Invalid(String),
+    /// The mesh is not a connected, consistently oriented 2-manifold.
+    #[error("topology: {0}")]
+    Topology(String),
+    /// The declared group does not act on the mesh as it should.
+    #[error("symmetry: {0}")]
+    Symmetry(String),
+    /// Writing a file failed.
+    #[error("i/o on {path}: {source}")]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+}

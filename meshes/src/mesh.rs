@@ -1,0 +1,254 @@
+//! Triangle surface meshes with named boundary node sets, and their topology checks.
+
+use crate::MeshError;
+use nalgebra::Vector3;
+use petgraph::graph::UnGraph;
+use std::collections::{BTreeMap, HashMap};
+
+/// A point or vector in 3-D.
+pub type Vec3 = Vector3<f64>;
+
+/// A triangulated surface: nodes, triangles (counter-clockwise seen from the side the normal
+/// points to) and named node sets such as `rim`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    /// Node coordinates.
+    pub nodes: Vec<Vec3>,
+    /// Triangles as node indices.
+    pub triangles: Vec<[usize; 3]>,
+    /// Named node sets (sorted, no duplicates), e.g. `rim`, `cut`.
+    pub boundaries: BTreeMap<String, Vec<usize>>,
+}
+
+/// What [`Mesh::topology`] found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Topology {
+    /// True if every edge is shared by exactly two triangles.
+    pub closed: bool,
+    /// Boundary loops as node sequences (each edge used by one triangle, chained).
+    pub boundary_loops: Vec<Vec<usize>>,
+    /// Euler characteristic V − E + F.
+    pub euler: i64,
+}
+
+impl Mesh {
+    /// A mesh without named boundaries; fails on a node index out of range or a triangle that
+    /// repeats a node.
+    pub fn new(nodes: Vec<Vec3>, triangles: Vec<[usize; 3]>) -> Result<Self, MeshError> {
+        for (t, tri) in triangles.iter().enumerate() {
+            if tri.iter().any(|&i| i >= nodes.len()) {
+                return Err(MeshError::Invalid(format!(
+                    "triangle {t} refers to a node beyond {}",
+                    nodes.len()
+                )));
+            }
+            if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+                return Err(MeshError::Invalid(format!("triangle {t} repeats a node")));
+            }
+        }
+        Ok(Self {
+            nodes,
+            triangles,
+            boundaries: BTreeMap::new(),
+        })
+    }
+
+    /// Adds (or replaces) a named node set.
+    pub fn set_boundary(&mut self, name: impl Into<String>, mut nodes: Vec<usize>) {
+        nodes.sort_unstable();
+        nodes.dedup();
+        self.boundaries.insert(name.into(), nodes);
+    }
+
+    /// Length of the bounding-box diagonal: the mesh's size for relative tolerances.
+    pub fn size(&self) -> f64 {
+        let mut lo = Vec3::repeat(f64::INFINITY);
+        let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+        for x in &self.nodes {
+            lo = lo.inf(x);
+            hi = hi.sup(x);
+        }
+        if self.nodes.is_empty() {
+            0.0
+        } else {
+            (hi - lo).norm()
+        }
+    }
+
+    /// The shortest edge length.
+    pub fn min_edge(&self) -> f64 {
+        self.edges()
+            .keys()
+            .map(|&(a, b)| (self.nodes[a] - self.nodes[b]).norm())
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The area vector `½ (x2 − x1) × (x3 − x1)` of triangle `t`.
+    pub fn area_vector(&self, t: usize) -> Vec3 {
+        let [a, b, c] = self.triangles[t];
+        let (xa, xb, xc) = (self.nodes[a], self.nodes[b], self.nodes[c]);
+        0.5 * (xb - xa).cross(&(xc - xa))
+    }
+
+    /// Total area.
+    pub fn area(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|t| self.area_vector(t).norm())
+            .sum()
+    }
+
+    /// Enclosed volume `(1/6) Σ x1·(x2 × x3)` (positive for a closed, outward-oriented mesh).
+    pub fn volume(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|&[a, b, c]| self.nodes[a].dot(&self.nodes[b].cross(&self.nodes[c])))
+            .sum::<f64>()
+            / 6.0
+    }
+
+    /// Undirected edges `(min, max)` with the triangles that use them, each with the
+    /// direction it runs in that triangle (true if from min to max).
+    pub(crate) fn edges(&self) -> HashMap<(usize, usize), Vec<(usize, bool)>> {
+        let mut edges: HashMap<(usize, usize), Vec<(usize, bool)>> = HashMap::new();
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                edges
+                    .entry((a.min(b), a.max(b)))
+                    .or_default()
+                    .push((t, a < b));
+            }
+        }
+        edges
+    }
+
+    /// Checks that the mesh is a connected, consistently oriented 2-manifold (with boundary)
+    /// without unused nodes, and reports whether it is closed and its boundary loops.
+    pub fn topology(&self) -> Result<Topology, MeshError> {
+        let bad = |m: String| Err(MeshError::Topology(m));
+        let edges = self.edges();
+        let mut boundary_next: HashMap<usize, usize> = HashMap::new();
+        for (&(a, b), uses) in &edges {
+            match uses.as_slice() {
+                [(t, dir)] => {
+                    // Boundary edge, oriented as in its triangle.
+                    let (from, to) = if *dir { (a, b) } else { (b, a) };
+                    if boundary_next.insert(from, to).is_some() {
+                        return bad(format!("node {from} starts two boundary edges (pinched boundary near triangle {t})"));
+                    }
+                }
+                [(t1, d1), (t2, d2)] => {
+                    if d1 == d2 {
+                        return bad(format!(
+                            "triangles {t1} and {t2} are oriented inconsistently across edge ({a}, {b})"
+                        ));
+                    }
+                }
+                _ => {
+                    return bad(format!(
+                        "edge ({a}, {b}) is shared by {} triangles",
+                        uses.len()
+                    ))
+                }
+            }
+        }
+        let mut used = vec![false; self.nodes.len()];
+        self.triangles
+            .iter()
+            .flatten()
+            .for_each(|&i| used[i] = true);
+        if let Some(i) = used.iter().position(|u| !u) {
+            return bad(format!("node {i} belongs to no triangle"));
+        }
+        // Connectivity over shared edges (petgraph union-find on the triangle graph).
+        let mut graph = UnGraph::<(), ()>::with_capacity(self.triangles.len(), edges.len());
+        for _ in 0..self.triangles.len() {
+            graph.add_node(());
+        }
+        for uses in edges.values() {
+            if let [(t1, _), (t2, _)] = uses.as_slice() {
+                graph.add_edge((*t1 as u32).into(), (*t2 as u32).into(), ());
+            }
+        }
+        let parts = petgraph::algo::connected_components(&graph);
+        if parts != 1 {
+            return bad(format!("the mesh has {parts} connected parts"));
+        }
+        // Each node's triangles must form one fan (no two surfaces touching at a vertex).
+        self.check_vertex_fans(&edges)?;
+        let mut loops = Vec::new();
+        let mut seen: HashMap<usize, bool> = HashMap::new();
+        let mut starts: Vec<usize> = boundary_next.keys().copied().collect();
+        starts.sort_unstable();
+        for start in starts {
+            if seen.contains_key(&start) {
+                continue;
+            }
+            let mut lp = vec![start];
+            seen.insert(start, true);
+            let mut cur = boundary_next[&start];
+            while cur != start {
+                if seen.insert(cur, true).is_some() {
+                    return bad(format!("boundary loop through node {cur} does not close"));
+                }
+                lp.push(cur);
+                cur = match boundary_next.get(&cur) {
+                    Some(&n) => n,
+                    None => return bad(format!("boundary ends at node {cur}")),
+                };
+            }
+            loops.push(lp);
+        }
+        let euler = self.nodes.len() as i64 - edges.len() as i64 + self.triangles.len() as i64;
+        Ok(Topology {
+            closed: boundary_next.is_empty(),
+            boundary_loops: loops,
+            euler,
+        })
+    }
+
+    fn check_vertex_fans(
+        &self,
+        edges: &HashMap<(usize, usize), Vec<(usize, bool)>>,
+    ) -> Result<(), MeshError> {
+        // Around node v, triangles sharing an edge through v are adjacent; they must form a
+        // single connected fan.
+        let mut around: Vec<Vec<usize>> = vec![Vec::new(); self.nodes.len()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for &v in tri {
+                around[v].push(t);
+            }
+        }
+        let mut parent: Vec<usize> = (0..self.triangles.len()).collect();
+        fn root(p: &mut [usize], mut i: usize) -> usize {
+            while p[i] != i {
+                p[i] = p[p[i]];
+                i = p[i];
+            }
+            i
+        }
+        let mut link_edges: Vec<Vec<(usize, usize)>> = vec![Vec::new(); self.nodes.len()];
+        for (&(a, b), uses) in edges {
+            if let [(t1, _), (t2, _)] = uses.as_slice() {
+                link_edges[a].push((*t1, *t2));
+                link_edges[b].push((*t1, *t2));
+            }
+        }
+        for v in 0..self.nodes.len() {
+            for &(t1, t2) in &link_edges[v] {
+                let (r1, r2) = (root(&mut parent, t1), root(&mut parent, t2));
+                parent[r1] = r2;
+            }
+            let r0 = around[v].first().map(|&t| root(&mut parent, t));
+            if around[v].iter().any(|&t| Some(root(&mut parent, t)) != r0) {
+                return Err(MeshError::Topology(format!(
+                    "node {v} joins surfaces that share only this node"
+                )));
+            }
+            for &t in &around[v] {
+                parent[t] = t;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,1 @@
+//! Writers that meshio reads. TODO(writers helper).
