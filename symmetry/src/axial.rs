@@ -16,7 +16,7 @@
 //! type; for `C_nv` every irrep is absolutely irreducible.
 
 use crate::group::{Group, Matrix3};
-use crate::irrep::{Irrep, IrrepKind};
+use crate::irrep::Irrep;
 use nalgebra::{DMatrix, Rotation3, Unit, Vector3};
 use std::f64::consts::PI;
 
@@ -66,29 +66,22 @@ pub(crate) fn axial(name: String, n: usize, axis: &Vector3<f64>, s: Option<Matri
 
     let mut irreps = Vec::new();
     let (a1, b1) = if mirrors { ("A1", "B1") } else { ("A", "B") };
-    irreps.push(Irrep::new(a1, IrrepKind::Real, one(&|_| 1.0)));
+    irreps.push(Irrep::real(a1, one(&|_| 1.0)));
     if mirrors {
-        irreps.push(Irrep::new(
+        irreps.push(Irrep::real(
             "A2",
-            IrrepKind::Real,
             one(&|g| if mirror_of(g) { -1.0 } else { 1.0 }),
         ));
     }
     if n % 2 == 0 {
-        irreps.push(Irrep::new(b1, IrrepKind::Real, one(&|g| sign(power(g)))));
+        irreps.push(Irrep::real(b1, one(&|g| sign(power(g)))));
         if mirrors {
-            irreps.push(Irrep::new(
+            irreps.push(Irrep::real(
                 "B2",
-                IrrepKind::Real,
                 one(&|g| sign(power(g)) * if mirror_of(g) { -1.0 } else { 1.0 }),
             ));
         }
     }
-    let kind = if mirrors {
-        IrrepKind::Real
-    } else {
-        IrrepKind::Complex
-    };
     for j in 1..n.div_ceil(2) {
         let matrices = (0..order)
             .map(|g| {
@@ -102,7 +95,17 @@ pub(crate) fn axial(name: String, n: usize, axis: &Vector3<f64>, s: Option<Matri
                 }
             })
             .collect();
-        irreps.push(Irrep::new(format!("E{j}"), kind, matrices));
+        let name = format!("E{j}");
+        irreps.push(if mirrors {
+            Irrep::real(name, matrices)
+        } else {
+            // Rotations commute with the quarter turn: the irrep is of complex type.
+            Irrep::complex(
+                name,
+                matrices,
+                DMatrix::from_row_slice(2, 2, &[0.0, -1.0, 1.0, 0.0]),
+            )
+        });
     }
     Group::from_parts(name, elements, irreps).expect("axial groups are closed by construction")
 }

@@ -158,6 +158,17 @@ impl Group {
         self.inverse[a]
     }
 
+    /// The order of element `g`: the least k ≥ 1 with g^k = identity.
+    pub fn element_order(&self, g: usize) -> usize {
+        let mut k = 1;
+        let mut p = g;
+        while p != 0 {
+            p = self.mul(g, p);
+            k += 1;
+        }
+        k
+    }
+
     /// Conjugacy classes, each a sorted list of element indices; the first is `{identity}`.
     pub fn classes(&self) -> &[Vec<usize>] {
         &self.classes

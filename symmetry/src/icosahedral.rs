@@ -18,7 +18,7 @@
 //! `Ih` irreps: `μg(±R) = μ(R)`, `μu(±R) = ±μ(R)`; `T1u` is the defining 3×3 representation.
 
 use crate::group::{Group, Matrix3};
-use crate::irrep::{extract_irrep, Irrep, IrrepKind};
+use crate::irrep::{extract_irrep, Irrep};
 use crate::MATRIX_TOL;
 use nalgebra::{DMatrix, Rotation3, Unit, Vector3};
 use std::f64::consts::PI;
@@ -93,7 +93,7 @@ impl Group {
         let rot = rotations();
         let irreps = rotation_irreps(&rot)
             .into_iter()
-            .map(|(name, m)| Irrep::new(name, IrrepKind::Real, m))
+            .map(|(name, m)| Irrep::real(name, m))
             .collect();
         Group::from_parts("I", rot, irreps).expect("I is closed by construction")
     }
@@ -110,7 +110,7 @@ impl Group {
             for (name, m) in &base {
                 let mut all = m.clone();
                 all.extend(m.iter().map(|d| d * sign));
-                irreps.push(Irrep::new(format!("{name}{parity}"), IrrepKind::Real, all));
+                irreps.push(Irrep::real(format!("{name}{parity}"), all));
             }
         }
         Group::from_parts("Ih", elements, irreps).expect("Ih is closed by construction")

@@ -35,18 +35,32 @@ pub struct Irrep {
     name: String,
     kind: IrrepKind,
     matrices: Vec<DMatrix<f64>>,
+    complex_structure: Option<DMatrix<f64>>,
 }
 
 impl Irrep {
-    pub(crate) fn new(
+    /// An absolutely irreducible representation.
+    pub(crate) fn real(name: impl Into<String>, matrices: Vec<DMatrix<f64>>) -> Self {
+        Self {
+            name: name.into(),
+            kind: IrrepKind::Real,
+            matrices,
+            complex_structure: None,
+        }
+    }
+
+    /// A complex-type irrep with its complex structure `J` (`J² = −I`, commuting with every
+    /// `D(g)`).
+    pub(crate) fn complex(
         name: impl Into<String>,
-        kind: IrrepKind,
         matrices: Vec<DMatrix<f64>>,
+        j: DMatrix<f64>,
     ) -> Self {
         Self {
             name: name.into(),
-            kind,
+            kind: IrrepKind::Complex,
             matrices,
+            complex_structure: Some(j),
         }
     }
 
@@ -63,6 +77,12 @@ impl Irrep {
     /// Real or complex type (see [`IrrepKind`]).
     pub fn kind(&self) -> IrrepKind {
         self.kind
+    }
+
+    /// For a complex-type irrep, the orthogonal `J` with `J² = −I` that commutes with every
+    /// `D(g)` (multiplication by i); `None` for real type.
+    pub fn complex_structure(&self) -> Option<&DMatrix<f64>> {
+        self.complex_structure.as_ref()
     }
 
     /// `D(g)` for element index `g`.
