@@ -64,25 +64,22 @@ impl NodeLocator {
         self.grid.entry(key).or_default().push(i);
     }
 
-    /// The node nearest to `x` among those within one cell, with its distance.
-    pub(crate) fn nearest(&self, nodes: &[Vec3], x: &Vec3) -> Option<(usize, f64)> {
+    /// A node within `tol` of `x` (`tol` must be below the cell size). Nodes of a mesh are
+    /// far apart compared with `tol`, so such a node is unique; the point's own cell is probed
+    /// first and the 26 around it only when that finds nothing.
+    pub(crate) fn find_within(&self, nodes: &[Vec3], x: &Vec3, tol: f64) -> Option<usize> {
         let k = self.key(x);
-        let mut best: Option<(usize, f64)> = None;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(list) = self.grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
-                        for &i in list {
-                            let d = (nodes[i] - x).norm();
-                            if best.is_none_or(|(_, bd)| d < bd) {
-                                best = Some((i, d));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        best
+        let hit = |key: &[i64; 3]| {
+            self.grid
+                .get(key)
+                .and_then(|list| list.iter().copied().find(|&i| (nodes[i] - x).norm() <= tol))
+        };
+        hit(&k).or_else(|| {
+            (-1..=1)
+                .flat_map(|dx| (-1..=1).flat_map(move |dy| (-1..=1).map(move |dz| [dx, dy, dz])))
+                .filter(|d| *d != [0, 0, 0])
+                .find_map(|[dx, dy, dz]| hit(&[k[0] + dx, k[1] + dy, k[2] + dz]))
+        })
     }
 }
 
@@ -92,11 +89,7 @@ fn node_permutation(mesh: &Mesh, loc: &NodeLocator, r: &Matrix3, tol: f64) -> Op
     let perm: Vec<usize> = mesh
         .nodes
         .iter()
-        .map(|x| {
-            loc.nearest(&mesh.nodes, &(r * x))
-                .filter(|&(_, d)| d <= tol)
-                .map(|(j, _)| j)
-        })
+        .map(|x| loc.find_within(&mesh.nodes, &(r * x), tol))
         .collect::<Option<_>>()?;
     let mut hit = vec![false; perm.len()];
     for &j in &perm {
@@ -151,6 +144,26 @@ fn triangle_permutation(
             Ok(u)
         })
         .collect()
+}
+
+/// Orbits of the points permuted by `perms` (one permutation per group element).
+fn orbits(perms: &[Vec<usize>]) -> Vec<Vec<usize>> {
+    let n = perms.first().map_or(0, Vec::len);
+    let mut seen = vec![false; n];
+    let mut orbits = Vec::new();
+    for i in 0..n {
+        if seen[i] {
+            continue;
+        }
+        let mut orbit: Vec<usize> = perms.iter().map(|p| p[i]).collect();
+        orbit.sort_unstable();
+        orbit.dedup();
+        for &j in &orbit {
+            seen[j] = true;
+        }
+        orbits.push(orbit);
+    }
+    orbits
 }
 
 fn tolerance(mesh: &Mesh) -> f64 {
@@ -209,22 +222,12 @@ impl GroupAction {
 
     /// Node orbits, each sorted, in order of their smallest node.
     pub fn node_orbits(&self) -> Vec<Vec<usize>> {
-        let n = self.node_perm.first().map_or(0, Vec::len);
-        let mut orbit_of = vec![usize::MAX; n];
-        let mut orbits = Vec::new();
-        for i in 0..n {
-            if orbit_of[i] != usize::MAX {
-                continue;
-            }
-            let mut orbit: Vec<usize> = self.node_perm.iter().map(|p| p[i]).collect();
-            orbit.sort_unstable();
-            orbit.dedup();
-            for &j in &orbit {
-                orbit_of[j] = orbits.len();
-            }
-            orbits.push(orbit);
-        }
-        orbits
+        orbits(&self.node_perm)
+    }
+
+    /// Triangle orbits, each sorted, in order of their smallest triangle.
+    pub fn triangle_orbits(&self) -> Vec<Vec<usize>> {
+        orbits(&self.triangle_perm)
     }
 
     /// The same action restricted to the subgroup that keeps `keep` (a scene's loads and
@@ -353,9 +356,9 @@ impl SymmetricMesh {
                 .iter()
                 .map(|x| {
                     let y = r * x;
-                    match loc.nearest(&nodes, &y) {
-                        Some((j, d)) if d <= tol => j,
-                        _ => {
+                    match loc.find_within(&nodes, &y, tol) {
+                        Some(j) => j,
+                        None => {
                             nodes.push(y);
                             loc.insert(nodes.len() - 1, &y);
                             nodes.len() - 1
@@ -389,18 +392,24 @@ impl SymmetricMesh {
     /// Symmetries of the mesh that the declared group lacks (hidden symmetry), described in
     /// words; empty when the group is the mesh's full symmetry among the candidates.
     ///
-    /// Candidates: for a group containing `I`, all of `Ih` (a maximal finite group). Otherwise
-    /// every rotation about z and every vertical mirror that maps one reference node onto a node
-    /// of its own ring, each also combined with the horizontal mirror z → −z. Any symmetry that
-    /// keeps the z-axis is among them, so for discs and truncated spheres the search is
-    /// exhaustive.
+    /// Candidates: for a polyhedral group (rotation axes in more than one direction, here `I`
+    /// or `Ih` in any orientation) the elements ±R of the group: `I` can only grow into `Ih`,
+    /// a maximal finite group. Otherwise every rotation about z and every vertical mirror that
+    /// maps one reference node onto a node of its own ring, each also combined with the
+    /// horizontal mirror z → −z. Any symmetry that keeps the z-axis is among them, so for
+    /// discs and truncated spheres the search is exhaustive.
     pub fn hidden_symmetries(&self) -> Vec<String> {
-        let candidates = if self.group().order() >= 60 {
-            Group::icosahedral_full()
+        let candidates = if is_polyhedral(self.group()) {
+            self.group()
                 .elements()
                 .iter()
                 .enumerate()
-                .map(|(g, r)| (format!("element {g} of Ih"), *r))
+                .flat_map(|(g, r)| {
+                    [
+                        (format!("element {g}"), *r),
+                        (format!("minus element {g}"), -r),
+                    ]
+                })
                 .collect()
         } else {
             candidates_about_z(&self.mesh)
@@ -423,6 +432,30 @@ impl SymmetricMesh {
     }
 }
 
+/// True if the group's rotations have axes in more than one direction.
+fn is_polyhedral(group: &Group) -> bool {
+    let axes: Vec<Vec3> = group
+        .elements()
+        .iter()
+        .filter(|r| r.determinant() > 0.0 && (*r - Matrix3::identity()).amax() > 1e-9)
+        .map(|r| {
+            // The axis spans the kernel of R − I: the largest cross product of two rows.
+            let m = r - Matrix3::identity();
+            let (r0, r1, r2) = (
+                m.row(0).transpose(),
+                m.row(1).transpose(),
+                m.row(2).transpose(),
+            );
+            [r0.cross(&r1), r1.cross(&r2), r2.cross(&r0)]
+                .into_iter()
+                .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+                .map(|v| v.normalize())
+                .unwrap_or_else(Vec3::z)
+        })
+        .collect();
+    axes.iter().any(|a| a.cross(&axes[0]).norm() > 1e-6)
+}
+
 /// Rotations about z and vertical mirrors (each alone and with z → −z) that map a reference
 /// node (the off-axis node nearest the axis, then lowest index) onto a node of its ring.
 fn candidates_about_z(mesh: &Mesh) -> Vec<(String, Matrix3)> {
@@ -442,10 +475,6 @@ fn candidates_about_z(mesh: &Mesh) -> Vec<(String, Matrix3)> {
         if (radius(x) - r0).abs() > 1e3 * tol {
             continue;
         }
-        let flipped = (x.z + x0.z).abs() <= 1e3 * tol;
-        if (x.z - x0.z).abs() > 1e3 * tol && !flipped {
-            continue;
-        }
         let t = x.y.atan2(x.x);
         let (rot_angle, mirror_angle) = (t - t0, 0.5 * (t + t0));
         let (c, s) = (rot_angle.cos(), rot_angle.sin());
@@ -453,27 +482,29 @@ fn candidates_about_z(mesh: &Mesh) -> Vec<(String, Matrix3)> {
         let (c2, s2) = ((2.0 * mirror_angle).cos(), (2.0 * mirror_angle).sin());
         let mirror = Matrix3::new(c2, s2, 0.0, s2, -c2, 0.0, 0.0, 0.0, 1.0);
         let deg = |a: f64| a.to_degrees().rem_euclid(360.0);
-        let tail = if flipped {
-            " combined with z -> -z"
-        } else {
-            ""
-        };
-        let (rot, mirror) = if flipped {
-            (flip * rot, flip * mirror)
-        } else {
-            (rot, mirror)
-        };
-        out.push((
-            format!("rotation by {:.4} deg about z{tail}", deg(rot_angle)),
-            rot,
-        ));
-        out.push((
-            format!(
-                "mirror through z at {:.4} deg from x{tail}",
-                deg(mirror_angle).rem_euclid(180.0)
-            ),
-            mirror,
-        ));
+        // A node at the same height is reached without z → −z, one at the mirrored height
+        // with it; in the plane z = 0 both.
+        for (flipped, height) in [(false, x0.z), (true, -x0.z)] {
+            if (x.z - height).abs() > 1e3 * tol {
+                continue;
+            }
+            let (tail, f) = if flipped {
+                (" combined with z -> -z", flip)
+            } else {
+                ("", Matrix3::identity())
+            };
+            out.push((
+                format!("rotation by {:.4} deg about z{tail}", deg(rot_angle)),
+                f * rot,
+            ));
+            out.push((
+                format!(
+                    "mirror through z at {:.4} deg from x{tail}",
+                    deg(mirror_angle).rem_euclid(180.0)
+                ),
+                f * mirror,
+            ));
+        }
     }
     out
 }
