@@ -8,3 +8,9 @@
 
 pub use meshes;
 pub use symmetry;
+pub mod effects;
+pub mod scene;
+pub mod linalg;
+pub mod model;
+pub mod adapted;
+pub mod continuation;

@@ -17,6 +17,8 @@ use nalgebra::Vector3;
 pub enum Invariant {
     /// A direction `v` (not just its line): kept when `R v = v`.
     Direction(Vector3<f64>),
+    /// A line through the origin along `v`: kept when `R v = ±v`.
+    Axis(Vector3<f64>),
     /// The plane `n·x = offset`: kept when `R n = n`, or also `R n = −n` if the plane passes
     /// through the origin (`offset = 0`).
     Plane {
@@ -32,6 +34,7 @@ impl Invariant {
         let close = |a: Vector3<f64>, b: Vector3<f64>| (a - b).amax() < 1e-9 * b.amax().max(1.0);
         match *self {
             Invariant::Direction(v) => close(r * v, v),
+            Invariant::Axis(v) => close(r * v, v) || close(r * v, -v),
             Invariant::Plane { normal, offset } => {
                 close(r * normal, normal)
                     || (offset.abs() <= 1e-12 * normal.norm() && close(r * normal, -normal))
@@ -41,7 +44,7 @@ impl Invariant {
 
     fn direction(&self) -> Vector3<f64> {
         match *self {
-            Invariant::Direction(v) => v,
+            Invariant::Direction(v) | Invariant::Axis(v) => v,
             Invariant::Plane { normal, .. } => normal,
         }
     }

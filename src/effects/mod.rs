@@ -1,0 +1,37 @@
+//! Effects: every load a potential (DESIGN §2). One effect per file, its potential in the
+//! module doc; the per-triangle kernels return value, gradient and Hessian ([`local::Local`]).
+
+pub mod gas;
+pub mod hydrostatic;
+pub mod local;
+pub mod membrane;
+pub mod plane;
+pub mod spin;
+pub mod volume;
+
+/// A number that is either fixed or one of the model's parameters Λ (by index).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Quantity {
+    /// A fixed value.
+    Value(f64),
+    /// The parameter with this index.
+    Parameter(usize),
+}
+
+impl Quantity {
+    /// The current value.
+    pub fn value(&self, params: &[f64]) -> f64 {
+        match *self {
+            Quantity::Value(v) => v,
+            Quantity::Parameter(i) => params[i],
+        }
+    }
+
+    /// The parameter index, if it is one.
+    pub fn parameter(&self) -> Option<usize> {
+        match *self {
+            Quantity::Value(_) => None,
+            Quantity::Parameter(i) => Some(i),
+        }
+    }
+}

@@ -1,0 +1,496 @@
+//! Sparse symmetric-indefinite factorisation `P A Pᵀ = L B Lᵀ` with inertia.
+//!
+//! # faer functions used, and why
+//! - [`factorize_symbolic_cholesky`] with [`SymmetricOrdering::Amd`] and a supernodal
+//!   threshold of `-∞` (always supernodal, for every `n > 0`): the symbolic analysis (AMD fill-reducing
+//!   ordering, elimination tree, supernodes), done once per pattern. The supernodal layout is
+//!   forced because faer's pivoted factorisation only pivots on that path (on the simplicial
+//!   path `factorize_numeric_intranode_lblt` silently falls back to unpivoted `LDLᵀ`).
+//! - [`SymbolicCholesky::factorize_numeric_intranode_lblt`]: the numeric factorisation into
+//!   our own buffers, with Bunch–Kaufman pivoting (1×1 and 2×2 pivots) *within each
+//!   supernode's dense diagonal block*. It never fails by itself: a zero pivot gives
+//!   infinities, which [`SymmetricFactorization::factorize`] detects and reports.
+//! - [`IntranodeLbltRef::solve_in_place_with_conj`]: the solve, applying both the AMD and the
+//!   pivoting permutations.
+//!
+//! Plain `LDLᵀ` (`factorize_numeric_ldlt`) was not chosen: without pivoting an indefinite
+//! matrix with a zero leading pivot (a bordered system, a saddle point) breaks down.
+//!
+//! # Limitation
+//! Pivoting is restricted to the diagonal block of each supernode (no delayed pivots across
+//! supernodes, unlike MA57/MUMPS). A pivot that is zero or tiny in a supernode too small to
+//! find a better one is reported as [`FactorError::Singular`] even if the matrix is
+//! nonsingular; it never gives a silently wrong answer because every pivot is checked.
+//!
+//! The inertia is counted from the block diagonal `B`: by Sylvester's law of inertia it
+//! equals the numbers of negative, zero and positive eigenvalues of `A`. A 2×2 block is
+//! counted by its two eigenvalues.
+
+use std::sync::{Mutex, PoisonError};
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::lblt::factor::LbltParams;
+use faer::perm::PermRef;
+use faer::reborrow::ReborrowMut;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, SymbolicCholesky,
+    SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::{Conj, MatMut, Par, Side, Spec};
+
+use super::sparse::SymmetricPattern;
+
+/// Right-hand sides solved together (the solve scratch is sized for this many columns).
+const SOLVE_BLOCK: usize = 8;
+
+/// Numbers of negative, zero and positive eigenvalues of a symmetric matrix.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Inertia {
+    pub negative: usize,
+    pub zero: usize,
+    pub positive: usize,
+}
+
+/// Why a factorisation or a solve failed.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum FactorError {
+    /// A pivot eigenvalue has `|λ| <= threshold` (= `zero_pivot_tolerance · max|aᵢⱼ|`).
+    /// `index` is the unknown (original numbering) eliminated at that pivot. The inertia,
+    /// counting such pivots as zero, is still available.
+    #[error("numerically singular matrix: pivot {value:e} at unknown {index} (|pivot| <= {threshold:e})")]
+    Singular {
+        index: usize,
+        value: f64,
+        threshold: f64,
+    },
+    /// A pivot is NaN or infinite (non-finite input, or a breakdown after a zero pivot).
+    #[error("non-finite pivot {value} at unknown {index}")]
+    NonFinite { index: usize, value: f64 },
+    /// [`SymmetricFactorization::factorize`] has not been called successfully yet.
+    #[error("no factorisation available")]
+    NotFactorized,
+    /// The symbolic analysis failed (out of memory or index overflow).
+    #[error("symbolic analysis failed: {0}")]
+    Symbolic(&'static str),
+}
+
+/// Options of [`SymmetricFactorization`].
+#[derive(Clone, Copy, Debug)]
+pub struct FactorOptions {
+    /// A pivot eigenvalue `λ` counts as zero when `|λ| <= zero_pivot_tolerance · max|aᵢⱼ|`.
+    /// Default `1e-13`: roughly the round-off level of the pivots of an exactly singular
+    /// matrix of a few thousand unknowns, far below any physical pivot of a stiffness matrix.
+    pub zero_pivot_tolerance: f64,
+    /// Parallelism of faer's kernels. Default [`Par::Seq`]: measured faster than rayon on
+    /// 2 cores for FE matrices of ~10⁴ unknowns.
+    pub par: Par,
+}
+
+impl Default for FactorOptions {
+    fn default() -> Self {
+        Self {
+            zero_pivot_tolerance: 1e-13,
+            par: Par::Seq,
+        }
+    }
+}
+
+/// What the pivots of the last numeric factorisation say.
+#[derive(Clone, Copy, Debug)]
+struct PivotSummary {
+    inertia: Inertia,
+    log_abs_det: f64,
+    /// First pivot judged zero or non-finite, as the error to report.
+    failure: Option<FactorError>,
+}
+
+/// Sparse symmetric (indefinite) `LBLᵀ` factorisation on a fixed [`SymmetricPattern`].
+///
+/// Built once per pattern ([`new`](Self::new): symbolic analysis and all buffers), then
+/// [`factorize`](Self::factorize) for each new set of values; neither `factorize` nor the
+/// solves allocate.
+pub struct SymmetricFactorization {
+    pattern: SymmetricPattern,
+    symbolic: SymbolicCholesky<usize>,
+    options: FactorOptions,
+    l_values: Vec<f64>,
+    subdiag: Vec<f64>,
+    perm_fwd: Vec<usize>,
+    perm_inv: Vec<usize>,
+    factor_mem: MemBuffer,
+    solve_mem: Mutex<MemBuffer>,
+    /// `None` until a numeric factorisation was done (or when the last one had a non-finite
+    /// pivot).
+    pivots: Option<PivotSummary>,
+}
+
+impl std::fmt::Debug for SymmetricFactorization {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SymmetricFactorization")
+            .field("n", &self.pattern.n())
+            .field("nnz", &self.pattern.nnz())
+            .field("factor_len", &self.l_values.len())
+            .field("pivots", &self.pivots)
+            .finish()
+    }
+}
+
+impl SymmetricFactorization {
+    /// Symbolic analysis of `pattern` with default options.
+    pub fn new(pattern: &SymmetricPattern) -> Result<Self, FactorError> {
+        Self::with_options(pattern, FactorOptions::default())
+    }
+
+    /// Symbolic analysis of `pattern` (AMD ordering, supernodes) and allocation of every
+    /// buffer the numeric factorisation and the solves need.
+    pub fn with_options(
+        pattern: &SymmetricPattern,
+        options: FactorOptions,
+    ) -> Result<Self, FactorError> {
+        Self::analyse(pattern, options, None)
+    }
+
+    /// Symbolic analysis with AMD (`order == None`) or with the given elimination order.
+    fn analyse(
+        pattern: &SymmetricPattern,
+        options: FactorOptions,
+        order: Option<&[usize]>,
+    ) -> Result<Self, FactorError> {
+        let n = pattern.n();
+        let inverse: Vec<usize>;
+        let ordering = match order {
+            None => SymmetricOrdering::Amd,
+            Some(fwd) => {
+                let mut inv = vec![0; n];
+                for (k, &i) in fwd.iter().enumerate() {
+                    inv[i] = k;
+                }
+                inverse = inv;
+                SymmetricOrdering::Custom(PermRef::new_checked(fwd, &inverse, n))
+            }
+        };
+        let params = CholeskySymbolicParams {
+            // Not `FORCE_SUPERNODAL` (= 0): faer compares `flops / nnz(L) > threshold`, which
+            // picks the simplicial layout for a matrix without fill (e.g. diagonal, n = 1).
+            supernodal_flop_ratio_threshold: SupernodalThreshold(f64::NEG_INFINITY),
+            ..Default::default()
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
+                .map_err(|e| FactorError::Symbolic(faer_error_name(e)))?;
+        let par = options.par;
+        let factor_req =
+            symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Spec::default());
+        let solve_req = symbolic.solve_in_place_scratch::<f64>(SOLVE_BLOCK, par);
+        Ok(Self {
+            l_values: vec![0.0; symbolic.len_val()],
+            subdiag: vec![0.0; n],
+            perm_fwd: (0..n).collect(),
+            perm_inv: (0..n).collect(),
+            factor_mem: MemBuffer::new(factor_req),
+            solve_mem: Mutex::new(MemBuffer::new(solve_req)),
+            pattern: pattern.clone(),
+            symbolic,
+            options,
+            pivots: None,
+        })
+    }
+
+    /// Dimension `n`.
+    pub fn n(&self) -> usize {
+        self.pattern.n()
+    }
+
+    /// The pattern this factorisation was built for.
+    pub fn pattern(&self) -> &SymmetricPattern {
+        &self.pattern
+    }
+
+    /// Number of stored values of the factor `L` (supernodal, including explicit zeros).
+    pub fn factor_len(&self) -> usize {
+        self.l_values.len()
+    }
+
+    /// Numeric factorisation of the matrix with `values` (aligned with the pattern; only the
+    /// lower triangle is read), reusing the symbolic analysis and the buffers.
+    ///
+    /// Every pivot is checked: `Err(Singular)` if one is zero within the tolerance (the
+    /// inertia is then still available, counting it as zero), `Err(NonFinite)` if one is NaN
+    /// or infinite (no inertia). Solves are refused after either error.
+    ///
+    /// Zero diagonal entries (Lagrange multipliers, `[[K, Cᵀ], [C, 0]]`) defeat pivoting
+    /// within supernodes when AMD eliminates such an unknown before all its neighbours. On a
+    /// failure with such unknowns, the elimination order is changed once so that each comes
+    /// right after one of its neighbours with a nonzero diagonal (see [`protecting_order`]),
+    /// the symbolic analysis is redone (this allocates, once) and the factorisation retried;
+    /// the new order is kept for later factorisations.
+    ///
+    /// # Panics
+    /// If `values.len() != pattern.nnz()`.
+    ///
+    /// [`protecting_order`]: Self::protecting_order
+    pub fn factorize(&mut self, values: &[f64]) -> Result<(), FactorError> {
+        assert_eq!(
+            values.len(),
+            self.pattern.nnz(),
+            "values do not match the pattern"
+        );
+        let result = self.factorize_numeric(values);
+        if result.is_err() {
+            if let Some(order) = self.protecting_order(values) {
+                *self = Self::analyse(&self.pattern, self.options, Some(&order))?;
+                return self.factorize_numeric(values);
+            }
+        }
+        result
+    }
+
+    fn factorize_numeric(&mut self, values: &[f64]) -> Result<(), FactorError> {
+        self.pivots = None;
+        // faer's Bunch–Kaufman leaves `subdiag` untouched for a 1×1 pivot with nothing to
+        // eliminate, so stale 2×2 markers from a previous factorisation must be cleared.
+        self.subdiag.fill(0.0);
+        let _ = self.symbolic.factorize_numeric_intranode_lblt(
+            &mut self.l_values,
+            &mut self.subdiag,
+            &mut self.perm_fwd,
+            &mut self.perm_inv,
+            self.pattern.as_faer(values),
+            Side::Lower,
+            self.options.par,
+            MemStack::new(&mut self.factor_mem),
+            Spec::<LbltParams, f64>::default(),
+        );
+        let summary = self.scan_pivots(self.zero_threshold(values));
+        match summary.failure {
+            Some(err @ FactorError::NonFinite { .. }) => Err(err),
+            failure => {
+                self.pivots = Some(summary);
+                failure.map_or(Ok(()), Err)
+            }
+        }
+    }
+
+    fn zero_threshold(&self, values: &[f64]) -> f64 {
+        let scale = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        self.options.zero_pivot_tolerance * scale
+    }
+
+    /// An elimination order (position → unknown) derived from the current one in which every
+    /// unknown `z` with a zero diagonal (`|a_zz| <=` the zero-pivot threshold) comes right
+    /// after its own *partner*: a neighbour `v` (`a_vz != 0`) with a nonzero diagonal that
+    /// partners no other such unknown. Then every leading block of the order is covered by
+    /// nonzero diagonals and disjoint 2×2 blocks `[[a_vv, a_vz], [a_vz, 0]]`, hence is
+    /// generically nonsingular, and `z`'s pivot is generically nonzero (for `[[K, Cᵀ], [C, 0]]`
+    /// with `K` positive definite and `C` selecting unknowns: `−a_vz² / d_v`). Unknowns that
+    /// find no partner go last, where the root supernode gives the pivoting most room.
+    /// `None` if the order would not change.
+    fn protecting_order(&self, values: &[f64]) -> Option<Vec<usize>> {
+        let n = self.n();
+        let (col_ptr, row_idx) = (self.pattern.col_ptr(), self.pattern.row_idx());
+        let threshold = self.zero_threshold(values);
+        let zero_diag: Vec<bool> = (0..n)
+            .map(|i| values[self.pattern.position(i, i).expect("diagonal")].abs() <= threshold)
+            .collect();
+        // Off-diagonal neighbours of `v` through nonzero entries.
+        let neighbours = |v: usize| {
+            (col_ptr[v]..col_ptr[v + 1])
+                .filter(move |&p| values[p] != 0.0 && row_idx[p] != v)
+                .map(|p| row_idx[p])
+        };
+        let current: Vec<usize> = match self.symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..n).collect(),
+        };
+        // `free[v]`: v is placed, has a nonzero diagonal and partners nobody yet.
+        let (mut placed, mut free, mut waiting) = (vec![false; n], vec![false; n], vec![false; n]);
+        let mut order = Vec::with_capacity(n);
+        for &i in &current {
+            if !zero_diag[i] {
+                placed[i] = true;
+                order.push(i);
+                free[i] = true;
+                if let Some(z) = neighbours(i).find(|&z| waiting[z] && !placed[z]) {
+                    free[i] = false;
+                    placed[z] = true;
+                    order.push(z);
+                }
+            } else if let Some(v) = neighbours(i).find(|&v| free[v]) {
+                free[v] = false;
+                placed[i] = true;
+                order.push(i);
+            } else {
+                waiting[i] = true;
+            }
+        }
+        order.extend(current.iter().filter(|&&i| !placed[i]));
+        debug_assert_eq!(order.len(), n);
+        (order != current).then_some(order)
+    }
+
+    /// Walks the block diagonal `B`, stored on the diagonal of each supernode's dense block
+    /// with the 2×2 off-diagonals in `subdiag`.
+    fn scan_pivots(&self, threshold: f64) -> PivotSummary {
+        let mut out = PivotSummary {
+            inertia: Inertia::default(),
+            log_abs_det: 0.0,
+            failure: None,
+        };
+        let SymbolicCholeskyRaw::Supernodal(sn) = self.symbolic.raw() else {
+            // Only reachable for n == 0 (faer then picks the simplicial layout).
+            debug_assert_eq!(self.n(), 0);
+            return out;
+        };
+        // Unknown (original numbering) eliminated at permuted position i.
+        let amd_fwd = self.symbolic.perm().map(|p| p.arrays().0);
+        let original = |i: usize| {
+            let i = self.perm_fwd[i];
+            amd_fwd.map_or(i, |fwd| fwd[i])
+        };
+        let mut record = |lambda: f64, index: usize| {
+            if !lambda.is_finite() {
+                // The first non-finite pivot wins over any zero pivot: no inertia then.
+                if !matches!(out.failure, Some(FactorError::NonFinite { .. })) {
+                    out.failure = Some(FactorError::NonFinite {
+                        index,
+                        value: lambda,
+                    });
+                }
+            } else if lambda.abs() <= threshold {
+                out.inertia.zero += 1;
+                if out.failure.is_none() {
+                    out.failure = Some(FactorError::Singular {
+                        index,
+                        value: lambda,
+                        threshold,
+                    });
+                }
+            } else if lambda < 0.0 {
+                out.inertia.negative += 1;
+            } else {
+                out.inertia.positive += 1;
+            }
+            out.log_abs_det += lambda.abs().ln();
+        };
+        for s in 0..sn.n_supernodes() {
+            let start = sn.supernode_begin()[s];
+            let ncols = sn.supernode_end()[s] - start;
+            let nrows = ncols + sn.supernode(s).pattern().len();
+            let block = &self.l_values[sn.col_ptr_for_val()[s]..];
+            let diag = |k: usize| block[k * nrows + k];
+            let mut k = 0;
+            while k < ncols {
+                let b = self.subdiag[start + k];
+                if b == 0.0 {
+                    record(diag(k), original(start + k));
+                    k += 1;
+                } else {
+                    let (l1, l2) = sym2_eigenvalues(diag(k), b, diag(k + 1));
+                    record(l1, original(start + k));
+                    record(l2, original(start + k + 1));
+                    k += 2;
+                }
+            }
+        }
+        out
+    }
+
+    /// Inertia of the last factorised matrix (`None` if there is none or it had a
+    /// non-finite pivot). Pivots with `|λ| <= tolerance · max|aᵢⱼ|` count as zero.
+    pub fn inertia(&self) -> Option<Inertia> {
+        self.pivots.map(|p| p.inertia)
+    }
+
+    /// `ln |det A|` (`-∞` if a pivot is exactly zero).
+    pub fn log_abs_det(&self) -> Option<f64> {
+        self.pivots.map(|p| p.log_abs_det)
+    }
+
+    /// Sign of `det A`: `-1`, `1`, or `0` when a pivot counts as zero.
+    pub fn determinant_sign(&self) -> Option<i8> {
+        self.inertia().map(|i| match (i.zero, i.negative % 2) {
+            (0, 0) => 1,
+            (0, _) => -1,
+            _ => 0,
+        })
+    }
+
+    /// Solves `A x = rhs` in place (`rhs.len() == n`).
+    pub fn solve_in_place(&self, rhs: &mut [f64]) -> Result<(), FactorError> {
+        let n = self.n();
+        assert_eq!(rhs.len(), n, "rhs length must be n");
+        self.solve_mat_in_place(MatMut::from_column_major_slice_mut(rhs, n, 1))
+    }
+
+    /// Solves for several right-hand sides stored column-major in `rhs` (`n · k` values).
+    pub fn solve_many_in_place(&self, rhs: &mut [f64]) -> Result<(), FactorError> {
+        let n = self.n();
+        assert!(
+            n > 0 && rhs.len() % n == 0,
+            "rhs length must be a multiple of n"
+        );
+        let k = rhs.len() / n;
+        self.solve_mat_in_place(MatMut::from_column_major_slice_mut(rhs, n, k))
+    }
+
+    /// Solves `A X = rhs` in place for a faer matrix of right-hand sides.
+    ///
+    /// Refused (`Err`, `rhs` untouched) unless the last [`factorize`](Self::factorize)
+    /// succeeded, so a singular matrix never yields a NaN/∞ "solution".
+    pub fn solve_mat_in_place(&self, mut rhs: MatMut<'_, f64>) -> Result<(), FactorError> {
+        let n = self.n();
+        assert_eq!(rhs.nrows(), n, "rhs must have n rows");
+        match self.pivots {
+            None => return Err(FactorError::NotFactorized),
+            Some(PivotSummary {
+                failure: Some(err), ..
+            }) => return Err(err),
+            Some(_) => {}
+        }
+        let perm = PermRef::new_checked(&self.perm_fwd, &self.perm_inv, n);
+        let lblt = IntranodeLbltRef::new(&self.symbolic, &self.l_values, &self.subdiag, perm);
+        let mut mem = self
+            .solve_mem
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let mut j = 0;
+        while j < rhs.ncols() {
+            let k = SOLVE_BLOCK.min(rhs.ncols() - j);
+            lblt.solve_in_place_with_conj(
+                Conj::No,
+                rhs.rb_mut().subcols_mut(j, k),
+                self.options.par,
+                MemStack::new(&mut mem),
+            );
+            j += k;
+        }
+        Ok(())
+    }
+}
+
+/// Eigenvalues of the symmetric 2×2 matrix `[[a, b], [b, c]]`, the smaller in magnitude
+/// computed from the determinant to avoid cancellation.
+fn sym2_eigenvalues(a: f64, b: f64, c: f64) -> (f64, f64) {
+    let mean = 0.5 * (a + c);
+    let radius = (0.5 * (a - c)).hypot(b);
+    let big = if mean >= 0.0 {
+        mean + radius
+    } else {
+        mean - radius
+    };
+    let small = if big == 0.0 {
+        0.0
+    } else {
+        (a * c - b * b) / big
+    };
+    (big, small)
+}
+
+fn faer_error_name(e: faer::sparse::FaerError) -> &'static str {
+    match e {
+        faer::sparse::FaerError::IndexOverflow => "index overflow",
+        faer::sparse::FaerError::OutOfMemory => "out of memory",
+        _ => "unknown faer error",
+    }
+}

@@ -1,0 +1,397 @@
+//! Assembly on a fixed pattern, without allocation per element.
+//!
+//! The [`Layout`] is built once per model: the unknown numbers of every node (fixed nodes
+//! have none), the symmetric sparsity pattern of the tangent, and for every triangle the 9
+//! unknowns and 81 value slots its local Hessian scatters into (for every node its 3×3
+//! diagonal block). An evaluation runs an effect's kernel over all triangles in parallel
+//! into a scratch buffer owned by the [`Evaluation`] (allocated once), then scatters the
+//! results in one sequential pass.
+
+use super::{ModelError, Vec3};
+use crate::effects::local::Local;
+use crate::linalg::SymmetricPattern;
+use rayon::prelude::*;
+
+/// Marks a fixed degree of freedom (no unknown, no slot).
+const NONE: u32 = u32::MAX;
+
+/// Unknown numbering, sparsity pattern and scatter slots of a mesh with fixed nodes.
+#[derive(Debug, Clone)]
+pub struct Layout {
+    triangles: Vec<[usize; 3]>,
+    dof_of: Vec<[u32; 3]>,
+    unknowns: usize,
+    pattern: SymmetricPattern,
+    tri_dofs: Vec<[u32; 9]>,
+    tri_slots: Vec<[u32; 81]>,
+    node_slots: Vec<[u32; 9]>,
+}
+
+impl Layout {
+    /// Numbers the free nodes' coordinates in node order (x, y, z of each free node) and
+    /// computes the pattern and slots.
+    pub fn new(nodes: usize, triangles: Vec<[usize; 3]>, fixed: &[usize]) -> Self {
+        let mut is_fixed = vec![false; nodes];
+        for &i in fixed {
+            is_fixed[i] = true;
+        }
+        let mut next = 0u32;
+        let dof_of: Vec<[u32; 3]> = is_fixed
+            .iter()
+            .map(|&f| {
+                if f {
+                    [NONE; 3]
+                } else {
+                    next += 3;
+                    [next - 3, next - 2, next - 1]
+                }
+            })
+            .collect();
+        let unknowns = next as usize;
+        assert!(unknowns < NONE as usize, "too many unknowns for u32 numbering");
+        let tri_dofs: Vec<[u32; 9]> = triangles
+            .iter()
+            .map(|t| std::array::from_fn(|a| dof_of[t[a / 3]][a % 3]))
+            .collect();
+        let entries = tri_dofs.iter().flat_map(|d| {
+            d.iter()
+                .filter(|&&r| r != NONE)
+                .flat_map(move |&r| d.iter().filter(|&&c| c != NONE).map(move |&c| (r as usize, c as usize)))
+        });
+        let pattern = SymmetricPattern::from_entries(unknowns, entries);
+        let slot = |r: u32, c: u32| -> u32 {
+            if r == NONE || c == NONE {
+                NONE
+            } else {
+                pattern
+                    .position(r as usize, c as usize)
+                    .map_or(NONE, |p| u32::try_from(p).expect("pattern fits u32"))
+            }
+        };
+        let tri_slots = tri_dofs
+            .iter()
+            .map(|d| std::array::from_fn(|k| slot(d[k / 9], d[k % 9])))
+            .collect();
+        let node_slots = dof_of
+            .iter()
+            .map(|d| std::array::from_fn(|k| slot(d[k / 3], d[k % 3])))
+            .collect();
+        Self {
+            triangles,
+            dof_of,
+            unknowns,
+            pattern,
+            tri_dofs,
+            tri_slots,
+            node_slots,
+        }
+    }
+
+    /// Number of unknowns.
+    pub fn unknowns(&self) -> usize {
+        self.unknowns
+    }
+
+    /// The tangent's sparsity pattern.
+    pub fn pattern(&self) -> &SymmetricPattern {
+        &self.pattern
+    }
+
+    /// Triangles (node indices).
+    pub fn triangles(&self) -> &[[usize; 3]] {
+        &self.triangles
+    }
+
+    /// The unknown of coordinate `k` of node `i`, or `None` for a fixed node.
+    pub fn dof(&self, node: usize, k: usize) -> Option<usize> {
+        let d = self.dof_of[node][k];
+        (d != NONE).then_some(d as usize)
+    }
+
+    /// Adds the displacements `u` to the positions `x` of the free nodes.
+    pub fn add_displacements(&self, u: &[f64], x: &mut [Vec3]) {
+        for (xi, d) in x.iter_mut().zip(&self.dof_of) {
+            if d[0] != NONE {
+                for k in 0..3 {
+                    xi[k] += u[d[k] as usize];
+                }
+            }
+        }
+    }
+}
+
+/// What an evaluation should compute (Π and F are always computed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Request {
+    /// The tangent K.
+    pub tangent: bool,
+    /// The load vectors ∂F/∂Λ.
+    pub loads: bool,
+}
+
+impl Request {
+    /// Π and F only.
+    pub const RESIDUAL: Request = Request {
+        tangent: false,
+        loads: false,
+    };
+    /// Π, F, K and ∂F/∂Λ.
+    pub const ALL: Request = Request {
+        tangent: true,
+        loads: true,
+    };
+}
+
+/// One triangle's terms: its [`Local`] and up to two parameter derivatives of its gradient.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TriangleTerms {
+    /// Value, gradient and Hessian.
+    pub local: Local,
+    /// ∂(gradient)/∂Λ for the parameters named in the assembler call.
+    pub loads: [[f64; 9]; 2],
+}
+
+/// One node's terms.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NodeTerms {
+    /// The contribution.
+    pub value: f64,
+    /// Its gradient.
+    pub grad: [f64; 3],
+    /// Its Hessian.
+    pub hess: [[f64; 3]; 3],
+    /// ∂(gradient)/∂Λ for the parameters named in the assembler call.
+    pub loads: [[f64; 3]; 2],
+}
+
+/// The result of an evaluation, with the scratch buffers reused from call to call.
+///
+/// The full tangent is `K = K_sparse + Σ_k c_k a_k a_kᵀ`: the sparse part on the pattern,
+/// plus the rank-one terms of global potentials such as a fixed amount of gas, which a
+/// solver treats by bordering or Sherman–Morrison rather than by filling K.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// Π.
+    pub energy: f64,
+    /// F = ∂Π/∂u.
+    pub residual: Vec<f64>,
+    /// Values of the sparse part of K on the pattern.
+    pub tangent: Vec<f64>,
+    /// ∂F/∂Λ_j, one vector per parameter.
+    pub loads: Vec<Vec<f64>>,
+    /// Rank-one terms (c_k, a_k) of K.
+    pub rank_one: Vec<(f64, Vec<f64>)>,
+    pub(super) positions: Vec<Vec3>,
+    tri_terms: Vec<TriangleTerms>,
+    node_terms: Vec<NodeTerms>,
+    request: Request,
+}
+
+impl Evaluation {
+    pub(super) fn new(layout: &Layout, parameters: usize) -> Self {
+        let n = layout.unknowns();
+        Self {
+            energy: 0.0,
+            residual: vec![0.0; n],
+            tangent: vec![0.0; layout.pattern().nnz()],
+            loads: vec![vec![0.0; n]; parameters],
+            rank_one: Vec::new(),
+            positions: Vec::with_capacity(layout.dof_of.len()),
+            tri_terms: vec![TriangleTerms::default(); layout.triangles.len()],
+            node_terms: vec![NodeTerms::default(); layout.dof_of.len()],
+            request: Request::ALL,
+        }
+    }
+
+    pub(super) fn reset(&mut self, request: Request) {
+        self.request = request;
+        self.energy = 0.0;
+        self.residual.fill(0.0);
+        if request.tangent {
+            self.tangent.fill(0.0);
+            self.rank_one.clear();
+        }
+        if request.loads {
+            self.loads.iter_mut().for_each(|l| l.fill(0.0));
+        }
+    }
+
+    pub(super) fn check_finite(&self) -> Result<(), ModelError> {
+        let bad = |what| {
+            Err(ModelError::NonFinite {
+                effect: "(sum)".into(),
+                what,
+            })
+        };
+        if !self.energy.is_finite() {
+            return bad("energy");
+        }
+        if !self.residual.iter().all(|v| v.is_finite()) {
+            return bad("residual");
+        }
+        if self.request.tangent && !self.tangent.iter().all(|v| v.is_finite()) {
+            return bad("tangent");
+        }
+        if self.request.loads && !self.loads.iter().flatten().all(|v| v.is_finite()) {
+            return bad("load vector");
+        }
+        Ok(())
+    }
+
+    /// The request this evaluation was made with.
+    pub fn request(&self) -> Request {
+        self.request
+    }
+}
+
+/// The interface an [`super::Effect`] assembles through.
+pub struct Assembler<'a> {
+    layout: &'a Layout,
+    out: &'a mut Evaluation,
+    request: Request,
+    effect: &'a str,
+}
+
+impl<'a> Assembler<'a> {
+    pub(super) fn new(layout: &'a Layout, out: &'a mut Evaluation, request: Request, effect: &'a str) -> Self {
+        Self {
+            layout,
+            out,
+            request,
+            effect,
+        }
+    }
+
+    /// What is being computed.
+    pub fn request(&self) -> Request {
+        self.request
+    }
+
+    /// The triangles of the mesh.
+    pub fn triangles(&self) -> &[[usize; 3]] {
+        &self.layout.triangles
+    }
+
+    /// Runs `kernel` on every triangle (in parallel) and adds the results. `load_params[s]`
+    /// names the parameter whose load vector receives `terms.loads[s]`.
+    pub fn add_triangles<F>(&mut self, x: &[Vec3], load_params: [Option<usize>; 2], kernel: F) -> Result<(), ModelError>
+    where
+        F: Fn(usize, &[Vec3; 3], &mut TriangleTerms) -> Result<(), String> + Sync,
+    {
+        let tris = &self.layout.triangles;
+        self.out
+            .tri_terms
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each(|(t, terms)| {
+                let [a, b, c] = tris[t];
+                terms.loads = [[0.0; 9]; 2];
+                kernel(t, &[x[a], x[b], x[c]], terms).map_err(|what| ModelError::Element {
+                    effect: self.effect.to_string(),
+                    triangle: t,
+                    what,
+                })
+            })?;
+        let (want_k, want_l) = (self.request.tangent, self.request.loads);
+        let out = &mut *self.out;
+        for (t, terms) in out.tri_terms.iter().enumerate() {
+            let dofs = &self.layout.tri_dofs[t];
+            out.energy += terms.local.value;
+            for (a, &d) in dofs.iter().enumerate() {
+                if d == NONE {
+                    continue;
+                }
+                out.residual[d as usize] += terms.local.grad[a];
+                if want_l {
+                    for (s, p) in load_params.iter().enumerate() {
+                        if let Some(p) = *p {
+                            out.loads[p][d as usize] += terms.loads[s][a];
+                        }
+                    }
+                }
+            }
+            if want_k {
+                let slots = &self.layout.tri_slots[t];
+                for (k, &slot) in slots.iter().enumerate() {
+                    if slot != NONE {
+                        out.tangent[slot as usize] += terms.local.hess[k / 9][k % 9];
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs `kernel` on every node (in parallel) and adds the results.
+    pub fn add_nodes<F>(&mut self, x: &[Vec3], load_params: [Option<usize>; 2], kernel: F) -> Result<(), ModelError>
+    where
+        F: Fn(usize, &Vec3, &mut NodeTerms) -> Result<(), String> + Sync,
+    {
+        self.out
+            .node_terms
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each(|(i, terms)| {
+                *terms = NodeTerms::default();
+                kernel(i, &x[i], terms).map_err(|what| ModelError::Global {
+                    effect: self.effect.to_string(),
+                    what: format!("{what} at node {i}"),
+                })
+            })?;
+        let (want_k, want_l) = (self.request.tangent, self.request.loads);
+        let out = &mut *self.out;
+        for (i, terms) in out.node_terms.iter().enumerate() {
+            out.energy += terms.value;
+            let dofs = &self.layout.dof_of[i];
+            if dofs[0] == NONE {
+                continue;
+            }
+            for (k, &d) in dofs.iter().enumerate() {
+                out.residual[d as usize] += terms.grad[k];
+                if want_l {
+                    for (s, p) in load_params.iter().enumerate() {
+                        if let Some(p) = *p {
+                            out.loads[p][d as usize] += terms.loads[s][k];
+                        }
+                    }
+                }
+            }
+            if want_k {
+                for (k, &slot) in self.layout.node_slots[i].iter().enumerate() {
+                    out.tangent[slot as usize] += terms.hess[k / 3][k % 3];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Assembles Σ_t (per-triangle gradient) into a vector over the unknowns, for global
+    /// potentials φ(Q(u)) whose tangent has the rank-one part φ''(Q) ∇Q ∇Qᵀ.
+    pub fn gradient_vector<F>(&self, x: &[Vec3], kernel: F) -> Vec<f64>
+    where
+        F: Fn(&[Vec3; 3]) -> [f64; 9],
+    {
+        let mut v = vec![0.0; self.layout.unknowns];
+        for (t, [a, b, c]) in self.layout.triangles.iter().enumerate() {
+            let g = kernel(&[x[*a], x[*b], x[*c]]);
+            for (k, &d) in self.layout.tri_dofs[t].iter().enumerate() {
+                if d != NONE {
+                    v[d as usize] += g[k];
+                }
+            }
+        }
+        v
+    }
+
+    /// Adds a constant to Π (the value of a global potential).
+    pub fn add_energy(&mut self, value: f64) {
+        self.out.energy += value;
+    }
+
+    /// Adds the rank-one term c a aᵀ to the tangent (only when the tangent is requested).
+    pub fn add_rank_one(&mut self, c: f64, a: Vec<f64>) {
+        if self.request.tangent {
+            self.out.rank_one.push((c, a));
+        }
+    }
+}

@@ -1,0 +1,169 @@
+//! The model: Π(u; Λ) = Σ_effects Π_e(x(u); Λ), x = X + u (DESIGN §2).
+//!
+//! A [`FeModel`] owns the reference mesh, the map from nodes to unknowns (fixed nodes have
+//! none), the sparsity pattern of the tangent (computed once) and the effects a scene asked
+//! for. [`FeModel::evaluate`] fills an [`Evaluation`]: Π, the residual F = ∂Π/∂u, the values
+//! of the symmetric tangent K = ∂²Π/∂u² on the fixed pattern, and the load vectors ∂F/∂Λ_j.
+//! Solvers see the [`Model`] trait, never a membrane.
+
+mod assembly;
+pub mod check;
+pub mod constraint;
+
+pub use assembly::{Assembler, Evaluation, Layout, NodeTerms, Request, TriangleTerms};
+
+use crate::linalg::SymmetricPattern;
+use nalgebra::Vector3;
+use symmetry::Invariant;
+
+/// A point or vector in 3-D.
+pub type Vec3 = Vector3<f64>;
+
+/// Why an evaluation failed.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+pub enum ModelError {
+    /// An element left the domain of its potential (inverted or collapsed triangle).
+    #[error("effect '{effect}': {what} at triangle {triangle}")]
+    Element {
+        /// The effect's name.
+        effect: String,
+        /// The triangle.
+        triangle: usize,
+        /// What went wrong.
+        what: String,
+    },
+    /// A global quantity left its domain (e.g. a non-positive gas volume).
+    #[error("effect '{effect}': {what}")]
+    Global {
+        /// The effect's name.
+        effect: String,
+        /// What went wrong.
+        what: String,
+    },
+    /// A non-finite number appeared.
+    #[error("non-finite {what} in effect '{effect}'")]
+    NonFinite {
+        /// The effect's name.
+        effect: String,
+        /// Energy, residual, tangent or load.
+        what: &'static str,
+    },
+}
+
+/// One term of the potential: a membrane, a gas, a fluid, a plane …
+///
+/// An effect adds its potential, gradient, Hessian and parameter derivatives through the
+/// [`Assembler`], which runs its per-triangle or per-node kernel in parallel and scatters the
+/// results into precomputed slots.
+pub trait Effect: Send + Sync {
+    /// A short name for reports, e.g. `membrane`, `gas`.
+    fn name(&self) -> &str;
+
+    /// What this effect leaves invariant (gravity: the direction −z; a plane: itself). The
+    /// scene's group is the mesh group restricted to what every effect keeps.
+    fn keeps(&self) -> Vec<Invariant>;
+
+    /// Adds Π_e and its derivatives at the current node positions `x` and parameters `params`.
+    fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError>;
+}
+
+/// What a solver needs from a model.
+pub trait Model: Sync {
+    /// Number of unknowns N.
+    fn unknowns(&self) -> usize;
+    /// Names of the parameters Λ, in order.
+    fn parameters(&self) -> &[String];
+    /// The fixed sparsity pattern of the tangent.
+    fn pattern(&self) -> &SymmetricPattern;
+    /// Evaluates what `request` asks for at (u, Λ) into `out` (buffers are reused).
+    fn evaluate(&self, u: &[f64], params: &[f64], request: Request, out: &mut Evaluation) -> Result<(), ModelError>;
+    /// A fresh evaluation buffer sized for this model.
+    fn new_evaluation(&self) -> Evaluation;
+}
+
+/// A finite-element model: reference mesh, fixed nodes, effects, parameters.
+pub struct FeModel {
+    reference: Vec<Vec3>,
+    layout: Layout,
+    effects: Vec<Box<dyn Effect>>,
+    parameters: Vec<String>,
+}
+
+impl FeModel {
+    /// A model of the mesh (reference positions and triangles) with the nodes in `fixed`
+    /// held in place, the given effects, and parameter names.
+    pub fn new(
+        reference: Vec<Vec3>,
+        triangles: Vec<[usize; 3]>,
+        fixed: &[usize],
+        effects: Vec<Box<dyn Effect>>,
+        parameters: Vec<String>,
+    ) -> Self {
+        let layout = Layout::new(reference.len(), triangles, fixed);
+        Self {
+            reference,
+            layout,
+            effects,
+            parameters,
+        }
+    }
+
+    /// The layout (dof map, pattern, scatter slots).
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// Reference node positions X.
+    pub fn reference(&self) -> &[Vec3] {
+        &self.reference
+    }
+
+    /// The effects, in assembly order.
+    pub fn effects(&self) -> &[Box<dyn Effect>] {
+        &self.effects
+    }
+
+    /// Current node positions x = X + u (fixed nodes at X).
+    pub fn positions(&self, u: &[f64]) -> Vec<Vec3> {
+        let mut x = self.reference.clone();
+        self.layout.add_displacements(u, &mut x);
+        x
+    }
+}
+
+impl Model for FeModel {
+    fn unknowns(&self) -> usize {
+        self.layout.unknowns()
+    }
+
+    fn parameters(&self) -> &[String] {
+        &self.parameters
+    }
+
+    fn pattern(&self) -> &SymmetricPattern {
+        self.layout.pattern()
+    }
+
+    fn new_evaluation(&self) -> Evaluation {
+        Evaluation::new(&self.layout, self.parameters.len())
+    }
+
+    fn evaluate(&self, u: &[f64], params: &[f64], request: Request, out: &mut Evaluation) -> Result<(), ModelError> {
+        assert_eq!(u.len(), self.unknowns(), "state length");
+        assert_eq!(params.len(), self.parameters.len(), "parameter count");
+        out.reset(request);
+        let mut x = std::mem::take(&mut out.positions);
+        x.clear();
+        x.extend_from_slice(&self.reference);
+        self.layout.add_displacements(u, &mut x);
+        let result = (|| {
+            for effect in &self.effects {
+                let mut asm = Assembler::new(&self.layout, out, request, effect.name());
+                effect.assemble(&x, params, &mut asm)?;
+            }
+            out.check_finite()
+        })();
+        out.positions = x;
+        result
+    }
+}

@@ -1,0 +1,760 @@
+//! Scene files: what to compute, in one TOML file.
+//!
+//! A scene names the mesh (a generator and its options), the membrane's material, the loads
+//! (*effects*, each a potential — DESIGN §2), the fixed node sets, the load parameters with
+//! their start values and bounds, the augmenting constraints, the analysis and how it starts.
+//! The format, with every key, its default and its validation rule, is documented in
+//! `docs/scenes.md`; the types below mirror it one to one (a TOML key `cut-height` is the
+//! field `cut_height`).
+//!
+//! Loading ([`Scene::from_toml_str`], [`Scene::load`]) parses and checks everything that does
+//! not need the mesh; [`Scene::build_mesh`] builds the mesh and checks the rest (boundary
+//! names, closed or clamped membranes for the enclosing effects). Every failure is a
+//! [`SceneError`], one line naming the key path and the value.
+//!
+//! After a successful load the scene is *consistent*: every parameter name used by an effect
+//! or a constraint is declared, every declared parameter is used by an effect, and (for a
+//! path) every parameter other than the control is governed by exactly one constraint.
+//!
+//! # Conventions the consumer relies on
+//! - Units are consistent but otherwise free; `μ·H` (material `mu` × `thickness`) is the
+//!   natural tension scale and `μH/R` the natural pressure scale (R a mesh radius).
+//! - Gravity acts along −z; a plane's [`PlaneEffect::normal`] is a unit vector (normalised
+//!   on loading) pointing to the side where the membrane may be (`n·x ≥ d`).
+//! - Indices in key paths and in [`FluidVolumeConstraint::effect`] count from 0 in the
+//!   order of the `[[effect]]` tables.
+//! - The mesh is the *reference* configuration X; the stress-free state is X/λ0 with λ0 =
+//!   [`Material::prestretch`]; the first Newton guess is `start.stretch · X` (see [`Start`]).
+
+mod error;
+mod load;
+mod validate;
+
+pub use error::SceneError;
+
+use meshes::generators::{self, DiscOptions, Down, IcosphereOptions, TruncatedSphereOptions};
+use meshes::{MeshError, SymmetricMesh};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// A validated scene. Build the mesh with [`Scene::build_mesh`], which checks the parts of
+/// the scene that refer to it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scene {
+    /// Where the scene came from (a file name or a label); used in error messages.
+    #[serde(skip)]
+    pub origin: String,
+    /// `[scene]`: name and description.
+    #[serde(rename = "scene")]
+    pub info: SceneInfo,
+    /// `[mesh]`: the generator and its options.
+    pub mesh: MeshSpec,
+    /// `[material]`: the membrane (always present; it is the first effect).
+    pub material: Material,
+    /// `[[effect]]`: the loads, in file order (indices count from 0).
+    #[serde(rename = "effect", skip_serializing_if = "Vec::is_empty")]
+    pub effects: Vec<Effect>,
+    /// `[boundary]`: fixed node sets.
+    pub boundary: Boundary,
+    /// `[parameters.NAME]`: the load parameters Λ, by name (sorted by name).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, Parameter>,
+    /// `[[constraint]]`: the augmenting equations, in file order.
+    #[serde(rename = "constraint", skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<Constraint>,
+    /// `[analysis]`: what to compute.
+    pub analysis: Analysis,
+    /// `[start]`: how the first state is found.
+    pub start: Start,
+}
+
+/// `[scene]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct SceneInfo {
+    /// A short name (non-empty), used in output metadata.
+    pub name: String,
+    /// Free text.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+}
+
+/// `[mesh]`, tagged by `generator`. Options not given take the generators' defaults (the
+/// same as `memstab mesh`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "generator", rename_all = "kebab-case")]
+pub enum MeshSpec {
+    /// `generator = "disc"`: a flat disc in z = 0, normal +z, node set `rim`.
+    Disc(DiscMesh),
+    /// `generator = "icosphere"`: a closed sphere, outward normals, no node sets.
+    Icosphere(IcosphereMesh),
+    /// `generator = "truncated-sphere"`: the cap z ≥ cut-height, outward normals, node set
+    /// `cut`.
+    TruncatedSphere(TruncatedSphereMesh),
+}
+
+/// Options of the disc generator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct DiscMesh {
+    /// Radius of the mesh (the clamped radius λ0·a of a pre-stretched disc). Default 1.
+    #[serde(default = "one")]
+    pub radius: f64,
+    /// Number of sectors N ≥ 3. Default 7.
+    #[serde(default = "default_sectors")]
+    pub sectors: usize,
+    /// Rings per sector d ≥ 1 (N d² triangles). Default 16.
+    #[serde(default = "default_disc_divisions")]
+    pub divisions: usize,
+    /// Declared group `C<M>v` or `C<M>` with M | N; default `C<N>v`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<String>,
+}
+
+/// Options of the icosphere generator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct IcosphereMesh {
+    /// Radius R. Default 1.
+    #[serde(default = "one")]
+    pub radius: f64,
+    /// Frequency f ≥ 1 (20 f² triangles). Default 4.
+    #[serde(default = "default_frequency")]
+    pub frequency: usize,
+    /// What points down (−z); default: the standard orientation (group Ih, coordinate axes
+    /// 2-fold).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub down: Option<DownSpec>,
+}
+
+/// `mesh.down` of an icosphere.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DownSpec {
+    /// A vertex points down (a scene that keeps −z keeps C5v).
+    Vertex,
+    /// A face centre points down (C3v).
+    Face,
+    /// An edge midpoint points down (C2v).
+    Edge,
+}
+
+/// Options of the truncated-sphere generator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct TruncatedSphereMesh {
+    /// Radius R. Default 1.
+    #[serde(default = "one")]
+    pub radius: f64,
+    /// Height c of the cut plane, −R < c < R. Default −0.5.
+    #[serde(default = "default_cut_height")]
+    pub cut_height: f64,
+    /// Declared group about z (`C8v`, `C2v`, `C1v`, …). Default `C8v`.
+    #[serde(default = "default_pattern")]
+    pub pattern: String,
+    /// Rings between pole and cut (8 d² triangles); default: about the reference element
+    /// count of the pattern (d = 29 for C8v, 26 for C2v and C1v).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub divisions: Option<usize>,
+}
+
+/// `[material]`: an incompressible Mooney–Rivlin membrane,
+/// W = c1(I1 − 3) + c2(I2 − 3), μ/2 = c1 + c2, k = c2/c1 (DESIGN §2.1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct Material {
+    /// The constitutive model; default and only choice `mooney-rivlin`.
+    #[serde(default)]
+    pub model: MaterialModel,
+    /// Shear modulus μ > 0.
+    pub mu: f64,
+    /// Mooney–Rivlin ratio k = c2/c1 ≥ 0 (0: neo-Hookean).
+    pub k: f64,
+    /// Thickness H > 0 of the stress-free membrane.
+    pub thickness: f64,
+    /// Isotropic pre-stretch λ0 > 0 of the mesh relative to the stress-free state (the
+    /// stress-free state is the mesh shrunk by 1/λ0). Default 1.
+    #[serde(default = "one")]
+    pub prestretch: f64,
+}
+
+/// `material.model`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MaterialModel {
+    /// Incompressible Mooney–Rivlin (plane stress).
+    #[default]
+    MooneyRivlin,
+}
+
+/// A numeric load quantity: a fixed number, or the name of a declared parameter (its value
+/// on the path). In TOML: `pressure = 0.5` or `pressure = "p"`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum Quantity {
+    /// A fixed number.
+    Value(f64),
+    /// The name of a parameter in `[parameters]`.
+    Parameter(String),
+}
+
+impl Quantity {
+    /// The parameter this quantity follows, if any.
+    pub fn parameter(&self) -> Option<&str> {
+        match self {
+            Quantity::Value(_) => None,
+            Quantity::Parameter(name) => Some(name),
+        }
+    }
+
+    /// The value, looking parameters up in `values` (`None` for a missing parameter).
+    pub fn value(&self, values: &BTreeMap<String, f64>) -> Option<f64> {
+        match self {
+            Quantity::Value(v) => Some(*v),
+            Quantity::Parameter(name) => values.get(name).copied(),
+        }
+    }
+}
+
+/// `[[effect]]`, tagged by `type`: one load, with its potential (DESIGN §2).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum Effect {
+    /// `type = "gas"`: fixed over-pressure p, Π = −p V.
+    Gas(GasEffect),
+    /// `type = "gas-amount"`: fixed amount of gas (isothermal), Π = −C ln V + P_atm V.
+    GasAmount(GasAmountEffect),
+    /// `type = "fluid"`: fluid under gravity (along −z) up to a level.
+    Fluid(FluidEffect),
+    /// `type = "spin"`: the enclosed fluid spinning about the z-axis (rotating frame).
+    Spin(SpinEffect),
+    /// `type = "plane"`: a rigid frictionless plane, penalty contact.
+    Plane(PlaneEffect),
+}
+
+impl Effect {
+    /// The `type` string of this effect.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Effect::Gas(_) => "gas",
+            Effect::GasAmount(_) => "gas-amount",
+            Effect::Fluid(_) => "fluid",
+            Effect::Spin(_) => "spin",
+            Effect::Plane(_) => "plane",
+        }
+    }
+
+    /// The quantities of this effect with their keys, in declaration order.
+    pub fn quantities(&self) -> Vec<(&'static str, &Quantity)> {
+        match self {
+            Effect::Gas(e) => vec![("pressure", &e.pressure)],
+            Effect::GasAmount(e) => vec![("amount", &e.amount)],
+            Effect::Fluid(e) => vec![("density", &e.density), ("level", &e.level)],
+            Effect::Spin(e) => vec![("density", &e.density), ("omega2", &e.omega2)],
+            Effect::Plane(e) => vec![("offset", &e.offset)],
+        }
+    }
+
+    /// The parameters this effect depends on.
+    pub fn parameters(&self) -> Vec<&str> {
+        self.quantities()
+            .into_iter()
+            .filter_map(|(_, q)| q.parameter())
+            .collect()
+    }
+
+    /// True for the effects that load the enclosed region (gas, fluid, spin): they need a
+    /// closed membrane or an open one whose whole rim is fixed.
+    pub fn encloses(&self) -> bool {
+        !matches!(self, Effect::Plane(_))
+    }
+}
+
+/// `type = "gas"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct GasEffect {
+    /// Over-pressure p (inside minus outside); positive inflates.
+    pub pressure: Quantity,
+}
+
+/// `type = "gas-amount"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct GasAmountEffect {
+    /// Amount C > 0 (absolute pressure × volume, P = C/V).
+    pub amount: Quantity,
+    /// Ambient (absolute) pressure P_atm ≥ 0; over-pressure p = C/V − P_atm.
+    pub ambient_pressure: f64,
+}
+
+/// `type = "fluid"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct FluidEffect {
+    /// Density ρ ≥ 0.
+    pub density: Quantity,
+    /// Gravitational acceleration g > 0 (gravity acts along −z).
+    pub gravity: f64,
+    /// Height h of the free surface; the pressure is ρ g (h − z)₊.
+    pub level: Quantity,
+    /// Where the fluid is.
+    pub side: FluidSide,
+}
+
+/// `side` of a fluid effect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FluidSide {
+    /// In the enclosed region: inside a closed membrane, or between an open membrane with a
+    /// fixed rim and the (fixed) surface spanning its rim, i.e. on the side opposite to the
+    /// mesh normals (a truncated sphere on a plate).
+    Inside,
+    /// Below an open membrane with a fixed rim, pushing it up (a container under it, full up
+    /// to `level`).
+    Below,
+    /// Above an open membrane with a fixed rim, which is the floor of a container; it pushes
+    /// the membrane down.
+    Above,
+}
+
+/// `type = "spin"`: the fluid in the enclosed region spins about the z-axis with angular
+/// speed ω; Π = −(ρω²/2) ∫Ω (x² + y²) dV.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct SpinEffect {
+    /// Density ρ ≥ 0 of the spinning fluid.
+    pub density: Quantity,
+    /// ω² ≥ 0 (the potential is linear in it).
+    pub omega2: Quantity,
+}
+
+/// `type = "plane"`: the half-space n·x ≥ d is allowed; node i penetrating by
+/// δ = d − n·x_i > 0 costs κ/(q+1) δ^(q+1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct PlaneEffect {
+    /// Normal n (normalised on loading), pointing to the allowed side.
+    pub normal: [f64; 3],
+    /// Offset d: the plane is n·x = d.
+    pub offset: Quantity,
+    /// Penalty κ > 0.
+    pub penalty: f64,
+    /// Exponent q: 1 (force linear in penetration) or 3 (cubic). Default 1.
+    #[serde(default = "default_exponent")]
+    pub exponent: u32,
+}
+
+/// `[boundary]`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct Boundary {
+    /// Node sets of the mesh whose nodes are held at their reference positions. Default none.
+    #[serde(default)]
+    pub fixed: Vec<String>,
+}
+
+/// `[parameters.NAME]`: a load parameter Λ_j.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct Parameter {
+    /// Value at the start state.
+    pub start: f64,
+    /// Lower bound: the path stops when the parameter falls below it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// Upper bound: the path stops when the parameter exceeds it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+}
+
+/// `[[constraint]]`, tagged by `type`: one augmenting equation, which governs (frees) one
+/// parameter (DESIGN §2.6).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum Constraint {
+    /// `type = "fluid-volume"`: the fluid volume of a fluid effect is held fixed; its level
+    /// (a parameter) is the unknown that adjusts.
+    FluidVolume(FluidVolumeConstraint),
+    /// `type = "gas-amount"`: the amount of gas (P_atm + p)·V of a `gas` effect is held
+    /// fixed; its pressure (a parameter) adjusts.
+    GasAmount(GasAmountConstraint),
+    /// `type = "fixed"`: a parameter is held at its start value.
+    Fixed(FixedConstraint),
+}
+
+impl Constraint {
+    /// The parameter this constraint governs.
+    pub fn parameter(&self) -> &str {
+        match self {
+            Constraint::FluidVolume(c) => &c.level,
+            Constraint::GasAmount(c) => &c.pressure,
+            Constraint::Fixed(c) => &c.parameter,
+        }
+    }
+
+    /// The `type` string of this constraint.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Constraint::FluidVolume(_) => "fluid-volume",
+            Constraint::GasAmount(_) => "gas-amount",
+            Constraint::Fixed(_) => "fixed",
+        }
+    }
+}
+
+/// A held value: a number, or `"initial"` — the value at the start state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    /// The value measured at the start state (after the start solve).
+    Initial,
+    /// A given number.
+    Value(f64),
+}
+
+/// `type = "fluid-volume"`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub struct FluidVolumeConstraint {
+    /// Index of the fluid effect (in the file `effect = N`, optional when there is one fluid
+    /// effect; always resolved after loading).
+    pub effect: usize,
+    /// The fluid volume V_f = ∮ min(z, h) n_z dA to hold, or its initial value.
+    pub value: Target,
+    /// The level parameter of that effect, which this constraint governs.
+    #[serde(skip)]
+    pub level: String,
+}
+
+/// `type = "gas-amount"`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub struct GasAmountConstraint {
+    /// Index of the `gas` effect (optional in the file when there is one; resolved).
+    pub effect: usize,
+    /// The amount C = (P_atm + p)·V to hold, or its initial value.
+    pub value: Target,
+    /// Ambient (absolute) pressure P_atm ≥ 0.
+    pub ambient_pressure: f64,
+    /// The pressure parameter of that effect, which this constraint governs.
+    #[serde(skip)]
+    pub pressure: String,
+}
+
+/// `type = "fixed"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct FixedConstraint {
+    /// The parameter held at its start value.
+    pub parameter: String,
+}
+
+/// `[analysis]`, tagged by `type`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+pub enum Analysis {
+    /// `type = "path"`: trace the equilibrium path in the control parameter.
+    Path(PathAnalysis),
+    /// `type = "equilibrium"`: one Newton solve at the start values.
+    Equilibrium(EquilibriumAnalysis),
+}
+
+/// `type = "path"`: pseudo-arclength continuation from the start state. The path stops at
+/// the first of: the control leaving `[min, max]` of its parameter, the stretch reaching
+/// `stop-stretch`, or `steps` steps.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct PathAnalysis {
+    /// The parameter that is free on the path.
+    pub control: String,
+    /// The sense of the first step in the control. Default `increase`.
+    #[serde(default)]
+    pub direction: Direction,
+    /// Step budget (≥ 1). Default 200.
+    #[serde(default = "default_steps")]
+    pub steps: usize,
+    /// First arclength step. Default 0.02.
+    #[serde(default = "default_initial_step")]
+    pub initial_step: f64,
+    /// Smallest arclength step; below it the path stops. Default 1e-6.
+    #[serde(default = "default_min_step")]
+    pub min_step: f64,
+    /// Largest arclength step. Default 0.2.
+    #[serde(default = "default_max_step")]
+    pub max_step: f64,
+    /// Write every n-th state (n ≥ 1; the first and the last are always written). Default 10.
+    #[serde(default = "default_save_every")]
+    pub save_every: usize,
+    /// Stop when the volume stretch λ = (V/V_sf)^(1/3) reaches this value (closed membranes
+    /// only; V_sf = V(mesh)/λ0³ is the stress-free enclosed volume).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop_stretch: Option<f64>,
+    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Newton iterations per step before the step is cut. Default 25.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+}
+
+/// `analysis.direction`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Direction {
+    /// The control increases on the first step.
+    #[default]
+    Increase,
+    /// The control decreases on the first step.
+    Decrease,
+}
+
+/// `type = "equilibrium"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct EquilibriumAnalysis {
+    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Newton iterations before giving up (with step cutting). Default 25.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+}
+
+/// `[start]`: how the first equilibrium is found. The first Newton guess is the mesh scaled
+/// by `stretch` about the origin, x⁰ = stretch · X, with every parameter at its start value;
+/// Newton from there gives the start state. A free closed membrane (a balloon) needs
+/// `stretch > 1` with a start pressure that holds it (a membrane without tension has a
+/// singular tangent); a clamped membrane starts taut from `material.prestretch > 1` and
+/// must keep `stretch = 1` (the fixed nodes stay at X).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct Start {
+    /// Isotropic scale of the first guess about the origin (> 0). Default 1.
+    #[serde(default = "one")]
+    pub stretch: f64,
+}
+
+impl Default for Start {
+    fn default() -> Self {
+        Start { stretch: 1.0 }
+    }
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn default_sectors() -> usize {
+    DiscOptions::default().sectors
+}
+fn default_disc_divisions() -> usize {
+    DiscOptions::default().divisions
+}
+fn default_frequency() -> usize {
+    IcosphereOptions::default().frequency
+}
+fn default_cut_height() -> f64 {
+    TruncatedSphereOptions::default().cut_height
+}
+fn default_pattern() -> String {
+    TruncatedSphereOptions::default().pattern
+}
+fn default_exponent() -> u32 {
+    1
+}
+fn default_steps() -> usize {
+    200
+}
+fn default_initial_step() -> f64 {
+    0.02
+}
+fn default_min_step() -> f64 {
+    1e-6
+}
+fn default_max_step() -> f64 {
+    0.2
+}
+fn default_save_every() -> usize {
+    10
+}
+fn default_tolerance() -> f64 {
+    1e-9
+}
+fn default_max_iterations() -> usize {
+    25
+}
+
+impl MeshSpec {
+    /// The `generator` string.
+    pub fn generator(&self) -> &'static str {
+        match self {
+            MeshSpec::Disc(_) => "disc",
+            MeshSpec::Icosphere(_) => "icosphere",
+            MeshSpec::TruncatedSphere(_) => "truncated-sphere",
+        }
+    }
+
+    /// The number of triangles the generator will build (saturating; a cheap guard before
+    /// building).
+    pub fn triangle_count(&self) -> usize {
+        match self {
+            MeshSpec::Disc(d) => d
+                .sectors
+                .saturating_mul(d.divisions)
+                .saturating_mul(d.divisions),
+            MeshSpec::Icosphere(i) => 20usize
+                .saturating_mul(i.frequency)
+                .saturating_mul(i.frequency),
+            MeshSpec::TruncatedSphere(t) => {
+                let d = t.divisions_or_default();
+                8usize.saturating_mul(d).saturating_mul(d)
+            }
+        }
+    }
+
+    /// Builds the mesh with its symmetry group. A generator's complaint becomes a
+    /// [`SceneError::Invalid`] naming `mesh.<option>`.
+    pub fn build(&self) -> Result<SymmetricMesh, SceneError> {
+        let built = match self {
+            MeshSpec::Disc(d) => generators::disc(&DiscOptions {
+                radius: d.radius,
+                sectors: d.sectors,
+                divisions: d.divisions,
+                group: d.group.clone(),
+            }),
+            MeshSpec::Icosphere(i) => {
+                let opts = IcosphereOptions {
+                    radius: i.radius,
+                    frequency: i.frequency,
+                };
+                match i.down {
+                    None => generators::icosphere(&opts),
+                    Some(down) => generators::icosphere_oriented(
+                        &opts,
+                        match down {
+                            DownSpec::Vertex => Down::Vertex,
+                            DownSpec::Face => Down::Face,
+                            DownSpec::Edge => Down::Edge,
+                        },
+                    ),
+                }
+            }
+            MeshSpec::TruncatedSphere(t) => {
+                let mut opts = TruncatedSphereOptions::for_pattern(&t.pattern);
+                opts.radius = t.radius;
+                opts.cut_height = t.cut_height;
+                opts.divisions = t.divisions_or_default();
+                generators::truncated_sphere(&opts)
+            }
+        };
+        built.map_err(|e| self.mesh_error(e).into())
+    }
+
+    /// A generator error as a problem naming `mesh.<option>`.
+    fn mesh_error(&self, e: MeshError) -> error::Problem {
+        let text = e.to_string();
+        let first: String = text
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect();
+        let options: &[&str] = match self {
+            MeshSpec::Disc(_) => &["radius", "sectors", "divisions", "group"],
+            MeshSpec::Icosphere(_) => &["radius", "frequency", "down"],
+            MeshSpec::TruncatedSphere(_) => &["radius", "cut_height", "pattern", "divisions"],
+        };
+        if options.contains(&first.as_str()) {
+            let key = format!("mesh.{}", first.replace('_', "-"));
+            match text.strip_prefix(&format!("{first} must")) {
+                Some(rest) => error::Problem::at(&key, format!("must{rest}")),
+                None => error::Problem::new(&key, format!("'{key}': {text}")),
+            }
+        } else {
+            error::Problem::new("mesh", format!("'mesh' ({}): {text}", self.generator()))
+        }
+    }
+}
+
+impl TruncatedSphereMesh {
+    /// `divisions`, or the generator's default for the pattern.
+    pub fn divisions_or_default(&self) -> usize {
+        self.divisions
+            .unwrap_or_else(|| TruncatedSphereOptions::for_pattern(&self.pattern).divisions)
+    }
+}
+
+impl Scene {
+    /// Parses and validates a scene from TOML text; `origin` (a file name or a label) prefixes
+    /// error messages. Checks everything that does not need the mesh; call
+    /// [`Scene::build_mesh`] for the rest.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        load::parse(text, origin)
+    }
+
+    /// Reads, parses and validates a scene file (see [`Scene::from_toml_str`]).
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// Builds the mesh and checks the parts of the scene that refer to it
+    /// ([`Scene::check_mesh`]).
+    pub fn build_mesh(&self) -> Result<SymmetricMesh, SceneError> {
+        let mesh = self.mesh.build().map_err(|e| e.with_origin(&self.origin))?;
+        self.check_mesh(&mesh)?;
+        Ok(mesh)
+    }
+
+    /// Checks the scene against its mesh: every `boundary.fixed` name is a node set of the
+    /// mesh; gas, fluid and spin need a closed membrane or one whose whole rim is fixed;
+    /// fluid `below`/`above` needs an open membrane; `start.stretch ≠ 1` and
+    /// `analysis.stop-stretch` need a closed one.
+    pub fn check_mesh(&self, mesh: &SymmetricMesh) -> Result<(), SceneError> {
+        validate::check_mesh(self, mesh).map_err(|p| p.into_error(&self.origin))
+    }
+
+    /// The sorted, de-duplicated nodes of all `boundary.fixed` sets (names must have been
+    /// checked with [`Scene::check_mesh`]; unknown names contribute nothing).
+    pub fn fixed_nodes(&self, mesh: &SymmetricMesh) -> Vec<usize> {
+        let mut nodes: Vec<usize> = self
+            .boundary
+            .fixed
+            .iter()
+            .filter_map(|name| mesh.mesh.boundaries.get(name))
+            .flatten()
+            .copied()
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
+    }
+
+    /// Parameter values at the start state.
+    pub fn start_values(&self) -> BTreeMap<String, f64> {
+        self.parameters
+            .iter()
+            .map(|(name, p)| (name.clone(), p.start))
+            .collect()
+    }
+
+    /// The control parameter of a path analysis.
+    pub fn control(&self) -> Option<&str> {
+        match &self.analysis {
+            Analysis::Path(p) => Some(&p.control),
+            Analysis::Equilibrium(_) => None,
+        }
+    }
+
+    /// The constraint that governs `parameter`, if any.
+    pub fn governing(&self, parameter: &str) -> Option<&Constraint> {
+        self.constraints.iter().find(|c| c.parameter() == parameter)
+    }
+
+    /// The scene as TOML (loading it again gives an equal scene).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a scene serialises to TOML")
+    }
+}

@@ -1,0 +1,588 @@
+//! Validation: the values and cross-references of a parsed scene ([`check`]), and the parts
+//! that need the mesh ([`check_mesh`]). Each failure is one [`Problem`] naming the key path
+//! and the value.
+
+use super::error::{num, Problem};
+use super::load::{key_path, RawConstraint};
+use super::*;
+use std::collections::BTreeSet;
+
+/// Fails unless `x` is finite and > 0.
+fn positive(key: &str, x: f64) -> Result<(), Problem> {
+    finite(key, x)?;
+    if x > 0.0 {
+        Ok(())
+    } else {
+        Err(Problem::at(key, format!("must be > 0, got {}", num(x))))
+    }
+}
+
+/// Fails unless `x` is finite and ≥ 0.
+fn non_negative(key: &str, x: f64) -> Result<(), Problem> {
+    finite(key, x)?;
+    if x >= 0.0 {
+        Ok(())
+    } else {
+        Err(Problem::at(key, format!("must be >= 0, got {}", num(x))))
+    }
+}
+
+/// Fails unless `x` is finite.
+fn finite(key: &str, x: f64) -> Result<(), Problem> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(Problem::at(
+            key,
+            format!("must be a finite number, got {}", num(x)),
+        ))
+    }
+}
+
+/// Fails unless the integer `n` is at least `min`.
+fn at_least(key: &str, n: usize, min: usize) -> Result<(), Problem> {
+    if n >= min {
+        Ok(())
+    } else {
+        Err(Problem::at(key, format!("must be >= {min}, got {n}")))
+    }
+}
+
+/// What a literal quantity must satisfy.
+#[derive(Clone, Copy)]
+enum Rule {
+    Finite,
+    NonNegative,
+    Positive,
+}
+
+/// The rule for each quantity key of each effect type.
+fn rule(effect: &Effect, key: &str) -> Rule {
+    match (effect, key) {
+        (Effect::GasAmount(_), "amount") => Rule::Positive,
+        (Effect::Fluid(_) | Effect::Spin(_), "density") => Rule::NonNegative,
+        (Effect::Spin(_), "omega2") => Rule::NonNegative,
+        _ => Rule::Finite,
+    }
+}
+
+fn declared(parameters: &BTreeMap<String, Parameter>) -> String {
+    if parameters.is_empty() {
+        "no parameters are declared".into()
+    } else {
+        let names: Vec<&str> = parameters.keys().map(String::as_str).collect();
+        format!("declared: {}", names.join(", "))
+    }
+}
+
+/// Fails unless `name` is a declared parameter; `key` is where it was referenced.
+fn known_parameter(
+    parameters: &BTreeMap<String, Parameter>,
+    key: &str,
+    name: &str,
+) -> Result<(), Problem> {
+    if parameters.contains_key(name) {
+        Ok(())
+    } else {
+        Err(Problem::new(
+            key,
+            format!(
+                "'{key}': unknown parameter \"{name}\" ({})",
+                declared(parameters)
+            ),
+        ))
+    }
+}
+
+/// Resolves the effect each constraint refers to and the parameter it governs.
+pub(super) fn resolve_constraints(
+    effects: &[Effect],
+    raw: Vec<RawConstraint>,
+) -> Result<Vec<Constraint>, Problem> {
+    raw.into_iter()
+        .map(|c| match c {
+            RawConstraint::FluidVolume(r, path) => {
+                let effect = pick_effect(effects, &path, "fluid-volume", "fluid", r.effect)?;
+                let Effect::Fluid(fluid) = &effects[effect] else {
+                    unreachable!("pick_effect returns a fluid effect")
+                };
+                let level = governed(&path, "fluid-volume", effect, "level", &fluid.level)?;
+                check_target(&path, r.value, false)?;
+                Ok(Constraint::FluidVolume(FluidVolumeConstraint {
+                    effect,
+                    value: r.value,
+                    level,
+                }))
+            }
+            RawConstraint::GasAmount(r, path) => {
+                let effect = pick_effect(effects, &path, "gas-amount", "gas", r.effect)?;
+                let Effect::Gas(gas) = &effects[effect] else {
+                    unreachable!("pick_effect returns a gas effect")
+                };
+                let pressure = governed(&path, "gas-amount", effect, "pressure", &gas.pressure)?;
+                check_target(&path, r.value, true)?;
+                non_negative(&format!("{path}.ambient-pressure"), r.ambient_pressure)?;
+                Ok(Constraint::GasAmount(GasAmountConstraint {
+                    effect,
+                    value: r.value,
+                    ambient_pressure: r.ambient_pressure,
+                    pressure,
+                }))
+            }
+            RawConstraint::Fixed(f) => Ok(Constraint::Fixed(f)),
+        })
+        .collect()
+}
+
+/// The index of the effect of type `kind` a constraint at `path` refers to: `given`, or the
+/// only one of that type.
+fn pick_effect(
+    effects: &[Effect],
+    path: &str,
+    constraint: &str,
+    kind: &str,
+    given: Option<usize>,
+) -> Result<usize, Problem> {
+    let candidates: Vec<usize> = (0..effects.len())
+        .filter(|&i| effects[i].kind() == kind)
+        .collect();
+    let listing = || {
+        candidates
+            .iter()
+            .map(|i| format!("effect[{i}]"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match given {
+        Some(i) => {
+            let key = format!("{path}.effect");
+            match effects.get(i) {
+                Some(e) if e.kind() == kind => Ok(i),
+                Some(e) => Err(Problem::at(
+                    &key,
+                    format!(
+                        "= {i} refers to a {} effect; a {constraint} constraint needs a {kind} \
+                         effect{}",
+                        e.kind(),
+                        if candidates.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" ({})", listing())
+                        }
+                    ),
+                )),
+                None => Err(Problem::at(
+                    &key,
+                    format!(
+                        "= {i} is out of range: the scene has {} effects (indices from 0)",
+                        effects.len()
+                    ),
+                )),
+            }
+        }
+        None => match candidates.as_slice() {
+            [i] => Ok(*i),
+            [] => Err(Problem::new(
+                path,
+                format!("'{path}' ({constraint}) needs a {kind} effect; the scene has none"),
+            )),
+            _ => Err(Problem::new(
+                &format!("{path}.effect"),
+                format!(
+                    "'{path}.effect' is required: the scene has several {kind} effects ({})",
+                    listing()
+                ),
+            )),
+        },
+    }
+}
+
+/// The parameter named by the quantity `key` of effect `effect`, which a constraint governs.
+fn governed(
+    path: &str,
+    constraint: &str,
+    effect: usize,
+    key: &str,
+    q: &Quantity,
+) -> Result<String, Problem> {
+    match q {
+        Quantity::Parameter(name) => Ok(name.clone()),
+        Quantity::Value(v) => Err(Problem::new(
+            path,
+            format!(
+                "'{path}' ({constraint}) needs 'effect[{effect}].{key}' to be a parameter, got {}",
+                num(*v)
+            ),
+        )),
+    }
+}
+
+fn check_target(path: &str, t: Target, must_be_positive: bool) -> Result<(), Problem> {
+    match t {
+        Target::Initial => Ok(()),
+        Target::Value(v) if must_be_positive => positive(&format!("{path}.value"), v),
+        Target::Value(v) => finite(&format!("{path}.value"), v),
+    }
+}
+
+/// Checks the values and cross-references of a parsed scene; normalises plane normals.
+pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
+    if scene.info.name.trim().is_empty() {
+        return Err(Problem::at("scene.name", "must not be empty, got \"\""));
+    }
+    check_mesh_options(&scene.mesh)?;
+    check_material(&scene.material)?;
+    for (i, effect) in scene.effects.iter_mut().enumerate() {
+        check_effect(i, effect, &scene.parameters)?;
+    }
+    let mut names = BTreeSet::new();
+    for (i, name) in scene.boundary.fixed.iter().enumerate() {
+        if !names.insert(name) {
+            return Err(Problem::at(
+                &format!("boundary.fixed[{i}]"),
+                format!("lists \"{name}\" a second time"),
+            ));
+        }
+    }
+    for (name, p) in &scene.parameters {
+        check_parameter(&key_path("parameters", name), p)?;
+    }
+    check_constraints(scene)?;
+    check_analysis(scene)?;
+    check_parameter_use(scene)?;
+    positive("start.stretch", scene.start.stretch)?;
+    if scene.start.stretch != 1.0 && !scene.boundary.fixed.is_empty() {
+        return Err(Problem::at(
+            "start.stretch",
+            format!(
+                "= {} would move the fixed nodes ({}); a clamped membrane starts taut from \
+                 material.prestretch and keeps stretch = 1",
+                num(scene.start.stretch),
+                scene.boundary.fixed.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
+    let radius_rule = |r: f64| positive("mesh.radius", r);
+    match mesh {
+        MeshSpec::Disc(d) => {
+            radius_rule(d.radius)?;
+            at_least("mesh.sectors", d.sectors, 3)?;
+            at_least("mesh.divisions", d.divisions, 1)?;
+        }
+        MeshSpec::Icosphere(i) => {
+            radius_rule(i.radius)?;
+            at_least("mesh.frequency", i.frequency, 1)?;
+        }
+        MeshSpec::TruncatedSphere(t) => {
+            radius_rule(t.radius)?;
+            let c = t.cut_height;
+            if !(c.is_finite() && c > -t.radius && c < t.radius) {
+                return Err(Problem::at(
+                    "mesh.cut-height",
+                    format!(
+                        "must lie strictly between -radius and radius ({}, {}), got {}",
+                        num(-t.radius),
+                        num(t.radius),
+                        num(c)
+                    ),
+                ));
+            }
+            if let Some(d) = t.divisions {
+                at_least("mesh.divisions", d, 1)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_material(m: &Material) -> Result<(), Problem> {
+    positive("material.mu", m.mu)?;
+    non_negative("material.k", m.k)?;
+    positive("material.thickness", m.thickness)?;
+    positive("material.prestretch", m.prestretch)
+}
+
+fn check_effect(
+    i: usize,
+    effect: &mut Effect,
+    parameters: &BTreeMap<String, Parameter>,
+) -> Result<(), Problem> {
+    let path = format!("effect[{i}]");
+    for (key, q) in effect.quantities() {
+        let key_path = format!("{path}.{key}");
+        match q {
+            Quantity::Parameter(name) => known_parameter(parameters, &key_path, name)?,
+            Quantity::Value(v) => match rule(effect, key) {
+                Rule::Finite => finite(&key_path, *v)?,
+                Rule::NonNegative => non_negative(&key_path, *v)?,
+                Rule::Positive => positive(&key_path, *v)?,
+            },
+        }
+    }
+    match effect {
+        Effect::GasAmount(g) => {
+            non_negative(&format!("{path}.ambient-pressure"), g.ambient_pressure)
+        }
+        Effect::Fluid(f) => positive(&format!("{path}.gravity"), f.gravity),
+        Effect::Plane(p) => {
+            let key = format!("{path}.normal");
+            let n = p.normal;
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if !(len.is_finite() && len > 0.0) {
+                return Err(Problem::at(
+                    &key,
+                    format!(
+                        "must be a finite non-zero vector, got [{}, {}, {}]",
+                        num(n[0]),
+                        num(n[1]),
+                        num(n[2])
+                    ),
+                ));
+            }
+            p.normal = [n[0] / len, n[1] / len, n[2] / len];
+            positive(&format!("{path}.penalty"), p.penalty)?;
+            if p.exponent != 1 && p.exponent != 3 {
+                return Err(Problem::at(
+                    &format!("{path}.exponent"),
+                    format!("must be 1 or 3, got {}", p.exponent),
+                ));
+            }
+            Ok(())
+        }
+        Effect::Gas(_) | Effect::Spin(_) => Ok(()),
+    }
+}
+
+fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
+    finite(&format!("{key}.start"), p.start)?;
+    if let Some(min) = p.min {
+        finite(&format!("{key}.min"), min)?;
+    }
+    if let Some(max) = p.max {
+        finite(&format!("{key}.max"), max)?;
+    }
+    if let (Some(min), Some(max)) = (p.min, p.max) {
+        if min >= max {
+            return Err(Problem::at(
+                &format!("{key}.min"),
+                format!("must be < max = {}, got {}", num(max), num(min)),
+            ));
+        }
+    }
+    let below = p.min.is_some_and(|m| p.start < m);
+    let above = p.max.is_some_and(|m| p.start > m);
+    if below || above {
+        let show = |b: Option<f64>, inf: &str| b.map_or_else(|| inf.to_string(), num);
+        return Err(Problem::at(
+            &format!("{key}.start"),
+            format!(
+                "must lie within [min, max] = [{}, {}], got {}",
+                show(p.min, "-inf"),
+                show(p.max, "inf"),
+                num(p.start)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn check_constraints(scene: &Scene) -> Result<(), Problem> {
+    let mut governed: BTreeMap<&str, usize> = BTreeMap::new();
+    for (i, c) in scene.constraints.iter().enumerate() {
+        let path = format!("constraint[{i}]");
+        let name = c.parameter();
+        let key = match c {
+            Constraint::Fixed(_) => format!("{path}.parameter"),
+            _ => path.clone(),
+        };
+        known_parameter(&scene.parameters, &key, name)?;
+        if let Some(j) = governed.insert(name, i) {
+            return Err(Problem::new(
+                &key,
+                format!(
+                    "'{key}' ({}) governs parameter \"{name}\", which constraint[{j}] \
+                     ({}) already governs",
+                    c.kind(),
+                    scene.constraints[j].kind()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn check_analysis(scene: &Scene) -> Result<(), Problem> {
+    match &scene.analysis {
+        Analysis::Path(a) => {
+            known_parameter(&scene.parameters, "analysis.control", &a.control)?;
+            if let Some((i, c)) = scene
+                .constraints
+                .iter()
+                .enumerate()
+                .find(|(_, c)| c.parameter() == a.control)
+            {
+                return Err(Problem::at(
+                    "analysis.control",
+                    format!(
+                        "= \"{}\" is governed by constraint[{i}] ({}); the control must be free",
+                        a.control,
+                        c.kind()
+                    ),
+                ));
+            }
+            at_least("analysis.steps", a.steps, 1)?;
+            positive("analysis.min-step", a.min_step)?;
+            positive("analysis.max-step", a.max_step)?;
+            positive("analysis.initial-step", a.initial_step)?;
+            if a.min_step > a.max_step {
+                return Err(Problem::at(
+                    "analysis.min-step",
+                    format!(
+                        "must be <= max-step = {}, got {}",
+                        num(a.max_step),
+                        num(a.min_step)
+                    ),
+                ));
+            }
+            if a.initial_step < a.min_step || a.initial_step > a.max_step {
+                return Err(Problem::at(
+                    "analysis.initial-step",
+                    format!(
+                        "must lie within [min-step, max-step] = [{}, {}], got {}",
+                        num(a.min_step),
+                        num(a.max_step),
+                        num(a.initial_step)
+                    ),
+                ));
+            }
+            at_least("analysis.save-every", a.save_every, 1)?;
+            if let Some(s) = a.stop_stretch {
+                positive("analysis.stop-stretch", s)?;
+            }
+            check_newton(a.tolerance, a.max_iterations)
+        }
+        Analysis::Equilibrium(a) => check_newton(a.tolerance, a.max_iterations),
+    }
+}
+
+fn check_newton(tolerance: f64, max_iterations: usize) -> Result<(), Problem> {
+    positive("analysis.tolerance", tolerance)?;
+    if tolerance >= 1.0 {
+        return Err(Problem::at(
+            "analysis.tolerance",
+            format!("must be < 1 (a relative residual), got {}", num(tolerance)),
+        ));
+    }
+    at_least("analysis.max-iterations", max_iterations, 1)
+}
+
+/// Every declared parameter is used by an effect; on a path, every parameter but the control
+/// is governed by a constraint.
+fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
+    let used: BTreeSet<&str> = scene.effects.iter().flat_map(Effect::parameters).collect();
+    for name in scene.parameters.keys() {
+        let key = key_path("parameters", name);
+        if !used.contains(name.as_str()) {
+            return Err(Problem::at(
+                &key,
+                format!(
+                    "is declared but no effect uses it (give an effect's quantity as \"{name}\")"
+                ),
+            ));
+        }
+        if let Some(control) = scene.control() {
+            if name != control && scene.governing(name).is_none() {
+                return Err(Problem::at(
+                    &key,
+                    format!(
+                        "is neither the control (\"{control}\") nor governed by a constraint; \
+                         hold it with [[constraint]] type = \"fixed\", parameter = \"{name}\""
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The checks that need the mesh (see [`Scene::check_mesh`]).
+pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Problem> {
+    let mesh = &sym.mesh;
+    let generator = scene.mesh.generator();
+    for (i, name) in scene.boundary.fixed.iter().enumerate() {
+        if !mesh.boundaries.contains_key(name) {
+            let key = format!("boundary.fixed[{i}]");
+            let available: Vec<&str> = mesh.boundaries.keys().map(String::as_str).collect();
+            let has = if available.is_empty() {
+                format!("the {generator} mesh has no node sets")
+            } else {
+                format!("the {generator} mesh has: {}", available.join(", "))
+            };
+            return Err(Problem::new(
+                &key,
+                format!("'{key}': unknown node set \"{name}\" ({has})"),
+            ));
+        }
+    }
+    let topology = mesh
+        .topology()
+        .map_err(|e| Problem::new("mesh", format!("'mesh' ({generator}): {e}")))?;
+    let fixed: BTreeSet<usize> = scene.fixed_nodes(sym).into_iter().collect();
+    let rim: BTreeSet<usize> = topology.boundary_loops.iter().flatten().copied().collect();
+    let loose = rim.difference(&fixed).count();
+    for (i, effect) in scene.effects.iter().enumerate() {
+        if !effect.encloses() {
+            continue;
+        }
+        let path = format!("effect[{i}]");
+        if !topology.closed && loose > 0 {
+            return Err(Problem::new(
+                &path,
+                format!(
+                    "'{path}' ({}) needs a closed membrane or a fixed rim, but {loose} of the {} \
+                     rim nodes of the {generator} mesh are not in boundary.fixed",
+                    effect.kind(),
+                    rim.len()
+                ),
+            ));
+        }
+        if let Effect::Fluid(f) = effect {
+            if topology.closed && f.side != FluidSide::Inside {
+                let key = format!("{path}.side");
+                let side = if f.side == FluidSide::Below {
+                    "below"
+                } else {
+                    "above"
+                };
+                return Err(Problem::new(
+                    &key,
+                    format!(
+                        "'{key}' = \"{side}\" needs an open membrane; the {generator} mesh is \
+                         closed (use \"inside\")"
+                    ),
+                ));
+            }
+        }
+    }
+    if let Analysis::Path(PathAnalysis {
+        stop_stretch: Some(s),
+        ..
+    }) = &scene.analysis
+    {
+        if !topology.closed {
+            return Err(Problem::at(
+                "analysis.stop-stretch",
+                format!(
+                    "= {} needs a closed membrane (the stretch is (V/V0)^(1/3)); the {generator} \
+                     mesh is open",
+                    num(*s)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,130 @@
+//! Every effect assembled into a model and checked against finite differences at random
+//! states (residual vs Π, tangent vs residual, symmetry, loads vs Λ), plus Archimedes.
+
+use memstab::effects::hydrostatic::{Fluid, FluidSide};
+use memstab::effects::membrane::{Membrane, MooneyRivlin};
+use memstab::effects::plane::{PenaltyLaw, Plane};
+use memstab::effects::spin::Spin;
+use memstab::effects::Quantity;
+use memstab::model::check::{check_derivatives, DerivativeErrors};
+use memstab::model::{Effect, FeModel, Model, Request};
+use meshes::generators::{disc, icosphere, DiscOptions, IcosphereOptions};
+use meshes::Mesh;
+use nalgebra::Vector3;
+use proptest::prelude::*;
+
+fn sphere(frequency: usize) -> Mesh {
+    icosphere(&IcosphereOptions { radius: 1.0, frequency }).unwrap().mesh
+}
+
+fn random_vector(seed: u64, n: usize, amplitude: f64) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            amplitude * (((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0)
+        })
+        .collect()
+}
+
+/// Random state around a uniform stretch; derivative errors along a random direction.
+fn errors(model: &FeModel, seed: u64, stretch: f64, params: &[f64]) -> DerivativeErrors {
+    let n = model.unknowns();
+    let mut u = random_vector(seed, n, 0.02);
+    for (i, x) in model.reference().iter().enumerate() {
+        if let Some(d) = model.layout().dof(i, 0) {
+            for c in 0..3 {
+                u[d + c] += (stretch - 1.0) * x[c];
+            }
+        }
+    }
+    let d = random_vector(seed ^ 0x5555, n, 1.0);
+    check_derivatives(model, &u, params, &d, 1e-6).unwrap()
+}
+
+fn assert_small(e: DerivativeErrors) -> Result<(), TestCaseError> {
+    prop_assert!(e.residual < 1e-7, "{e:?}");
+    prop_assert!(e.tangent < 1e-5, "{e:?}");
+    prop_assert!(e.asymmetry < 1e-13, "{e:?}");
+    prop_assert!(e.loads < 1e-6, "{e:?}");
+    Ok(())
+}
+
+fn membrane(m: &Mesh, prestretch: f64) -> Box<dyn Effect> {
+    Box::new(Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, 0.1, 1.0), prestretch).unwrap())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, failure_persistence: None, .. ProptestConfig::default() })]
+
+    #[test]
+    fn fluid_inside_a_closed_membrane(seed in any::<u64>(), h in -1.2f64..1.2, rho in 0.1f64..3.0) {
+        let m = sphere(2);
+        let fluid = Fluid { density: Quantity::Parameter(0), gravity: 1.0, level: Quantity::Parameter(1), side: FluidSide::Behind };
+        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![membrane(&m, 1.0), Box::new(fluid)], vec!["rho".into(), "h".into()]);
+        assert_small(errors(&model, seed, 1.2, &[rho, h]))?;
+    }
+
+    #[test]
+    fn fluid_above_a_clamped_disc(seed in any::<u64>(), h in -0.2f64..0.3, rho in 0.1f64..3.0) {
+        let sym = disc(&DiscOptions { radius: 1.0, sectors: 5, divisions: 4, group: None }).unwrap();
+        let m = &sym.mesh;
+        let fluid = Fluid { density: Quantity::Parameter(0), gravity: 1.0, level: Quantity::Parameter(1), side: FluidSide::Front };
+        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &m.boundaries["rim"], vec![membrane(m, 1.1), Box::new(fluid)], vec!["rho".into(), "h".into()]);
+        assert_small(errors(&model, seed, 1.0, &[rho, h]))?;
+    }
+
+    #[test]
+    fn spinning_fluid(seed in any::<u64>(), w2 in 0.0f64..4.0) {
+        let m = sphere(2);
+        let spin = Spin { density: 1.3, omega2: Quantity::Parameter(0), side: FluidSide::Behind };
+        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![membrane(&m, 1.0), Box::new(spin)], vec!["w2".into()]);
+        assert_small(errors(&model, seed, 1.1, &[w2]))?;
+    }
+
+    #[test]
+    fn rigid_planes(seed in any::<u64>(), d in -1.1f64..-0.8, cubic in any::<bool>()) {
+        let m = sphere(2);
+        let law = if cubic { PenaltyLaw::Cubic } else { PenaltyLaw::Linear };
+        let plane = Plane { normal: Vector3::z(), offset: Quantity::Parameter(0), penalty: 50.0, law };
+        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![membrane(&m, 1.0), Box::new(plane)], vec!["d".into()]);
+        assert_small(errors(&model, seed, 1.05, &[d]))?;
+    }
+}
+
+/// Net force of the fluid on a closed membrane immersed in a pool, Σ_i (−F_i).
+fn buoyancy(m: &Mesh, level: f64) -> Vector3<f64> {
+    let fluid = Fluid {
+        density: Quantity::Value(2.0),
+        gravity: 9.81,
+        level: Quantity::Value(level),
+        side: FluidSide::Front,
+    };
+    let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![Box::new(fluid)], vec![]);
+    let mut e = model.new_evaluation();
+    model.evaluate(&vec![0.0; model.unknowns()], &[], Request::RESIDUAL, &mut e).unwrap();
+    let mut f = Vector3::zeros();
+    for (i, r) in e.residual.iter().enumerate() {
+        f[i % 3] -= r;
+    }
+    f
+}
+
+#[test]
+fn archimedes_on_a_sphere_converges_at_second_order() {
+    // A unit sphere immersed to the level h = 0.3 displaces the cap below it:
+    // V = π (R + h)² (2R − h) / 3 for the part below z = h.
+    let h: f64 = 0.3;
+    let exact = std::f64::consts::PI * (1.0 + h).powi(2) * (2.0 - h) / 3.0 * 2.0 * 9.81;
+    let errs: Vec<f64> = [8, 16]
+        .iter()
+        .map(|&f| {
+            let force = buoyancy(&sphere(f), h);
+            assert!(force.x.abs() < 1e-10 * exact && force.y.abs() < 1e-10 * exact, "{force}");
+            (force.z - exact).abs() / exact
+        })
+        .collect();
+    let rate = (errs[0] / errs[1]).log2();
+    assert!(errs[1] < 5e-3, "{errs:?}");
+    assert!((1.7..2.3).contains(&rate), "rate {rate}, errors {errs:?}");
+}

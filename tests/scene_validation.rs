@@ -1,0 +1,640 @@
+//! Scene files: the bundled scenes load and build, and every class of bad input gets one
+//! line naming the key path and the value; garbage never panics.
+
+use memstab::scene::{
+    Analysis, Constraint, Effect, FluidSide, MeshSpec, Quantity, Scene, SceneError, Target,
+};
+use proptest::prelude::*;
+use std::path::Path;
+
+/// A valid scene that exercises most sections: a small clamped disc with fluid above, a gas
+/// pressure and a plane (effect[0], effect[1], effect[2]).
+const BASE: &str = r#"
+[scene]
+name = "test"
+
+[mesh]
+generator = "disc"
+radius = 1.1
+sectors = 6
+divisions = 3
+
+[material]
+mu = 100.0
+k = 0.1
+thickness = 0.01
+prestretch = 1.1
+
+[[effect]]
+type = "fluid"
+side = "above"
+density = "rho"
+gravity = 1.0
+level = 0.001
+
+[[effect]]
+type = "gas"
+pressure = 0.5
+
+[[effect]]
+type = "plane"
+normal = [0.0, 0.0, 2.0]
+offset = -0.5
+penalty = 1000.0
+
+[boundary]
+fixed = ["rim"]
+
+[parameters.rho]
+start = 0.0
+min = 0.0
+max = 5.0
+
+[analysis]
+type = "path"
+control = "rho"
+"#;
+
+/// BASE with the first occurrence of `from` replaced by `to` (which must exist).
+fn edit(from: &str, to: &str) -> String {
+    assert!(BASE.contains(from), "BASE has no {from:?}");
+    BASE.replacen(from, to, 1)
+}
+
+/// The error of loading `text` (and, if that succeeds, of building its mesh), checked to be
+/// one line.
+fn error_of(text: &str) -> String {
+    let err = match Scene::from_toml_str(text, "test.toml") {
+        Ok(scene) => match scene.build_mesh() {
+            Ok(_) => panic!("the scene was accepted:\n{text}"),
+            Err(e) => e,
+        },
+        Err(e) => e,
+    };
+    let message = err.to_string();
+    assert_eq!(message.lines().count(), 1, "not one line: {message}");
+    assert!(message.starts_with("test.toml"), "no origin: {message}");
+    message
+}
+
+/// Asserts that `text` is rejected with a message containing every needle.
+fn rejects(text: &str, needles: &[&str]) -> String {
+    let message = error_of(text);
+    for needle in needles {
+        assert!(
+            message.contains(needle),
+            "{needle:?} not in the message: {message}"
+        );
+    }
+    message
+}
+
+#[test]
+fn base_scene_is_valid() {
+    let scene = Scene::from_toml_str(BASE, "base").expect("BASE loads");
+    let mesh = scene.build_mesh().expect("BASE builds");
+    assert_eq!(mesh.mesh.triangles.len(), 6 * 9);
+    assert_eq!(scene.effects.len(), 3);
+    // Defaults.
+    assert_eq!(scene.start.stretch, 1.0);
+    let Analysis::Path(path) = &scene.analysis else {
+        panic!("a path analysis")
+    };
+    assert_eq!(path.steps, 200);
+    assert!(path.min_step <= path.initial_step && path.initial_step <= path.max_step);
+    // The plane normal is normalised; the exponent defaults to 1.
+    let Effect::Plane(plane) = &scene.effects[2] else {
+        panic!("effect[2] is a plane")
+    };
+    assert_eq!(plane.normal, [0.0, 0.0, 1.0]);
+    assert_eq!(plane.exponent, 1);
+    let Effect::Fluid(fluid) = &scene.effects[0] else {
+        panic!("effect[0] is a fluid")
+    };
+    assert_eq!(fluid.side, FluidSide::Above);
+    assert_eq!(fluid.density, Quantity::Parameter("rho".into()));
+    assert_eq!(scene.fixed_nodes(&mesh).len(), 6 * 3);
+}
+
+#[test]
+fn unknown_keys_are_named_with_their_path() {
+    rejects(
+        &edit("pressure = 0.5", "pressur = 0.5"),
+        &["unknown key 'effect[1].pressur'", "pressure"],
+    );
+    rejects(
+        &edit("thickness = 0.01", "thickness = 0.01\nthicknes = 0.01"),
+        &["unknown key 'material.thicknes'"],
+    );
+    rejects(
+        &format!("{BASE}\n[solver]\nx = 1\n"),
+        &["unknown key 'solver'"],
+    );
+    rejects(
+        &edit("control = \"rho\"", "control = \"rho\"\nstep = 3"),
+        &["unknown key 'analysis.step'", "steps"],
+    );
+    rejects(
+        &edit(
+            "type = \"path\"\ncontrol = \"rho\"",
+            "type = \"equilibrium\"\ncontrol = \"rho\"",
+        ),
+        &[
+            "unknown key 'analysis.control'",
+            "type, tolerance, max-iterations",
+        ],
+    );
+    rejects(
+        &edit("max = 5.0", "max = 5.0\nscale = 2.0"),
+        &["unknown key 'parameters.rho.scale'"],
+    );
+    // An option of another generator says so.
+    rejects(
+        &edit("divisions = 3", "divisions = 3\nfrequency = 4"),
+        &["'mesh.frequency'", "generator \"disc\"", "sectors"],
+    );
+    rejects(
+        &edit("divisions = 3", "divisions = 3\nrings = 4"),
+        &["unknown key 'mesh.rings'", "generator, radius, sectors"],
+    );
+}
+
+#[test]
+fn missing_fields_are_named_with_their_path() {
+    rejects(&edit("mu = 100.0\n", ""), &["missing field 'material.mu'"]);
+    rejects(
+        &edit("generator = \"disc\"\n", ""),
+        &["missing field 'mesh.generator'"],
+    );
+    rejects(
+        &edit("type = \"gas\"\n", ""),
+        &["missing field 'effect[1].type'"],
+    );
+    rejects(
+        &edit("gravity = 1.0\n", ""),
+        &["missing field 'effect[0].gravity'"],
+    );
+    rejects(
+        &edit("start = 0.0\n", ""),
+        &["missing field 'parameters.rho.start'"],
+    );
+    rejects(
+        &edit("[material]", "[materials]"),
+        &["unknown key 'materials'"],
+    );
+    let no_material = BASE.replace("[material]", "").replace(
+        "mu = 100.0\nk = 0.1\nthickness = 0.01\nprestretch = 1.1\n",
+        "",
+    );
+    rejects(&no_material, &["missing section 'material'"]);
+}
+
+#[test]
+fn wrong_types_name_the_expected_type_and_the_value() {
+    rejects(
+        &edit("mu = 100.0", "mu = \"one\""),
+        &["'material.mu': expected a number, got \"one\""],
+    );
+    rejects(
+        &edit("sectors = 6", "sectors = 6.5"),
+        &["'mesh.sectors': expected a non-negative integer, got 6.5"],
+    );
+    rejects(
+        &edit("sectors = 6", "sectors = -6"),
+        &["'mesh.sectors'", "-6"],
+    );
+    rejects(
+        &edit("normal = [0.0, 0.0, 2.0]", "normal = [0.0, 2.0]"),
+        &["'effect[2].normal'", "an array of 3 numbers", "[0.0, 2.0]"],
+    );
+    rejects(
+        &edit("normal = [0.0, 0.0, 2.0]", "normal = [0.0, \"z\", 2.0]"),
+        &["'effect[2].normal[1]': expected a number, got \"z\""],
+    );
+    rejects(
+        &edit("pressure = 0.5", "pressure = true"),
+        &["'effect[1].pressure': expected a number or a parameter name, got true"],
+    );
+    rejects(
+        &edit("fixed = [\"rim\"]", "fixed = \"rim\""),
+        &["'boundary.fixed': expected an array, got \"rim\""],
+    );
+    rejects(
+        &edit("side = \"above\"", "side = \"sideways\""),
+        &[
+            "'effect[0].side': unknown value \"sideways\"",
+            "inside, below, above",
+        ],
+    );
+    rejects(
+        &edit("type = \"gas\"", "type = \"gaz\""),
+        &["'effect[1].type': unknown value \"gaz\"", "gas-amount"],
+    );
+    rejects(
+        &edit("type = \"path\"", "type = 3"),
+        &["'analysis.type': expected a string, got 3"],
+    );
+    // Sections of the wrong shape.
+    rejects(
+        &valid_text().replace("[[effect]]", "[effect]"),
+        &["'effect': expected an array of tables ([[effect]]), got a table"],
+    );
+    rejects(
+        &edit("[scene]", "[[scene]]"),
+        &["'scene': expected a table, got an array"],
+    );
+    rejects(
+        &edit(
+            "[parameters.rho]\nstart = 0.0\nmin = 0.0\nmax = 5.0",
+            "[parameters]\nrho = 3",
+        ),
+        &["'parameters.rho': expected a table, got 3"],
+    );
+    rejects(
+        &edit("mu = 100.0", "mu = 1979-05-27"),
+        &["'material.mu': expected a number, got 1979-05-27"],
+    );
+}
+
+#[test]
+fn non_physical_values_are_rejected() {
+    rejects(
+        &edit("thickness = 0.01", "thickness = -0.01"),
+        &["'material.thickness' must be > 0, got -0.01"],
+    );
+    rejects(
+        &edit("mu = 100.0", "mu = 0"),
+        &["'material.mu' must be > 0, got 0"],
+    );
+    rejects(
+        &edit("k = 0.1", "k = -0.1"),
+        &["'material.k' must be >= 0, got -0.1"],
+    );
+    rejects(
+        &edit("penalty = 1000.0", "penalty = 0"),
+        &["'effect[2].penalty' must be > 0, got 0"],
+    );
+    rejects(
+        &edit("prestretch = 1.1", "prestretch = -1.1"),
+        &["'material.prestretch' must be > 0, got -1.1"],
+    );
+    rejects(
+        &edit("mu = 100.0", "mu = nan"),
+        &["'material.mu' must be a finite number, got NaN"],
+    );
+    rejects(
+        &edit("gravity = 1.0", "gravity = 0.0"),
+        &["'effect[0].gravity' must be > 0, got 0"],
+    );
+    rejects(
+        &edit("level = 0.001", "level = inf"),
+        &["'effect[0].level' must be a finite number, got inf"],
+    );
+    rejects(
+        &edit("penalty = 1000.0", "penalty = 1000.0\nexponent = 2"),
+        &["'effect[2].exponent' must be 1 or 3, got 2"],
+    );
+    rejects(
+        &edit("normal = [0.0, 0.0, 2.0]", "normal = [0.0, 0.0, 0.0]"),
+        &["'effect[2].normal' must be a finite non-zero vector, got [0, 0, 0]"],
+    );
+    rejects(
+        &edit("radius = 1.1", "radius = -1"),
+        &["'mesh.radius' must be > 0, got -1"],
+    );
+    rejects(
+        &edit("sectors = 6", "sectors = 2"),
+        &["'mesh.sectors' must be >= 3, got 2"],
+    );
+    rejects(
+        &edit("min = 0.0", "min = 6.0"),
+        &["'parameters.rho.min' must be < max = 5, got 6"],
+    );
+    rejects(
+        &edit("start = 0.0", "start = 7.0"),
+        &["'parameters.rho.start' must lie within [min, max] = [0, 5], got 7"],
+    );
+    rejects(
+        &edit("control = \"rho\"", "control = \"rho\"\ninitial-step = 0.5"),
+        &["'analysis.initial-step'", "0.5"],
+    );
+    rejects(
+        &edit("control = \"rho\"", "control = \"rho\"\nsteps = 0"),
+        &["'analysis.steps' must be >= 1, got 0"],
+    );
+    rejects(
+        &edit("name = \"test\"", "name = \" \""),
+        &["'scene.name' must not be empty"],
+    );
+}
+
+#[test]
+fn unknown_boundary_names_list_the_available_ones() {
+    rejects(
+        &edit("fixed = [\"rim\"]", "fixed = [\"rims\"]"),
+        &["'boundary.fixed[0]'", "\"rims\"", "rim"],
+    );
+    rejects(
+        &edit("fixed = [\"rim\"]", "fixed = [\"rim\", \"rim\"]"),
+        &["'boundary.fixed[1]'", "\"rim\""],
+    );
+    // Mesh checks through Scene::check_mesh directly.
+    let scene = Scene::from_toml_str(&edit("fixed = [\"rim\"]", "fixed = [\"edge\"]"), "t")
+        .expect("names are checked against the mesh only");
+    let mesh = scene.mesh.build().expect("the mesh builds");
+    let err = scene.check_mesh(&mesh).unwrap_err();
+    assert_eq!(err.key(), Some("boundary.fixed[0]"));
+    assert!(err.to_string().contains("\"edge\""), "{err}");
+}
+
+#[test]
+fn unknown_parameter_references_are_named() {
+    rejects(
+        &edit("pressure = 0.5", "pressure = \"q\""),
+        &[
+            "'effect[1].pressure': unknown parameter \"q\"",
+            "declared: rho",
+        ],
+    );
+    rejects(
+        &edit("control = \"rho\"", "control = \"p\""),
+        &["'analysis.control': unknown parameter \"p\""],
+    );
+    rejects(
+        &format!("{BASE}\n[[constraint]]\ntype = \"fixed\"\nparameter = \"h\"\n"),
+        &["'constraint[0].parameter': unknown parameter \"h\""],
+    );
+    // A declared parameter no effect uses.
+    rejects(
+        &format!("{BASE}\n[parameters.q]\nstart = 1.0\n"),
+        &["'parameters.q' is declared but no effect uses it"],
+    );
+}
+
+#[test]
+fn constraints_are_checked_against_effects_and_parameters() {
+    // Two parameters on a path: the one that is not the control must be governed.
+    let two = edit("pressure = 0.5", "pressure = \"p\"") + "\n[parameters.p]\nstart = 0.5\n";
+    rejects(&two, &["'parameters.p'", "neither the control"]);
+    let fixed = format!("{two}\n[[constraint]]\ntype = \"fixed\"\nparameter = \"p\"\n");
+    let scene = Scene::from_toml_str(&fixed, "t").expect("p is held fixed");
+    assert_eq!(scene.governing("p").map(Constraint::kind), Some("fixed"));
+    // The control cannot be governed.
+    rejects(
+        &format!("{fixed}\n[[constraint]]\ntype = \"fixed\"\nparameter = \"rho\"\n"),
+        &["'analysis.control'", "governed by constraint[1]"],
+    );
+    // Governed twice.
+    rejects(
+        &format!("{fixed}\n[[constraint]]\ntype = \"fixed\"\nparameter = \"p\"\n"),
+        &["'constraint[1].parameter'", "\"p\"", "constraint[0]"],
+    );
+    // A fluid-volume constraint needs the level to be a parameter.
+    rejects(
+        &format!("{BASE}\n[[constraint]]\ntype = \"fluid-volume\"\nvalue = \"initial\"\n"),
+        &["'constraint[0]'", "'effect[0].level'", "0.001"],
+    );
+    rejects(
+        &format!("{BASE}\n[[constraint]]\ntype = \"fluid-volume\"\neffect = 1\nvalue = 1.0\n"),
+        &["'constraint[0].effect'", "gas"],
+    );
+    rejects(
+        &format!("{BASE}\n[[constraint]]\ntype = \"fluid-volume\"\nvalue = \"init\"\n"),
+        &["'constraint[0].value': expected a number or \"initial\", got \"init\""],
+    );
+    // A valid fluid-volume constraint resolves its effect and the level it governs.
+    let volume = edit("level = 0.001", "level = \"h\"")
+        + "\n[parameters.h]\nstart = 0.001\n\n[[constraint]]\ntype = \"fluid-volume\"\nvalue = \"initial\"\n";
+    let scene = Scene::from_toml_str(&volume, "t").expect("a fluid-volume constraint");
+    match &scene.constraints[0] {
+        Constraint::FluidVolume(c) => {
+            assert_eq!(
+                (c.effect, c.level.as_str(), c.value),
+                (0, "h", Target::Initial)
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn syntax_errors_give_the_line() {
+    let text = edit("k = 0.1", "k = = 0.1");
+    let message = rejects(&text, &["TOML syntax error"]);
+    let line = text.lines().position(|l| l == "k = = 0.1").unwrap() + 1;
+    assert!(
+        message.starts_with(&format!("test.toml:{line}:")),
+        "{message}"
+    );
+    rejects("[scene\nname = 1", &["test.toml:1:", "TOML syntax error"]);
+    rejects(
+        &format!("{BASE}\n[material]\nmu = 1.0\n"),
+        &["TOML syntax error", "duplicate key", "[material]"],
+    );
+}
+
+#[test]
+fn mesh_related_rules_are_checked_after_building() {
+    // Generator errors name the option.
+    rejects(
+        &edit("divisions = 3", "divisions = 3\ngroup = \"C4v\""),
+        &["'mesh.group'", "C4v"],
+    );
+    // Gas on an open membrane whose rim is free.
+    rejects(
+        &edit("fixed = [\"rim\"]", "fixed = []"),
+        &["'effect[0]' (fluid)", "fixed rim"],
+    );
+    // Fluid below a closed membrane.
+    let sphere = BASE
+        .replace(
+            "generator = \"disc\"\nradius = 1.1\nsectors = 6\ndivisions = 3",
+            "generator = \"icosphere\"\nfrequency = 2",
+        )
+        .replace("fixed = [\"rim\"]", "fixed = []");
+    rejects(&sphere, &["'effect[0].side'", "\"above\"", "closed"]);
+    // Stop at a stretch needs a closed membrane.
+    rejects(
+        &edit("control = \"rho\"", "control = \"rho\"\nstop-stretch = 2.0"),
+        &["'analysis.stop-stretch'", "open"],
+    );
+    // A start stretch would move the fixed nodes.
+    rejects(
+        &format!("{BASE}\n[start]\nstretch = 1.05\n"),
+        &["'start.stretch'", "1.05"],
+    );
+}
+
+#[test]
+fn reading_a_missing_file_is_an_input_error() {
+    let err = Scene::load("/nonexistent/scene.toml").unwrap_err();
+    assert!(matches!(err, SceneError::Read { .. }));
+    assert!(err.to_string().contains("/nonexistent/scene.toml"));
+}
+
+fn bundled() -> Vec<std::path::PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("scenes/ exists")
+        .map(|e| e.expect("a directory entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn bundled_scenes_load_and_build() {
+    let files = bundled();
+    let names: Vec<String> = files
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    for expected in [
+        "balloon.toml",
+        "balloon_k0.toml",
+        "demo.toml",
+        "disc_fluid_above.toml",
+        "disc_fluid_below.toml",
+    ] {
+        assert!(names.iter().any(|n| n == expected), "no scenes/{expected}");
+    }
+    for file in &files {
+        let scene = Scene::load(file).unwrap_or_else(|e| panic!("{e}"));
+        let mesh = scene.build_mesh().unwrap_or_else(|e| panic!("{e}"));
+        for name in &scene.boundary.fixed {
+            assert!(
+                mesh.mesh.boundaries.contains_key(name),
+                "{}",
+                file.display()
+            );
+        }
+        // The scene survives a round trip through TOML.
+        let again = Scene::from_toml_str(&scene.to_toml(), &scene.origin)
+            .unwrap_or_else(|e| panic!("{}: round trip: {e}", file.display()));
+        assert_eq!(again, scene, "{}", file.display());
+    }
+}
+
+#[test]
+fn bundled_balloon_reaches_past_the_pressure_minimum() {
+    let scene = Scene::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balloon.toml"))
+        .expect("balloon loads");
+    assert!(matches!(&scene.mesh, MeshSpec::Icosphere(i) if i.frequency == 8));
+    assert_eq!(scene.material.k, 0.1);
+    assert!(scene.boundary.fixed.is_empty());
+    let Analysis::Path(path) = &scene.analysis else {
+        panic!("a path")
+    };
+    assert_eq!(path.control, "p");
+    assert!(path.stop_stretch.unwrap() > 3.1426213);
+    let p = &scene.parameters["p"];
+    assert!(p.max.unwrap() > 1.3551069 && p.min.unwrap() < 1.1487477);
+    // The start pressure holds the start stretch (closed form).
+    let (l, k) = (scene.start.stretch, scene.material.k);
+    let mu_h = scene.material.mu * scene.material.thickness;
+    let closed = 2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l) * mu_h;
+    assert!((p.start - closed).abs() < 1e-6, "{} vs {closed}", p.start);
+}
+
+/// A valid scene used by the property tests: the bundled balloon.
+fn valid_text() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balloon.toml"))
+        .expect("balloon.toml")
+}
+
+/// Loading never panics; an error is one line; a success builds (when small) or fails with
+/// a scene error.
+fn load_never_panics(text: &str) {
+    match Scene::from_toml_str(text, "prop") {
+        Ok(scene) => {
+            if scene.mesh.triangle_count() <= 20_000 {
+                if let Err(e) = scene.build_mesh() {
+                    assert_eq!(e.to_string().lines().count(), 1, "{e}");
+                }
+            }
+        }
+        Err(e) => {
+            let m = e.to_string();
+            assert_eq!(m.lines().count(), 1, "not one line: {m}");
+            assert!(!m.trim().is_empty());
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn garbage_never_panics(text in "\\PC{0,300}") {
+        load_never_panics(&text);
+    }
+
+    #[test]
+    fn toml_like_garbage_never_panics(
+        text in "(\\[{1,2}[a-z.]{1,12}\\]{1,2}\n|[a-z-]{1,10} = (\"[a-z]{0,6}\"|-?[0-9.e]{1,6}|\\[[0-9., ]{0,10}\\]|true)\n){0,20}"
+    ) {
+        load_never_panics(&text);
+    }
+
+    #[test]
+    fn truncated_scenes_never_panic(cut in 0usize..2000) {
+        let text = valid_text();
+        let cut = cut.min(text.len());
+        let cut = (0..=cut).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
+        load_never_panics(&text[..cut]);
+    }
+
+    #[test]
+    fn scenes_with_a_line_dropped_never_panic(drop in 0usize..80) {
+        let text: String = valid_text()
+            .lines()
+            .enumerate()
+            .filter(|(i, _)| *i != drop)
+            .map(|(_, l)| format!("{l}\n"))
+            .collect();
+        load_never_panics(&text);
+    }
+
+    #[test]
+    fn scenes_with_a_value_replaced_never_panic(
+        line in 0usize..80,
+        value in prop_oneof![
+            Just("0".to_string()),
+            Just("-1".to_string()),
+            Just("nan".to_string()),
+            Just("\"\"".to_string()),
+            Just("[]".to_string()),
+            Just("{}".to_string()),
+            Just("1e308".to_string()),
+            Just("99999999999".to_string()),
+            "-?[0-9]{1,4}(\\.[0-9]{1,3})?",
+            "\"[a-z0-9-]{0,8}\"",
+        ],
+    ) {
+        let text: String = valid_text()
+            .lines()
+            .enumerate()
+            .map(|(i, l)| match l.split_once(" = ") {
+                Some((key, _)) if i == line => format!("{key} = {value}\n"),
+                _ => format!("{l}\n"),
+            })
+            .collect();
+        load_never_panics(&text);
+    }
+}
+
+#[test]
+fn the_documented_example_loads_and_builds() {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scenes.md"))
+        .expect("docs/scenes.md");
+    let start = doc.rfind("```toml\n").expect("a toml example") + "```toml\n".len();
+    let end = start + doc[start..].find("```").expect("the example ends");
+    let scene =
+        Scene::from_toml_str(&doc[start..end], "docs/scenes.md").unwrap_or_else(|e| panic!("{e}"));
+    scene.build_mesh().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        scene.governing("h").map(Constraint::kind),
+        Some("fluid-volume")
+    );
+}
