@@ -14,3 +14,5 @@ pub mod linalg;
 pub mod model;
 pub mod adapted;
 pub mod continuation;
+pub mod report;
+pub mod output;

@@ -427,8 +427,8 @@ impl SymmetricFactorization {
     pub fn solve_many_in_place(&self, rhs: &mut [f64]) -> Result<(), FactorError> {
         let n = self.n();
         assert!(
-            n > 0 && rhs.len() % n == 0,
-            "rhs length must be a multiple of n"
+            rhs.len().checked_rem(n) == Some(0),
+            "rhs length must be a multiple of n > 0"
         );
         let k = rhs.len() / n;
         self.solve_mat_in_place(MatMut::from_column_major_slice_mut(rhs, n, k))
