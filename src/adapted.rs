@@ -135,32 +135,33 @@ impl SparseBasis {
 }
 
 /// A model restricted to the fixed-point space, as a dense problem for the path follower:
-/// u = B q, R = Bᵀ F, K_A = Bᵀ K B, L_j = Bᵀ ∂F/∂Λ_j for the free parameters (`free`, the
-/// control first) and the augmenting equations with G_q = Bᵀ ∂g/∂u. Every other parameter is
-/// held at its value in `params`.
+/// u = B q, R = Bᵀ F, K_A = Bᵀ K B, L_j = Bᵀ ∂F/∂Λ_j for the free parameters (the control,
+/// then the one each constraint governs) and the augmenting equations with G_q = Bᵀ ∂g/∂u.
+/// Every other parameter is held at its value in `params`. Without a control (a single
+/// equilibrium), λ_0 is a dummy with a zero load column.
 pub struct SymmetricProblem<'a> {
     model: &'a crate::model::FeModel,
     basis: &'a SparseBasis,
     constraints: &'a [Box<dyn Constraint>],
     params: Vec<f64>,
-    free: Vec<usize>,
+    free: Vec<Option<usize>>,
     eval: Evaluation,
     u: Vec<f64>,
     work: Vec<f64>,
 }
 
 impl<'a> SymmetricProblem<'a> {
-    /// Restricts `model` to `basis`; `free[0]` is the control and `free[1..]` the parameters
-    /// the `constraints` free, in the same order.
+    /// Restricts `model` to `basis` with the given control parameter (if any) and
+    /// constraints, each of which frees its parameter.
     pub fn new(
         model: &'a crate::model::FeModel,
         basis: &'a SparseBasis,
         constraints: &'a [Box<dyn Constraint>],
         params: Vec<f64>,
-        free: Vec<usize>,
+        control: Option<usize>,
     ) -> Self {
         use crate::model::Model;
-        assert_eq!(free.len(), constraints.len() + 1, "one free parameter per constraint, plus the control");
+        let free = std::iter::once(control).chain(constraints.iter().map(|c| Some(c.frees()))).collect();
         Self {
             eval: model.new_evaluation(),
             u: vec![0.0; model.unknowns()],
@@ -183,10 +184,17 @@ impl<'a> SymmetricProblem<'a> {
     /// All parameters with the free ones set to `lambda`.
     pub fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
         let mut p = self.params.clone();
-        for (j, &i) in self.free.iter().enumerate() {
-            p[i] = lambda[j];
+        for (j, i) in self.free.iter().enumerate() {
+            if let Some(i) = *i {
+                p[i] = lambda[j];
+            }
         }
         p
+    }
+
+    /// The free parameters' values in `params` (the dummy control is 0).
+    pub fn free_values(&self, params: &[f64]) -> DVector<f64> {
+        DVector::from_iterator(self.free.len(), self.free.iter().map(|i| i.map_or(0.0, |i| params[i])))
     }
 }
 
@@ -206,14 +214,14 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
     ) -> Result<crate::continuation::Linearization, crate::model::ModelError> {
         use crate::model::{Model, Request};
         self.basis.expand(q, &mut self.u);
-        for (j, &i) in self.free.iter().enumerate() {
-            self.params[i] = lambda[j];
-        }
+        self.params = self.parameters(lambda);
         self.model.evaluate(&self.u, &self.params, Request::ALL, &mut self.eval)?;
         let (m, nf, c) = (self.basis.dim(), self.free.len(), self.constraints.len());
         let mut loads = DMatrix::zeros(m, nf);
-        for (j, &i) in self.free.iter().enumerate() {
-            loads.set_column(j, &self.basis.restrict(&self.eval.loads[i]));
+        for (j, i) in self.free.iter().enumerate() {
+            if let Some(i) = *i {
+                loads.set_column(j, &self.basis.restrict(&self.eval.loads[i]));
+            }
         }
         let mut constraints = DVector::zeros(c);
         let mut constraint_q = DMatrix::zeros(c, m);
@@ -224,8 +232,10 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
                 let v = con.evaluate(self.model.layout(), &x, &self.params);
                 constraints[k] = v.value;
                 constraint_q.set_row(k, &self.basis.restrict(&v.grad_u).transpose());
-                for (j, &i) in self.free.iter().enumerate() {
-                    constraint_lambda[(k, j)] = v.grad_params[i];
+                for (j, i) in self.free.iter().enumerate() {
+                    if let Some(i) = *i {
+                        constraint_lambda[(k, j)] = v.grad_params[i];
+                    }
                 }
             }
         }

@@ -66,9 +66,12 @@ impl Linearization {
         a
     }
 
-    /// Largest |R| relative to the load scale and largest |g| relative to its derivatives.
+    /// |R| small against the forces a unit scaled change of q or λ makes (‖K‖ σ_q and
+    /// ‖L‖ σ_λ), and |g| small against its derivatives.
     fn converged(&self, opts: &PathOptions) -> bool {
-        let force = self.loads.amax().max(1e-300) * opts.parameter_scales.first().copied().unwrap_or(1.0);
+        let force = (self.loads.amax() * opts.parameter_scales.first().copied().unwrap_or(1.0))
+            .max(self.tangent.amax() * opts.state_scale)
+            .max(1e-300);
         let gscale = self.constraint_q.amax().max(self.constraint_lambda.amax()).max(1e-300) * opts.state_scale;
         self.residual.amax() <= opts.tolerance * force && self.constraints.amax() <= opts.tolerance * gscale
     }

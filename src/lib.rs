@@ -16,3 +16,5 @@ pub mod adapted;
 pub mod continuation;
 pub mod report;
 pub mod output;
+pub mod study;
+pub mod run;

@@ -54,7 +54,7 @@ fn balloon(frequency: usize, k: f64, to_stretch: f64) -> Extrema {
         let v: f64 = m.triangles.iter().map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c]))).sum::<f64>() / 6.0;
         (v / v0).cbrt()
     };
-    let mut problem = SymmetricProblem::new(&model, &basis, &[], vec![0.0], vec![0]);
+    let mut problem = SymmetricProblem::new(&model, &basis, &[], vec![0.0], Some(0));
     let opts = PathOptions {
         initial_step: 0.02,
         max_step: 0.3,
@@ -65,11 +65,11 @@ fn balloon(frequency: usize, k: f64, to_stretch: f64) -> Extrema {
     let q0 = DVector::zeros(basis.dim());
     let mut stretches = Vec::new();
     let path = {
-        let probe = SymmetricProblem::new(&model, &basis, &[], vec![0.0], vec![0]);
+        let probe = SymmetricProblem::new(&model, &basis, &[], vec![0.0], Some(0));
         follow(&mut problem, &q0, &DVector::from_element(1, 0.0), &opts, |p| stretch_of(&probe, &p.q) >= to_stretch, |_| {}).unwrap()
     };
     assert_eq!(path.stop, StopReason::Condition, "the path must reach stretch {to_stretch}");
-    let probe = SymmetricProblem::new(&model, &basis, &[], vec![0.0], vec![0]);
+    let probe = SymmetricProblem::new(&model, &basis, &[], vec![0.0], Some(0));
     let mut on_curve: f64 = 0.0;
     for p in &path.points {
         let l = stretch_of(&probe, &p.q);

@@ -143,9 +143,9 @@ fn dense_extreme_eigs(a: &Mat<f64>) -> (f64, f64) {
 
 /// An FE-like matrix on a structured triangulation of an `m × m` grid of nodes with `dofs`
 /// unknowns per node: every triangle adds a random symmetric positive semi-definite element
-/// matrix `G Gᵀ` (G of size `3·dofs × dofs`... rank-deficient like a real element), plus a
-/// small diagonal so the sum is positive definite. `shift` is then subtracted from the
-/// diagonal to make it indefinite.
+/// matrix `G Gᵀ` (`G` random of size `k × (k − 1)`, `k = 3·dofs`: rank-deficient like a
+/// real element), plus a small diagonal so the sum is positive definite. Tests make it
+/// indefinite with [`Sym::shift`].
 fn fe_like(m: usize, dofs: usize, rng: &mut Rng) -> Sym {
     let node = |i: usize, j: usize| i * m + j;
     let n = m * m * dofs;
@@ -575,9 +575,12 @@ fn bordered_indefinite_block() {
     assert!(relative_residual(&a, &x, &b) < 1e-10);
 }
 
+/// Zero leading pivots, all diagonals zero: `[[0, a], [a, 0]]` blocks, alone or chained.
+/// No partner with a nonzero diagonal exists, so this is the intranode Bunch–Kaufman's job
+/// (each pair lands in one supernode); the brief allows a reported failure here, but it
+/// does solve them, and a wrong answer would fail the inertia and residual checks.
 #[test]
-fn zero_leading_pivots_are_pivoted_or_reported() {
-    // Block diagonal of [[0, 1], [1, 0]] blocks, and the same blocks chained together.
+fn zero_leading_pivots_are_pivoted() {
     for chained in [false, true] {
         let blocks = 6;
         let n = 2 * blocks;
@@ -591,26 +594,21 @@ fn zero_leading_pivots_are_pivoted_or_reported() {
             }
         }
         let a = Sym::from_triplets(n, &triplets);
-        let dense = a.dense();
         let mut f = SymmetricFactorization::new(&a.pattern).unwrap();
+        f.factorize(&a.values)
+            .unwrap_or_else(|e| panic!("chained = {chained}: {e}"));
+        assert_eq!(
+            f.inertia().unwrap(),
+            Inertia {
+                negative: blocks,
+                zero: 0,
+                positive: blocks
+            }
+        );
+        assert_eq!(f.inertia().unwrap(), dense_inertia(&a.dense(), 0.0));
         let b = rhs(n, 41);
-        let r = f.factorize(&a.values);
-        eprintln!("ZEROLEAD chained={chained} {r:?} {:?}", f.inertia());
-        match r {
-            Ok(()) => {
-                assert_eq!(f.inertia().unwrap(), dense_inertia(&dense, 0.0));
-                let x = solve(&f, &b);
-                assert!(relative_residual(&a, &x, &b) < 1e-12, "chained = {chained}");
-            }
-            Err(e) => {
-                assert!(matches!(
-                    e,
-                    FactorError::Singular { .. } | FactorError::NonFinite { .. }
-                ));
-                let mut x = b.clone();
-                assert!(f.solve_in_place(&mut x).is_err());
-            }
-        }
+        let x = solve(&f, &b);
+        assert!(relative_residual(&a, &x, &b) < 1e-12, "chained = {chained}");
     }
 }
 
@@ -726,17 +724,22 @@ fn zero_rows_and_nan_input_do_not_panic() {
         }
     }
     let mut f = SymmetricFactorization::new(&a.pattern).unwrap();
-    let err = f.factorize(&a.values).unwrap_err();
-    eprintln!("DEAD {err:?} {:?}", f.inertia());
-    assert!(
-        matches!(
-            err,
-            FactorError::Singular { .. } | FactorError::NonFinite { .. }
-        ),
-        "{err}"
-    );
-    if let FactorError::Singular { index, .. } = err {
-        assert_eq!(index, dead, "the reported pivot names the dead unknown");
+    // The zero diagonal makes the factorisation re-order once (the dead unknown goes last,
+    // having no partner), then the zero pivot is reported at the right unknown.
+    for _ in 0..2 {
+        let err = f.factorize(&a.values).unwrap_err();
+        assert!(
+            matches!(err, FactorError::Singular { index, .. } if index == dead),
+            "{err}"
+        );
+        assert_eq!(
+            f.inertia(),
+            Some(Inertia {
+                negative: 0,
+                zero: 1,
+                positive: n - 1
+            })
+        );
     }
     let mut x = vec![1.0; n];
     assert!(f.solve_in_place(&mut x).is_err());

@@ -45,11 +45,11 @@ use symmetry::Invariant;
 
 /// Fluid spinning about the z-axis at angular velocity ω (parameter ω²), in the rotating
 /// frame: Π_ω = ±ρ ω² Σ_T ψ_T (+ for fluid behind the membrane, − in front), exact for the
-/// cubic integrand so that K stays symmetric. Load: ∂F/∂(ω²) = ±ρ ∇ψ.
+/// cubic integrand so that K stays symmetric. Loads: ∂F/∂(ω²) = ±ρ ∇ψ, ∂F/∂ρ = ±ω² ∇ψ.
 #[derive(Debug, Clone)]
 pub struct Spin {
     /// Density ρ.
-    pub density: f64,
+    pub density: Quantity,
     /// ω².
     pub omega2: Quantity,
     /// Side of the membrane the fluid is on.
@@ -72,12 +72,13 @@ impl Effect for Spin {
             FluidSide::Behind => 1.0,
             FluidSide::Front => -1.0,
         };
-        let s = sign * self.density;
+        let rho = self.density.value(params);
         let w2 = self.omega2.value(params);
-        out.add_triangles(x, [self.omega2.parameter(), None], |_, xt, terms| {
+        out.add_triangles(x, [self.omega2.parameter(), self.density.parameter()], |_, xt, terms| {
             let psi = potential(xt);
-            terms.local = psi.scaled(s * w2);
-            terms.loads[0] = psi.grad.map(|g| s * g);
+            terms.local = psi.scaled(sign * rho * w2);
+            terms.loads[0] = psi.grad.map(|g| sign * rho * g);
+            terms.loads[1] = psi.grad.map(|g| sign * w2 * g);
             Ok(())
         })
     }

@@ -1,9 +1,10 @@
 //! Sparse symmetric-indefinite factorisation `P A Pᵀ = L B Lᵀ` with inertia.
 //!
 //! # faer functions used, and why
-//! - [`factorize_symbolic_cholesky`] with [`SymmetricOrdering::Amd`] and a supernodal
-//!   threshold of `-∞` (always supernodal, for every `n > 0`): the symbolic analysis (AMD fill-reducing
-//!   ordering, elimination tree, supernodes), done once per pattern. The supernodal layout is
+//! - [`factorize_symbolic_cholesky`] with [`SymmetricOrdering::Amd`] (or `Custom`, see
+//!   below) and a supernodal threshold of `-∞` (always supernodal when `n > 0`): the
+//!   symbolic analysis (fill-reducing ordering, elimination tree, supernodes), done once per
+//!   pattern. The supernodal layout is
 //!   forced because faer's pivoted factorisation only pivots on that path (on the simplicial
 //!   path `factorize_numeric_intranode_lblt` silently falls back to unpivoted `LDLᵀ`).
 //! - [`SymbolicCholesky::factorize_numeric_intranode_lblt`]: the numeric factorisation into
@@ -16,11 +17,19 @@
 //! Plain `LDLᵀ` (`factorize_numeric_ldlt`) was not chosen: without pivoting an indefinite
 //! matrix with a zero leading pivot (a bordered system, a saddle point) breaks down.
 //!
-//! # Limitation
+//! # Zero diagonals and the limits of pivoting
 //! Pivoting is restricted to the diagonal block of each supernode (no delayed pivots across
-//! supernodes, unlike MA57/MUMPS). A pivot that is zero or tiny in a supernode too small to
-//! find a better one is reported as [`FactorError::Singular`] even if the matrix is
-//! nonsingular; it never gives a silently wrong answer because every pivot is checked.
+//! supernodes, unlike MA57/MUMPS). AMD likes to eliminate a Lagrange multiplier (zero
+//! diagonal, few neighbours) first, alone in its supernode, where no pivoting can help. So
+//! when a factorisation fails and the matrix has zero diagonal entries, the elimination
+//! order is changed once so that each such unknown comes right after a "partner" neighbour
+//! with a nonzero diagonal, the symbolic analysis is redone and the factorisation retried
+//! (see [`SymmetricFactorization::factorize`]). KKT / saddle-point / bordered systems then
+//! factorise. What remains: a pivot that is zero or tiny by cancellation in a supernode
+//! too small to find a better one, or matrices with many mutually coupled zero diagonals,
+//! are reported as [`FactorError::Singular`] / [`FactorError::NonFinite`] even if the
+//! matrix is nonsingular (≈ 0.1 % of random sparse indefinite matrices with up to 25 %
+//! zero diagonals). Never a silently wrong answer: every pivot is checked.
 //!
 //! The inertia is counted from the block diagonal `B`: by Sylvester's law of inertia it
 //! equals the numbers of negative, zero and positive eigenvalues of `A`. A 2×2 block is
@@ -220,16 +229,14 @@ impl SymmetricFactorization {
     /// or infinite (no inertia). Solves are refused after either error.
     ///
     /// Zero diagonal entries (Lagrange multipliers, `[[K, Cᵀ], [C, 0]]`) defeat pivoting
-    /// within supernodes when AMD eliminates such an unknown before all its neighbours. On a
-    /// failure with such unknowns, the elimination order is changed once so that each comes
-    /// right after one of its neighbours with a nonzero diagonal (see [`protecting_order`]),
-    /// the symbolic analysis is redone (this allocates, once) and the factorisation retried;
-    /// the new order is kept for later factorisations.
+    /// within supernodes when AMD eliminates such an unknown before its neighbours. On a
+    /// failure with such unknowns, the elimination order is changed so that each comes right
+    /// after its own partner neighbour with a nonzero diagonal (see `protecting_order`),
+    /// the symbolic analysis is redone and the factorisation retried, once per call; the new
+    /// order is kept for later factorisations. Only that failure path allocates.
     ///
     /// # Panics
     /// If `values.len() != pattern.nnz()`.
-    ///
-    /// [`protecting_order`]: Self::protecting_order
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), FactorError> {
         assert_eq!(
             values.len(),

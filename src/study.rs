@@ -1,0 +1,282 @@
+//! A scene made ready to solve: scene → mesh + group → effects → model (DESIGN §5).
+//!
+//! Only the effects the scene lists are built. The scene's group is the mesh group restricted
+//! to what every effect keeps (computed from [`crate::model::Effect::keeps`], never typed in),
+//! and the path is followed in that group's fixed-point space.
+
+use crate::adapted::SparseBasis;
+use crate::effects::gas::{GasAmount, GasPressure};
+use crate::effects::hydrostatic::{Fluid, FluidSide};
+use crate::effects::membrane::{Membrane, MooneyRivlin};
+use crate::effects::plane::{PenaltyLaw, Plane};
+use crate::effects::spin::Spin;
+use crate::effects::Quantity;
+use crate::model::constraint::{self, Constraint};
+use crate::model::{Effect, FeModel, Vec3};
+use crate::scene::{self, Scene};
+use meshes::{GroupAction, SymmetricMesh};
+
+/// Why a scene could not be made into a model (the scene itself was valid).
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    /// The scene file is wrong (user input).
+    #[error("{0}")]
+    Scene(#[from] scene::SceneError),
+    /// The scene asks for something this version cannot do (user input).
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// Measures reported along a path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measure {
+    /// Largest nodal displacement |u_i|.
+    MaxDisplacement,
+    /// Lowest z of the membrane.
+    MinZ,
+    /// Highest z of the membrane.
+    MaxZ,
+    /// Enclosed volume (closed membranes).
+    Volume,
+    /// (V / V_stress-free)^(1/3) (closed membranes).
+    Stretch,
+    /// Fluid volume of the fluid effect with this index among the fluids.
+    FluidVolume(usize),
+}
+
+/// A scene ready to solve.
+pub struct Study {
+    /// The scene.
+    pub scene: Scene,
+    /// The mesh with its own group.
+    pub mesh: SymmetricMesh,
+    /// The scene's group acting on the mesh (mesh group restricted to what the effects keep).
+    pub action: GroupAction,
+    /// The model.
+    pub model: FeModel,
+    /// Parameter names (scene order).
+    pub parameters: Vec<String>,
+    /// Start values, in that order.
+    pub start: Vec<f64>,
+    /// Augmenting equations, in scene order (targets set by [`Study::set_targets`]).
+    pub constraints: Vec<Box<dyn Constraint>>,
+    /// Index of the control parameter (path analyses).
+    pub control: Option<usize>,
+    /// The free parameters: the control, then those the constraints govern.
+    pub free: Vec<usize>,
+    /// The fixed-point basis of the scene's group.
+    pub basis: SparseBasis,
+    /// Measures reported along the path, with names.
+    pub measures: Vec<(String, Measure)>,
+    fluids: Vec<Fluid>,
+    closed: bool,
+    stress_free_volume: f64,
+    targets_from_start: Vec<bool>,
+}
+
+fn side(s: scene::FluidSide) -> FluidSide {
+    match s {
+        // The disc generators orient their normal along +z: fluid below is behind it.
+        scene::FluidSide::Inside | scene::FluidSide::Below => FluidSide::Behind,
+        scene::FluidSide::Above => FluidSide::Front,
+    }
+}
+
+impl Study {
+    /// Builds mesh, effects, model, constraints and basis from a validated scene.
+    pub fn build(scene: Scene) -> Result<Self, StudyError> {
+        let mesh = scene.build_mesh()?;
+        let m = &mesh.mesh;
+        let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
+        let index = |name: &str| parameters.iter().position(|p| p == name).expect("validated parameter");
+        let quantity = |q: &scene::Quantity| match q {
+            scene::Quantity::Value(v) => Quantity::Value(*v),
+            scene::Quantity::Parameter(name) => Quantity::Parameter(index(name)),
+        };
+        let mat = &scene.material;
+        let membrane = Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(mat.mu, mat.k, mat.thickness), mat.prestretch)
+            .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
+        let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
+        let mut fluids = Vec::new();
+        for e in &scene.effects {
+            effects.push(match e {
+                scene::Effect::Gas(g) => Box::new(GasPressure {
+                    pressure: quantity(&g.pressure),
+                }),
+                scene::Effect::GasAmount(g) => Box::new(GasAmount {
+                    amount: quantity(&g.amount),
+                    ambient: g.ambient_pressure,
+                    closing_volume: 0.0,
+                }),
+                scene::Effect::Fluid(f) => {
+                    let fluid = Fluid {
+                        density: quantity(&f.density),
+                        gravity: f.gravity,
+                        level: quantity(&f.level),
+                        side: side(f.side),
+                    };
+                    fluids.push(fluid.clone());
+                    Box::new(fluid)
+                }
+                scene::Effect::Spin(s) => Box::new(Spin {
+                    density: quantity(&s.density),
+                    omega2: quantity(&s.omega2),
+                    side: FluidSide::Behind,
+                }),
+                scene::Effect::Plane(p) => Box::new(Plane {
+                    normal: Vec3::from(p.normal),
+                    offset: quantity(&p.offset),
+                    penalty: p.penalty,
+                    law: if p.exponent == 3 { PenaltyLaw::Cubic } else { PenaltyLaw::Linear },
+                }),
+            });
+        }
+        let keep: Vec<_> = effects.iter().flat_map(|e| e.keeps()).collect();
+        let action = mesh
+            .action
+            .restrict(&keep)
+            .map_err(|e| StudyError::Unsupported(format!("the scene's symmetry group: {e}")))?;
+        let fixed = scene.fixed_nodes(&mesh);
+        let closed = m.topology().map(|t| t.closed).unwrap_or(false);
+        let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
+        let mut targets_from_start = Vec::new();
+        for c in &scene.constraints {
+            let (con, initial): (Box<dyn Constraint>, bool) = match c {
+                scene::Constraint::FluidVolume(fv) => {
+                    if !closed {
+                        return Err(StudyError::Unsupported(
+                            "a fluid-volume constraint needs a closed membrane in this version (an open one would need its walls)".into(),
+                        ));
+                    }
+                    let fluid = match &scene.effects[fv.effect] {
+                        scene::Effect::Fluid(f) => Fluid {
+                            density: quantity(&f.density),
+                            gravity: f.gravity,
+                            level: quantity(&f.level),
+                            side: side(f.side),
+                        },
+                        _ => unreachable!("validated: the constraint names a fluid effect"),
+                    };
+                    let (target, initial) = target(&fv.value);
+                    (
+                        Box::new(constraint::FluidVolume {
+                            fluid,
+                            level: index(&fv.level),
+                            target,
+                        }),
+                        initial,
+                    )
+                }
+                scene::Constraint::GasAmount(ga) => {
+                    let (target, initial) = target(&ga.value);
+                    (
+                        Box::new(constraint::GasAmount {
+                            pressure: index(&ga.pressure),
+                            ambient: ga.ambient_pressure,
+                            target,
+                        }),
+                        initial,
+                    )
+                }
+                scene::Constraint::Fixed(_) => continue,
+            };
+            constraints.push(con);
+            targets_from_start.push(initial);
+        }
+        let control = scene.control().map(index);
+        let free: Vec<usize> = control.into_iter().chain(constraints.iter().map(|c| c.frees())).collect();
+        let start: Vec<f64> = parameters.iter().map(|p| scene.parameters[p].start).collect();
+        let stress_free_volume = if closed { m.volume() / mat.prestretch.powi(3) } else { 0.0 };
+        let mut measures = vec![
+            ("max_displacement".to_string(), Measure::MaxDisplacement),
+            ("min_z".to_string(), Measure::MinZ),
+            ("max_z".to_string(), Measure::MaxZ),
+        ];
+        if closed {
+            measures.push(("volume".into(), Measure::Volume));
+            measures.push(("stretch".into(), Measure::Stretch));
+        }
+        for i in 0..fluids.len() {
+            let name = if fluids.len() == 1 { "fluid_volume".to_string() } else { format!("fluid_volume_{i}") };
+            measures.push((name, Measure::FluidVolume(i)));
+        }
+        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &fixed, effects, parameters.clone());
+        let basis = SparseBasis::fixed_point(&action, model.layout());
+        Ok(Self {
+            scene,
+            mesh,
+            action,
+            model,
+            parameters,
+            start,
+            constraints,
+            control,
+            free,
+            basis,
+            measures,
+            fluids,
+            closed,
+            stress_free_volume,
+            targets_from_start,
+        })
+    }
+
+    /// The measures at displacement `u` and parameters `params`, in the order of
+    /// [`Study::measures`].
+    pub fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64> {
+        let x = self.model.positions(u);
+        let tris = self.model.layout().triangles();
+        let volume = || tris.iter().map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c]))).sum::<f64>() / 6.0;
+        self.measures
+            .iter()
+            .map(|(_, m)| match *m {
+                Measure::MaxDisplacement => x
+                    .iter()
+                    .zip(self.model.reference())
+                    .map(|(a, b)| (a - b).norm())
+                    .fold(0.0, f64::max),
+                Measure::MinZ => x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min),
+                Measure::MaxZ => x.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max),
+                Measure::Volume => volume(),
+                Measure::Stretch => (volume() / self.stress_free_volume).cbrt(),
+                Measure::FluidVolume(i) => self.fluids[i].fluid_volume(tris, &x, params),
+            })
+            .collect()
+    }
+
+    /// True if the mesh is closed.
+    pub fn closed(&self) -> bool {
+        self.closed
+    }
+
+    /// Sets the targets of constraints declared `"initial"` from the state (u, params).
+    pub fn set_targets(&mut self, u: &[f64], params: &[f64]) {
+        let x = self.model.positions(u);
+        for (c, &initial) in self.constraints.iter_mut().zip(&self.targets_from_start) {
+            if initial {
+                c.set_target(c.measure(self.model.layout(), &x, params));
+            }
+        }
+    }
+
+    /// The start displacement: the reference scaled by `start.stretch` about the origin.
+    pub fn start_displacement(&self) -> Vec<f64> {
+        let s = self.scene.start.stretch - 1.0;
+        let mut u = vec![0.0; self.model.layout().unknowns()];
+        for (i, x) in self.model.reference().iter().enumerate() {
+            for c in 0..3 {
+                if let Some(d) = self.model.layout().dof(i, c) {
+                    u[d] = s * x[c];
+                }
+            }
+        }
+        u
+    }
+}
+
+fn target(t: &scene::Target) -> (f64, bool) {
+    match *t {
+        scene::Target::Initial => (0.0, true),
+        scene::Target::Value(v) => (v, false),
+    }
+}
