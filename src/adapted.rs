@@ -14,7 +14,7 @@
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout};
 use meshes::GroupAction;
-use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen};
+use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
 
 /// An orthonormal basis with sparse columns, each a list of (unknown, value).
 #[derive(Debug, Clone)]
@@ -104,14 +104,19 @@ impl SparseBasis {
     /// Bᵀ K B for the full tangent of an evaluation (sparse part on `layout`'s pattern plus
     /// its rank-one terms), using the sparsity of the columns; `work` is scratch of length N.
     pub fn restrict_tangent(&self, layout: &Layout, eval: &Evaluation, work: &mut Vec<f64>) -> DMatrix<f64> {
-        let m = self.dim();
+        let out = self.restrict_tangent_to(self, layout, eval, work);
+        (&out + out.transpose()) * 0.5
+    }
+
+    /// Bᵀ K C for another basis C over the same unknowns (off-diagonal blocks, for checks).
+    pub fn restrict_tangent_to(&self, other: &SparseBasis, layout: &Layout, eval: &Evaluation, work: &mut Vec<f64>) -> DMatrix<f64> {
         let pattern = layout.pattern();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         work.clear();
         work.resize(self.unknowns, 0.0);
-        let mut out = DMatrix::zeros(m, m);
-        for (j, cj) in self.columns.iter().enumerate() {
-            // w = K b_j, touching only the columns of K in b_j's support.
+        let mut out = DMatrix::zeros(self.dim(), other.dim());
+        for (j, cj) in other.columns.iter().enumerate() {
+            // w = K c_j, touching only the columns of K in c_j's support.
             for &(d, b) in cj {
                 for p in col_ptr[d]..col_ptr[d + 1] {
                     work[row_idx[p]] += eval.tangent[p] * b;
@@ -127,11 +132,207 @@ impl SparseBasis {
             }
         }
         for (c, a) in &eval.rank_one {
-            let ar = self.restrict(a);
-            out += &ar * ar.transpose() * *c;
+            let (ar, ao) = (self.restrict(a), other.restrict(a));
+            out += &ar * ao.transpose() * *c;
         }
-        (&out + out.transpose()) * 0.5
+        out
     }
+}
+
+/// The columns of one partner of one irrep, and the blocks of every irrep (DESIGN §4.3).
+#[derive(Debug, Clone)]
+pub struct IrrepBasis {
+    /// Irrep name.
+    pub name: String,
+    /// Irrep dimension d.
+    pub dim: usize,
+    /// The multiplicity predicted by the characters, (1/|G|) Σ χ_T(g) χ_μ(g).
+    pub multiplicity: usize,
+    /// One basis per partner a = 0..d; `partners[0]` spans the first copy, and
+    /// `partners[a] = P_{a0} partners[0]`.
+    pub partners: Vec<SparseBasis>,
+}
+
+/// The symmetry-adapted basis of the free unknowns, by irrep.
+#[derive(Debug, Clone)]
+pub struct AdaptedBasis {
+    /// One entry per irrep of the group, in the group's order (the trivial one first).
+    pub irreps: Vec<IrrepBasis>,
+}
+
+/// Errors building an adapted basis.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+pub enum AdaptedError {
+    /// Complex-type irreps (the E_k of a chiral C_n) need a complex basis, not built yet.
+    #[error("irrep {0} of {1} is of complex type (a chiral group); its block is not supported yet")]
+    ComplexType(String, String),
+    /// The projected basis does not have the size the characters predict.
+    #[error("irrep {irrep}: built {built} columns but the characters predict {predicted}")]
+    Count {
+        /// Irrep.
+        irrep: String,
+        /// Columns built.
+        built: usize,
+        /// Character formula.
+        predicted: usize,
+    },
+}
+
+impl AdaptedBasis {
+    /// Builds, orbit by orbit, the sparse orthonormal bases B_{μa} of every irrep μ and
+    /// partner a from the operators P^μ_{ab} = (d/|G|) Σ_g D^μ_ab(g) T(g): on an orbit with
+    /// representative i, the first copy is spanned by P^μ_{0b} e_{i,c} (b < d, c < 3),
+    /// orthonormalised; partner a by P^μ_{a0} of those columns. Fixed orbits are skipped.
+    pub fn new(action: &GroupAction, layout: &Layout) -> Result<Self, AdaptedError> {
+        let group = action.group();
+        let order = group.order() as f64;
+        let orbits: Vec<Vec<usize>> = action
+            .node_orbits()
+            .into_iter()
+            .filter(|o| layout.dof(o[0], 0).is_some())
+            .collect();
+        let free_nodes: Vec<usize> = orbits.iter().flatten().copied().collect();
+        let node_of = layout_node_map(layout);
+        let mut irreps = Vec::new();
+        for irrep in group.irreps() {
+            if irrep.kind() != symmetry::IrrepKind::Real {
+                return Err(AdaptedError::ComplexType(irrep.name().into(), group.name().into()));
+            }
+            let d = irrep.dim();
+            // Character formula over the free nodes.
+            let chi_t = |g: usize| -> f64 {
+                free_nodes
+                    .iter()
+                    .filter(|&&i| action.node_perm(g)[i] == i)
+                    .count() as f64
+                    * group.element(g).trace()
+            };
+            let m: f64 = (0..group.order()).map(|g| chi_t(g) * irrep.character(g)).sum::<f64>() / order;
+            let multiplicity = m.round() as usize;
+            let mut first: Vec<Vec<(usize, f64)>> = Vec::new();
+            for orbit in &orbits {
+                let i = orbit[0];
+                let local = |j: usize| orbit.binary_search(&j).expect("orbit closed");
+                // W: 3|O| × 3d candidates P_{0b} e_{i,c}.
+                let rows = 3 * orbit.len();
+                let mut w = DMatrix::<f64>::zeros(rows, 3 * d);
+                for g in 0..group.order() {
+                    let j = local(action.node_perm(g)[i]);
+                    let r = group.element(g);
+                    let dm = irrep.matrix(g);
+                    for b in 0..d {
+                        let coef = d as f64 / order * dm[(0, b)];
+                        if coef == 0.0 {
+                            continue;
+                        }
+                        for c in 0..3 {
+                            for k in 0..3 {
+                                w[(3 * j + k, 3 * b + c)] += coef * r[(k, c)];
+                            }
+                        }
+                    }
+                }
+                // The candidates are projections of unit vectors (norm ≤ 1); a direction they
+                // really span has a Gram eigenvalue of order 1/|G|, round-off one of 1e-30.
+                let gram = w.transpose() * &w;
+                let eig = SymmetricEigen::new(gram);
+                for (e, &lam) in eig.eigenvalues.iter().enumerate() {
+                    if lam <= 1e-10 {
+                        continue;
+                    }
+                    let v = &w * eig.eigenvectors.column(e) / lam.sqrt();
+                    let mut col = Vec::new();
+                    for (jl, &j) in orbit.iter().enumerate() {
+                        for k in 0..3 {
+                            let val = v[3 * jl + k];
+                            if val.abs() > 1e-15 {
+                                col.push((layout.dof(j, k).expect("free orbit"), val));
+                            }
+                        }
+                    }
+                    col.sort_unstable_by_key(|&(dof, _)| dof);
+                    first.push(col);
+                }
+            }
+            if first.len() != multiplicity {
+                return Err(AdaptedError::Count {
+                    irrep: irrep.name().into(),
+                    built: first.len(),
+                    predicted: multiplicity,
+                });
+            }
+            let unknowns = layout.unknowns();
+            let mut partners = vec![SparseBasis {
+                unknowns,
+                columns: first.clone(),
+            }];
+            for a in 1..d {
+                let cols = first
+                    .iter()
+                    .map(|col| apply_projector(action, layout, &node_of, irrep.matrices(), a, 0, col))
+                    .collect();
+                partners.push(SparseBasis { unknowns, columns: cols });
+            }
+            irreps.push(IrrepBasis {
+                name: irrep.name().into(),
+                dim: d,
+                multiplicity,
+                partners,
+            });
+        }
+        Ok(Self { irreps })
+    }
+}
+
+/// P_{ab} v = (d/|G|) Σ_g D_ab(g) T(g) v for a sparse v, with (T(g) v)_{π_g(j)} = R_g v_j.
+fn apply_projector(
+    action: &GroupAction,
+    layout: &Layout,
+    node_of: &[(usize, usize)],
+    matrices: &[DMatrix<f64>],
+    a: usize,
+    b: usize,
+    v: &[(usize, f64)],
+) -> Vec<(usize, f64)> {
+    let group = action.group();
+    let d = matrices[0].nrows() as f64;
+    // Gather v by node.
+    let mut by_node: std::collections::BTreeMap<usize, Vector3<f64>> = std::collections::BTreeMap::new();
+    for &(dof, val) in v {
+        let (node, k) = node_of[dof];
+        by_node.entry(node).or_insert_with(Vector3::zeros)[k] += val;
+    }
+    let mut out: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
+    for g in 0..group.order() {
+        let coef = d / group.order() as f64 * matrices[g][(a, b)];
+        if coef == 0.0 {
+            continue;
+        }
+        let r = group.element(g);
+        for (&j, vj) in &by_node {
+            let target = action.node_perm(g)[j];
+            let w = r * vj * coef;
+            for k in 0..3 {
+                let dof = layout.dof(target, k).expect("free orbits map to free nodes");
+                *out.entry(dof).or_insert(0.0) += w[k];
+            }
+        }
+    }
+    out.into_iter().filter(|(_, x)| x.abs() > 1e-15).collect()
+}
+
+/// For each unknown, its (node, component).
+fn layout_node_map(layout: &Layout) -> Vec<(usize, usize)> {
+    let mut map = vec![(0, 0); layout.unknowns()];
+    let nodes = layout.nodes();
+    for i in 0..nodes {
+        for k in 0..3 {
+            if let Some(d) = layout.dof(i, k) {
+                map[d] = (i, k);
+            }
+        }
+    }
+    map
 }
 
 /// A model restricted to the fixed-point space, as a dense problem for the path follower:

@@ -87,6 +87,11 @@ impl Layout {
         }
     }
 
+    /// Number of nodes.
+    pub fn nodes(&self) -> usize {
+        self.dof_of.len()
+    }
+
     /// Number of unknowns.
     pub fn unknowns(&self) -> usize {
         self.unknowns

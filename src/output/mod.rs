@@ -1,1 +1,244 @@
-//! Writers of a run's results. TODO(outputs helper).
+//! Writers of a run's results into an output directory.
+//!
+//! | file | writer | content |
+//! | --- | --- | --- |
+//! | `path.csv` | [`write_csv`] | a row per path point: step, arclength, parameters, measures, iterations |
+//! | `path.json` | [`write_json`] | the whole [`PathReport`]: metadata, path, turning points, saved states |
+//! | `path.svg` | [`write_diagram`], [`write_diagram_with`] | the path in two chosen quantities, turning points marked |
+//! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
+//!
+//! [`Progress`] is the terminal progress bar (silent when quiet or when stderr is not a
+//! terminal).
+//!
+//! Every file is written whole: into a temporary file in the target directory, flushed to
+//! disk and renamed over the target, so a reader never sees half a file and a failed write
+//! leaves nothing (or the previous file) behind. Nothing non-finite is ever written: the
+//! writers check the report (or the state) first and return an [`OutputError`] naming the file
+//! and the offending value. One writer per file: `csv.rs`, `json.rs`, `svg.rs`, `states.rs`,
+//! `progress.rs`.
+//!
+//! [`PathReport`]: crate::report::PathReport
+
+mod csv;
+mod json;
+mod progress;
+mod states;
+mod svg;
+
+pub use csv::write_csv;
+pub use json::write_json;
+pub use progress::Progress;
+pub use states::{PvdTime, StateWriter};
+pub use svg::{
+    default_axes, write_diagram, write_diagram_with, Diagram, Marker, MarkerKind, Segment,
+};
+
+use crate::report::PathReport;
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Why an output file could not be written; every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// The output directory does not exist (or is not a directory).
+    #[error("cannot write {path}: the output directory {dir} does not exist")]
+    NoDirectory {
+        /// The file that was to be written.
+        path: PathBuf,
+        /// The missing directory.
+        dir: PathBuf,
+    },
+    /// Creating, writing, syncing or renaming the file failed.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: io::Error,
+    },
+    /// The data cannot be written as asked: a non-finite value, an unknown axis name, a
+    /// field of the wrong length, a failure of the plotting library.
+    #[error("cannot write {path}: {message}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the value.
+        message: String,
+    },
+}
+
+impl OutputError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            OutputError::NoDirectory { path, .. }
+            | OutputError::Io { path, .. }
+            | OutputError::Invalid { path, .. } => path,
+        }
+    }
+
+    fn invalid(path: &Path, message: impl Into<String>) -> Self {
+        OutputError::Invalid {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+
+    /// Converts an error of the mesh writers, which already name the file for i/o errors.
+    fn from_mesh(path: &Path, e: meshes::MeshError) -> Self {
+        match e {
+            meshes::MeshError::Io { path, source } => OutputError::Io { path, source },
+            other => OutputError::invalid(path, other.to_string()),
+        }
+    }
+}
+
+/// Fails with [`OutputError::NoDirectory`] unless the directory `path` would go into exists.
+fn check_dir(path: &Path) -> Result<(), OutputError> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if dir.is_dir() {
+        Ok(())
+    } else {
+        Err(OutputError::NoDirectory {
+            path: path.to_path_buf(),
+            dir: dir.to_path_buf(),
+        })
+    }
+}
+
+/// Writes `path` whole: `fill` writes into a temporary file in the same directory, which is
+/// flushed, synced, made world-readable (0644 on Unix) and renamed over `path`. On error the
+/// temporary file is removed and an existing `path` is left as it was.
+fn write_whole(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), OutputError> {
+    check_dir(path)?;
+    let io_err = |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path.file_name().map_or_else(
+        || "output".to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(io_err)?;
+    {
+        let mut w = BufWriter::new(tmp.as_file());
+        fill(&mut w).map_err(io_err)?;
+        w.flush().map_err(io_err)?;
+    }
+    let file: &File = tmp.as_file();
+    set_mode(file).map_err(io_err)?;
+    file.sync_all().map_err(io_err)?;
+    tmp.persist(path).map_err(|e| io_err(e.error))?;
+    Ok(())
+}
+
+/// Temporary files are created private (0600); output files should be readable like files
+/// made by `File::create` under the usual umask (0644).
+#[cfg(unix)]
+fn set_mode(file: &File) -> io::Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    file.set_permissions(std::fs::Permissions::from_mode(0o644))
+}
+
+#[cfg(not(unix))]
+fn set_mode(_file: &File) -> io::Result<()> {
+    Ok(())
+}
+
+/// Checks that every number of the report is finite; the error names the row (or turning
+/// point, or saved state) and the column.
+fn check_finite(path: &Path, report: &PathReport) -> Result<(), OutputError> {
+    let bad = |what: String, name: &str, v: f64| {
+        OutputError::invalid(path, format!("{what}: {name} is {v} (not finite)"))
+    };
+    let columns = |params: &[f64], measures: &[f64]| {
+        let p = report.parameters.iter().zip(params);
+        let m = report.measures.iter().zip(measures);
+        p.chain(m)
+            .find(|(_, v)| !v.is_finite())
+            .map(|(n, v)| (n.clone(), *v))
+    };
+    for row in &report.rows {
+        let what = || format!("path row {}", row.step);
+        if !row.arclength.is_finite() {
+            return Err(bad(what(), "arclength", row.arclength));
+        }
+        check_lengths(path, report, &what(), &row.parameters, &row.measures)?;
+        if let Some((n, v)) = columns(&row.parameters, &row.measures) {
+            return Err(bad(what(), &n, v));
+        }
+    }
+    for (k, t) in report.turning_points.iter().enumerate() {
+        let what = || {
+            format!(
+                "turning point {k} ({}, after step {})",
+                t.kind, t.after_step
+            )
+        };
+        check_lengths(path, report, &what(), &t.parameters, &t.measures)?;
+        if let Some((n, v)) = columns(&t.parameters, &t.measures) {
+            return Err(bad(what(), &n, v));
+        }
+    }
+    for s in &report.saved {
+        if !s.control.is_finite() {
+            return Err(bad(format!("saved state {}", s.file), "control", s.control));
+        }
+    }
+    Ok(())
+}
+
+/// A row must have one value per parameter name and one per measure name.
+fn check_lengths(
+    path: &Path,
+    report: &PathReport,
+    what: &str,
+    params: &[f64],
+    measures: &[f64],
+) -> Result<(), OutputError> {
+    if params.len() != report.parameters.len() || measures.len() != report.measures.len() {
+        return Err(OutputError::invalid(
+            path,
+            format!(
+                "{what} has {} parameters and {} measures, the report names {} and {}",
+                params.len(),
+                measures.len(),
+                report.parameters.len(),
+                report.measures.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// An `f64` with the fewest digits that parse back to the same bits: plain decimal for
+/// 1e-4 ≤ |x| < 1e16 (and zero), `1.5e-300` style otherwise (like Python's `repr`, and like
+/// the mesh writers).
+struct Num(f64);
+
+impl fmt::Display for Num {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || (1e-4..1e16).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
+}

@@ -1,0 +1,49 @@
+//! `path.csv`: the path as a table, one row per converged point.
+
+use super::{check_finite, write_whole, Num, OutputError};
+use crate::report::PathReport;
+use std::path::{Path, PathBuf};
+
+/// Writes `dir/path.csv` and returns its path.
+///
+/// The header is `step,arclength,<each parameter>,<each measure>,iterations` (names quoted as
+/// in RFC 4180 if they contain a comma, a quote or a line break), followed by one row per
+/// [`PathRow`](crate::report::PathRow). Numbers are printed with the fewest digits that parse
+/// back to the same `f64` (`1.5`, `-0`, `2.5e-7`), so the table is exact. Lines end in `\n`.
+///
+/// # Errors
+/// [`OutputError::NoDirectory`] if `dir` does not exist, [`OutputError::Invalid`] if a value of
+/// the report is not finite or a row has the wrong number of values (nothing is written),
+/// [`OutputError::Io`] if the file cannot be written.
+pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError> {
+    let path = dir.join("path.csv");
+    check_finite(&path, report)?;
+    write_whole(&path, |w| {
+        let names = ["step", "arclength"]
+            .into_iter()
+            .chain(report.parameters.iter().map(String::as_str))
+            .chain(report.measures.iter().map(String::as_str))
+            .chain(["iterations"])
+            .map(quote)
+            .collect::<Vec<_>>();
+        writeln!(w, "{}", names.join(","))?;
+        for row in &report.rows {
+            write!(w, "{},{}", row.step, Num(row.arclength))?;
+            for &v in row.parameters.iter().chain(&row.measures) {
+                write!(w, ",{}", Num(v))?;
+            }
+            writeln!(w, ",{}", row.iterations)?;
+        }
+        Ok(())
+    })?;
+    Ok(path)
+}
+
+/// A header cell: as is, or in double quotes (inner quotes doubled) when it needs them.
+fn quote(name: &str) -> String {
+    if name.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", name.replace('"', "\"\""))
+    } else {
+        name.to_string()
+    }
+}
