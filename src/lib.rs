@@ -18,3 +18,4 @@ pub mod report;
 pub mod output;
 pub mod study;
 pub mod run;
+pub mod stability;

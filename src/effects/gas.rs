@@ -33,6 +33,11 @@ impl Effect for GasPressure {
         Vec::new()
     }
 
+    /// The enclosed volume is invariant under rigid motions.
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        crate::model::ALL_RIGID_MOTIONS.to_vec()
+    }
+
     fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
         let p = self.pressure.value(params);
         out.add_triangles(x, [self.pressure.parameter(), None], |_, xt, terms| {
@@ -73,6 +78,10 @@ impl Effect for GasAmount {
 
     fn keeps(&self) -> Vec<Invariant> {
         Vec::new()
+    }
+
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        crate::model::ALL_RIGID_MOTIONS.to_vec()
     }
 
     fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {

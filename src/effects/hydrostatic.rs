@@ -172,6 +172,12 @@ impl Effect for Fluid {
         vec![Invariant::Direction(-Vector3::z())]
     }
 
+    /// Horizontal translations and rotation about the vertical z-axis keep the level planes.
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        let m = crate::model::ALL_RIGID_MOTIONS;
+        vec![m[0], m[1], m[5]]
+    }
+
     fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
         let (rho, h) = (self.density.value(params), self.level.value(params));
         let s = self.sign() * self.gravity;

@@ -232,6 +232,11 @@ impl Effect for Membrane {
         Vec::new()
     }
 
+    /// Strain energy depends only on the metric: every rigid motion keeps it.
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        crate::model::ALL_RIGID_MOTIONS.to_vec()
+    }
+
     fn assemble(&self, x: &[Vec3], _params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
         out.add_triangles(x, [None, None], |t, xt, terms| {
             terms.local = self.elements[t]

@@ -48,6 +48,19 @@ impl Effect for Plane {
         vec![Invariant::Direction(self.normal)]
     }
 
+    /// Translations within the plane and rotation about its normal (through the origin).
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        let n = self.normal.normalize();
+        let a = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+        let t1 = n.cross(&a).normalize();
+        let t2 = n.cross(&t1);
+        vec![
+            [t1.x, t1.y, t1.z, 0.0, 0.0, 0.0],
+            [t2.x, t2.y, t2.z, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, n.x, n.y, n.z],
+        ]
+    }
+
     fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
         let d = self.offset.value(params);
         let n = self.normal;

@@ -67,6 +67,12 @@ impl Effect for Spin {
         vec![Invariant::Axis(Vector3::z())]
     }
 
+    /// Translation along and rotation about the spin axis z.
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        let m = crate::model::ALL_RIGID_MOTIONS;
+        vec![m[2], m[5]]
+    }
+
     fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
         let sign = match self.side {
             FluidSide::Behind => 1.0,

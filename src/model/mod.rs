@@ -63,9 +63,24 @@ pub trait Effect: Send + Sync {
     /// scene's group is the mesh group restricted to what every effect keeps.
     fn keeps(&self) -> Vec<Invariant>;
 
+    /// The rigid motions that leave Π_e unchanged, as vectors (t_x, t_y, t_z, ω_x, ω_y, ω_z)
+    /// of translations and rotations about axes through the origin spanning them. A free body
+    /// has a zero tangent eigenvalue for every motion all its effects keep.
+    fn rigid_motions(&self) -> Vec<[f64; 6]>;
+
     /// Adds Π_e and its derivatives at the current node positions `x` and parameters `params`.
     fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError>;
 }
+
+/// All six rigid motions.
+pub const ALL_RIGID_MOTIONS: [[f64; 6]; 6] = [
+    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+];
 
 /// What a solver needs from a model.
 pub trait Model: Sync {
@@ -121,6 +136,55 @@ impl FeModel {
     /// The effects, in assembly order.
     pub fn effects(&self) -> &[Box<dyn Effect>] {
         &self.effects
+    }
+
+    /// The rigid motions (t, ω) that every effect keeps, as an orthonormal basis of that
+    /// subspace of ℝ⁶: the intersection of the effects' subspaces, computed as the null space
+    /// of Σ_e (I − P_e). Empty when any node is fixed.
+    pub fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        if self.layout.unknowns() < 3 * self.reference.len() {
+            return Vec::new();
+        }
+        let mut sum = nalgebra::SMatrix::<f64, 6, 6>::zeros();
+        for e in &self.effects {
+            let kept = e.rigid_motions();
+            let basis = nalgebra::DMatrix::from_fn(6, kept.len(), |i, j| kept[j][i]);
+            let projector = if kept.is_empty() {
+                nalgebra::DMatrix::zeros(6, 6)
+            } else {
+                let svd = basis.svd(true, false);
+                let u = svd.u.expect("U requested");
+                let rank = svd.singular_values.iter().filter(|&&v| v > 1e-12).count();
+                let u = u.columns(0, rank);
+                &u * u.transpose()
+            };
+            sum += nalgebra::SMatrix::<f64, 6, 6>::identity() - nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, j| projector[(i, j)]);
+        }
+        let eig = nalgebra::SymmetricEigen::new(sum);
+        (0..6)
+            .filter(|&k| eig.eigenvalues[k].abs() < 1e-10)
+            .map(|k| std::array::from_fn(|i| eig.eigenvectors[(i, k)]))
+            .collect()
+    }
+
+    /// The displacement fields of rigid motions at positions `x`: u_i = t + ω × x_i.
+    pub fn rigid_modes(&self, motions: &[[f64; 6]], x: &[Vec3]) -> Vec<Vec<f64>> {
+        motions
+            .iter()
+            .map(|m| {
+                let (t, w) = (Vec3::new(m[0], m[1], m[2]), Vec3::new(m[3], m[4], m[5]));
+                let mut u = vec![0.0; self.layout.unknowns()];
+                for (i, xi) in x.iter().enumerate() {
+                    let v = t + w.cross(xi);
+                    for k in 0..3 {
+                        if let Some(d) = self.layout.dof(i, k) {
+                            u[d] = v[k];
+                        }
+                    }
+                }
+                u
+            })
+            .collect()
     }
 
     /// Current node positions x = X + u (fixed nodes at X).

@@ -1,0 +1,201 @@
+//! Stability by irrep (DESIGN §3, §4.3): every block K_μ = B_μᵀ K B_μ of the tangent at a
+//! symmetric state, its eigenvalues, negative count and zero modes.
+//!
+//! - Rigid-body modes. A free body has a zero eigenvalue for every rigid motion all its
+//!   effects keep (see [`crate::model::FeModel::rigid_motions`]); at the current positions
+//!   those fields u_i = t + ω × x_i are projected into each block, reported there as zero
+//!   modes (T1u and T1g for a free sphere in Ih) and deflated: the block's spectrum is taken on
+//!   their orthogonal complement, so they never count in the index.
+//! - Physical constraints. With augmenting equations g = 0 active (their parameters free) the
+//!   trivial block is bordered, K̃ = [[K_A, L], [Lᵀ, C]], each constraint row scaled so that
+//!   the border is symmetric (L = Bᵀ ∂F/∂μ and s·∂g/∂q agree; DESIGN §2.3 "scale it by −ρg").
+//!   By Haynsworth the index is that of the Schur complement: on the constraints' tangent
+//!   space Zᵀ K_A Z when C = 0, K_A − L C⁻¹ Lᵀ when C is invertible; that matrix's spectrum is
+//!   reported for the trivial block.
+//!
+//! The index of the state is Σ_μ d_μ · neg(block μ).
+
+use crate::adapted::AdaptedBasis;
+use crate::model::constraint::Constraint;
+use crate::model::{Evaluation, FeModel, Model, ModelError, Request};
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use serde::Serialize;
+
+/// The spectrum of one irrep's block.
+#[derive(Debug, Clone, Serialize)]
+pub struct BlockSpectrum {
+    /// Irrep name.
+    pub irrep: String,
+    /// Irrep dimension d (every eigenvalue below occurs d times in K).
+    pub dim: usize,
+    /// Block size m_μ (columns of one partner).
+    pub size: usize,
+    /// Rigid-body zero modes found in this block (deflated).
+    pub rigid_modes: usize,
+    /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium).
+    pub rigid_residual: f64,
+    /// Eigenvalues on the complement of the rigid modes (and of the constraints' border for the
+    /// trivial block), ascending.
+    pub eigenvalues: Vec<f64>,
+    /// Number of negative eigenvalues.
+    pub negative: usize,
+    /// Eigenvectors (columns, in block coordinates of the first partner) of the lowest
+    /// eigenvalues, kept for critical modes.
+    #[serde(skip)]
+    pub vectors: DMatrix<f64>,
+}
+
+/// The spectrum of a state by irrep.
+#[derive(Debug, Clone, Serialize)]
+pub struct Spectrum {
+    /// One per irrep, the trivial first.
+    pub blocks: Vec<BlockSpectrum>,
+    /// Instability index Σ_μ d_μ neg_μ (0 = stable).
+    pub index: usize,
+    /// max |K_ij|, the scale for "zero".
+    pub scale: f64,
+}
+
+impl Spectrum {
+    /// Negative counts per block, for comparing states.
+    pub fn negatives(&self) -> Vec<usize> {
+        self.blocks.iter().map(|b| b.negative).collect()
+    }
+}
+
+/// Everything needed to analyse states of one model under one group.
+pub struct Stability<'a> {
+    model: &'a FeModel,
+    basis: &'a AdaptedBasis,
+    motions: Vec<[f64; 6]>,
+}
+
+/// An orthonormal basis of the orthogonal complement of the columns of `r` in ℝ^m, and the
+/// rank of `r`. Columns count when their span has a squared singular value above `floor`
+/// (callers pass columns whose genuine parts are of order one).
+fn complement(r: &DMatrix<f64>, m: usize, floor: f64) -> (DMatrix<f64>, usize) {
+    if r.ncols() == 0 || m == 0 {
+        return (DMatrix::identity(m, m), 0);
+    }
+    let eig = SymmetricEigen::new(r * r.transpose());
+    let keep: Vec<usize> = (0..m).filter(|&k| eig.eigenvalues[k] <= floor).collect();
+    let rank = m - keep.len();
+    let z = DMatrix::from_fn(m, keep.len(), |i, j| eig.eigenvectors[(i, keep[j])]);
+    (z, rank)
+}
+
+/// Sorted eigen-decomposition of a symmetric matrix (empty-safe).
+fn sorted_eigen(a: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let n = a.nrows();
+    if n == 0 {
+        return (Vec::new(), DMatrix::zeros(0, 0));
+    }
+    let eig = SymmetricEigen::new((a + a.transpose()) * 0.5);
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
+    let values = idx.iter().map(|&k| eig.eigenvalues[k]).collect();
+    let vectors = DMatrix::from_fn(n, n, |i, j| eig.eigenvectors[(i, idx[j])]);
+    (values, vectors)
+}
+
+impl<'a> Stability<'a> {
+    /// The analysis of `model` with the adapted `basis` of the scene's group.
+    pub fn new(model: &'a FeModel, basis: &'a AdaptedBasis) -> Self {
+        Self {
+            model,
+            basis,
+            motions: model.rigid_motions(),
+        }
+    }
+
+    /// The basis by irrep.
+    pub fn basis(&self) -> &AdaptedBasis {
+        self.basis
+    }
+
+    /// The spectrum by irrep at (u, params) with `constraints` active; `governed[k]` is the
+    /// parameter constraint k frees. `eval` is a reusable buffer.
+    pub fn spectrum(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        constraints: &[Box<dyn Constraint>],
+        eval: &mut Evaluation,
+    ) -> Result<Spectrum, ModelError> {
+        let model = self.model;
+        let layout = model.layout();
+        model.evaluate(u, params, Request::ALL, eval)?;
+        let scale = eval
+            .tangent
+            .iter()
+            .fold(0.0f64, |a, b| a.max(b.abs()))
+            .max(eval.rank_one.iter().map(|(c, a)| c.abs() * a.iter().fold(0.0f64, |m, v| m.max(v * v))).fold(0.0, f64::max))
+            .max(1e-300);
+        let x = model.positions(u);
+        // Unit rigid fields: their projections onto a block are of order one or round-off.
+        let rigid: Vec<Vec<f64>> = model
+            .rigid_modes(&self.motions, &x)
+            .into_iter()
+            .map(|v| {
+                let n = v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-300);
+                v.into_iter().map(|a| a / n).collect()
+            })
+            .collect();
+        let mut work = Vec::new();
+        let mut blocks = Vec::with_capacity(self.basis.irreps.len());
+        for (mu, ib) in self.basis.irreps.iter().enumerate() {
+            let b = &ib.partners[0];
+            let m = b.dim();
+            let k = b.restrict_tangent(layout, eval, &mut work);
+            // Rigid modes in this block, deflated.
+            let r = DMatrix::from_columns(&rigid.iter().map(|v| b.restrict(v)).collect::<Vec<DVector<f64>>>());
+            let r = if rigid.is_empty() { DMatrix::zeros(m, 0) } else { r };
+            let (z, rigid_modes) = complement(&r, m, 1e-12);
+            let rigid_residual = if rigid_modes > 0 { (&k * &r).amax() / (scale * r.amax().max(1e-300)) } else { 0.0 };
+            let mut kz = z.transpose() * &k * &z;
+            let mut basis_map = z;
+            // The constraints' border on the trivial block.
+            if mu == 0 && !constraints.is_empty() && kz.nrows() > 0 {
+                let c = constraints.len();
+                let mut l = DMatrix::zeros(m, c);
+                let mut cc = DMatrix::zeros(c, c);
+                for (kk, con) in constraints.iter().enumerate() {
+                    let v = con.evaluate(layout, &x, params);
+                    let gq = b.restrict(&v.grad_u);
+                    let load = b.restrict(&eval.loads[con.frees()]);
+                    let s = if gq.norm_squared() > 0.0 { gq.dot(&load) / gq.norm_squared() } else { 1.0 };
+                    l.set_column(kk, &load);
+                    for (jj, other) in constraints.iter().enumerate() {
+                        cc[(kk, jj)] = s * v.grad_params[other.frees()];
+                    }
+                }
+                let cc = (&cc + cc.transpose()) * 0.5;
+                let lz = basis_map.transpose() * &l;
+                if cc.amax() <= 1e-12 * scale {
+                    let lz = &lz / lz.amax().max(1e-300);
+                    let (zc, _) = complement(&lz, kz.nrows(), 1e-12);
+                    kz = zc.transpose() * &kz * &zc;
+                    basis_map = &basis_map * zc;
+                } else if let Some(ci) = cc.clone().try_inverse() {
+                    kz -= &lz * ci * lz.transpose();
+                }
+            }
+            let (values, vecs) = sorted_eigen(&kz);
+            let keep = values.len().min(8);
+            let vectors = if keep > 0 { &basis_map * vecs.columns(0, keep) } else { DMatrix::zeros(m, 0) };
+            let negative = values.iter().filter(|&&v| v < 0.0).count();
+            blocks.push(BlockSpectrum {
+                irrep: ib.name.clone(),
+                dim: ib.dim,
+                size: m,
+                rigid_modes,
+                rigid_residual,
+                eigenvalues: values,
+                negative,
+                vectors,
+            });
+        }
+        let index = blocks.iter().map(|b| b.dim * b.negative).sum();
+        Ok(Spectrum { blocks, index, scale })
+    }
+}
