@@ -33,8 +33,13 @@ impl SparseBasis {
             if layout.dof(i, 0).is_none() {
                 continue; // a fixed orbit
             }
-            let stabiliser: Vec<usize> = (0..group.order()).filter(|&g| action.node_perm(g)[i] == i).collect();
-            let p = stabiliser.iter().fold(Matrix3::zeros(), |acc, &h| acc + group.element(h)) / stabiliser.len() as f64;
+            let stabiliser: Vec<usize> = (0..group.order())
+                .filter(|&g| action.node_perm(g)[i] == i)
+                .collect();
+            let p = stabiliser
+                .iter()
+                .fold(Matrix3::zeros(), |acc, &h| acc + group.element(h))
+                / stabiliser.len() as f64;
             let eig = SymmetricEigen::new((p + p.transpose()) * 0.5);
             // One group element carrying i to each node of its orbit.
             let mut carrier = vec![usize::MAX; orbit.len()];
@@ -55,7 +60,9 @@ impl SparseBasis {
                 for (k, &j) in orbit.iter().enumerate() {
                     let w = group.element(carrier[k]) * v * scale;
                     for c in 0..3 {
-                        let d = layout.dof(j, c).expect("a free orbit has unknowns at every node");
+                        let d = layout
+                            .dof(j, c)
+                            .expect("a free orbit has unknowns at every node");
                         if w[c] != 0.0 {
                             col.push((d, w[c]));
                         }
@@ -88,7 +95,12 @@ impl SparseBasis {
 
     /// Bᵀ v.
     pub fn restrict(&self, v: &[f64]) -> DVector<f64> {
-        DVector::from_iterator(self.dim(), self.columns.iter().map(|c| c.iter().map(|&(d, b)| b * v[d]).sum()))
+        DVector::from_iterator(
+            self.dim(),
+            self.columns
+                .iter()
+                .map(|c| c.iter().map(|&(d, b)| b * v[d]).sum()),
+        )
     }
 
     /// u = B q.
@@ -103,13 +115,24 @@ impl SparseBasis {
 
     /// Bᵀ K B for the full tangent of an evaluation (sparse part on `layout`'s pattern plus
     /// its rank-one terms), using the sparsity of the columns; `work` is scratch of length N.
-    pub fn restrict_tangent(&self, layout: &Layout, eval: &Evaluation, work: &mut Vec<f64>) -> DMatrix<f64> {
+    pub fn restrict_tangent(
+        &self,
+        layout: &Layout,
+        eval: &Evaluation,
+        work: &mut Vec<f64>,
+    ) -> DMatrix<f64> {
         let out = self.restrict_tangent_to(self, layout, eval, work);
         (&out + out.transpose()) * 0.5
     }
 
     /// Bᵀ K C for another basis C over the same unknowns (off-diagonal blocks, for checks).
-    pub fn restrict_tangent_to(&self, other: &SparseBasis, layout: &Layout, eval: &Evaluation, work: &mut Vec<f64>) -> DMatrix<f64> {
+    pub fn restrict_tangent_to(
+        &self,
+        other: &SparseBasis,
+        layout: &Layout,
+        eval: &Evaluation,
+        work: &mut Vec<f64>,
+    ) -> DMatrix<f64> {
         let pattern = layout.pattern();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         work.clear();
@@ -164,7 +187,9 @@ pub struct AdaptedBasis {
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
 pub enum AdaptedError {
     /// Complex-type irreps (the E_k of a chiral C_n) need a complex basis, not built yet.
-    #[error("irrep {0} of {1} is of complex type (a chiral group); its block is not supported yet")]
+    #[error(
+        "irrep {0} of {1} is of complex type (a chiral group); its block is not supported yet"
+    )]
     ComplexType(String, String),
     /// The projected basis does not have the size the characters predict.
     #[error("irrep {irrep}: built {built} columns but the characters predict {predicted}")]
@@ -196,7 +221,10 @@ impl AdaptedBasis {
         let mut irreps = Vec::new();
         for irrep in group.irreps() {
             if irrep.kind() != symmetry::IrrepKind::Real {
-                return Err(AdaptedError::ComplexType(irrep.name().into(), group.name().into()));
+                return Err(AdaptedError::ComplexType(
+                    irrep.name().into(),
+                    group.name().into(),
+                ));
             }
             let d = irrep.dim();
             // Character formula over the free nodes.
@@ -207,7 +235,10 @@ impl AdaptedBasis {
                     .count() as f64
                     * group.element(g).trace()
             };
-            let m: f64 = (0..group.order()).map(|g| chi_t(g) * irrep.character(g)).sum::<f64>() / order;
+            let m: f64 = (0..group.order())
+                .map(|g| chi_t(g) * irrep.character(g))
+                .sum::<f64>()
+                / order;
             let multiplicity = m.round() as usize;
             let mut first: Vec<Vec<(usize, f64)>> = Vec::new();
             for orbit in &orbits {
@@ -269,9 +300,14 @@ impl AdaptedBasis {
             for a in 1..d {
                 let cols = first
                     .iter()
-                    .map(|col| apply_projector(action, layout, &node_of, irrep.matrices(), a, 0, col))
+                    .map(|col| {
+                        apply_projector(action, layout, &node_of, irrep.matrices(), a, 0, col)
+                    })
                     .collect();
-                partners.push(SparseBasis { unknowns, columns: cols });
+                partners.push(SparseBasis {
+                    unknowns,
+                    columns: cols,
+                });
             }
             irreps.push(IrrepBasis {
                 name: irrep.name().into(),
@@ -297,14 +333,15 @@ fn apply_projector(
     let group = action.group();
     let d = matrices[0].nrows() as f64;
     // Gather v by node.
-    let mut by_node: std::collections::BTreeMap<usize, Vector3<f64>> = std::collections::BTreeMap::new();
+    let mut by_node: std::collections::BTreeMap<usize, Vector3<f64>> =
+        std::collections::BTreeMap::new();
     for &(dof, val) in v {
         let (node, k) = node_of[dof];
         by_node.entry(node).or_insert_with(Vector3::zeros)[k] += val;
     }
     let mut out: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
-    for g in 0..group.order() {
-        let coef = d / group.order() as f64 * matrices[g][(a, b)];
+    for (g, dm) in matrices.iter().enumerate() {
+        let coef = d / group.order() as f64 * dm[(a, b)];
         if coef == 0.0 {
             continue;
         }
@@ -313,7 +350,9 @@ fn apply_projector(
             let target = action.node_perm(g)[j];
             let w = r * vj * coef;
             for k in 0..3 {
-                let dof = layout.dof(target, k).expect("free orbits map to free nodes");
+                let dof = layout
+                    .dof(target, k)
+                    .expect("free orbits map to free nodes");
                 *out.entry(dof).or_insert(0.0) += w[k];
             }
         }
@@ -362,7 +401,9 @@ impl<'a> SymmetricProblem<'a> {
         control: Option<usize>,
     ) -> Self {
         use crate::model::Model;
-        let free = std::iter::once(control).chain(constraints.iter().map(|c| Some(c.frees()))).collect();
+        let free = std::iter::once(control)
+            .chain(constraints.iter().map(|c| Some(c.frees())))
+            .collect();
         Self {
             eval: model.new_evaluation(),
             u: vec![0.0; model.unknowns()],
@@ -395,7 +436,10 @@ impl<'a> SymmetricProblem<'a> {
 
     /// The free parameters' values in `params` (the dummy control is 0).
     pub fn free_values(&self, params: &[f64]) -> DVector<f64> {
-        DVector::from_iterator(self.free.len(), self.free.iter().map(|i| i.map_or(0.0, |i| params[i])))
+        DVector::from_iterator(
+            self.free.len(),
+            self.free.iter().map(|i| i.map_or(0.0, |i| params[i])),
+        )
     }
 }
 
@@ -416,7 +460,8 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
         use crate::model::{Model, Request};
         self.basis.expand(q, &mut self.u);
         self.params = self.parameters(lambda);
-        self.model.evaluate(&self.u, &self.params, Request::ALL, &mut self.eval)?;
+        self.model
+            .evaluate(&self.u, &self.params, Request::ALL, &mut self.eval)?;
         let (m, nf, c) = (self.basis.dim(), self.free.len(), self.constraints.len());
         let mut loads = DMatrix::zeros(m, nf);
         for (j, i) in self.free.iter().enumerate() {
@@ -442,7 +487,9 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
         }
         Ok(crate::continuation::Linearization {
             residual: self.basis.restrict(&self.eval.residual),
-            tangent: self.basis.restrict_tangent(self.model.layout(), &self.eval, &mut self.work),
+            tangent: self
+                .basis
+                .restrict_tangent(self.model.layout(), &self.eval, &mut self.work),
             loads,
             constraints,
             constraint_q,

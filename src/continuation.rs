@@ -29,7 +29,11 @@ pub trait DenseProblem {
     /// Number of free parameters (augmenting equations + 1).
     fn free_parameters(&self) -> usize;
     /// R, g and their derivatives at (q, λ).
-    fn evaluate(&mut self, q: &DVector<f64>, lambda: &DVector<f64>) -> Result<Linearization, ModelError>;
+    fn evaluate(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Linearization, ModelError>;
 }
 
 /// R, K, L and the augmenting equations at a point.
@@ -56,12 +60,16 @@ impl Linearization {
         let (m, c) = (self.residual.len(), self.constraints.len());
         let n = m + c + 1;
         let mut a = DMatrix::zeros(n, n);
-        a.view_mut((0, 0), (m, m)).copy_from(&(&self.tangent * opts.state_scale));
-        a.view_mut((m, 0), (c, m)).copy_from(&(&self.constraint_q * opts.state_scale));
+        a.view_mut((0, 0), (m, m))
+            .copy_from(&(&self.tangent * opts.state_scale));
+        a.view_mut((m, 0), (c, m))
+            .copy_from(&(&self.constraint_q * opts.state_scale));
         for j in 0..=c {
             let sj = opts.parameter_scales.get(j).copied().unwrap_or(1.0);
-            a.view_mut((0, m + j), (m, 1)).copy_from(&(self.loads.column(j) * sj));
-            a.view_mut((m, m + j), (c, 1)).copy_from(&(self.constraint_lambda.column(j) * sj));
+            a.view_mut((0, m + j), (m, 1))
+                .copy_from(&(self.loads.column(j) * sj));
+            a.view_mut((m, m + j), (c, 1))
+                .copy_from(&(self.constraint_lambda.column(j) * sj));
         }
         a
     }
@@ -72,8 +80,14 @@ impl Linearization {
         let force = (self.loads.amax() * opts.parameter_scales.first().copied().unwrap_or(1.0))
             .max(self.tangent.amax() * opts.state_scale)
             .max(1e-300);
-        let gscale = self.constraint_q.amax().max(self.constraint_lambda.amax()).max(1e-300) * opts.state_scale;
-        self.residual.amax() <= opts.tolerance * force && self.constraints.amax() <= opts.tolerance * gscale
+        let gscale = self
+            .constraint_q
+            .amax()
+            .max(self.constraint_lambda.amax())
+            .max(1e-300)
+            * opts.state_scale;
+        self.residual.amax() <= opts.tolerance * force
+            && self.constraints.amax() <= opts.tolerance * gscale
     }
 }
 
@@ -189,7 +203,10 @@ pub fn solve_at<P: DenseProblem>(
         let mut rhs = DVector::zeros(m + c + 1);
         rhs.rows_mut(0, m).copy_from(&(-&lin.residual));
         rhs.rows_mut(m, c).copy_from(&(-&lin.constraints));
-        let d = a.lu().solve(&rhs).ok_or_else(|| format!("singular tangent at λ = {}", lambda[0]))?;
+        let d = a
+            .lu()
+            .solve(&rhs)
+            .ok_or_else(|| format!("singular tangent at λ = {}", lambda[0]))?;
         q += d.rows(0, m) * opts.state_scale;
         for j in 1..=c {
             lambda[j] += d[m + j] * opts.parameter_scales.get(j).copied().unwrap_or(1.0);
@@ -201,12 +218,19 @@ pub fn solve_at<P: DenseProblem>(
             return Ok((q, lambda, it));
         }
     }
-    Err(format!("Newton did not converge at λ = {} in {budget} iterations", lambda[0]))
+    Err(format!(
+        "Newton did not converge at λ = {} in {budget} iterations",
+        lambda[0]
+    ))
 }
 
 /// The unit tangent of the path at a solution, oriented along `previous` (or so that the
 /// control moves in `opts.direction` when there is none).
-fn tangent_at(lin: &Linearization, opts: &PathOptions, previous: Option<&DVector<f64>>) -> Option<DVector<f64>> {
+fn tangent_at(
+    lin: &Linearization,
+    opts: &PathOptions,
+    previous: Option<&DVector<f64>>,
+) -> Option<DVector<f64>> {
     let (m, c) = (lin.residual.len(), lin.constraints.len());
     let n = m + c + 1;
     let mut a = lin.scaled_jacobian(opts);
@@ -229,7 +253,12 @@ fn tangent_at(lin: &Linearization, opts: &PathOptions, previous: Option<&DVector
 }
 
 /// Predictor–corrector from `from` with step `s` along `from.tangent`.
-fn step<P: DenseProblem>(problem: &mut P, from: &PathPoint, s: f64, opts: &PathOptions) -> Result<PathPoint, String> {
+pub fn step<P: DenseProblem>(
+    problem: &mut P,
+    from: &PathPoint,
+    s: f64,
+    opts: &PathOptions,
+) -> Result<PathPoint, String> {
     let m = problem.dim();
     let nl = from.lambda.len();
     let sq = opts.state_scale;
@@ -274,20 +303,37 @@ fn step<P: DenseProblem>(problem: &mut P, from: &PathPoint, s: f64, opts: &PathO
             });
         }
     }
-    Err(format!("the corrector did not converge in {} iterations", opts.max_iterations))
+    Err(format!(
+        "the corrector did not converge in {} iterations",
+        opts.max_iterations
+    ))
 }
 
 /// Localises the turning point between `from` (t_λ of one sign) and a point reached with
 /// step `s_hi` (t_λ of the other) by a secant search on the step length.
-fn localise_turning<P: DenseProblem>(problem: &mut P, from: &PathPoint, s_hi: f64, t_hi: f64, opts: &PathOptions) -> Option<PathPoint> {
+fn localise_turning<P: DenseProblem>(
+    problem: &mut P,
+    from: &PathPoint,
+    s_hi: f64,
+    t_hi: f64,
+    opts: &PathOptions,
+) -> Option<PathPoint> {
     let m = problem.dim();
     let (mut s0, mut f0) = (0.0, from.tangent[m]);
     let (mut s1, mut f1) = (s_hi, t_hi);
     let mut best = None;
     for _ in 0..40 {
-        let s = if (f1 - f0).abs() > 0.0 { s1 - f1 * (s1 - s0) / (f1 - f0) } else { 0.5 * (s0 + s1) };
+        let s = if (f1 - f0).abs() > 0.0 {
+            s1 - f1 * (s1 - s0) / (f1 - f0)
+        } else {
+            0.5 * (s0 + s1)
+        };
         // Keep the secant inside the bracket; fall back to bisection.
-        let s = if s <= s0.min(s1) || s >= s0.max(s1) { 0.5 * (s0 + s1) } else { s };
+        let s = if s <= s0.min(s1) || s >= s0.max(s1) {
+            0.5 * (s0 + s1)
+        } else {
+            s
+        };
         let p = step(problem, from, s, opts).ok()?;
         let f = p.tangent[m];
         let done = f.abs() < 1e-12 || (s1 - s0).abs() < 1e-14 * s_hi;

@@ -8,14 +8,15 @@
 
 pub use meshes;
 pub use symmetry;
-pub mod effects;
-pub mod scene;
-pub mod linalg;
-pub mod model;
 pub mod adapted;
 pub mod continuation;
-pub mod report;
+pub mod critical;
+pub mod effects;
+pub mod linalg;
+pub mod model;
 pub mod output;
-pub mod study;
+pub mod report;
 pub mod run;
+pub mod scene;
 pub mod stability;
+pub mod study;

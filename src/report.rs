@@ -32,6 +32,9 @@ pub struct PathRow {
     pub measures: Vec<f64>,
     /// Newton iterations of the corrector.
     pub iterations: usize,
+    /// Instability index Σ_μ d_μ neg_μ (rigid modes excluded), when stability was analysed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub index: Option<usize>,
 }
 
 /// A turning point of the control parameter (a fold of the path in the control).
@@ -56,6 +59,11 @@ pub struct SavedState {
     pub control: f64,
     /// File name relative to the output directory.
     pub file: String,
+    /// What the state is: `step N`, `maximum`, `double bifurcation in E1` …
+    pub label: String,
+    /// True for the states of the path collection (`path.pvd`); turning and critical points
+    /// are written beside it.
+    pub in_collection: bool,
 }
 
 /// Everything a path run found.
@@ -89,6 +97,11 @@ pub struct PathReport {
     pub turning_points: Vec<TurningRow>,
     /// Why the path ended, in words.
     pub stop: String,
+    /// Critical points, localised and classified by irrep.
+    pub critical: Vec<crate::critical::CriticalPoint>,
+    /// Why stability was not analysed, if it was not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stability_note: Option<String>,
     /// States written as VTU files.
     pub saved: Vec<SavedState>,
 }

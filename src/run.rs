@@ -1,29 +1,38 @@
-//! Running a study's analysis: the start solve, then the path (or the single equilibrium),
-//! collected into a [`PathReport`] with the states to save.
+//! Running a study's analysis, collected into a [`PathReport`] with the states to save.
 //!
-//! The start state is the reference scaled by `start.stretch`, solved with every parameter at
-//! its start value. Constraint targets declared `"initial"` are measured there. The path is
-//! then followed in the fixed-point space of the scene's group with the control and the
-//! constraint-governed parameters free.
+//! - `path`: the start state (the reference scaled by `start.stretch`, every parameter at its
+//!   start value, no constraint active) is solved; constraint targets declared `"initial"`
+//!   are measured there; the path is followed in the fixed-point space of the scene's group.
+//! - `equilibrium`: the start state alone.
+//! - `linear-buckling`: the start state held while the control sweeps `[min, max]`.
+//!
+//! At every point the tangent is split by irrep ([`crate::stability`]); where a block's
+//! negative count changes, the critical point is localised and classified
+//! ([`crate::critical`]).
 
-use crate::adapted::SymmetricProblem;
-use crate::continuation::{follow, solve_at, PathOptions, PathPoint, StopReason};
+use crate::adapted::{AdaptedBasis, SymmetricProblem};
+use crate::continuation::{follow, solve_at, step, PathOptions, PathPoint, StopReason};
+use crate::critical::{classify_on, isotropy, locate_sign_change, CriticalPoint};
 use crate::report::{MeshInfo, PathReport, PathRow, TurningRow};
 use crate::scene::{Analysis, Direction};
+use crate::stability::{Spectrum, Stability};
 use crate::study::{Measure, Study};
 use nalgebra::DVector;
 
-/// A state to write: path step, control value, full displacement.
+/// A state to write: path step, control value, full displacement, and a mode for critical
+/// points.
 #[derive(Debug, Clone)]
 pub struct State {
-    /// Path step (turning points carry the step before them).
+    /// Path step (turning and critical points carry the step before them).
     pub step: usize,
-    /// A label: `step` or `maximum` / `minimum`.
+    /// A label: `step N`, `maximum`, `minimum`, or the critical point's kind and irrep.
     pub label: String,
     /// The control's value.
     pub control: f64,
     /// Displacement over the unknowns.
     pub u: Vec<f64>,
+    /// The critical mode over the unknowns, for critical points.
+    pub mode: Option<Vec<f64>>,
 }
 
 /// A finished run.
@@ -31,7 +40,7 @@ pub struct State {
 pub struct RunResult {
     /// What was found.
     pub report: PathReport,
-    /// States to write (every `save-every` steps, the last one, and the turning points).
+    /// States to write (every `save-every` steps, the last one, turning and critical points).
     pub states: Vec<State>,
 }
 
@@ -43,186 +52,471 @@ pub enum RunError {
     Start(String),
 }
 
+/// Relative size below which a localised eigenvalue counts as zero.
+const ZERO_EIGENVALUE: f64 = 1e-10;
+
 /// Runs the scene's analysis; `progress(step, control)` is called at every converged point.
 pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<RunResult, RunError> {
-    let (opts, save_every, stop_stretch, direction) = match &study.scene.analysis {
-        Analysis::Path(p) => {
-            let control = study.control.expect("a path analysis has a control");
-            let bounds = &study.scene.parameters[&study.parameters[control]];
-            (
-                PathOptions {
-                    initial_step: p.initial_step,
-                    min_step: p.min_step,
-                    max_step: p.max_step,
-                    max_steps: p.steps,
-                    max_iterations: p.max_iterations,
-                    tolerance: p.tolerance,
-                    bounds: (bounds.min.unwrap_or(f64::NEG_INFINITY), bounds.max.unwrap_or(f64::INFINITY)),
-                    parameter_scales: vec![1.0; study.free.len()],
-                    state_scale: state_scale(study),
-                    direction: if p.direction == Direction::Decrease { -1.0 } else { 1.0 },
-                },
-                p.save_every.max(1),
-                p.stop_stretch,
-                p.direction,
-            )
-        }
-        Analysis::Equilibrium(e) => (
-            PathOptions {
-                tolerance: e.tolerance,
-                max_iterations: e.max_iterations,
-                state_scale: state_scale(study),
-                ..PathOptions::default()
-            },
-            1,
-            None,
-            Direction::Increase,
-        ),
-    };
-    let _ = direction;
+    let opts = path_options(study);
     // 1. The start: every parameter at its start value, no constraint active.
     let u0 = study.start_displacement();
     let q0 = study.basis.restrict(&u0);
     let (q_start, params_start) = {
-        let mut problem = SymmetricProblem::new(&study.model, &study.basis, &[], study.start.clone(), study.control);
+        let mut problem = SymmetricProblem::new(
+            &study.model,
+            &study.basis,
+            &[],
+            study.start.clone(),
+            study.control,
+        );
         let lambda = problem.free_values(&study.start);
         let start_opts = PathOptions {
             max_iterations: opts.max_iterations.max(50),
             ..opts.clone()
         };
-        let (q, lambda, _) = solve_at(&mut problem, &q0, &lambda, &start_opts).map_err(RunError::Start)?;
-        (q.clone(), problem.parameters(&lambda))
+        let (q, lambda, _) =
+            solve_at(&mut problem, &q0, &lambda, &start_opts).map_err(RunError::Start)?;
+        (q, problem.parameters(&lambda))
     };
-    let u_start = {
-        let mut u = vec![0.0; study.basis.unknowns()];
-        study.basis.expand(&q_start, &mut u);
-        u
-    };
+    let mut u_start = vec![0.0; study.basis.unknowns()];
+    study.basis.expand(&q_start, &mut u_start);
+    if let Some(k) = study
+        .measures
+        .iter()
+        .position(|(_, m)| *m == Measure::Volume)
+    {
+        let v = study.measure(&u_start, &params_start)[k];
+        if v <= 0.0 {
+            return Err(RunError::Start(format!(
+                "Newton converged to an inside-out membrane (enclosed volume {v:e}); start closer to the intended state (start.stretch, the start values)"
+            )));
+        }
+    }
     study.set_targets(&u_start, &params_start);
-    // 2. The path (or the single point).
-    let study_ref: &Study = study;
-    let mut problem = SymmetricProblem::new(&study_ref.model, &study_ref.basis, &study_ref.constraints, params_start.clone(), study_ref.control);
-    let lambda0 = problem.free_values(&params_start);
-    let probe = SymmetricProblem::new(&study_ref.model, &study_ref.basis, &study_ref.constraints, params_start.clone(), study_ref.control);
-    let stretch_index = study_ref.measures.iter().position(|(_, m)| *m == Measure::Stretch);
-    let row = |step: usize, p: &PathPoint| -> (PathRow, Vec<f64>) {
-        let u = probe.displacement(&p.q);
-        let params = probe.parameters(&p.lambda);
-        let measures = study_ref.measure(&u, &params);
-        (
-            PathRow {
-                step,
-                arclength: p.arclength,
-                parameters: params,
-                measures,
-                iterations: p.iterations,
-            },
-            u,
-        )
+    let study: &Study = study;
+    let (adapted, stability_note) = match AdaptedBasis::new(&study.action, study.model.layout()) {
+        Ok(b) => (Some(b), None),
+        Err(e) => (None, Some(format!("stability not analysed: {e}"))),
     };
-    let path = if matches!(study_ref.scene.analysis, Analysis::Path(_)) {
-        let mut count = 0usize;
-        follow(
-            &mut problem,
-            &q_start,
-            &lambda0,
-            &opts,
-            |p| match (stop_stretch, stretch_index) {
-                (Some(target), Some(k)) => row(0, p).0.measures[k] >= target,
-                _ => false,
-            },
-            |p| {
-                progress(count, p.lambda[0]);
-                count += 1;
-            },
-        )
-        .map_err(RunError::Start)?
-    } else {
-        let (q, lambda, iterations) = solve_at(&mut problem, &q_start, &lambda0, &opts).map_err(RunError::Start)?;
-        crate::continuation::Path {
-            points: vec![PathPoint {
-                tangent: DVector::zeros(q.len() + lambda.len()),
-                q,
-                lambda,
-                arclength: 0.0,
-                iterations,
-            }],
-            turning_points: Vec::new(),
-            stop: StopReason::Condition,
-        }
+    let stability = adapted.as_ref().map(|b| Stability::new(&study.model, b));
+    let mut runner = Runner {
+        study,
+        stability,
+        opts,
+        rows: Vec::new(),
+        states: Vec::new(),
+        turning: Vec::new(),
+        critical: Vec::new(),
     };
-    let mut rows = Vec::with_capacity(path.points.len());
-    let mut states = Vec::new();
-    let control = study_ref.control;
-    let last = path.points.len() - 1;
-    for (step, p) in path.points.iter().enumerate() {
-        let (r, u) = row(step, p);
-        if step % save_every == 0 || step == last {
-            states.push(State {
-                step,
-                label: format!("step {step}"),
-                control: control.map_or(0.0, |c| r.parameters[c]),
-                u,
-            });
+    let stop = match &study.scene.analysis {
+        Analysis::LinearBuckling(a) => {
+            runner.linear_buckling(&u_start, &params_start, a.samples, &mut progress)
         }
-        rows.push(r);
-    }
-    let mut turning_points = Vec::new();
-    for t in &path.turning_points {
-        let (r, u) = row(t.after_step, &t.point);
-        let kind = if t.kind > 0.0 { "maximum" } else { "minimum" };
-        states.push(State {
-            step: t.after_step,
-            label: kind.to_string(),
-            control: control.map_or(0.0, |c| r.parameters[c]),
-            u,
-        });
-        turning_points.push(TurningRow {
-            kind: kind.to_string(),
-            after_step: t.after_step,
-            parameters: r.parameters,
-            measures: r.measures,
-        });
-    }
-    let stop = match &path.stop {
-        StopReason::Bounds => "the control parameter reached its bound".to_string(),
-        StopReason::StepBudget => format!("the step budget ({}) was used", opts.max_steps),
-        StopReason::Condition if matches!(study_ref.scene.analysis, Analysis::Path(_)) => {
-            format!("the stretch reached {}", stop_stretch.unwrap_or(f64::NAN))
-        }
-        StopReason::Condition => "equilibrium found".to_string(),
-        StopReason::StepTooSmall(why) => why.clone(),
+        _ => runner.path(&q_start, &params_start, &mut progress)?,
     };
-    let m = &study_ref.mesh;
+    let Runner {
+        rows,
+        states,
+        turning,
+        critical,
+        ..
+    } = runner;
+    let m = &study.mesh;
     let report = PathReport {
-        scene: study_ref.scene.info.name.clone(),
-        origin: study_ref.scene.origin.clone(),
+        scene: study.scene.info.name.clone(),
+        origin: study.scene.origin.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),
         mesh: MeshInfo {
-            generator: study_ref.scene.mesh.generator().to_string(),
+            generator: study.scene.mesh.generator().to_string(),
             nodes: m.mesh.nodes.len(),
             elements: m.mesh.triangles.len(),
             group: m.group().name().to_string(),
             order: m.group().order(),
         },
-        group: study_ref.action.group().name().to_string(),
-        group_order: study_ref.action.group().order(),
-        unknowns: study_ref.basis.unknowns(),
-        symmetric_unknowns: study_ref.basis.dim(),
-        control: control.map_or_else(String::new, |c| study_ref.parameters[c].clone()),
-        parameters: study_ref.parameters.clone(),
-        measures: study_ref.measures.iter().map(|(n, _)| n.clone()).collect(),
+        group: study.action.group().name().to_string(),
+        group_order: study.action.group().order(),
+        unknowns: study.basis.unknowns(),
+        symmetric_unknowns: study.basis.dim(),
+        control: study
+            .control
+            .map_or_else(String::new, |c| study.parameters[c].clone()),
+        parameters: study.parameters.clone(),
+        measures: study.measures.iter().map(|(n, _)| n.clone()).collect(),
         rows,
-        turning_points,
+        turning_points: turning,
         stop,
+        critical,
+        stability_note,
         saved: Vec::new(),
     };
     Ok(RunResult { report, states })
 }
 
+fn path_options(study: &Study) -> PathOptions {
+    let scale = state_scale(study);
+    match &study.scene.analysis {
+        Analysis::Path(p) => {
+            let bounds = study
+                .control
+                .map(|c| &study.scene.parameters[&study.parameters[c]]);
+            PathOptions {
+                initial_step: p.initial_step,
+                min_step: p.min_step,
+                max_step: p.max_step,
+                max_steps: p.steps,
+                max_iterations: p.max_iterations,
+                tolerance: p.tolerance,
+                bounds: (
+                    bounds.and_then(|b| b.min).unwrap_or(f64::NEG_INFINITY),
+                    bounds.and_then(|b| b.max).unwrap_or(f64::INFINITY),
+                ),
+                parameter_scales: vec![1.0; study.free.len()],
+                state_scale: scale,
+                direction: if p.direction == Direction::Decrease {
+                    -1.0
+                } else {
+                    1.0
+                },
+            }
+        }
+        Analysis::Equilibrium(e) => PathOptions {
+            tolerance: e.tolerance,
+            max_iterations: e.max_iterations,
+            state_scale: scale,
+            ..PathOptions::default()
+        },
+        Analysis::LinearBuckling(b) => PathOptions {
+            tolerance: b.tolerance,
+            max_iterations: b.max_iterations,
+            state_scale: scale,
+            ..PathOptions::default()
+        },
+    }
+}
+
+struct Runner<'a> {
+    study: &'a Study,
+    stability: Option<Stability<'a>>,
+    opts: PathOptions,
+    rows: Vec<PathRow>,
+    states: Vec<State>,
+    turning: Vec<TurningRow>,
+    critical: Vec<CriticalPoint>,
+}
+
+impl Runner<'_> {
+    fn control_of(&self, params: &[f64]) -> f64 {
+        self.study.control.map_or(0.0, |c| params[c])
+    }
+
+    fn spectrum(&self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
+        let stab = self.stability.as_ref()?;
+        let mut eval = crate::model::Model::new_evaluation(&self.study.model);
+        stab.spectrum_of(u, params, &self.study.constraints, &mut eval, None, false)
+            .ok()
+    }
+
+    fn row(
+        &self,
+        step: usize,
+        arclength: f64,
+        u: &[f64],
+        params: Vec<f64>,
+        iterations: usize,
+        index: Option<usize>,
+    ) -> PathRow {
+        PathRow {
+            step,
+            arclength,
+            measures: self.study.measure(u, &params),
+            parameters: params,
+            iterations,
+            index,
+        }
+    }
+
+    /// Localises every eigenvalue of every block whose negative count differs between `a`
+    /// and `b`, with `state(s)` giving (u, params) for s ∈ [0, s1] (s = 0 at a, s1 at b).
+    fn critical_between(
+        &mut self,
+        a: &Spectrum,
+        b: &Spectrum,
+        after_step: usize,
+        s1: f64,
+        mut state: impl FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
+    ) {
+        let Some(stab) = self.stability.as_ref() else {
+            return;
+        };
+        let study = self.study;
+        let mut found = Vec::new();
+        for mu in 0..a.blocks.len() {
+            let (n0, n1) = (a.blocks[mu].negative, b.blocks[mu].negative);
+            for k in n0.min(n1)..n0.max(n1) {
+                let g0 = a.blocks[mu].eigenvalues.get(k).copied().unwrap_or(0.0);
+                let g1 = b.blocks[mu].eigenvalues.get(k).copied().unwrap_or(0.0);
+                let mut eval = crate::model::Model::new_evaluation(&study.model);
+                let tol = ZERO_EIGENVALUE * a.scale;
+                let located = locate_sign_change(
+                    |s| {
+                        let (u, p) = state(s)?;
+                        let sp = stab
+                            .spectrum_of(&u, &p, &study.constraints, &mut eval, Some(mu), false)
+                            .ok()?;
+                        sp.blocks[mu].eigenvalues.get(k).copied()
+                    },
+                    g0,
+                    s1,
+                    g1,
+                    tol,
+                );
+                let Some((s_best, g_best)) = located else {
+                    continue;
+                };
+                // Re-evaluate at the best point, with the eigenvectors for the critical mode.
+                let Some((u, p)) = state(s_best) else {
+                    continue;
+                };
+                let Ok(sp) =
+                    stab.spectrum_of(&u, &p, &study.constraints, &mut eval, Some(mu), true)
+                else {
+                    continue;
+                };
+                let block = &sp.blocks[mu];
+                let ib = &stab.basis().irreps[mu];
+                let v = block
+                    .vectors
+                    .column(k.min(block.vectors.ncols().saturating_sub(1)));
+                let mut mode = vec![0.0; ib.partners[0].unknowns()];
+                ib.partners[0].expand(&v.into_owned(), &mut mode);
+                let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
+                mode.iter_mut().for_each(|x| *x /= norm);
+                found.push(CriticalPoint {
+                    kind: classify_on(
+                        mu == 0,
+                        ib.dim,
+                        matches!(study.scene.analysis, Analysis::LinearBuckling(_)),
+                    ),
+                    irrep: ib.name.clone(),
+                    multiplicity: ib.dim,
+                    measures: study.measure(&u, &p),
+                    parameters: p,
+                    after_step,
+                    residual_eigenvalue: g_best.abs() / sp.scale,
+                    isotropy: isotropy(&study.action, study.model.layout(), &mode),
+                    mode,
+                    state: u,
+                });
+            }
+        }
+        found.sort_by(|x, y| {
+            let c = |p: &CriticalPoint| self.control_of(&p.parameters);
+            c(x).total_cmp(&c(y))
+        });
+        for cp in found {
+            self.states.push(State {
+                step: cp.after_step,
+                label: format!("{} in {}", cp.kind, cp.irrep),
+                control: self.control_of(&cp.parameters),
+                u: cp.state.clone(),
+                mode: Some(cp.mode.clone()),
+            });
+            self.critical.push(cp);
+        }
+    }
+
+    /// The path analysis (or the single equilibrium).
+    fn path(
+        &mut self,
+        q_start: &DVector<f64>,
+        params_start: &[f64],
+        progress: &mut impl FnMut(usize, f64),
+    ) -> Result<String, RunError> {
+        let study = self.study;
+        let mut problem = SymmetricProblem::new(
+            &study.model,
+            &study.basis,
+            &study.constraints,
+            params_start.to_vec(),
+            study.control,
+        );
+        let probe = SymmetricProblem::new(
+            &study.model,
+            &study.basis,
+            &study.constraints,
+            params_start.to_vec(),
+            study.control,
+        );
+        let lambda0 = problem.free_values(params_start);
+        let stretch_index = study
+            .measures
+            .iter()
+            .position(|(_, m)| *m == Measure::Stretch);
+        let (save_every, stop_stretch) = match &study.scene.analysis {
+            Analysis::Path(p) => (p.save_every.max(1), p.stop_stretch),
+            _ => (1, None),
+        };
+        let opts = self.opts.clone();
+        let path = if let Analysis::Path(_) = study.scene.analysis {
+            let mut count = 0usize;
+            follow(
+                &mut problem,
+                q_start,
+                &lambda0,
+                &opts,
+                |p| match (stop_stretch, stretch_index) {
+                    (Some(target), Some(k)) => {
+                        let u = probe.displacement(&p.q);
+                        study.measure(&u, &probe.parameters(&p.lambda))[k] >= target
+                    }
+                    _ => false,
+                },
+                |p| {
+                    progress(count, p.lambda[0]);
+                    count += 1;
+                },
+            )
+            .map_err(RunError::Start)?
+        } else {
+            let (q, lambda, iterations) =
+                solve_at(&mut problem, q_start, &lambda0, &opts).map_err(RunError::Start)?;
+            crate::continuation::Path {
+                points: vec![PathPoint {
+                    tangent: DVector::zeros(q.len() + lambda.len()),
+                    q,
+                    lambda,
+                    arclength: 0.0,
+                    iterations,
+                }],
+                turning_points: Vec::new(),
+                stop: StopReason::Condition,
+            }
+        };
+        let last = path.points.len() - 1;
+        let mut previous: Option<Spectrum> = None;
+        for (i, p) in path.points.iter().enumerate() {
+            let u = probe.displacement(&p.q);
+            let params = probe.parameters(&p.lambda);
+            let spectrum = self.spectrum(&u, &params);
+            let index = spectrum.as_ref().map(|s| s.index);
+            if i % save_every == 0 || i == last {
+                self.states.push(State {
+                    step: i,
+                    label: format!("step {i}"),
+                    control: self.control_of(&params),
+                    u: u.clone(),
+                    mode: None,
+                });
+            }
+            self.rows
+                .push(self.row(i, p.arclength, &u, params, p.iterations, index));
+            if let (Some(a), Some(b)) = (&previous, &spectrum) {
+                if a.negatives() != b.negatives() {
+                    let from = &path.points[i - 1];
+                    let s1 = p.arclength - from.arclength;
+                    let mut local = SymmetricProblem::new(
+                        &study.model,
+                        &study.basis,
+                        &study.constraints,
+                        params_start.to_vec(),
+                        study.control,
+                    );
+                    let (a, b) = (a.clone(), b.clone());
+                    self.critical_between(&a, &b, i - 1, s1, |s| {
+                        let q = step(&mut local, from, s, &opts).ok()?;
+                        Some((local.displacement(&q.q), local.parameters(&q.lambda)))
+                    });
+                }
+            }
+            previous = spectrum;
+        }
+        for t in &path.turning_points {
+            let u = probe.displacement(&t.point.q);
+            let params = probe.parameters(&t.point.lambda);
+            let kind = if t.kind > 0.0 { "maximum" } else { "minimum" };
+            self.states.push(State {
+                step: t.after_step,
+                label: kind.to_string(),
+                control: self.control_of(&params),
+                u: u.clone(),
+                mode: None,
+            });
+            self.turning.push(TurningRow {
+                kind: kind.to_string(),
+                after_step: t.after_step,
+                measures: study.measure(&u, &params),
+                parameters: params,
+            });
+        }
+        Ok(match &path.stop {
+            StopReason::Bounds => "the control parameter left its [min, max] range (the last point is the first beyond it)".to_string(),
+            StopReason::StepBudget => format!("the step budget ({}) was used", opts.max_steps),
+            StopReason::Condition if matches!(study.scene.analysis, Analysis::Path(_)) => {
+                format!("the stretch reached {}", stop_stretch.unwrap_or(f64::NAN))
+            }
+            StopReason::Condition => "equilibrium found".to_string(),
+            StopReason::StepTooSmall(why) => why.clone(),
+        })
+    }
+
+    /// The start state held while the control sweeps [min, max] in `samples` steps.
+    fn linear_buckling(
+        &mut self,
+        u: &[f64],
+        params_start: &[f64],
+        samples: usize,
+        progress: &mut impl FnMut(usize, f64),
+    ) -> String {
+        let study = self.study;
+        let Some(c) = study.control else {
+            return "no control parameter".into();
+        };
+        let spec = &study.scene.parameters[&study.parameters[c]];
+        let (lo, hi) = (spec.min.unwrap_or(0.0), spec.max.unwrap_or(1.0));
+        let at = |value: f64| {
+            let mut p = params_start.to_vec();
+            p[c] = value;
+            p
+        };
+        let mut previous: Option<(Spectrum, f64)> = None;
+        for i in 0..=samples {
+            let value = lo + (hi - lo) * i as f64 / samples as f64;
+            progress(i, value);
+            let params = at(value);
+            let spectrum = self.spectrum(u, &params);
+            let index = spectrum.as_ref().map(|s| s.index);
+            self.rows.push(self.row(i, value - lo, u, params, 0, index));
+            if let (Some((a, va)), Some(b)) = (&previous, &spectrum) {
+                if a.negatives() != b.negatives() {
+                    let (a, va) = (a.clone(), *va);
+                    let held = u.to_vec();
+                    self.critical_between(&a, b, i - 1, value - va, |s| {
+                        Some((held.clone(), at(va + s)))
+                    });
+                }
+            }
+            previous = spectrum.map(|s| (s, value));
+        }
+        self.states.push(State {
+            step: 0,
+            label: "held state".into(),
+            control: lo,
+            u: u.to_vec(),
+            mode: None,
+        });
+        format!("the control swept [{lo}, {hi}] in {samples} steps")
+    }
+}
+
 /// The unit of the state in the arclength: the mesh radius times √nodes, so that a step is
 /// an RMS displacement relative to the mesh size.
 fn state_scale(study: &Study) -> f64 {
-    let r = study.model.reference().iter().map(|x| x.norm()).fold(0.0, f64::max).max(1e-300);
+    let r = study
+        .model
+        .reference()
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max)
+        .max(1e-300);
     r * (study.model.reference().len() as f64).sqrt()
 }

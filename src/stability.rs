@@ -84,18 +84,39 @@ fn complement(r: &DMatrix<f64>, m: usize, floor: f64) -> (DMatrix<f64>, usize) {
     (z, rank)
 }
 
-/// Sorted eigen-decomposition of a symmetric matrix (empty-safe).
-fn sorted_eigen(a: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+/// Sorted eigen-decomposition of a symmetric matrix (empty-safe), by faer's dense
+/// self-adjoint eigensolver (much faster than nalgebra's on blocks of a few hundred).
+fn sorted_eigen(a: &DMatrix<f64>, with_vectors: bool) -> (Vec<f64>, DMatrix<f64>) {
     let n = a.nrows();
     if n == 0 {
         return (Vec::new(), DMatrix::zeros(0, 0));
     }
-    let eig = SymmetricEigen::new((a + a.transpose()) * 0.5);
-    let mut idx: Vec<usize> = (0..n).collect();
-    idx.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
-    let values = idx.iter().map(|&k| eig.eigenvalues[k]).collect();
-    let vectors = DMatrix::from_fn(n, n, |i, j| eig.eigenvectors[(i, idx[j])]);
-    (values, vectors)
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    if !with_vectors {
+        if let Ok(values) = m.self_adjoint_eigenvalues(faer::Side::Lower) {
+            let mut values = values;
+            values.sort_by(f64::total_cmp);
+            return (values, DMatrix::zeros(n, 0));
+        }
+    }
+    match m.self_adjoint_eigen(faer::Side::Lower) {
+        Ok(eig) => {
+            // faer returns the eigenvalues in ascending order.
+            let s = eig.S();
+            let u = eig.U();
+            let values = (0..n).map(|k| s[k]).collect();
+            let vectors = DMatrix::from_fn(n, n, |i, j| u[(i, j)]);
+            (values, vectors)
+        }
+        Err(_) => {
+            let eig = SymmetricEigen::new(a.clone());
+            let mut idx: Vec<usize> = (0..n).collect();
+            idx.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
+            let values = idx.iter().map(|&k| eig.eigenvalues[k]).collect();
+            let vectors = DMatrix::from_fn(n, n, |i, j| eig.eigenvectors[(i, idx[j])]);
+            (values, vectors)
+        }
+    }
 }
 
 impl<'a> Stability<'a> {
@@ -122,6 +143,20 @@ impl<'a> Stability<'a> {
         constraints: &[Box<dyn Constraint>],
         eval: &mut Evaluation,
     ) -> Result<Spectrum, ModelError> {
+        self.spectrum_of(u, params, constraints, eval, None, true)
+    }
+
+    /// As [`Stability::spectrum`], but with `only = Some(μ)` the other blocks are left empty
+    /// (for localising a crossing in one block), and eigenvectors only when asked for.
+    pub fn spectrum_of(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        constraints: &[Box<dyn Constraint>],
+        eval: &mut Evaluation,
+        only: Option<usize>,
+        with_vectors: bool,
+    ) -> Result<Spectrum, ModelError> {
         let model = self.model;
         let layout = model.layout();
         model.evaluate(u, params, Request::ALL, eval)?;
@@ -129,7 +164,12 @@ impl<'a> Stability<'a> {
             .tangent
             .iter()
             .fold(0.0f64, |a, b| a.max(b.abs()))
-            .max(eval.rank_one.iter().map(|(c, a)| c.abs() * a.iter().fold(0.0f64, |m, v| m.max(v * v))).fold(0.0, f64::max))
+            .max(
+                eval.rank_one
+                    .iter()
+                    .map(|(c, a)| c.abs() * a.iter().fold(0.0f64, |m, v| m.max(v * v)))
+                    .fold(0.0, f64::max),
+            )
             .max(1e-300);
         let x = model.positions(u);
         // Unit rigid fields: their projections onto a block are of order one or round-off.
@@ -146,12 +186,37 @@ impl<'a> Stability<'a> {
         for (mu, ib) in self.basis.irreps.iter().enumerate() {
             let b = &ib.partners[0];
             let m = b.dim();
+            if only.is_some_and(|o| o != mu) {
+                blocks.push(BlockSpectrum {
+                    irrep: ib.name.clone(),
+                    dim: ib.dim,
+                    size: m,
+                    rigid_modes: 0,
+                    rigid_residual: 0.0,
+                    eigenvalues: Vec::new(),
+                    negative: 0,
+                    vectors: DMatrix::zeros(m, 0),
+                });
+                continue;
+            }
             let k = b.restrict_tangent(layout, eval, &mut work);
             // Rigid modes in this block, deflated.
-            let r = DMatrix::from_columns(&rigid.iter().map(|v| b.restrict(v)).collect::<Vec<DVector<f64>>>());
-            let r = if rigid.is_empty() { DMatrix::zeros(m, 0) } else { r };
+            let r = if rigid.is_empty() {
+                DMatrix::zeros(m, 0)
+            } else {
+                DMatrix::from_columns(
+                    &rigid
+                        .iter()
+                        .map(|v| b.restrict(v))
+                        .collect::<Vec<DVector<f64>>>(),
+                )
+            };
             let (z, rigid_modes) = complement(&r, m, 1e-12);
-            let rigid_residual = if rigid_modes > 0 { (&k * &r).amax() / (scale * r.amax().max(1e-300)) } else { 0.0 };
+            let rigid_residual = if rigid_modes > 0 {
+                (&k * &r).amax() / (scale * r.amax().max(1e-300))
+            } else {
+                0.0
+            };
             let mut kz = z.transpose() * &k * &z;
             let mut basis_map = z;
             // The constraints' border on the trivial block.
@@ -163,7 +228,11 @@ impl<'a> Stability<'a> {
                     let v = con.evaluate(layout, &x, params);
                     let gq = b.restrict(&v.grad_u);
                     let load = b.restrict(&eval.loads[con.frees()]);
-                    let s = if gq.norm_squared() > 0.0 { gq.dot(&load) / gq.norm_squared() } else { 1.0 };
+                    let s = if gq.norm_squared() > 0.0 {
+                        gq.dot(&load) / gq.norm_squared()
+                    } else {
+                        1.0
+                    };
                     l.set_column(kk, &load);
                     for (jj, other) in constraints.iter().enumerate() {
                         cc[(kk, jj)] = s * v.grad_params[other.frees()];
@@ -180,9 +249,13 @@ impl<'a> Stability<'a> {
                     kz -= &lz * ci * lz.transpose();
                 }
             }
-            let (values, vecs) = sorted_eigen(&kz);
-            let keep = values.len().min(8);
-            let vectors = if keep > 0 { &basis_map * vecs.columns(0, keep) } else { DMatrix::zeros(m, 0) };
+            let (values, vecs) = sorted_eigen(&kz, with_vectors);
+            let keep = values.len().min(8).min(vecs.ncols());
+            let vectors = if keep > 0 {
+                &basis_map * vecs.columns(0, keep)
+            } else {
+                DMatrix::zeros(m, 0)
+            };
             let negative = values.iter().filter(|&&v| v < 0.0).count();
             blocks.push(BlockSpectrum {
                 irrep: ib.name.clone(),
@@ -196,6 +269,10 @@ impl<'a> Stability<'a> {
             });
         }
         let index = blocks.iter().map(|b| b.dim * b.negative).sum();
-        Ok(Spectrum { blocks, index, scale })
+        Ok(Spectrum {
+            blocks,
+            index,
+            scale,
+        })
     }
 }

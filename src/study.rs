@@ -88,14 +88,24 @@ impl Study {
         let mesh = scene.build_mesh()?;
         let m = &mesh.mesh;
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
-        let index = |name: &str| parameters.iter().position(|p| p == name).expect("validated parameter");
+        let index = |name: &str| {
+            parameters
+                .iter()
+                .position(|p| p == name)
+                .expect("validated parameter")
+        };
         let quantity = |q: &scene::Quantity| match q {
             scene::Quantity::Value(v) => Quantity::Value(*v),
             scene::Quantity::Parameter(name) => Quantity::Parameter(index(name)),
         };
         let mat = &scene.material;
-        let membrane = Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(mat.mu, mat.k, mat.thickness), mat.prestretch)
-            .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
+        let membrane = Membrane::new(
+            &m.nodes,
+            &m.triangles,
+            MooneyRivlin::new(mat.mu, mat.k, mat.thickness),
+            mat.prestretch,
+        )
+        .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
         let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
         let mut fluids = Vec::new();
         for e in &scene.effects {
@@ -127,7 +137,11 @@ impl Study {
                     normal: Vec3::from(p.normal),
                     offset: quantity(&p.offset),
                     penalty: p.penalty,
-                    law: if p.exponent == 3 { PenaltyLaw::Cubic } else { PenaltyLaw::Linear },
+                    law: if p.exponent == 3 {
+                        PenaltyLaw::Cubic
+                    } else {
+                        PenaltyLaw::Linear
+                    },
                 }),
             });
         }
@@ -184,9 +198,19 @@ impl Study {
             targets_from_start.push(initial);
         }
         let control = scene.control().map(index);
-        let free: Vec<usize> = control.into_iter().chain(constraints.iter().map(|c| c.frees())).collect();
-        let start: Vec<f64> = parameters.iter().map(|p| scene.parameters[p].start).collect();
-        let stress_free_volume = if closed { m.volume() / mat.prestretch.powi(3) } else { 0.0 };
+        let free: Vec<usize> = control
+            .into_iter()
+            .chain(constraints.iter().map(|c| c.frees()))
+            .collect();
+        let start: Vec<f64> = parameters
+            .iter()
+            .map(|p| scene.parameters[p].start)
+            .collect();
+        let stress_free_volume = if closed {
+            m.volume() / mat.prestretch.powi(3)
+        } else {
+            0.0
+        };
         let mut measures = vec![
             ("max_displacement".to_string(), Measure::MaxDisplacement),
             ("min_z".to_string(), Measure::MinZ),
@@ -197,10 +221,20 @@ impl Study {
             measures.push(("stretch".into(), Measure::Stretch));
         }
         for i in 0..fluids.len() {
-            let name = if fluids.len() == 1 { "fluid_volume".to_string() } else { format!("fluid_volume_{i}") };
+            let name = if fluids.len() == 1 {
+                "fluid_volume".to_string()
+            } else {
+                format!("fluid_volume_{i}")
+            };
             measures.push((name, Measure::FluidVolume(i)));
         }
-        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &fixed, effects, parameters.clone());
+        let model = FeModel::new(
+            m.nodes.clone(),
+            m.triangles.clone(),
+            &fixed,
+            effects,
+            parameters.clone(),
+        );
         let basis = SparseBasis::fixed_point(&action, model.layout());
         Ok(Self {
             scene,
@@ -226,7 +260,12 @@ impl Study {
     pub fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64> {
         let x = self.model.positions(u);
         let tris = self.model.layout().triangles();
-        let volume = || tris.iter().map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c]))).sum::<f64>() / 6.0;
+        let volume = || {
+            tris.iter()
+                .map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c])))
+                .sum::<f64>()
+                / 6.0
+        };
         self.measures
             .iter()
             .map(|(_, m)| match *m {

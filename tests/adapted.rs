@@ -8,7 +8,10 @@ use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel, Model, Request};
-use meshes::generators::{disc, icosphere, icosphere_oriented, truncated_sphere, DiscOptions, Down, IcosphereOptions, TruncatedSphereOptions};
+use meshes::generators::{
+    disc, icosphere, icosphere_oriented, truncated_sphere, DiscOptions, Down, IcosphereOptions,
+    TruncatedSphereOptions,
+};
 use meshes::{GroupAction, SymmetricMesh};
 use nalgebra::{DMatrix, DVector};
 use symmetry::Invariant;
@@ -26,20 +29,36 @@ fn dense(b: &SparseBasis) -> DMatrix<f64> {
 /// A model of the mesh with a membrane and a load that keeps `action`'s group.
 fn model(sym: &SymmetricMesh, fixed: &[usize], fluid: bool) -> FeModel {
     let m = &sym.mesh;
-    let membrane = Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, 0.2, 1.0), 1.1).unwrap();
+    let membrane = Membrane::new(
+        &m.nodes,
+        &m.triangles,
+        MooneyRivlin::new(1.0, 0.2, 1.0),
+        1.1,
+    )
+    .unwrap();
     let load: Box<dyn Effect> = if fluid {
         Box::new(Fluid {
             density: Quantity::Value(1.0),
             gravity: 1.0,
             level: Quantity::Value(0.2),
-            side: if fixed.is_empty() { FluidSide::Behind } else { FluidSide::Front },
+            side: if fixed.is_empty() {
+                FluidSide::Behind
+            } else {
+                FluidSide::Front
+            },
         })
     } else {
         Box::new(GasPressure {
             pressure: Quantity::Value(0.3),
         })
     };
-    FeModel::new(m.nodes.clone(), m.triangles.clone(), fixed, vec![Box::new(membrane), load], vec![])
+    FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        fixed,
+        vec![Box::new(membrane), load],
+        vec![],
+    )
 }
 
 fn check(name: &str, action: &GroupAction, model: &FeModel) {
@@ -50,8 +69,16 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let total: usize = basis.irreps.iter().map(|b| b.dim * b.multiplicity).sum();
     assert_eq!(total, n, "{name}: blocks do not cover the unknowns");
     // All columns together: an orthonormal basis of R^N.
-    let all: Vec<DMatrix<f64>> = basis.irreps.iter().flat_map(|b| b.partners.iter().map(dense)).collect();
-    let q = DMatrix::from_columns(&all.iter().flat_map(|m| m.column_iter().map(|c| c.into_owned())).collect::<Vec<DVector<f64>>>());
+    let all: Vec<DMatrix<f64>> = basis
+        .irreps
+        .iter()
+        .flat_map(|b| b.partners.iter().map(dense))
+        .collect();
+    let q = DMatrix::from_columns(
+        &all.iter()
+            .flat_map(|m| m.column_iter().map(|c| c.into_owned()))
+            .collect::<Vec<DVector<f64>>>(),
+    );
     let orth = (q.transpose() * &q - DMatrix::identity(n, n)).amax();
     assert!(orth < 1e-12, "{name}: columns not orthonormal ({orth:e})");
     // A symmetric state: a random combination of the fixed-point columns.
@@ -78,15 +105,26 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     for &(o, m) in &spans {
         off.view_mut((o, o), (m, m)).fill(0.0);
     }
-    assert!(off.amax() < 1e-12 * scale, "{name}: off-block residual {:e}", off.amax() / scale);
+    assert!(
+        off.amax() < 1e-12 * scale,
+        "{name}: off-block residual {:e}",
+        off.amax() / scale
+    );
     // Partner blocks equal the first one.
     let mut o = 0;
     let mut work = Vec::new();
     for b in &basis.irreps {
         let k0 = b.partners[0].restrict_tangent(layout, &eval, &mut work);
         for a in 0..b.dim {
-            let ka = kt.view((o + a * b.multiplicity, o + a * b.multiplicity), (b.multiplicity, b.multiplicity));
-            assert!((ka - &k0).amax() < 1e-12 * scale, "{name}: partner {a} of {} differs", b.name);
+            let ka = kt.view(
+                (o + a * b.multiplicity, o + a * b.multiplicity),
+                (b.multiplicity, b.multiplicity),
+            );
+            assert!(
+                (ka - &k0).amax() < 1e-12 * scale,
+                "{name}: partner {a} of {} differs",
+                b.name
+            );
         }
         o += b.dim * b.multiplicity;
     }
@@ -96,20 +134,34 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
         .iter()
         .filter(|b| b.multiplicity > 0)
         .flat_map(|b| {
-            let ev = b.partners[0].restrict_tangent(layout, &eval, &mut Vec::new()).symmetric_eigenvalues();
-            std::iter::repeat_n(ev.iter().copied().collect::<Vec<_>>(), b.dim).flatten().collect::<Vec<_>>()
+            let ev = b.partners[0]
+                .restrict_tangent(layout, &eval, &mut Vec::new())
+                .symmetric_eigenvalues();
+            std::iter::repeat_n(ev.iter().copied().collect::<Vec<_>>(), b.dim)
+                .flatten()
+                .collect::<Vec<_>>()
         })
         .collect();
     let mut full: Vec<f64> = k.symmetric_eigenvalues().iter().copied().collect();
     from_blocks.sort_by(f64::total_cmp);
     full.sort_by(f64::total_cmp);
-    let diff = from_blocks.iter().zip(&full).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let diff = from_blocks
+        .iter()
+        .zip(&full)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     assert!(diff < 1e-10 * scale, "{name}: spectra differ by {diff:e}");
 }
 
 #[test]
 fn discs_of_every_symmetry() {
-    for (sectors, divisions, group) in [(7, 3, None), (8, 3, None), (8, 3, Some("C2v")), (6, 3, Some("C1v")), (6, 3, Some("C3v"))] {
+    for (sectors, divisions, group) in [
+        (7, 3, None),
+        (8, 3, None),
+        (8, 3, Some("C2v")),
+        (6, 3, Some("C1v")),
+        (6, 3, Some("C3v")),
+    ] {
         let sym = disc(&DiscOptions {
             radius: 1.0,
             sectors,
@@ -119,18 +171,40 @@ fn discs_of_every_symmetry() {
         .unwrap();
         let fixed = sym.mesh.boundaries["rim"].clone();
         let model = model(&sym, &fixed, true);
-        check(&format!("disc {:?}", sym.group().name()), &sym.action, &model);
+        check(
+            &format!("disc {:?}", sym.group().name()),
+            &sym.action,
+            &model,
+        );
     }
 }
 
 #[test]
 fn icospheres_in_ih_and_resting_on_a_vertex() {
-    let sym = icosphere(&IcosphereOptions { radius: 1.0, frequency: 2 }).unwrap();
+    let sym = icosphere(&IcosphereOptions {
+        radius: 1.0,
+        frequency: 2,
+    })
+    .unwrap();
     check("icosphere Ih", &sym.action, &model(&sym, &[], false));
     for down in [Down::Vertex, Down::Face, Down::Edge] {
-        let sym = icosphere_oriented(&IcosphereOptions { radius: 1.0, frequency: 2 }, down).unwrap();
-        let action = sym.action.restrict(&[Invariant::Direction(-nalgebra::Vector3::z())]).unwrap();
-        check(&format!("icosphere {:?} down, {}", down, action.group().name()), &action, &model(&sym, &[], true));
+        let sym = icosphere_oriented(
+            &IcosphereOptions {
+                radius: 1.0,
+                frequency: 2,
+            },
+            down,
+        )
+        .unwrap();
+        let action = sym
+            .action
+            .restrict(&[Invariant::Direction(-nalgebra::Vector3::z())])
+            .unwrap();
+        check(
+            &format!("icosphere {:?} down, {}", down, action.group().name()),
+            &action,
+            &model(&sym, &[], true),
+        );
     }
 }
 
@@ -143,7 +217,11 @@ fn truncated_spheres() {
         })
         .unwrap();
         let fixed = sym.mesh.boundaries["cut"].clone();
-        check(&format!("truncated sphere {pattern}"), &sym.action, &model(&sym, &fixed, true));
+        check(
+            &format!("truncated sphere {pattern}"),
+            &sym.action,
+            &model(&sym, &fixed, true),
+        );
     }
 }
 

@@ -14,14 +14,21 @@ use nalgebra::Vector3;
 use proptest::prelude::*;
 
 fn sphere(frequency: usize) -> Mesh {
-    icosphere(&IcosphereOptions { radius: 1.0, frequency }).unwrap().mesh
+    icosphere(&IcosphereOptions {
+        radius: 1.0,
+        frequency,
+    })
+    .unwrap()
+    .mesh
 }
 
 fn random_vector(seed: u64, n: usize, amplitude: f64) -> Vec<f64> {
     let mut s = seed;
     (0..n)
         .map(|_| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             amplitude * (((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0)
         })
         .collect()
@@ -51,7 +58,15 @@ fn assert_small(e: DerivativeErrors) -> Result<(), TestCaseError> {
 }
 
 fn membrane(m: &Mesh, prestretch: f64) -> Box<dyn Effect> {
-    Box::new(Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, 0.1, 1.0), prestretch).unwrap())
+    Box::new(
+        Membrane::new(
+            &m.nodes,
+            &m.triangles,
+            MooneyRivlin::new(1.0, 0.1, 1.0),
+            prestretch,
+        )
+        .unwrap(),
+    )
 }
 
 proptest! {
@@ -100,9 +115,17 @@ fn buoyancy(m: &Mesh, level: f64) -> Vector3<f64> {
         level: Quantity::Value(level),
         side: FluidSide::Front,
     };
-    let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![Box::new(fluid)], vec![]);
+    let model = FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        vec![Box::new(fluid)],
+        vec![],
+    );
     let mut e = model.new_evaluation();
-    model.evaluate(&vec![0.0; model.unknowns()], &[], Request::RESIDUAL, &mut e).unwrap();
+    model
+        .evaluate(&vec![0.0; model.unknowns()], &[], Request::RESIDUAL, &mut e)
+        .unwrap();
     let mut f = Vector3::zeros();
     for (i, r) in e.residual.iter().enumerate() {
         f[i % 3] -= r;
@@ -120,7 +143,10 @@ fn archimedes_on_a_sphere_converges_at_second_order() {
         .iter()
         .map(|&f| {
             let force = buoyancy(&sphere(f), h);
-            assert!(force.x.abs() < 1e-10 * exact && force.y.abs() < 1e-10 * exact, "{force}");
+            assert!(
+                force.x.abs() < 1e-10 * exact && force.y.abs() < 1e-10 * exact,
+                "{force}"
+            );
             (force.z - exact).abs() / exact
         })
         .collect();

@@ -16,7 +16,8 @@ fn sphere_model(k: f64, with_amount: bool) -> FeModel {
     })
     .unwrap();
     let m = &sym.mesh;
-    let membrane = Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, k, 0.1), 1.0).unwrap();
+    let membrane =
+        Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, k, 0.1), 1.0).unwrap();
     let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
     if with_amount {
         effects.push(Box::new(GasAmount {
@@ -29,15 +30,25 @@ fn sphere_model(k: f64, with_amount: bool) -> FeModel {
             pressure: Quantity::Parameter(0),
         }));
     }
-    FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec!["p".into()])
+    FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        effects,
+        vec!["p".into()],
+    )
 }
 
 fn random_vector(seed: u64, n: usize, amplitude: f64) -> Vec<f64> {
     // A small deterministic generator: the proptest seed drives it.
-    let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut s = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (0..n)
         .map(|_| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             amplitude * (((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0)
         })
         .collect()
@@ -90,7 +101,11 @@ fn a_wrong_tangent_is_detected() {
     // error must be large.
     let model = sphere_model(0.1, true);
     let n = model.unknowns();
-    let u: Vec<f64> = model.reference().iter().flat_map(|x| [0.2 * x.x, 0.2 * x.y, 0.2 * x.z]).collect();
+    let u: Vec<f64> = model
+        .reference()
+        .iter()
+        .flat_map(|x| [0.2 * x.x, 0.2 * x.y, 0.2 * x.z])
+        .collect();
     let d = random_vector(7, n, 1.0);
     let good = check_derivatives(&model, &u, &[5.0], &d, 1e-6).unwrap();
     assert!(good.tangent < 1e-6);
@@ -134,7 +149,13 @@ fn a_uniformly_prestretched_flat_disc_is_in_equilibrium_without_load() {
     })
     .unwrap();
     let m = &sym.mesh;
-    let membrane = Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, 0.1, 0.01), 1.1).unwrap();
+    let membrane = Membrane::new(
+        &m.nodes,
+        &m.triangles,
+        MooneyRivlin::new(1.0, 0.1, 0.01),
+        1.1,
+    )
+    .unwrap();
     let model = FeModel::new(
         m.nodes.clone(),
         m.triangles.clone(),
@@ -143,9 +164,19 @@ fn a_uniformly_prestretched_flat_disc_is_in_equilibrium_without_load() {
         vec![],
     );
     let mut e = model.new_evaluation();
-    model.evaluate(&vec![0.0; model.unknowns()], &[], memstab::model::Request::ALL, &mut e).unwrap();
+    model
+        .evaluate(
+            &vec![0.0; model.unknowns()],
+            &[],
+            memstab::model::Request::ALL,
+            &mut e,
+        )
+        .unwrap();
     let fmax = e.residual.iter().fold(0.0f64, |a, b| a.max(b.abs()));
     let kmax = e.tangent.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-    assert!(fmax < 1e-14 * kmax.max(1.0), "residual {fmax:e} at the pre-stretched flat state");
+    assert!(
+        fmax < 1e-14 * kmax.max(1.0),
+        "residual {fmax:e} at the pre-stretched flat state"
+    );
     assert!(kmax > 0.0);
 }

@@ -36,6 +36,7 @@ fn report() -> PathReport {
                 parameters: vec![pressure(k, l), 9.81],
                 measures: measures(l),
                 iterations: 3 + i % 4,
+                index: Some(usize::from(l > 1.476)),
             }
         })
         .collect();
@@ -72,6 +73,8 @@ fn report() -> PathReport {
             "max_displacement".to_string(),
         ],
         rows,
+        critical: Vec::new(),
+        stability_note: None,
         turning_points: vec![
             turning("maximum", 6, 1.4760699, 1.3551069),
             turning("minimum", 28, 3.1426213, 1.1487477),

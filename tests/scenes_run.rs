@@ -6,17 +6,28 @@ use memstab::scene::Scene;
 use memstab::study::Study;
 
 fn run_scene(name: &str) -> memstab::run::RunResult {
-    let scene = Scene::load(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).expect("bundled scene loads");
+    let scene = Scene::load(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR")))
+        .expect("bundled scene loads");
     let mut study = Study::build(scene).expect("bundled scene builds");
     let result = run(&mut study, |_, _| {}).expect("the start converges");
     for r in &result.report.rows {
-        assert!(r.parameters.iter().chain(&r.measures).all(|v| v.is_finite()), "non-finite row {r:?}");
+        assert!(
+            r.parameters
+                .iter()
+                .chain(&r.measures)
+                .all(|v| v.is_finite()),
+            "non-finite row {r:?}"
+        );
     }
     result
 }
 
 fn column(report: &memstab::report::PathReport, name: &str) -> usize {
-    report.measures.iter().position(|m| m == name).unwrap_or_else(|| panic!("measure {name}"))
+    report
+        .measures
+        .iter()
+        .position(|m| m == name)
+        .unwrap_or_else(|| panic!("measure {name}"))
 }
 
 #[test]
@@ -29,8 +40,16 @@ fn demo_balloon_passes_the_pressure_maximum_and_minimum() {
     let s = column(&r, "stretch");
     let max = &r.turning_points[0];
     // f = 4 is coarse: within 2 % of the closed form 1.3551 at stretch 1.476.
-    assert!((max.parameters[0] - 1.3551069).abs() < 0.03 * 1.3551069, "{:?}", max.parameters);
-    assert!((max.measures[s] - 1.4760699).abs() < 0.01, "{:?}", max.measures);
+    assert!(
+        (max.parameters[0] - 1.3551069).abs() < 0.03 * 1.3551069,
+        "{:?}",
+        max.parameters
+    );
+    assert!(
+        (max.measures[s] - 1.4760699).abs() < 0.01,
+        "{:?}",
+        max.measures
+    );
 }
 
 #[test]
@@ -39,9 +58,21 @@ fn balloon_scene_matches_the_closed_form() {
     let s = column(&r, "stretch");
     let max = &r.turning_points[0];
     let min = &r.turning_points[1];
-    assert!((max.parameters[0] / 1.3551069 - 1.0).abs() < 5e-3, "{:?}", max.parameters);
-    assert!((min.parameters[0] / 1.1487477 - 1.0).abs() < 5e-3, "{:?}", min.parameters);
-    assert!((min.measures[s] - 3.1426213).abs() < 0.01, "{:?}", min.measures);
+    assert!(
+        (max.parameters[0] / 1.3551069 - 1.0).abs() < 5e-3,
+        "{:?}",
+        max.parameters
+    );
+    assert!(
+        (min.parameters[0] / 1.1487477 - 1.0).abs() < 5e-3,
+        "{:?}",
+        min.parameters
+    );
+    assert!(
+        (min.measures[s] - 3.1426213).abs() < 0.01,
+        "{:?}",
+        min.measures
+    );
 }
 
 /// J0 by its power series (enough terms for |x| < 5).
@@ -59,9 +90,14 @@ fn ponding_disc_sags_as_the_bessel_solution_below_the_first_rung() {
     // Below the ponding ladder the pre-stretched disc (tension T0) under fluid to the level h
     // sags by d(r) = h (J0(k r)/J0(k a) − 1), k² = ρ g/T0, a = λ0 a0 the clamped radius:
     // T0 ∇²d + ρ g d = −ρ g h. At ρ = 1 the deflection is small and the membrane linear.
-    let text = std::fs::read_to_string(format!("{}/scenes/disc_fluid_above.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/disc_fluid_above.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
     let (body, _) = text.split_once("[analysis]").expect("an analysis section");
-    let text = body.replace("start = 0.0 ", "start = 1.0 ") + "[analysis]\ntype = \"equilibrium\"\n";
+    let text =
+        body.replace("start = 0.0 ", "start = 1.0 ") + "[analysis]\ntype = \"equilibrium\"\n";
     let scene = Scene::from_toml_str(&text, "ponding-equilibrium").expect("the variant loads");
     let (h, rho, a) = (0.001, 1.0, 1.1);
     let t0 = 1.0 - 1.1f64.powi(-6); // k = 0: T0/(μH) = 1 − λ0⁻⁶, μH = 1
@@ -72,5 +108,8 @@ fn ponding_disc_sags_as_the_bessel_solution_below_the_first_rung() {
     assert_eq!(r.rows.len(), 1);
     assert_eq!(r.rows[0].parameters[0], 1.0);
     let d = r.rows[0].measures[column(&r, "max_displacement")];
-    assert!((d / exact - 1.0).abs() < 0.01, "centre deflection {d:e}, Bessel solution {exact:e}");
+    assert!(
+        (d / exact - 1.0).abs() < 0.01,
+        "centre deflection {d:e}, Bessel solution {exact:e}"
+    );
 }

@@ -15,15 +15,27 @@ use meshes::SymmetricMesh;
 use nalgebra::{DMatrix, DVector};
 
 fn balloon(frequency: usize, k: f64) -> (SymmetricMesh, FeModel) {
-    let sym = icosphere(&IcosphereOptions { radius: 1.0, frequency }).unwrap();
+    let sym = icosphere(&IcosphereOptions {
+        radius: 1.0,
+        frequency,
+    })
+    .unwrap();
     let m = &sym.mesh;
     let effects: Vec<Box<dyn Effect>> = vec![
-        Box::new(Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, k, 1.0), 1.0).unwrap()),
+        Box::new(
+            Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, k, 1.0), 1.0).unwrap(),
+        ),
         Box::new(GasPressure {
             pressure: Quantity::Parameter(0),
         }),
     ];
-    let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec!["p".into()]);
+    let model = FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        effects,
+        vec!["p".into()],
+    );
     (sym, model)
 }
 
@@ -35,7 +47,13 @@ fn states(sym: &SymmetricMesh, model: &FeModel, to_stretch: f64) -> Vec<(Vec<f64
     let probe = SymmetricProblem::new(model, &basis, &[], vec![0.0], Some(0));
     let stretch = |q: &DVector<f64>| {
         let x = model.positions(&probe.displacement(q));
-        let v: f64 = sym.mesh.triangles.iter().map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c]))).sum::<f64>() / 6.0;
+        let v: f64 = sym
+            .mesh
+            .triangles
+            .iter()
+            .map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c])))
+            .sum::<f64>()
+            / 6.0;
         (v / v0).cbrt()
     };
     let opts = PathOptions {
@@ -44,8 +62,19 @@ fn states(sym: &SymmetricMesh, model: &FeModel, to_stretch: f64) -> Vec<(Vec<f64
         state_scale: (sym.mesh.nodes.len() as f64).sqrt(),
         ..PathOptions::default()
     };
-    let path = follow(&mut problem, &DVector::zeros(basis.dim()), &DVector::from_element(1, 0.0), &opts, |p| stretch(&p.q) > to_stretch, |_| {}).unwrap();
-    path.points.iter().map(|p| (probe.displacement(&p.q), p.lambda[0], stretch(&p.q))).collect()
+    let path = follow(
+        &mut problem,
+        &DVector::zeros(basis.dim()),
+        &DVector::from_element(1, 0.0),
+        &opts,
+        |p| stretch(&p.q) > to_stretch,
+        |_| {},
+    )
+    .unwrap();
+    path.points
+        .iter()
+        .map(|p| (probe.displacement(&p.q), p.lambda[0], stretch(&p.q)))
+        .collect()
 }
 
 #[test]
@@ -60,15 +89,31 @@ fn free_sphere_has_three_zero_modes_in_t1u_and_three_in_t1g_at_every_state() {
     for (u, p, s) in all.iter().step_by(3) {
         let sp = stab.spectrum(u, &[*p], &[], &mut eval).unwrap();
         for b in &sp.blocks {
-            let expected = if b.irrep == "T1u" || b.irrep == "T1g" { 1 } else { 0 };
+            let expected = if b.irrep == "T1u" || b.irrep == "T1g" {
+                1
+            } else {
+                0
+            };
             assert_eq!(b.rigid_modes, expected, "{} at stretch {s}", b.irrep);
             // At an equilibrium the rigid fields are exact null vectors of K.
-            assert!(b.rigid_residual < 1e-9, "{}: K r = {:e} at stretch {s}", b.irrep, b.rigid_residual);
+            assert!(
+                b.rigid_residual < 1e-9,
+                "{}: K r = {:e} at stretch {s}",
+                b.irrep,
+                b.rigid_residual
+            );
             // Nothing else is near zero in those blocks (no spurious modes) — except at the
             // limit point, which is in the trivial block.
             if expected == 1 {
-                let low = b.eigenvalues.iter().fold(f64::INFINITY, |a, v| a.min(v.abs()));
-                assert!(low > 1e-6 * sp.scale, "{}: a second small eigenvalue {low:e}", b.irrep);
+                let low = b
+                    .eigenvalues
+                    .iter()
+                    .fold(f64::INFINITY, |a, v| a.min(v.abs()));
+                assert!(
+                    low > 1e-6 * sp.scale,
+                    "{}: a second small eigenvalue {low:e}",
+                    b.irrep
+                );
             }
         }
         // In K itself: d = 3 copies of each, six zero eigenvalues in all.
@@ -91,7 +136,10 @@ fn balloon_first_instability_is_a_limit_point_in_the_trivial_irrep() {
         let neg = sp.negatives();
         if let Some((prev, pp, ps)) = &previous {
             if *prev != neg && first.is_none() {
-                let changed: Vec<&str> = (0..neg.len()).filter(|&i| neg[i] != prev[i]).map(|i| sp.blocks[i].irrep.as_str()).collect();
+                let changed: Vec<&str> = (0..neg.len())
+                    .filter(|&i| neg[i] != prev[i])
+                    .map(|i| sp.blocks[i].irrep.as_str())
+                    .collect();
                 first = Some((changed.join(","), *pp, *p, *ps, *s));
             }
         } else {
@@ -102,7 +150,10 @@ fn balloon_first_instability_is_a_limit_point_in_the_trivial_irrep() {
     let (irreps, p0, p1, s0, s1) = first.expect("the balloon loses stability");
     assert_eq!(irreps, "Ag", "first change of index in {irreps}");
     // Between the two states the pressure passes its maximum (stretch ≈ 1.476).
-    assert!(s0 < 1.48 && s1 > 1.47, "stretches {s0}..{s1}, pressures {p0}..{p1}");
+    assert!(
+        s0 < 1.48 && s1 > 1.47,
+        "stretches {s0}..{s1}, pressures {p0}..{p1}"
+    );
 }
 
 #[test]
@@ -112,16 +163,27 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
     // (rank-one stiffness) and the pressure effect bordered by the constraint (p+P)V = C.
     let (sym, model) = balloon(2, 0.1);
     let all = states(&sym, &model, 2.2);
-    let (u, p, s) = all.iter().find(|st| st.2 > 2.0).cloned().expect("a state past the maximum");
+    let (u, p, s) = all
+        .iter()
+        .find(|st| st.2 > 2.0)
+        .cloned()
+        .expect("a state past the maximum");
     let basis = AdaptedBasis::new(&sym.action, model.layout()).unwrap();
     let stab = Stability::new(&model, &basis);
     let mut eval = model.new_evaluation();
     let pressure_control = stab.spectrum(&u, &[p], &[], &mut eval).unwrap();
-    assert!(pressure_control.index >= 1, "past the maximum at stretch {s} under pressure control");
+    assert!(
+        pressure_control.index >= 1,
+        "past the maximum at stretch {s} under pressure control"
+    );
 
     let ambient = 1.0;
     let x = model.positions(&u);
-    let mut amount = constraint::GasAmount { pressure: 0, ambient, target: 0.0 };
+    let mut amount = constraint::GasAmount {
+        pressure: 0,
+        ambient,
+        target: 0.0,
+    };
     let c = amount.measure(model.layout(), &x, &[p]);
     amount.set_target(c);
     let constraints: Vec<Box<dyn Constraint>> = vec![Box::new(amount)];
@@ -129,8 +191,20 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
 
     let m = &sym.mesh;
     let effects: Vec<Box<dyn Effect>> = vec![
-        Box::new(Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, 0.1, 1.0), 1.0).unwrap()),
-        Box::new(GasAmount { amount: Quantity::Value(c), ambient, closing_volume: 0.0 }),
+        Box::new(
+            Membrane::new(
+                &m.nodes,
+                &m.triangles,
+                MooneyRivlin::new(1.0, 0.1, 1.0),
+                1.0,
+            )
+            .unwrap(),
+        ),
+        Box::new(GasAmount {
+            amount: Quantity::Value(c),
+            ambient,
+            closing_volume: 0.0,
+        }),
     ];
     let closed = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec![]);
     let basis2 = AdaptedBasis::new(&sym.action, closed.layout()).unwrap();
@@ -138,11 +212,20 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
     let mut eval2 = closed.new_evaluation();
     let by_effect = stab2.spectrum(&u, &[], &[], &mut eval2).unwrap();
     assert_eq!(bordered.index, by_effect.index);
-    assert_eq!(by_effect.index, 0, "a fixed amount of gas stabilises the balloon at stretch {s}");
-    let (a, b) = (&bordered.blocks[0].eigenvalues, &by_effect.blocks[0].eigenvalues);
+    assert_eq!(
+        by_effect.index, 0,
+        "a fixed amount of gas stabilises the balloon at stretch {s}"
+    );
+    let (a, b) = (
+        &bordered.blocks[0].eigenvalues,
+        &by_effect.blocks[0].eigenvalues,
+    );
     assert_eq!(a.len(), b.len());
     for (x1, x2) in a.iter().zip(b) {
-        assert!((x1 - x2).abs() < 1e-9 * by_effect.scale, "trivial blocks differ: {x1} vs {x2}");
+        assert!(
+            (x1 - x2).abs() < 1e-9 * by_effect.scale,
+            "trivial blocks differ: {x1} vs {x2}"
+        );
     }
 
     // Dense on the full matrix: K + c aaᵀ on the complement of the six rigid fields.
@@ -155,17 +238,32 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
         k += &a * a.transpose() * *cc;
     }
     let rigid = closed.rigid_modes(&closed.rigid_motions(), &closed.positions(&u));
-    let r = DMatrix::from_columns(&rigid.iter().map(|v| DVector::from_column_slice(v)).collect::<Vec<_>>());
+    let r = DMatrix::from_columns(
+        &rigid
+            .iter()
+            .map(|v| DVector::from_column_slice(v))
+            .collect::<Vec<_>>(),
+    );
     let eig = (&r * r.transpose()).symmetric_eigen();
     let top = eig.eigenvalues.amax();
-    let keep: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] < 1e-10 * top).collect();
+    let keep: Vec<usize> = (0..n)
+        .filter(|&i| eig.eigenvalues[i] < 1e-10 * top)
+        .collect();
     let z = DMatrix::from_fn(n, keep.len(), |i, j| eig.eigenvectors[(i, keep[j])]);
-    let neg = (z.transpose() * &k * &z).symmetric_eigenvalues().iter().filter(|&&v| v < 0.0).count();
+    let neg = (z.transpose() * &k * &z)
+        .symmetric_eigenvalues()
+        .iter()
+        .filter(|&&v| v < 0.0)
+        .count();
     assert_eq!(neg, by_effect.index);
     // And the pressure-controlled index against the dense K on the same complement.
     model.evaluate(&u, &[p], Request::ALL, &mut eval).unwrap();
     let kd = model.pattern().to_dense(&eval.tangent);
     let k = DMatrix::from_fn(n, n, |i, j| kd[(i, j)]);
-    let neg = (z.transpose() * &k * &z).symmetric_eigenvalues().iter().filter(|&&v| v < 0.0).count();
+    let neg = (z.transpose() * &k * &z)
+        .symmetric_eigenvalues()
+        .iter()
+        .filter(|&&v| v < 0.0)
+        .count();
     assert_eq!(neg, pressure_control.index);
 }

@@ -5,6 +5,7 @@
 
 mod group;
 mod mesh;
+mod run;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -23,6 +24,10 @@ enum Command {
     Mesh(mesh::MeshArgs),
     /// Show a point group: elements, irreps and characters.
     Group(group::GroupArgs),
+    /// Run a scene: follow its path and write path.csv, path.json, path.svg, VTUs + path.pvd.
+    Run(run::RunArgs),
+    /// Run the bundled demo (a k = 0.1 balloon) and compare it with the closed form.
+    Demo(run::DemoArgs),
 }
 
 /// An error that ends the command: bad input (exit 2) or a failure (exit 1).
@@ -53,14 +58,28 @@ pub(crate) fn main() -> ExitCode {
                 };
             }
             // One line naming the bad value, as for every other input error.
+            // The lines before the first blank one, joined: clap puts the bad value or the
+            // missing argument on a line of its own.
             let text = e.render().to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: bad arguments"));
+            let first: Vec<&str> = text
+                .lines()
+                .take_while(|l| !l.trim().is_empty())
+                .map(str::trim)
+                .collect();
+            let line = if first.is_empty() {
+                "error: bad arguments".to_string()
+            } else {
+                first.join(" ")
+            };
+            eprintln!("{line}");
             return ExitCode::from(2);
         }
     };
     let result = match cli.command {
         Command::Mesh(args) => mesh::run(&args),
         Command::Group(args) => group::run(&args),
+        Command::Run(args) => run::run(&args),
+        Command::Demo(args) => run::demo(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -38,7 +38,12 @@ impl Effect for GasPressure {
         crate::model::ALL_RIGID_MOTIONS.to_vec()
     }
 
-    fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        params: &[f64],
+        out: &mut Assembler<'_>,
+    ) -> Result<(), ModelError> {
         let p = self.pressure.value(params);
         out.add_triangles(x, [self.pressure.parameter(), None], |_, xt, terms| {
             let v = volume(xt);
@@ -84,10 +89,15 @@ impl Effect for GasAmount {
         crate::model::ALL_RIGID_MOTIONS.to_vec()
     }
 
-    fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        params: &[f64],
+        out: &mut Assembler<'_>,
+    ) -> Result<(), ModelError> {
         let c = self.amount.value(params);
         let v = self.volume(out.triangles(), x);
-        if !(v > 0.0) {
+        if v.is_nan() || v <= 0.0 {
             return Err(ModelError::Global {
                 effect: self.name().into(),
                 what: format!("the enclosed volume {v:e} is not positive"),

@@ -128,7 +128,7 @@ pub enum FluidSide {
 }
 
 /// Fluid under gravity (density ρ, gravity g along −z, level h): Π_f = ±ρ g Σ_T φ_T, the sign
-/// + for fluid [`FluidSide::Behind`] the membrane and − in [`FluidSide::Front`]. Fixed walls
+/// plus for fluid [`FluidSide::Behind`] the membrane and minus in [`FluidSide::Front`]. Fixed walls
 /// closing the fluid region add only constants. Loads: ∂F/∂ρ = ±g ∇φ, ∂F/∂h = ±ρ g ∂∇φ/∂h.
 #[derive(Debug, Clone)]
 pub struct Fluid {
@@ -178,16 +178,25 @@ impl Effect for Fluid {
         vec![m[0], m[1], m[5]]
     }
 
-    fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        params: &[f64],
+        out: &mut Assembler<'_>,
+    ) -> Result<(), ModelError> {
         let (rho, h) = (self.density.value(params), self.level.value(params));
         let s = self.sign() * self.gravity;
-        out.add_triangles(x, [self.density.parameter(), self.level.parameter()], |_, xt, terms| {
-            let f = potential(xt, h);
-            terms.local = f.local.scaled(s * rho);
-            terms.loads[0] = f.local.grad.map(|g| s * g);
-            terms.loads[1] = f.grad_d_dh.map(|g| s * rho * g);
-            Ok(())
-        })
+        out.add_triangles(
+            x,
+            [self.density.parameter(), self.level.parameter()],
+            |_, xt, terms| {
+                let f = potential(xt, h);
+                terms.local = f.local.scaled(s * rho);
+                terms.loads[0] = f.local.grad.map(|g| s * g);
+                terms.loads[1] = f.grad_d_dh.map(|g| s * rho * g);
+                Ok(())
+            },
+        )
     }
 }
 

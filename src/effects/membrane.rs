@@ -73,7 +73,7 @@ impl ReferenceTriangle {
         let s = prestretch * prestretch;
         let g0 = Matrix2::new(a.dot(&a), a.dot(&b), a.dot(&b), b.dot(&b)) / s;
         let det_g0 = g0.determinant();
-        if !(det_g0 > 0.0) {
+        if det_g0.is_nan() || det_g0 <= 0.0 {
             return None;
         }
         let inv = g0.try_inverse()?;
@@ -97,7 +97,7 @@ impl ReferenceTriangle {
         let d = self.det_g0;
         let t = i11 * g[0] + 2.0 * i12 * g[1] + i22 * g[2];
         let j = (g[0] * g[2] - g[1] * g[1]) / d;
-        if !(j > 0.0) {
+        if j.is_nan() || j <= 0.0 {
             return None;
         }
         let [w, w_t, w_j, w_tj, w_jj] = mat.strain_energy(t, j);
@@ -214,8 +214,12 @@ impl Membrane {
             .iter()
             .enumerate()
             .map(|(t, &[a, b, c])| {
-                ReferenceTriangle::new(&[reference[a], reference[b], reference[c]], prestretch, material.thickness)
-                    .ok_or_else(|| format!("triangle {t} is degenerate in the reference state"))
+                ReferenceTriangle::new(
+                    &[reference[a], reference[b], reference[c]],
+                    prestretch,
+                    material.thickness,
+                )
+                .ok_or_else(|| format!("triangle {t} is degenerate in the reference state"))
             })
             .collect::<Result<_, _>>()?;
         Ok(Self { material, elements })
@@ -237,7 +241,12 @@ impl Effect for Membrane {
         crate::model::ALL_RIGID_MOTIONS.to_vec()
     }
 
-    fn assemble(&self, x: &[Vec3], _params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        _params: &[f64],
+        out: &mut Assembler<'_>,
+    ) -> Result<(), ModelError> {
         out.add_triangles(x, [None, None], |t, xt, terms| {
             terms.local = self.elements[t]
                 .energy_gradient_hessian(&self.material, xt)
@@ -261,7 +270,6 @@ mod tests {
         ]
     }
 
-
     #[test]
     fn equibiaxial_stretch_matches_the_closed_form() {
         let mat = MooneyRivlin::new(1.0, 0.1, 0.01);
@@ -282,7 +290,9 @@ mod tests {
         let mat = MooneyRivlin::new(2.0, 0.3, 0.1);
         let x = triangle();
         let elem = ReferenceTriangle::new(&x, 1.0, mat.thickness).unwrap();
-        let Local { value: e, grad: g, .. } = elem.energy_gradient_hessian(&mat, &x).unwrap();
+        let Local {
+            value: e, grad: g, ..
+        } = elem.energy_gradient_hessian(&mat, &x).unwrap();
         assert!(e.abs() < 1e-14);
         assert!(g.iter().all(|v| v.abs() < 1e-13));
     }

@@ -51,7 +51,11 @@ impl Effect for Plane {
     /// Translations within the plane and rotation about its normal (through the origin).
     fn rigid_motions(&self) -> Vec<[f64; 6]> {
         let n = self.normal.normalize();
-        let a = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+        let a = if n.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
         let t1 = n.cross(&a).normalize();
         let t2 = n.cross(&t1);
         vec![
@@ -61,7 +65,12 @@ impl Effect for Plane {
         ]
     }
 
-    fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        params: &[f64],
+        out: &mut Assembler<'_>,
+    ) -> Result<(), ModelError> {
         let d = self.offset.value(params);
         let n = self.normal;
         let (kappa, q) = (

@@ -73,20 +73,29 @@ impl Effect for Spin {
         vec![m[2], m[5]]
     }
 
-    fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError> {
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        params: &[f64],
+        out: &mut Assembler<'_>,
+    ) -> Result<(), ModelError> {
         let sign = match self.side {
             FluidSide::Behind => 1.0,
             FluidSide::Front => -1.0,
         };
         let rho = self.density.value(params);
         let w2 = self.omega2.value(params);
-        out.add_triangles(x, [self.omega2.parameter(), self.density.parameter()], |_, xt, terms| {
-            let psi = potential(xt);
-            terms.local = psi.scaled(sign * rho * w2);
-            terms.loads[0] = psi.grad.map(|g| sign * rho * g);
-            terms.loads[1] = psi.grad.map(|g| sign * w2 * g);
-            Ok(())
-        })
+        out.add_triangles(
+            x,
+            [self.omega2.parameter(), self.density.parameter()],
+            |_, xt, terms| {
+                let psi = potential(xt);
+                terms.local = psi.scaled(sign * rho * w2);
+                terms.loads[0] = psi.grad.map(|g| sign * rho * g);
+                terms.loads[1] = psi.grad.map(|g| sign * w2 * g);
+                Ok(())
+            },
+        )
     }
 }
 

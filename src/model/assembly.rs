@@ -48,15 +48,20 @@ impl Layout {
             })
             .collect();
         let unknowns = next as usize;
-        assert!(unknowns < NONE as usize, "too many unknowns for u32 numbering");
+        assert!(
+            unknowns < NONE as usize,
+            "too many unknowns for u32 numbering"
+        );
         let tri_dofs: Vec<[u32; 9]> = triangles
             .iter()
             .map(|t| std::array::from_fn(|a| dof_of[t[a / 3]][a % 3]))
             .collect();
         let entries = tri_dofs.iter().flat_map(|d| {
-            d.iter()
-                .filter(|&&r| r != NONE)
-                .flat_map(move |&r| d.iter().filter(|&&c| c != NONE).map(move |&c| (r as usize, c as usize)))
+            d.iter().filter(|&&r| r != NONE).flat_map(move |&r| {
+                d.iter()
+                    .filter(|&&c| c != NONE)
+                    .map(move |&c| (r as usize, c as usize))
+            })
         });
         let pattern = SymmetricPattern::from_entries(unknowns, entries);
         let slot = |r: u32, c: u32| -> u32 {
@@ -258,7 +263,12 @@ pub struct Assembler<'a> {
 }
 
 impl<'a> Assembler<'a> {
-    pub(super) fn new(layout: &'a Layout, out: &'a mut Evaluation, request: Request, effect: &'a str) -> Self {
+    pub(super) fn new(
+        layout: &'a Layout,
+        out: &'a mut Evaluation,
+        request: Request,
+        effect: &'a str,
+    ) -> Self {
         Self {
             layout,
             out,
@@ -279,7 +289,12 @@ impl<'a> Assembler<'a> {
 
     /// Runs `kernel` on every triangle (in parallel) and adds the results. `load_params[s]`
     /// names the parameter whose load vector receives `terms.loads[s]`.
-    pub fn add_triangles<F>(&mut self, x: &[Vec3], load_params: [Option<usize>; 2], kernel: F) -> Result<(), ModelError>
+    pub fn add_triangles<F>(
+        &mut self,
+        x: &[Vec3],
+        load_params: [Option<usize>; 2],
+        kernel: F,
+    ) -> Result<(), ModelError>
     where
         F: Fn(usize, &[Vec3; 3], &mut TriangleTerms) -> Result<(), String> + Sync,
     {
@@ -328,7 +343,12 @@ impl<'a> Assembler<'a> {
     }
 
     /// Runs `kernel` on every node (in parallel) and adds the results.
-    pub fn add_nodes<F>(&mut self, x: &[Vec3], load_params: [Option<usize>; 2], kernel: F) -> Result<(), ModelError>
+    pub fn add_nodes<F>(
+        &mut self,
+        x: &[Vec3],
+        load_params: [Option<usize>; 2],
+        kernel: F,
+    ) -> Result<(), ModelError>
     where
         F: Fn(usize, &Vec3, &mut NodeTerms) -> Result<(), String> + Sync,
     {

@@ -57,7 +57,12 @@ pub fn check_derivatives<M: Model + ?Sized>(
     let residual = (fd - exact).abs() / (max_abs(&e0.residual) * max_abs(d) * n as f64).max(tiny);
     // F along d.
     let kd = tangent_times(model, &e0, d);
-    let k_norm = max_abs(&e0.tangent).max(e0.rank_one.iter().map(|(c, a)| c.abs() * max_abs(a).powi(2)).fold(0.0, f64::max));
+    let k_norm = max_abs(&e0.tangent).max(
+        e0.rank_one
+            .iter()
+            .map(|(c, a)| c.abs() * max_abs(a).powi(2))
+            .fold(0.0, f64::max),
+    );
     let tangent = (0..n)
         .map(|i| ((ep.residual[i] - em.residual[i]) / (2.0 * h) - kd[i]).abs())
         .fold(0.0, f64::max)
@@ -81,7 +86,9 @@ pub fn check_derivatives<M: Model + ?Sized>(
         model.evaluate(u, &pp, Request::RESIDUAL, &mut ep)?;
         pp[j] -= 2.0 * hj;
         model.evaluate(u, &pp, Request::RESIDUAL, &mut em)?;
-        let scale = max_abs(&e0.loads[j]).max(max_abs(&e0.residual) / params[j].abs().max(1.0)).max(tiny);
+        let scale = max_abs(&e0.loads[j])
+            .max(max_abs(&e0.residual) / params[j].abs().max(1.0))
+            .max(tiny);
         for i in 0..n {
             let fd = (ep.residual[i] - em.residual[i]) / (2.0 * hj);
             loads = loads.max((fd - e0.loads[j][i]).abs() / scale);

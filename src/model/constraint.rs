@@ -130,7 +130,11 @@ impl Constraint for GasAmount {
         self.pressure
     }
     fn measure(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> f64 {
-        let v: f64 = layout.triangles().iter().map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value).sum();
+        let v: f64 = layout
+            .triangles()
+            .iter()
+            .map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value)
+            .sum();
         (params[self.pressure] + self.ambient) * v
     }
     fn target(&self) -> f64 {
@@ -141,7 +145,11 @@ impl Constraint for GasAmount {
     }
     fn evaluate(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> ConstraintValue {
         let pa = params[self.pressure] + self.ambient;
-        let v: f64 = layout.triangles().iter().map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value).sum();
+        let v: f64 = layout
+            .triangles()
+            .iter()
+            .map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value)
+            .sum();
         let grad_u = gather(layout, x, |xt| volume(xt).grad.map(|g| pa * g));
         let mut grad_params = vec![0.0; params.len()];
         grad_params[self.pressure] = v;

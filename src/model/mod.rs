@@ -69,7 +69,12 @@ pub trait Effect: Send + Sync {
     fn rigid_motions(&self) -> Vec<[f64; 6]>;
 
     /// Adds Π_e and its derivatives at the current node positions `x` and parameters `params`.
-    fn assemble(&self, x: &[Vec3], params: &[f64], out: &mut Assembler<'_>) -> Result<(), ModelError>;
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        params: &[f64],
+        out: &mut Assembler<'_>,
+    ) -> Result<(), ModelError>;
 }
 
 /// All six rigid motions.
@@ -91,7 +96,13 @@ pub trait Model: Sync {
     /// The fixed sparsity pattern of the tangent.
     fn pattern(&self) -> &SymmetricPattern;
     /// Evaluates what `request` asks for at (u, Λ) into `out` (buffers are reused).
-    fn evaluate(&self, u: &[f64], params: &[f64], request: Request, out: &mut Evaluation) -> Result<(), ModelError>;
+    fn evaluate(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        request: Request,
+        out: &mut Evaluation,
+    ) -> Result<(), ModelError>;
     /// A fresh evaluation buffer sized for this model.
     fn new_evaluation(&self) -> Evaluation;
 }
@@ -156,9 +167,10 @@ impl FeModel {
                 let u = svd.u.expect("U requested");
                 let rank = svd.singular_values.iter().filter(|&&v| v > 1e-12).count();
                 let u = u.columns(0, rank);
-                &u * u.transpose()
+                u * u.transpose()
             };
-            sum += nalgebra::SMatrix::<f64, 6, 6>::identity() - nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, j| projector[(i, j)]);
+            sum += nalgebra::SMatrix::<f64, 6, 6>::identity()
+                - nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, j| projector[(i, j)]);
         }
         let eig = nalgebra::SymmetricEigen::new(sum);
         (0..6)
@@ -212,7 +224,13 @@ impl Model for FeModel {
         Evaluation::new(&self.layout, self.parameters.len())
     }
 
-    fn evaluate(&self, u: &[f64], params: &[f64], request: Request, out: &mut Evaluation) -> Result<(), ModelError> {
+    fn evaluate(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        request: Request,
+        out: &mut Evaluation,
+    ) -> Result<(), ModelError> {
         assert_eq!(u.len(), self.unknowns(), "state length");
         assert_eq!(params.len(), self.parameters.len(), "parameter count");
         out.reset(request);

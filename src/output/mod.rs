@@ -26,7 +26,7 @@ mod states;
 mod svg;
 
 pub use csv::write_csv;
-pub use json::write_json;
+pub use json::{write_critical, write_json};
 pub use progress::Progress;
 pub use states::{PvdTime, StateWriter};
 pub use svg::{

@@ -88,7 +88,33 @@ impl StateWriter {
         positions: &[Vec3],
         extra: Fields,
     ) -> Result<&SavedState, OutputError> {
-        let file = format!("state_{step:04}.vtu");
+        let name = format!("state_{step:04}");
+        self.save_as(
+            &name,
+            &format!("step {step}"),
+            true,
+            step,
+            control,
+            positions,
+            extra,
+        )
+    }
+
+    /// As [`StateWriter::save`], with the file name `name.vtu`, a label, and whether the
+    /// state belongs to the path collection (`path.pvd`) or is written beside it (turning and
+    /// critical points). Saving the same name again replaces its file and entry.
+    #[allow(clippy::too_many_arguments)]
+    pub fn save_as(
+        &mut self,
+        name: &str,
+        label: &str,
+        in_collection: bool,
+        step: usize,
+        control: f64,
+        positions: &[Vec3],
+        extra: Fields,
+    ) -> Result<&SavedState, OutputError> {
+        let file = format!("{name}.vtu");
         let path = self.dir.join(&file);
         let invalid = |message: String| OutputError::invalid(&path, message);
         let n = self.reference.nodes.len();
@@ -135,8 +161,10 @@ impl StateWriter {
             step,
             control,
             file,
+            label: label.to_string(),
+            in_collection,
         };
-        let k = match self.saved.iter().position(|s| s.step == step) {
+        let k = match self.saved.iter().position(|s| s.file == entry.file) {
             Some(k) => {
                 self.saved[k] = entry;
                 k
@@ -172,6 +200,7 @@ impl StateWriter {
         let entries: Vec<(f64, PathBuf)> = self
             .saved
             .iter()
+            .filter(|s| s.in_collection)
             .map(|s| {
                 let t = match self.time {
                     PvdTime::Control => s.control,

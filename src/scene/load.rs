@@ -33,7 +33,7 @@ const ICOSPHERE_OPTIONS: [&str; 3] = ["radius", "frequency", "down"];
 const TRUNCATED_OPTIONS: [&str; 4] = ["radius", "cut-height", "pattern", "divisions"];
 const EFFECTS: [&str; 5] = ["gas", "gas-amount", "fluid", "spin", "plane"];
 const CONSTRAINTS: [&str; 3] = ["fluid-volume", "gas-amount", "fixed"];
-const ANALYSES: [&str; 2] = ["path", "equilibrium"];
+const ANALYSES: [&str; 3] = ["path", "equilibrium", "linear-buckling"];
 
 pub(super) fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
     let doc: Table = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
@@ -239,6 +239,7 @@ fn read_analysis(v: &Value) -> Result<Analysis, Problem> {
     let (kind, rest) = tagged(v, "analysis", "type", &ANALYSES)?;
     match kind.as_str() {
         "path" => de(&rest, "analysis").map(Analysis::Path),
+        "linear-buckling" => de(&rest, "analysis").map(Analysis::LinearBuckling),
         _ => de(&rest, "analysis").map(Analysis::Equilibrium),
     }
     .map_err(with_tag("type"))

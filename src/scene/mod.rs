@@ -458,6 +458,30 @@ pub enum Analysis {
     Path(PathAnalysis),
     /// `type = "equilibrium"`: one Newton solve at the start values.
     Equilibrium(EquilibriumAnalysis),
+    /// `type = "linear-buckling"`: the start state held while the control sweeps its range.
+    LinearBuckling(LinearBucklingAnalysis),
+}
+
+/// `type = "linear-buckling"`: the critical loads of the start state. The start state is solved
+/// at the start values and then held — taken as a trivial solution whose shape does not
+/// depend on the control (a flat pre-stretched disc under fluid at its rim, say) — while the
+/// control runs over `[min, max]` of its parameter in `samples` equal steps. Wherever a block's
+/// eigenvalue changes sign between two samples, the critical value is localised to round-off
+/// and classified by its irrep. Other parameters stay at their start values.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct LinearBucklingAnalysis {
+    /// The swept parameter (it needs `min` and `max`).
+    pub control: String,
+    /// Number of equal steps over `[min, max]` (≥ 1). Default 200.
+    #[serde(default = "default_steps")]
+    pub samples: usize,
+    /// Newton's convergence tolerance for the start state. Default 1e-9.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Newton iterations for the start state. Default 25.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
 }
 
 /// `type = "path"`: pseudo-arclength continuation from the start state. The path stops at
@@ -744,6 +768,7 @@ impl Scene {
     pub fn control(&self) -> Option<&str> {
         match &self.analysis {
             Analysis::Path(p) => Some(&p.control),
+            Analysis::LinearBuckling(b) => Some(&b.control),
             Analysis::Equilibrium(_) => None,
         }
     }

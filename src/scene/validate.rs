@@ -466,6 +466,30 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
             check_newton(a.tolerance, a.max_iterations)
         }
         Analysis::Equilibrium(a) => check_newton(a.tolerance, a.max_iterations),
+        Analysis::LinearBuckling(a) => {
+            known_parameter(&scene.parameters, "analysis.control", &a.control)?;
+            let p = &scene.parameters[&a.control];
+            if p.min.is_none() || p.max.is_none() {
+                return Err(Problem::at(
+                    &key_path("parameters", &a.control),
+                    "needs both min and max: linear-buckling sweeps the control over [min, max]"
+                        .to_string(),
+                ));
+            }
+            if let Some((i, c)) = scene
+                .constraints
+                .iter()
+                .enumerate()
+                .find(|(_, c)| c.kind() != "fixed")
+            {
+                return Err(Problem::at(
+                    &format!("constraint[{i}]"),
+                    format!("type = \"{}\" cannot be active in a linear-buckling analysis (the state is held)", c.kind()),
+                ));
+            }
+            at_least("analysis.samples", a.samples, 1)?;
+            check_newton(a.tolerance, a.max_iterations)
+        }
     }
 }
 
@@ -494,7 +518,7 @@ fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
                 ),
             ));
         }
-        if let Some(control) = scene.control() {
+        if let Analysis::Path(PathAnalysis { control, .. }) = &scene.analysis {
             if name != control && scene.governing(name).is_none() {
                 return Err(Problem::at(
                     &key,

@@ -62,7 +62,7 @@ pub(crate) fn axial(name: String, n: usize, axis: &Vector3<f64>, s: Option<Matri
             .map(|g| DMatrix::from_element(1, 1, f(g)))
             .collect()
     };
-    let sign = |k: usize| if k % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = |k: usize| if k.is_multiple_of(2) { 1.0 } else { -1.0 };
 
     let mut irreps = Vec::new();
     let (a1, b1) = if mirrors { ("A1", "B1") } else { ("A", "B") };
@@ -73,7 +73,7 @@ pub(crate) fn axial(name: String, n: usize, axis: &Vector3<f64>, s: Option<Matri
             one(&|g| if mirror_of(g) { -1.0 } else { 1.0 }),
         ));
     }
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         irreps.push(Irrep::real(b1, one(&|g| sign(power(g)))));
         if mirrors {
             irreps.push(Irrep::real(

@@ -180,7 +180,7 @@ impl AxialSymmetry {
             Ok(m) if digits.bytes().all(|b| b.is_ascii_digit()) && m >= 1 => m,
             _ => return Err(bad("is not of the form C<M> or C<M>v with M >= 1".into())),
         };
-        if sectors % order != 0 {
+        if !sectors.is_multiple_of(order) {
             return Err(bad(format!(
                 "is not a subgroup of C{sectors}v: {order} does not divide {sectors}"
             )));

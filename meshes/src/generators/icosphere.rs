@@ -85,10 +85,9 @@ pub fn icosphere(opts: &IcosphereOptions) -> Result<SymmetricMesh, MeshError> {
             "frequency must be >= 1, got {f}"
         )));
     }
-    if !f
-        .checked_mul(f)
+    if f.checked_mul(f)
         .and_then(|f2| f2.checked_mul(20))
-        .is_some_and(|t| t <= MAX_TRIANGLES)
+        .is_none_or(|t| t > MAX_TRIANGLES)
     {
         return Err(MeshError::Invalid(format!(
             "frequency = {f} gives more than {MAX_TRIANGLES} triangles"
