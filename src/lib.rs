@@ -14,6 +14,7 @@ pub mod critical;
 pub mod effects;
 pub mod linalg;
 pub mod model;
+pub mod newton;
 pub mod output;
 pub mod report;
 pub mod run;
