@@ -70,6 +70,7 @@ pub struct Study {
     pub measures: Vec<(String, Measure)>,
     fluids: Vec<Fluid>,
     closed: bool,
+    closing: Option<constraint::ClosingFace>,
     stress_free_volume: f64,
     targets_from_start: Vec<bool>,
 }
@@ -88,6 +89,16 @@ impl Study {
         let mesh = scene.build_mesh()?;
         let m = &mesh.mesh;
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
+        let topology = m
+            .topology()
+            .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
+        let closed = topology.closed;
+        let fixed = scene.fixed_nodes(&mesh);
+        let closing = if closed {
+            None
+        } else {
+            closing_face(m, &topology.boundary_loops, &fixed)
+        };
         let index = |name: &str| {
             parameters
                 .iter()
@@ -116,7 +127,7 @@ impl Study {
                 scene::Effect::GasAmount(g) => Box::new(GasAmount {
                     amount: quantity(&g.amount),
                     ambient: g.ambient_pressure,
-                    closing_volume: 0.0,
+                    closing_volume: closing.map_or(0.0, |c| c.volume()),
                 }),
                 scene::Effect::Fluid(f) => {
                     let fluid = Fluid {
@@ -150,16 +161,14 @@ impl Study {
             .action
             .restrict(&keep)
             .map_err(|e| StudyError::Unsupported(format!("the scene's symmetry group: {e}")))?;
-        let fixed = scene.fixed_nodes(&mesh);
-        let closed = m.topology().map(|t| t.closed).unwrap_or(false);
         let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
         let mut targets_from_start = Vec::new();
         for c in &scene.constraints {
             let (con, initial): (Box<dyn Constraint>, bool) = match c {
                 scene::Constraint::FluidVolume(fv) => {
-                    if !closed {
+                    if !closed && closing.is_none() {
                         return Err(StudyError::Unsupported(
-                            "a fluid-volume constraint needs a closed membrane in this version (an open one would need its walls)".into(),
+                            "a fluid-volume constraint needs a closed membrane, or an open one whose rim is fixed in a horizontal plane (closed by a flat plate)".into(),
                         ));
                     }
                     let fluid = match &scene.effects[fv.effect] {
@@ -177,6 +186,7 @@ impl Study {
                             fluid,
                             level: index(&fv.level),
                             target,
+                            closing,
                         }),
                         initial,
                     )
@@ -188,6 +198,7 @@ impl Study {
                             pressure: index(&ga.pressure),
                             ambient: ga.ambient_pressure,
                             target,
+                            closing_volume: closing.map_or(0.0, |c| c.volume()),
                         }),
                         initial,
                     )
@@ -250,6 +261,7 @@ impl Study {
             measures,
             fluids,
             closed,
+            closing,
             stress_free_volume,
             targets_from_start,
         })
@@ -278,7 +290,18 @@ impl Study {
                 Measure::MaxZ => x.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max),
                 Measure::Volume => volume(),
                 Measure::Stretch => (volume() / self.stress_free_volume).cbrt(),
-                Measure::FluidVolume(i) => self.fluids[i].fluid_volume(tris, &x, params),
+                Measure::FluidVolume(i) => {
+                    let f = &self.fluids[i];
+                    let sign = if f.side == FluidSide::Behind {
+                        1.0
+                    } else {
+                        -1.0
+                    };
+                    let plate = self
+                        .closing
+                        .map_or(0.0, |c| sign * c.fluid_volume(f.level.value(params)).0);
+                    f.fluid_volume(tris, &x, params) + plate
+                }
             })
             .collect()
     }
@@ -311,6 +334,31 @@ impl Study {
         }
         u
     }
+}
+
+/// The flat plate closing an open membrane: every boundary loop fixed and in one horizontal
+/// plane. Its area vector is minus that of the loops as they run in the triangles, so that it
+/// is oriented like the membrane (outward for the closed body).
+fn closing_face(
+    m: &meshes::Mesh,
+    loops: &[Vec<usize>],
+    fixed: &[usize],
+) -> Option<constraint::ClosingFace> {
+    let first = *loops.first()?.first()?;
+    let z = m.nodes[first].z;
+    let tol = 1e-12 * m.size().max(1e-300);
+    let mut area_z = 0.0;
+    for lp in loops {
+        for (k, &i) in lp.iter().enumerate() {
+            if fixed.binary_search(&i).is_err() || (m.nodes[i].z - z).abs() > tol {
+                return None;
+            }
+            let j = lp[(k + 1) % lp.len()];
+            let (a, b) = (m.nodes[i], m.nodes[j]);
+            area_z -= 0.5 * (a.x * b.y - a.y * b.x);
+        }
+    }
+    Some(constraint::ClosingFace { z, area_z })
 }
 
 fn target(t: &scene::Target) -> (f64, bool) {

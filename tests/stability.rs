@@ -183,6 +183,7 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
         pressure: 0,
         ambient,
         target: 0.0,
+        closing_volume: 0.0,
     };
     let c = amount.measure(model.layout(), &x, &[p]);
     amount.set_target(c);

@@ -1,7 +1,7 @@
 //! Augmenting equations g(u, Λ) = 0 that free one parameter each (DESIGN §2.6).
 //!
-//! - Fixed fluid volume: g = V_f(u, h) − V*, V_f = Σ_T v_T (± for the side), which frees the
-//!   level h. Needs a closed membrane (an open one would need its walls).
+//! - Fixed fluid volume: g = V_f(u, h) − V*, V_f = Σ_T v_T (± for the side) plus the part of a
+//!   fixed flat face closing an open membrane ([`ClosingFace`]), which frees the level h.
 //! - Fixed amount of gas at fixed over-pressure effect: g = (p + P_atm) V(u) − C*, which frees
 //!   the pressure p.
 //!
@@ -54,6 +54,33 @@ fn gather(layout: &Layout, x: &[Vec3], grad: impl Fn(&[Vec3; 3]) -> [f64; 9]) ->
     v
 }
 
+/// A fixed flat horizontal face that closes an open membrane along its fixed rim (a plate),
+/// oriented like the membrane: the z-component of its area vector and its height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClosingFace {
+    /// Height z_c of the face.
+    pub z: f64,
+    /// z-component of its area vector (signed by the outward orientation of the closed body).
+    pub area_z: f64,
+}
+
+impl ClosingFace {
+    /// Its contribution (1/3)∫ x·n dA = z_c A_z / 3 to the enclosed volume.
+    pub fn volume(&self) -> f64 {
+        self.z * self.area_z / 3.0
+    }
+
+    /// Its contribution ∫ min(z, h) n_z dA = min(z_c, h) A_z to the fluid volume below h,
+    /// and the derivative in h.
+    pub fn fluid_volume(&self, h: f64) -> (f64, f64) {
+        if h < self.z {
+            (h * self.area_z, self.area_z)
+        } else {
+            (self.z * self.area_z, 0.0)
+        }
+    }
+}
+
 /// Fixed fluid volume of a fluid effect; frees its level.
 #[derive(Debug, Clone)]
 pub struct FluidVolume {
@@ -63,6 +90,8 @@ pub struct FluidVolume {
     pub level: usize,
     /// V*.
     pub target: f64,
+    /// The fixed face closing an open membrane, if any.
+    pub closing: Option<ClosingFace>,
 }
 
 impl FluidVolume {
@@ -82,7 +111,10 @@ impl Constraint for FluidVolume {
         self.level
     }
     fn measure(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> f64 {
-        self.fluid.fluid_volume(layout.triangles(), x, params)
+        let closing = self
+            .closing
+            .map_or(0.0, |c| self.sign() * c.fluid_volume(params[self.level]).0);
+        self.fluid.fluid_volume(layout.triangles(), x, params) + closing
     }
     fn target(&self) -> f64 {
         self.target
@@ -99,6 +131,11 @@ impl Constraint for FluidVolume {
             let v = fluid_volume(&[x[a], x[b], x[c]], h);
             value += s * v.value;
             d_dh += s * v.d_dh;
+        }
+        if let Some(c) = self.closing {
+            let (v, dv) = c.fluid_volume(h);
+            value += s * v;
+            d_dh += s * dv;
         }
         let grad_u = gather(layout, x, |xt| fluid_volume(xt, h).grad.map(|g| s * g));
         let mut grad_params = vec![0.0; params.len()];
@@ -120,6 +157,8 @@ pub struct GasAmount {
     pub ambient: f64,
     /// C*.
     pub target: f64,
+    /// Volume between the membrane and fixed walls, added to Σ V_T.
+    pub closing_volume: f64,
 }
 
 impl Constraint for GasAmount {
