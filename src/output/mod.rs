@@ -34,9 +34,7 @@ pub use svg::{
 };
 
 use crate::report::PathReport;
-use std::fmt;
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 /// Why an output file could not be written; every variant names the file.
@@ -119,46 +117,13 @@ fn write_whole(
     fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<(), OutputError> {
     check_dir(path)?;
-    let io_err = |source| OutputError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path.file_name().map_or_else(
-        || "output".to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(io_err)?;
-    {
-        let mut w = BufWriter::new(tmp.as_file());
-        fill(&mut w).map_err(io_err)?;
-        w.flush().map_err(io_err)?;
-    }
-    let file: &File = tmp.as_file();
-    set_mode(file).map_err(io_err)?;
-    file.sync_all().map_err(io_err)?;
-    tmp.persist(path).map_err(|e| io_err(e.error))?;
-    Ok(())
-}
-
-/// Temporary files are created private (0600); output files should be readable like files
-/// made by `File::create` under the usual umask (0644).
-#[cfg(unix)]
-fn set_mode(file: &File) -> io::Result<()> {
-    use std::os::unix::fs::PermissionsExt;
-    file.set_permissions(std::fs::Permissions::from_mode(0o644))
-}
-
-#[cfg(not(unix))]
-fn set_mode(_file: &File) -> io::Result<()> {
-    Ok(())
+    meshes::write::write_whole(path, fill).map_err(|e| match e {
+        meshes::MeshError::Io { source, .. } => OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        other => OutputError::invalid(path, other.to_string()),
+    })
 }
 
 /// Checks that every number of the report is finite; the error names the row (or turning
@@ -227,18 +192,5 @@ fn check_lengths(
     Ok(())
 }
 
-/// An `f64` with the fewest digits that parse back to the same bits: plain decimal for
-/// 1e-4 ≤ |x| < 1e16 (and zero), `1.5e-300` style otherwise (like Python's `repr`, and like
-/// the mesh writers).
-struct Num(f64);
-
-impl fmt::Display for Num {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let a = self.0.abs();
-        if a == 0.0 || (1e-4..1e16).contains(&a) {
-            write!(f, "{}", self.0)
-        } else {
-            write!(f, "{:e}", self.0)
-        }
-    }
-}
+/// Shortest round-trip numbers, as the mesh writers print them.
+use meshes::write::Num;

@@ -46,6 +46,14 @@ pub(crate) fn stage(
     })
 }
 
+/// Writes `target` whole: [`stage`] then commit.
+pub fn write_whole(
+    target: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), MeshError> {
+    stage(target, fill)?.commit()
+}
+
 impl Staged {
     /// Renames the temporary file over the target.
     pub(crate) fn commit(self) -> Result<(), MeshError> {

@@ -42,6 +42,7 @@ mod pvd;
 mod vtu;
 mod xdmf;
 
+pub use atomic::write_whole;
 pub use pvd::write_pvd;
 
 use crate::mesh::Mesh;
@@ -395,7 +396,7 @@ fn check_name(kind: &str, name: &str) -> Result<(), MeshError> {
 /// An `f64` printed with the fewest digits that parse back to the same bits: plain decimal for
 /// 1e-4 ≤ |x| < 1e16 (and zero), `1.5e-300` style otherwise (like Python's `repr`). Never
 /// `inf`/`NaN`: callers validate first.
-pub(crate) struct Num(pub f64);
+pub struct Num(pub f64);
 
 impl fmt::Display for Num {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
