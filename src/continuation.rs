@@ -22,6 +22,11 @@
 use crate::model::ModelError;
 use nalgebra::{DMatrix, DVector};
 
+/// Largest distance, in steps, between the converged point and the predictor.
+const MAX_CORRECTOR_DISTANCE: f64 = 0.5;
+/// Smallest cosine between consecutive tangents (about 35°).
+const MIN_TANGENT_COSINE: f64 = 0.8;
+
 /// A dense problem R(q, λ), g(q, λ) with its derivatives.
 pub trait DenseProblem {
     /// Dimension m of q.
@@ -294,6 +299,19 @@ pub fn step<P: DenseProblem>(
         if converged && d.amax() <= opts.tolerance {
             let lin = problem.evaluate(&q, &lambda).map_err(|e| e.to_string())?;
             let tangent = tangent_at(&lin, opts, Some(t)).ok_or("singular tangent system")?;
+            // Stay on the branch: the corrector must end near the predictor and the tangent
+            // must not turn sharply; otherwise the step is cut rather than a jump accepted.
+            let mut dist2 = (&q - &from.q - t.rows(0, m) * (s * sq)).norm_squared() / (sq * sq);
+            for j in 0..nl {
+                dist2 += ((lambda[j] - from.lambda[j] - t[m + j] * s * sl(j)) / sl(j)).powi(2);
+            }
+            if dist2.sqrt() > MAX_CORRECTOR_DISTANCE * s || tangent.dot(t) < MIN_TANGENT_COSINE {
+                return Err(format!(
+                    "the corrector moved {:.2} steps from the predictor and the tangent turned by {:.0}°: a possible branch jump",
+                    dist2.sqrt() / s,
+                    tangent.dot(t).clamp(-1.0, 1.0).acos().to_degrees()
+                ));
+            }
             return Ok(PathPoint {
                 q,
                 lambda,

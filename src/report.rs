@@ -99,6 +99,9 @@ pub struct PathReport {
     pub stop: String,
     /// Critical points, localised and classified by irrep.
     pub critical: Vec<crate::critical::CriticalPoint>,
+    /// Things the analysis could not settle (a crossing that could not be localised …).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Why stability was not analysed, if it was not.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stability_note: Option<String>,

@@ -58,41 +58,9 @@ const ZERO_EIGENVALUE: f64 = 1e-10;
 /// Runs the scene's analysis; `progress(step, control)` is called at every converged point.
 pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<RunResult, RunError> {
     let opts = path_options(study);
-    // 1. The start: every parameter at its start value, no constraint active.
-    let u0 = study.start_displacement();
-    let q0 = study.basis.restrict(&u0);
-    let (q_start, params_start) = {
-        let mut problem = SymmetricProblem::new(
-            &study.model,
-            &study.basis,
-            &[],
-            study.start.clone(),
-            study.control,
-        );
-        let lambda = problem.free_values(&study.start);
-        let start_opts = PathOptions {
-            max_iterations: opts.max_iterations.max(50),
-            ..opts.clone()
-        };
-        let (q, lambda, _) =
-            solve_at(&mut problem, &q0, &lambda, &start_opts).map_err(RunError::Start)?;
-        (q, problem.parameters(&lambda))
-    };
-    let mut u_start = vec![0.0; study.basis.unknowns()];
-    study.basis.expand(&q_start, &mut u_start);
-    if let Some(k) = study
-        .measures
-        .iter()
-        .position(|(_, m)| *m == Measure::Volume)
-    {
-        let v = study.measure(&u_start, &params_start)[k];
-        if v <= 0.0 {
-            return Err(RunError::Start(format!(
-                "Newton converged to an inside-out membrane (enclosed volume {v:e}); start closer to the intended state (start.stretch, the start values)"
-            )));
-        }
-    }
-    study.set_targets(&u_start, &params_start);
+    let start = study.start.clone();
+    let (u_start, params_start, _) = solve_start(study, &start)?;
+    let q_start = study.basis.restrict(&u_start);
     let study: &Study = study;
     let (adapted, stability_note) = match AdaptedBasis::new(&study.action, study.model.layout()) {
         Ok(b) => (Some(b), None),
@@ -107,6 +75,7 @@ pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<Ru
         states: Vec::new(),
         turning: Vec::new(),
         critical: Vec::new(),
+        warnings: Vec::new(),
     };
     let stop = match &study.scene.analysis {
         Analysis::LinearBuckling(a) => {
@@ -119,6 +88,7 @@ pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<Ru
         states,
         turning,
         critical,
+        warnings,
         ..
     } = runner;
     let m = &study.mesh;
@@ -146,10 +116,55 @@ pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<Ru
         turning_points: turning,
         stop,
         critical,
+        warnings,
         stability_note,
         saved: Vec::new(),
     };
     Ok(RunResult { report, states })
+}
+
+/// Solves the start state with every parameter at `params` and no constraint active (the
+/// reference scaled by `start.stretch` is the first guess), refuses an inside-out solution,
+/// and sets the targets of constraints declared `"initial"` there. Returns the displacement,
+/// the parameters and Newton's iterations.
+pub fn solve_start(
+    study: &mut Study,
+    params: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>, usize), RunError> {
+    let opts = path_options(study);
+    let u0 = study.start_displacement();
+    let q0 = study.basis.restrict(&u0);
+    let mut problem = SymmetricProblem::new(
+        &study.model,
+        &study.basis,
+        &[],
+        params.to_vec(),
+        study.control,
+    );
+    let lambda = problem.free_values(params);
+    let start_opts = PathOptions {
+        max_iterations: opts.max_iterations.max(50),
+        ..opts
+    };
+    let (q, lambda, iterations) =
+        solve_at(&mut problem, &q0, &lambda, &start_opts).map_err(RunError::Start)?;
+    let params = problem.parameters(&lambda);
+    let mut u = vec![0.0; study.basis.unknowns()];
+    study.basis.expand(&q, &mut u);
+    if let Some(k) = study
+        .measures
+        .iter()
+        .position(|(_, m)| *m == Measure::Volume)
+    {
+        let v = study.measure(&u, &params)[k];
+        if v <= 0.0 {
+            return Err(RunError::Start(format!(
+                "Newton converged to an inside-out membrane (enclosed volume {v:e}); start closer to the intended state (start.stretch, the start values)"
+            )));
+        }
+    }
+    study.set_targets(&u, &params);
+    Ok((u, params, iterations))
 }
 
 fn path_options(study: &Study) -> PathOptions {
@@ -202,6 +217,7 @@ struct Runner<'a> {
     states: Vec<State>,
     turning: Vec<TurningRow>,
     critical: Vec<CriticalPoint>,
+    warnings: Vec<String>,
 }
 
 impl Runner<'_> {
@@ -250,6 +266,7 @@ impl Runner<'_> {
         };
         let study = self.study;
         let mut found = Vec::new();
+        let mut warnings = Vec::new();
         for mu in 0..a.blocks.len() {
             let (n0, n1) = (a.blocks[mu].negative, b.blocks[mu].negative);
             for k in n0.min(n1)..n0.max(n1) {
@@ -270,16 +287,28 @@ impl Runner<'_> {
                     g1,
                     tol,
                 );
+                let not_localised = |why: &str| {
+                    format!(
+                        "the index of {} changed between steps {after_step} and {} but the crossing could not be localised ({why})",
+                        a.blocks[mu].irrep,
+                        after_step + 1
+                    )
+                };
                 let Some((s_best, g_best)) = located else {
+                    warnings.push(not_localised(
+                        "a state inside the interval did not converge",
+                    ));
                     continue;
                 };
                 // Re-evaluate at the best point, with the eigenvectors for the critical mode.
-                let Some((u, p)) = state(s_best) else {
-                    continue;
-                };
-                let Ok(sp) =
-                    stab.spectrum_of(&u, &p, &study.constraints, &mut eval, Some(mu), true)
-                else {
+                let evaluated = state(s_best).and_then(|(u, p)| {
+                    let sp = stab
+                        .spectrum_of(&u, &p, &study.constraints, &mut eval, Some(mu), true)
+                        .ok()?;
+                    Some((u, p, sp))
+                });
+                let Some((u, p, sp)) = evaluated else {
+                    warnings.push(not_localised("the best point could not be evaluated"));
                     continue;
                 };
                 let block = &sp.blocks[mu];
@@ -313,6 +342,7 @@ impl Runner<'_> {
             let c = |p: &CriticalPoint| self.control_of(&p.parameters);
             c(x).total_cmp(&c(y))
         });
+        self.warnings.extend(warnings);
         for cp in found {
             self.states.push(State {
                 step: cp.after_step,

@@ -74,6 +74,7 @@ fn report() -> PathReport {
         ],
         rows,
         critical: Vec::new(),
+        warnings: Vec::new(),
         stability_note: None,
         turning_points: vec![
             turning("maximum", 6, 1.4760699, 1.3551069),

@@ -508,6 +508,9 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
             );
         }
     }
+    for w in &report.warnings {
+        println!("warning: {w}");
+    }
     if let Some(note) = &report.stability_note {
         println!("{note}");
     } else if report.critical.is_empty() {
