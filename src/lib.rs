@@ -9,6 +9,7 @@
 pub use meshes;
 pub use symmetry;
 pub mod adapted;
+pub mod bench;
 pub mod continuation;
 pub mod critical;
 pub mod effects;

@@ -3,9 +3,14 @@
 //! Exit codes: 0 success; 2 bad input (one line on stderr naming the bad value, nothing
 //! written); 1 a failure that is not the user's input (a verification or I/O failure).
 
+mod bench;
+mod common;
+mod compare;
+mod export;
 mod group;
 mod mesh;
 mod run;
+mod spectrum;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -28,6 +33,14 @@ enum Command {
     Run(run::RunArgs),
     /// Run the bundled demo (a k = 0.1 balloon) and compare it with the closed form.
     Demo(run::DemoArgs),
+    /// The tangent's spectrum by irrep at the scene's start state (or at --at values).
+    Spectrum(spectrum::SpectrumArgs),
+    /// The same scene on meshes of different symmetry: critical points matched, splits measured.
+    Compare(compare::CompareArgs),
+    /// What accuracy costs in time: balloon refinement study, symmetry payoff, ponding ladder.
+    Bench(bench::BenchArgs),
+    /// Write the full tangent K at the scene's start state in Matrix Market format.
+    ExportMatrix(export::ExportArgs),
 }
 
 /// An error that ends the command: bad input (exit 2) or a failure (exit 1).
@@ -80,6 +93,10 @@ pub(crate) fn main() -> ExitCode {
         Command::Group(args) => group::run(&args),
         Command::Run(args) => run::run(&args),
         Command::Demo(args) => run::demo(&args),
+        Command::Spectrum(args) => spectrum::run(&args),
+        Command::Compare(args) => compare::run(&args),
+        Command::Bench(args) => bench::run(&args),
+        Command::ExportMatrix(args) => export::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

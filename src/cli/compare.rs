@@ -1,0 +1,1393 @@
+//! `memstab compare SCENE --meshes A,B,… [--refine] [--max X] [--divisions D] [--samples N]
+//! [--json] [--quiet]`: the same scene on meshes of different symmetry, side by side.
+//!
+//! # Meshes
+//!
+//! Each mesh is typed as
+//! - a group name, `C8v`, `C2v`, `C1v`, `C4` …: the scene's own generator with that group. A
+//!   disc takes any subgroup `C<M>v` / `C<M>` of its `C<N>v` with M | N; the group names of one
+//!   command share one sector count N: the scene's `sectors` if every M divides it, else the
+//!   smallest multiple of the least common multiple of the Ms that is at least the scene's
+//!   (the ponding scene's 7 sectors become 8 for `C8v,C2v,C1v`). A truncated sphere takes the
+//!   name as its `pattern` (a subgroup of its `C8v`). An icosphere has no group option: name
+//!   it by a full override.
+//! - a full override `GENERATOR:KEY=VALUE,…`, e.g. `disc:sectors=8,divisions=12,group=C2v`:
+//!   the scene's mesh options (or the generator's defaults for another generator) with these
+//!   keys (the scene file's `[mesh]` keys) replaced. Its commas are its own: a `KEY=VALUE`
+//!   item continues the override before it.
+//!
+//! The first mesh is the reference. `--divisions D` sets the divisions of every disc and
+//! truncated sphere (an icosphere's frequency) unless a full override sets them; `--refine`
+//! runs every mesh again at twice its divisions (frequency). `--max X` sets the control's upper
+//! bound; a linear-buckling sweep then keeps the scene's sample spacing unless `--samples N`
+//! (the sweep's samples, or a path's step budget) says otherwise.
+//!
+//! # Matching
+//!
+//! Every variant is run as `memstab run` runs it ([`memstab::run::run`]), in parallel. For the
+//! disc and the truncated sphere each critical mode is labelled by its wave number m about z
+//! (the m = 0…24 whose cos mθ / sin mθ carries most of the mode's cylindrical components).
+//! Critical points of one mesh with the same m ≥ 1 and values within 10 % are grouped into a
+//! *rung* of multiplicity 2 (the cos/sin pair of an axisymmetric structure), m = 0 into rungs of
+//! multiplicity 1. For every rung of the reference mesh, the images on each mesh are the
+//! points with the same m nearest in value (within 20 %), taken until their multiplicities
+//! reach the rung's. An icosphere's modes get no label: images are then matched by value
+//! alone, up to the reference point's multiplicity.
+//!
+//! A rung's *gap* on a mesh is measured: the spread of the values of its images there. One
+//! point in a 2-D irrep is a double by construction ("not split: double … in E1"); two points
+//! are "split" when their gap exceeds 1e-8 of the value (the localisation's precision), else
+//! "not split (gap 0)" / "(gap at round-off)". With `--refine` the observed order of the gap
+//! is log2(gap_coarse / gap_fine).
+//!
+//! Bad input (a scene that does not load or build, a mesh that is not a subgroup or does not
+//! parse, a chiral group, an equilibrium analysis, a bad `--max`) is one line and exit code 2,
+//! before anything runs; a start state that does not converge is exit code 1.
+
+use super::common::{build_study, check_real_irreps, load_scene, one_line, sci, sig_digits};
+use super::CliError;
+use clap::Args;
+use memstab::adapted::AdaptedBasis;
+use memstab::critical::CriticalPoint;
+use memstab::model::Model;
+use memstab::run::run as run_study;
+use memstab::scene::{Analysis, MeshSpec, Scene};
+use memstab::stability::Stability;
+use memstab::study::Study;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Largest wave number tried when labelling a mode.
+const MAX_WAVE_NUMBER: usize = 24;
+/// Relative distance within which two points of one mesh with the same m form a rung.
+const PAIR_TOLERANCE: f64 = 0.1;
+/// Relative distance within which a point on another mesh is an image of a reference rung.
+const MATCH_TOLERANCE: f64 = 0.2;
+/// A gap at most this fraction of the value is round-off (the localisation's precision).
+const ROUND_OFF: f64 = 1e-8;
+
+#[derive(Debug, Args)]
+pub(crate) struct CompareArgs {
+    /// The scene file (TOML; see docs/scenes.md).
+    scene: PathBuf,
+    /// The meshes, comma-separated, the first the reference: group names (C8v, C2v, C1v: the
+    /// scene's generator with that group or pattern) or full overrides
+    /// GENERATOR:KEY=VALUE,... (e.g. disc:sectors=8,divisions=12,group=C2v).
+    #[arg(long, required = true, value_name = "A,B,...")]
+    meshes: Vec<String>,
+    /// Also run every mesh at twice its divisions and report how the gaps shrink.
+    #[arg(long)]
+    refine: bool,
+    /// The control's upper bound (default: the scene's `max`).
+    #[arg(long, value_name = "VALUE", allow_negative_numbers = true)]
+    max: Option<f64>,
+    /// Divisions of every disc or truncated sphere (an icosphere's frequency), unless a full
+    /// override sets them.
+    #[arg(long, value_name = "D")]
+    divisions: Option<usize>,
+    /// Samples of a linear-buckling sweep (a path's step budget); default: the scene's, scaled
+    /// with --max to keep the sample spacing.
+    #[arg(long, value_name = "N")]
+    samples: Option<usize>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// No progress lines on stderr.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// A mesh as typed.
+#[derive(Debug, Clone, PartialEq)]
+enum MeshArg {
+    /// A group name for the scene's generator.
+    Group(String),
+    /// `GENERATOR:KEY=VALUE,…`.
+    Full {
+        generator: String,
+        options: Vec<(String, String)>,
+    },
+}
+
+/// One typed mesh: its label (as typed) and meaning.
+#[derive(Debug, Clone)]
+struct Typed {
+    label: String,
+    arg: MeshArg,
+}
+
+const GENERATORS: [&str; 3] = ["disc", "icosphere", "truncated-sphere"];
+
+/// Splits the `--meshes` values into meshes; a `KEY=VALUE` item continues the full override
+/// before it.
+fn split_meshes(values: &[String]) -> Result<Vec<Typed>, CliError> {
+    let mut out: Vec<Typed> = Vec::new();
+    for value in values {
+        let mut continuing = false;
+        for raw in value.split(',') {
+            let item = raw.trim();
+            if item.is_empty() {
+                return Err(CliError::Input(format!(
+                    "--meshes '{value}': an empty mesh name"
+                )));
+            }
+            if let Some((generator, rest)) = item.split_once(':') {
+                let generator = generator.trim().to_string();
+                let mut options = Vec::new();
+                if !rest.trim().is_empty() {
+                    options.push(key_value(rest, value)?);
+                }
+                out.push(Typed {
+                    label: item.to_string(),
+                    arg: MeshArg::Full { generator, options },
+                });
+                continuing = true;
+            } else if item.contains('=') {
+                let last = out.last_mut().filter(|_| continuing);
+                let Some(Typed {
+                    label,
+                    arg: MeshArg::Full { options, .. },
+                }) = last
+                else {
+                    return Err(CliError::Input(format!(
+                        "--meshes '{value}': '{item}' names no generator; write a full \
+                         override as GENERATOR:KEY=VALUE,..., e.g. disc:divisions=12,group=C2v"
+                    )));
+                };
+                options.push(key_value(item, value)?);
+                label.push(',');
+                label.push_str(item);
+            } else if GENERATORS.contains(&item) {
+                out.push(Typed {
+                    label: item.to_string(),
+                    arg: MeshArg::Full {
+                        generator: item.to_string(),
+                        options: Vec::new(),
+                    },
+                });
+                continuing = true;
+            } else {
+                out.push(Typed {
+                    label: item.to_string(),
+                    arg: MeshArg::Group(item.to_string()),
+                });
+                continuing = false;
+            }
+        }
+    }
+    for (i, t) in out.iter().enumerate() {
+        if out[..i].iter().any(|o| o.label == t.label) {
+            return Err(CliError::Input(format!(
+                "--meshes: '{}' is given twice",
+                t.label
+            )));
+        }
+    }
+    if out.is_empty() {
+        return Err(CliError::Input("--meshes: no mesh given".into()));
+    }
+    Ok(out)
+}
+
+fn key_value(item: &str, value: &str) -> Result<(String, String), CliError> {
+    match item.split_once('=') {
+        Some((k, v)) if !k.trim().is_empty() && !v.trim().is_empty() => {
+            Ok((k.trim().replace('_', "-"), v.trim().to_string()))
+        }
+        _ => Err(CliError::Input(format!(
+            "--meshes '{value}': '{item}' is not KEY=VALUE"
+        ))),
+    }
+}
+
+/// A typed option value as TOML: an integer, a float, a boolean, else a string.
+fn toml_value(v: &str) -> toml::Value {
+    if let Ok(i) = v.parse::<i64>() {
+        toml::Value::Integer(i)
+    } else if let Ok(f) = v.parse::<f64>() {
+        toml::Value::Float(f)
+    } else if let Ok(b) = v.parse::<bool>() {
+        toml::Value::Boolean(b)
+    } else {
+        toml::Value::String(v.to_string())
+    }
+}
+
+/// M of `C<M>` / `C<M>v`, if the name has that form.
+fn axial_order(name: &str) -> Option<usize> {
+    let rest = name.strip_prefix('C')?;
+    let digits = rest.strip_suffix('v').unwrap_or(rest);
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse().ok().filter(|&m: &usize| m >= 1)
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+/// The sector count shared by the group names: the scene's if every M divides it, else the
+/// smallest multiple of lcm(M…) that is at least the scene's.
+fn common_sectors(scene_sectors: usize, typed: &[Typed]) -> usize {
+    let orders: Vec<usize> = typed
+        .iter()
+        .filter_map(|t| match &t.arg {
+            MeshArg::Group(g) => axial_order(g),
+            MeshArg::Full { .. } => None,
+        })
+        .collect();
+    if orders.iter().all(|m| scene_sectors.is_multiple_of(*m)) {
+        return scene_sectors;
+    }
+    let l = orders
+        .iter()
+        .fold(1usize, |l, &m| (l / gcd(l, m)).saturating_mul(m))
+        .max(1);
+    scene_sectors.div_ceil(l).saturating_mul(l)
+}
+
+/// The resolution of a mesh spec: divisions, or an icosphere's frequency.
+fn resolution(spec: &MeshSpec) -> usize {
+    match spec {
+        MeshSpec::Disc(d) => d.divisions,
+        MeshSpec::Icosphere(i) => i.frequency,
+        MeshSpec::TruncatedSphere(t) => t.divisions_or_default(),
+    }
+}
+
+/// The key of the resolution in a generator's options.
+fn resolution_key(generator: &str) -> &'static str {
+    if generator == "icosphere" {
+        "frequency"
+    } else {
+        "divisions"
+    }
+}
+
+/// The mesh options as one line, e.g. `disc sectors=8 divisions=6 group=C8v`.
+fn describe(spec: &MeshSpec) -> String {
+    match spec {
+        MeshSpec::Disc(d) => format!(
+            "disc sectors={} divisions={} group={}",
+            d.sectors,
+            d.divisions,
+            d.group
+                .clone()
+                .unwrap_or_else(|| format!("C{}v", d.sectors))
+        ),
+        MeshSpec::Icosphere(i) => format!(
+            "icosphere frequency={}{}",
+            i.frequency,
+            i.down.map_or_else(String::new, |d| format!(
+                " down={}",
+                format!("{d:?}").to_lowercase()
+            ))
+        ),
+        MeshSpec::TruncatedSphere(t) => format!(
+            "truncated-sphere pattern={} divisions={} cut-height={}",
+            t.pattern,
+            t.divisions_or_default(),
+            t.cut_height
+        ),
+    }
+}
+
+/// The settings shared by every variant.
+struct Common {
+    control: String,
+    max: Option<f64>,
+    samples: Option<usize>,
+    divisions: Option<usize>,
+    sectors: usize,
+}
+
+/// The scene with the typed mesh and the common settings, validated again as a whole.
+fn variant(scene: &Scene, typed: &Typed, common: &Common) -> Result<Scene, CliError> {
+    let bad = |what: String| CliError::Input(format!("mesh '{}': {what}", typed.label));
+    let mut mesh = toml::Table::try_from(&scene.mesh)
+        .map_err(|e| CliError::Failure(format!("the scene's mesh does not serialise: {e}")))?;
+    let own = scene.mesh.generator();
+    let mut explicit_resolution = false;
+    match &typed.arg {
+        MeshArg::Group(name) => match &scene.mesh {
+            MeshSpec::Disc(_) => {
+                mesh.insert("group".into(), toml::Value::String(name.clone()));
+                mesh.insert(
+                    "sectors".into(),
+                    toml::Value::Integer(common.sectors as i64),
+                );
+            }
+            MeshSpec::TruncatedSphere(_) => {
+                mesh.insert("pattern".into(), toml::Value::String(name.clone()));
+            }
+            MeshSpec::Icosphere(_) => {
+                return Err(bad(
+                    "an icosphere has no group option; name it by a full override, e.g. \
+                     icosphere:frequency=4,down=vertex"
+                        .into(),
+                ))
+            }
+        },
+        MeshArg::Full { generator, options } => {
+            if !GENERATORS.contains(&generator.as_str()) {
+                return Err(bad(format!(
+                    "unknown generator '{generator}' (disc, icosphere, truncated-sphere)"
+                )));
+            }
+            if generator != own {
+                mesh = toml::Table::new();
+                mesh.insert("generator".into(), toml::Value::String(generator.clone()));
+            }
+            for (k, v) in options {
+                if k == "generator" {
+                    return Err(bad("the generator goes before the ':'".into()));
+                }
+                explicit_resolution |= k == resolution_key(generator);
+                mesh.insert(k.clone(), toml_value(v));
+            }
+        }
+    }
+    let generator = mesh
+        .get("generator")
+        .and_then(|g| g.as_str())
+        .unwrap_or(own)
+        .to_string();
+    if let (Some(d), false) = (common.divisions, explicit_resolution) {
+        mesh.insert(
+            resolution_key(&generator).into(),
+            toml::Value::Integer(d as i64),
+        );
+    }
+    let mut base = scene.clone();
+    if let Some(max) = common.max {
+        if let Some(p) = base.parameters.get_mut(&common.control) {
+            let old = (p.min, p.max);
+            p.max = Some(max);
+            // Keep the sample spacing of a linear-buckling sweep.
+            if let (Analysis::LinearBuckling(b), (Some(lo), Some(hi)), None) =
+                (&mut base.analysis, old, common.samples)
+            {
+                if hi > lo && max > lo {
+                    b.samples = ((b.samples as f64) * (max - lo) / (hi - lo))
+                        .ceil()
+                        .max(1.0) as usize;
+                }
+            }
+        }
+    }
+    if let Some(n) = common.samples {
+        match &mut base.analysis {
+            Analysis::LinearBuckling(b) => b.samples = n,
+            Analysis::Path(p) => p.steps = n,
+            Analysis::Equilibrium(_) => {}
+        }
+    }
+    let mut table = toml::Table::try_from(&base)
+        .map_err(|e| CliError::Failure(format!("the scene does not serialise: {e}")))?;
+    table.insert("mesh".into(), toml::Value::Table(mesh));
+    let text = toml::to_string(&table)
+        .map_err(|e| CliError::Failure(format!("the scene does not serialise: {e}")))?;
+    let origin = format!("{} with mesh '{}'", scene.origin, typed.label);
+    Scene::from_toml_str(&text, &origin).map_err(|e| CliError::Input(one_line(&e.to_string())))
+}
+
+/// A critical point as compared.
+#[derive(Debug, Clone, Serialize)]
+struct Point {
+    kind: String,
+    irrep: String,
+    multiplicity: usize,
+    /// The control's value.
+    value: f64,
+    /// Wave number of the mode about z (disc, truncated sphere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    m: Option<usize>,
+    residual_eigenvalue: f64,
+    /// Uncertainty of `value` from the localisation: |eigenvalue| / |d eigenvalue / d control|
+    /// at the point (held states of a linear-buckling sweep only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    precision: Option<f64>,
+    isotropy: String,
+}
+
+/// One run of one mesh at one resolution.
+#[derive(Debug, Clone, Serialize)]
+struct Level {
+    mesh: String,
+    resolution: usize,
+    nodes: usize,
+    triangles: usize,
+    group: String,
+    order: usize,
+    unknowns: usize,
+    symmetric_unknowns: usize,
+    stop: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    note: Option<String>,
+    /// Steps where the instability index changes by more than the critical points localised
+    /// there account for (a crossing the run could not localise, or a jump of the path).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    warnings: Vec<String>,
+    seconds: f64,
+    critical: Vec<Point>,
+}
+
+/// The m (0…MAX_WAVE_NUMBER) whose cos mθ, sin mθ carry most of the mode's cylindrical
+/// components (u_r, u_θ, u_z), nodes weighted by their distance from the axis.
+fn wave_number(study: &Study, mode: &[f64]) -> usize {
+    let layout = study.model.layout();
+    let nodes = study.model.reference();
+    let size = nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
+    // (θ, r, [u_r, u_θ, u_z]) per free node off the axis.
+    let samples: Vec<(f64, f64, [f64; 3])> = nodes
+        .iter()
+        .enumerate()
+        .filter_map(|(i, x)| {
+            let r = x.x.hypot(x.y);
+            if r <= 1e-9 * size {
+                return None;
+            }
+            let d = [layout.dof(i, 0)?, layout.dof(i, 1)?, layout.dof(i, 2)?];
+            let t = x.y.atan2(x.x);
+            let (s, c) = t.sin_cos();
+            let (ux, uy, uz) = (mode[d[0]], mode[d[1]], mode[d[2]]);
+            Some((t, r, [c * ux + s * uy, -s * ux + c * uy, uz]))
+        })
+        .collect();
+    let power = |m: usize| {
+        let mut total = 0.0;
+        for k in 0..3 {
+            let (mut c, mut s, mut nc, mut ns) = (0.0, 0.0, 0.0, 0.0);
+            for (t, r, u) in &samples {
+                let (sn, cs) = (t * m as f64).sin_cos();
+                c += u[k] * cs * r;
+                s += u[k] * sn * r;
+                nc += (cs * r).powi(2);
+                ns += (sn * r).powi(2);
+            }
+            total += c * c / nc.max(1e-300);
+            if ns > 1e-12 * nc.max(1e-300) {
+                total += s * s / ns;
+            }
+        }
+        total
+    };
+    let mut best = (0, f64::NEG_INFINITY);
+    for m in 0..=MAX_WAVE_NUMBER {
+        let p = power(m);
+        if p > best.1 * (1.0 + 1e-9) {
+            best = (m, p);
+        }
+    }
+    best.0
+}
+
+/// Whether modes are labelled by their wave number about z.
+fn labelled(scene: &Scene) -> bool {
+    matches!(scene.mesh, MeshSpec::Disc(_) | MeshSpec::TruncatedSphere(_))
+}
+
+/// Runs one variant and collects its critical points.
+fn execute(label: &str, mut study: Study, quiet: bool) -> Result<Level, CliError> {
+    let start = Instant::now();
+    let mesh = describe(&study.scene.mesh);
+    let resolution = resolution(&study.scene.mesh);
+    let result = run_study(&mut study, |_, _| {}).map_err(|e| {
+        CliError::Failure(format!(
+            "mesh '{label}' ({mesh}): {}",
+            one_line(&e.to_string())
+        ))
+    })?;
+    let report = &result.report;
+    let control = study.control;
+    let label_modes = labelled(&study.scene);
+    let precisions = precisions(&study, &report.critical);
+    let critical: Vec<Point> = report
+        .critical
+        .iter()
+        .zip(precisions)
+        .map(|(cp, precision): (&CriticalPoint, Option<f64>)| Point {
+            kind: cp.kind.clone(),
+            irrep: cp.irrep.clone(),
+            multiplicity: cp.multiplicity,
+            value: control.map_or(f64::NAN, |c| cp.parameters[c]),
+            m: label_modes.then(|| wave_number(&study, &cp.mode)),
+            residual_eigenvalue: cp.residual_eigenvalue,
+            precision,
+            isotropy: cp.isotropy.name.clone(),
+        })
+        .collect();
+    let warnings = unaccounted(report);
+    let seconds = start.elapsed().as_secs_f64();
+    if !quiet {
+        eprintln!(
+            "compare: {label} ({mesh}): {} critical points in {seconds:.1} s",
+            critical.len()
+        );
+    }
+    Ok(Level {
+        mesh,
+        resolution,
+        nodes: report.mesh.nodes,
+        triangles: report.mesh.elements,
+        group: report.group.clone(),
+        order: report.group_order,
+        unknowns: report.unknowns,
+        symmetric_unknowns: report.symmetric_unknowns,
+        stop: report.stop.clone(),
+        note: report.stability_note.clone(),
+        warnings,
+        seconds,
+        critical,
+    })
+}
+
+/// Every interval of the path whose change of the instability index exceeds the
+/// multiplicities of the critical points localised in it: such a crossing was not localised
+/// (or the path jumped), so a comparison of that mesh may miss points.
+fn unaccounted(report: &memstab::report::PathReport) -> Vec<String> {
+    let control = report.parameters.iter().position(|p| *p == report.control);
+    let mut out = Vec::new();
+    for w in report.rows.windows(2) {
+        let (Some(a), Some(b)) = (w[0].index, w[1].index) else {
+            continue;
+        };
+        let found: usize = report
+            .critical
+            .iter()
+            .filter(|c| c.after_step == w[0].step)
+            .map(|c| c.multiplicity)
+            .sum();
+        if a.abs_diff(b) > found {
+            let at = control.map_or_else(String::new, |c| {
+                format!(
+                    " ({} {} to {})",
+                    report.control,
+                    sig_digits(w[0].parameters[c], 6),
+                    sig_digits(w[1].parameters[c], 6)
+                )
+            });
+            out.push(format!(
+                "the index changes from {a} to {b} between steps {} and {}{at} but critical \
+                 points of multiplicity {found} were localised there",
+                w[0].step, w[1].step
+            ));
+        }
+    }
+    out
+}
+
+/// The uncertainty of each critical value of a linear-buckling sweep: the localised
+/// eigenvalue's |g| / |dg/dλ|, the slope taken by central differences on the held state (the
+/// tangent is affine in the control there). `None` for path analyses, whose state moves with
+/// the control.
+fn precisions(study: &Study, critical: &[CriticalPoint]) -> Vec<Option<f64>> {
+    let none = vec![None; critical.len()];
+    let (Analysis::LinearBuckling(_), Some(c)) = (&study.scene.analysis, study.control) else {
+        return none;
+    };
+    let Ok(adapted) = AdaptedBasis::new(&study.action, study.model.layout()) else {
+        return none;
+    };
+    let stability = Stability::new(&study.model, &adapted);
+    let mut eval = study.model.new_evaluation();
+    let spec = &study.scene.parameters[&study.parameters[c]];
+    let range = match (spec.min, spec.max) {
+        (Some(lo), Some(hi)) => (hi - lo).abs(),
+        _ => 1.0,
+    };
+    critical
+        .iter()
+        .map(|cp| {
+            let mu = adapted.irreps.iter().position(|i| i.name == cp.irrep)?;
+            let v = cp.parameters[c];
+            let delta = 1e-5 * range.max(v.abs()).max(1e-300);
+            let mut at = |x: f64| {
+                let mut p = cp.parameters.clone();
+                p[c] = x;
+                let sp = stability
+                    .spectrum_of(
+                        &cp.state,
+                        &p,
+                        &study.constraints,
+                        &mut eval,
+                        Some(mu),
+                        false,
+                    )
+                    .ok()?;
+                let g = sp.blocks[mu]
+                    .eigenvalues
+                    .iter()
+                    .copied()
+                    .min_by(|a, b| a.abs().total_cmp(&b.abs()))?;
+                Some((g, sp.scale))
+            };
+            let (gp, scale) = at(v + delta)?;
+            let (gm, _) = at(v - delta)?;
+            let slope = (gp - gm) / (2.0 * delta) / scale;
+            (slope != 0.0 && slope.is_finite())
+                .then(|| (cp.residual_eigenvalue / slope.abs()).max(4e-16 * v.abs()))
+        })
+        .collect()
+}
+
+/// The multiplicity a rung of this point should reach: 2 for a wave number m ≥ 1 (the cos/sin
+/// pair), 1 for m = 0, the point's own without a label.
+fn expected(p: &Point) -> usize {
+    match p.m {
+        Some(0) => 1,
+        Some(_) => 2,
+        None => p.multiplicity,
+    }
+    .max(p.multiplicity)
+}
+
+/// Groups the points of one mesh that are not `taken` into rungs (indices, the first point
+/// first).
+fn rungs(points: &[Point], floor: f64, taken: &[bool]) -> Vec<Vec<usize>> {
+    let mut used = taken.to_vec();
+    let mut out = Vec::new();
+    for i in 0..points.len() {
+        if used[i] {
+            continue;
+        }
+        used[i] = true;
+        let mut group = vec![i];
+        let target = expected(&points[i]);
+        let mut have = points[i].multiplicity;
+        let v = points[i].value;
+        while have < target {
+            let next = (0..points.len())
+                .filter(|&j| !used[j] && points[j].m == points[i].m && points[i].m.is_some())
+                .filter(|&j| (points[j].value - v).abs() <= PAIR_TOLERANCE * v.abs() + floor)
+                .min_by(|&a, &b| {
+                    (points[a].value - v)
+                        .abs()
+                        .total_cmp(&(points[b].value - v).abs())
+                });
+            let Some(j) = next else { break };
+            used[j] = true;
+            have += points[j].multiplicity;
+            group.push(j);
+        }
+        out.push(group);
+    }
+    out
+}
+
+/// The images of a rung (label m, value v, multiplicity `target`) among the unused points.
+fn images(
+    points: &[Point],
+    used: &mut [bool],
+    m: Option<usize>,
+    v: f64,
+    target: usize,
+    floor: f64,
+) -> Vec<usize> {
+    let mut found = Vec::new();
+    let mut have = 0;
+    while have < target {
+        let next = (0..points.len())
+            .filter(|&j| !used[j] && points[j].m == m)
+            .filter(|&j| (points[j].value - v).abs() <= MATCH_TOLERANCE * v.abs() + floor)
+            .min_by(|&a, &b| {
+                (points[a].value - v)
+                    .abs()
+                    .total_cmp(&(points[b].value - v).abs())
+            });
+        let Some(j) = next else { break };
+        used[j] = true;
+        have += points[j].multiplicity;
+        found.push(j);
+    }
+    found.sort_by(|&a, &b| points[a].value.total_cmp(&points[b].value));
+    found
+}
+
+/// The images of one rung on one mesh at one resolution, measured.
+#[derive(Debug, Clone, Serialize)]
+struct Image {
+    resolution: usize,
+    /// Indices into that run's `critical`.
+    points: Vec<usize>,
+    irreps: Vec<String>,
+    values: Vec<f64>,
+    multiplicity: usize,
+    /// Spread of the values of two or more points; 0 for one point in a d ≥ 2 irrep (double by
+    /// construction); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gap: Option<f64>,
+    /// Gap above round-off, for two or more points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    split: Option<bool>,
+    verdict: String,
+}
+
+fn measure(points: &[Point], found: Vec<usize>, target: usize, resolution: usize) -> Image {
+    let values: Vec<f64> = found.iter().map(|&j| points[j].value).collect();
+    let irreps: Vec<String> = found.iter().map(|&j| points[j].irrep.clone()).collect();
+    let multiplicity: usize = found.iter().map(|&j| points[j].multiplicity).sum();
+    let (gap, split, mut verdict) = match found.as_slice() {
+        [] => (None, None, "not found".to_string()),
+        [j] if points[*j].multiplicity >= 2 => (
+            Some(0.0),
+            None,
+            format!("not split: {} in {}", points[*j].kind, points[*j].irrep),
+        ),
+        [j] => (None, None, points[*j].kind.clone()),
+        _ => {
+            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let gap = hi - lo;
+            let scale = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            // Resolved when the gap exceeds twice the summed uncertainties of the two ends
+            // (or, without them, ROUND_OFF of the value).
+            let ends = |x: f64| {
+                found
+                    .iter()
+                    .filter(|&&j| points[j].value == x)
+                    .map(|&j| points[j].precision)
+                    .next()
+                    .flatten()
+            };
+            let precision = match (ends(lo), ends(hi)) {
+                (Some(a), Some(b)) => a + b,
+                _ => ROUND_OFF * scale,
+            };
+            if gap == 0.0 {
+                (Some(gap), Some(false), "not split (gap 0)".to_string())
+            } else if gap <= 2.0 * precision {
+                (
+                    Some(gap),
+                    Some(false),
+                    format!("not split (gap at round-off, +-{})", sci(precision)),
+                )
+            } else {
+                (Some(gap), Some(true), "split".to_string())
+            }
+        }
+    };
+    if !found.is_empty() && multiplicity < target {
+        verdict.push_str(if found.len() == 1 && multiplicity == 1 {
+            "; partner not found in range"
+        } else {
+            "; an image not found in range"
+        });
+    }
+    Image {
+        resolution,
+        points: found,
+        irreps,
+        values,
+        multiplicity,
+        gap,
+        split,
+        verdict,
+    }
+}
+
+/// A rung's images on one mesh, at each resolution, and the observed order of the gap.
+#[derive(Debug, Clone, Serialize)]
+struct MeshImages {
+    mesh: String,
+    levels: Vec<Image>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    order: Option<f64>,
+}
+
+/// A rung of the reference mesh.
+#[derive(Debug, Clone, Serialize)]
+struct Rung {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    m: Option<usize>,
+    kind: String,
+    irreps: Vec<String>,
+    values: Vec<f64>,
+    multiplicity: usize,
+    /// The reference's resolution where the rung was found (its first, or the refined one).
+    found_at: usize,
+    /// The images on every mesh, the reference first.
+    images: Vec<MeshImages>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+struct MeshJson {
+    label: String,
+    generator: String,
+    levels: Vec<Level>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+struct Unmatched {
+    mesh: String,
+    resolution: usize,
+    point: usize,
+    irrep: String,
+    value: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    m: Option<usize>,
+}
+
+#[derive(Debug, Serialize)]
+struct CompareJson {
+    scene: String,
+    origin: String,
+    analysis: &'static str,
+    control: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    range: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    samples: Option<usize>,
+    /// `m` when modes are labelled by their wave number about z.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    label: Option<&'static str>,
+    refine: bool,
+    reference: String,
+    meshes: Vec<MeshJson>,
+    rungs: Vec<Rung>,
+    unmatched: Vec<Unmatched>,
+}
+
+/// Matches every mesh's points to the reference's rungs: those of its first resolution, then
+/// (with `--refine`) those of its refined run that the first did not have.
+fn compare(meshes: &[MeshJson], floor: f64) -> (Vec<Rung>, Vec<Unmatched>) {
+    // Used points per (mesh, level).
+    let mut used: Vec<Vec<Vec<bool>>> = meshes
+        .iter()
+        .map(|m| {
+            m.levels
+                .iter()
+                .map(|l| vec![false; l.critical.len()])
+                .collect()
+        })
+        .collect();
+    let mut out = Vec::new();
+    for source in 0..meshes[0].levels.len() {
+        let groups = rungs(&meshes[0].levels[source].critical, floor, &used[0][source]);
+        for group in &groups {
+            out.push(rung(meshes, &mut used, source, group, floor));
+        }
+    }
+    let mut unmatched = Vec::new();
+    for (k, mesh) in meshes.iter().enumerate() {
+        for (l, level) in mesh.levels.iter().enumerate() {
+            for (i, p) in level.critical.iter().enumerate() {
+                if !used[k][l][i] {
+                    unmatched.push(Unmatched {
+                        mesh: mesh.label.clone(),
+                        resolution: level.resolution,
+                        point: i,
+                        irrep: p.irrep.clone(),
+                        value: p.value,
+                        m: p.m,
+                    });
+                }
+            }
+        }
+    }
+    (out, unmatched)
+}
+
+/// The rung `group` of the reference's level `source` with its images on every mesh.
+fn rung(
+    meshes: &[MeshJson],
+    used: &mut [Vec<Vec<bool>>],
+    source: usize,
+    group: &[usize],
+    floor: f64,
+) -> Rung {
+    let reference = &meshes[0].levels[source].critical;
+    let first = &reference[group[0]];
+    let m = first.m;
+    let multiplicity: usize = group.iter().map(|&i| reference[i].multiplicity).sum();
+    let target = multiplicity.max(expected(first));
+    let v = group.iter().map(|&i| reference[i].value).sum::<f64>() / group.len() as f64;
+    let mut sorted = group.to_vec();
+    sorted.sort_by(|&a, &b| reference[a].value.total_cmp(&reference[b].value));
+    let mut all = Vec::new();
+    for (k, mesh) in meshes.iter().enumerate() {
+        let mut levels = Vec::new();
+        for (l, level) in mesh.levels.iter().enumerate() {
+            let found = if k == 0 && l == source {
+                for &i in &sorted {
+                    used[0][source][i] = true;
+                }
+                sorted.clone()
+            } else {
+                images(&level.critical, &mut used[k][l], m, v, target, floor)
+            };
+            levels.push(measure(&level.critical, found, target, level.resolution));
+        }
+        let order = match levels.as_slice() {
+            [a, b] => match (a.split, b.split, a.gap, b.gap) {
+                (Some(true), Some(true), Some(ga), Some(gb)) => Some((ga / gb).log2()),
+                _ => None,
+            },
+            _ => None,
+        };
+        all.push(MeshImages {
+            mesh: mesh.label.clone(),
+            levels,
+            order,
+        });
+    }
+    let kinds: Vec<&str> = sorted.iter().map(|&i| reference[i].kind.as_str()).collect();
+    let kind = if kinds.iter().all(|k| *k == kinds[0]) {
+        kinds[0].to_string()
+    } else {
+        kinds.join(" + ")
+    };
+    Rung {
+        m,
+        kind,
+        irreps: sorted.iter().map(|&i| reference[i].irrep.clone()).collect(),
+        values: sorted.iter().map(|&i| reference[i].value).collect(),
+        multiplicity,
+        found_at: meshes[0].levels[source].resolution,
+        images: all,
+    }
+}
+
+pub(crate) fn run(args: &CompareArgs) -> Result<(), CliError> {
+    let scene = load_scene(&args.scene)?;
+    let Some(control) = scene.control().map(str::to_string) else {
+        return Err(CliError::Input(format!(
+            "scene '{}': compare needs a path or linear-buckling analysis (an equilibrium has \
+             no control to compare critical values in)",
+            scene.origin
+        )));
+    };
+    if let Some(max) = args.max {
+        if !max.is_finite() {
+            return Err(CliError::Input(format!(
+                "--max {max}: must be a finite number"
+            )));
+        }
+    }
+    if args.divisions == Some(0) {
+        return Err(CliError::Input("--divisions 0: must be >= 1".into()));
+    }
+    if args.samples == Some(0) {
+        return Err(CliError::Input("--samples 0: must be >= 1".into()));
+    }
+    if let (Some(max), Some(p)) = (args.max, scene.parameters.get(&control)) {
+        if p.min.is_some_and(|lo| max <= lo) || max < p.start {
+            return Err(CliError::Input(format!(
+                "--max {max}: the upper bound of {control} must exceed its min{} and be at \
+                 least its start value {}",
+                p.min.map_or_else(String::new, |lo| format!(" {lo}")),
+                p.start
+            )));
+        }
+    }
+    let typed = split_meshes(&args.meshes)?;
+    let common = Common {
+        control: control.clone(),
+        max: args.max,
+        samples: args.samples,
+        divisions: args.divisions,
+        sectors: match &scene.mesh {
+            MeshSpec::Disc(d) => common_sectors(d.sectors, &typed),
+            _ => 0,
+        },
+    };
+    // Every variant is built (and checked) before anything runs.
+    let levels = if args.refine { 2 } else { 1 };
+    let mut jobs: Vec<(usize, usize, Study)> = Vec::new();
+    let mut first_scene: Option<Scene> = None;
+    for (k, t) in typed.iter().enumerate() {
+        let coarse = variant(&scene, t, &common)?;
+        for l in 0..levels {
+            let mut s = coarse.clone();
+            if l == 1 {
+                match &mut s.mesh {
+                    MeshSpec::Disc(d) => d.divisions *= 2,
+                    MeshSpec::Icosphere(i) => i.frequency *= 2,
+                    MeshSpec::TruncatedSphere(t) => {
+                        t.divisions = Some(t.divisions_or_default() * 2)
+                    }
+                }
+            }
+            let study = build_study(s)?;
+            check_real_irreps(&study, &format!("mesh '{}'", t.label))?;
+            jobs.push((k, l, study));
+        }
+        if k == 0 {
+            first_scene = Some(coarse);
+        }
+    }
+    let reference_scene = first_scene.expect("at least one mesh");
+    let quiet = args.quiet || !std::io::stderr().is_terminal();
+    // The largest meshes first, so that the parallel runs end together.
+    jobs.sort_by_key(|(_, _, s)| std::cmp::Reverse(s.basis.unknowns()));
+    let results: Vec<Result<(usize, usize, Level), CliError>> = jobs
+        .into_par_iter()
+        .map(|(k, l, study)| execute(&typed[k].label, study, quiet).map(|r| (k, l, r)))
+        .collect();
+    let mut meshes: Vec<MeshJson> = typed
+        .iter()
+        .map(|t| MeshJson {
+            label: t.label.clone(),
+            generator: String::new(),
+            levels: Vec::new(),
+        })
+        .collect();
+    let mut slots: Vec<Vec<Option<Level>>> = vec![vec![None; levels]; typed.len()];
+    for r in results {
+        let (k, l, level) = r?;
+        slots[k][l] = Some(level);
+    }
+    for (k, s) in slots.into_iter().enumerate() {
+        meshes[k].levels = s.into_iter().map(|l| l.expect("every job ran")).collect();
+        meshes[k].generator = meshes[k].levels[0]
+            .mesh
+            .split_whitespace()
+            .next()
+            .unwrap_or("")
+            .to_string();
+    }
+    let p = &reference_scene.parameters[&control];
+    let range = match (p.min, p.max) {
+        (Some(lo), Some(hi)) => Some([lo, hi]),
+        _ => None,
+    };
+    let floor = range.map_or(1e-12, |[lo, hi]| 1e-3 * (hi - lo).abs());
+    let (rung_list, unmatched) = compare(&meshes, floor);
+    let (analysis, samples) = match &reference_scene.analysis {
+        Analysis::LinearBuckling(b) => ("linear-buckling", Some(b.samples)),
+        Analysis::Path(p) => ("path", Some(p.steps)),
+        Analysis::Equilibrium(_) => ("equilibrium", None),
+    };
+    let json = CompareJson {
+        scene: scene.info.name.clone(),
+        origin: scene.origin.clone(),
+        analysis,
+        control,
+        range,
+        samples,
+        label: labelled(&reference_scene).then_some("m"),
+        refine: args.refine,
+        reference: typed[0].label.clone(),
+        meshes,
+        rungs: rung_list,
+        unmatched,
+    };
+    if args.json {
+        let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
+        println!("{text}");
+    } else {
+        print_table(&json);
+    }
+    Ok(())
+}
+
+/// Values with seven significant digits, joined.
+fn values(v: &[f64]) -> String {
+    if v.is_empty() {
+        return "-".into();
+    }
+    v.iter()
+        .map(|x| sig_digits(*x, 7))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn gap_text(image: &Image) -> String {
+    match (image.gap, image.points.len()) {
+        (Some(g), n) if n >= 2 => sci(g),
+        (Some(_), _) => format!("0 (d={})", image.multiplicity),
+        (None, _) => "-".into(),
+    }
+}
+
+fn print_table(c: &CompareJson) {
+    let what = match (c.analysis, c.range, c.samples) {
+        ("linear-buckling", Some([lo, hi]), Some(n)) => {
+            format!(
+                "linear buckling, {} swept over [{lo}, {hi}] in {n} samples",
+                c.control
+            )
+        }
+        ("path", range, Some(n)) => format!(
+            "path in {}{}, at most {n} steps",
+            c.control,
+            range.map_or_else(String::new, |[lo, hi]| format!(" within [{lo}, {hi}]"))
+        ),
+        _ => format!("control {}", c.control),
+    };
+    println!("compare '{}' ({}): {what}", c.scene, c.origin);
+    println!("meshes (the first is the reference):");
+    let lw = c
+        .meshes
+        .iter()
+        .map(|m| m.label.len())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    let mw = c
+        .meshes
+        .iter()
+        .flat_map(|m| m.levels.iter().map(|l| l.mesh.len()))
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    println!(
+        "  {:<lw$}  {:<mw$}  {:<12} {:>6} {:>8} {:>8} {:>7}",
+        "mesh", "options", "group", "nodes", "unknowns", "critical", "time"
+    );
+    for m in &c.meshes {
+        for (l, level) in m.levels.iter().enumerate() {
+            println!(
+                "  {:<lw$}  {:<mw$}  {:<12} {:>6} {:>8} {:>8} {:>6.1}s",
+                if l == 0 { m.label.as_str() } else { "" },
+                level.mesh,
+                format!("{} ({})", level.group, level.order),
+                level.nodes,
+                level.unknowns,
+                level.critical.len(),
+                level.seconds
+            );
+            if let Some(note) = &level.note {
+                println!("  {:<lw$}  {note}", "");
+            }
+            if level.critical.is_empty() {
+                println!("  {:<lw$}  no critical point; stopped: {}", "", level.stop);
+            }
+            for w in &level.warnings {
+                println!("  {:<lw$}  warning: {w}", "");
+            }
+        }
+    }
+    if c.label.is_some() {
+        println!(
+            "images are matched by the wave number m of the critical mode about z and the \
+             nearest {}; a gap is measured between the images on a mesh, never inferred from \
+             its group",
+            c.control
+        );
+    } else {
+        println!(
+            "images are matched by the nearest {} (no wave number for this generator); a gap is \
+             measured between the images on a mesh, never inferred from its group",
+            c.control
+        );
+    }
+    if c.rungs.is_empty() {
+        println!(
+            "the reference mesh '{}' has no critical point in range",
+            c.reference
+        );
+    } else {
+        let refine = c.refine;
+        let iw = c
+            .rungs
+            .iter()
+            .flat_map(|r| {
+                r.images
+                    .iter()
+                    .flat_map(|i| i.levels.iter().map(|l| l.irreps.join(" + ").len()))
+            })
+            .max()
+            .unwrap_or(6)
+            .max(6);
+        let vw = c
+            .rungs
+            .iter()
+            .flat_map(|r| {
+                r.images
+                    .iter()
+                    .flat_map(|i| i.levels.iter().map(|l| values(&l.values).len()))
+            })
+            .max()
+            .unwrap_or(5)
+            .max(c.control.len());
+        let head = format!(
+            "{:>4} {:>3}  {:<lw$}  {:<iw$}  {:<vw$}  {:>10}",
+            "rung", "m", "mesh", "irreps", c.control, "gap"
+        );
+        if refine {
+            println!("{head} {:>10} {:>6}  verdict", "gap fine", "order");
+        } else {
+            println!("{head}  verdict");
+        }
+        for (n, r) in c.rungs.iter().enumerate() {
+            for (k, im) in r.images.iter().enumerate() {
+                let (num, m) = if k == 0 {
+                    (
+                        (n + 1).to_string(),
+                        r.m.map_or_else(|| "-".to_string(), |m| m.to_string()),
+                    )
+                } else {
+                    (String::new(), String::new())
+                };
+                // The first run's images, or the refined run's where the first has none.
+                let coarse = &im.levels[0];
+                let only_refined = coarse.points.is_empty()
+                    && im.levels.get(1).is_some_and(|f| !f.points.is_empty());
+                let shown = if only_refined { &im.levels[1] } else { coarse };
+                let irreps = if shown.irreps.is_empty() {
+                    "-".to_string()
+                } else {
+                    shown.irreps.join(" + ")
+                };
+                let line = format!(
+                    "{num:>4} {m:>3}  {:<lw$}  {irreps:<iw$}  {:<vw$}  {:>10}",
+                    im.mesh,
+                    values(&shown.values),
+                    gap_text(coarse)
+                );
+                if refine {
+                    let fine = im.levels.get(1);
+                    let order = im
+                        .order
+                        .map_or_else(|| "-".to_string(), |o| format!("{o:.2}"));
+                    let mut verdict = coarse.verdict.clone();
+                    if let Some(f) = fine {
+                        if only_refined {
+                            verdict = format!("refined run only: {}", f.verdict);
+                        } else if f.verdict != coarse.verdict {
+                            verdict = format!("{verdict} (refined: {})", f.verdict);
+                        }
+                    }
+                    println!(
+                        "{line} {:>10} {order:>6}  {verdict}",
+                        fine.map_or_else(|| "-".to_string(), gap_text)
+                    );
+                } else {
+                    println!("{line}  {}", coarse.verdict);
+                }
+            }
+        }
+    }
+    if !c.unmatched.is_empty() {
+        println!("points without a counterpart on the reference mesh:");
+        for u in &c.unmatched {
+            println!(
+                "  {} ({} {}): {} at {} = {}{}",
+                u.mesh,
+                resolution_key(
+                    c.meshes
+                        .iter()
+                        .find(|m| m.label == u.mesh)
+                        .map_or("disc", |m| m.generator.as_str())
+                ),
+                u.resolution,
+                u.irrep,
+                c.control,
+                sig_digits(u.value, 7),
+                u.m.map_or_else(String::new, |m| format!(" (m = {m})"))
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(irrep: &str, multiplicity: usize, value: f64, m: usize) -> Point {
+        Point {
+            kind: if multiplicity == 2 {
+                "double bifurcation".into()
+            } else {
+                "simple bifurcation".into()
+            },
+            irrep: irrep.into(),
+            multiplicity,
+            value,
+            m: Some(m),
+            residual_eigenvalue: 0.0,
+            precision: None,
+            isotropy: String::new(),
+        }
+    }
+
+    #[test]
+    fn full_overrides_keep_their_commas() {
+        let t = split_meshes(&["C8v,disc:sectors=8,divisions=12,group=C2v,C1v".into()]).unwrap();
+        let labels: Vec<&str> = t.iter().map(|t| t.label.as_str()).collect();
+        assert_eq!(
+            labels,
+            ["C8v", "disc:sectors=8,divisions=12,group=C2v", "C1v"]
+        );
+        assert!(split_meshes(&["C8v,divisions=3".into()]).is_err());
+        assert!(split_meshes(&["C8v,,C2v".into()]).is_err());
+        assert!(split_meshes(&["C2v,C2v".into()]).is_err());
+    }
+
+    #[test]
+    fn sectors_are_shared() {
+        let t = split_meshes(&["C8v,C2v,C1v".into()]).unwrap();
+        assert_eq!(common_sectors(7, &t), 8);
+        assert_eq!(common_sectors(8, &t), 8);
+        let t = split_meshes(&["C7v,C1v".into()]).unwrap();
+        assert_eq!(common_sectors(7, &t), 7);
+        let t = split_meshes(&["C7v,C2v".into()]).unwrap();
+        assert_eq!(common_sectors(7, &t), 14);
+    }
+
+    #[test]
+    fn a_double_and_its_split_images_are_matched() {
+        let reference = vec![
+            point("A1", 1, 2.0, 0),
+            point("E1", 2, 5.0, 1),
+            point("B1", 1, 9.0, 4),
+            point("B2", 1, 9.01, 4),
+        ];
+        let other = vec![
+            point("A1", 1, 2.01, 0),
+            point("B2", 1, 5.02, 1),
+            point("B1", 1, 4.99, 1),
+            point("A1", 1, 9.02, 4),
+        ];
+        let level = |critical: Vec<Point>| Level {
+            mesh: String::new(),
+            resolution: 6,
+            nodes: 0,
+            triangles: 0,
+            group: String::new(),
+            order: 1,
+            unknowns: 0,
+            symmetric_unknowns: 0,
+            stop: String::new(),
+            note: None,
+            warnings: Vec::new(),
+            seconds: 0.0,
+            critical,
+        };
+        let meshes = vec![
+            MeshJson {
+                label: "C8v".into(),
+                generator: "disc".into(),
+                levels: vec![level(reference)],
+            },
+            MeshJson {
+                label: "C2v".into(),
+                generator: "disc".into(),
+                levels: vec![level(other)],
+            },
+        ];
+        let (rungs, unmatched) = compare(&meshes, 1e-3);
+        assert_eq!(rungs.len(), 3);
+        assert!(unmatched.is_empty());
+        let e1 = &rungs[1].images;
+        assert_eq!(
+            e1[0].levels[0].verdict,
+            "not split: double bifurcation in E1"
+        );
+        assert_eq!(e1[1].levels[0].irreps, ["B1", "B2"]);
+        assert!((e1[1].levels[0].gap.unwrap() - 0.03).abs() < 1e-12);
+        assert_eq!(e1[1].levels[0].verdict, "split");
+        let m4 = &rungs[2].images;
+        assert_eq!(m4[0].levels[0].irreps, ["B1", "B2"]);
+        assert!(m4[1].levels[0].verdict.contains("partner not found"));
+    }
+}

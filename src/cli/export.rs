@@ -1,0 +1,128 @@
+//! `memstab export-matrix SCENE [--at NAME=VALUE]... --out K.mtx`: the full tangent K at the
+//! scene's start state in Matrix Market format, so that an external solver (scipy `eigsh`,
+//! `scripts/peer_eigsh.py`) works on exactly our matrix.
+//!
+//! The state is solved as `memstab run` solves its start, with `--at` overriding start values;
+//! for a `linear-buckling` scene the start state is held and an `--at` only enters the tangent.
+//! The file is `coordinate real symmetric`, the lower triangle of the pattern (explicit zeros
+//! included), 1-based, written whole (temporary file + rename). Rank-one terms of K (global
+//! constraints such as a gas amount) are refused: exit 2, nothing written.
+
+use super::common::{build_study, load_scene, one_line};
+use super::CliError;
+use clap::Args;
+use memstab::model::{Model, Request};
+use memstab::scene::Analysis;
+use std::path::PathBuf;
+
+/// Arguments of `memstab export-matrix`.
+#[derive(Debug, Args)]
+pub(crate) struct ExportArgs {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// Set a parameter instead of its start value (repeatable), e.g. `--at p=1.3`.
+    #[arg(long = "at", value_name = "NAME=VALUE")]
+    at: Vec<String>,
+    /// The Matrix Market file to write (its directory must exist).
+    #[arg(long, value_name = "K.mtx")]
+    out: PathBuf,
+}
+
+/// Parses `--at NAME=VALUE` items against the parameter names.
+fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f64)>, CliError> {
+    at.iter()
+        .map(|item| {
+            let (name, value) = item.split_once('=').ok_or_else(|| {
+                CliError::Input(format!(
+                    "--at '{item}': expected NAME=VALUE, e.g. --at p=1.3"
+                ))
+            })?;
+            let i = names.iter().position(|n| n == name.trim()).ok_or_else(|| {
+                CliError::Input(format!(
+                    "--at '{item}': no parameter '{}'; the scene's parameters: {}",
+                    name.trim(),
+                    names.join(", ")
+                ))
+            })?;
+            let v: f64 = value
+                .trim()
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite())
+                .ok_or_else(|| {
+                    CliError::Input(format!("--at '{item}': '{}' is not a number", value.trim()))
+                })?;
+            Ok((i, v))
+        })
+        .collect()
+}
+
+pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
+    let dir = match args.out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        return Err(CliError::Input(format!(
+            "--out {}: the directory {} does not exist",
+            args.out.display(),
+            dir.display()
+        )));
+    }
+    if args.out.is_dir() {
+        return Err(CliError::Input(format!(
+            "--out {}: is a directory",
+            args.out.display()
+        )));
+    }
+    let scene = load_scene(&args.scene)?;
+    let mut study = build_study(scene)?;
+    let at = parse_at(&args.at, &study.parameters)?;
+    let mut params = study.start.clone();
+    for &(i, v) in &at {
+        params[i] = v;
+    }
+    let held = matches!(study.scene.analysis, Analysis::LinearBuckling(_));
+    let solve_params = if held {
+        study.start.clone()
+    } else {
+        params.clone()
+    };
+    let u = memstab::bench::solve_start(&mut study, &solve_params)
+        .map_err(|e| CliError::Failure(one_line(&e)))?;
+    let mut eval = study.model.new_evaluation();
+    study
+        .model
+        .evaluate(&u, &params, Request::ALL, &mut eval)
+        .map_err(|e| CliError::Failure(format!("evaluating the tangent: {e}")))?;
+    let comment = format!(
+        "memstab {} export-matrix: tangent K of scene '{}' at {}",
+        env!("CARGO_PKG_VERSION"),
+        study.scene.info.name,
+        study
+            .parameters
+            .iter()
+            .zip(&params)
+            .map(|(n, v)| format!("{n}={v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if !eval.rank_one.is_empty() {
+        return Err(CliError::Input(format!(
+            "{}: the tangent has {} rank-one term(s) (a global constraint such as a gas \
+             amount); export-matrix writes only sparse tangents in this version",
+            args.scene.display(),
+            eval.rank_one.len()
+        )));
+    }
+    let count = memstab::bench::write_matrix_market(&args.out, &study.model, &eval, &comment)
+        .map_err(CliError::Failure)?;
+    println!(
+        "wrote {} ({} x {}, {} entries in the lower triangle)",
+        args.out.display(),
+        study.model.unknowns(),
+        study.model.unknowns(),
+        count
+    );
+    Ok(())
+}

@@ -1,0 +1,125 @@
+//! Smoke tests of `memstab bench --quick` and `memstab export-matrix` (no timing assertions:
+//! the figures are for BENCHMARKS.md, never for tests).
+
+use std::process::Command;
+
+fn memstab() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_memstab"))
+}
+
+#[test]
+fn quick_bench_writes_finite_tables_and_a_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let o = memstab()
+        .args(["bench", "--quick", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "bench failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let md = std::fs::read_to_string(out.join("accuracy.md")).unwrap();
+    for heading in ["## Balloon", "## Symmetry payoff", "## Ponding ladder"] {
+        assert!(md.contains(heading), "accuracy.md lacks {heading}");
+    }
+    assert!(!md.contains("NaN") && !md.contains("inf"), "{md}");
+    // The block eigenvalues agree with the dense ones.
+    assert!(md.contains("The multisets agree"), "{md}");
+
+    let csv = std::fs::read_to_string(out.join("accuracy.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2, "quick mode: frequencies 4 and 8\n{csv}");
+    for row in &rows {
+        assert_eq!(row.len(), header.len());
+        for (name, cell) in header.iter().zip(row) {
+            if cell.is_empty() {
+                continue; // order and Richardson columns of the first level
+            }
+            let v: f64 = cell.parse().unwrap_or_else(|_| panic!("{name} = {cell:?}"));
+            assert!(v.is_finite(), "{name} = {v}");
+        }
+    }
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    // Errors shrink under refinement (second order is measured, not asserted here).
+    let e4: f64 = rows[0][col("err_max")].parse().unwrap();
+    let e8: f64 = rows[1][col("err_max")].parse().unwrap();
+    assert!(e8 < e4 && e8 > 0.0, "{e4} -> {e8}");
+    assert!(!rows[1][col("richardson_max")].is_empty());
+
+    let svg = std::fs::read_to_string(out.join("accuracy.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("f=8"),
+        "{}",
+        &svg[..200.min(svg.len())]
+    );
+}
+
+#[test]
+fn export_matrix_writes_the_lower_triangle_of_the_pattern() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("K.mtx");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demo.toml");
+    let o = memstab()
+        .args(["export-matrix", scene, "--at", "p=0.6", "--out"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "export-matrix failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "%%MatrixMarket matrix coordinate real symmetric"
+    );
+    let mut lines = lines.skip_while(|l| l.starts_with('%'));
+    let size: Vec<usize> = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let (n, count) = (size[0], size[2]);
+    assert_eq!(size[1], n);
+    let mut entries = 0;
+    for l in lines {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        assert_eq!(f.len(), 3, "{l}");
+        let (i, j): (usize, usize) = (f[0].parse().unwrap(), f[1].parse().unwrap());
+        let v: f64 = f[2].parse().unwrap();
+        assert!(i >= j && j >= 1 && i <= n && v.is_finite(), "{l}");
+        entries += 1;
+    }
+    assert_eq!(entries, count);
+
+    // The pattern's lower triangle, from the same scene built by the library.
+    let scene = memstab::scene::Scene::load(scene).unwrap();
+    let study = memstab::study::Study::build(scene).unwrap();
+    use memstab::model::Model;
+    let pattern = study.model.pattern();
+    assert_eq!(n, pattern.n());
+    assert_eq!(count, (pattern.nnz() + pattern.n()) / 2);
+}
+
+#[test]
+fn export_matrix_rejects_an_unknown_parameter() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("K.mtx");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/demo.toml");
+    let o = memstab()
+        .args(["export-matrix", scene, "--at", "nope=1", "--out"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nope"));
+    assert!(!path.exists());
+}

@@ -1,0 +1,274 @@
+//! `memstab compare`: the ponding scene on C8v, C2v and C1v discs — the m = 1 double of the
+//! C8v disc (E1) appears on C2v as B1 + B2 and on C1v as A1 + A2, two simple points whose gap
+//! is measured, and shrinks under `--refine`; the JSON form; bad mesh names (exit code 2).
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn memstab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the memstab binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn scene(name: &str) -> String {
+    format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The ponding scene on 8 sectors of 6 divisions, the density swept over [0, 10.5] in 40
+/// samples (past the m = 0, 1, 2 rungs), written into `dir`.
+fn small_ponding(dir: &Path) -> String {
+    let mut t = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    for (a, b) in [
+        ("sectors = 7 ", "sectors = 8 "),
+        ("divisions = 16 ", "divisions = 6 "),
+        ("max = 46.0 ", "max = 10.5 "),
+        ("samples = 92", "samples = 40"),
+    ] {
+        assert!(t.contains(a), "ponding.toml contains {a:?}");
+        t = t.replacen(a, b, 1);
+    }
+    let path = dir.join("ponding_small.toml");
+    std::fs::write(&path, t).unwrap();
+    path.display().to_string()
+}
+
+fn compare_json(args: &[&str]) -> Value {
+    let mut all = vec!["compare"];
+    all.extend_from_slice(args);
+    all.push("--json");
+    let out = memstab(&all);
+    assert!(
+        out.status.success(),
+        "compare {args:?} failed ({:?}): {}{}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    serde_json::from_str(text(&out.stdout).trim()).expect("one JSON object")
+}
+
+/// The rung of wave number m found on the reference's first run.
+fn rung(json: &Value, m: u64) -> &Value {
+    json["rungs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["m"] == m)
+        .unwrap_or_else(|| panic!("no rung m = {m} in {}", json["rungs"]))
+}
+
+/// The images of a rung on the mesh labelled `mesh`.
+fn on<'a>(rung: &'a Value, mesh: &str) -> &'a Value {
+    rung["images"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["mesh"] == mesh)
+        .unwrap_or_else(|| panic!("no images on {mesh} in {rung}"))
+}
+
+fn strings(v: &Value) -> Vec<String> {
+    let mut s: Vec<String> = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_str().unwrap().to_string())
+        .collect();
+    s.sort();
+    s
+}
+
+#[test]
+fn the_m1_double_splits_into_two_simple_points_on_c2v_and_c1v() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = small_ponding(dir.path());
+    let json = compare_json(&[&path, "--meshes", "C8v,C2v,C1v"]);
+    assert_eq!(json["reference"], "C8v");
+    assert_eq!(json["label"], "m");
+    let groups: Vec<&str> = json["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["levels"][0]["group"].as_str().unwrap())
+        .collect();
+    assert_eq!(groups, ["C8v", "C2v", "C1v"]);
+
+    // m = 0: one simple point in A1 everywhere.
+    let m0 = rung(&json, 0);
+    assert_eq!(strings(&m0["irreps"]), ["A1"]);
+    for mesh in ["C2v", "C1v"] {
+        assert_eq!(strings(&on(m0, mesh)["levels"][0]["irreps"]), ["A1"]);
+    }
+
+    // m = 1: the E1 double on C8v (one point, multiplicity 2) ...
+    let m1 = rung(&json, 1);
+    assert_eq!(strings(&m1["irreps"]), ["E1"]);
+    assert_eq!(m1["multiplicity"], 2);
+    assert_eq!(m1["kind"], "double bifurcation");
+    let reference = m1["values"][0].as_f64().unwrap();
+    // ... close to the closed form gamma_{1,1} = 0.3599389 j_{1,1}^2 on this coarse mesh ...
+    assert!((reference / (0.3599389 * 14.681971) - 1.0).abs() < 0.05);
+    // ... and two simple points with a measured, positive gap on C2v and C1v.
+    for (mesh, pair) in [("C2v", ["B1", "B2"]), ("C1v", ["A1", "A2"])] {
+        let image = &on(m1, mesh)["levels"][0];
+        assert_eq!(strings(&image["irreps"]), pair, "{mesh}: {image}");
+        assert_eq!(image["multiplicity"], 2);
+        assert_eq!(image["split"], true, "{mesh}: {image}");
+        let values: Vec<f64> = image["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let gap = image["gap"].as_f64().unwrap();
+        assert!(gap > 0.0 && (gap - (values[1] - values[0]).abs()).abs() < 1e-12 * gap.max(1.0));
+        assert!(gap < 0.05 * reference, "{mesh}: gap {gap}");
+        for v in &values {
+            assert!(
+                (v / reference - 1.0).abs() < 0.02,
+                "{mesh}: {v} vs {reference}"
+            );
+        }
+    }
+    assert_eq!(on(m1, "C8v")["levels"][0]["gap"], 0.0);
+
+    // The table: a row per mesh, the C8v double not split, the others split.
+    let out = memstab(&["compare", &path, "--meshes", "C8v,C2v,C1v"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let table = text(&out.stdout);
+    assert!(
+        table.contains("not split: double bifurcation in E1"),
+        "{table}"
+    );
+    let split_rows = table
+        .lines()
+        .filter(|l| l.trim_end().ends_with("split") && !l.contains("not split"))
+        .count();
+    assert!(split_rows >= 2, "{table}");
+    assert!(
+        table.contains("B2 + B1") || table.contains("B1 + B2"),
+        "{table}"
+    );
+}
+
+#[test]
+fn refine_shrinks_the_split_gaps() {
+    // The bundled scene (7 sectors) with the options: the group names share 8 sectors.
+    let json = compare_json(&[
+        &scene("ponding.toml"),
+        "--meshes",
+        "C8v,C2v,C1v",
+        "--divisions",
+        "4",
+        "--max",
+        "10.5",
+        "--samples",
+        "21",
+        "--refine",
+    ]);
+    assert_eq!(json["refine"], true);
+    assert_eq!(json["samples"], 21);
+    for m in json["meshes"].as_array().unwrap() {
+        let levels = m["levels"].as_array().unwrap();
+        assert_eq!(levels.len(), 2);
+        assert_eq!(levels[0]["resolution"], 4);
+        assert_eq!(levels[1]["resolution"], 8);
+        assert!(levels[0]["mesh"]
+            .as_str()
+            .unwrap()
+            .starts_with("disc sectors=8 divisions=4"));
+    }
+    let m1 = rung(&json, 1);
+    assert_eq!(strings(&m1["irreps"]), ["E1"]);
+    for (mesh, pair) in [("C2v", ["B1", "B2"]), ("C1v", ["A1", "A2"])] {
+        let images = on(m1, mesh);
+        let (coarse, fine) = (&images["levels"][0], &images["levels"][1]);
+        assert_eq!(strings(&coarse["irreps"]), pair);
+        assert_eq!(strings(&fine["irreps"]), pair);
+        let (g1, g2) = (
+            coarse["gap"].as_f64().unwrap(),
+            fine["gap"].as_f64().unwrap(),
+        );
+        let order = images["order"].as_f64().expect("an observed order");
+        assert!(
+            g2 > 0.0 && g2 < g1 && order > 1.5,
+            "{mesh}: gaps {g1:e} -> {g2:e}, order {order}"
+        );
+        assert!((order - (g1 / g2).log2()).abs() < 1e-9);
+    }
+    // The E1 double stays one point in E1 on the refined C8v disc.
+    let fine = &on(m1, "C8v")["levels"][1];
+    assert_eq!(strings(&fine["irreps"]), ["E1"]);
+    assert_eq!(fine["multiplicity"], 2);
+}
+
+fn assert_rejected(args: &[&str], needles: &[&str]) {
+    let out = memstab(args);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{args:?}: {}{}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    let err = text(&out.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{args:?}: {err:?} lacks {n:?}");
+    }
+}
+
+#[test]
+fn bad_meshes_are_one_line_and_exit_code_2() {
+    let ponding = scene("ponding.toml");
+    // Not a subgroup of the disc's C8v.
+    assert_rejected(
+        &[
+            "compare",
+            &ponding,
+            "--meshes",
+            "C8v,disc:sectors=8,group=C5v",
+        ],
+        &["C5v", "mesh.group"],
+    );
+    assert_rejected(
+        &["compare", &ponding, "--meshes", "C8v,disc:bogus=1"],
+        &["bogus"],
+    );
+    assert_rejected(
+        &["compare", &ponding, "--meshes", "C8v,divisions=3"],
+        &["divisions=3"],
+    );
+    assert_rejected(
+        &["compare", &ponding, "--meshes", "C8v,sphere:radius=1"],
+        &["sphere"],
+    );
+    assert_rejected(
+        &[
+            "compare",
+            &ponding,
+            "--meshes",
+            "C8,C2v",
+            "--divisions",
+            "2",
+        ],
+        &["C8", "chiral"],
+    );
+    assert_rejected(
+        &["compare", &ponding, "--meshes", "C8v", "--max", "-1"],
+        &["--max"],
+    );
+    // An icosphere has no group option.
+    assert_rejected(
+        &["compare", &scene("demo.toml"), "--meshes", "C2v"],
+        &["icosphere"],
+    );
+}
