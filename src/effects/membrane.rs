@@ -11,14 +11,20 @@
 //!   μ/2 = c1 + c2,  k = c2/c1,      Π_el = H · A0 · W,  A0 = ½ √det G0
 //! ```
 //!
-//! (H and A0 are the stress-free thickness and area). Gradient and Hessian follow by the chain
-//! rule through (g11, g12, g22), in closed form: with W_p = ∂W/∂g_p,
-//! ∂Π/∂a = H A0 (2 W_11 a + W_12 b), ∂Π/∂b = H A0 (W_12 a + 2 W_22 b), and the Hessian
-//! Σ_pq W_pq ∇g_p ∇g_qᵀ + Σ_p W_p ∇²g_p. Nodes: x1 takes −(∂/∂a + ∂/∂b), x2 ∂/∂a, x3 ∂/∂b.
+//! (H and A0 are the stress-free thickness and area). The invariants are computed from the
+//! in-plane deformation gradient F = [f1 f2] = [a b] M, with M the inverse of the stress-free
+//! edges [A B]/λ0 written in an orthonormal frame of the reference triangle (upper triangular),
+//! so that t = |f1|² + |f2|² and J = |f1 × f2|² = det(FᵀF). This is the same t and J as from the
+//! metrics, but its round-off grows only like the condition number of [A B] rather than its
+//! square, which keeps thin triangles (slivers) accurate. With ∇t = 2(f1, f2),
+//! ∂J/∂f1 = 2(|f2|² f1 − (f1·f2) f2), ∂J/∂f2 = 2(|f1|² f2 − (f1·f2) f1), the gradient in F is
+//! P = W_t ∇t + W_J ∇J and the Hessian W_tJ(∇t∇Jᵀ + ∇J∇tᵀ) + W_JJ ∇J∇Jᵀ + W_t ∇²t + W_J ∇²J
+//! (∇²t = 2I, ∇²J in closed form), carried to the edges by f1 = m11 a, f2 = m12 a + m22 b
+//! and to the nodes by a = x2 − x1, b = x3 − x1: x1 takes −(∂/∂a + ∂/∂b), x2 ∂/∂a, x3 ∂/∂b.
 
 use super::local::Local;
 use crate::model::{Assembler, Effect, ModelError, Vec3};
-use nalgebra::{Matrix2, Vector3};
+use nalgebra::Vector3;
 use symmetry::Invariant;
 
 /// Mooney-Rivlin constants and thickness.
@@ -58,29 +64,36 @@ impl MooneyRivlin {
 /// What one triangle needs from its reference state.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ReferenceTriangle {
-    /// G0⁻¹ entries (11, 12, 22).
-    g0_inv: [f64; 3],
-    /// det G0.
-    det_g0: f64,
+    /// M = R⁻¹ (upper triangular): (m11, m12, m22), with R the stress-free edges in a local
+    /// orthonormal frame, so that f1 = m11 a and f2 = m12 a + m22 b.
+    m: [f64; 3],
     /// H · A0 (stress-free volume of the element).
     volume: f64,
+}
+
+/// The 3×3 outer product u vᵀ.
+fn outer(u: &Vector3<f64>, v: &Vector3<f64>) -> nalgebra::Matrix3<f64> {
+    u * v.transpose()
 }
 
 impl ReferenceTriangle {
     /// From reference positions, pre-stretch λ0 and thickness; `None` for a degenerate triangle.
     pub fn new(x: &[Vector3<f64>; 3], prestretch: f64, thickness: f64) -> Option<Self> {
         let (a, b) = (x[1] - x[0], x[2] - x[0]);
-        let s = prestretch * prestretch;
-        let g0 = Matrix2::new(a.dot(&a), a.dot(&b), a.dot(&b), b.dot(&b)) / s;
-        let det_g0 = g0.determinant();
-        if det_g0.is_nan() || det_g0 <= 0.0 {
+        let la = a.norm();
+        let area2 = a.cross(&b).norm(); // |A × B| = |A| h
+        if !(la > 0.0 && area2 > 0.0 && area2.is_finite()) {
             return None;
         }
-        let inv = g0.try_inverse()?;
+        // Stress-free edges in the frame e1 = A/|A|, e2 ⟂ e1 in the plane: R = [[|A|, B·e1], [0, h]]/λ0.
+        let (r11, r12, r22) = (
+            la / prestretch,
+            b.dot(&a) / la / prestretch,
+            area2 / la / prestretch,
+        );
         Some(Self {
-            g0_inv: [inv[(0, 0)], inv[(0, 1)], inv[(1, 1)]],
-            det_g0,
-            volume: thickness * 0.5 * det_g0.sqrt(),
+            m: [1.0 / r11, -r12 / (r11 * r22), 1.0 / r22],
+            volume: thickness * 0.5 * r11 * r22,
         })
     }
 
@@ -92,103 +105,92 @@ impl ReferenceTriangle {
         x: &[Vector3<f64>; 3],
     ) -> Option<Local> {
         let (a, b) = (x[1] - x[0], x[2] - x[0]);
-        let g = [a.dot(&a), a.dot(&b), b.dot(&b)];
-        let [i11, i12, i22] = self.g0_inv;
-        let d = self.det_g0;
-        let t = i11 * g[0] + 2.0 * i12 * g[1] + i22 * g[2];
-        let j = (g[0] * g[2] - g[1] * g[1]) / d;
+        let [m11, m12, m22] = self.m;
+        let f = [a * m11, a * m12 + b * m22];
+        let (n1, n2, c) = (f[0].norm_squared(), f[1].norm_squared(), f[0].dot(&f[1]));
+        let t = n1 + n2;
+        let j = f[0].cross(&f[1]).norm_squared();
         if j.is_nan() || j <= 0.0 {
             return None;
         }
         let [w, w_t, w_j, w_tj, w_jj] = mat.strain_energy(t, j);
-        // First derivatives of t and J in p = (g11, g12, g22).
-        let t_p = [i11, 2.0 * i12, i22];
-        let j_p = [g[2] / d, -2.0 * g[1] / d, g[0] / d];
-        // Second derivatives of J: ∂²J/∂g11∂g22 = 1/D, ∂²J/∂g12² = −2/D.
-        let j_pq = [
-            [0.0, 0.0, 1.0 / d],
-            [0.0, -2.0 / d, 0.0],
-            [1.0 / d, 0.0, 0.0],
+        let vol = self.volume;
+        // ∇t and ∇J in (f1, f2).
+        let dt = [f[0] * 2.0, f[1] * 2.0];
+        let dj = [(f[0] * n2 - f[1] * c) * 2.0, (f[1] * n1 - f[0] * c) * 2.0];
+        let p = [dt[0] * w_t + dj[0] * w_j, dt[1] * w_t + dj[1] * w_j];
+        // Hessian blocks in (f1, f2): hf[i][k] = ∂²W/∂f_i∂f_k (3×3).
+        let id = nalgebra::Matrix3::<f64>::identity();
+        let d2j = [
+            [
+                id * (2.0 * n2) - outer(&f[1], &f[1]) * 2.0,
+                outer(&f[0], &f[1]) * 4.0 - outer(&f[1], &f[0]) * 2.0 - id * (2.0 * c),
+            ],
+            [
+                outer(&f[1], &f[0]) * 4.0 - outer(&f[0], &f[1]) * 2.0 - id * (2.0 * c),
+                id * (2.0 * n1) - outer(&f[0], &f[0]) * 2.0,
+            ],
         ];
-        let s = self.volume;
-        let mut w_p = [0.0; 3];
-        let mut w_pq = [[0.0; 3]; 3];
-        for p in 0..3 {
-            w_p[p] = s * (w_t * t_p[p] + w_j * j_p[p]);
-            for q in 0..3 {
-                w_pq[p][q] = s
-                    * (w_tj * (t_p[p] * j_p[q] + j_p[p] * t_p[q])
-                        + w_jj * j_p[p] * j_p[q]
-                        + w_j * j_pq[p][q]);
+        let mut hf = [[nalgebra::Matrix3::<f64>::zeros(); 2]; 2];
+        for i in 0..2 {
+            for k in 0..2 {
+                let mut h = (outer(&dt[i], &dj[k]) + outer(&dj[i], &dt[k])) * w_tj
+                    + outer(&dj[i], &dj[k]) * w_jj
+                    + d2j[i][k] * w_j;
+                if i == k {
+                    h += id * (2.0 * w_t);
+                }
+                hf[i][k] = h;
             }
         }
-        // ∇g_p with respect to (a, b) ∈ R⁶.
-        let zero = Vector3::zeros();
-        let dg: [[Vector3<f64>; 2]; 3] = [[2.0 * a, zero], [b, a], [zero, 2.0 * b]];
-        let mut grad_ab = [0.0; 6];
-        let mut hess_ab = [[0.0; 6]; 6];
-        for p in 0..3 {
-            for (u, v) in dg[p].iter().enumerate() {
-                for k in 0..3 {
-                    grad_ab[3 * u + k] += w_p[p] * v[k];
-                }
+        // f_i = Σ_e C[i][e] edge_e with edges (a, b).
+        let cm = [[m11, 0.0], [m12, m22]];
+        let mut grad_ab = [Vector3::zeros(); 2];
+        let mut hess_ab = [[nalgebra::Matrix3::<f64>::zeros(); 2]; 2];
+        for e in 0..2 {
+            for i in 0..2 {
+                grad_ab[e] += p[i] * cm[i][e];
             }
-            for q in 0..3 {
-                for (u, vu) in dg[p].iter().enumerate() {
-                    for (v, vv) in dg[q].iter().enumerate() {
-                        for k in 0..3 {
-                            for l in 0..3 {
-                                hess_ab[3 * u + k][3 * v + l] += w_pq[p][q] * vu[k] * vv[l];
-                            }
-                        }
+            for e2 in 0..2 {
+                for i in 0..2 {
+                    for k in 0..2 {
+                        hess_ab[e][e2] += hf[i][k] * (cm[i][e] * cm[k][e2]);
                     }
                 }
             }
         }
-        // Σ_p W_p ∇²g_p: ∇²g11 = 2 I in (a, a); ∇²g12 = I in (a, b) and (b, a); ∇²g22 = 2 I in (b, b).
-        for k in 0..3 {
-            hess_ab[k][k] += 2.0 * w_p[0];
-            hess_ab[k][3 + k] += w_p[1];
-            hess_ab[3 + k][k] += w_p[1];
-            hess_ab[3 + k][3 + k] += 2.0 * w_p[2];
-        }
         // Map (a, b) to nodes: a = x2 − x1, b = x3 − x1.
-        let coef = |node: usize, u: usize| -> f64 {
-            match (node, u) {
+        let coef = |node: usize, e: usize| -> f64 {
+            match (node, e) {
                 (0, _) => -1.0,
                 (1, 0) | (2, 1) => 1.0,
                 _ => 0.0,
             }
         };
-        let mut grad = [0.0; 9];
-        let mut hess = [[0.0; 9]; 9];
+        let mut local = Local::ZERO;
+        local.value = vol * w;
         for n in 0..3 {
             for k in 0..3 {
-                grad[3 * n + k] = (0..2).map(|u| coef(n, u) * grad_ab[3 * u + k]).sum();
+                local.grad[3 * n + k] =
+                    vol * (0..2).map(|e| coef(n, e) * grad_ab[e][k]).sum::<f64>();
             }
-        }
-        for n in 0..3 {
             for m in 0..3 {
-                for u in 0..2 {
-                    for v in 0..2 {
-                        let c = coef(n, u) * coef(m, v);
-                        if c == 0.0 {
+                for e in 0..2 {
+                    for e2 in 0..2 {
+                        let cc = coef(n, e) * coef(m, e2);
+                        if cc == 0.0 {
                             continue;
                         }
                         for k in 0..3 {
                             for l in 0..3 {
-                                hess[3 * n + k][3 * m + l] += c * hess_ab[3 * u + k][3 * v + l];
+                                local.hess[3 * n + k][3 * m + l] +=
+                                    vol * cc * hess_ab[e][e2][(k, l)];
                             }
                         }
                     }
                 }
             }
         }
-        let mut local = Local {
-            value: s * w,
-            grad,
-            hess,
-        };
         // Symmetric to the last bit, whatever order the terms were summed in.
         local.mirror_upper();
         Some(local)
