@@ -99,6 +99,9 @@ impl ReferenceTriangle {
 
     /// The element's energy, its gradient (9, node-major) and Hessian (9×9) at `x`.
     /// `None` if the triangle is inverted or collapsed (J ≤ 0), where W is not defined.
+    // The loops place 3-vectors and 3×3 blocks into the node-major 9 and 9×9 layout; indices
+    // say that more plainly than iterator chains.
+    #[allow(clippy::needless_range_loop)]
     pub fn energy_gradient_hessian(
         &self,
         mat: &MooneyRivlin,
