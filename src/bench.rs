@@ -68,59 +68,7 @@ pub fn ponding_scene(divisions: usize, max: f64, samples: usize) -> Result<Scene
         .map_err(|e| e.to_string())
 }
 
-/// The unit of the state in the arclength, as in `run`: the mesh radius times √nodes.
-pub fn state_scale(study: &Study) -> f64 {
-    let reference = study.model.reference();
-    let r = reference
-        .iter()
-        .map(|x| x.norm())
-        .fold(0.0, f64::max)
-        .max(1e-300);
-    r * (reference.len() as f64).sqrt()
-}
-
-/// The path options `run` uses for a study.
-pub fn path_options(study: &Study) -> PathOptions {
-    let scale = state_scale(study);
-    match &study.scene.analysis {
-        Analysis::Path(p) => {
-            let bounds = study
-                .control
-                .map(|c| &study.scene.parameters[&study.parameters[c]]);
-            PathOptions {
-                initial_step: p.initial_step,
-                min_step: p.min_step,
-                max_step: p.max_step,
-                max_steps: p.steps,
-                max_iterations: p.max_iterations,
-                tolerance: p.tolerance,
-                bounds: (
-                    bounds.and_then(|b| b.min).unwrap_or(f64::NEG_INFINITY),
-                    bounds.and_then(|b| b.max).unwrap_or(f64::INFINITY),
-                ),
-                parameter_scales: vec![1.0; study.free.len()],
-                state_scale: scale,
-                direction: if p.direction == crate::scene::Direction::Decrease {
-                    -1.0
-                } else {
-                    1.0
-                },
-            }
-        }
-        Analysis::Equilibrium(e) => PathOptions {
-            tolerance: e.tolerance,
-            max_iterations: e.max_iterations,
-            state_scale: scale,
-            ..PathOptions::default()
-        },
-        Analysis::LinearBuckling(b) => PathOptions {
-            tolerance: b.tolerance,
-            max_iterations: b.max_iterations,
-            state_scale: scale,
-            ..PathOptions::default()
-        },
-    }
-}
+pub use crate::run::{path_options, state_scale};
 
 /// A copy of [`crate::adapted::SymmetricProblem`] that times its phases: `model.evaluate`
 /// (assembly) and the restriction to the fixed-point basis (projection).
@@ -253,34 +201,9 @@ impl DenseProblem for TimedProblem<'_> {
 /// parameter at `params`, no constraint active, at least 50 Newton iterations), then sets the
 /// `"initial"` constraint targets there. Returns the displacement over all unknowns.
 pub fn solve_start(study: &mut Study, params: &[f64]) -> Result<Vec<f64>, String> {
-    let opts = PathOptions {
-        max_iterations: path_options(study).max_iterations.max(50),
-        ..path_options(study)
-    };
-    let u0 = study.start_displacement();
-    let q0 = study.basis.restrict(&u0);
-    let u = {
-        let mut problem = TimedProblem::new(study, &[], params.to_vec());
-        let lambda = problem.free_values(params);
-        let (q, _, _) = solve_at(&mut problem, &q0, &lambda, &opts)
-            .map_err(|e| format!("the start state did not converge: {e}"))?;
-        problem.displacement(&q)
-    };
-    if let Some(k) = study
-        .measures
-        .iter()
-        .position(|(_, m)| *m == Measure::Volume)
-    {
-        let v = study.measure(&u, params)[k];
-        if v <= 0.0 {
-            return Err(format!(
-                "the start state did not converge: Newton converged to an inside-out membrane \
-                 (enclosed volume {v:e})"
-            ));
-        }
-    }
-    study.set_targets(&u, params);
-    Ok(u)
+    crate::run::solve_start(study, params)
+        .map(|(u, _, _)| u)
+        .map_err(|e| e.to_string())
 }
 
 /// One refinement level of the balloon study.
@@ -910,28 +833,10 @@ pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let tmp = tempfile::Builder::new()
-        .prefix(".memstab.")
-        .suffix(".tmp")
-        .tempfile_in(dir)?;
-    {
-        let mut w = std::io::BufWriter::new(tmp.as_file());
-        fill(&mut w)?;
-        w.flush()?;
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))?;
-    }
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    meshes::write::write_whole(path, fill).map_err(|e| match e {
+        meshes::MeshError::Io { source, .. } => source,
+        other => std::io::Error::other(other.to_string()),
+    })
 }
 
 /// Writes the full tangent K of `eval` (sparse part only; rank-one terms are refused) in

@@ -167,7 +167,8 @@ pub fn solve_start(
     Ok((u, params, iterations))
 }
 
-fn path_options(study: &Study) -> PathOptions {
+/// The path options of a study's analysis (steps, bounds, tolerances, scales).
+pub fn path_options(study: &Study) -> PathOptions {
     let scale = state_scale(study);
     match &study.scene.analysis {
         Analysis::Path(p) => {
@@ -540,7 +541,7 @@ impl Runner<'_> {
 
 /// The unit of the state in the arclength: the mesh radius times √nodes, so that a step is
 /// an RMS displacement relative to the mesh size.
-fn state_scale(study: &Study) -> f64 {
+pub fn state_scale(study: &Study) -> f64 {
     let r = study
         .model
         .reference()
