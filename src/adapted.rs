@@ -21,6 +21,8 @@ use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
 pub struct SparseBasis {
     unknowns: usize,
     columns: Vec<Vec<(usize, f64)>>,
+    /// For each unknown, the columns whose support contains it (built on first use).
+    by_dof: std::sync::OnceLock<Vec<Vec<u32>>>,
 }
 
 impl SparseBasis {
@@ -72,9 +74,14 @@ impl SparseBasis {
                 columns.push(col);
             }
         }
+        Self::from_columns(layout.unknowns(), columns)
+    }
+
+    fn from_columns(unknowns: usize, columns: Vec<Vec<(usize, f64)>>) -> Self {
         Self {
-            unknowns: layout.unknowns(),
+            unknowns,
             columns,
+            by_dof: std::sync::OnceLock::new(),
         }
     }
 
@@ -125,7 +132,24 @@ impl SparseBasis {
         (&out + out.transpose()) * 0.5
     }
 
+    /// The columns containing each unknown.
+    fn columns_by_dof(&self) -> &Vec<Vec<u32>> {
+        self.by_dof.get_or_init(|| {
+            let mut by_dof = vec![Vec::new(); self.unknowns];
+            for (i, c) in self.columns.iter().enumerate() {
+                for &(d, _) in c {
+                    by_dof[d].push(i as u32);
+                }
+            }
+            by_dof
+        })
+    }
+
     /// Bᵀ K C for another basis C over the same unknowns (off-diagonal blocks, for checks).
+    ///
+    /// Sparse: w = K c_j touches only the rows coupled to c_j's support, and only the columns
+    /// of B that contain one of those rows can meet it, so the block costs O(nnz of the block ×
+    /// support) rather than O(m² × support).
     pub fn restrict_tangent_to(
         &self,
         other: &SparseBasis,
@@ -135,23 +159,39 @@ impl SparseBasis {
     ) -> DMatrix<f64> {
         let pattern = layout.pattern();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let by_dof = self.columns_by_dof();
         work.clear();
         work.resize(self.unknowns, 0.0);
+        let mut touched: Vec<usize> = Vec::new();
+        let mut mark = vec![usize::MAX; self.dim()];
+        let mut candidates: Vec<usize> = Vec::new();
         let mut out = DMatrix::zeros(self.dim(), other.dim());
         for (j, cj) in other.columns.iter().enumerate() {
-            // w = K c_j, touching only the columns of K in c_j's support.
+            touched.clear();
+            candidates.clear();
             for &(d, b) in cj {
                 for p in col_ptr[d]..col_ptr[d + 1] {
-                    work[row_idx[p]] += eval.tangent[p] * b;
+                    let r = row_idx[p];
+                    if work[r] == 0.0 {
+                        touched.push(r);
+                    }
+                    work[r] += eval.tangent[p] * b;
                 }
             }
-            for (i, ci) in self.columns.iter().enumerate() {
-                out[(i, j)] = ci.iter().map(|&(d, b)| b * work[d]).sum();
-            }
-            for &(d, _) in cj {
-                for p in col_ptr[d]..col_ptr[d + 1] {
-                    work[row_idx[p]] = 0.0;
+            for &r in &touched {
+                for &i in &by_dof[r] {
+                    let i = i as usize;
+                    if mark[i] != j {
+                        mark[i] = j;
+                        candidates.push(i);
+                    }
                 }
+            }
+            for &i in &candidates {
+                out[(i, j)] = self.columns[i].iter().map(|&(d, b)| b * work[d]).sum();
+            }
+            for &r in &touched {
+                work[r] = 0.0;
             }
         }
         for (c, a) in &eval.rank_one {
@@ -293,10 +333,7 @@ impl AdaptedBasis {
                 });
             }
             let unknowns = layout.unknowns();
-            let mut partners = vec![SparseBasis {
-                unknowns,
-                columns: first.clone(),
-            }];
+            let mut partners = vec![SparseBasis::from_columns(unknowns, first.clone())];
             for a in 1..d {
                 let cols = first
                     .iter()
@@ -304,10 +341,7 @@ impl AdaptedBasis {
                         apply_projector(action, layout, &node_of, irrep.matrices(), a, 0, col)
                     })
                     .collect();
-                partners.push(SparseBasis {
-                    unknowns,
-                    columns: cols,
-                });
+                partners.push(SparseBasis::from_columns(unknowns, cols));
             }
             irreps.push(IrrepBasis {
                 name: irrep.name().into(),
