@@ -170,12 +170,12 @@ impl SparseBasis {
             touched.clear();
             candidates.clear();
             for &(d, b) in cj {
-                for p in col_ptr[d]..col_ptr[d + 1] {
-                    let r = row_idx[p];
+                let range = col_ptr[d]..col_ptr[d + 1];
+                for (&r, &k) in row_idx[range.clone()].iter().zip(&eval.tangent[range]) {
                     if work[r] == 0.0 {
                         touched.push(r);
                     }
-                    work[r] += eval.tangent[p] * b;
+                    work[r] += k * b;
                 }
             }
             for &r in &touched {
