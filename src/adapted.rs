@@ -422,6 +422,19 @@ pub struct SymmetricProblem<'a> {
     eval: Evaluation,
     u: Vec<f64>,
     work: Vec<f64>,
+    /// Where the evaluations' time went (for `memstab bench`).
+    pub times: PhaseTimes,
+}
+
+/// Time spent by a [`SymmetricProblem`]'s evaluations, by phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// In `model.evaluate` (assembly).
+    pub assembly: std::time::Duration,
+    /// Restricting residual, loads, constraints and tangent to the basis (projection).
+    pub projection: std::time::Duration,
+    /// Number of evaluations.
+    pub evaluations: usize,
 }
 
 impl<'a> SymmetricProblem<'a> {
@@ -447,6 +460,7 @@ impl<'a> SymmetricProblem<'a> {
             constraints,
             params,
             free,
+            times: PhaseTimes::default(),
         }
     }
 
@@ -492,10 +506,14 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
         lambda: &DVector<f64>,
     ) -> Result<crate::continuation::Linearization, crate::model::ModelError> {
         use crate::model::{Model, Request};
+        let t0 = std::time::Instant::now();
         self.basis.expand(q, &mut self.u);
         self.params = self.parameters(lambda);
         self.model
             .evaluate(&self.u, &self.params, Request::ALL, &mut self.eval)?;
+        let t1 = std::time::Instant::now();
+        self.times.assembly += t1 - t0;
+        self.times.evaluations += 1;
         let (m, nf, c) = (self.basis.dim(), self.free.len(), self.constraints.len());
         let mut loads = DMatrix::zeros(m, nf);
         for (j, i) in self.free.iter().enumerate() {
@@ -519,7 +537,7 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
                 }
             }
         }
-        Ok(crate::continuation::Linearization {
+        let lin = crate::continuation::Linearization {
             residual: self.basis.restrict(&self.eval.residual),
             tangent: self
                 .basis
@@ -528,6 +546,8 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
             constraints,
             constraint_q,
             constraint_lambda,
-        })
+        };
+        self.times.projection += t1.elapsed();
+        Ok(lin)
     }
 }

@@ -6,10 +6,9 @@
 //!
 //! How the phases are timed (no hooks inside [`crate::run`]): the balloon path is followed
 //! with the library calls `run` makes ([`solve_at`] for the start, [`follow`] for the path,
-//! [`Stability::spectrum_of`] at every converged point), but through [`TimedProblem`], a copy
-//! of [`crate::adapted::SymmetricProblem`] that times `model.evaluate` (assembly) and the
-//! restriction of residual, loads and tangent to the fixed-point space (projection) around the
-//! calls it makes. What is left of the path follower's wall time is the dense linear algebra
+//! [`Stability::spectrum_of`] at every converged point), reading the phase times that
+//! [`crate::adapted::SymmetricProblem`] keeps: `model.evaluate` (assembly) and the restriction
+//! of residual, loads and tangent to the fixed-point space (projection). What is left of the path follower's wall time is the dense linear algebra
 //! of the fixed-point system (factorisations and solves of a matrix of size m + 1, m the
 //! symmetric unknowns) and step control. The stability phase is timed around each
 //! `spectrum_of`, which assembles K again; that assembly is re-timed by one extra
@@ -17,15 +16,14 @@
 //! column. Critical-point localisation and output writing, which `run` also does, are not
 //! part of this study.
 
-use crate::adapted::AdaptedBasis;
-use crate::continuation::{follow, solve_at, DenseProblem, Linearization, PathOptions};
+use crate::adapted::{AdaptedBasis, SymmetricProblem};
+use crate::continuation::{follow, solve_at, PathOptions};
 use crate::linalg::SymmetricFactorization;
-use crate::model::constraint::Constraint;
-use crate::model::{Evaluation, FeModel, Model, ModelError, Request};
+use crate::model::{Evaluation, FeModel, Model, Request};
 use crate::scene::{Analysis, Scene};
 use crate::stability::Stability;
 use crate::study::{Measure, Study};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -69,133 +67,6 @@ pub fn ponding_scene(divisions: usize, max: f64, samples: usize) -> Result<Scene
 }
 
 pub use crate::run::{path_options, state_scale};
-
-/// A copy of [`crate::adapted::SymmetricProblem`] that times its phases: `model.evaluate`
-/// (assembly) and the restriction to the fixed-point basis (projection).
-pub struct TimedProblem<'a> {
-    model: &'a FeModel,
-    basis: &'a crate::adapted::SparseBasis,
-    constraints: &'a [Box<dyn Constraint>],
-    params: Vec<f64>,
-    free: Vec<Option<usize>>,
-    eval: Evaluation,
-    u: Vec<f64>,
-    work: Vec<f64>,
-    /// Time spent in `model.evaluate`.
-    pub assembly: Duration,
-    /// Time spent restricting residual, loads and tangent to the basis.
-    pub projection: Duration,
-    /// Number of evaluations.
-    pub evaluations: usize,
-}
-
-impl<'a> TimedProblem<'a> {
-    /// As `SymmetricProblem::new`.
-    pub fn new(study: &'a Study, constraints: &'a [Box<dyn Constraint>], params: Vec<f64>) -> Self {
-        let free = std::iter::once(study.control)
-            .chain(constraints.iter().map(|c| Some(c.frees())))
-            .collect();
-        Self {
-            model: &study.model,
-            basis: &study.basis,
-            constraints,
-            params,
-            free,
-            eval: study.model.new_evaluation(),
-            u: vec![0.0; study.model.unknowns()],
-            work: Vec::new(),
-            assembly: Duration::ZERO,
-            projection: Duration::ZERO,
-            evaluations: 0,
-        }
-    }
-
-    /// The full displacement u = B q.
-    pub fn displacement(&self, q: &DVector<f64>) -> Vec<f64> {
-        let mut u = vec![0.0; self.basis.unknowns()];
-        self.basis.expand(q, &mut u);
-        u
-    }
-
-    /// All parameters with the free ones set to `lambda`.
-    pub fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
-        let mut p = self.params.clone();
-        for (j, i) in self.free.iter().enumerate() {
-            if let Some(i) = *i {
-                p[i] = lambda[j];
-            }
-        }
-        p
-    }
-
-    /// The free parameters' values in `params`.
-    pub fn free_values(&self, params: &[f64]) -> DVector<f64> {
-        DVector::from_iterator(
-            self.free.len(),
-            self.free.iter().map(|i| i.map_or(0.0, |i| params[i])),
-        )
-    }
-}
-
-impl DenseProblem for TimedProblem<'_> {
-    fn dim(&self) -> usize {
-        self.basis.dim()
-    }
-
-    fn free_parameters(&self) -> usize {
-        self.free.len()
-    }
-
-    fn evaluate(
-        &mut self,
-        q: &DVector<f64>,
-        lambda: &DVector<f64>,
-    ) -> Result<Linearization, ModelError> {
-        let t0 = Instant::now();
-        self.basis.expand(q, &mut self.u);
-        self.params = self.parameters(lambda);
-        self.model
-            .evaluate(&self.u, &self.params, Request::ALL, &mut self.eval)?;
-        let t1 = Instant::now();
-        self.assembly += t1 - t0;
-        self.evaluations += 1;
-        let (m, nf, c) = (self.basis.dim(), self.free.len(), self.constraints.len());
-        let mut loads = DMatrix::zeros(m, nf);
-        for (j, i) in self.free.iter().enumerate() {
-            if let Some(i) = *i {
-                loads.set_column(j, &self.basis.restrict(&self.eval.loads[i]));
-            }
-        }
-        let mut constraints = DVector::zeros(c);
-        let mut constraint_q = DMatrix::zeros(c, m);
-        let mut constraint_lambda = DMatrix::zeros(c, nf);
-        if c > 0 {
-            let x = self.model.positions(&self.u);
-            for (k, con) in self.constraints.iter().enumerate() {
-                let v = con.evaluate(self.model.layout(), &x, &self.params);
-                constraints[k] = v.value;
-                constraint_q.set_row(k, &self.basis.restrict(&v.grad_u).transpose());
-                for (j, i) in self.free.iter().enumerate() {
-                    if let Some(i) = *i {
-                        constraint_lambda[(k, j)] = v.grad_params[i];
-                    }
-                }
-            }
-        }
-        let lin = Linearization {
-            residual: self.basis.restrict(&self.eval.residual),
-            tangent: self
-                .basis
-                .restrict_tangent(self.model.layout(), &self.eval, &mut self.work),
-            loads,
-            constraints,
-            constraint_q,
-            constraint_lambda,
-        };
-        self.projection += t1.elapsed();
-        Ok(lin)
-    }
-}
 
 /// Solves the start state as `run` does (the reference scaled by `start.stretch`, every
 /// parameter at `params`, no constraint active, at least 50 Newton iterations), then sets the
@@ -282,13 +153,19 @@ pub fn balloon_level(frequency: usize, stability: bool) -> Result<(BalloonLevel,
         };
         let u0 = study.start_displacement();
         let q0 = study.basis.restrict(&u0);
-        let mut problem = TimedProblem::new(&study, &[], params0.clone());
+        let mut problem = SymmetricProblem::new(
+            &study.model,
+            &study.basis,
+            &[],
+            params0.clone(),
+            study.control,
+        );
         let lambda = problem.free_values(&params0);
         let (q, lambda, _) = solve_at(&mut problem, &q0, &lambda, &opts)
             .map_err(|e| format!("the start state did not converge: {e}"))?;
-        assembly += problem.assembly;
-        projection += problem.projection;
-        evaluations += problem.evaluations;
+        assembly += problem.times.assembly;
+        projection += problem.times.projection;
+        evaluations += problem.times.evaluations;
         (q, problem.parameters(&lambda))
     };
     let u_start = {
@@ -308,9 +185,18 @@ pub fn balloon_level(frequency: usize, stability: bool) -> Result<(BalloonLevel,
         Analysis::Path(p) => p.stop_stretch,
         _ => None,
     };
-    let mut problem = TimedProblem::new(study_ref, &study_ref.constraints, params_start.clone());
+    let problem_for = || {
+        SymmetricProblem::new(
+            &study_ref.model,
+            &study_ref.basis,
+            &study_ref.constraints,
+            params_start.clone(),
+            study_ref.control,
+        )
+    };
+    let mut problem = problem_for();
     let lambda0 = problem.free_values(&params_start);
-    let probe = TimedProblem::new(study_ref, &study_ref.constraints, params_start.clone());
+    let probe = problem_for();
     let path = follow(
         &mut problem,
         &q_start,
@@ -325,9 +211,9 @@ pub fn balloon_level(frequency: usize, stability: bool) -> Result<(BalloonLevel,
         |_| {},
     )?;
     let path_time = t_start.elapsed();
-    assembly += problem.assembly;
-    projection += problem.projection;
-    evaluations += problem.evaluations;
+    assembly += problem.times.assembly;
+    projection += problem.times.projection;
+    evaluations += problem.times.evaluations;
     let continuation = path_time.saturating_sub(assembly + projection);
     let turning = |kind: f64| {
         path.turning_points
