@@ -692,26 +692,9 @@ pub fn ponding_level(divisions: usize) -> Result<PondingLevel, String> {
     })
 }
 
-/// The wave number m (0..=12) whose cos/sin mθ carries most of the mode's deflection.
+/// The wave number of a critical mode about z (see [`crate::critical::wave_number`]).
 pub fn wave_number(study: &Study, mode: &[f64]) -> usize {
-    let layout = study.model.layout();
-    let nodes = study.model.reference();
-    let power = |m: usize| {
-        let (mut c, mut s, mut nc, mut ns) = (0.0, 0.0, 0.0, 0.0);
-        for (i, x) in nodes.iter().enumerate() {
-            let Some(d) = layout.dof(i, 2) else { continue };
-            let t = x.y.atan2(x.x) * m as f64;
-            let r = x.x.hypot(x.y);
-            c += mode[d] * t.cos() * r;
-            s += mode[d] * t.sin() * r;
-            nc += (t.cos() * r).powi(2);
-            ns += (t.sin() * r).powi(2);
-        }
-        c * c / f64::max(nc, 1e-300) + if ns > 1e-12 { s * s / ns } else { 0.0 }
-    };
-    (0..=12)
-        .max_by(|&a, &b| power(a).total_cmp(&power(b)))
-        .unwrap_or(0)
+    crate::critical::wave_number(study.model.reference(), study.model.layout(), mode, 12)
 }
 
 /// Writes `path` whole: into a temporary file in the same directory, then renamed over it.

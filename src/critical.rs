@@ -163,6 +163,60 @@ pub fn isotropy(action: &GroupAction, layout: &Layout, u: &[f64]) -> Isotropy {
     }
 }
 
+/// The wave number about z of a mode over the unknowns: the m (0…`max_m`) whose cos mθ and
+/// sin mθ carry most of its cylindrical components (u_r, u_θ, u_z), nodes weighted by their
+/// distance from the axis. Used to identify modes by Fourier content, never by sorted order.
+pub fn wave_number(
+    nodes: &[nalgebra::Vector3<f64>],
+    layout: &Layout,
+    mode: &[f64],
+    max_m: usize,
+) -> usize {
+    let size = nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
+    // (θ, r, [u_r, u_θ, u_z]) per free node off the axis.
+    let samples: Vec<(f64, f64, [f64; 3])> = nodes
+        .iter()
+        .enumerate()
+        .filter_map(|(i, x)| {
+            let r = x.x.hypot(x.y);
+            if r <= 1e-9 * size {
+                return None;
+            }
+            let d = [layout.dof(i, 0)?, layout.dof(i, 1)?, layout.dof(i, 2)?];
+            let t = x.y.atan2(x.x);
+            let (s, c) = t.sin_cos();
+            let (ux, uy, uz) = (mode[d[0]], mode[d[1]], mode[d[2]]);
+            Some((t, r, [c * ux + s * uy, -s * ux + c * uy, uz]))
+        })
+        .collect();
+    let power = |m: usize| {
+        let mut total = 0.0;
+        for k in 0..3 {
+            let (mut c, mut s, mut nc, mut ns) = (0.0, 0.0, 0.0, 0.0);
+            for (t, r, u) in &samples {
+                let (sn, cs) = (t * m as f64).sin_cos();
+                c += u[k] * cs * r;
+                s += u[k] * sn * r;
+                nc += (cs * r).powi(2);
+                ns += (sn * r).powi(2);
+            }
+            total += c * c / nc.max(1e-300);
+            if ns > 1e-12 * nc.max(1e-300) {
+                total += s * s / ns;
+            }
+        }
+        total
+    };
+    let mut best = (0, f64::NEG_INFINITY);
+    for m in 0..=max_m {
+        let p = power(m);
+        if p > best.1 * (1.0 + 1e-9) {
+            best = (m, p);
+        }
+    }
+    best.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -440,54 +440,14 @@ struct Level {
     critical: Vec<Point>,
 }
 
-/// The m (0…MAX_WAVE_NUMBER) whose cos mθ, sin mθ carry most of the mode's cylindrical
-/// components (u_r, u_θ, u_z), nodes weighted by their distance from the axis.
+/// The wave number of a critical mode about z (see [`memstab::critical::wave_number`]).
 fn wave_number(study: &Study, mode: &[f64]) -> usize {
-    let layout = study.model.layout();
-    let nodes = study.model.reference();
-    let size = nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
-    // (θ, r, [u_r, u_θ, u_z]) per free node off the axis.
-    let samples: Vec<(f64, f64, [f64; 3])> = nodes
-        .iter()
-        .enumerate()
-        .filter_map(|(i, x)| {
-            let r = x.x.hypot(x.y);
-            if r <= 1e-9 * size {
-                return None;
-            }
-            let d = [layout.dof(i, 0)?, layout.dof(i, 1)?, layout.dof(i, 2)?];
-            let t = x.y.atan2(x.x);
-            let (s, c) = t.sin_cos();
-            let (ux, uy, uz) = (mode[d[0]], mode[d[1]], mode[d[2]]);
-            Some((t, r, [c * ux + s * uy, -s * ux + c * uy, uz]))
-        })
-        .collect();
-    let power = |m: usize| {
-        let mut total = 0.0;
-        for k in 0..3 {
-            let (mut c, mut s, mut nc, mut ns) = (0.0, 0.0, 0.0, 0.0);
-            for (t, r, u) in &samples {
-                let (sn, cs) = (t * m as f64).sin_cos();
-                c += u[k] * cs * r;
-                s += u[k] * sn * r;
-                nc += (cs * r).powi(2);
-                ns += (sn * r).powi(2);
-            }
-            total += c * c / nc.max(1e-300);
-            if ns > 1e-12 * nc.max(1e-300) {
-                total += s * s / ns;
-            }
-        }
-        total
-    };
-    let mut best = (0, f64::NEG_INFINITY);
-    for m in 0..=MAX_WAVE_NUMBER {
-        let p = power(m);
-        if p > best.1 * (1.0 + 1e-9) {
-            best = (m, p);
-        }
-    }
-    best.0
+    memstab::critical::wave_number(
+        study.model.reference(),
+        study.model.layout(),
+        mode,
+        MAX_WAVE_NUMBER,
+    )
 }
 
 /// Whether modes are labelled by their wave number about z.
