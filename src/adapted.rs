@@ -1,20 +1,247 @@
-//! Symmetry-adapted bases (DESIGN §4.3), here the fixed-point space of the group: the
-//! displacements u with T(g) u = u for every g, where (T(g) u)_{π_g(i)} = R_g u_i.
+//! Symmetry-adapted bases (DESIGN §4.3): the fixed-point space of the group — the
+//! displacements u with T(g) u = u for every g, where (T(g) u)_{π_g(i)} = R_g u_i — and, for
+//! every irrep μ, the blocks on which the tangent at a symmetric state is block diagonal.
 //!
-//! The basis is built node orbit by node orbit: for the orbit of node i with stabiliser
-//! H_i = {h : π_h(i) = i}, the vectors v ∈ ℝ³ fixed by H_i span the range of the projector
-//! P_i = (1/|H_i|) Σ_{h ∈ H_i} R_h; each such v spreads over the orbit as u_{π_g(i)} = R_g v
-//! (independent of the choice of g because H_i fixes v), scaled by 1/√|orbit|. Columns are
-//! orthonormal and sparse (one orbit each), and their number is Σ_orbits rank P_i — the
-//! multiplicity of the trivial irrep in T. Fixed nodes form whole orbits and carry no unknowns.
+//! **Orbit-local form.** Every column is built on one node orbit O with representative node
+//! i₀ (its smallest node) from a *seed*: d vectors s_b ∈ ℝ³ at i₀, with
 //!
-//! On a G-invariant state the residual lies in this space and the tangent maps it into
-//! itself, so a symmetric path can be followed with `B_A^T K B_A` alone.
+//!   b = Σ_b P^μ_{0b} s_b,   P^μ_{ab} = (d/|G|) Σ_g D^μ_{ab}(g) T(g).
+//!
+//! The seeds come from the Gram matrix of the candidates P^μ_{0b} e_{i₀,c}, which only needs
+//! the stabiliser H of i₀: ⟨P_{0b} e_{i₀c}, P_{0b'} e_{i₀c'}⟩ = (d/|G|) Σ_{h∈H} D_{bb'}(h) (R_h)_{cc'}
+//! (because P_{0b}ᵀ P_{0b'} = P_{bb'}); its eigenvectors with nonzero eigenvalue λ, scaled by
+//! λ^{-1/2}, are orthonormal seeds. Partner a of a column is P_{a0} b = Σ_b P_{ab} s_b.
+//!
+//! **Block restriction from the representatives.** K commutes with every T(g) at a symmetric
+//! state, so with P_{0b}ᵀ = P_{b0}:
+//!
+//!   (Bᵀ K B)_{fe} = Σ_b ⟨P_{b0} b_f, K s_{e,b}⟩
+//!                 = (d/|G|) Σ_{b,b'} Σ_g D_{b'b}(g) ⟨s_{f,b'}, T(g) K s_{e,b}⟩.
+//!
+//! K s_{e,b} lives on the neighbours j of i₀ only, and ⟨s_f, T(g) w⟩ needs π_g(j) to be the
+//! representative of f's orbit: a block costs the three columns of K at each representative,
+//! independent of the orbit size — |G| times less than forming B_μᵀ K B_μ column by column.
+//!
+//! The fixed-point space is the trivial irrep's block (d = 1, D = 1). Fixed nodes form whole
+//! orbits and carry no unknowns.
 
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout};
 use meshes::GroupAction;
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// What the orbit-local formulas need of a group action, shared by all blocks of one basis.
+#[derive(Debug)]
+struct OrbitFrame {
+    /// |G|.
+    order: usize,
+    /// R_g.
+    rotations: Vec<Matrix3<f64>>,
+    /// For each unknown, its (node, component).
+    node_of: Vec<(u32, u8)>,
+    /// For each node, the index of its orbit (in `GroupAction::node_orbits` order).
+    orbit_of: Vec<u32>,
+    /// For each node j, the elements g with π_g(j) = representative of j's orbit, as a CSR
+    /// list: `to_rep[to_rep_ptr[j]..to_rep_ptr[j + 1]]` (|H| elements per node).
+    to_rep_ptr: Vec<u32>,
+    to_rep: Vec<u16>,
+}
+
+impl OrbitFrame {
+    fn new(action: &GroupAction, layout: &Layout, orbits: &[Vec<usize>]) -> Self {
+        let group = action.group();
+        let nodes = layout.nodes();
+        let mut orbit_of = vec![u32::MAX; nodes];
+        let mut rep = vec![usize::MAX; nodes];
+        for (o, orbit) in orbits.iter().enumerate() {
+            for &j in orbit {
+                orbit_of[j] = o as u32;
+                rep[j] = orbit[0];
+            }
+        }
+        let mut to_rep_ptr = vec![0u32; nodes + 1];
+        let mut to_rep = Vec::with_capacity(nodes);
+        for j in 0..nodes {
+            if rep[j] != usize::MAX {
+                to_rep.extend(
+                    (0..group.order())
+                        .filter(|&g| action.node_perm(g)[j] == rep[j])
+                        .map(|g| g as u16),
+                );
+            }
+            to_rep_ptr[j + 1] = to_rep.len() as u32;
+        }
+        let mut node_of = vec![(0, 0); layout.unknowns()];
+        for i in 0..nodes {
+            for k in 0..3 {
+                if let Some(d) = layout.dof(i, k) {
+                    node_of[d] = (i as u32, k as u8);
+                }
+            }
+        }
+        Self {
+            order: group.order(),
+            rotations: group.elements().to_vec(),
+            node_of,
+            orbit_of,
+            to_rep_ptr,
+            to_rep,
+        }
+    }
+
+    fn to_rep(&self, j: usize) -> &[u16] {
+        &self.to_rep[self.to_rep_ptr[j] as usize..self.to_rep_ptr[j + 1] as usize]
+    }
+}
+
+/// The orbit-local description of a block's columns (see the module docs).
+#[derive(Debug, Clone)]
+struct Seeds {
+    frame: Arc<OrbitFrame>,
+    /// Irrep dimension d.
+    d: usize,
+    /// D(g), row-major d × d per element.
+    matrices: Arc<Vec<f64>>,
+    /// Representative node of each column's orbit.
+    rep: Vec<u32>,
+    /// Seeds, d per column: `seeds[e * d + b]` = s_{e,b}.
+    seeds: Vec<Vector3<f64>>,
+    /// The columns on each orbit (contiguous, as they are built orbit by orbit).
+    by_orbit: Vec<Range<u32>>,
+}
+
+impl Seeds {
+    fn dmat(&self, g: usize) -> &[f64] {
+        &self.matrices[g * self.d * self.d..(g + 1) * self.d * self.d]
+    }
+
+    /// Partner a of column e, Σ_b P_{ab} s_{e,b}, summed over the whole group.
+    fn column(
+        &self,
+        action: &GroupAction,
+        layout: &Layout,
+        e: usize,
+        a: usize,
+    ) -> Vec<(usize, f64)> {
+        let d = self.d;
+        let coef = d as f64 / self.frame.order as f64;
+        let i0 = self.rep[e] as usize;
+        let s = &self.seeds[e * d..(e + 1) * d];
+        let mut at: Vec<(usize, Vector3<f64>)> = Vec::new();
+        for g in 0..self.frame.order {
+            let dm = self.dmat(g);
+            let mut v = Vector3::zeros();
+            for (b, sb) in s.iter().enumerate() {
+                v += sb * dm[a * d + b];
+            }
+            if v == Vector3::zeros() {
+                continue;
+            }
+            let j = action.node_perm(g)[i0];
+            let w = self.frame.rotations[g] * v * coef;
+            match at.iter_mut().find(|(n, _)| *n == j) {
+                Some((_, x)) => *x += w,
+                None => at.push((j, w)),
+            }
+        }
+        let mut col = Vec::with_capacity(3 * at.len());
+        for (j, w) in at {
+            for k in 0..3 {
+                if w[k].abs() > 1e-15 {
+                    col.push((layout.dof(j, k).expect("free orbit"), w[k]));
+                }
+            }
+        }
+        col.sort_unstable_by_key(|&(dof, _)| dof);
+        col
+    }
+}
+
+/// Builds the seeds and first-partner columns of one real irrep (given by its matrices
+/// D(g), d × d) on the free orbits.
+fn orbit_basis(
+    action: &GroupAction,
+    layout: &Layout,
+    frame: &Arc<OrbitFrame>,
+    orbits: &[Vec<usize>],
+    matrices: &[DMatrix<f64>],
+) -> SparseBasis {
+    let group = action.group();
+    let d = matrices[0].nrows();
+    let order = group.order() as f64;
+    let flat: Vec<f64> = matrices
+        .iter()
+        .flat_map(|m| (0..d * d).map(move |k| m[(k / d, k % d)]))
+        .collect();
+    let mut seeds = Seeds {
+        frame: frame.clone(),
+        d,
+        matrices: Arc::new(flat),
+        rep: Vec::new(),
+        seeds: Vec::new(),
+        by_orbit: Vec::with_capacity(orbits.len()),
+    };
+    for orbit in orbits {
+        let i0 = orbit[0];
+        let start = seeds.rep.len() as u32;
+        // Gram matrix of the candidates P_{0b} e_{i0,c} (index 3b + c), from the stabiliser.
+        let mut gram = DMatrix::<f64>::zeros(3 * d, 3 * d);
+        for h in (0..group.order()).filter(|&h| action.node_perm(h)[i0] == i0) {
+            let r = group.element(h);
+            let dm = &matrices[h];
+            for b in 0..d {
+                for b2 in 0..d {
+                    let x = dm[(b, b2)] * d as f64 / order;
+                    if x == 0.0 {
+                        continue;
+                    }
+                    for c in 0..3 {
+                        for c2 in 0..3 {
+                            gram[(3 * b + c, 3 * b2 + c2)] += x * r[(c, c2)];
+                        }
+                    }
+                }
+            }
+        }
+        let eig = SymmetricEigen::new((&gram + gram.transpose()) * 0.5);
+        // Genuine directions have eigenvalues of order d|H|/|G|, round-off ones of 1e-16.
+        for (k, &lam) in eig.eigenvalues.iter().enumerate() {
+            if lam <= 1e-10 {
+                continue;
+            }
+            let y = eig.eigenvectors.column(k) / lam.sqrt();
+            seeds.rep.push(i0 as u32);
+            for b in 0..d {
+                seeds
+                    .seeds
+                    .push(Vector3::new(y[3 * b], y[3 * b + 1], y[3 * b + 2]));
+            }
+        }
+        seeds.by_orbit.push(start..seeds.rep.len() as u32);
+    }
+    let columns = (0..seeds.rep.len())
+        .into_par_iter()
+        .map(|e| seeds.column(action, layout, e, 0))
+        .collect();
+    SparseBasis {
+        unknowns: layout.unknowns(),
+        columns,
+        by_dof: std::sync::OnceLock::new(),
+        seeds: Some(seeds),
+    }
+}
+
+/// The free orbits of `action` on `layout` (fixed orbits carry no unknowns).
+fn free_orbits(action: &GroupAction, layout: &Layout) -> Vec<Vec<usize>> {
+    action
+        .node_orbits()
+        .into_iter()
+        .filter(|o| layout.dof(o[0], 0).is_some())
+        .collect()
+}
 
 /// An orthonormal basis with sparse columns, each a list of (unknown, value).
 #[derive(Debug, Clone)]
@@ -23,58 +250,19 @@ pub struct SparseBasis {
     columns: Vec<Vec<(usize, f64)>>,
     /// For each unknown, the columns whose support contains it (built on first use).
     by_dof: std::sync::OnceLock<Vec<Vec<u32>>>,
+    /// The orbit-local form, when the basis was built from a group action.
+    seeds: Option<Seeds>,
 }
 
 impl SparseBasis {
-    /// The fixed-point space of `action` on the unknowns of `layout`.
+    /// The fixed-point space of `action` on the unknowns of `layout`: for the orbit of node i
+    /// with stabiliser H_i, the vectors v fixed by H_i spread over the orbit as
+    /// u_{π_g(i)} = R_g v / √|orbit| (the trivial irrep's block).
     pub fn fixed_point(action: &GroupAction, layout: &Layout) -> Self {
-        let group = action.group();
-        let mut columns = Vec::new();
-        for orbit in action.node_orbits() {
-            let i = orbit[0];
-            if layout.dof(i, 0).is_none() {
-                continue; // a fixed orbit
-            }
-            let stabiliser: Vec<usize> = (0..group.order())
-                .filter(|&g| action.node_perm(g)[i] == i)
-                .collect();
-            let p = stabiliser
-                .iter()
-                .fold(Matrix3::zeros(), |acc, &h| acc + group.element(h))
-                / stabiliser.len() as f64;
-            let eig = SymmetricEigen::new((p + p.transpose()) * 0.5);
-            // One group element carrying i to each node of its orbit.
-            let mut carrier = vec![usize::MAX; orbit.len()];
-            for g in 0..group.order() {
-                let j = action.node_perm(g)[i];
-                let k = orbit.binary_search(&j).expect("orbit is closed");
-                if carrier[k] == usize::MAX {
-                    carrier[k] = g;
-                }
-            }
-            let scale = 1.0 / (orbit.len() as f64).sqrt();
-            for e in 0..3 {
-                if eig.eigenvalues[e] < 0.5 {
-                    continue;
-                }
-                let v = eig.eigenvectors.column(e).into_owned();
-                let mut col = Vec::with_capacity(3 * orbit.len());
-                for (k, &j) in orbit.iter().enumerate() {
-                    let w = group.element(carrier[k]) * v * scale;
-                    for c in 0..3 {
-                        let d = layout
-                            .dof(j, c)
-                            .expect("a free orbit has unknowns at every node");
-                        if w[c] != 0.0 {
-                            col.push((d, w[c]));
-                        }
-                    }
-                }
-                col.sort_unstable_by_key(|&(d, _)| d);
-                columns.push(col);
-            }
-        }
-        Self::from_columns(layout.unknowns(), columns)
+        let orbits = free_orbits(action, layout);
+        let frame = Arc::new(OrbitFrame::new(action, layout, &orbits));
+        let trivial = vec![DMatrix::from_element(1, 1, 1.0); action.group().order()];
+        orbit_basis(action, layout, &frame, &orbits, &trivial)
     }
 
     fn from_columns(unknowns: usize, columns: Vec<Vec<(usize, f64)>>) -> Self {
@@ -82,6 +270,7 @@ impl SparseBasis {
             unknowns,
             columns,
             by_dof: std::sync::OnceLock::new(),
+            seeds: None,
         }
     }
 
@@ -121,15 +310,107 @@ impl SparseBasis {
     }
 
     /// Bᵀ K B for the full tangent of an evaluation (sparse part on `layout`'s pattern plus
-    /// its rank-one terms), using the sparsity of the columns; `work` is scratch of length N.
+    /// its rank-one terms) at a state that the basis's group keeps; `work` is scratch.
+    ///
+    /// A basis built from a group action uses the orbit-local formula of the module docs
+    /// (only K's columns at the orbit representatives are read); any other basis the
+    /// column-by-column product of [`SparseBasis::restrict_tangent_to`].
     pub fn restrict_tangent(
         &self,
         layout: &Layout,
         eval: &Evaluation,
         work: &mut Vec<f64>,
     ) -> DMatrix<f64> {
-        let out = self.restrict_tangent_to(self, layout, eval, work);
+        let out = match &self.seeds {
+            Some(seeds) => self.restrict_tangent_seeded(seeds, layout, eval),
+            None => self.restrict_tangent_to(self, layout, eval, work),
+        };
         (&out + out.transpose()) * 0.5
+    }
+
+    /// The orbit-local Bᵀ K B (module docs), one column per rayon task.
+    fn restrict_tangent_seeded(
+        &self,
+        seeds: &Seeds,
+        layout: &Layout,
+        eval: &Evaluation,
+    ) -> DMatrix<f64> {
+        let m = self.dim();
+        let mut out = DMatrix::zeros(m, m);
+        if m == 0 {
+            return out;
+        }
+        let frame = &*seeds.frame;
+        let d = seeds.d;
+        let coef = d as f64 / frame.order as f64;
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        out.as_mut_slice()
+            .par_chunks_mut(m)
+            .enumerate()
+            .for_each_init(
+                || {
+                    (
+                        Vec::<u32>::new(),
+                        Vec::<Vector3<f64>>::new(),
+                        vec![Vector3::zeros(); 2 * d],
+                    )
+                },
+                |(touched, w, vu), (e, out_col)| {
+                    let i0 = seeds.rep[e] as usize;
+                    let s_e = &seeds.seeds[e * d..(e + 1) * d];
+                    // w_b = K s_{e,b}, gathered by node (the neighbours of i0).
+                    touched.clear();
+                    w.clear();
+                    for c in 0..3 {
+                        let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+                        let range = col_ptr[dof]..col_ptr[dof + 1];
+                        for (&r, &k) in row_idx[range.clone()].iter().zip(&eval.tangent[range]) {
+                            let (j, comp) = frame.node_of[r];
+                            let t = match touched.iter().position(|&n| n == j) {
+                                Some(t) => t,
+                                None => {
+                                    touched.push(j);
+                                    w.resize(w.len() + d, Vector3::zeros());
+                                    touched.len() - 1
+                                }
+                            };
+                            for (b, s) in s_e.iter().enumerate() {
+                                w[t * d + b][comp as usize] += k * s[c];
+                            }
+                        }
+                    }
+                    // ⟨s_{f,b'}, T(g) w_b⟩ for the g carrying j to its representative.
+                    let (v, u) = vu.split_at_mut(d);
+                    for (t, &j) in touched.iter().enumerate() {
+                        let cols = seeds.by_orbit[frame.orbit_of[j as usize] as usize].clone();
+                        if cols.is_empty() {
+                            continue;
+                        }
+                        for &g in frame.to_rep(j as usize) {
+                            let r = &frame.rotations[g as usize];
+                            let dm = seeds.dmat(g as usize);
+                            for b in 0..d {
+                                v[b] = r * w[t * d + b];
+                            }
+                            for b2 in 0..d {
+                                u[b2] = (0..d)
+                                    .fold(Vector3::zeros(), |acc, b| acc + v[b] * dm[b2 * d + b]);
+                            }
+                            for f in cols.clone() {
+                                let s_f = &seeds.seeds[f as usize * d..(f as usize + 1) * d];
+                                let x: f64 = s_f.iter().zip(u.iter()).map(|(s, u)| s.dot(u)).sum();
+                                out_col[f as usize] += coef * x;
+                            }
+                        }
+                    }
+                },
+            );
+        for (c, a) in &eval.rank_one {
+            let ar = self.restrict(a);
+            out += &ar * ar.transpose() * *c;
+        }
+        out
     }
 
     /// The columns containing each unknown.
@@ -245,19 +526,25 @@ pub enum AdaptedError {
 
 impl AdaptedBasis {
     /// Builds, orbit by orbit, the sparse orthonormal bases B_{μa} of every irrep μ and
-    /// partner a from the operators P^μ_{ab} = (d/|G|) Σ_g D^μ_ab(g) T(g): on an orbit with
-    /// representative i, the first copy is spanned by P^μ_{0b} e_{i,c} (b < d, c < 3),
-    /// orthonormalised; partner a by P^μ_{a0} of those columns. Fixed orbits are skipped.
+    /// partner a from the operators P^μ_{ab} = (d/|G|) Σ_g D^μ_ab(g) T(g) in orbit-local form
+    /// (module docs): the first copy from the seeds of each orbit, partner a as
+    /// P^μ_{a0} of those columns. Fixed orbits are skipped.
     pub fn new(action: &GroupAction, layout: &Layout) -> Result<Self, AdaptedError> {
         let group = action.group();
         let order = group.order() as f64;
-        let orbits: Vec<Vec<usize>> = action
-            .node_orbits()
-            .into_iter()
-            .filter(|o| layout.dof(o[0], 0).is_some())
+        let orbits = free_orbits(action, layout);
+        let frame = Arc::new(OrbitFrame::new(action, layout, &orbits));
+        // χ_T(g) = #{free nodes fixed by g} · tr R_g.
+        let chi_t: Vec<f64> = (0..group.order())
+            .map(|g| {
+                let fixed = orbits
+                    .iter()
+                    .flatten()
+                    .filter(|&&i| action.node_perm(g)[i] == i)
+                    .count();
+                fixed as f64 * group.element(g).trace()
+            })
             .collect();
-        let free_nodes: Vec<usize> = orbits.iter().flatten().copied().collect();
-        let node_of = layout_node_map(layout);
         let mut irreps = Vec::new();
         for irrep in group.irreps() {
             if irrep.kind() != symmetry::IrrepKind::Real {
@@ -267,82 +554,30 @@ impl AdaptedBasis {
                 ));
             }
             let d = irrep.dim();
-            // Character formula over the free nodes.
-            let chi_t = |g: usize| -> f64 {
-                free_nodes
-                    .iter()
-                    .filter(|&&i| action.node_perm(g)[i] == i)
-                    .count() as f64
-                    * group.element(g).trace()
-            };
+            // Character formula: the multiplicity of μ in T.
             let m: f64 = (0..group.order())
-                .map(|g| chi_t(g) * irrep.character(g))
+                .map(|g| chi_t[g] * irrep.character(g))
                 .sum::<f64>()
                 / order;
             let multiplicity = m.round() as usize;
-            let mut first: Vec<Vec<(usize, f64)>> = Vec::new();
-            for orbit in &orbits {
-                let i = orbit[0];
-                let local = |j: usize| orbit.binary_search(&j).expect("orbit closed");
-                // W: 3|O| × 3d candidates P_{0b} e_{i,c}.
-                let rows = 3 * orbit.len();
-                let mut w = DMatrix::<f64>::zeros(rows, 3 * d);
-                for g in 0..group.order() {
-                    let j = local(action.node_perm(g)[i]);
-                    let r = group.element(g);
-                    let dm = irrep.matrix(g);
-                    for b in 0..d {
-                        let coef = d as f64 / order * dm[(0, b)];
-                        if coef == 0.0 {
-                            continue;
-                        }
-                        for c in 0..3 {
-                            for k in 0..3 {
-                                w[(3 * j + k, 3 * b + c)] += coef * r[(k, c)];
-                            }
-                        }
-                    }
-                }
-                // The candidates are projections of unit vectors (norm ≤ 1); a direction they
-                // really span has a Gram eigenvalue of order 1/|G|, round-off one of 1e-30.
-                let gram = w.transpose() * &w;
-                let eig = SymmetricEigen::new(gram);
-                for (e, &lam) in eig.eigenvalues.iter().enumerate() {
-                    if lam <= 1e-10 {
-                        continue;
-                    }
-                    let v = &w * eig.eigenvectors.column(e) / lam.sqrt();
-                    let mut col = Vec::new();
-                    for (jl, &j) in orbit.iter().enumerate() {
-                        for k in 0..3 {
-                            let val = v[3 * jl + k];
-                            if val.abs() > 1e-15 {
-                                col.push((layout.dof(j, k).expect("free orbit"), val));
-                            }
-                        }
-                    }
-                    col.sort_unstable_by_key(|&(dof, _)| dof);
-                    first.push(col);
-                }
-            }
-            if first.len() != multiplicity {
+            let first = orbit_basis(action, layout, &frame, &orbits, irrep.matrices());
+            if first.dim() != multiplicity {
                 return Err(AdaptedError::Count {
                     irrep: irrep.name().into(),
-                    built: first.len(),
+                    built: first.dim(),
                     predicted: multiplicity,
                 });
             }
-            let unknowns = layout.unknowns();
-            let mut partners = vec![SparseBasis::from_columns(unknowns, first.clone())];
+            let seeds = first.seeds.as_ref().expect("built from seeds");
+            let mut partners = Vec::with_capacity(d);
             for a in 1..d {
-                let cols = first
-                    .iter()
-                    .map(|col| {
-                        apply_projector(action, layout, &node_of, irrep.matrices(), a, 0, col)
-                    })
+                let columns = (0..first.dim())
+                    .into_par_iter()
+                    .map(|e| seeds.column(action, layout, e, a))
                     .collect();
-                partners.push(SparseBasis::from_columns(unknowns, cols));
+                partners.push(SparseBasis::from_columns(layout.unknowns(), columns));
             }
+            partners.insert(0, first);
             irreps.push(IrrepBasis {
                 name: irrep.name().into(),
                 dim: d,
@@ -352,60 +587,6 @@ impl AdaptedBasis {
         }
         Ok(Self { irreps })
     }
-}
-
-/// P_{ab} v = (d/|G|) Σ_g D_ab(g) T(g) v for a sparse v, with (T(g) v)_{π_g(j)} = R_g v_j.
-fn apply_projector(
-    action: &GroupAction,
-    layout: &Layout,
-    node_of: &[(usize, usize)],
-    matrices: &[DMatrix<f64>],
-    a: usize,
-    b: usize,
-    v: &[(usize, f64)],
-) -> Vec<(usize, f64)> {
-    let group = action.group();
-    let d = matrices[0].nrows() as f64;
-    // Gather v by node.
-    let mut by_node: std::collections::BTreeMap<usize, Vector3<f64>> =
-        std::collections::BTreeMap::new();
-    for &(dof, val) in v {
-        let (node, k) = node_of[dof];
-        by_node.entry(node).or_insert_with(Vector3::zeros)[k] += val;
-    }
-    let mut out: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
-    for (g, dm) in matrices.iter().enumerate() {
-        let coef = d / group.order() as f64 * dm[(a, b)];
-        if coef == 0.0 {
-            continue;
-        }
-        let r = group.element(g);
-        for (&j, vj) in &by_node {
-            let target = action.node_perm(g)[j];
-            let w = r * vj * coef;
-            for k in 0..3 {
-                let dof = layout
-                    .dof(target, k)
-                    .expect("free orbits map to free nodes");
-                *out.entry(dof).or_insert(0.0) += w[k];
-            }
-        }
-    }
-    out.into_iter().filter(|(_, x)| x.abs() > 1e-15).collect()
-}
-
-/// For each unknown, its (node, component).
-fn layout_node_map(layout: &Layout) -> Vec<(usize, usize)> {
-    let mut map = vec![(0, 0); layout.unknowns()];
-    let nodes = layout.nodes();
-    for i in 0..nodes {
-        for k in 0..3 {
-            if let Some(d) = layout.dof(i, k) {
-                map[d] = (i, k);
-            }
-        }
-    }
-    map
 }
 
 /// A model restricted to the fixed-point space, as a dense problem for the path follower:

@@ -70,18 +70,86 @@ pub struct Stability<'a> {
     motions: Vec<[f64; 6]>,
 }
 
-/// An orthonormal basis of the orthogonal complement of the columns of `r` in ℝ^m, and the
-/// rank of `r`. Columns count when their span has a squared singular value above `floor`
-/// (callers pass columns whose genuine parts are of order one).
-fn complement(r: &DMatrix<f64>, m: usize, floor: f64) -> (DMatrix<f64>, usize) {
-    if r.ncols() == 0 || m == 0 {
-        return (DMatrix::identity(m, m), 0);
+/// The orthogonal complement of the columns of an m × c matrix r (c small: rigid modes,
+/// constraint gradients), as Q = H_1 ⋯ H_k, a product of Householder reflections from a
+/// QR factorisation of r with column pivoting: the first k columns of Q span r's columns,
+/// the other m − k their complement. Restricting a block to the complement then costs
+/// O(k m²) (a reflection from both sides per column) instead of the O(m³) of forming Z
+/// explicitly.
+struct Complement {
+    /// Unit Householder vectors v (H = I − 2 v vᵀ), zero above their pivot row.
+    reflectors: Vec<DVector<f64>>,
+}
+
+impl Complement {
+    /// Columns count when the part of them not yet spanned has squared norm above `floor`
+    /// (callers pass columns whose genuine parts are of order one).
+    fn of(r: &DMatrix<f64>, floor: f64) -> Self {
+        let m = r.nrows();
+        let mut a = r.clone();
+        let mut reflectors = Vec::new();
+        for k in 0..r.ncols().min(m) {
+            let (pivot, norm2) = (k..a.ncols())
+                .map(|j| (j, a.view((k, j), (m - k, 1)).norm_squared()))
+                .fold((k, -1.0), |best, x| if x.1 > best.1 { x } else { best });
+            if norm2 <= floor {
+                break;
+            }
+            a.swap_columns(k, pivot);
+            let mut v = DVector::zeros(m);
+            v.rows_mut(k, m - k).copy_from(&a.view((k, k), (m - k, 1)));
+            let alpha = -v[k].signum() * norm2.sqrt();
+            v[k] -= alpha;
+            v /= v.norm();
+            let vta = v.transpose() * &a;
+            a -= &v * vta * 2.0;
+            reflectors.push(v);
+        }
+        Self { reflectors }
     }
-    let eig = SymmetricEigen::new(r * r.transpose());
-    let keep: Vec<usize> = (0..m).filter(|&k| eig.eigenvalues[k] <= floor).collect();
-    let rank = m - keep.len();
-    let z = DMatrix::from_fn(m, keep.len(), |i, j| eig.eigenvectors[(i, keep[j])]);
-    (z, rank)
+
+    /// The rank k of r.
+    fn rank(&self) -> usize {
+        self.reflectors.len()
+    }
+
+    /// (Qᵀ K Q) without its first k rows and columns: K on the complement.
+    fn restrict(&self, mut k: DMatrix<f64>) -> DMatrix<f64> {
+        if self.reflectors.is_empty() {
+            return k;
+        }
+        for v in &self.reflectors {
+            // H K H = K − 2 v wᵀ − 2 w vᵀ + 4 (vᵀ w) v vᵀ with w = K v.
+            let w = &k * v;
+            let vw = v.dot(&w);
+            k -= (v * w.transpose() + &w * v.transpose()) * 2.0;
+            k += v * v.transpose() * (4.0 * vw);
+        }
+        let (n, r) = (k.nrows(), self.rank());
+        k.view((r, r), (n - r, n - r)).into_owned()
+    }
+
+    /// (Qᵀ L) without its first k rows: the columns of L in complement coordinates.
+    fn restrict_columns(&self, mut l: DMatrix<f64>) -> DMatrix<f64> {
+        for v in &self.reflectors {
+            let vtl = v.transpose() * &l;
+            l -= v * vtl * 2.0;
+        }
+        let r = self.rank();
+        l.rows(r, l.nrows() - r).into_owned()
+    }
+
+    /// Q [0; y]: complement coordinates back to block coordinates.
+    fn lift(&self, y: &DMatrix<f64>) -> DMatrix<f64> {
+        let r = self.rank();
+        let mut x = DMatrix::zeros(y.nrows() + r, y.ncols());
+        x.rows_mut(r, y.nrows()).copy_from(y);
+        for v in self.reflectors.iter().rev() {
+            let vtx = v.transpose() * &x;
+            x -= v * vtx * 2.0;
+        }
+        x
+    }
 }
 
 /// Sorted eigen-decomposition of a symmetric matrix (empty-safe), by faer's dense
@@ -211,15 +279,16 @@ impl<'a> Stability<'a> {
                         .collect::<Vec<DVector<f64>>>(),
                 )
             };
-            let (z, rigid_modes) = complement(&r, m, 1e-12);
+            let rigid = Complement::of(&r, 1e-12);
+            let rigid_modes = rigid.rank();
             let rigid_residual = if rigid_modes > 0 {
                 (&k * &r).amax() / (scale * r.amax().max(1e-300))
             } else {
                 0.0
             };
-            let mut kz = z.transpose() * &k * &z;
-            let mut basis_map = z;
+            let mut kz = rigid.restrict(k);
             // The constraints' border on the trivial block.
+            let mut border = None;
             if mu == 0 && !constraints.is_empty() && kz.nrows() > 0 {
                 let c = constraints.len();
                 let mut l = DMatrix::zeros(m, c);
@@ -239,12 +308,12 @@ impl<'a> Stability<'a> {
                     }
                 }
                 let cc = (&cc + cc.transpose()) * 0.5;
-                let lz = basis_map.transpose() * &l;
+                let lz = rigid.restrict_columns(l);
                 if cc.amax() <= 1e-12 * scale {
                     let lz = &lz / lz.amax().max(1e-300);
-                    let (zc, _) = complement(&lz, kz.nrows(), 1e-12);
-                    kz = zc.transpose() * &kz * &zc;
-                    basis_map = &basis_map * zc;
+                    let zc = Complement::of(&lz, 1e-12);
+                    kz = zc.restrict(kz);
+                    border = Some(zc);
                 } else if let Some(ci) = cc.clone().try_inverse() {
                     kz -= &lz * ci * lz.transpose();
                 }
@@ -252,7 +321,12 @@ impl<'a> Stability<'a> {
             let (values, vecs) = sorted_eigen(&kz, with_vectors);
             let keep = values.len().min(8).min(vecs.ncols());
             let vectors = if keep > 0 {
-                &basis_map * vecs.columns(0, keep)
+                let y = vecs.columns(0, keep).into_owned();
+                let y = match &border {
+                    Some(zc) => zc.lift(&y),
+                    None => y,
+                };
+                rigid.lift(&y)
             } else {
                 DMatrix::zeros(m, 0)
             };
@@ -274,5 +348,33 @@ impl<'a> Stability<'a> {
             index,
             scale,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Complement;
+    use nalgebra::DMatrix;
+
+    /// Q is orthogonal, its last m − k columns are orthogonal to r, and `restrict` is Zᵀ K Z
+    /// for those columns Z; a column dependent on the others does not count in the rank.
+    #[test]
+    fn complement_is_orthogonal_and_restricts() {
+        let m = 9;
+        let f = |i: usize, j: usize| ((i * 7 + j * 3) as f64 * 0.37).sin();
+        let mut r = DMatrix::from_fn(m, 3, f);
+        let dependent = r.column(0) * 2.0 - r.column(1) * 0.5;
+        r.set_column(2, &dependent);
+        let c = Complement::of(&r, 1e-12);
+        assert_eq!(c.rank(), 2);
+        let q = c.lift(&DMatrix::identity(m - 2, m - 2));
+        assert!((q.transpose() * &q - DMatrix::identity(m - 2, m - 2)).amax() < 1e-14);
+        assert!((q.transpose() * &r).amax() < 1e-14);
+        let a = DMatrix::from_fn(m, m, |i, j| f(i + j, i * j));
+        let k = &a + a.transpose();
+        let expected = q.transpose() * &k * &q;
+        assert!((c.restrict(k.clone()) - expected).amax() < 1e-13);
+        let l = DMatrix::from_fn(m, 2, |i, j| f(j, i + 1));
+        assert!((c.restrict_columns(l.clone()) - q.transpose() * l).amax() < 1e-14);
     }
 }
