@@ -68,6 +68,9 @@ pub struct Study {
     pub basis: SparseBasis,
     /// Measures reported along the path, with names.
     pub measures: Vec<(String, Measure)>,
+    /// Warnings about the setup that a run should report, e.g. symmetry of a mesh file beyond
+    /// its declared group ([`Scene::mesh_warnings`]).
+    pub warnings: Vec<String>,
     fluids: Vec<Fluid>,
     closed: bool,
     closing: Option<constraint::ClosingFace>,
@@ -87,6 +90,7 @@ impl Study {
     /// Builds mesh, effects, model, constraints and basis from a validated scene.
     pub fn build(scene: Scene) -> Result<Self, StudyError> {
         let mesh = scene.build_mesh()?;
+        let warnings = scene.mesh_warnings(&mesh);
         let m = &mesh.mesh;
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
         let topology = m
@@ -259,6 +263,7 @@ impl Study {
             free,
             basis,
             measures,
+            warnings,
             fluids,
             closed,
             closing,

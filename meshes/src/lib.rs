@@ -8,11 +8,15 @@
 //! checked with [`SymmetricMesh::verify`]. [`SymmetricMesh::hidden_symmetries`] finds symmetry
 //! a mesh has but does not declare.
 //!
+//! [`write`] writes meshes with fields (VTU, Gmsh, XDMF); [`read`] reads the VTU and Gmsh files
+//! back, node sets included, so that a mesh can come from a file.
+//!
 //! This crate knows groups but no physics.
 
 mod action;
 pub mod generators;
 mod mesh;
+pub mod read;
 pub mod write;
 
 pub use action::{GroupAction, SymmetricMesh, Verification, ACTION_TOL};
@@ -30,12 +34,21 @@ pub enum MeshError {
     /// The declared group does not act on the mesh as it should.
     #[error("symmetry: {0}")]
     Symmetry(String),
-    /// Writing a file failed.
+    /// Reading or writing a file failed.
     #[error("i/o on {path}: {source}")]
     Io {
         /// The file.
         path: std::path::PathBuf,
         /// The cause.
         source: std::io::Error,
+    },
+    /// A mesh file cannot be read: an unsupported extension, or content that is malformed or
+    /// not supported ([`read`]); the message says where (a line, a data array) and what.
+    #[error("{path}: {message}")]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Where and what, e.g. `line 12: expected 3 numbers …`.
+        message: String,
     },
 }

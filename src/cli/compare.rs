@@ -260,6 +260,7 @@ fn resolution(spec: &MeshSpec) -> usize {
         MeshSpec::Disc(d) => d.divisions,
         MeshSpec::Icosphere(i) => i.frequency,
         MeshSpec::TruncatedSphere(t) => t.divisions_or_default(),
+        MeshSpec::File(_) => 0,
     }
 }
 
@@ -297,6 +298,7 @@ fn describe(spec: &MeshSpec) -> String {
             t.divisions_or_default(),
             t.cut_height
         ),
+        MeshSpec::File(f) => format!("file {} group={}", f.path.display(), f.group),
     }
 }
 
@@ -327,6 +329,10 @@ fn variant(scene: &Scene, typed: &Typed, common: &Common) -> Result<Scene, CliEr
             }
             MeshSpec::TruncatedSphere(_) => {
                 mesh.insert("pattern".into(), toml::Value::String(name.clone()));
+            }
+            // The same file, declared with another group.
+            MeshSpec::File(_) => {
+                mesh.insert("group".into(), toml::Value::String(name.clone()));
             }
             MeshSpec::Icosphere(_) => {
                 return Err(bad(
@@ -973,6 +979,12 @@ pub(crate) fn run(args: &CompareArgs) -> Result<(), CliError> {
                     MeshSpec::Icosphere(i) => i.frequency *= 2,
                     MeshSpec::TruncatedSphere(t) => {
                         t.divisions = Some(t.divisions_or_default() * 2)
+                    }
+                    MeshSpec::File(_) => {
+                        return Err(CliError::Input(format!(
+                            "mesh '{}': --refine cannot refine a mesh file",
+                            t.label
+                        )))
                     }
                 }
             }

@@ -27,10 +27,11 @@ const SECTIONS: [&str; 9] = [
     "start",
 ];
 
-const GENERATORS: [&str; 3] = ["disc", "icosphere", "truncated-sphere"];
+const GENERATORS: [&str; 4] = ["disc", "icosphere", "truncated-sphere", "file"];
 const DISC_OPTIONS: [&str; 4] = ["radius", "sectors", "divisions", "group"];
 const ICOSPHERE_OPTIONS: [&str; 3] = ["radius", "frequency", "down"];
 const TRUNCATED_OPTIONS: [&str; 4] = ["radius", "cut-height", "pattern", "divisions"];
+const FILE_OPTIONS: [&str; 2] = ["path", "group"];
 const EFFECTS: [&str; 5] = ["gas", "gas-amount", "fluid", "spin", "plane"];
 const CONSTRAINTS: [&str; 3] = ["fluid-volume", "gas-amount", "fixed"];
 const ANALYSES: [&str; 3] = ["path", "equilibrium", "linear-buckling"];
@@ -179,6 +180,7 @@ fn read_mesh(v: &Value) -> Result<MeshSpec, Problem> {
             .iter()
             .chain(&ICOSPHERE_OPTIONS)
             .chain(&TRUNCATED_OPTIONS)
+            .chain(&FILE_OPTIONS)
             .copied()
             .filter(|o| !own.contains(o))
             .collect()
@@ -205,9 +207,12 @@ fn read_mesh(v: &Value) -> Result<MeshSpec, Problem> {
         "icosphere" => de(&rest, "mesh")
             .map(MeshSpec::Icosphere)
             .map_err(|p| explain(&ICOSPHERE_OPTIONS, p)),
-        _ => de(&rest, "mesh")
+        "truncated-sphere" => de(&rest, "mesh")
             .map(MeshSpec::TruncatedSphere)
             .map_err(|p| explain(&TRUNCATED_OPTIONS, p)),
+        _ => de(&rest, "mesh")
+            .map(MeshSpec::File)
+            .map_err(|p| explain(&FILE_OPTIONS, p)),
     }
     .map_err(with_tag("generator"))
 }
@@ -455,7 +460,7 @@ fn plain_expected(expected: &str) -> String {
         "usize" | "u64" | "u32" | "u16" | "u8" => "a non-negative integer".into(),
         "i64" | "i32" | "isize" => "an integer".into(),
         "a boolean" | "bool" => "true or false".into(),
-        "a string" => "a string".into(),
+        "a string" | "path string" => "a string".into(),
         "a sequence" => "an array".into(),
         "a map" => "a table".into(),
         e if e.starts_with("struct ") => "a table".into(),

@@ -36,7 +36,8 @@ use meshes::generators::{self, DiscOptions, Down, IcosphereOptions, TruncatedSph
 use meshes::{MeshError, SymmetricMesh};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use symmetry::Group;
 
 /// A validated scene. Build the mesh with [`Scene::build_mesh`], which checks the parts of
 /// the scene that refer to it.
@@ -81,7 +82,7 @@ pub struct SceneInfo {
 }
 
 /// `[mesh]`, tagged by `generator`. Options not given take the generators' defaults (the
-/// same as `memstab mesh`).
+/// same as `memstab mesh`); `generator = "file"` reads the mesh from a file instead.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "generator", rename_all = "kebab-case")]
 pub enum MeshSpec {
@@ -92,6 +93,9 @@ pub enum MeshSpec {
     /// `generator = "truncated-sphere"`: the cap z ≥ cut-height, outward normals, node set
     /// `cut`.
     TruncatedSphere(TruncatedSphereMesh),
+    /// `generator = "file"`: a mesh file (`.msh`, `.vtu`, as `memstab mesh --out` writes
+    /// them) with its node sets, declared to have the symmetry `group`.
+    File(FileMesh),
 }
 
 /// Options of the disc generator.
@@ -157,6 +161,26 @@ pub struct TruncatedSphereMesh {
     /// count of the pattern (d = 29 for C8v, 26 for C2v and C1v).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub divisions: Option<usize>,
+}
+
+/// Options of a mesh read from a file ([`meshes::read::read_mesh`]).
+///
+/// A file carries no group, so the scene declares one; building the mesh computes the group's
+/// action on the nodes and verifies it (a group that does not map the mesh onto itself is an
+/// error naming `mesh.group`), and symmetry the mesh has beyond it is reported by
+/// [`Scene::mesh_warnings`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct FileMesh {
+    /// The mesh file; the extension chooses the reader (`.msh` Gmsh 4.1 ascii, `.vtu`).
+    /// [`Scene::load`] resolves a relative path against the scene file's directory (so after
+    /// loading it is the path to open); [`Scene::from_toml_str`] keeps it as written, relative
+    /// to the current directory.
+    pub path: PathBuf,
+    /// The declared symmetry group, a name [`Group::by_name`] accepts (`C8v`, `C4`, `Ih`, …),
+    /// acting in the mesh's own coordinates. Default `C1`, the trivial group.
+    #[serde(default = "default_file_group")]
+    pub group: String,
 }
 
 /// `[material]`: an incompressible Mooney–Rivlin membrane,
@@ -583,6 +607,9 @@ fn default_cut_height() -> f64 {
 fn default_pattern() -> String {
     TruncatedSphereOptions::default().pattern
 }
+fn default_file_group() -> String {
+    "C1".to_string()
+}
 fn default_exponent() -> u32 {
     1
 }
@@ -615,11 +642,21 @@ impl MeshSpec {
             MeshSpec::Disc(_) => "disc",
             MeshSpec::Icosphere(_) => "icosphere",
             MeshSpec::TruncatedSphere(_) => "truncated-sphere",
+            MeshSpec::File(_) => "file",
+        }
+    }
+
+    /// How messages name the mesh: `the disc mesh`, `the mesh in 'disc.msh'`.
+    pub fn describe(&self) -> String {
+        match self {
+            MeshSpec::File(f) => format!("the mesh in '{}'", f.path.display()),
+            other => format!("the {} mesh", other.generator()),
         }
     }
 
     /// The number of triangles the generator will build (saturating; a cheap guard before
-    /// building).
+    /// building). A file is not read here: its count is 0 (reading costs what the file's size
+    /// is, so there is nothing to guard against).
     pub fn triangle_count(&self) -> usize {
         match self {
             MeshSpec::Disc(d) => d
@@ -633,11 +670,14 @@ impl MeshSpec {
                 let d = t.divisions_or_default();
                 8usize.saturating_mul(d).saturating_mul(d)
             }
+            MeshSpec::File(_) => 0,
         }
     }
 
     /// Builds the mesh with its symmetry group. A generator's complaint becomes a
-    /// [`SceneError::Invalid`] naming `mesh.<option>`.
+    /// [`SceneError::Invalid`] naming `mesh.<option>`; a mesh file that cannot be read or is
+    /// not a sound surface names `mesh.path`, a group that does not map it onto itself
+    /// `mesh.group`.
     pub fn build(&self) -> Result<SymmetricMesh, SceneError> {
         let built = match self {
             MeshSpec::Disc(d) => generators::disc(&DiscOptions {
@@ -670,6 +710,7 @@ impl MeshSpec {
                 opts.divisions = t.divisions_or_default();
                 generators::truncated_sphere(&opts)
             }
+            MeshSpec::File(f) => return f.build().map_err(SceneError::from),
         };
         built.map_err(|e| self.mesh_error(e).into())
     }
@@ -685,6 +726,7 @@ impl MeshSpec {
             MeshSpec::Disc(_) => &["radius", "sectors", "divisions", "group"],
             MeshSpec::Icosphere(_) => &["radius", "frequency", "down"],
             MeshSpec::TruncatedSphere(_) => &["radius", "cut_height", "pattern", "divisions"],
+            MeshSpec::File(_) => &["path", "group"],
         };
         if options.contains(&first.as_str()) {
             let key = format!("mesh.{}", first.replace('_', "-"));
@@ -695,6 +737,53 @@ impl MeshSpec {
         } else {
             error::Problem::new("mesh", format!("'mesh' ({}): {text}", self.generator()))
         }
+    }
+}
+
+impl FileMesh {
+    /// Reads the file, pairs the mesh with the declared group and verifies the action.
+    fn build(&self) -> Result<SymmetricMesh, error::Problem> {
+        let shown = self.path.display();
+        let bad_file = |why: String| {
+            error::Problem::new("mesh.path", format!("'mesh.path' = \"{shown}\": {why}"))
+        };
+        let not_symmetric = |why: String| {
+            error::Problem::new(
+                "mesh.group",
+                format!(
+                    "'mesh.group' = \"{}\": the group does not map the mesh in '{shown}' to \
+                     itself ({why})",
+                    self.group
+                ),
+            )
+        };
+        let group = Group::by_name(&self.group).map_err(|e| {
+            error::Problem::new(
+                "mesh.group",
+                format!("'mesh.group' = \"{}\": {e}", self.group),
+            )
+        })?;
+        let mesh = meshes::read::read_mesh(&self.path).map_err(|e| {
+            bad_file(match e {
+                MeshError::Io { source, .. } => format!("cannot read the mesh file: {source}"),
+                MeshError::Read { message, .. } => message,
+                other => other.to_string(),
+            })
+        })?;
+        let sym = SymmetricMesh::new(mesh, group).map_err(|e| not_symmetric(inner(e)))?;
+        sym.verify().map_err(|e| match e {
+            MeshError::Topology(m) => bad_file(format!("not a usable membrane: {m}")),
+            other => not_symmetric(inner(other)),
+        })?;
+        Ok(sym)
+    }
+}
+
+/// The text of a symmetry or topology error without its `symmetry:` / `topology:` label.
+fn inner(e: MeshError) -> String {
+    match e {
+        MeshError::Symmetry(m) | MeshError::Topology(m) | MeshError::Invalid(m) => m,
+        other => other.to_string(),
     }
 }
 
@@ -714,14 +803,35 @@ impl Scene {
         load::parse(text, origin)
     }
 
-    /// Reads, parses and validates a scene file (see [`Scene::from_toml_str`]).
+    /// Reads, parses and validates a scene file (see [`Scene::from_toml_str`]). A relative
+    /// `mesh.path` of a `generator = "file"` mesh is resolved against the directory of the
+    /// scene file.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::from_toml_str(&text, &path.display().to_string())
+        let origin = path.display().to_string();
+        let mut scene = Self::from_toml_str(&text, &origin)?;
+        if let MeshSpec::File(f) = &mut scene.mesh {
+            if f.path.is_relative() {
+                let resolved = path.parent().unwrap_or(Path::new("")).join(&f.path);
+                // The scene must stay writable as TOML (`to_toml`), which needs UTF-8.
+                if resolved.to_str().is_none() {
+                    return Err(error::Problem::at(
+                        "mesh.path",
+                        format!(
+                            "resolved against the scene's directory is not valid UTF-8: {}",
+                            resolved.display()
+                        ),
+                    )
+                    .into_error(&origin));
+                }
+                f.path = resolved;
+            }
+        }
+        Ok(scene)
     }
 
     /// Builds the mesh and checks the parts of the scene that refer to it
@@ -730,6 +840,37 @@ impl Scene {
         let mesh = self.mesh.build().map_err(|e| e.with_origin(&self.origin))?;
         self.check_mesh(&mesh)?;
         Ok(mesh)
+    }
+
+    /// Warnings about the built mesh for the run's report: for a mesh read from a file, the
+    /// symmetry it has beyond the declared `mesh.group` ([`SymmetricMesh::hidden_symmetries`]),
+    /// which the analysis does not use. Generated meshes have exactly their group by
+    /// construction, so they get none.
+    pub fn mesh_warnings(&self, mesh: &SymmetricMesh) -> Vec<String> {
+        let MeshSpec::File(f) = &self.mesh else {
+            return Vec::new();
+        };
+        let hidden = mesh.hidden_symmetries();
+        if hidden.is_empty() {
+            return Vec::new();
+        }
+        const SHOWN: usize = 3;
+        let mut list = hidden
+            .iter()
+            .take(SHOWN)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("; ");
+        if hidden.len() > SHOWN {
+            list.push_str(&format!(" and {} more", hidden.len() - SHOWN));
+        }
+        vec![format!(
+            "the mesh in '{}' has symmetry beyond mesh.group = \"{}\" ({list}); the analysis \
+             uses only {}: declare the larger group to split the tangent by it",
+            f.path.display(),
+            f.group,
+            mesh.group().name()
+        )]
     }
 
     /// Checks the scene against its mesh: every `boundary.fixed` name is a node set of the

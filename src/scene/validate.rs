@@ -295,6 +295,14 @@ fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
                 at_least("mesh.divisions", d, 1)?;
             }
         }
+        MeshSpec::File(f) => {
+            if f.path.as_os_str().is_empty() {
+                return Err(Problem::at("mesh.path", "must name a mesh file, got \"\""));
+            }
+            if let Err(e) = symmetry::Group::by_name(&f.group) {
+                return Err(Problem::at("mesh.group", format!("= \"{}\": {e}", f.group)));
+            }
+        }
     }
     Ok(())
 }
@@ -536,15 +544,16 @@ fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
 /// The checks that need the mesh (see [`Scene::check_mesh`]).
 pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Problem> {
     let mesh = &sym.mesh;
-    let generator = scene.mesh.generator();
+    // "the disc mesh", "the mesh in 'disc.msh'".
+    let the_mesh = scene.mesh.describe();
     for (i, name) in scene.boundary.fixed.iter().enumerate() {
         if !mesh.boundaries.contains_key(name) {
             let key = format!("boundary.fixed[{i}]");
             let available: Vec<&str> = mesh.boundaries.keys().map(String::as_str).collect();
             let has = if available.is_empty() {
-                format!("the {generator} mesh has no node sets")
+                format!("{the_mesh} has no node sets")
             } else {
-                format!("the {generator} mesh has: {}", available.join(", "))
+                format!("{the_mesh} has: {}", available.join(", "))
             };
             return Err(Problem::new(
                 &key,
@@ -554,7 +563,7 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
     }
     let topology = mesh
         .topology()
-        .map_err(|e| Problem::new("mesh", format!("'mesh' ({generator}): {e}")))?;
+        .map_err(|e| Problem::new("mesh", format!("'mesh' ({}): {e}", scene.mesh.generator())))?;
     let fixed: BTreeSet<usize> = scene.fixed_nodes(sym).into_iter().collect();
     let rim: BTreeSet<usize> = topology.boundary_loops.iter().flatten().copied().collect();
     let loose = rim.difference(&fixed).count();
@@ -568,7 +577,7 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
                 &path,
                 format!(
                     "'{path}' ({}) needs a closed membrane or a fixed rim, but {loose} of the {} \
-                     rim nodes of the {generator} mesh are not in boundary.fixed",
+                     rim nodes of {the_mesh} are not in boundary.fixed",
                     effect.kind(),
                     rim.len()
                 ),
@@ -585,8 +594,8 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
                 return Err(Problem::new(
                     &key,
                     format!(
-                        "'{key}' = \"{side}\" needs an open membrane; the {generator} mesh is \
-                         closed (use \"inside\")"
+                        "'{key}' = \"{side}\" needs an open membrane; {the_mesh} is closed \
+                         (use \"inside\")"
                     ),
                 ));
             }
@@ -601,8 +610,8 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
             return Err(Problem::at(
                 "analysis.stop-stretch",
                 format!(
-                    "= {} needs a closed membrane (the stretch is (V/V0)^(1/3)); the {generator} \
-                     mesh is open",
+                    "= {} needs a closed membrane (the stretch is (V/V0)^(1/3)); {the_mesh} is \
+                     open",
                     num(*s)
                 ),
             ));
