@@ -25,6 +25,7 @@
 //! The fixed-point space is the trivial irrep's block (d = 1, D = 1). Fixed nodes form whole
 //! orbits and carry no unknowns.
 
+use crate::linalg::SymmetricPattern;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout};
 use meshes::GroupAction;
@@ -118,6 +119,94 @@ impl Seeds {
         &self.matrices[g * self.d * self.d..(g + 1) * self.d * self.d]
     }
 
+    /// Column e of Bᵀ K B (module docs) added into `out_col`: w_b = K s_{e,b} gathered by
+    /// node (the neighbours j of e's representative), then ⟨s_{f,b'}, T(g) w_b⟩ for the
+    /// elements g carrying j to the representative of the columns f on j's orbit.
+    fn tangent_column(
+        &self,
+        e: usize,
+        layout: &Layout,
+        tangent: &[f64],
+        scratch: &mut ColumnScratch,
+        out_col: &mut [f64],
+    ) {
+        let frame = &*self.frame;
+        let d = self.d;
+        let coef = d as f64 / frame.order as f64;
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let i0 = self.rep[e] as usize;
+        let s_e = &self.seeds[e * d..(e + 1) * d];
+        let ColumnScratch { touched, w, v, u } = scratch;
+        touched.clear();
+        w.clear();
+        for c in 0..3 {
+            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+            let range = col_ptr[dof]..col_ptr[dof + 1];
+            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
+                let (j, comp) = frame.node_of[r];
+                let t = match touched.iter().position(|&n| n == j) {
+                    Some(t) => t,
+                    None => {
+                        touched.push(j);
+                        w.resize(w.len() + d, Vector3::zeros());
+                        touched.len() - 1
+                    }
+                };
+                for (b, s) in s_e.iter().enumerate() {
+                    w[t * d + b][comp as usize] += k * s[c];
+                }
+            }
+        }
+        for (t, &j) in touched.iter().enumerate() {
+            let cols = self.by_orbit[frame.orbit_of[j as usize] as usize].clone();
+            if cols.is_empty() {
+                continue;
+            }
+            for &g in frame.to_rep(j as usize) {
+                let r = &frame.rotations[g as usize];
+                let dm = self.dmat(g as usize);
+                for b in 0..d {
+                    v[b] = r * w[t * d + b];
+                }
+                for b2 in 0..d {
+                    u[b2] = (0..d).fold(Vector3::zeros(), |acc, b| acc + v[b] * dm[b2 * d + b]);
+                }
+                for f in cols.clone() {
+                    let s_f = &self.seeds[f as usize * d..(f as usize + 1) * d];
+                    let x: f64 = s_f.iter().zip(u.iter()).map(|(s, u)| s.dot(u)).sum();
+                    out_col[f as usize] += coef * x;
+                }
+            }
+        }
+    }
+
+    /// The pattern of Bᵀ K B: column e meets every column on an orbit that holds a
+    /// neighbour of e's representative (by K's pattern).
+    fn block_pattern(&self, layout: &Layout) -> SymmetricPattern {
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let mut entries = Vec::new();
+        let mut orbits: Vec<u32> = Vec::new();
+        for e in 0..self.rep.len() {
+            let i0 = self.rep[e] as usize;
+            orbits.clear();
+            for c in 0..3 {
+                let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+                for &r in &row_idx[col_ptr[dof]..col_ptr[dof + 1]] {
+                    let o = self.frame.orbit_of[self.frame.node_of[r].0 as usize];
+                    if !orbits.contains(&o) {
+                        orbits.push(o);
+                    }
+                }
+            }
+            for &o in &orbits {
+                entries.extend(self.by_orbit[o as usize].clone().map(|f| (f as usize, e)));
+            }
+        }
+        SymmetricPattern::from_entries(self.rep.len(), entries)
+    }
+
     /// Partner a of column e, Σ_b P_{ab} s_{e,b}, summed over the whole group.
     fn column(
         &self,
@@ -157,6 +246,25 @@ impl Seeds {
         }
         col.sort_unstable_by_key(|&(dof, _)| dof);
         col
+    }
+}
+
+/// Per-thread scratch of [`Seeds::tangent_column`].
+struct ColumnScratch {
+    touched: Vec<u32>,
+    w: Vec<Vector3<f64>>,
+    v: Vec<Vector3<f64>>,
+    u: Vec<Vector3<f64>>,
+}
+
+impl ColumnScratch {
+    fn new(d: usize) -> Self {
+        Self {
+            touched: Vec::new(),
+            w: Vec::new(),
+            v: vec![Vector3::zeros(); d],
+            u: vec![Vector3::zeros(); d],
+        }
     }
 }
 
@@ -231,6 +339,7 @@ fn orbit_basis(
         columns,
         by_dof: std::sync::OnceLock::new(),
         seeds: Some(seeds),
+        pattern: std::sync::OnceLock::new(),
     }
 }
 
@@ -252,6 +361,8 @@ pub struct SparseBasis {
     by_dof: std::sync::OnceLock<Vec<Vec<u32>>>,
     /// The orbit-local form, when the basis was built from a group action.
     seeds: Option<Seeds>,
+    /// The sparsity pattern of Bᵀ K B (built on first use).
+    pattern: std::sync::OnceLock<Arc<SymmetricPattern>>,
 }
 
 impl SparseBasis {
@@ -271,6 +382,7 @@ impl SparseBasis {
             columns,
             by_dof: std::sync::OnceLock::new(),
             seeds: None,
+            pattern: std::sync::OnceLock::new(),
         }
     }
 
@@ -340,70 +452,13 @@ impl SparseBasis {
         if m == 0 {
             return out;
         }
-        let frame = &*seeds.frame;
-        let d = seeds.d;
-        let coef = d as f64 / frame.order as f64;
-        let pattern = layout.pattern();
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         out.as_mut_slice()
             .par_chunks_mut(m)
             .enumerate()
             .for_each_init(
-                || {
-                    (
-                        Vec::<u32>::new(),
-                        Vec::<Vector3<f64>>::new(),
-                        vec![Vector3::zeros(); 2 * d],
-                    )
-                },
-                |(touched, w, vu), (e, out_col)| {
-                    let i0 = seeds.rep[e] as usize;
-                    let s_e = &seeds.seeds[e * d..(e + 1) * d];
-                    // w_b = K s_{e,b}, gathered by node (the neighbours of i0).
-                    touched.clear();
-                    w.clear();
-                    for c in 0..3 {
-                        let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
-                        let range = col_ptr[dof]..col_ptr[dof + 1];
-                        for (&r, &k) in row_idx[range.clone()].iter().zip(&eval.tangent[range]) {
-                            let (j, comp) = frame.node_of[r];
-                            let t = match touched.iter().position(|&n| n == j) {
-                                Some(t) => t,
-                                None => {
-                                    touched.push(j);
-                                    w.resize(w.len() + d, Vector3::zeros());
-                                    touched.len() - 1
-                                }
-                            };
-                            for (b, s) in s_e.iter().enumerate() {
-                                w[t * d + b][comp as usize] += k * s[c];
-                            }
-                        }
-                    }
-                    // ⟨s_{f,b'}, T(g) w_b⟩ for the g carrying j to its representative.
-                    let (v, u) = vu.split_at_mut(d);
-                    for (t, &j) in touched.iter().enumerate() {
-                        let cols = seeds.by_orbit[frame.orbit_of[j as usize] as usize].clone();
-                        if cols.is_empty() {
-                            continue;
-                        }
-                        for &g in frame.to_rep(j as usize) {
-                            let r = &frame.rotations[g as usize];
-                            let dm = seeds.dmat(g as usize);
-                            for b in 0..d {
-                                v[b] = r * w[t * d + b];
-                            }
-                            for b2 in 0..d {
-                                u[b2] = (0..d)
-                                    .fold(Vector3::zeros(), |acc, b| acc + v[b] * dm[b2 * d + b]);
-                            }
-                            for f in cols.clone() {
-                                let s_f = &seeds.seeds[f as usize * d..(f as usize + 1) * d];
-                                let x: f64 = s_f.iter().zip(u.iter()).map(|(s, u)| s.dot(u)).sum();
-                                out_col[f as usize] += coef * x;
-                            }
-                        }
-                    }
+                || ColumnScratch::new(seeds.d),
+                |scratch, (e, out_col)| {
+                    seeds.tangent_column(e, layout, &eval.tangent, scratch, out_col)
                 },
             );
         for (c, a) in &eval.rank_one {
@@ -411,6 +466,49 @@ impl SparseBasis {
             out += &ar * ar.transpose() * *c;
         }
         out
+    }
+
+    /// The sparse part of Bᵀ K B (without `eval`'s rank-one terms) on its own pattern, for
+    /// a basis built from a group action (`None` otherwise). The pattern — column e meets
+    /// the columns on the orbits next to e's representative — is computed on first use.
+    pub fn restrict_tangent_sparse(
+        &self,
+        layout: &Layout,
+        eval: &Evaluation,
+    ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
+        let seeds = self.seeds.as_ref()?;
+        let pattern = self
+            .pattern
+            .get_or_init(|| Arc::new(seeds.block_pattern(layout)))
+            .clone();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let m = self.dim();
+        let columns: Vec<Vec<f64>> = (0..m)
+            .into_par_iter()
+            .map_init(
+                || (ColumnScratch::new(seeds.d), vec![0.0; m]),
+                |(scratch, dense), e| {
+                    seeds.tangent_column(e, layout, &eval.tangent, scratch, dense);
+                    let rows = &row_idx[col_ptr[e]..col_ptr[e + 1]];
+                    let values = rows.iter().map(|&r| dense[r]).collect();
+                    rows.iter().for_each(|&r| dense[r] = 0.0);
+                    values
+                },
+            )
+            .collect();
+        // Symmetrise: the two triangles agree up to round-off.
+        let mut values: Vec<f64> = columns.concat();
+        let mut sym = values.clone();
+        for e in 0..m {
+            for p in col_ptr[e]..col_ptr[e + 1] {
+                let q = pattern
+                    .position(e, row_idx[p])
+                    .expect("the block pattern is symmetric");
+                sym[p] = 0.5 * (values[p] + values[q]);
+            }
+        }
+        std::mem::swap(&mut values, &mut sym);
+        Some((pattern, values))
     }
 
     /// The columns containing each unknown.
@@ -603,9 +701,15 @@ pub struct SymmetricProblem<'a> {
     eval: Evaluation,
     u: Vec<f64>,
     work: Vec<f64>,
+    /// From this many columns on the restricted tangent is passed on sparse.
+    sparse_from: usize,
     /// Where the evaluations' time went (for `memstab bench`).
     pub times: PhaseTimes,
 }
+
+/// Default [`SymmetricProblem::with_sparse_tangent_from`]: below this size a dense LU of the
+/// extended system is cheaper than a sparse one (f = 32: 272 columns; f = 64: 1 056).
+pub const SPARSE_TANGENT_FROM: usize = 600;
 
 /// Time spent by a [`SymmetricProblem`]'s evaluations, by phase.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -636,6 +740,7 @@ impl<'a> SymmetricProblem<'a> {
             eval: model.new_evaluation(),
             u: vec![0.0; model.unknowns()],
             work: Vec::new(),
+            sparse_from: SPARSE_TANGENT_FROM,
             model,
             basis,
             constraints,
@@ -643,6 +748,39 @@ impl<'a> SymmetricProblem<'a> {
             free,
             times: PhaseTimes::default(),
         }
+    }
+
+    /// Passes the restricted tangent on as a sparse matrix (to a sparse LU of the extended
+    /// system) when the basis has at least `columns` columns; `usize::MAX` keeps it dense.
+    pub fn with_sparse_tangent_from(mut self, columns: usize) -> Self {
+        self.sparse_from = columns;
+        self
+    }
+
+    /// Bᵀ K B of the last evaluation, sparse for a large basis built from a group action.
+    fn restricted_tangent(&mut self) -> crate::continuation::Tangent {
+        use crate::continuation::Tangent;
+        let layout = self.model.layout();
+        if self.basis.dim() >= self.sparse_from {
+            if let Some((pattern, values)) = self.basis.restrict_tangent_sparse(layout, &self.eval)
+            {
+                let rank_one = self
+                    .eval
+                    .rank_one
+                    .iter()
+                    .map(|(c, a)| (*c, self.basis.restrict(a)))
+                    .collect();
+                return Tangent::Sparse {
+                    pattern,
+                    values,
+                    rank_one,
+                };
+            }
+        }
+        Tangent::Dense(
+            self.basis
+                .restrict_tangent(layout, &self.eval, &mut self.work),
+        )
     }
 
     /// The full displacement u = B q.
@@ -720,9 +858,7 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
         }
         let lin = crate::continuation::Linearization {
             residual: self.basis.restrict(&self.eval.residual),
-            tangent: self
-                .basis
-                .restrict_tangent(self.model.layout(), &self.eval, &mut self.work),
+            tangent: self.restricted_tangent(),
             loads,
             constraints,
             constraint_q,

@@ -19,8 +19,11 @@
 //! with a report of where and why. Turning points of λ (sign changes of t_λ) are localised
 //! by a secant search on the step length until t_λ vanishes.
 
+use crate::linalg::SymmetricPattern;
 use crate::model::ModelError;
+use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::{DMatrix, DVector};
+use std::sync::Arc;
 
 /// Largest distance, in steps, between the converged point and the predictor.
 const MAX_CORRECTOR_DISTANCE: f64 = 0.5;
@@ -47,7 +50,7 @@ pub struct Linearization {
     /// R(q, λ) (m).
     pub residual: DVector<f64>,
     /// ∂R/∂q (m × m, symmetric).
-    pub tangent: DMatrix<f64>,
+    pub tangent: Tangent,
     /// ∂R/∂λ (m × (c+1)).
     pub loads: DMatrix<f64>,
     /// g(q, λ) (c).
@@ -58,25 +61,141 @@ pub struct Linearization {
     pub constraint_lambda: DMatrix<f64>,
 }
 
+/// ∂R/∂q: dense for small problems; for large ones sparse, plus rank-one terms
+/// Σ c a aᵀ (a gas amount's stiffness) kept apart so that they do not fill the matrix.
+#[derive(Debug, Clone)]
+pub enum Tangent {
+    /// A dense symmetric matrix.
+    Dense(DMatrix<f64>),
+    /// A symmetric sparse matrix (both triangles stored) and rank-one terms (c, a).
+    Sparse {
+        /// The pattern.
+        pattern: Arc<SymmetricPattern>,
+        /// Values aligned with the pattern's row indices.
+        values: Vec<f64>,
+        /// The terms c a aᵀ.
+        rank_one: Vec<(f64, DVector<f64>)>,
+    },
+}
+
+impl Tangent {
+    /// max |K_ij| (of the sparse part and of each rank-one term).
+    pub fn amax(&self) -> f64 {
+        match self {
+            Tangent::Dense(k) => k.amax(),
+            Tangent::Sparse {
+                values, rank_one, ..
+            } => rank_one
+                .iter()
+                .map(|(c, a)| c.abs() * a.amax().powi(2))
+                .fold(values.iter().fold(0.0, |m, v| m.max(v.abs())), f64::max),
+        }
+    }
+}
+
+/// An extended Jacobian ready to solve.
+enum Extended {
+    Dense(DMatrix<f64>),
+    /// n equations, of which the first `n - extra` are the extended system and the last
+    /// `extra` define y_r = c_r σ_q a_rᵀ x for the rank-one terms.
+    Sparse {
+        n: usize,
+        extra: usize,
+        triplets: Vec<Triplet<usize, usize, f64>>,
+    },
+}
+
+impl Extended {
+    /// Solves A x = rhs (rhs of the extended system's size); `None` if A is singular.
+    fn solve(self, rhs: &DVector<f64>) -> Option<DVector<f64>> {
+        match self {
+            Extended::Dense(a) => solve_dense(a, rhs),
+            Extended::Sparse { n, extra, triplets } => {
+                let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).ok()?;
+                let lu = a.sp_lu().ok()?;
+                let mut b = faer::Mat::<f64>::zeros(n, 1);
+                for i in 0..n - extra {
+                    b[(i, 0)] = rhs[i];
+                }
+                let x = faer::linalg::solvers::Solve::solve(&lu, &b);
+                let x = DVector::from_fn(n - extra, |i, _| x[(i, 0)]);
+                x.iter().all(|v| v.is_finite()).then_some(x)
+            }
+        }
+    }
+}
+
 impl Linearization {
-    /// [[K σ_q, L diag(σ_λ)], [G_q σ_q, G_λ diag(σ_λ)], [0]]: the Jacobian in the scaled
-    /// unknowns, with an empty last row for the arclength equation.
-    fn scaled_jacobian(&self, opts: &PathOptions) -> DMatrix<f64> {
+    /// [[K σ_q, L diag(σ_λ)], [G_q σ_q, G_λ diag(σ_λ)], [last_rowᵀ]]: the Jacobian in the
+    /// scaled unknowns, with `last_row` (the arclength or "control fixed" equation) last.
+    fn extended(&self, opts: &PathOptions, last_row: &DVector<f64>) -> Extended {
         let (m, c) = (self.residual.len(), self.constraints.len());
         let n = m + c + 1;
-        let mut a = DMatrix::zeros(n, n);
-        a.view_mut((0, 0), (m, m))
-            .copy_from(&(&self.tangent * opts.state_scale));
-        a.view_mut((m, 0), (c, m))
-            .copy_from(&(&self.constraint_q * opts.state_scale));
-        for j in 0..=c {
-            let sj = opts.parameter_scales.get(j).copied().unwrap_or(1.0);
-            a.view_mut((0, m + j), (m, 1))
-                .copy_from(&(self.loads.column(j) * sj));
-            a.view_mut((m, m + j), (c, 1))
-                .copy_from(&(self.constraint_lambda.column(j) * sj));
+        let sq = opts.state_scale;
+        let sl = |j: usize| opts.parameter_scales.get(j).copied().unwrap_or(1.0);
+        match &self.tangent {
+            Tangent::Dense(k) => {
+                let mut a = DMatrix::zeros(n, n);
+                a.view_mut((0, 0), (m, m)).copy_from(&(k * sq));
+                a.view_mut((m, 0), (c, m))
+                    .copy_from(&(&self.constraint_q * sq));
+                for j in 0..=c {
+                    a.view_mut((0, m + j), (m, 1))
+                        .copy_from(&(self.loads.column(j) * sl(j)));
+                    a.view_mut((m, m + j), (c, 1))
+                        .copy_from(&(self.constraint_lambda.column(j) * sl(j)));
+                }
+                a.row_mut(n - 1).copy_from(&last_row.transpose());
+                Extended::Dense(a)
+            }
+            Tangent::Sparse {
+                pattern,
+                values,
+                rank_one,
+            } => {
+                let extra = rank_one.len();
+                let mut t = Vec::with_capacity(values.len() + (2 * c + 3 + 2 * extra) * m);
+                let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+                for j in 0..m {
+                    for p in col_ptr[j]..col_ptr[j + 1] {
+                        t.push(Triplet::new(row_idx[p], j, values[p] * sq));
+                    }
+                }
+                let push_dense = |t: &mut Vec<Triplet<usize, usize, f64>>, i, j, v: f64| {
+                    if v != 0.0 {
+                        t.push(Triplet::new(i, j, v));
+                    }
+                };
+                for j in 0..=c {
+                    for i in 0..m {
+                        push_dense(&mut t, i, m + j, self.loads[(i, j)] * sl(j));
+                    }
+                    for i in 0..c {
+                        push_dense(&mut t, m + i, m + j, self.constraint_lambda[(i, j)] * sl(j));
+                    }
+                }
+                for i in 0..c {
+                    for j in 0..m {
+                        push_dense(&mut t, m + i, j, self.constraint_q[(i, j)] * sq);
+                    }
+                }
+                for (j, &v) in last_row.iter().enumerate() {
+                    push_dense(&mut t, n - 1, j, v);
+                }
+                for (r, (cr, a)) in rank_one.iter().enumerate() {
+                    for (i, &ai) in a.iter().enumerate() {
+                        push_dense(&mut t, i, n + r, ai);
+                        push_dense(&mut t, n + r, i, cr * sq * ai);
+                    }
+                    t.push(Triplet::new(n + r, n + r, -1.0));
+                }
+                Extended::Sparse {
+                    n: n + extra,
+                    extra,
+                    triplets: t,
+                }
+            }
         }
-        a
     }
 
     /// |R| small against the forces a unit scaled change of q or λ makes (‖K‖ σ_q and
@@ -203,15 +322,14 @@ pub fn solve_at<P: DenseProblem>(
         let lin = problem.evaluate(&q, &lambda).map_err(|e| e.to_string())?;
         let c = lin.constraints.len();
         // The arclength row becomes "control fixed".
-        let mut a = lin.scaled_jacobian(opts);
-        a[(m + c, m)] = 1.0;
+        let mut last = DVector::zeros(m + c + 1);
+        last[m] = 1.0;
+        let a = lin.extended(opts, &last);
         let mut rhs = DVector::zeros(m + c + 1);
         rhs.rows_mut(0, m).copy_from(&(-&lin.residual));
         rhs.rows_mut(m, c).copy_from(&(-&lin.constraints));
-        let d = a
-            .lu()
-            .solve(&rhs)
-            .ok_or_else(|| format!("singular tangent at λ = {}", lambda[0]))?;
+        let d =
+            a.solve(&rhs).ok_or_else(|| format!("singular tangent at λ = {}", lambda[0]))?;
         q += d.rows(0, m) * opts.state_scale;
         for j in 1..=c {
             lambda[j] += d[m + j] * opts.parameter_scales.get(j).copied().unwrap_or(1.0);
@@ -229,6 +347,25 @@ pub fn solve_at<P: DenseProblem>(
     ))
 }
 
+/// Above this size the extended system is solved by faer's blocked, multi-threaded LU
+/// (the fixed-point space of an f = 128 icosphere has ≈ 4 200 unknowns: nalgebra's
+/// unblocked LU takes seconds there); below it by nalgebra's, which is faster on tiny ones.
+const BLOCKED_LU_FROM: usize = 256;
+
+/// A x = rhs by LU with partial pivoting; `None` for a singular A (a zero pivot, or a
+/// non-finite solution).
+fn solve_dense(a: DMatrix<f64>, rhs: &DVector<f64>) -> Option<DVector<f64>> {
+    let n = a.nrows();
+    if n < BLOCKED_LU_FROM {
+        return a.lu().solve(rhs);
+    }
+    let lu = faer::MatRef::from_column_major_slice(a.as_slice(), n, n).partial_piv_lu();
+    let b = faer::MatRef::from_column_major_slice(rhs.as_slice(), n, 1);
+    let x = faer::linalg::solvers::Solve::solve(&lu, b);
+    let x = DVector::from_fn(n, |i, _| x[(i, 0)]);
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
 /// The unit tangent of the path at a solution, oriented along `previous` (or so that the
 /// control moves in `opts.direction` when there is none).
 fn tangent_at(
@@ -238,14 +375,17 @@ fn tangent_at(
 ) -> Option<DVector<f64>> {
     let (m, c) = (lin.residual.len(), lin.constraints.len());
     let n = m + c + 1;
-    let mut a = lin.scaled_jacobian(opts);
     let mut rhs = DVector::zeros(n);
     rhs[n - 1] = 1.0;
-    match previous {
-        Some(t) => a.row_mut(n - 1).copy_from(&t.transpose()),
-        None => a[(n - 1, m)] = 1.0,
-    }
-    let mut t = a.lu().solve(&rhs)?;
+    let last = match previous {
+        Some(t) => t.clone(),
+        None => {
+            let mut e = DVector::zeros(n);
+            e[m] = 1.0;
+            e
+        }
+    };
+    let mut t = lin.extended(opts, &last).solve(&rhs)?;
     t /= t.norm();
     let sign = match previous {
         Some(p) => t.dot(p),
@@ -277,8 +417,7 @@ pub fn step<P: DenseProblem>(
     for it in 1..=opts.max_iterations {
         let lin = problem.evaluate(&q, &lambda).map_err(|e| e.to_string())?;
         let c = lin.constraints.len();
-        let mut a = lin.scaled_jacobian(opts);
-        a.row_mut(m + c).copy_from(&t.transpose());
+        let a = lin.extended(opts, t);
         let mut g = DVector::zeros(m + c + 1);
         g.rows_mut(0, m).copy_from(&lin.residual);
         g.rows_mut(m, c).copy_from(&lin.constraints);
@@ -288,7 +427,7 @@ pub fn step<P: DenseProblem>(
         }
         g[m + c] = arc;
         let converged = lin.converged(opts);
-        let d = a.lu().solve(&(-&g)).ok_or("singular extended Jacobian")?;
+        let d = a.solve(&(-&g)).ok_or("singular extended Jacobian")?;
         q += d.rows(0, m) * sq;
         for j in 0..nl {
             lambda[j] += d[m + j] * sl(j);
@@ -445,4 +584,27 @@ pub fn follow<P: DenseProblem>(
         }
     }
     Ok(path)
+}
+
+#[cfg(test)]
+mod solve_tests {
+    use super::{solve_dense, BLOCKED_LU_FROM};
+    use nalgebra::{DMatrix, DVector};
+
+    /// Both LU paths solve a well-conditioned system to round-off, and refuse a singular one.
+    #[test]
+    fn blocked_and_small_lu_agree_and_refuse_singular_matrices() {
+        for n in [BLOCKED_LU_FROM - 1, BLOCKED_LU_FROM + 44] {
+            let a = DMatrix::from_fn(n, n, |i, j| {
+                ((i * 31 + j * 17) as f64 * 0.13).sin() + if i == j { n as f64 } else { 0.0 }
+            });
+            let x = DVector::from_fn(n, |i, _| (i as f64 * 0.7).cos());
+            let b = &a * &x;
+            let y = solve_dense(a.clone(), &b).expect("regular");
+            assert!((y - &x).amax() < 1e-12, "n = {n}");
+            let mut singular = a;
+            singular.row_mut(3).fill(0.0);
+            assert!(solve_dense(singular, &b).is_none(), "n = {n}");
+        }
+    }
 }

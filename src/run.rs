@@ -75,7 +75,7 @@ pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<Ru
         states: Vec::new(),
         turning: Vec::new(),
         critical: Vec::new(),
-        warnings: Vec::new(),
+        warnings: study.warnings.clone(),
     };
     let stop = match &study.scene.analysis {
         Analysis::LinearBuckling(a) => {
@@ -270,6 +270,17 @@ impl Runner<'_> {
         let mut warnings = Vec::new();
         for mu in 0..a.blocks.len() {
             let (n0, n1) = (a.blocks[mu].negative, b.blocks[mu].negative);
+            if n0 != n1 && a.blocks[mu].eigenvalues.is_empty() {
+                warnings.push(format!(
+                    "the index of {} changed between steps {after_step} and {} (by {}); its block has {} columns, more than the {} whose eigenvalues are computed, so the crossing was not localised",
+                    a.blocks[mu].irrep,
+                    after_step + 1,
+                    n1 as i64 - n0 as i64,
+                    a.blocks[mu].size,
+                    crate::stability::DENSE_BLOCK_LIMIT
+                ));
+                continue;
+            }
             for k in n0.min(n1)..n0.max(n1) {
                 let g0 = a.blocks[mu].eigenvalues.get(k).copied().unwrap_or(0.0);
                 let g1 = b.blocks[mu].eigenvalues.get(k).copied().unwrap_or(0.0);
@@ -313,6 +324,10 @@ impl Runner<'_> {
                     continue;
                 };
                 let block = &sp.blocks[mu];
+                if block.vectors.ncols() == 0 {
+                    warnings.push(not_localised("no eigenvector at the best point"));
+                    continue;
+                }
                 let ib = &stab.basis().irreps[mu];
                 let v = block
                     .vectors

@@ -16,10 +16,12 @@
 //! The index of the state is Σ_μ d_μ · neg(block μ).
 
 use crate::adapted::AdaptedBasis;
+use crate::linalg::{SymmetricFactorization, SymmetricPattern};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, FeModel, Model, ModelError, Request};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::Serialize;
+use std::sync::Mutex;
 
 /// The spectrum of one irrep's block.
 #[derive(Debug, Clone, Serialize)]
@@ -68,7 +70,16 @@ pub struct Stability<'a> {
     model: &'a FeModel,
     basis: &'a AdaptedBasis,
     motions: Vec<[f64; 6]>,
+    /// Blocks with more columns than this get only their inertia, from a sparse LBLᵀ.
+    dense_limit: usize,
+    /// Per block, the sparse factorisation of its bordered matrix and its border size.
+    factorizations: Vec<Mutex<Option<(usize, SymmetricFactorization)>>>,
 }
+
+/// Default [`Stability::with_dense_limit`]: blocks up to this size get all their eigenvalues
+/// from a dense eigen-solve (≈ 1–2 s at m = 2000 on one core, growing as m³), which crossings
+/// are localised with; larger blocks get their exact negative count only.
+pub const DENSE_BLOCK_LIMIT: usize = 2000;
 
 /// The orthogonal complement of the columns of an m × c matrix r (c small: rigid modes,
 /// constraint gradients), as Q = H_1 ⋯ H_k, a product of Householder reflections from a
@@ -111,6 +122,17 @@ impl Complement {
     /// The rank k of r.
     fn rank(&self) -> usize {
         self.reflectors.len()
+    }
+
+    /// Column k < rank of Q: an orthonormal basis of the span of r.
+    fn span_column(&self, k: usize, m: usize) -> DVector<f64> {
+        let mut x = DVector::zeros(m);
+        x[k] = 1.0;
+        for v in self.reflectors.iter().rev() {
+            let vx = v.dot(&x);
+            x -= v * (2.0 * vx);
+        }
+        x
     }
 
     /// (Qᵀ K Q) without its first k rows and columns: K on the complement.
@@ -187,6 +209,51 @@ fn sorted_eigen(a: &DMatrix<f64>, with_vectors: bool) -> (Vec<f64>, DMatrix<f64>
     }
 }
 
+/// The constraints' border of the trivial block: L = Bᵀ ∂F/∂μ_k (the loads of the parameters
+/// the constraints free) and C, each constraint row scaled by s so that s·∂g/∂q agrees with
+/// L (the border is symmetric; DESIGN §2.3).
+fn constraint_border(
+    b: &crate::adapted::SparseBasis,
+    layout: &crate::model::Layout,
+    x: &[meshes::Vec3],
+    params: &[f64],
+    constraints: &[Box<dyn Constraint>],
+    eval: &Evaluation,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let c = constraints.len();
+    let mut l = DMatrix::zeros(b.dim(), c);
+    let mut cc = DMatrix::zeros(c, c);
+    for (kk, con) in constraints.iter().enumerate() {
+        let v = con.evaluate(layout, x, params);
+        let gq = b.restrict(&v.grad_u);
+        let load = b.restrict(&eval.loads[con.frees()]);
+        let s = if gq.norm_squared() > 0.0 {
+            gq.dot(&load) / gq.norm_squared()
+        } else {
+            1.0
+        };
+        l.set_column(kk, &load);
+        for (jj, other) in constraints.iter().enumerate() {
+            cc[(kk, jj)] = s * v.grad_params[other.frees()];
+        }
+    }
+    let cc = (&cc + cc.transpose()) * 0.5;
+    (l, cc)
+}
+
+/// The pattern of [[K, U], [Uᵀ, E]] for a sparse K and `border` dense columns U and E.
+fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
+    let (m, col_ptr, row_idx) = (k.n(), k.col_ptr(), k.row_idx());
+    let entries = (0..m)
+        .flat_map(|j| {
+            row_idx[col_ptr[j]..col_ptr[j + 1]]
+                .iter()
+                .map(move |&i| (i, j))
+        })
+        .chain((m..m + border).flat_map(|j| (0..m + border).map(move |i| (i, j))));
+    SymmetricPattern::from_entries(m + border, entries)
+}
+
 impl<'a> Stability<'a> {
     /// The analysis of `model` with the adapted `basis` of the scene's group.
     pub fn new(model: &'a FeModel, basis: &'a AdaptedBasis) -> Self {
@@ -194,7 +261,138 @@ impl<'a> Stability<'a> {
             model,
             basis,
             motions: model.rigid_motions(),
+            dense_limit: DENSE_BLOCK_LIMIT,
+            factorizations: basis.irreps.iter().map(|_| Mutex::new(None)).collect(),
         }
+    }
+
+    /// Blocks with more than `limit` columns are analysed by the inertia of a sparse LBLᵀ
+    /// factorisation of the block, bordered by its rigid modes, constraints and rank-one
+    /// terms (Haynsworth): the negative count is exact, no eigenvalues are computed. With
+    /// `usize::MAX` every block gets its full dense spectrum.
+    pub fn with_dense_limit(mut self, limit: usize) -> Self {
+        self.dense_limit = limit;
+        self
+    }
+
+    /// The negative count of block `mu` by Haynsworth's inertia additivity, from one sparse
+    /// LBLᵀ of M = [[K_μ, U], [Uᵀ, E]]: U holds an orthonormal basis of the rigid modes r and,
+    /// for the trivial block, the constraint loads L, with E = 0 for those (zero-C
+    /// constraints) and the rank-one vectors a with E = −1/c, L with E = C otherwise.
+    /// Eliminating the invertible part D of E and then the zero part (p columns, full rank)
+    /// gives In(M) = In(D) + In(Zᵀ (K + Σ c a aᵀ − L C⁻¹ Lᵀ) Z) + (p, p, 0): the same
+    /// matrix the dense path takes eigenvalues of. `None` if the block has no orbit-local
+    /// form or the factorisation breaks down (the caller then goes dense).
+    #[allow(clippy::too_many_arguments)]
+    fn block_inertia(
+        &self,
+        mu: usize,
+        b: &crate::adapted::SparseBasis,
+        layout: &crate::model::Layout,
+        eval: &Evaluation,
+        r: &DMatrix<f64>,
+        border: Option<&(DMatrix<f64>, DMatrix<f64>)>,
+        scale: f64,
+    ) -> Option<BlockSpectrum> {
+        let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
+        let m = b.dim();
+        // Border columns: zero-E first (rigid span, zero-C constraints), then invertible D.
+        let rigid = Complement::of(r, 1e-12);
+        let rigid_modes = rigid.rank();
+        let mut zero_cols: Vec<DVector<f64>> =
+            (0..rigid_modes).map(|k| rigid.span_column(k, m)).collect();
+        let mut d_cols: Vec<DVector<f64>> = Vec::new();
+        let mut d_block: Vec<(usize, usize, f64)> = Vec::new();
+        let mut d_negative = 0;
+        for (c, a) in &eval.rank_one {
+            if *c != 0.0 {
+                let k = d_cols.len();
+                d_cols.push(b.restrict(a));
+                d_block.push((k, k, -1.0 / c));
+                d_negative += usize::from(*c > 0.0);
+            }
+        }
+        if let Some((l, cc)) = border {
+            if cc.amax() <= 1e-12 * scale {
+                let norm = l.amax().max(1e-300);
+                zero_cols.extend(l.column_iter().map(|c| c / norm));
+            } else {
+                let k0 = d_cols.len();
+                d_cols.extend(l.column_iter().map(|c| c.into_owned()));
+                for i in 0..cc.nrows() {
+                    for j in 0..cc.ncols() {
+                        d_block.push((k0 + i, k0 + j, cc[(i, j)]));
+                    }
+                }
+                d_negative += cc
+                    .symmetric_eigenvalues()
+                    .iter()
+                    .filter(|&&v| v < 0.0)
+                    .count();
+            }
+        }
+        let p = zero_cols.len();
+        let nb = p + d_cols.len();
+        let mut guard = self.factorizations[mu].lock().ok()?;
+        if guard.as_ref().is_none_or(|(n, _)| *n != nb) {
+            let fact = SymmetricFactorization::new(&bordered_pattern(&pattern, nb)).ok()?;
+            *guard = Some((nb, fact));
+        }
+        let (_, fact) = guard.as_mut()?;
+        let col_ptr = pattern.col_ptr();
+        let u = |i: usize, t: usize| {
+            if t < p {
+                zero_cols[t][i]
+            } else {
+                d_cols[t - p][i]
+            }
+        };
+        let mut e = DMatrix::zeros(nb, nb);
+        for &(i, j, v) in &d_block {
+            e[(p + i, p + j)] = v;
+        }
+        let mut mv = Vec::with_capacity(fact.pattern().nnz());
+        for j in 0..m {
+            mv.extend_from_slice(&values[col_ptr[j]..col_ptr[j + 1]]);
+            mv.extend((0..nb).map(|t| u(j, t)));
+        }
+        for t in 0..nb {
+            mv.extend((0..m).map(|i| u(i, t)));
+            mv.extend((0..nb).map(|t2| e[(t2, t)]));
+        }
+        debug_assert_eq!(mv.len(), fact.pattern().nnz());
+        match fact.factorize(&mv) {
+            Ok(()) | Err(crate::linalg::FactorError::Singular { .. }) => {}
+            Err(_) => return None,
+        }
+        let inertia = fact.inertia()?;
+        let negative = inertia.negative.checked_sub(p + d_negative)?;
+        let rigid_residual = if rigid_modes > 0 {
+            let mut worst = 0.0f64;
+            let mut y = vec![0.0; m];
+            for col in r.column_iter() {
+                pattern.matvec(&values, col.as_slice(), &mut y);
+                let mut ky = DVector::from_vec(y.clone());
+                for (c, a) in &eval.rank_one {
+                    let ar = b.restrict(a);
+                    ky += &ar * (c * ar.dot(&col));
+                }
+                worst = worst.max(ky.amax() / col.amax().max(1e-300));
+            }
+            worst / scale
+        } else {
+            0.0
+        };
+        Some(BlockSpectrum {
+            irrep: String::new(),
+            dim: 0,
+            size: m,
+            rigid_modes,
+            rigid_residual,
+            eigenvalues: Vec::new(),
+            negative,
+            vectors: DMatrix::zeros(m, 0),
+        })
     }
 
     /// The basis by irrep.
@@ -267,7 +465,6 @@ impl<'a> Stability<'a> {
                 });
                 continue;
             }
-            let k = b.restrict_tangent(layout, eval, &mut work);
             // Rigid modes in this block, deflated.
             let r = if rigid.is_empty() {
                 DMatrix::zeros(m, 0)
@@ -279,6 +476,25 @@ impl<'a> Stability<'a> {
                         .collect::<Vec<DVector<f64>>>(),
                 )
             };
+            let border = if mu == 0 && !constraints.is_empty() {
+                Some(constraint_border(b, layout, &x, params, constraints, eval))
+            } else {
+                None
+            };
+            if m > self.dense_limit {
+                if let Some(block) =
+                    self.block_inertia(mu, b, layout, eval, &r, border.as_ref(), scale)
+                {
+                    blocks.push(BlockSpectrum {
+                        irrep: ib.name.clone(),
+                        dim: ib.dim,
+                        size: m,
+                        ..block
+                    });
+                    continue;
+                }
+            }
+            let k = b.restrict_tangent(layout, eval, &mut work);
             let rigid = Complement::of(&r, 1e-12);
             let rigid_modes = rigid.rank();
             let rigid_residual = if rigid_modes > 0 {
@@ -288,32 +504,14 @@ impl<'a> Stability<'a> {
             };
             let mut kz = rigid.restrict(k);
             // The constraints' border on the trivial block.
-            let mut border = None;
-            if mu == 0 && !constraints.is_empty() && kz.nrows() > 0 {
-                let c = constraints.len();
-                let mut l = DMatrix::zeros(m, c);
-                let mut cc = DMatrix::zeros(c, c);
-                for (kk, con) in constraints.iter().enumerate() {
-                    let v = con.evaluate(layout, &x, params);
-                    let gq = b.restrict(&v.grad_u);
-                    let load = b.restrict(&eval.loads[con.frees()]);
-                    let s = if gq.norm_squared() > 0.0 {
-                        gq.dot(&load) / gq.norm_squared()
-                    } else {
-                        1.0
-                    };
-                    l.set_column(kk, &load);
-                    for (jj, other) in constraints.iter().enumerate() {
-                        cc[(kk, jj)] = s * v.grad_params[other.frees()];
-                    }
-                }
-                let cc = (&cc + cc.transpose()) * 0.5;
+            let mut deflated = None;
+            if let Some((l, cc)) = border.filter(|_| kz.nrows() > 0) {
                 let lz = rigid.restrict_columns(l);
                 if cc.amax() <= 1e-12 * scale {
                     let lz = &lz / lz.amax().max(1e-300);
                     let zc = Complement::of(&lz, 1e-12);
                     kz = zc.restrict(kz);
-                    border = Some(zc);
+                    deflated = Some(zc);
                 } else if let Some(ci) = cc.clone().try_inverse() {
                     kz -= &lz * ci * lz.transpose();
                 }
@@ -322,7 +520,7 @@ impl<'a> Stability<'a> {
             let keep = values.len().min(8).min(vecs.ncols());
             let vectors = if keep > 0 {
                 let y = vecs.columns(0, keep).into_owned();
-                let y = match &border {
+                let y = match &deflated {
                     Some(zc) => zc.lift(&y),
                     None => y,
                 };

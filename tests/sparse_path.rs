@@ -1,0 +1,103 @@
+//! The path follower gives the same path whether the restricted tangent is passed on dense
+//! (LU of the dense extended Jacobian) or sparse (sparse LU, rank-one terms as extra
+//! unknowns): the balloon under pressure control through its pressure maximum, and under
+//! control of the amount of gas (a rank-one stiffness).
+
+use memstab::adapted::{SparseBasis, SymmetricProblem};
+use memstab::continuation::{follow, PathOptions};
+use memstab::effects::gas::{GasAmount, GasPressure};
+use memstab::effects::membrane::{Membrane, MooneyRivlin};
+use memstab::effects::Quantity;
+use memstab::model::{Effect, FeModel};
+use meshes::generators::{icosphere, IcosphereOptions};
+use nalgebra::DVector;
+
+fn path(model: &FeModel, basis: &SparseBasis, start: f64, sparse_from: usize) -> Vec<(f64, f64)> {
+    let mut problem = SymmetricProblem::new(model, basis, &[], vec![start], Some(0))
+        .with_sparse_tangent_from(sparse_from);
+    let opts = PathOptions {
+        initial_step: 0.05,
+        max_step: 0.2,
+        max_steps: 14,
+        state_scale: 10.0,
+        ..PathOptions::default()
+    };
+    let path = follow(
+        &mut problem,
+        &DVector::zeros(basis.dim()),
+        &DVector::from_element(1, start),
+        &opts,
+        |_| false,
+        |_| {},
+    )
+    .unwrap();
+    path.points
+        .iter()
+        .map(|p| (p.lambda[0], p.q.amax()))
+        .collect()
+}
+
+fn compare(model: &FeModel, basis: &SparseBasis, start: f64) {
+    let dense = path(model, basis, start, usize::MAX);
+    let sparse = path(model, basis, start, 0);
+    assert_eq!(dense.len(), sparse.len());
+    assert!(dense.len() > 10);
+    for ((l1, q1), (l2, q2)) in dense.iter().zip(&sparse) {
+        assert!((l1 - l2).abs() <= 1e-9 * l1.abs().max(1.0), "{l1} vs {l2}");
+        assert!((q1 - q2).abs() <= 1e-9 * q1.abs().max(1.0), "{q1} vs {q2}");
+    }
+}
+
+fn membrane(m: &meshes::Mesh) -> Box<dyn Effect> {
+    Box::new(
+        Membrane::new(
+            &m.nodes,
+            &m.triangles,
+            MooneyRivlin::new(1.0, 0.1, 1.0),
+            1.0,
+        )
+        .unwrap(),
+    )
+}
+
+#[test]
+fn sparse_and_dense_tangents_give_the_same_path() {
+    let sym = icosphere(&IcosphereOptions {
+        radius: 1.0,
+        frequency: 4,
+    })
+    .unwrap();
+    let m = &sym.mesh;
+    let pressure = FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        vec![
+            membrane(m),
+            Box::new(GasPressure {
+                pressure: Quantity::Parameter(0),
+            }),
+        ],
+        vec!["p".into()],
+    );
+    let basis = SparseBasis::fixed_point(&sym.action, pressure.layout());
+    compare(&pressure, &basis, 0.0);
+
+    // Amount of gas C = (p + P) V as the control, from the unstressed sphere at p = 0.
+    let ambient = 1.0;
+    let amount = FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        vec![
+            membrane(m),
+            Box::new(GasAmount {
+                amount: Quantity::Parameter(0),
+                ambient,
+                closing_volume: 0.0,
+            }),
+        ],
+        vec!["C".into()],
+    );
+    compare(&amount, &basis, ambient * m.volume());
+}
