@@ -328,8 +328,9 @@ pub fn solve_at<P: DenseProblem>(
         let mut rhs = DVector::zeros(m + c + 1);
         rhs.rows_mut(0, m).copy_from(&(-&lin.residual));
         rhs.rows_mut(m, c).copy_from(&(-&lin.constraints));
-        let d =
-            a.solve(&rhs).ok_or_else(|| format!("singular tangent at λ = {}", lambda[0]))?;
+        let d = a
+            .solve(&rhs)
+            .ok_or_else(|| format!("singular tangent at λ = {}", lambda[0]))?;
         q += d.rows(0, m) * opts.state_scale;
         for j in 1..=c {
             lambda[j] += d[m + j] * opts.parameter_scales.get(j).copied().unwrap_or(1.0);
