@@ -595,6 +595,13 @@ pub struct IrrepBasis {
     pub partners: Vec<SparseBasis>,
 }
 
+impl IrrepBasis {
+    /// The block's basis: the columns of the first partner.
+    pub fn first(&self) -> &SparseBasis {
+        &self.partners[0]
+    }
+}
+
 /// The symmetry-adapted basis of the free unknowns, by irrep.
 #[derive(Debug, Clone)]
 pub struct AdaptedBasis {

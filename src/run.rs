@@ -332,8 +332,8 @@ impl Runner<'_> {
                 let v = block
                     .vectors
                     .column(k.min(block.vectors.ncols().saturating_sub(1)));
-                let mut mode = vec![0.0; ib.partners[0].unknowns()];
-                ib.partners[0].expand(&v.into_owned(), &mut mode);
+                let mut mode = vec![0.0; ib.first().unknowns()];
+                ib.first().expand(&v.into_owned(), &mut mode);
                 let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
                 mode.iter_mut().for_each(|x| *x /= norm);
                 found.push(CriticalPoint {

@@ -450,7 +450,7 @@ impl<'a> Stability<'a> {
         let mut work = Vec::new();
         let mut blocks = Vec::with_capacity(self.basis.irreps.len());
         for (mu, ib) in self.basis.irreps.iter().enumerate() {
-            let b = &ib.partners[0];
+            let b = ib.first();
             let m = b.dim();
             if only.is_some_and(|o| o != mu) {
                 blocks.push(BlockSpectrum {
