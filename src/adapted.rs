@@ -27,7 +27,7 @@
 
 use crate::linalg::SymmetricPattern;
 use crate::model::constraint::Constraint;
-use crate::model::{Evaluation, Layout};
+use crate::model::{Evaluation, Layout, Subset};
 use meshes::GroupAction;
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
@@ -108,6 +108,8 @@ struct Seeds {
     matrices: Arc<Vec<f64>>,
     /// Representative node of each column's orbit.
     rep: Vec<u32>,
+    /// The unknowns of each column's representative node.
+    rep_dofs: Vec<[u32; 3]>,
     /// Seeds, d per column: `seeds[e * d + b]` = s_{e,b}.
     seeds: Vec<Vector3<f64>>,
     /// The columns on each orbit (contiguous, as they are built orbit by orbit).
@@ -289,6 +291,7 @@ fn orbit_basis(
         d,
         matrices: Arc::new(flat),
         rep: Vec::new(),
+        rep_dofs: Vec::new(),
         seeds: Vec::new(),
         by_orbit: Vec::with_capacity(orbits.len()),
     };
@@ -322,6 +325,9 @@ fn orbit_basis(
             }
             let y = eig.eigenvectors.column(k) / lam.sqrt();
             seeds.rep.push(i0 as u32);
+            seeds
+                .rep_dofs
+                .push([0, 1, 2].map(|c| layout.dof(i0, c).expect("free orbit") as u32));
             for b in 0..d {
                 seeds
                     .seeds
@@ -409,6 +415,38 @@ impl SparseBasis {
                 .iter()
                 .map(|c| c.iter().map(|&(d, b)| b * v[d]).sum()),
         )
+    }
+
+    /// Bᵀ v for a G-invariant v (T(g) v = v, such as the residual and the load vectors at a
+    /// symmetric state), from v's entries at the orbit representatives only: with b = Σ_b
+    /// P_{0b} s_b, ⟨b, v⟩ = Σ_b ⟨s_b, P_{b0} v⟩, which is ⟨s, v⟩ for the trivial irrep and 0
+    /// for any other (Σ_g D(g) = 0). Falls back to [`SparseBasis::restrict`] for a basis
+    /// without orbit-local form.
+    pub fn restrict_invariant(&self, v: &[f64]) -> DVector<f64> {
+        let Some(seeds) = &self.seeds else {
+            return self.restrict(v);
+        };
+        if seeds.d != 1 || seeds.matrices.iter().any(|&x| x != 1.0) {
+            return DVector::zeros(self.dim());
+        }
+        DVector::from_iterator(
+            self.dim(),
+            seeds
+                .rep_dofs
+                .iter()
+                .zip(&seeds.seeds)
+                .map(|(dofs, s)| (0..3).map(|c| s[c] * v[dofs[c] as usize]).sum()),
+        )
+    }
+
+    /// The representative nodes of the orbits the columns live on (`None` for a basis
+    /// without orbit-local form): F, ∂F/∂Λ and K's columns there are all that
+    /// [`SparseBasis::restrict_invariant`] and [`SparseBasis::restrict_tangent`] read.
+    pub fn representatives(&self) -> Option<Vec<usize>> {
+        let seeds = self.seeds.as_ref()?;
+        let mut reps: Vec<usize> = seeds.rep.iter().map(|&i| i as usize).collect();
+        reps.dedup();
+        Some(reps)
     }
 
     /// u = B q.
@@ -743,8 +781,14 @@ impl<'a> SymmetricProblem<'a> {
         let free = std::iter::once(control)
             .chain(constraints.iter().map(|c| Some(c.frees())))
             .collect();
+        let eval = match basis.representatives() {
+            Some(reps) => model
+                .new_evaluation()
+                .restricted_to(Arc::new(Subset::around(model.layout(), &reps))),
+            None => model.new_evaluation(),
+        };
         Self {
-            eval: model.new_evaluation(),
+            eval,
             u: vec![0.0; model.unknowns()],
             work: Vec::new(),
             sparse_from: SPARSE_TANGENT_FROM,
@@ -755,6 +799,14 @@ impl<'a> SymmetricProblem<'a> {
             free,
             times: PhaseTimes::default(),
         }
+    }
+
+    /// Assembles the whole mesh at every evaluation instead of only the triangles around the
+    /// orbit representatives (for checks and timing comparisons).
+    pub fn with_full_assembly(mut self) -> Self {
+        use crate::model::Model;
+        self.eval = self.model.new_evaluation();
+        self
     }
 
     /// Passes the restricted tangent on as a sparse matrix (to a sparse LU of the extended
@@ -844,7 +896,7 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
         let mut loads = DMatrix::zeros(m, nf);
         for (j, i) in self.free.iter().enumerate() {
             if let Some(i) = *i {
-                loads.set_column(j, &self.basis.restrict(&self.eval.loads[i]));
+                loads.set_column(j, &self.basis.restrict_invariant(&self.eval.loads[i]));
             }
         }
         let mut constraints = DVector::zeros(c);
@@ -864,7 +916,7 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
             }
         }
         let lin = crate::continuation::Linearization {
-            residual: self.basis.restrict(&self.eval.residual),
+            residual: self.basis.restrict_invariant(&self.eval.residual),
             tangent: self.restricted_tangent(),
             loads,
             constraints,

@@ -65,6 +65,17 @@ impl Spectrum {
     }
 }
 
+/// How much of each block [`Stability::analyse`] computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Detail {
+    /// The negative count only (inertia of a sparse LBLᵀ); no eigenvalues.
+    Inertia,
+    /// All eigenvalues of blocks up to the dense limit.
+    Eigenvalues,
+    /// Eigenvalues and the eigenvectors of the lowest ones.
+    Vectors,
+}
+
 /// Everything needed to analyse states of one model under one group.
 pub struct Stability<'a> {
     model: &'a FeModel,
@@ -226,7 +237,7 @@ fn constraint_border(
     for (kk, con) in constraints.iter().enumerate() {
         let v = con.evaluate(layout, x, params);
         let gq = b.restrict(&v.grad_u);
-        let load = b.restrict(&eval.loads[con.frees()]);
+        let load = b.restrict_invariant(&eval.loads[con.frees()]);
         let s = if gq.norm_squared() > 0.0 {
             gq.dot(&load) / gq.norm_squared()
         } else {
@@ -423,6 +434,49 @@ impl<'a> Stability<'a> {
         only: Option<usize>,
         with_vectors: bool,
     ) -> Result<Spectrum, ModelError> {
+        let detail = if with_vectors {
+            Detail::Vectors
+        } else {
+            Detail::Eigenvalues
+        };
+        self.analyse(u, params, constraints, eval, only, detail)
+    }
+
+    /// An evaluation buffer for [`Stability::analyse`] that assembles only the triangles
+    /// around the orbit representatives (all a block restriction reads; ≈ 1/|G| of the
+    /// mesh). Its F and K are exact only there.
+    pub fn new_evaluation(&self) -> Evaluation {
+        let reps: Vec<usize> = self
+            .basis
+            .irreps
+            .iter()
+            .filter_map(|ib| ib.first().representatives())
+            .flatten()
+            .collect();
+        self.model
+            .new_evaluation()
+            .restricted_to(std::sync::Arc::new(crate::model::Subset::around(
+                self.model.layout(),
+                &reps,
+            )))
+    }
+
+    /// The analysis by irrep at (u, params) with `constraints` active, to the `detail`
+    /// asked for: [`Detail::Inertia`] gives every block's exact negative count from a
+    /// sparse LBLᵀ (the cheap test of stability at every path point); the other two give
+    /// the eigenvalues (and vectors) of blocks up to the dense limit. `only = Some(μ)` leaves
+    /// the other blocks empty. `eval` is a reusable buffer, from `model.new_evaluation()` or
+    /// [`Stability::new_evaluation`].
+    pub fn analyse(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        constraints: &[Box<dyn Constraint>],
+        eval: &mut Evaluation,
+        only: Option<usize>,
+        detail: Detail,
+    ) -> Result<Spectrum, ModelError> {
+        let with_vectors = detail == Detail::Vectors;
         let model = self.model;
         let layout = model.layout();
         model.evaluate(u, params, Request::ALL, eval)?;
@@ -481,7 +535,7 @@ impl<'a> Stability<'a> {
             } else {
                 None
             };
-            if m > self.dense_limit {
+            if detail == Detail::Inertia || m > self.dense_limit {
                 if let Some(block) =
                     self.block_inertia(mu, b, layout, eval, &r, border.as_ref(), scale)
                 {

@@ -1,7 +1,8 @@
 //! The path follower gives the same path whether the restricted tangent is passed on dense
 //! (LU of the dense extended Jacobian) or sparse (sparse LU, rank-one terms as extra
-//! unknowns): the balloon under pressure control through its pressure maximum, and under
-//! control of the amount of gas (a rank-one stiffness).
+//! unknowns), and whether the whole mesh is assembled or only the triangles around the orbit
+//! representatives: the balloon under pressure control through its pressure maximum, and
+//! under control of the amount of gas (a rank-one stiffness and a global volume).
 
 use memstab::adapted::{SparseBasis, SymmetricProblem};
 use memstab::continuation::{follow, PathOptions};
@@ -12,9 +13,18 @@ use memstab::model::{Effect, FeModel};
 use meshes::generators::{icosphere, IcosphereOptions};
 use nalgebra::DVector;
 
-fn path(model: &FeModel, basis: &SparseBasis, start: f64, sparse_from: usize) -> Vec<(f64, f64)> {
+fn path(
+    model: &FeModel,
+    basis: &SparseBasis,
+    start: f64,
+    sparse_from: usize,
+    full_assembly: bool,
+) -> Vec<(f64, f64)> {
     let mut problem = SymmetricProblem::new(model, basis, &[], vec![start], Some(0))
         .with_sparse_tangent_from(sparse_from);
+    if full_assembly {
+        problem = problem.with_full_assembly();
+    }
     let opts = PathOptions {
         initial_step: 0.05,
         max_step: 0.2,
@@ -37,14 +47,25 @@ fn path(model: &FeModel, basis: &SparseBasis, start: f64, sparse_from: usize) ->
         .collect()
 }
 
+/// The same path four ways: dense or sparse extended Jacobian, assembling the whole mesh or
+/// only the triangles around the orbit representatives.
 fn compare(model: &FeModel, basis: &SparseBasis, start: f64) {
-    let dense = path(model, basis, start, usize::MAX);
-    let sparse = path(model, basis, start, 0);
-    assert_eq!(dense.len(), sparse.len());
-    assert!(dense.len() > 10);
-    for ((l1, q1), (l2, q2)) in dense.iter().zip(&sparse) {
-        assert!((l1 - l2).abs() <= 1e-9 * l1.abs().max(1.0), "{l1} vs {l2}");
-        assert!((q1 - q2).abs() <= 1e-9 * q1.abs().max(1.0), "{q1} vs {q2}");
+    let reference = path(model, basis, start, usize::MAX, true);
+    assert!(reference.len() > 10);
+    for (sparse_from, full) in [(0, true), (usize::MAX, false), (0, false)] {
+        let other = path(model, basis, start, sparse_from, full);
+        assert_eq!(reference.len(), other.len());
+        for ((l1, q1), (l2, q2)) in reference.iter().zip(&other) {
+            let what = format!("sparse from {sparse_from}, full assembly {full}");
+            assert!(
+                (l1 - l2).abs() <= 1e-9 * l1.abs().max(1.0),
+                "{what}: {l1} vs {l2}"
+            );
+            assert!(
+                (q1 - q2).abs() <= 1e-9 * q1.abs().max(1.0),
+                "{what}: {q1} vs {q2}"
+            );
+        }
     }
 }
 

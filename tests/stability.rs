@@ -9,7 +9,7 @@ use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::constraint::{self, Constraint};
 use memstab::model::{Effect, FeModel, Model, Request};
-use memstab::stability::Stability;
+use memstab::stability::{Detail, Stability};
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::SymmetricMesh;
 use nalgebra::{DMatrix, DVector};
@@ -281,6 +281,7 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
     let dense = Stability::new(&model, &basis).with_dense_limit(usize::MAX);
     let sparse = Stability::new(&model, &basis).with_dense_limit(0);
     let mut eval = model.new_evaluation();
+    let mut local = dense.new_evaluation();
     let mut seen = std::collections::BTreeSet::new();
     let ambient = 1.0;
     for (u, p, s) in states(&sym, &model, 3.6) {
@@ -303,6 +304,11 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
                 "stretch {s}, constraints {}",
                 cons.len()
             );
+            // The same from an evaluation of the triangles around the representatives only.
+            let c = dense
+                .analyse(&u, &[p], cons, &mut local, None, Detail::Inertia)
+                .unwrap();
+            assert_eq!(a.negatives(), c.negatives(), "local, stretch {s}");
             for (x, y) in a.blocks.iter().zip(&b.blocks) {
                 assert_eq!(x.rigid_modes, y.rigid_modes, "{} at stretch {s}", x.irrep);
                 assert!(y.eigenvalues.is_empty());
@@ -333,6 +339,18 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
             .with_dense_limit(usize::MAX)
             .spectrum(&u, &[], &[], &mut eval2)
             .unwrap();
+        let local = Stability::new(&closed, &basis2);
+        let c = local
+            .analyse(
+                &u,
+                &[],
+                &[],
+                &mut local.new_evaluation(),
+                None,
+                Detail::Inertia,
+            )
+            .unwrap();
+        assert_eq!(a.negatives(), c.negatives(), "gas-amount effect, local");
         let b = Stability::new(&closed, &basis2)
             .with_dense_limit(0)
             .spectrum(&u, &[], &[], &mut eval2)

@@ -195,6 +195,48 @@ pub struct Evaluation {
     tri_terms: Vec<TriangleTerms>,
     node_terms: Vec<NodeTerms>,
     request: Request,
+    /// When set, only these triangles and nodes are assembled (see [`Subset`]).
+    subset: Option<std::sync::Arc<Subset>>,
+}
+
+/// The triangles and nodes around a set of nodes: every triangle that contains one of them,
+/// and the nodes themselves. An evaluation restricted to a subset computes F, ∂F/∂Λ and the
+/// columns of K at those nodes exactly (every term that reaches them is assembled) and
+/// nothing else is meaningful: the other entries and Π are partial sums. Global quantities
+/// an effect computes itself (the enclosed volume of a gas amount, its rank-one gradient)
+/// stay complete. At a symmetric state the orbit representatives are all the symmetric
+/// solver needs (see [`crate::adapted`]), about 1/|G| of the mesh.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Subset {
+    triangles: Vec<usize>,
+    nodes: Vec<usize>,
+}
+
+impl Subset {
+    /// The triangles containing any of `nodes`, and `nodes` (sorted, deduplicated).
+    pub fn around(layout: &Layout, nodes: &[usize]) -> Self {
+        let mut mark = vec![false; layout.nodes()];
+        for &i in nodes {
+            mark[i] = true;
+        }
+        let triangles = (0..layout.triangles.len())
+            .filter(|&t| layout.triangles[t].iter().any(|&i| mark[i]))
+            .collect();
+        let mut nodes = nodes.to_vec();
+        nodes.sort_unstable();
+        nodes.dedup();
+        Self { triangles, nodes }
+    }
+
+    /// The triangles assembled.
+    pub fn triangles(&self) -> &[usize] {
+        &self.triangles
+    }
+
+    /// The nodes whose rows and columns are exact.
+    pub fn nodes(&self) -> &[usize] {
+        &self.nodes
+    }
 }
 
 impl Evaluation {
@@ -210,7 +252,21 @@ impl Evaluation {
             tri_terms: vec![TriangleTerms::default(); layout.triangles.len()],
             node_terms: vec![NodeTerms::default(); layout.dof_of.len()],
             request: Request::ALL,
+            subset: None,
         }
+    }
+
+    /// The same buffer, assembling only `subset` from now on.
+    pub fn restricted_to(mut self, subset: std::sync::Arc<Subset>) -> Self {
+        self.tri_terms = vec![TriangleTerms::default(); subset.triangles.len()];
+        self.node_terms = vec![NodeTerms::default(); subset.nodes.len()];
+        self.subset = Some(subset);
+        self
+    }
+
+    /// The subset this evaluation assembles (`None`: the whole mesh).
+    pub fn subset(&self) -> Option<&Subset> {
+        self.subset.as_deref()
     }
 
     pub(super) fn reset(&mut self, request: Request) {
@@ -299,11 +355,14 @@ impl<'a> Assembler<'a> {
         F: Fn(usize, &[Vec3; 3], &mut TriangleTerms) -> Result<(), String> + Sync,
     {
         let tris = &self.layout.triangles;
+        let ids = self.out.subset.clone();
+        let id = |k: usize| ids.as_ref().map_or(k, |s| s.triangles[k]);
         self.out
             .tri_terms
             .par_iter_mut()
             .enumerate()
-            .try_for_each(|(t, terms)| {
+            .try_for_each(|(k, terms)| {
+                let t = id(k);
                 let [a, b, c] = tris[t];
                 terms.loads = [[0.0; 9]; 2];
                 kernel(t, &[x[a], x[b], x[c]], terms).map_err(|what| ModelError::Element {
@@ -314,7 +373,8 @@ impl<'a> Assembler<'a> {
             })?;
         let (want_k, want_l) = (self.request.tangent, self.request.loads);
         let out = &mut *self.out;
-        for (t, terms) in out.tri_terms.iter().enumerate() {
+        for (k, terms) in out.tri_terms.iter().enumerate() {
+            let t = id(k);
             let dofs = &self.layout.tri_dofs[t];
             out.energy += terms.local.value;
             for (a, &d) in dofs.iter().enumerate() {
@@ -352,11 +412,14 @@ impl<'a> Assembler<'a> {
     where
         F: Fn(usize, &Vec3, &mut NodeTerms) -> Result<(), String> + Sync,
     {
+        let ids = self.out.subset.clone();
+        let id = |k: usize| ids.as_ref().map_or(k, |s| s.nodes[k]);
         self.out
             .node_terms
             .par_iter_mut()
             .enumerate()
-            .try_for_each(|(i, terms)| {
+            .try_for_each(|(k, terms)| {
+                let i = id(k);
                 *terms = NodeTerms::default();
                 kernel(i, &x[i], terms).map_err(|what| ModelError::Global {
                     effect: self.effect.to_string(),
@@ -365,7 +428,8 @@ impl<'a> Assembler<'a> {
             })?;
         let (want_k, want_l) = (self.request.tangent, self.request.loads);
         let out = &mut *self.out;
-        for (i, terms) in out.node_terms.iter().enumerate() {
+        for (k, terms) in out.node_terms.iter().enumerate() {
+            let i = id(k);
             out.energy += terms.value;
             let dofs = &self.layout.dof_of[i];
             if dofs[0] == NONE {

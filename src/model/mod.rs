@@ -10,7 +10,7 @@ mod assembly;
 pub mod check;
 pub mod constraint;
 
-pub use assembly::{Assembler, Evaluation, Layout, NodeTerms, Request, TriangleTerms};
+pub use assembly::{Assembler, Evaluation, Layout, NodeTerms, Request, Subset, TriangleTerms};
 
 use crate::linalg::SymmetricPattern;
 use nalgebra::Vector3;
