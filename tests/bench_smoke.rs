@@ -22,12 +22,18 @@ fn quick_bench_writes_finite_tables_and_a_plot() {
         String::from_utf8_lossy(&o.stderr)
     );
     let md = std::fs::read_to_string(out.join("accuracy.md")).unwrap();
-    for heading in ["## Balloon", "## Symmetry payoff", "## Ponding ladder"] {
+    for heading in [
+        "## Balloon",
+        "## Symmetry payoff on one tangent matrix",
+        "## Symmetry payoff on a C8v tangent matrix",
+        "## Stability along the path, with and without symmetry",
+        "## Ponding ladder",
+    ] {
         assert!(md.contains(heading), "accuracy.md lacks {heading}");
     }
     assert!(!md.contains("NaN") && !md.contains("inf"), "{md}");
-    // The block eigenvalues agree with the dense ones.
-    assert!(md.contains("The multisets agree"), "{md}");
+    // The block eigenvalues agree with the dense ones, for Ih and for C8v.
+    assert_eq!(md.matches("The multisets agree").count(), 2, "{md}");
 
     let csv = std::fs::read_to_string(out.join("accuracy.csv")).unwrap();
     let mut lines = csv.lines();
@@ -50,6 +56,46 @@ fn quick_bench_writes_finite_tables_and_a_plot() {
     let e8: f64 = rows[1][col("err_max")].parse().unwrap();
     assert!(e8 < e4 && e8 > 0.0, "{e4} -> {e8}");
     assert!(!rows[1][col("richardson_max")].is_empty());
+
+    // Stability along the path without symmetry at both quick levels, dense at f = 4: the
+    // index agrees with the one by blocks at every point (a check of correctness, not time).
+    for (i, row) in rows.iter().enumerate() {
+        let points: usize = row[col("stab_points")].parse().unwrap();
+        assert_eq!(points, row[col("points")].parse::<usize>().unwrap());
+        assert_eq!(row[col("index_mismatches")], "0", "row {i}\n{csv}");
+        assert_eq!(
+            row[col("index_max")],
+            "1",
+            "past the pressure maximum\n{csv}"
+        );
+    }
+    assert_eq!(rows[0][col("index_mismatches_dense")], "0", "{csv}");
+    assert!(rows[1][col("index_mismatches_dense")].is_empty(), "{csv}");
+
+    // One row per payoff case, the multisets agreeing to round-off.
+    let payoff = std::fs::read_to_string(out.join("payoff.csv")).unwrap();
+    let mut lines = payoff.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let cases: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(cases.len(), 2, "{payoff}");
+    let pcol = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    assert_eq!(cases[0][pcol("group")], "Ih");
+    assert_eq!(cases[1][pcol("group")], "C8v");
+    for row in &cases {
+        assert_eq!(row.len(), header.len(), "{payoff}");
+        for (name, cell) in header.iter().zip(row).skip(2) {
+            if cell.is_empty() {
+                continue; // the peer's columns without scipy or for the disc
+            }
+            let v: f64 = cell.parse().unwrap_or_else(|_| panic!("{name} = {cell:?}"));
+            assert!(v.is_finite() && v >= 0.0, "{name} = {v}");
+        }
+        let diff: f64 = row[pcol("dense_difference")].parse().unwrap();
+        assert!(
+            diff < 1e-10,
+            "block vs dense eigenvalues differ by {diff:e}"
+        );
+    }
 
     let svg = std::fs::read_to_string(out.join("accuracy.svg")).unwrap();
     assert!(
@@ -101,6 +147,10 @@ fn export_matrix_writes_the_lower_triangle_of_the_pattern() {
     assert_eq!(entries, count);
 
     // The pattern's lower triangle, from the same scene built by the library.
+    // A pressure-controlled balloon has no rank-one terms: no companion file, no mention.
+    assert!(!dir.path().join("K.rank1.mtx").exists());
+    assert!(!text.contains("rank-one file:"));
+
     let scene = memstab::scene::Scene::load(scene).unwrap();
     let study = memstab::study::Study::build(scene).unwrap();
     use memstab::model::Model;
@@ -122,4 +172,83 @@ fn export_matrix_rejects_an_unknown_parameter() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("nope"));
     assert!(!path.exists());
+}
+
+#[test]
+fn scaling_study_writes_times_memory_and_exponents() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scaling");
+    let o = memstab()
+        .args([
+            "bench",
+            "--scaling",
+            "2,4",
+            "--scaling-points",
+            "6",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "bench --scaling failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let md = std::fs::read_to_string(out.join("scaling.md")).unwrap();
+    assert!(md.contains("## Scaling"), "{md}");
+    assert!(md.contains("Growth exponents"), "{md}");
+    assert!(
+        !out.join("accuracy.md").exists(),
+        "--scaling runs the scaling study only"
+    );
+    let csv = std::fs::read_to_string(out.join("scaling.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2, "{csv}");
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for row in &rows {
+        assert_eq!(row.len(), header.len());
+        assert_eq!(row[col("points")], "6", "{csv}");
+        for name in ["total_s", "eigen_s", "stability_s", "exponent_total"] {
+            let v: f64 = row[col(name)].parse().unwrap();
+            assert!(v.is_finite(), "{name} = {v}");
+        }
+        // Peak memory where /proc/self/clear_refs exists (Linux), else empty ("n/a").
+        let peak = row[col("peak_rss_mib")];
+        if std::path::Path::new("/proc/self/clear_refs").exists() {
+            assert!(peak.parse::<f64>().unwrap() > 0.0, "{csv}");
+        }
+    }
+    assert_eq!(rows[0][col("frequency")], "2");
+    assert_eq!(rows[1][col("frequency")], "4");
+}
+
+#[test]
+fn bench_rejects_bad_flags_with_exit_code_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bad");
+    for args in [
+        vec!["--scaling", "0"],
+        vec!["--scaling", "x"],
+        vec!["--scaling", "4,,8"],
+        vec!["--scaling", "4", "--quick"],
+        vec!["--scaling", "4", "--frequencies", "8"],
+        vec!["--scaling", "4", "--scaling-points", "1"],
+        vec!["--scaling-points", "5"],
+        vec!["--frequencies", "0"],
+    ] {
+        let o = memstab()
+            .arg("bench")
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
 }

@@ -5,8 +5,9 @@
 //! The state is solved as `memstab run` solves its start, with `--at` overriding start values;
 //! for a `linear-buckling` scene the start state is held and an `--at` only enters the tangent.
 //! The file is `coordinate real symmetric`, the lower triangle of the pattern (explicit zeros
-//! included), 1-based, written whole (temporary file + rename). Rank-one terms of K (global
-//! constraints such as a gas amount) are refused: exit 2, nothing written.
+//! included), 1-based, written whole (temporary file + rename). Rank-one terms of K (a
+//! `gas-amount` effect: K = S + Σ c_k a_k a_kᵀ, dense) go into a companion file next to it,
+//! `K.rank1.mtx` (see [`memstab::bench::write_matrix_market`] and the `--help` text).
 
 use super::common::{build_study, load_scene, one_line};
 use super::CliError;
@@ -17,16 +18,34 @@ use std::path::PathBuf;
 
 /// Arguments of `memstab export-matrix`.
 #[derive(Debug, Args)]
+#[command(after_long_help = EXPORT_HELP)]
 pub(crate) struct ExportArgs {
     /// The scene file (TOML).
     scene: PathBuf,
     /// Set a parameter instead of its start value (repeatable), e.g. `--at p=1.3`.
     #[arg(long = "at", value_name = "NAME=VALUE")]
     at: Vec<String>,
-    /// The Matrix Market file to write (its directory must exist).
+    /// The Matrix Market file to write (its directory must exist); rank-one terms of K, if
+    /// any, go to a companion file next to it (K.mtx → K.rank1.mtx), see below.
     #[arg(long, value_name = "K.mtx")]
     out: PathBuf,
 }
+
+/// The file formats, shown by `memstab export-matrix --help`.
+const EXPORT_HELP: &str = "\
+Files:
+  K.mtx        the sparse part S of K: Matrix Market `coordinate real symmetric`, the lower
+               triangle of K's pattern (explicit zeros included), 1-based, 17 digits.
+  K.rank1.mtx  only when K has rank-one terms (a `gas-amount` effect adds c a a^T, which is
+               dense): K = S + sum_k c_k a_k a_k^T. Matrix Market `array real general`, n rows
+               and one column a_k per term (column-major), with the coefficients on the
+               comment line `% coefficients: c_1 ... c_r`. K.mtx then names it on a comment
+               line `% rank-one file: K.rank1.mtx`; that line is what says K has rank-one terms
+               (a companion file left by an earlier export is not read).
+
+`python3 scripts/peer_eigsh.py K.mtx [--k 20] [--sigma=S]` runs scipy eigsh (shift-invert) on
+K and prints JSON; it finds the rank-one file by that comment line and inverts K - sigma I by a
+sparse LU of S - sigma I and the Sherman-Morrison-Woodbury formula.";
 
 /// Parses `--at NAME=VALUE` items against the parameter names.
 fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f64)>, CliError> {
@@ -107,22 +126,30 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    if !eval.rank_one.is_empty() {
+    let companion = memstab::bench::rank_one_path(&args.out);
+    if !eval.rank_one.is_empty() && companion.is_dir() {
         return Err(CliError::Input(format!(
-            "{}: the tangent has {} rank-one term(s) (a global constraint such as a gas \
-             amount); export-matrix writes only sparse tangents in this version",
-            args.scene.display(),
-            eval.rank_one.len()
+            "--out {}: K has rank-one terms, and their file {} is a directory",
+            args.out.display(),
+            companion.display()
         )));
     }
-    let count = memstab::bench::write_matrix_market(&args.out, &study.model, &eval, &comment)
+    let files = memstab::bench::write_matrix_market(&args.out, &study.model, &eval, &comment)
         .map_err(CliError::Failure)?;
-    println!(
-        "wrote {} ({} x {}, {} entries in the lower triangle)",
-        args.out.display(),
-        study.model.unknowns(),
-        study.model.unknowns(),
-        count
-    );
+    let n = study.model.unknowns();
+    match &files.rank_one {
+        None => println!(
+            "wrote {} ({n} x {n}, {} entries in the lower triangle)",
+            args.out.display(),
+            files.entries
+        ),
+        Some((file, r)) => println!(
+            "wrote {} ({n} x {n}, {} entries in the lower triangle: the sparse part S) and {} \
+             ({r} rank-one term(s) c a a^T: K = S + sum_k c_k a_k a_k^T)",
+            args.out.display(),
+            files.entries,
+            file.display()
+        ),
+    }
     Ok(())
 }
