@@ -114,6 +114,9 @@ struct Seeds {
     seeds: Vec<Vector3<f64>>,
     /// The columns on each orbit (contiguous, as they are built orbit by orbit).
     by_orbit: Vec<Range<u32>>,
+    /// For each b < d, (d/|G|) Σ_g D_{b0}(g) R_g and (d/|G|) Σ_g D_{b0}(g) det(R_g) R_g: how
+    /// P_{b0} acts on the translation and the rotation of a rigid motion.
+    rigid_maps: Vec<(Matrix3<f64>, Matrix3<f64>)>,
 }
 
 impl Seeds {
@@ -294,6 +297,15 @@ fn orbit_basis(
         rep_dofs: Vec::new(),
         seeds: Vec::new(),
         by_orbit: Vec::with_capacity(orbits.len()),
+        rigid_maps: (0..d)
+            .map(|b| {
+                (0..group.order()).fold((Matrix3::zeros(), Matrix3::zeros()), |(t, w), g| {
+                    let c = matrices[g][(b, 0)] * d as f64 / order;
+                    let r = group.element(g);
+                    (t + r * c, w + r * (c * r.determinant()))
+                })
+            })
+            .collect(),
     };
     for orbit in orbits {
         let i0 = orbit[0];
@@ -367,8 +379,9 @@ pub struct SparseBasis {
     by_dof: std::sync::OnceLock<Vec<Vec<u32>>>,
     /// The orbit-local form, when the basis was built from a group action.
     seeds: Option<Seeds>,
-    /// The sparsity pattern of Bᵀ K B (built on first use).
-    pattern: std::sync::OnceLock<Arc<SymmetricPattern>>,
+    /// The sparsity pattern of Bᵀ K B (built on first use),
+    /// and for each stored entry the slot of its transpose.
+    pattern: std::sync::OnceLock<(Arc<SymmetricPattern>, Vec<u32>)>,
 }
 
 impl SparseBasis {
@@ -436,6 +449,50 @@ impl SparseBasis {
                 .iter()
                 .zip(&seeds.seeds)
                 .map(|(dofs, s)| (0..3).map(|c| s[c] * v[dofs[c] as usize]).sum()),
+        )
+    }
+
+    /// Bᵀ v for the rigid motion v_i = t + ω × x_i (`motion` = [t, ω]) at a state x the
+    /// group keeps, in O(columns): T(g) maps it to the rigid motion (R_g t, det(R_g) R_g ω)
+    /// because x_{π_g(i)} = R_g x_i, so P_{b0} v is the rigid motion (t_b, ω_b) of
+    /// `rigid_maps` and ⟨b, v⟩ = Σ_b s_b · (t_b + ω_b × x_rep). Without orbit-local form, the
+    /// field is built and restricted explicitly.
+    pub fn restrict_rigid(
+        &self,
+        motion: &[f64; 6],
+        x: &[Vector3<f64>],
+        layout: &Layout,
+    ) -> DVector<f64> {
+        let t = Vector3::new(motion[0], motion[1], motion[2]);
+        let w = Vector3::new(motion[3], motion[4], motion[5]);
+        let Some(seeds) = &self.seeds else {
+            let mut v = vec![0.0; self.unknowns];
+            for (i, xi) in x.iter().enumerate() {
+                let vi = t + w.cross(xi);
+                for k in 0..3 {
+                    if let Some(d) = layout.dof(i, k) {
+                        v[d] = vi[k];
+                    }
+                }
+            }
+            return self.restrict(&v);
+        };
+        let moved: Vec<(Vector3<f64>, Vector3<f64>)> = seeds
+            .rigid_maps
+            .iter()
+            .map(|(a, b)| (a * t, b * w))
+            .collect();
+        let d = seeds.d;
+        DVector::from_iterator(
+            self.dim(),
+            (0..self.dim()).map(|e| {
+                let xr = x[seeds.rep[e] as usize];
+                moved
+                    .iter()
+                    .zip(&seeds.seeds[e * d..(e + 1) * d])
+                    .map(|((tb, wb), s)| s.dot(&(tb + wb.cross(&xr))))
+                    .sum()
+            }),
         )
     }
 
@@ -515,10 +572,21 @@ impl SparseBasis {
         eval: &Evaluation,
     ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
         let seeds = self.seeds.as_ref()?;
-        let pattern = self
-            .pattern
-            .get_or_init(|| Arc::new(seeds.block_pattern(layout)))
-            .clone();
+        let (pattern, transpose) = self.pattern.get_or_init(|| {
+            let pattern = seeds.block_pattern(layout);
+            let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+            let mut transpose = vec![0u32; pattern.nnz()];
+            for e in 0..pattern.n() {
+                for p in col_ptr[e]..col_ptr[e + 1] {
+                    transpose[p] = pattern
+                        .position(e, row_idx[p])
+                        .expect("the block pattern is symmetric")
+                        as u32;
+                }
+            }
+            (Arc::new(pattern), transpose)
+        });
+        let pattern = pattern.clone();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let m = self.dim();
         let columns: Vec<Vec<f64>> = (0..m)
@@ -535,17 +603,12 @@ impl SparseBasis {
             )
             .collect();
         // Symmetrise: the two triangles agree up to round-off.
-        let mut values: Vec<f64> = columns.concat();
-        let mut sym = values.clone();
-        for e in 0..m {
-            for p in col_ptr[e]..col_ptr[e + 1] {
-                let q = pattern
-                    .position(e, row_idx[p])
-                    .expect("the block pattern is symmetric");
-                sym[p] = 0.5 * (values[p] + values[q]);
-            }
-        }
-        std::mem::swap(&mut values, &mut sym);
+        let raw: Vec<f64> = columns.concat();
+        let values = raw
+            .iter()
+            .zip(transpose)
+            .map(|(v, &q)| 0.5 * (v + raw[q as usize]))
+            .collect();
         Some((pattern, values))
     }
 

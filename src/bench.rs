@@ -26,7 +26,7 @@ use crate::continuation::{follow, solve_at, PathOptions};
 use crate::linalg::{SymmetricFactorization, SymmetricPattern};
 use crate::model::{Evaluation, FeModel, Model, Request};
 use crate::scene::{Analysis, Scene};
-use crate::stability::Stability;
+use crate::stability::{Detail, Stability, DENSE_BLOCK_LIMIT};
 use crate::study::{Measure, Study};
 use nalgebra::DMatrix;
 use std::io::Write;
@@ -116,6 +116,10 @@ pub struct BalloonLevel {
     /// Wall time of all `spectrum_of` calls, their assembly included (what stability by
     /// irrep costs along the path, the adapted basis excepted); `None` when skipped.
     pub spectra: Option<Duration>,
+    /// Wall time of the index by irrep blocks at every point, as `run` computes it
+    /// ([`Detail::Inertia`] on the representatives' evaluation, its assembly included);
+    /// `None` without stability.
+    pub index: Option<Duration>,
     /// The instability index by irrep blocks at every point (empty without stability).
     pub indices: Vec<usize>,
     /// The lowest eigenvalue over all blocks at every point (rigid modes deflated; empty
@@ -146,6 +150,23 @@ impl BalloonLevel {
             .saturating_sub(self.continuation)
             .saturating_sub(self.adapted_basis)
             .saturating_sub(self.eigen.unwrap_or_default())
+            .saturating_sub(self.index.unwrap_or_default())
+    }
+    /// What `memstab run` pays for this path: everything but the eigenvalue spectra (the
+    /// path, the adapted basis and the index by blocks at every point).
+    pub fn run_time(&self) -> Duration {
+        self.total.saturating_sub(self.spectra.unwrap_or_default())
+    }
+    /// Path points per second of the per-point work alone: the path (assembly, projection,
+    /// continuation) and the index by blocks at every point, without the one-off set-up
+    /// (scene, mesh, start solve, adapted basis); `None` without stability.
+    pub fn steady_points_per_second(&self) -> Option<f64> {
+        let t = self.path_time() + self.index?;
+        Some(self.points as f64 / t.as_secs_f64().max(1e-12))
+    }
+    /// Path points per second of [`BalloonLevel::run_time`].
+    pub fn points_per_second(&self) -> f64 {
+        self.points as f64 / self.run_time().as_secs_f64().max(1e-12)
     }
     /// The path without stability: assembly (of the path) + projection + continuation. The
     /// assembly re-timed inside the spectra is not counted.
@@ -159,7 +180,7 @@ impl BalloonLevel {
     /// Stability by irrep along the path: the adapted basis (once) and every spectrum with
     /// its assembly; zero when skipped.
     pub fn stability_time(&self) -> Duration {
-        self.adapted_basis + self.spectra.unwrap_or_default()
+        self.adapted_basis + self.index.unwrap_or_default() + self.spectra.unwrap_or_default()
     }
 }
 
@@ -174,6 +195,8 @@ pub struct LevelOptions {
     /// Stop after this many converged points, the start included (`None`: where the scene's
     /// path ends, at the stretch 4).
     pub max_points: Option<usize>,
+    /// Only the index by blocks at every point, no eigenvalue spectra (the scaling study).
+    pub index_only: bool,
 }
 
 /// Follows the balloon of `frequency` through its pressure maximum and minimum, timing each
@@ -298,6 +321,7 @@ pub fn balloon_level_with(
         .map(|m| (probe.displacement(&m.q), probe.parameters(&m.lambda)));
 
     let (mut adapted_basis, mut eigen, mut eigen_restrict) = (Duration::ZERO, None, None);
+    let mut index = None;
     let (mut spectra_wall, mut indices, mut lowest) = (None, Vec::new(), Vec::new());
     let mut retimed = Duration::ZERO;
     if options.stability {
@@ -307,6 +331,8 @@ pub fn balloon_level_with(
         adapted_basis = t.elapsed();
         let stab = Stability::new(&study_ref.model, &adapted);
         let mut eval = study_ref.model.new_evaluation();
+        let mut local = stab.new_evaluation();
+        let mut by_index = Duration::ZERO;
         let mut spectra = Duration::ZERO;
         let mut in_spectra_assembly = Duration::ZERO;
         let mut restrict = Duration::ZERO;
@@ -316,11 +342,33 @@ pub fn balloon_level_with(
             let u = probe.displacement(&p.q);
             let params = probe.parameters(&p.lambda);
             let t = Instant::now();
+            let inertia = stab
+                .analyse(
+                    &u,
+                    &params,
+                    &study_ref.constraints,
+                    &mut local,
+                    None,
+                    Detail::Inertia,
+                )
+                .map_err(|e| e.to_string())?;
+            by_index += t.elapsed();
+            indices.push(inertia.index);
+            if options.index_only {
+                continue;
+            }
+            let t = Instant::now();
             let spectrum = stab
                 .spectrum_of(&u, &params, &study_ref.constraints, &mut eval, None, false)
                 .map_err(|e| e.to_string())?;
             spectra += t.elapsed();
-            indices.push(spectrum.index);
+            if spectrum.negatives() != inertia.negatives() {
+                return Err(format!(
+                    "f = {frequency}, point {i}: negative counts by eigenvalues {:?} and by inertia {:?} differ",
+                    spectrum.negatives(),
+                    inertia.negatives()
+                ));
+            }
             lowest.push(
                 spectrum
                     .blocks
@@ -330,7 +378,7 @@ pub fn balloon_level_with(
                     .fold(f64::INFINITY, f64::min),
             );
             // Re-timing (not counted in the total): the assembly inside spectrum_of, and at
-            // three points the block restrictions.
+            // three points the block restrictions (dense, or sparse above the dense limit).
             let t = Instant::now();
             study_ref
                 .model
@@ -341,20 +389,28 @@ pub fn balloon_level_with(
             retimed += dt;
             if sample.contains(&i) {
                 let t = Instant::now();
+                let layout = study_ref.model.layout();
                 for ib in &adapted.irreps {
-                    let k =
-                        ib.partners[0].restrict_tangent(study_ref.model.layout(), &eval, &mut work);
-                    std::hint::black_box(k);
+                    if ib.first().dim() > DENSE_BLOCK_LIMIT {
+                        std::hint::black_box(ib.first().restrict_tangent_sparse(layout, &eval));
+                    } else {
+                        std::hint::black_box(ib.first().restrict_tangent(layout, &eval, &mut work));
+                    }
                 }
                 let dt = t.elapsed();
                 restrict += dt;
                 retimed += dt;
             }
         }
-        assembly += in_spectra_assembly;
-        spectra_wall = Some(spectra);
-        eigen = Some(spectra.saturating_sub(in_spectra_assembly));
-        eigen_restrict = Some(restrict.mul_f64(path.points.len() as f64 / sample.len() as f64));
+        index = Some(by_index);
+        if options.index_only {
+            eigen_restrict = None;
+        } else {
+            assembly += in_spectra_assembly;
+            spectra_wall = Some(spectra);
+            eigen = Some(spectra.saturating_sub(in_spectra_assembly));
+            eigen_restrict = Some(restrict.mul_f64(path.points.len() as f64 / sample.len() as f64));
+        }
     }
     let total = start.elapsed().saturating_sub(retimed);
     let states = if options.keep_states {
@@ -381,6 +437,7 @@ pub fn balloon_level_with(
         eigen,
         eigen_restrict,
         spectra: spectra_wall,
+        index,
         indices,
         lowest,
         total,
@@ -790,7 +847,10 @@ pub fn payoff(
     let blocks_k: Vec<DMatrix<f64>> = adapted
         .irreps
         .iter()
-        .map(|ib| ib.partners[0].restrict_tangent(model.layout(), &eval, &mut work))
+        .map(|ib| {
+            ib.first()
+                .restrict_tangent(model.layout(), &eval, &mut work)
+        })
         .collect();
     let restrict = t.elapsed();
     let t = Instant::now();
@@ -821,7 +881,7 @@ pub fn payoff(
     let blocks = adapted
         .irreps
         .iter()
-        .map(|ib| (ib.name.clone(), ib.dim, ib.partners[0].dim()))
+        .map(|ib| (ib.name.clone(), ib.dim, ib.first().dim()))
         .collect();
     let mut out = Payoff {
         case: String::new(),
@@ -1209,6 +1269,7 @@ pub fn scaling_level(frequency: usize, points: usize) -> Result<ScalingLevel, St
         stability: true,
         keep_states: false,
         max_points: Some(points),
+        index_only: true,
     };
     let (level, study) = balloon_level_with(frequency, &options)?;
     let peak_kib = if reset { memory::peak_kib() } else { None };

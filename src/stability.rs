@@ -20,6 +20,7 @@ use crate::linalg::{SymmetricFactorization, SymmetricPattern};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, FeModel, Model, ModelError, Request};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Mutex;
 
@@ -493,21 +494,24 @@ impl<'a> Stability<'a> {
             .max(1e-300);
         let x = model.positions(u);
         // Unit rigid fields: their projections onto a block are of order one or round-off.
-        let rigid: Vec<Vec<f64>> = model
+        let rigid_norms: Vec<f64> = model
             .rigid_modes(&self.motions, &x)
-            .into_iter()
-            .map(|v| {
-                let n = v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-300);
-                v.into_iter().map(|a| a / n).collect()
-            })
+            .iter()
+            .map(|v| v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-300))
             .collect();
-        let mut work = Vec::new();
-        let mut blocks = Vec::with_capacity(self.basis.irreps.len());
-        for (mu, ib) in self.basis.irreps.iter().enumerate() {
+        let eval: &Evaluation = eval;
+        // The constraints' border of the trivial block, before the blocks go parallel.
+        let border0 = match self.basis.irreps.first() {
+            Some(ib) if !constraints.is_empty() && only.is_none_or(|o| o == 0) => Some(
+                constraint_border(ib.first(), layout, &x, params, constraints, eval),
+            ),
+            _ => None,
+        };
+        let block = |(mu, ib): (usize, &crate::adapted::IrrepBasis)| -> BlockSpectrum {
             let b = ib.first();
             let m = b.dim();
             if only.is_some_and(|o| o != mu) {
-                blocks.push(BlockSpectrum {
+                return BlockSpectrum {
                     irrep: ib.name.clone(),
                     dim: ib.dim,
                     size: m,
@@ -516,39 +520,35 @@ impl<'a> Stability<'a> {
                     eigenvalues: Vec::new(),
                     negative: 0,
                     vectors: DMatrix::zeros(m, 0),
-                });
-                continue;
+                };
             }
             // Rigid modes in this block, deflated.
-            let r = if rigid.is_empty() {
+            let r = if self.motions.is_empty() {
                 DMatrix::zeros(m, 0)
             } else {
                 DMatrix::from_columns(
-                    &rigid
+                    &self
+                        .motions
                         .iter()
-                        .map(|v| b.restrict(v))
+                        .zip(&rigid_norms)
+                        .map(|(motion, n)| b.restrict_rigid(motion, &x, layout) / *n)
                         .collect::<Vec<DVector<f64>>>(),
                 )
             };
-            let border = if mu == 0 && !constraints.is_empty() {
-                Some(constraint_border(b, layout, &x, params, constraints, eval))
-            } else {
-                None
-            };
+            let border = if mu == 0 { border0.clone() } else { None };
             if detail == Detail::Inertia || m > self.dense_limit {
                 if let Some(block) =
                     self.block_inertia(mu, b, layout, eval, &r, border.as_ref(), scale)
                 {
-                    blocks.push(BlockSpectrum {
+                    return BlockSpectrum {
                         irrep: ib.name.clone(),
                         dim: ib.dim,
                         size: m,
                         ..block
-                    });
-                    continue;
+                    };
                 }
             }
-            let k = b.restrict_tangent(layout, eval, &mut work);
+            let k = b.restrict_tangent(layout, eval, &mut Vec::new());
             let rigid = Complement::of(&r, 1e-12);
             let rigid_modes = rigid.rank();
             let rigid_residual = if rigid_modes > 0 {
@@ -583,7 +583,7 @@ impl<'a> Stability<'a> {
                 DMatrix::zeros(m, 0)
             };
             let negative = values.iter().filter(|&&v| v < 0.0).count();
-            blocks.push(BlockSpectrum {
+            BlockSpectrum {
                 irrep: ib.name.clone(),
                 dim: ib.dim,
                 size: m,
@@ -592,8 +592,16 @@ impl<'a> Stability<'a> {
                 eigenvalues: values,
                 negative,
                 vectors,
-            });
-        }
+            }
+        };
+        // Blocks are independent: one rayon task each.
+        let blocks: Vec<BlockSpectrum> = self
+            .basis
+            .irreps
+            .par_iter()
+            .enumerate()
+            .map(block)
+            .collect();
         let index = blocks.iter().map(|b| b.dim * b.negative).sum();
         Ok(Spectrum {
             blocks,

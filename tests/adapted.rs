@@ -88,6 +88,22 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     fixed_point.expand(&qa, &mut u);
     let mut eval = model.new_evaluation();
     model.evaluate(&u, &[], Request::ALL, &mut eval).unwrap();
+    // Rigid motions restricted from the orbit representatives equal the explicit restriction.
+    let x = model.positions(&u);
+    for k in 0..6 {
+        let mut motion = [0.0; 6];
+        motion[k] = 1.0;
+        let field = &model.rigid_modes(&[motion], &x)[0];
+        for b in &basis.irreps {
+            let fast = b.first().restrict_rigid(&motion, &x, layout);
+            let slow = b.first().restrict(field);
+            assert!(
+                (&fast - &slow).amax() < 1e-12 * slow.amax().max(1.0),
+                "{name}: rigid motion {k} in {}",
+                b.name
+            );
+        }
+    }
     let k = model.pattern().to_dense(&eval.tangent);
     let k = DMatrix::from_fn(n, n, |i, j| k[(i, j)]);
     let kt = q.transpose() * &k * &q;

@@ -211,7 +211,13 @@ fn scaling_study_writes_times_memory_and_exponents() {
     for row in &rows {
         assert_eq!(row.len(), header.len());
         assert_eq!(row[col("points")], "6", "{csv}");
-        for name in ["total_s", "eigen_s", "stability_s", "exponent_total"] {
+        for name in [
+            "total_s",
+            "index_s",
+            "stability_s",
+            "points_per_s",
+            "exponent_total",
+        ] {
             let v: f64 = row[col(name)].parse().unwrap();
             assert!(v.is_finite(), "{name} = {v}");
         }

@@ -196,6 +196,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
             stability,
             keep_states: stability && f <= compare_max_f,
             max_points: None,
+            index_only: false,
         };
         let failure =
             |e: &str| CliError::Failure(format!("balloon f = {f}: {}", super::common::one_line(e)));
@@ -384,16 +385,17 @@ fn scaling_table(md: &mut String, levels: &[ScalingLevel], fits: &ScalingFits, p
         "## Scaling: balloon paths of {points} points with stability at every point\n\n\
          The k = 0.1 balloon (`scenes/balloon.toml`, frequency replaced) followed for {points} \
          converged points (start included; fewer when it reaches the stretch 4 first) in the \
-         Ih fixed-point space, with `Stability::spectrum_of` (every irrep block) at every \
-         point. Wall times in ms, phases as in the bench: path = assembly of the path + \
-         projection + continuation; stability = adapted basis (once) + every spectrum with \
-         its assembly. Memory: resident set at the start of the level and its peak during the \
+         Ih fixed-point space, with the index of every irrep block at every point \
+         (`Stability::analyse` with `Detail::Inertia`, as `memstab run` computes it). Wall \
+         times in ms, phases as in the bench: path = assembly of the path + projection + \
+         continuation; stability = adapted basis (once) + the index at every point with its \
+         assembly. Memory: resident set at the start of the level and its peak during the \
          level (high-water mark reset before the level through `/proc/self/clear_refs`, then \
          `VmHWM`), MiB; memory the allocator kept from earlier levels counts in both.\n"
     );
     let _ = writeln!(
         md,
-        "| f | elements | unknowns | symmetric | points | err max | err min | total | assembly | projection | continuation | basis | eigen | (restrict) | rest | path | stability | points/s | RSS at start (MiB) | peak RSS (MiB) |"
+        "| f | elements | unknowns | symmetric | points | err max | err min | total | assembly | projection | continuation | basis | index by blocks | rest | path | stability | points/s | points/s per point (path + index) | RSS at start (MiB) | peak RSS (MiB) |"
     );
     let _ = writeln!(md, "|{}", "---|".repeat(20));
     let mem = |v: Option<u64>| mib(v).map_or_else(|| "n/a".to_string(), |m| format!("{m:.0}"));
@@ -402,7 +404,7 @@ fn scaling_table(md: &mut String, levels: &[ScalingLevel], fits: &ScalingFits, p
         let l = &s.level;
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} | {} |",
             l.frequency,
             l.elements,
             l.unknowns,
@@ -415,12 +417,13 @@ fn scaling_table(md: &mut String, levels: &[ScalingLevel], fits: &ScalingFits, p
             ms(l.projection),
             ms(l.continuation),
             ms(l.adapted_basis),
-            opt_ms(l.eigen),
-            opt_ms(l.eigen_restrict),
+            opt_ms(l.index),
             ms(l.rest()),
             ms(l.path_time()),
             ms(l.stability_time()),
-            l.points as f64 / secs(l.total),
+            l.points_per_second(),
+            l.steady_points_per_second()
+                .map_or_else(|| "–".to_string(), |p| format!("{p:.1}")),
             mem(s.rss_start_kib),
             mem(s.peak_kib),
         );
@@ -450,13 +453,13 @@ fn scaling_table(md: &mut String, levels: &[ScalingLevel], fits: &ScalingFits, p
 
 fn scaling_csv(levels: &[ScalingLevel], fits: &ScalingFits) -> String {
     let mut s = String::from(
-        "frequency,elements,unknowns,symmetric_unknowns,points,err_max,err_min,total_s,assembly_s,projection_s,continuation_s,adapted_basis_s,eigen_s,eigen_restrict_s,rest_s,path_s,stability_s,rss_start_mib,peak_rss_mib,exponent_total,exponent_path,exponent_stability,exponent_memory\n",
+        "frequency,elements,unknowns,symmetric_unknowns,points,err_max,err_min,total_s,assembly_s,projection_s,continuation_s,adapted_basis_s,index_s,rest_s,path_s,stability_s,points_per_s,rss_start_mib,peak_rss_mib,exponent_total,exponent_path,exponent_stability,exponent_memory\n",
     );
     for sl in levels {
         let l = &sl.level;
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{},{},{:e},{:e},{:e},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{},{},{},{},{},{}",
             l.frequency,
             l.elements,
             l.unknowns,
@@ -469,11 +472,11 @@ fn scaling_csv(levels: &[ScalingLevel], fits: &ScalingFits) -> String {
             secs(l.projection),
             secs(l.continuation),
             secs(l.adapted_basis),
-            opt_cell(l.eigen.map(secs)),
-            opt_cell(l.eigen_restrict.map(secs)),
+            opt_cell(l.index.map(secs)),
             secs(l.rest()),
             secs(l.path_time()),
             secs(l.stability_time()),
+            l.points_per_second(),
             opt_cell(mib(sl.rss_start_kib)),
             opt_cell(mib(sl.peak_kib)),
             opt_cell(fits.total),
@@ -498,20 +501,25 @@ fn balloon_tables(md: &mut String, levels: &[BalloonLevel]) {
          turning points found by the path follower (Ih fixed-point space), wall times in ms. \
          Phases: assembly = `model.evaluate` (path + stability); projection = restriction to \
          the fixed-point basis along the path; continuation = the path follower's dense \
-         solves and step control; basis = building the adapted basis by irrep; eigen = the \
-         stability spectrum by irrep at every path point without its assembly (of which \
-         `restrict` is the block restrictions B_μᵀ K B_μ, estimated from three points); \
-         rest = the remainder (scene, mesh, study).\n"
+         solves and step control; basis = building the adapted basis by irrep; index by \
+         blocks = the negative count of every irrep block at every path point, as `memstab \
+         run` computes it (`Stability::analyse` with `Detail::Inertia`: sparse LBLᵀ per \
+         block, assembly around the orbit representatives included); eigen = in addition, \
+         all eigenvalues of every block at every point (`spectrum_of`, dense per block up to \
+         `DENSE_BLOCK_LIMIT`) without its assembly (of which `restrict` is the block \
+         restrictions B_μᵀ K B_μ, estimated from three points); rest = the remainder (scene, \
+         mesh, study). points/s = points / (total − eigenvalue spectra), i.e. path + index \
+         at every point, what `run` pays.\n"
     );
     let _ = writeln!(
         md,
-        "| f | elements | unknowns | symmetric | points | evals | p_max | err max | p_min | err min | total | assembly | projection | continuation | basis | eigen | (restrict) | rest | points/s |"
+        "| f | elements | unknowns | symmetric | points | evals | p_max | err max | p_min | err min | total | assembly | projection | continuation | basis | index by blocks | eigen | (restrict) | rest | points/s | points/s per point (path + index) |"
     );
-    let _ = writeln!(md, "|{}", "---|".repeat(19));
+    let _ = writeln!(md, "|{}", "---|".repeat(21));
     for l in levels {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {:.7} | {:.3e} | {:.7} | {:.3e} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |",
+            "| {} | {} | {} | {} | {} | {} | {:.7} | {:.3e} | {:.7} | {:.3e} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {} |",
             l.frequency,
             l.elements,
             l.unknowns,
@@ -526,11 +534,14 @@ fn balloon_tables(md: &mut String, levels: &[BalloonLevel]) {
             ms(l.assembly),
             ms(l.projection),
             ms(l.continuation),
-            if l.eigen.is_some() { ms(l.adapted_basis) } else { "–".into() },
+            if l.index.is_some() { ms(l.adapted_basis) } else { "–".into() },
+            opt_ms(l.index),
             opt_ms(l.eigen),
             opt_ms(l.eigen_restrict),
             ms(l.rest()),
-            l.points as f64 / secs(l.total)
+            l.points_per_second(),
+            l.steady_points_per_second()
+                .map_or_else(|| "–".to_string(), |p| format!("{p:.1}"))
         );
     }
     if levels.len() >= 2 {
