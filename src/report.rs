@@ -107,4 +107,63 @@ pub struct PathReport {
     pub stability_note: Option<String>,
     /// States written as VTU files.
     pub saved: Vec<SavedState>,
+    /// The lowest eigenvalue of every irrep block at every sample of a linear-buckling sweep
+    /// (empty, and left out of `path.json`, for the other analyses).
+    #[serde(skip_serializing_if = "Spectra::is_empty")]
+    pub spectra: Spectra,
+}
+
+/// An irrep block as listed in [`Spectra`].
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct SpectrumIrrep {
+    /// Irrep name (`A1`, `E2`, `T1u` …).
+    pub name: String,
+    /// Its dimension d (every eigenvalue of the block is d-fold in K).
+    pub dim: usize,
+    /// Block size m (columns of one partner).
+    pub size: usize,
+    /// Whether the block's eigenvalues are computed; a block larger than
+    /// [`DENSE_BLOCK_LIMIT`](crate::stability::DENSE_BLOCK_LIMIT) (or an empty one) gets its
+    /// negative count only, and its `lowest` is `null` throughout.
+    pub eigenvalues: bool,
+}
+
+/// The spectra of one sample: per irrep (in the order of [`Spectra::irreps`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpectrumRow {
+    /// The path row (sample) this belongs to.
+    pub step: usize,
+    /// The control's value there.
+    pub control: f64,
+    /// max |K_ij| of the tangent there, the unit of `lowest`.
+    pub scale: f64,
+    /// The block's lowest eigenvalue over `scale` (λ/‖K‖, rigid modes excluded), or `None`
+    /// where it was not computed (a large block, or no spectrum at this sample).
+    pub lowest: Vec<Option<f64>>,
+    /// The block's number of negative eigenvalues (`None` where no spectrum was computed).
+    pub negative: Vec<Option<usize>>,
+}
+
+/// The lowest eigenvalue of every irrep block along a linear-buckling sweep: what `path.svg`
+/// plots for that analysis, stored in `path.json` so that the two agree.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Spectra {
+    /// The irrep blocks, the trivial first.
+    pub irreps: Vec<SpectrumIrrep>,
+    /// One per sample, matching [`PathReport::rows`] (all `None` where no spectrum was
+    /// computed).
+    pub rows: Vec<SpectrumRow>,
+}
+
+impl Spectra {
+    /// True when no spectrum was recorded (every analysis but linear buckling, or a run whose
+    /// stability was not analysed).
+    pub fn is_empty(&self) -> bool {
+        self.irreps.is_empty() || self.rows.is_empty()
+    }
+
+    /// The index of the irrep named `name`.
+    pub fn irrep(&self, name: &str) -> Option<usize> {
+        self.irreps.iter().position(|i| i.name == name)
+    }
 }

@@ -2,11 +2,14 @@
 //! with its pressure maximum and minimum as turning points) and a small icosphere: CSV, JSON,
 //! SVG, VTU + PVD, and their errors.
 
+use memstab::critical::{CriticalPoint, Isotropy};
 use memstab::output::{
-    default_axes, write_csv, write_diagram, write_diagram_with, write_json, Diagram, Marker,
-    MarkerKind, OutputError, Progress, PvdTime, Segment, StateWriter,
+    default_axes, write_csv, write_diagram, write_diagram_with, write_json, write_spectrum_diagram,
+    Diagram, Marker, MarkerKind, OutputError, Progress, PvdTime, Segment, StateWriter, ZERO_LINE,
 };
-use memstab::report::{MeshInfo, PathReport, PathRow, TurningRow};
+use memstab::report::{
+    MeshInfo, PathReport, PathRow, Spectra, SpectrumIrrep, SpectrumRow, TurningRow,
+};
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::write::Fields;
 use meshes::{Mesh, Vec3};
@@ -82,6 +85,7 @@ fn report() -> PathReport {
         ],
         stop: "reached the bound stretch = 4".to_string(),
         saved: Vec::new(),
+        spectra: Spectra::default(),
     }
 }
 
@@ -403,4 +407,219 @@ fn a_quiet_progress_bar_is_silent() {
     assert!(!bar.is_visible());
     bar.set(3, "p = 1.2");
     bar.finish("done");
+}
+
+/// The `<polyline>`s of an SVG: stroke colour and points.
+fn polylines(svg: &str) -> Vec<(String, Vec<(i64, i64)>)> {
+    svg.split("<polyline")
+        .skip(1)
+        .map(|p| {
+            let attr = |name: &str| {
+                let start = p.find(&format!("{name}=\"")).unwrap() + name.len() + 2;
+                p[start..start + p[start..].find('"').unwrap()].to_string()
+            };
+            let points = attr("points")
+                .split_whitespace()
+                .map(|xy| {
+                    let (x, y) = xy.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect();
+            (attr("stroke"), points)
+        })
+        .collect()
+}
+
+/// `#RRGGBB` of the zero line.
+fn zero_colour() -> String {
+    format!("#{:02X}{:02X}{:02X}", ZERO_LINE.0, ZERO_LINE.1, ZERO_LINE.2)
+}
+
+/// A linear-buckling sweep of ρ over [0, 10] in 20 steps on a held state: A1 crosses zero at
+/// ρ = 2.5, E1 at 20/3, A2 stays positive and has no spectrum at rows 7–9, and B1 is a large
+/// block without eigenvalues.
+fn sweep() -> PathReport {
+    let mut r = report();
+    let n = 20;
+    let rho = |i: usize| 10.0 * i as f64 / n as f64;
+    r.scene = "sweep".to_string();
+    r.control = "rho".to_string();
+    r.parameters = vec!["rho".to_string()];
+    r.measures = vec!["max_displacement".to_string()];
+    r.turning_points.clear();
+    r.rows = (0..=n)
+        .map(|i| PathRow {
+            step: i,
+            arclength: rho(i),
+            parameters: vec![rho(i)],
+            measures: vec![0.0],
+            iterations: 0,
+            index: Some(usize::from(rho(i) > 2.5) + 2 * usize::from(rho(i) > 20.0 / 3.0)),
+        })
+        .collect();
+    let irrep = |name: &str, dim, size, eigenvalues| SpectrumIrrep {
+        name: name.to_string(),
+        dim,
+        size,
+        eigenvalues,
+    };
+    r.spectra = Spectra {
+        irreps: vec![
+            irrep("A1", 1, 40, true),
+            irrep("A2", 1, 30, true),
+            irrep("B1", 1, 2500, false),
+            irrep("E1", 2, 70, true),
+        ],
+        rows: (0..=n)
+            .map(|i| {
+                let x = rho(i);
+                let a1 = 0.01 - 0.004 * x;
+                let e1 = 0.02 - 0.003 * x;
+                let a2 = (!(7..=9).contains(&i)).then_some(0.05 - 0.001 * x);
+                SpectrumRow {
+                    step: i,
+                    control: x,
+                    scale: 3.5,
+                    lowest: vec![Some(a1), a2, None, Some(e1)],
+                    negative: vec![
+                        Some(usize::from(a1 < 0.0)),
+                        Some(0),
+                        Some(0),
+                        Some(usize::from(e1 < 0.0)),
+                    ],
+                }
+            })
+            .collect(),
+    };
+    let critical = |kind: &str, irrep: &str, dim, rho: f64| CriticalPoint {
+        kind: kind.to_string(),
+        irrep: irrep.to_string(),
+        multiplicity: dim,
+        parameters: vec![rho],
+        measures: vec![0.0],
+        after_step: (rho * 2.0).floor() as usize,
+        residual_eigenvalue: 1e-13,
+        isotropy: Isotropy {
+            name: "C1v".to_string(),
+            order: 2,
+            elements: vec![0, 1],
+        },
+        mode: Vec::new(),
+        state: Vec::new(),
+    };
+    r.critical = vec![
+        critical("symmetric bifurcation", "A1", 1, 2.5),
+        critical("double bifurcation", "E1", 2, 20.0 / 3.0),
+    ];
+    r
+}
+
+#[test]
+fn spectrum_svg_draws_a_line_per_irrep_and_the_zero_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = sweep();
+    let path = write_spectrum_diagram(dir.path(), &r).unwrap();
+    assert_eq!(path, dir.path().join("path.svg"));
+    let svg = fs::read_to_string(&path).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(
+        !svg.contains("NaN") && !svg.contains("inf"),
+        "a non-finite number"
+    );
+    let texts = texts(&svg);
+    for text in [
+        "sweep (group Ih): lowest eigenvalue by irrep",
+        "rho",
+        "lowest eigenvalue / max|K_ij|",
+        "A1 (×1)",
+        "A2 (×1)",
+        "E1 (×2)",
+        "B1 (×1): not plotted (2500 columns, negative count only)",
+        "symmetric A1",
+        "double E1",
+        "critical point",
+    ] {
+        assert!(
+            texts.iter().any(|t| t == text),
+            "no text {text:?} in {texts:?}"
+        );
+    }
+    let lines = polylines(&svg);
+    // The zero line: one horizontal line across the plot in its own colour.
+    let zero: Vec<_> = lines.iter().filter(|l| l.0 == zero_colour()).collect();
+    assert_eq!(zero.len(), 1, "{zero:?}");
+    let zero = &zero[0].1;
+    assert_eq!(zero.len(), 2);
+    assert_eq!(zero[0].1, zero[1].1, "horizontal");
+    let y0 = zero[0].1;
+    // A1 and E1 are one line of 21 samples each, crossing zero; A2 is broken into two runs
+    // (rows 0–6 and 10–20) above zero; B1 has no line.
+    let data: Vec<_> = lines
+        .iter()
+        .filter(|l| l.1.len() > 2 && l.0 != "#000000")
+        .collect();
+    let lengths: Vec<usize> = data.iter().map(|l| l.1.len()).collect();
+    assert_eq!(lengths, [21, 7, 11, 21], "{data:?}");
+    let crosses = |l: &[(i64, i64)]| {
+        l.iter().any(|p| p.1 < y0) && l.iter().any(|p| p.1 > y0) // SVG y grows downwards
+    };
+    assert!(crosses(&data[0].1) && crosses(&data[3].1));
+    assert!(data[1].1.iter().chain(&data[2].1).all(|p| p.1 < y0));
+    assert_eq!(data[1].0, data[2].0, "A2's runs share a colour");
+    let colours: std::collections::BTreeSet<&str> = data.iter().map(|l| l.0.as_str()).collect();
+    assert_eq!(colours.len(), 3, "a colour per irrep: {colours:?}");
+    assert_eq!(listing(dir.path()), ["path.svg"]);
+}
+
+#[test]
+fn spectra_go_into_path_json_and_only_there_when_present() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_json(dir.path(), &report()).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
+    assert!(v.get("spectra").is_none(), "a path report has no spectra");
+    let r = sweep();
+    write_json(dir.path(), &r).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
+    let s = &v["spectra"];
+    assert_eq!(s["irreps"][3]["name"], "E1");
+    assert_eq!(s["irreps"][3]["dim"], 2);
+    assert_eq!(s["irreps"][2]["eigenvalues"], false);
+    let rows = s["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), r.rows.len());
+    assert_eq!(rows[4]["control"], 2.0);
+    assert_eq!(rows[4]["lowest"][0].as_f64().unwrap(), 0.01 - 0.004 * 2.0);
+    assert!(rows[8]["lowest"][1].is_null());
+    assert!(rows[8]["lowest"][2].is_null());
+    assert_eq!(rows[20]["negative"][3], 1);
+}
+
+#[test]
+fn spectrum_svg_refuses_a_nan_or_a_report_without_spectra() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = write_spectrum_diagram(dir.path(), &report()).unwrap_err();
+    assert!(err.to_string().contains("no spectra"), "{err}");
+    let mut r = sweep();
+    r.spectra.rows[3].lowest[3] = Some(f64::NAN);
+    for err in [
+        write_spectrum_diagram(dir.path(), &r).unwrap_err(),
+        write_json(dir.path(), &r).unwrap_err(),
+    ] {
+        let msg = err.to_string();
+        assert!(
+            msg.contains("spectra row 3") && msg.contains("E1") && msg.contains("NaN"),
+            "{msg}"
+        );
+    }
+    let mut r = sweep();
+    r.spectra.rows[5].lowest.pop();
+    let err = write_spectrum_diagram(dir.path(), &r).unwrap_err();
+    assert!(err.to_string().contains("spectra row 5"), "{err}");
+    let mut r = sweep();
+    r.critical[1].parameters[0] = f64::INFINITY;
+    let err = write_spectrum_diagram(dir.path(), &r).unwrap_err();
+    assert!(
+        err.to_string().contains("double bifurcation in E1"),
+        "{err}"
+    );
+    assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
 }

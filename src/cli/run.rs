@@ -2,7 +2,10 @@
 //!
 //! Loads and validates a scene, builds the study (mesh, the scene's group, effects, model),
 //! follows its path with a progress bar and writes into DIR: `path.csv`, `path.json`,
-//! `path.svg`, and a `state_NNNN.vtu` per saved state with the collection `path.pvd`.
+//! `path.svg`, and a `state_NNNN.vtu` per saved state with the collection `path.pvd`. The SVG
+//! of a linear-buckling sweep plots the lowest eigenvalue of every irrep block against the
+//! control (the held state's measures are constant); every other analysis gets the path
+//! diagram.
 //!
 //! Bad input — a scene that does not load or cannot be built, an `--out` whose parent does not
 //! exist or that is not a directory — is one line and exit code 2, and nothing is written (not
@@ -13,8 +16,9 @@
 use super::CliError;
 use clap::Args;
 use memstab::output::{
-    default_axes, write_critical, write_csv, write_diagram_with, write_json, Diagram, Marker,
-    MarkerKind, OutputError, Progress, PvdTime, Segment, StateWriter,
+    default_axes, write_critical, write_csv, write_diagram_with, write_json,
+    write_spectrum_diagram, Diagram, Marker, MarkerKind, OutputError, Progress, PvdTime, Segment,
+    StateWriter, SPECTRUM_AXIS,
 };
 use memstab::report::PathReport;
 use memstab::run::{run as run_study, RunResult};
@@ -87,7 +91,8 @@ struct Written {
     json: PathBuf,
     critical: PathBuf,
     svg: PathBuf,
-    axes: (String, String),
+    /// What the SVG shows, for the summary.
+    plotted: String,
     pvd: PathBuf,
     states: Vec<PathBuf>,
 }
@@ -279,15 +284,38 @@ fn write_outputs(study: &Study, result: &mut RunResult, out: &Path) -> Result<Wr
     done.push(json.clone());
     let critical_json = write_critical(out, &result.report).map_err(|e| fail(e, &done))?;
     done.push(critical_json.clone());
-    let axes = axes(&result.report);
-    let svg = write_diagram_with(out, &result.report, &diagram(&result.report, &axes))
-        .map_err(|e| fail(e, &done))?;
+    let report = &result.report;
+    let (svg, plotted) = if report.spectra.is_empty() {
+        let axes = axes(report);
+        let svg = write_diagram_with(out, report, &diagram(report, &axes));
+        let plotted = format!("{} against {}, turning points marked", axes.1, axes.0);
+        (svg, plotted)
+    } else {
+        let skipped: Vec<&str> = report
+            .spectra
+            .irreps
+            .iter()
+            .filter(|i| !i.eigenvalues)
+            .map(|i| i.name.as_str())
+            .collect();
+        let skipped = if skipped.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} not plotted: no eigenvalues)", skipped.join(", "))
+        };
+        let plotted = format!(
+            "{SPECTRUM_AXIS} per irrep against {}{skipped}, critical points marked",
+            report.control
+        );
+        (write_spectrum_diagram(out, report), plotted)
+    };
+    let svg = svg.map_err(|e| fail(e, &done))?;
     Ok(Written {
         csv,
         json,
         critical: critical_json,
         svg,
-        axes,
+        plotted,
         pvd,
         states,
     })
@@ -560,12 +588,7 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
         file_name(&written.critical),
         report.critical.len()
     );
-    println!(
-        "  {:<10} {} against {}, turning points marked",
-        file_name(&written.svg),
-        written.axes.1,
-        written.axes.0
-    );
+    println!("  {:<10} {}", file_name(&written.svg), written.plotted);
     let in_collection = report.saved.iter().filter(|s| s.in_collection).count();
     println!(
         "  {:<10} ParaView collection of the {in_collection} path states (time = path step); turning and critical points beside it",

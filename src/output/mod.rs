@@ -5,6 +5,7 @@
 //! | `path.csv` | [`write_csv`] | a row per path point: step, arclength, parameters, measures, iterations |
 //! | `path.json` | [`write_json`] | the whole [`PathReport`]: metadata, path, turning points, saved states |
 //! | `path.svg` | [`write_diagram`], [`write_diagram_with`] | the path in two chosen quantities, turning points marked |
+//! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
 //! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
 //!
 //! [`Progress`] is the terminal progress bar (silent when quiet or when stderr is not a
@@ -30,7 +31,8 @@ pub use json::{write_critical, write_json};
 pub use progress::Progress;
 pub use states::{PvdTime, StateWriter};
 pub use svg::{
-    default_axes, write_diagram, write_diagram_with, Diagram, Marker, MarkerKind, Segment,
+    default_axes, write_diagram, write_diagram_with, write_spectrum_diagram, Diagram, Marker,
+    MarkerKind, Segment, SPECTRUM_AXIS, ZERO_LINE,
 };
 
 use crate::report::PathReport;
@@ -164,6 +166,41 @@ fn check_finite(path: &Path, report: &PathReport) -> Result<(), OutputError> {
     for s in &report.saved {
         if !s.control.is_finite() {
             return Err(bad(format!("saved state {}", s.file), "control", s.control));
+        }
+    }
+    check_spectra(path, report)
+}
+
+/// Checks the report's [`Spectra`](crate::report::Spectra): a value per irrep in every row,
+/// every number finite (a lowest eigenvalue that was not computed is `None`, never NaN).
+fn check_spectra(path: &Path, report: &PathReport) -> Result<(), OutputError> {
+    let spectra = &report.spectra;
+    let n = spectra.irreps.len();
+    for row in &spectra.rows {
+        let what = format!("spectra row {}", row.step);
+        if row.lowest.len() != n || row.negative.len() != n {
+            return Err(OutputError::invalid(
+                path,
+                format!(
+                    "{what} has {} lowest eigenvalues and {} negative counts, the spectra name {n} irreps",
+                    row.lowest.len(),
+                    row.negative.len()
+                ),
+            ));
+        }
+        let bad = |name: &str, v: f64| {
+            OutputError::invalid(path, format!("{what}: {name} is {v} (not finite)"))
+        };
+        if !row.control.is_finite() {
+            return Err(bad("control", row.control));
+        }
+        if !row.scale.is_finite() {
+            return Err(bad("scale", row.scale));
+        }
+        for (irrep, v) in spectra.irreps.iter().zip(&row.lowest) {
+            if let Some(v) = v.filter(|v| !v.is_finite()) {
+                return Err(bad(&format!("the lowest eigenvalue of {}", irrep.name), v));
+            }
         }
     }
     Ok(())
