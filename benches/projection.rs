@@ -1,6 +1,6 @@
 //! The symmetry projection on the f = 16 balloon (Ih, 7686 unknowns): building the adapted
 //! basis of every irrep (`AdaptedBasis::new`, once per mesh and group) and restricting one
-//! tangent to every block (`restrict_tangent` of `partners[0]` of each irrep, per matrix).
+//! tangent to every block (`restrict_tangent` of `first()` of each irrep, per matrix).
 //!
 //! `cargo bench --bench projection`
 
@@ -36,7 +36,7 @@ fn restrict_all_blocks(bencher: divan::Bencher, frequency: usize) {
             .irreps
             .iter()
             .map(|ib| {
-                ib.partners[0]
+                ib.first()
                     .restrict_tangent(study.model.layout(), &eval, &mut work)
                     .nrows()
             })

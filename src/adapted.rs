@@ -691,15 +691,32 @@ pub struct IrrepBasis {
     pub dim: usize,
     /// The multiplicity predicted by the characters, (1/|G|) Σ χ_T(g) χ_μ(g).
     pub multiplicity: usize,
-    /// One basis per partner a = 0..d; `partners[0]` spans the first copy, and
-    /// `partners[a] = P_{a0} partners[0]`.
-    pub partners: Vec<SparseBasis>,
+    /// The first partner's columns: the block's basis. The other partners hold the same
+    /// block again (they are built on demand by [`IrrepBasis::partners`]; kept, they would
+    /// take d times the memory, ≈ 2 GB at f = 128 for Ih).
+    first: SparseBasis,
 }
 
 impl IrrepBasis {
     /// The block's basis: the columns of the first partner.
     pub fn first(&self) -> &SparseBasis {
-        &self.partners[0]
+        &self.first
+    }
+
+    /// All d partners (a = 0..d, the first one included), partner a = P_{a0} of the first:
+    /// together with the other irreps', an orthonormal basis of the unknowns. For checks;
+    /// the analysis needs only [`IrrepBasis::first`].
+    pub fn partners(&self, action: &GroupAction, layout: &Layout) -> Vec<SparseBasis> {
+        let seeds = self.first.seeds.as_ref().expect("built from seeds");
+        std::iter::once(self.first.clone())
+            .chain((1..self.dim).map(|a| {
+                let columns = (0..self.first.dim())
+                    .into_par_iter()
+                    .map(|e| seeds.column(action, layout, e, a))
+                    .collect();
+                SparseBasis::from_columns(layout.unknowns(), columns)
+            }))
+            .collect()
     }
 }
 
@@ -774,21 +791,11 @@ impl AdaptedBasis {
                     predicted: multiplicity,
                 });
             }
-            let seeds = first.seeds.as_ref().expect("built from seeds");
-            let mut partners = Vec::with_capacity(d);
-            for a in 1..d {
-                let columns = (0..first.dim())
-                    .into_par_iter()
-                    .map(|e| seeds.column(action, layout, e, a))
-                    .collect();
-                partners.push(SparseBasis::from_columns(layout.unknowns(), columns));
-            }
-            partners.insert(0, first);
             irreps.push(IrrepBasis {
                 name: irrep.name().into(),
                 dim: d,
                 multiplicity,
-                partners,
+                first,
             });
         }
         Ok(Self { irreps })

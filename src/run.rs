@@ -4,7 +4,9 @@
 //!   start value, no constraint active) is solved; constraint targets declared `"initial"`
 //!   are measured there; the path is followed in the fixed-point space of the scene's group.
 //! - `equilibrium`: the start state alone.
-//! - `linear-buckling`: the start state held while the control sweeps `[min, max]`.
+//! - `linear-buckling`: the start state held while the control sweeps `[min, max]`; the
+//!   lowest eigenvalue of every irrep block at every sample goes into the report's
+//!   [`Spectra`](crate::report::Spectra) (what `path.svg` plots for this analysis).
 //!
 //! At every point the tangent is split by irrep ([`crate::stability`]); where a block's
 //! negative count changes, the critical point is localised and classified
@@ -13,9 +15,12 @@
 use crate::adapted::{AdaptedBasis, SymmetricProblem};
 use crate::continuation::{follow, solve_at, step, PathOptions, PathPoint, StopReason};
 use crate::critical::{classify_on, isotropy, locate_sign_change, CriticalPoint};
-use crate::report::{MeshInfo, PathReport, PathRow, TurningRow};
+use crate::model::{Evaluation, Model};
+use crate::report::{
+    MeshInfo, PathReport, PathRow, Spectra, SpectrumIrrep, SpectrumRow, TurningRow,
+};
 use crate::scene::{Analysis, Direction};
-use crate::stability::{Spectrum, Stability};
+use crate::stability::{Detail, Spectrum, Stability};
 use crate::study::{Measure, Study};
 use nalgebra::DVector;
 
@@ -67,15 +72,19 @@ pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<Ru
         Err(e) => (None, Some(format!("stability not analysed: {e}"))),
     };
     let stability = adapted.as_ref().map(|b| Stability::new(&study.model, b));
+    let local = stability.as_ref().map(|s| s.new_evaluation());
     let mut runner = Runner {
         study,
         stability,
+        eval: study.model.new_evaluation(),
+        local,
         opts,
         rows: Vec::new(),
         states: Vec::new(),
         turning: Vec::new(),
         critical: Vec::new(),
         warnings: study.warnings.clone(),
+        spectra: Spectra::default(),
     };
     let stop = match &study.scene.analysis {
         Analysis::LinearBuckling(a) => {
@@ -89,6 +98,7 @@ pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<Ru
         turning,
         critical,
         warnings,
+        spectra,
         ..
     } = runner;
     let m = &study.mesh;
@@ -119,6 +129,7 @@ pub fn run(study: &mut Study, mut progress: impl FnMut(usize, f64)) -> Result<Ru
         warnings,
         stability_note,
         saved: Vec::new(),
+        spectra,
     };
     Ok(RunResult { report, states })
 }
@@ -213,12 +224,19 @@ pub fn path_options(study: &Study) -> PathOptions {
 struct Runner<'a> {
     study: &'a Study,
     stability: Option<Stability<'a>>,
+    /// The model's evaluation buffer, reused by every spectrum of the run (the tangent of a
+    /// large mesh is megabytes; a fresh buffer per point would allocate it every time).
+    eval: Evaluation,
+    /// The evaluation around the orbit representatives, for the index at every path point.
+    local: Option<Evaluation>,
     opts: PathOptions,
     rows: Vec<PathRow>,
     states: Vec<State>,
     turning: Vec<TurningRow>,
     critical: Vec<CriticalPoint>,
     warnings: Vec<String>,
+    /// The lowest eigenvalue per irrep at every sample (linear buckling only).
+    spectra: Spectra,
 }
 
 impl Runner<'_> {
@@ -226,11 +244,33 @@ impl Runner<'_> {
         self.study.control.map_or(0.0, |c| params[c])
     }
 
-    fn spectrum(&self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
+    fn spectrum(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
         let stab = self.stability.as_ref()?;
-        let mut eval = crate::model::Model::new_evaluation(&self.study.model);
-        stab.spectrum_of(u, params, &self.study.constraints, &mut eval, None, false)
-            .ok()
+        stab.spectrum_of(
+            u,
+            params,
+            &self.study.constraints,
+            &mut self.eval,
+            None,
+            false,
+        )
+        .ok()
+    }
+
+    /// The negative count of every block only (sparse inertia, assembly around the orbit
+    /// representatives): what every path point needs to detect a change of stability.
+    fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
+        let stab = self.stability.as_ref()?;
+        let local = self.local.as_mut()?;
+        stab.analyse(
+            u,
+            params,
+            &self.study.constraints,
+            local,
+            None,
+            Detail::Inertia,
+        )
+        .ok()
     }
 
     fn row(
@@ -265,12 +305,33 @@ impl Runner<'_> {
         let Some(stab) = self.stability.as_ref() else {
             return;
         };
+        let eval = &mut self.eval;
         let study = self.study;
         let mut found = Vec::new();
         let mut warnings = Vec::new();
         for mu in 0..a.blocks.len() {
             let (n0, n1) = (a.blocks[mu].negative, b.blocks[mu].negative);
-            if n0 != n1 && a.blocks[mu].eigenvalues.is_empty() {
+            if n0 == n1 {
+                continue;
+            }
+            // Along a path only the negative counts are computed at every point; the
+            // eigenvalues of the block that changed are computed at both ends here.
+            let mut ends = [
+                a.blocks[mu].eigenvalues.clone(),
+                b.blocks[mu].eigenvalues.clone(),
+            ];
+            if ends[0].is_empty() {
+                for (end, s) in ends.iter_mut().zip([0.0, s1]) {
+                    if let Some((u, p)) = state(s) {
+                        if let Ok(sp) =
+                            stab.spectrum_of(&u, &p, &study.constraints, eval, Some(mu), false)
+                        {
+                            *end = sp.blocks[mu].eigenvalues.clone();
+                        }
+                    }
+                }
+            }
+            if ends[0].is_empty() || ends[1].is_empty() {
                 warnings.push(format!(
                     "the index of {} changed between steps {after_step} and {} (by {}); its block has {} columns, more than the {} whose eigenvalues are computed, so the crossing was not localised",
                     a.blocks[mu].irrep,
@@ -282,15 +343,14 @@ impl Runner<'_> {
                 continue;
             }
             for k in n0.min(n1)..n0.max(n1) {
-                let g0 = a.blocks[mu].eigenvalues.get(k).copied().unwrap_or(0.0);
-                let g1 = b.blocks[mu].eigenvalues.get(k).copied().unwrap_or(0.0);
-                let mut eval = crate::model::Model::new_evaluation(&study.model);
+                let g0 = ends[0].get(k).copied().unwrap_or(0.0);
+                let g1 = ends[1].get(k).copied().unwrap_or(0.0);
                 let tol = ZERO_EIGENVALUE * a.scale;
                 let located = locate_sign_change(
                     |s| {
                         let (u, p) = state(s)?;
                         let sp = stab
-                            .spectrum_of(&u, &p, &study.constraints, &mut eval, Some(mu), false)
+                            .spectrum_of(&u, &p, &study.constraints, eval, Some(mu), false)
                             .ok()?;
                         sp.blocks[mu].eigenvalues.get(k).copied()
                     },
@@ -315,7 +375,7 @@ impl Runner<'_> {
                 // Re-evaluate at the best point, with the eigenvectors for the critical mode.
                 let evaluated = state(s_best).and_then(|(u, p)| {
                     let sp = stab
-                        .spectrum_of(&u, &p, &study.constraints, &mut eval, Some(mu), true)
+                        .spectrum_of(&u, &p, &study.constraints, eval, Some(mu), true)
                         .ok()?;
                     Some((u, p, sp))
                 });
@@ -443,7 +503,7 @@ impl Runner<'_> {
         for (i, p) in path.points.iter().enumerate() {
             let u = probe.displacement(&p.q);
             let params = probe.parameters(&p.lambda);
-            let spectrum = self.spectrum(&u, &params);
+            let spectrum = self.index(&u, &params);
             let index = spectrum.as_ref().map(|s| s.index);
             if i % save_every == 0 || i == last {
                 self.states.push(State {
@@ -525,11 +585,13 @@ impl Runner<'_> {
             p
         };
         let mut previous: Option<(Spectrum, f64)> = None;
+        let mut sampled: Vec<(usize, f64, Option<Sample>)> = Vec::with_capacity(samples + 1);
         for i in 0..=samples {
             let value = lo + (hi - lo) * i as f64 / samples as f64;
             progress(i, value);
             let params = at(value);
             let spectrum = self.spectrum(u, &params);
+            sampled.push((i, value, spectrum.as_ref().map(Sample::of)));
             let index = spectrum.as_ref().map(|s| s.index);
             self.rows.push(self.row(i, value - lo, u, params, 0, index));
             if let (Some((a, va)), Some(b)) = (&previous, &spectrum) {
@@ -543,6 +605,7 @@ impl Runner<'_> {
             }
             previous = spectrum.map(|s| (s, value));
         }
+        self.spectra = spectra_of(sampled);
         self.states.push(State {
             step: 0,
             label: "held state".into(),
@@ -552,6 +615,72 @@ impl Runner<'_> {
         });
         format!("the control swept [{lo}, {hi}] in {samples} steps")
     }
+}
+
+/// What the report keeps of one sample's spectrum: per block, its irrep, its lowest
+/// eigenvalue relative to the scale (finite, or none) and its negative count.
+struct Sample {
+    scale: f64,
+    blocks: Vec<(SpectrumIrrep, Option<f64>, usize)>,
+}
+
+impl Sample {
+    fn of(s: &Spectrum) -> Self {
+        Self {
+            scale: s.scale,
+            blocks: s
+                .blocks
+                .iter()
+                .map(|b| {
+                    let irrep = SpectrumIrrep {
+                        name: b.irrep.clone(),
+                        dim: b.dim,
+                        size: b.size,
+                        eigenvalues: !b.eigenvalues.is_empty(),
+                    };
+                    let lowest = b
+                        .eigenvalues
+                        .first()
+                        .map(|l| l / s.scale)
+                        .filter(|l| l.is_finite());
+                    (irrep, lowest, b.negative)
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The report's [`Spectra`] from the samples `(step, control, sample)` of a sweep: the irreps
+/// of the first analysed sample, a row per sample (all `None` where it was not analysed).
+fn spectra_of(sampled: Vec<(usize, f64, Option<Sample>)>) -> Spectra {
+    let Some(first) = sampled.iter().find_map(|s| s.2.as_ref()) else {
+        return Spectra::default();
+    };
+    let mut irreps: Vec<SpectrumIrrep> = first.blocks.iter().map(|b| b.0.clone()).collect();
+    let n = irreps.len();
+    let rows: Vec<SpectrumRow> = sampled
+        .into_iter()
+        .map(|(step, control, sample)| {
+            let sample = sample.filter(|s| s.blocks.len() == n && s.scale.is_finite());
+            SpectrumRow {
+                step,
+                control,
+                scale: sample.as_ref().map_or(0.0, |s| s.scale),
+                lowest: sample
+                    .as_ref()
+                    .map_or_else(|| vec![None; n], |s| s.blocks.iter().map(|b| b.1).collect()),
+                negative: sample.as_ref().map_or_else(
+                    || vec![None; n],
+                    |s| s.blocks.iter().map(|b| Some(b.2)).collect(),
+                ),
+            }
+        })
+        .collect();
+    // A block counts as having eigenvalues if any sample computed them.
+    for (mu, irrep) in irreps.iter_mut().enumerate() {
+        irrep.eigenvalues = rows.iter().any(|r| r.lowest[mu].is_some());
+    }
+    Spectra { irreps, rows }
 }
 
 /// The unit of the state in the arclength: the mesh radius times √nodes, so that a step is

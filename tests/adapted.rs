@@ -72,7 +72,12 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let all: Vec<DMatrix<f64>> = basis
         .irreps
         .iter()
-        .flat_map(|b| b.partners.iter().map(dense))
+        .flat_map(|b| {
+            b.partners(action, layout)
+                .iter()
+                .map(dense)
+                .collect::<Vec<_>>()
+        })
         .collect();
     let q = DMatrix::from_columns(
         &all.iter()
@@ -82,7 +87,7 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let orth = (q.transpose() * &q - DMatrix::identity(n, n)).amax();
     assert!(orth < 1e-12, "{name}: columns not orthonormal ({orth:e})");
     // A symmetric state: a random combination of the fixed-point columns.
-    let fixed_point = &basis.irreps[0].partners[0];
+    let fixed_point = &basis.irreps[0].first();
     let qa = DVector::from_fn(fixed_point.dim(), |i, _| 0.02 * ((i as f64 * 0.7).sin()));
     let mut u = vec![0.0; n];
     fixed_point.expand(&qa, &mut u);
@@ -130,7 +135,7 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let mut o = 0;
     let mut work = Vec::new();
     for b in &basis.irreps {
-        let k0 = b.partners[0].restrict_tangent(layout, &eval, &mut work);
+        let k0 = b.first().restrict_tangent(layout, &eval, &mut work);
         for a in 0..b.dim {
             let ka = kt.view(
                 (o + a * b.multiplicity, o + a * b.multiplicity),
@@ -150,7 +155,8 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
         .iter()
         .filter(|b| b.multiplicity > 0)
         .flat_map(|b| {
-            let ev = b.partners[0]
+            let ev = b
+                .first()
                 .restrict_tangent(layout, &eval, &mut Vec::new())
                 .symmetric_eigenvalues();
             std::iter::repeat_n(ev.iter().copied().collect::<Vec<_>>(), b.dim)
