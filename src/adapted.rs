@@ -818,6 +818,8 @@ pub struct SymmetricProblem<'a> {
     work: Vec<f64>,
     /// From this many columns on the restricted tangent is passed on sparse.
     sparse_from: usize,
+    /// The sparse LBLᵀ of the restricted tangent, its symbolic analysis done once.
+    solver: crate::continuation::SharedFactorization,
     /// Where the evaluations' time went (for `memstab bench`).
     pub times: PhaseTimes,
 }
@@ -862,6 +864,7 @@ impl<'a> SymmetricProblem<'a> {
             u: vec![0.0; model.unknowns()],
             work: Vec::new(),
             sparse_from: SPARSE_TANGENT_FROM,
+            solver: Default::default(),
             model,
             basis,
             constraints,
@@ -903,6 +906,7 @@ impl<'a> SymmetricProblem<'a> {
                     pattern,
                     values,
                     rank_one,
+                    solver: self.solver.clone(),
                 };
             }
         }

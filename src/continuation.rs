@@ -19,11 +19,11 @@
 //! with a report of where and why. Turning points of λ (sign changes of t_λ) are localised
 //! by a secant search on the step length until t_λ vanishes.
 
-use crate::linalg::SymmetricPattern;
+use crate::linalg::{SymmetricFactorization, SymmetricPattern};
 use crate::model::ModelError;
 use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::{DMatrix, DVector};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Largest distance, in steps, between the converged point and the predictor.
 const MAX_CORRECTOR_DISTANCE: f64 = 0.5;
@@ -75,8 +75,14 @@ pub enum Tangent {
         values: Vec<f64>,
         /// The terms c a aᵀ.
         rank_one: Vec<(f64, DVector<f64>)>,
+        /// A sparse LBLᵀ on `pattern`, kept by the problem from one evaluation to the next
+        /// (the symbolic analysis is done once).
+        solver: SharedFactorization,
     },
 }
+
+/// A sparse LBLᵀ shared between the evaluations of one problem.
+pub type SharedFactorization = Arc<Mutex<Option<SymmetricFactorization>>>;
 
 impl Tangent {
     /// max |K_ij| (of the sparse part and of each rank-one term).
@@ -96,12 +102,17 @@ impl Tangent {
 /// An extended Jacobian ready to solve.
 enum Extended {
     Dense(DMatrix<f64>),
-    /// n equations, of which the first `n - extra` are the extended system and the last
-    /// `extra` define y_r = c_r σ_q a_rᵀ x for the rank-one terms.
+    /// [[A, B], [C, D]] with A = K σ_q sparse symmetric (m × m) and a border of nb rows and
+    /// columns: the loads, constraint rows, the arclength row, and one unknown
+    /// y_r = c_r σ_q a_rᵀ x per rank-one term (the last `extra` of the border).
     Sparse {
-        n: usize,
+        pattern: Arc<SymmetricPattern>,
+        values: Vec<f64>,
+        b: DMatrix<f64>,
+        c: DMatrix<f64>,
+        d: DMatrix<f64>,
         extra: usize,
-        triplets: Vec<Triplet<usize, usize, f64>>,
+        solver: SharedFactorization,
     },
 }
 
@@ -110,19 +121,125 @@ impl Extended {
     fn solve(self, rhs: &DVector<f64>) -> Option<DVector<f64>> {
         match self {
             Extended::Dense(a) => solve_dense(a, rhs),
-            Extended::Sparse { n, extra, triplets } => {
-                let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).ok()?;
-                let lu = a.sp_lu().ok()?;
-                let mut b = faer::Mat::<f64>::zeros(n, 1);
-                for i in 0..n - extra {
-                    b[(i, 0)] = rhs[i];
-                }
-                let x = faer::linalg::solvers::Solve::solve(&lu, &b);
-                let x = DVector::from_fn(n - extra, |i, _| x[(i, 0)]);
+            Extended::Sparse {
+                pattern,
+                values,
+                b,
+                c,
+                d,
+                extra,
+                solver,
+            } => {
+                let m = pattern.n();
+                let nb = d.nrows();
+                let mut full = DVector::zeros(m + nb);
+                full.rows_mut(0, m + nb - extra)
+                    .copy_from(&rhs.rows(0, m + nb - extra));
+                let x = bordered_solve(&pattern, &values, &b, &c, &d, &solver, &full)
+                    .or_else(|| sparse_lu_solve(&pattern, &values, &b, &c, &d, &full))?;
+                let x = x.rows(0, m + nb - extra).into_owned();
                 x.iter().all(|v| v.is_finite()).then_some(x)
             }
         }
     }
+}
+
+/// [[A, B], [C, D]] [x; z] = [r1; r2] by block elimination on a sparse LBLᵀ of A (symbolic
+/// analysis kept in `solver`): A X = B, S = D − C X, S z = r2 − C A⁻¹ r1, x = A⁻¹(r1 − B z),
+/// then one step of iterative refinement on the whole system (A is nearly singular close
+/// to a limit point, which the border makes regular). `None` if A is singular.
+fn bordered_solve(
+    pattern: &Arc<SymmetricPattern>,
+    values: &[f64],
+    b: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    d: &DMatrix<f64>,
+    solver: &SharedFactorization,
+    rhs: &DVector<f64>,
+) -> Option<DVector<f64>> {
+    let m = pattern.n();
+    let nb = d.nrows();
+    let mut guard = solver.lock().ok()?;
+    if guard.as_ref().is_none_or(|f| f.n() != m) {
+        *guard = Some(SymmetricFactorization::new(pattern).ok()?);
+    }
+    let fact = guard.as_mut()?;
+    fact.factorize(values).ok()?;
+    // X = A⁻¹ B.
+    let mut x_b = b.clone();
+    fact.solve_many_in_place(x_b.as_mut_slice()).ok()?;
+    let schur = d - c * &x_b;
+    let lu = schur.lu();
+    let solve = |r: &DVector<f64>| -> Option<DVector<f64>> {
+        let mut y = r.rows(0, m).into_owned();
+        fact.solve_in_place(y.as_mut_slice()).ok()?;
+        let z = lu.solve(&(r.rows(m, nb) - c * &y))?;
+        let x = y - &x_b * &z;
+        let mut out = DVector::zeros(m + nb);
+        out.rows_mut(0, m).copy_from(&x);
+        out.rows_mut(m, nb).copy_from(&z);
+        Some(out)
+    };
+    let mut sol = solve(rhs)?;
+    // One refinement step: r = rhs − M sol.
+    let (xs, zs) = (sol.rows(0, m).into_owned(), sol.rows(m, nb).into_owned());
+    let mut ax = vec![0.0; m];
+    pattern.matvec(values, xs.as_slice(), &mut ax);
+    let mut residual = rhs.clone();
+    for i in 0..m {
+        residual[i] -= ax[i];
+    }
+    let top = b * &zs;
+    let bottom = c * &xs + d * &zs;
+    for i in 0..m {
+        residual[i] -= top[i];
+    }
+    for i in 0..nb {
+        residual[m + i] -= bottom[i];
+    }
+    sol += solve(&residual)?;
+    Some(sol)
+}
+
+/// The same system by faer's sparse LU of the whole matrix (the fallback when A itself is
+/// singular).
+fn sparse_lu_solve(
+    pattern: &SymmetricPattern,
+    values: &[f64],
+    b: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    d: &DMatrix<f64>,
+    rhs: &DVector<f64>,
+) -> Option<DVector<f64>> {
+    let (m, nb) = (pattern.n(), d.nrows());
+    let n = m + nb;
+    let mut t = Vec::with_capacity(values.len() + 2 * nb * m + nb * nb);
+    let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+    for j in 0..m {
+        for p in col_ptr[j]..col_ptr[j + 1] {
+            t.push(Triplet::new(row_idx[p], j, values[p]));
+        }
+    }
+    for j in 0..nb {
+        for i in 0..m {
+            if b[(i, j)] != 0.0 {
+                t.push(Triplet::new(i, m + j, b[(i, j)]));
+            }
+            if c[(j, i)] != 0.0 {
+                t.push(Triplet::new(m + j, i, c[(j, i)]));
+            }
+        }
+        for i in 0..nb {
+            if d[(i, j)] != 0.0 {
+                t.push(Triplet::new(m + i, m + j, d[(i, j)]));
+            }
+        }
+    }
+    let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &t).ok()?;
+    let lu = a.sp_lu().ok()?;
+    let rhs = faer::MatRef::from_column_major_slice(rhs.as_slice(), n, 1);
+    let x = faer::linalg::solvers::Solve::solve(&lu, rhs);
+    Some(DVector::from_fn(n, |i, _| x[(i, 0)]))
 }
 
 impl Linearization {
@@ -152,47 +269,39 @@ impl Linearization {
                 pattern,
                 values,
                 rank_one,
+                solver,
             } => {
                 let extra = rank_one.len();
-                let mut t = Vec::with_capacity(values.len() + (2 * c + 3 + 2 * extra) * m);
-                let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-                for j in 0..m {
-                    for p in col_ptr[j]..col_ptr[j + 1] {
-                        t.push(Triplet::new(row_idx[p], j, values[p] * sq));
-                    }
-                }
-                let push_dense = |t: &mut Vec<Triplet<usize, usize, f64>>, i, j, v: f64| {
-                    if v != 0.0 {
-                        t.push(Triplet::new(i, j, v));
-                    }
-                };
+                let nb = c + 1 + extra;
+                let mut bm = DMatrix::zeros(m, nb);
+                let mut cm = DMatrix::zeros(nb, m);
+                let mut dm = DMatrix::zeros(nb, nb);
                 for j in 0..=c {
-                    for i in 0..m {
-                        push_dense(&mut t, i, m + j, self.loads[(i, j)] * sl(j));
-                    }
+                    bm.set_column(j, &(self.loads.column(j) * sl(j)));
                     for i in 0..c {
-                        push_dense(&mut t, m + i, m + j, self.constraint_lambda[(i, j)] * sl(j));
+                        dm[(i, j)] = self.constraint_lambda[(i, j)] * sl(j);
                     }
                 }
                 for i in 0..c {
-                    for j in 0..m {
-                        push_dense(&mut t, m + i, j, self.constraint_q[(i, j)] * sq);
-                    }
+                    cm.set_row(i, &(self.constraint_q.row(i) * sq));
                 }
-                for (j, &v) in last_row.iter().enumerate() {
-                    push_dense(&mut t, n - 1, j, v);
+                cm.row_mut(c).copy_from(&last_row.rows(0, m).transpose());
+                for j in 0..=c {
+                    dm[(c, j)] = last_row[m + j];
                 }
                 for (r, (cr, a)) in rank_one.iter().enumerate() {
-                    for (i, &ai) in a.iter().enumerate() {
-                        push_dense(&mut t, i, n + r, ai);
-                        push_dense(&mut t, n + r, i, cr * sq * ai);
-                    }
-                    t.push(Triplet::new(n + r, n + r, -1.0));
+                    bm.set_column(c + 1 + r, a);
+                    cm.set_row(c + 1 + r, &(a.transpose() * (cr * sq)));
+                    dm[(c + 1 + r, c + 1 + r)] = -1.0;
                 }
                 Extended::Sparse {
-                    n: n + extra,
+                    pattern: pattern.clone(),
+                    values: values.iter().map(|v| v * sq).collect(),
+                    b: bm,
+                    c: cm,
+                    d: dm,
                     extra,
-                    triplets: t,
+                    solver: solver.clone(),
                 }
             }
         }
@@ -607,5 +716,59 @@ mod solve_tests {
             singular.row_mut(3).fill(0.0);
             assert!(solve_dense(singular, &b).is_none(), "n = {n}");
         }
+    }
+}
+
+#[cfg(test)]
+mod bordered_tests {
+    use super::{bordered_solve, sparse_lu_solve, SharedFactorization};
+    use crate::linalg::SymmetricPattern;
+    use nalgebra::{DMatrix, DVector};
+    use std::sync::Arc;
+
+    /// Block elimination on the sparse LBLᵀ, the sparse LU of the whole matrix and a dense
+    /// LU agree on an indefinite tridiagonal A with a two-column border.
+    #[test]
+    fn bordered_and_sparse_lu_solves_agree_with_dense() {
+        let m = 40;
+        let pattern = Arc::new(SymmetricPattern::from_entries(
+            m,
+            (1..m).map(|i| (i, i - 1)),
+        ));
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let entry = |i: usize, j: usize| {
+            if i == j {
+                2.0 + (i as f64 * 0.9).sin() - 1.0
+            } else {
+                -0.7
+            }
+        };
+        let mut values = vec![0.0; pattern.nnz()];
+        for j in 0..m {
+            for p in col_ptr[j]..col_ptr[j + 1] {
+                values[p] = entry(row_idx[p], j);
+            }
+        }
+        let b = DMatrix::from_fn(m, 2, |i, j| ((i + 3 * j) as f64 * 0.37).cos());
+        let c = DMatrix::from_fn(2, m, |i, j| ((2 * j + i) as f64 * 0.21).sin());
+        let d = DMatrix::from_row_slice(2, 2, &[0.3, -0.1, 0.2, 0.0]);
+        let rhs = DVector::from_fn(m + 2, |i, _| (i as f64 * 0.5).sin());
+        let mut dense = DMatrix::zeros(m + 2, m + 2);
+        for j in 0..m {
+            for p in col_ptr[j]..col_ptr[j + 1] {
+                dense[(row_idx[p], j)] = values[p];
+            }
+        }
+        dense.view_mut((0, m), (m, 2)).copy_from(&b);
+        dense.view_mut((m, 0), (2, m)).copy_from(&c);
+        dense.view_mut((m, m), (2, 2)).copy_from(&d);
+        let expected = dense.lu().solve(&rhs).unwrap();
+        let solver = SharedFactorization::default();
+        let x = bordered_solve(&pattern, &values, &b, &c, &d, &solver, &rhs).unwrap();
+        assert!((&x - &expected).amax() < 1e-10 * expected.amax());
+        // The symbolic analysis is kept for the next solve.
+        assert!(solver.lock().unwrap().is_some());
+        let y = sparse_lu_solve(&pattern, &values, &b, &c, &d, &rhs).unwrap();
+        assert!((&y - &expected).amax() < 1e-10 * expected.amax());
     }
 }
