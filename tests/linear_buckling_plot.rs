@@ -77,6 +77,13 @@ fn a_linear_buckling_run_plots_the_spectrum_by_irrep() {
         "{stdout}"
     );
 
+    // The held state is written under its own name, and no file name has a space.
+    assert!(dir.join("held_state.vtu").exists());
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        assert!(!name.contains(' '), "{name}");
+    }
+
     // No NaN or infinity in any text output (as a word: `NaN`, `inf`, `-inf`, `Infinity`).
     for name in [
         "path.csv",

@@ -257,8 +257,19 @@ fn write_outputs(study: &Study, result: &mut RunResult, out: &Path) -> Result<Wr
                 Fields::new().point_vector("critical_mode", field),
             )
         } else {
-            turning += 1;
-            let name = format!("turning_{turning:02}_{}", s.label);
+            // A turning point ("maximum", "minimum"), or the held state of a sweep; file
+            // names without spaces.
+            let stem: String = s
+                .label
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                .collect();
+            let name = if matches!(s.label.as_str(), "maximum" | "minimum") {
+                turning += 1;
+                format!("turning_{turning:02}_{stem}")
+            } else {
+                stem
+            };
             writer.save_as(
                 &name,
                 &s.label,
