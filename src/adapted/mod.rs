@@ -1,0 +1,490 @@
+//! Symmetry-adapted bases (DESIGN §4.3): the fixed-point space of the group — the
+//! displacements u with T(g) u = u for every g, where (T(g) u)_{π_g(i)} = R_g u_i — and, for
+//! every irrep μ, the blocks on which the tangent at a symmetric state is block diagonal.
+//!
+//! **Orbit-local form.** Every column is built on one node orbit O with representative node
+//! i₀ (its smallest node) from a *seed*: d vectors s_b ∈ ℝ³ at i₀, with
+//!
+//!   b = Σ_b P^μ_{0b} s_b,   P^μ_{ab} = (d/|G|) Σ_g D^μ_{ab}(g) T(g).
+//!
+//! The seeds come from the Gram matrix of the candidates P^μ_{0b} e_{i₀,c}, which only needs
+//! the stabiliser H of i₀: ⟨P_{0b} e_{i₀c}, P_{0b'} e_{i₀c'}⟩ = (d/|G|) Σ_{h∈H} D_{bb'}(h) (R_h)_{cc'}
+//! (because P_{0b}ᵀ P_{0b'} = P_{bb'}); its eigenvectors with nonzero eigenvalue λ, scaled by
+//! λ^{-1/2}, are orthonormal seeds. Partner a of a column is P_{a0} b = Σ_b P_{ab} s_b.
+//!
+//! **Block restriction from the representatives.** K commutes with every T(g) at a symmetric
+//! state, so with P_{0b}ᵀ = P_{b0}:
+//!
+//!   (Bᵀ K B)_{fe} = Σ_b ⟨P_{b0} b_f, K s_{e,b}⟩
+//!                 = (d/|G|) Σ_{b,b'} Σ_g D_{b'b}(g) ⟨s_{f,b'}, T(g) K s_{e,b}⟩.
+//!
+//! K s_{e,b} lives on the neighbours j of i₀ only, and ⟨s_f, T(g) w⟩ needs π_g(j) to be the
+//! representative of f's orbit: a block costs the three columns of K at each representative,
+//! independent of the orbit size — |G| times less than forming B_μᵀ K B_μ column by column.
+//!
+//! The fixed-point space is the trivial irrep's block (d = 1, D = 1). Fixed nodes form whole
+//! orbits and carry no unknowns.
+
+mod orbit;
+mod problem;
+
+pub use problem::{PhaseTimes, SymmetricProblem, SPARSE_TANGENT_FROM};
+
+use crate::linalg::SymmetricPattern;
+use crate::model::{Evaluation, Layout};
+use meshes::GroupAction;
+use nalgebra::{DMatrix, DVector, Vector3};
+use orbit::{orbit_basis, ColumnScratch, OrbitFrame, Seeds};
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// The free orbits of `action` on `layout` (fixed orbits carry no unknowns).
+fn free_orbits(action: &GroupAction, layout: &Layout) -> Vec<Vec<usize>> {
+    action
+        .node_orbits()
+        .into_iter()
+        .filter(|o| layout.dof(o[0], 0).is_some())
+        .collect()
+}
+
+/// An orthonormal basis with sparse columns, each a list of (unknown, value).
+#[derive(Debug, Clone)]
+pub struct SparseBasis {
+    unknowns: usize,
+    columns: Vec<Vec<(usize, f64)>>,
+    /// For each unknown, the columns whose support contains it (built on first use).
+    by_dof: std::sync::OnceLock<Vec<Vec<u32>>>,
+    /// The orbit-local form, when the basis was built from a group action.
+    seeds: Option<Seeds>,
+    /// The sparsity pattern of Bᵀ K B (built on first use),
+    /// and for each stored entry the slot of its transpose.
+    pattern: std::sync::OnceLock<(Arc<SymmetricPattern>, Vec<u32>)>,
+}
+
+impl SparseBasis {
+    /// The fixed-point space of `action` on the unknowns of `layout`: for the orbit of node i
+    /// with stabiliser H_i, the vectors v fixed by H_i spread over the orbit as
+    /// u_{π_g(i)} = R_g v / √|orbit| (the trivial irrep's block).
+    pub fn fixed_point(action: &GroupAction, layout: &Layout) -> Self {
+        let orbits = free_orbits(action, layout);
+        let frame = Arc::new(OrbitFrame::new(action, layout, &orbits));
+        let trivial = vec![DMatrix::from_element(1, 1, 1.0); action.group().order()];
+        orbit_basis(action, layout, &frame, &orbits, &trivial)
+    }
+
+    fn with_seeds(unknowns: usize, columns: Vec<Vec<(usize, f64)>>, seeds: Seeds) -> Self {
+        Self {
+            unknowns,
+            columns,
+            by_dof: std::sync::OnceLock::new(),
+            seeds: Some(seeds),
+            pattern: std::sync::OnceLock::new(),
+        }
+    }
+
+    fn from_columns(unknowns: usize, columns: Vec<Vec<(usize, f64)>>) -> Self {
+        Self {
+            unknowns,
+            columns,
+            by_dof: std::sync::OnceLock::new(),
+            seeds: None,
+            pattern: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// Number of columns m.
+    pub fn dim(&self) -> usize {
+        self.columns.len()
+    }
+
+    /// Number of rows (the model's unknowns).
+    pub fn unknowns(&self) -> usize {
+        self.unknowns
+    }
+
+    /// The sparse columns.
+    pub fn columns(&self) -> &[Vec<(usize, f64)>] {
+        &self.columns
+    }
+
+    /// Bᵀ v.
+    pub fn restrict(&self, v: &[f64]) -> DVector<f64> {
+        DVector::from_iterator(
+            self.dim(),
+            self.columns
+                .iter()
+                .map(|c| c.iter().map(|&(d, b)| b * v[d]).sum()),
+        )
+    }
+
+    /// Bᵀ v for a G-invariant v (T(g) v = v, such as the residual and the load vectors at a
+    /// symmetric state), from v's entries at the orbit representatives only: with b = Σ_b
+    /// P_{0b} s_b, ⟨b, v⟩ = Σ_b ⟨s_b, P_{b0} v⟩, which is ⟨s, v⟩ for the trivial irrep and 0
+    /// for any other (Σ_g D(g) = 0). Falls back to [`SparseBasis::restrict`] for a basis
+    /// without orbit-local form.
+    pub fn restrict_invariant(&self, v: &[f64]) -> DVector<f64> {
+        let Some(seeds) = &self.seeds else {
+            return self.restrict(v);
+        };
+        if seeds.d != 1 || seeds.matrices.iter().any(|&x| x != 1.0) {
+            return DVector::zeros(self.dim());
+        }
+        DVector::from_iterator(
+            self.dim(),
+            seeds
+                .rep_dofs
+                .iter()
+                .zip(&seeds.seeds)
+                .map(|(dofs, s)| (0..3).map(|c| s[c] * v[dofs[c] as usize]).sum()),
+        )
+    }
+
+    /// Bᵀ v for the rigid motion v_i = t + ω × x_i (`motion` = [t, ω]) at a state x the
+    /// group keeps, in O(columns): T(g) maps it to the rigid motion (R_g t, det(R_g) R_g ω)
+    /// because x_{π_g(i)} = R_g x_i, so P_{b0} v is the rigid motion (t_b, ω_b) of
+    /// `rigid_maps` and ⟨b, v⟩ = Σ_b s_b · (t_b + ω_b × x_rep). Without orbit-local form, the
+    /// field is built and restricted explicitly.
+    pub fn restrict_rigid(
+        &self,
+        motion: &[f64; 6],
+        x: &[Vector3<f64>],
+        layout: &Layout,
+    ) -> DVector<f64> {
+        let t = Vector3::new(motion[0], motion[1], motion[2]);
+        let w = Vector3::new(motion[3], motion[4], motion[5]);
+        let Some(seeds) = &self.seeds else {
+            let mut v = vec![0.0; self.unknowns];
+            for (i, xi) in x.iter().enumerate() {
+                let vi = t + w.cross(xi);
+                for k in 0..3 {
+                    if let Some(d) = layout.dof(i, k) {
+                        v[d] = vi[k];
+                    }
+                }
+            }
+            return self.restrict(&v);
+        };
+        let moved: Vec<(Vector3<f64>, Vector3<f64>)> = seeds
+            .rigid_maps
+            .iter()
+            .map(|(a, b)| (a * t, b * w))
+            .collect();
+        let d = seeds.d;
+        DVector::from_iterator(
+            self.dim(),
+            (0..self.dim()).map(|e| {
+                let xr = x[seeds.rep[e] as usize];
+                moved
+                    .iter()
+                    .zip(&seeds.seeds[e * d..(e + 1) * d])
+                    .map(|((tb, wb), s)| s.dot(&(tb + wb.cross(&xr))))
+                    .sum()
+            }),
+        )
+    }
+
+    /// The representative nodes of the orbits the columns live on (`None` for a basis
+    /// without orbit-local form): F, ∂F/∂Λ and K's columns there are all that
+    /// [`SparseBasis::restrict_invariant`] and [`SparseBasis::restrict_tangent`] read.
+    pub fn representatives(&self) -> Option<Vec<usize>> {
+        let seeds = self.seeds.as_ref()?;
+        let mut reps: Vec<usize> = seeds.rep.iter().map(|&i| i as usize).collect();
+        reps.dedup();
+        Some(reps)
+    }
+
+    /// u = B q.
+    pub fn expand(&self, q: &DVector<f64>, u: &mut [f64]) {
+        u.fill(0.0);
+        for (c, &qc) in self.columns.iter().zip(q.iter()) {
+            for &(d, b) in c {
+                u[d] += b * qc;
+            }
+        }
+    }
+
+    /// Bᵀ K B for the full tangent of an evaluation (sparse part on `layout`'s pattern plus
+    /// its rank-one terms) at a state that the basis's group keeps; `work` is scratch.
+    ///
+    /// A basis built from a group action uses the orbit-local formula of the module docs
+    /// (only K's columns at the orbit representatives are read); any other basis the
+    /// column-by-column product of [`SparseBasis::restrict_tangent_to`].
+    pub fn restrict_tangent(
+        &self,
+        layout: &Layout,
+        eval: &Evaluation,
+        work: &mut Vec<f64>,
+    ) -> DMatrix<f64> {
+        let out = match &self.seeds {
+            Some(seeds) => self.restrict_tangent_seeded(seeds, layout, eval),
+            None => self.restrict_tangent_to(self, layout, eval, work),
+        };
+        (&out + out.transpose()) * 0.5
+    }
+
+    /// The orbit-local Bᵀ K B (module docs), one column per rayon task.
+    fn restrict_tangent_seeded(
+        &self,
+        seeds: &Seeds,
+        layout: &Layout,
+        eval: &Evaluation,
+    ) -> DMatrix<f64> {
+        let m = self.dim();
+        let mut out = DMatrix::zeros(m, m);
+        if m == 0 {
+            return out;
+        }
+        out.as_mut_slice()
+            .par_chunks_mut(m)
+            .enumerate()
+            .for_each_init(
+                || ColumnScratch::new(seeds.d),
+                |scratch, (e, out_col)| {
+                    seeds.tangent_column(e, layout, &eval.tangent, scratch, out_col)
+                },
+            );
+        for (c, a) in &eval.rank_one {
+            let ar = self.restrict(a);
+            out += &ar * ar.transpose() * *c;
+        }
+        out
+    }
+
+    /// The sparse part of Bᵀ K B (without `eval`'s rank-one terms) on its own pattern, for
+    /// a basis built from a group action (`None` otherwise). The pattern — column e meets
+    /// the columns on the orbits next to e's representative — is computed on first use.
+    pub fn restrict_tangent_sparse(
+        &self,
+        layout: &Layout,
+        eval: &Evaluation,
+    ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
+        let seeds = self.seeds.as_ref()?;
+        let (pattern, transpose) = self.pattern.get_or_init(|| {
+            let pattern = seeds.block_pattern(layout);
+            let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+            let mut transpose = vec![0u32; pattern.nnz()];
+            for e in 0..pattern.n() {
+                for p in col_ptr[e]..col_ptr[e + 1] {
+                    transpose[p] = pattern
+                        .position(e, row_idx[p])
+                        .expect("the block pattern is symmetric")
+                        as u32;
+                }
+            }
+            (Arc::new(pattern), transpose)
+        });
+        let pattern = pattern.clone();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let m = self.dim();
+        let columns: Vec<Vec<f64>> = (0..m)
+            .into_par_iter()
+            .map_init(
+                || (ColumnScratch::new(seeds.d), vec![0.0; m]),
+                |(scratch, dense), e| {
+                    seeds.tangent_column(e, layout, &eval.tangent, scratch, dense);
+                    let rows = &row_idx[col_ptr[e]..col_ptr[e + 1]];
+                    let values = rows.iter().map(|&r| dense[r]).collect();
+                    rows.iter().for_each(|&r| dense[r] = 0.0);
+                    values
+                },
+            )
+            .collect();
+        // Symmetrise: the two triangles agree up to round-off.
+        let raw: Vec<f64> = columns.concat();
+        let values = raw
+            .iter()
+            .zip(transpose)
+            .map(|(v, &q)| 0.5 * (v + raw[q as usize]))
+            .collect();
+        Some((pattern, values))
+    }
+
+    /// The columns containing each unknown.
+    fn columns_by_dof(&self) -> &Vec<Vec<u32>> {
+        self.by_dof.get_or_init(|| {
+            let mut by_dof = vec![Vec::new(); self.unknowns];
+            for (i, c) in self.columns.iter().enumerate() {
+                for &(d, _) in c {
+                    by_dof[d].push(i as u32);
+                }
+            }
+            by_dof
+        })
+    }
+
+    /// Bᵀ K C for another basis C over the same unknowns (off-diagonal blocks, for checks).
+    ///
+    /// Sparse: w = K c_j touches only the rows coupled to c_j's support, and only the columns
+    /// of B that contain one of those rows can meet it, so the block costs O(nnz of the block ×
+    /// support) rather than O(m² × support).
+    pub fn restrict_tangent_to(
+        &self,
+        other: &SparseBasis,
+        layout: &Layout,
+        eval: &Evaluation,
+        work: &mut Vec<f64>,
+    ) -> DMatrix<f64> {
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let by_dof = self.columns_by_dof();
+        work.clear();
+        work.resize(self.unknowns, 0.0);
+        let mut touched: Vec<usize> = Vec::new();
+        let mut mark = vec![usize::MAX; self.dim()];
+        let mut candidates: Vec<usize> = Vec::new();
+        let mut out = DMatrix::zeros(self.dim(), other.dim());
+        for (j, cj) in other.columns.iter().enumerate() {
+            touched.clear();
+            candidates.clear();
+            for &(d, b) in cj {
+                let range = col_ptr[d]..col_ptr[d + 1];
+                for (&r, &k) in row_idx[range.clone()].iter().zip(&eval.tangent[range]) {
+                    if work[r] == 0.0 {
+                        touched.push(r);
+                    }
+                    work[r] += k * b;
+                }
+            }
+            for &r in &touched {
+                for &i in &by_dof[r] {
+                    let i = i as usize;
+                    if mark[i] != j {
+                        mark[i] = j;
+                        candidates.push(i);
+                    }
+                }
+            }
+            for &i in &candidates {
+                out[(i, j)] = self.columns[i].iter().map(|&(d, b)| b * work[d]).sum();
+            }
+            for &r in &touched {
+                work[r] = 0.0;
+            }
+        }
+        for (c, a) in &eval.rank_one {
+            let (ar, ao) = (self.restrict(a), other.restrict(a));
+            out += &ar * ao.transpose() * *c;
+        }
+        out
+    }
+}
+
+/// The columns of one partner of one irrep, and the blocks of every irrep (DESIGN §4.3).
+#[derive(Debug, Clone)]
+pub struct IrrepBasis {
+    /// Irrep name.
+    pub name: String,
+    /// Irrep dimension d.
+    pub dim: usize,
+    /// The multiplicity predicted by the characters, (1/|G|) Σ χ_T(g) χ_μ(g).
+    pub multiplicity: usize,
+    /// The first partner's columns: the block's basis. The other partners hold the same
+    /// block again (they are built on demand by [`IrrepBasis::partners`]; kept, they would
+    /// take d times the memory, ≈ 2 GB at f = 128 for Ih).
+    first: SparseBasis,
+}
+
+impl IrrepBasis {
+    /// The block's basis: the columns of the first partner.
+    pub fn first(&self) -> &SparseBasis {
+        &self.first
+    }
+
+    /// All d partners (a = 0..d, the first one included), partner a = P_{a0} of the first:
+    /// together with the other irreps', an orthonormal basis of the unknowns. For checks;
+    /// the analysis needs only [`IrrepBasis::first`].
+    pub fn partners(&self, action: &GroupAction, layout: &Layout) -> Vec<SparseBasis> {
+        let seeds = self.first.seeds.as_ref().expect("built from seeds");
+        std::iter::once(self.first.clone())
+            .chain((1..self.dim).map(|a| {
+                let columns = (0..self.first.dim())
+                    .into_par_iter()
+                    .map(|e| seeds.column(action, layout, e, a))
+                    .collect();
+                SparseBasis::from_columns(layout.unknowns(), columns)
+            }))
+            .collect()
+    }
+}
+
+/// The symmetry-adapted basis of the free unknowns, by irrep.
+#[derive(Debug, Clone)]
+pub struct AdaptedBasis {
+    /// One entry per irrep of the group, in the group's order (the trivial one first).
+    pub irreps: Vec<IrrepBasis>,
+}
+
+/// Errors building an adapted basis.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+pub enum AdaptedError {
+    /// Complex-type irreps (the E_k of a chiral C_n) need a complex basis, not built yet.
+    #[error(
+        "irrep {0} of {1} is of complex type (a chiral group); its block is not supported yet"
+    )]
+    ComplexType(String, String),
+    /// The projected basis does not have the size the characters predict.
+    #[error("irrep {irrep}: built {built} columns but the characters predict {predicted}")]
+    Count {
+        /// Irrep.
+        irrep: String,
+        /// Columns built.
+        built: usize,
+        /// Character formula.
+        predicted: usize,
+    },
+}
+
+impl AdaptedBasis {
+    /// Builds, orbit by orbit, the sparse orthonormal bases B_{μa} of every irrep μ and
+    /// partner a from the operators P^μ_{ab} = (d/|G|) Σ_g D^μ_ab(g) T(g) in orbit-local form
+    /// (module docs): the first copy from the seeds of each orbit, partner a as
+    /// P^μ_{a0} of those columns. Fixed orbits are skipped.
+    pub fn new(action: &GroupAction, layout: &Layout) -> Result<Self, AdaptedError> {
+        let group = action.group();
+        let order = group.order() as f64;
+        let orbits = free_orbits(action, layout);
+        let frame = Arc::new(OrbitFrame::new(action, layout, &orbits));
+        // χ_T(g) = #{free nodes fixed by g} · tr R_g.
+        let chi_t: Vec<f64> = (0..group.order())
+            .map(|g| {
+                let fixed = orbits
+                    .iter()
+                    .flatten()
+                    .filter(|&&i| action.node_perm(g)[i] == i)
+                    .count();
+                fixed as f64 * group.element(g).trace()
+            })
+            .collect();
+        let mut irreps = Vec::new();
+        for irrep in group.irreps() {
+            if irrep.kind() != symmetry::IrrepKind::Real {
+                return Err(AdaptedError::ComplexType(
+                    irrep.name().into(),
+                    group.name().into(),
+                ));
+            }
+            let d = irrep.dim();
+            // Character formula: the multiplicity of μ in T.
+            let m: f64 = (0..group.order())
+                .map(|g| chi_t[g] * irrep.character(g))
+                .sum::<f64>()
+                / order;
+            let multiplicity = m.round() as usize;
+            let first = orbit_basis(action, layout, &frame, &orbits, irrep.matrices());
+            if first.dim() != multiplicity {
+                return Err(AdaptedError::Count {
+                    irrep: irrep.name().into(),
+                    built: first.dim(),
+                    predicted: multiplicity,
+                });
+            }
+            irreps.push(IrrepBasis {
+                name: irrep.name().into(),
+                dim: d,
+                multiplicity,
+                first,
+            });
+        }
+        Ok(Self { irreps })
+    }
+}

@@ -1,0 +1,333 @@
+//! The orbit-local form of a block (see the module docs of [`crate::adapted`]): what the
+//! formulas need of the group action, the seeds of each column, and the kernels that build
+//! columns and restrict the tangent from the orbit representatives.
+
+use super::SparseBasis;
+use crate::linalg::SymmetricPattern;
+use crate::model::Layout;
+use meshes::GroupAction;
+use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// What the orbit-local formulas need of a group action, shared by all blocks of one basis.
+#[derive(Debug)]
+pub(super) struct OrbitFrame {
+    /// |G|.
+    pub(super) order: usize,
+    /// R_g.
+    pub(super) rotations: Vec<Matrix3<f64>>,
+    /// For each unknown, its (node, component).
+    pub(super) node_of: Vec<(u32, u8)>,
+    /// For each node, the index of its orbit (in `GroupAction::node_orbits` order).
+    pub(super) orbit_of: Vec<u32>,
+    /// For each node j, the elements g with π_g(j) = representative of j's orbit, as a CSR
+    /// list: `to_rep[to_rep_ptr[j]..to_rep_ptr[j + 1]]` (|H| elements per node).
+    pub(super) to_rep_ptr: Vec<u32>,
+    pub(super) to_rep: Vec<u16>,
+}
+
+impl OrbitFrame {
+    pub(super) fn new(action: &GroupAction, layout: &Layout, orbits: &[Vec<usize>]) -> Self {
+        let group = action.group();
+        let nodes = layout.nodes();
+        let mut orbit_of = vec![u32::MAX; nodes];
+        let mut rep = vec![usize::MAX; nodes];
+        for (o, orbit) in orbits.iter().enumerate() {
+            for &j in orbit {
+                orbit_of[j] = o as u32;
+                rep[j] = orbit[0];
+            }
+        }
+        let mut to_rep_ptr = vec![0u32; nodes + 1];
+        let mut to_rep = Vec::with_capacity(nodes);
+        for j in 0..nodes {
+            if rep[j] != usize::MAX {
+                to_rep.extend(
+                    (0..group.order())
+                        .filter(|&g| action.node_perm(g)[j] == rep[j])
+                        .map(|g| g as u16),
+                );
+            }
+            to_rep_ptr[j + 1] = to_rep.len() as u32;
+        }
+        let mut node_of = vec![(0, 0); layout.unknowns()];
+        for i in 0..nodes {
+            for k in 0..3 {
+                if let Some(d) = layout.dof(i, k) {
+                    node_of[d] = (i as u32, k as u8);
+                }
+            }
+        }
+        Self {
+            order: group.order(),
+            rotations: group.elements().to_vec(),
+            node_of,
+            orbit_of,
+            to_rep_ptr,
+            to_rep,
+        }
+    }
+
+    pub(super) fn to_rep(&self, j: usize) -> &[u16] {
+        &self.to_rep[self.to_rep_ptr[j] as usize..self.to_rep_ptr[j + 1] as usize]
+    }
+}
+
+/// The orbit-local description of a block's columns (see the module docs).
+#[derive(Debug, Clone)]
+pub(super) struct Seeds {
+    pub(super) frame: Arc<OrbitFrame>,
+    /// Irrep dimension d.
+    pub(super) d: usize,
+    /// D(g), row-major d × d per element.
+    pub(super) matrices: Arc<Vec<f64>>,
+    /// Representative node of each column's orbit.
+    pub(super) rep: Vec<u32>,
+    /// The unknowns of each column's representative node.
+    pub(super) rep_dofs: Vec<[u32; 3]>,
+    /// Seeds, d per column: `seeds[e * d + b]` = s_{e,b}.
+    pub(super) seeds: Vec<Vector3<f64>>,
+    /// The columns on each orbit (contiguous, as they are built orbit by orbit).
+    pub(super) by_orbit: Vec<Range<u32>>,
+    /// For each b < d, (d/|G|) Σ_g D_{b0}(g) R_g and (d/|G|) Σ_g D_{b0}(g) det(R_g) R_g: how
+    /// P_{b0} acts on the translation and the rotation of a rigid motion.
+    pub(super) rigid_maps: Vec<(Matrix3<f64>, Matrix3<f64>)>,
+}
+
+impl Seeds {
+    pub(super) fn dmat(&self, g: usize) -> &[f64] {
+        &self.matrices[g * self.d * self.d..(g + 1) * self.d * self.d]
+    }
+
+    /// Column e of Bᵀ K B (module docs) added into `out_col`: w_b = K s_{e,b} gathered by
+    /// node (the neighbours j of e's representative), then ⟨s_{f,b'}, T(g) w_b⟩ for the
+    /// elements g carrying j to the representative of the columns f on j's orbit.
+    pub(super) fn tangent_column(
+        &self,
+        e: usize,
+        layout: &Layout,
+        tangent: &[f64],
+        scratch: &mut ColumnScratch,
+        out_col: &mut [f64],
+    ) {
+        let frame = &*self.frame;
+        let d = self.d;
+        let coef = d as f64 / frame.order as f64;
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let i0 = self.rep[e] as usize;
+        let s_e = &self.seeds[e * d..(e + 1) * d];
+        let ColumnScratch { touched, w, v, u } = scratch;
+        touched.clear();
+        w.clear();
+        for c in 0..3 {
+            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+            let range = col_ptr[dof]..col_ptr[dof + 1];
+            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
+                let (j, comp) = frame.node_of[r];
+                let t = match touched.iter().position(|&n| n == j) {
+                    Some(t) => t,
+                    None => {
+                        touched.push(j);
+                        w.resize(w.len() + d, Vector3::zeros());
+                        touched.len() - 1
+                    }
+                };
+                for (b, s) in s_e.iter().enumerate() {
+                    w[t * d + b][comp as usize] += k * s[c];
+                }
+            }
+        }
+        for (t, &j) in touched.iter().enumerate() {
+            let cols = self.by_orbit[frame.orbit_of[j as usize] as usize].clone();
+            if cols.is_empty() {
+                continue;
+            }
+            for &g in frame.to_rep(j as usize) {
+                let r = &frame.rotations[g as usize];
+                let dm = self.dmat(g as usize);
+                for b in 0..d {
+                    v[b] = r * w[t * d + b];
+                }
+                for b2 in 0..d {
+                    u[b2] = (0..d).fold(Vector3::zeros(), |acc, b| acc + v[b] * dm[b2 * d + b]);
+                }
+                for f in cols.clone() {
+                    let s_f = &self.seeds[f as usize * d..(f as usize + 1) * d];
+                    let x: f64 = s_f.iter().zip(u.iter()).map(|(s, u)| s.dot(u)).sum();
+                    out_col[f as usize] += coef * x;
+                }
+            }
+        }
+    }
+
+    /// The pattern of Bᵀ K B: column e meets every column on an orbit that holds a
+    /// neighbour of e's representative (by K's pattern).
+    pub(super) fn block_pattern(&self, layout: &Layout) -> SymmetricPattern {
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let mut entries = Vec::new();
+        let mut orbits: Vec<u32> = Vec::new();
+        for e in 0..self.rep.len() {
+            let i0 = self.rep[e] as usize;
+            orbits.clear();
+            for c in 0..3 {
+                let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+                for &r in &row_idx[col_ptr[dof]..col_ptr[dof + 1]] {
+                    let o = self.frame.orbit_of[self.frame.node_of[r].0 as usize];
+                    if !orbits.contains(&o) {
+                        orbits.push(o);
+                    }
+                }
+            }
+            for &o in &orbits {
+                entries.extend(self.by_orbit[o as usize].clone().map(|f| (f as usize, e)));
+            }
+        }
+        SymmetricPattern::from_entries(self.rep.len(), entries)
+    }
+
+    /// Partner a of column e, Σ_b P_{ab} s_{e,b}, summed over the whole group.
+    pub(super) fn column(
+        &self,
+        action: &GroupAction,
+        layout: &Layout,
+        e: usize,
+        a: usize,
+    ) -> Vec<(usize, f64)> {
+        let d = self.d;
+        let coef = d as f64 / self.frame.order as f64;
+        let i0 = self.rep[e] as usize;
+        let s = &self.seeds[e * d..(e + 1) * d];
+        let mut at: Vec<(usize, Vector3<f64>)> = Vec::new();
+        for g in 0..self.frame.order {
+            let dm = self.dmat(g);
+            let mut v = Vector3::zeros();
+            for (b, sb) in s.iter().enumerate() {
+                v += sb * dm[a * d + b];
+            }
+            if v == Vector3::zeros() {
+                continue;
+            }
+            let j = action.node_perm(g)[i0];
+            let w = self.frame.rotations[g] * v * coef;
+            match at.iter_mut().find(|(n, _)| *n == j) {
+                Some((_, x)) => *x += w,
+                None => at.push((j, w)),
+            }
+        }
+        let mut col = Vec::with_capacity(3 * at.len());
+        for (j, w) in at {
+            for k in 0..3 {
+                if w[k].abs() > 1e-15 {
+                    col.push((layout.dof(j, k).expect("free orbit"), w[k]));
+                }
+            }
+        }
+        col.sort_unstable_by_key(|&(dof, _)| dof);
+        col
+    }
+}
+
+/// Per-thread scratch of [`Seeds::tangent_column`].
+pub(super) struct ColumnScratch {
+    pub(super) touched: Vec<u32>,
+    pub(super) w: Vec<Vector3<f64>>,
+    pub(super) v: Vec<Vector3<f64>>,
+    pub(super) u: Vec<Vector3<f64>>,
+}
+
+impl ColumnScratch {
+    pub(super) fn new(d: usize) -> Self {
+        Self {
+            touched: Vec::new(),
+            w: Vec::new(),
+            v: vec![Vector3::zeros(); d],
+            u: vec![Vector3::zeros(); d],
+        }
+    }
+}
+
+/// Builds the seeds and first-partner columns of one real irrep (given by its matrices
+/// D(g), d × d) on the free orbits.
+pub(super) fn orbit_basis(
+    action: &GroupAction,
+    layout: &Layout,
+    frame: &Arc<OrbitFrame>,
+    orbits: &[Vec<usize>],
+    matrices: &[DMatrix<f64>],
+) -> SparseBasis {
+    let group = action.group();
+    let d = matrices[0].nrows();
+    let order = group.order() as f64;
+    let flat: Vec<f64> = matrices
+        .iter()
+        .flat_map(|m| (0..d * d).map(move |k| m[(k / d, k % d)]))
+        .collect();
+    let mut seeds = Seeds {
+        frame: frame.clone(),
+        d,
+        matrices: Arc::new(flat),
+        rep: Vec::new(),
+        rep_dofs: Vec::new(),
+        seeds: Vec::new(),
+        by_orbit: Vec::with_capacity(orbits.len()),
+        rigid_maps: (0..d)
+            .map(|b| {
+                (0..group.order()).fold((Matrix3::zeros(), Matrix3::zeros()), |(t, w), g| {
+                    let c = matrices[g][(b, 0)] * d as f64 / order;
+                    let r = group.element(g);
+                    (t + r * c, w + r * (c * r.determinant()))
+                })
+            })
+            .collect(),
+    };
+    for orbit in orbits {
+        let i0 = orbit[0];
+        let start = seeds.rep.len() as u32;
+        // Gram matrix of the candidates P_{0b} e_{i0,c} (index 3b + c), from the stabiliser.
+        let mut gram = DMatrix::<f64>::zeros(3 * d, 3 * d);
+        for h in (0..group.order()).filter(|&h| action.node_perm(h)[i0] == i0) {
+            let r = group.element(h);
+            let dm = &matrices[h];
+            for b in 0..d {
+                for b2 in 0..d {
+                    let x = dm[(b, b2)] * d as f64 / order;
+                    if x == 0.0 {
+                        continue;
+                    }
+                    for c in 0..3 {
+                        for c2 in 0..3 {
+                            gram[(3 * b + c, 3 * b2 + c2)] += x * r[(c, c2)];
+                        }
+                    }
+                }
+            }
+        }
+        let eig = SymmetricEigen::new((&gram + gram.transpose()) * 0.5);
+        // Genuine directions have eigenvalues of order d|H|/|G|, round-off ones of 1e-16.
+        for (k, &lam) in eig.eigenvalues.iter().enumerate() {
+            if lam <= 1e-10 {
+                continue;
+            }
+            let y = eig.eigenvectors.column(k) / lam.sqrt();
+            seeds.rep.push(i0 as u32);
+            seeds
+                .rep_dofs
+                .push([0, 1, 2].map(|c| layout.dof(i0, c).expect("free orbit") as u32));
+            for b in 0..d {
+                seeds
+                    .seeds
+                    .push(Vector3::new(y[3 * b], y[3 * b + 1], y[3 * b + 2]));
+            }
+        }
+        seeds.by_orbit.push(start..seeds.rep.len() as u32);
+    }
+    let columns = (0..seeds.rep.len())
+        .into_par_iter()
+        .map(|e| seeds.column(action, layout, e, 0))
+        .collect();
+    SparseBasis::with_seeds(layout.unknowns(), columns, seeds)
+}

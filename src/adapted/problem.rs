@@ -1,0 +1,207 @@
+//! A model restricted to the fixed-point space of its group, for the path follower.
+
+use super::SparseBasis;
+use crate::model::constraint::Constraint;
+use crate::model::{Evaluation, Subset};
+use nalgebra::{DMatrix, DVector};
+use std::sync::Arc;
+
+/// A model restricted to the fixed-point space, as a dense problem for the path follower:
+/// u = B q, R = Bᵀ F, K_A = Bᵀ K B, L_j = Bᵀ ∂F/∂Λ_j for the free parameters (the control,
+/// then the one each constraint governs) and the augmenting equations with G_q = Bᵀ ∂g/∂u.
+/// Every other parameter is held at its value in `params`. Without a control (a single
+/// equilibrium), λ_0 is a dummy with a zero load column.
+pub struct SymmetricProblem<'a> {
+    model: &'a crate::model::FeModel,
+    basis: &'a SparseBasis,
+    constraints: &'a [Box<dyn Constraint>],
+    params: Vec<f64>,
+    free: Vec<Option<usize>>,
+    eval: Evaluation,
+    u: Vec<f64>,
+    work: Vec<f64>,
+    /// From this many columns on the restricted tangent is passed on sparse.
+    sparse_from: usize,
+    /// The sparse LBLᵀ of the restricted tangent, its symbolic analysis done once.
+    solver: crate::continuation::SharedFactorization,
+    /// Where the evaluations' time went (for `memstab bench`).
+    pub times: PhaseTimes,
+}
+
+/// Default [`SymmetricProblem::with_sparse_tangent_from`]: below this size a dense LU of the
+/// extended system is cheaper than a sparse one (f = 32: 272 columns; f = 64: 1 056).
+pub const SPARSE_TANGENT_FROM: usize = 600;
+
+/// Time spent by a [`SymmetricProblem`]'s evaluations, by phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// In `model.evaluate` (assembly).
+    pub assembly: std::time::Duration,
+    /// Restricting residual, loads, constraints and tangent to the basis (projection).
+    pub projection: std::time::Duration,
+    /// Number of evaluations.
+    pub evaluations: usize,
+}
+
+impl<'a> SymmetricProblem<'a> {
+    /// Restricts `model` to `basis` with the given control parameter (if any) and
+    /// constraints, each of which frees its parameter.
+    pub fn new(
+        model: &'a crate::model::FeModel,
+        basis: &'a SparseBasis,
+        constraints: &'a [Box<dyn Constraint>],
+        params: Vec<f64>,
+        control: Option<usize>,
+    ) -> Self {
+        use crate::model::Model;
+        let free = std::iter::once(control)
+            .chain(constraints.iter().map(|c| Some(c.frees())))
+            .collect();
+        let eval = match basis.representatives() {
+            Some(reps) => model
+                .new_evaluation()
+                .restricted_to(Arc::new(Subset::around(model.layout(), &reps))),
+            None => model.new_evaluation(),
+        };
+        Self {
+            eval,
+            u: vec![0.0; model.unknowns()],
+            work: Vec::new(),
+            sparse_from: SPARSE_TANGENT_FROM,
+            solver: Default::default(),
+            model,
+            basis,
+            constraints,
+            params,
+            free,
+            times: PhaseTimes::default(),
+        }
+    }
+
+    /// Assembles the whole mesh at every evaluation instead of only the triangles around the
+    /// orbit representatives (for checks and timing comparisons).
+    pub fn with_full_assembly(mut self) -> Self {
+        use crate::model::Model;
+        self.eval = self.model.new_evaluation();
+        self
+    }
+
+    /// Passes the restricted tangent on as a sparse matrix (to a sparse LU of the extended
+    /// system) when the basis has at least `columns` columns; `usize::MAX` keeps it dense.
+    pub fn with_sparse_tangent_from(mut self, columns: usize) -> Self {
+        self.sparse_from = columns;
+        self
+    }
+
+    /// Bᵀ K B of the last evaluation, sparse for a large basis built from a group action.
+    fn restricted_tangent(&mut self) -> crate::continuation::Tangent {
+        use crate::continuation::Tangent;
+        let layout = self.model.layout();
+        if self.basis.dim() >= self.sparse_from {
+            if let Some((pattern, values)) = self.basis.restrict_tangent_sparse(layout, &self.eval)
+            {
+                let rank_one = self
+                    .eval
+                    .rank_one
+                    .iter()
+                    .map(|(c, a)| (*c, self.basis.restrict(a)))
+                    .collect();
+                return Tangent::Sparse {
+                    pattern,
+                    values,
+                    rank_one,
+                    solver: self.solver.clone(),
+                };
+            }
+        }
+        Tangent::Dense(
+            self.basis
+                .restrict_tangent(layout, &self.eval, &mut self.work),
+        )
+    }
+
+    /// The full displacement u = B q.
+    pub fn displacement(&self, q: &DVector<f64>) -> Vec<f64> {
+        let mut u = vec![0.0; self.basis.unknowns()];
+        self.basis.expand(q, &mut u);
+        u
+    }
+
+    /// All parameters with the free ones set to `lambda`.
+    pub fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
+        let mut p = self.params.clone();
+        for (j, i) in self.free.iter().enumerate() {
+            if let Some(i) = *i {
+                p[i] = lambda[j];
+            }
+        }
+        p
+    }
+
+    /// The free parameters' values in `params` (the dummy control is 0).
+    pub fn free_values(&self, params: &[f64]) -> DVector<f64> {
+        DVector::from_iterator(
+            self.free.len(),
+            self.free.iter().map(|i| i.map_or(0.0, |i| params[i])),
+        )
+    }
+}
+
+impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
+    fn dim(&self) -> usize {
+        self.basis.dim()
+    }
+
+    fn free_parameters(&self) -> usize {
+        self.free.len()
+    }
+
+    fn evaluate(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<crate::continuation::Linearization, crate::model::ModelError> {
+        use crate::model::{Model, Request};
+        let t0 = std::time::Instant::now();
+        self.basis.expand(q, &mut self.u);
+        self.params = self.parameters(lambda);
+        self.model
+            .evaluate(&self.u, &self.params, Request::ALL, &mut self.eval)?;
+        let t1 = std::time::Instant::now();
+        self.times.assembly += t1 - t0;
+        self.times.evaluations += 1;
+        let (m, nf, c) = (self.basis.dim(), self.free.len(), self.constraints.len());
+        let mut loads = DMatrix::zeros(m, nf);
+        for (j, i) in self.free.iter().enumerate() {
+            if let Some(i) = *i {
+                loads.set_column(j, &self.basis.restrict_invariant(&self.eval.loads[i]));
+            }
+        }
+        let mut constraints = DVector::zeros(c);
+        let mut constraint_q = DMatrix::zeros(c, m);
+        let mut constraint_lambda = DMatrix::zeros(c, nf);
+        if c > 0 {
+            let x = self.model.positions(&self.u);
+            for (k, con) in self.constraints.iter().enumerate() {
+                let v = con.evaluate(self.model.layout(), &x, &self.params);
+                constraints[k] = v.value;
+                constraint_q.set_row(k, &self.basis.restrict(&v.grad_u).transpose());
+                for (j, i) in self.free.iter().enumerate() {
+                    if let Some(i) = *i {
+                        constraint_lambda[(k, j)] = v.grad_params[i];
+                    }
+                }
+            }
+        }
+        let lin = crate::continuation::Linearization {
+            residual: self.basis.restrict_invariant(&self.eval.residual),
+            tangent: self.restricted_tangent(),
+            loads,
+            constraints,
+            constraint_q,
+            constraint_lambda,
+        };
+        self.times.projection += t1.elapsed();
+        Ok(lin)
+    }
+}
