@@ -3,8 +3,14 @@
 
 use crate::mesh::{Mesh, Vec3};
 use crate::MeshError;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use symmetry::{Group, Invariant, Matrix3};
+
+/// A hash map with a fast, fixed hasher (foldhash): the keys are grid cells and node
+/// triples of our own meshes, not untrusted input, and SipHash made the lookups the cost
+/// of computing an action (≈ 20 s for Ih on an f = 128 icosphere).
+type FastMap<K, V> = HashMap<K, V, foldhash::fast::FixedState>;
 
 /// Relative tolerance (to the mesh size) for `R_g X_i = X_{π_g(i)}`.
 pub const ACTION_TOL: f64 = 1e-10;
@@ -40,14 +46,14 @@ pub struct Verification {
 /// Finds nodes near a point with a uniform hash grid.
 pub(crate) struct NodeLocator {
     cell: f64,
-    grid: HashMap<[i64; 3], Vec<usize>>,
+    grid: FastMap<[i64; 3], Vec<usize>>,
 }
 
 impl NodeLocator {
     pub(crate) fn new(nodes: &[Vec3], cell: f64) -> Self {
         let mut loc = Self {
             cell,
-            grid: HashMap::new(),
+            grid: FastMap::default(),
         };
         for (i, x) in nodes.iter().enumerate() {
             loc.insert(i, x);
@@ -107,7 +113,7 @@ fn triangle_key(t: &[usize; 3]) -> [usize; 3] {
 }
 
 /// Triangles by their sorted node triple.
-fn triangle_index(mesh: &Mesh) -> HashMap<[usize; 3], usize> {
+fn triangle_index(mesh: &Mesh) -> FastMap<[usize; 3], usize> {
     mesh.triangles
         .iter()
         .enumerate()
@@ -121,7 +127,7 @@ fn triangle_index(mesh: &Mesh) -> HashMap<[usize; 3], usize> {
 /// element maps the surface's normal field onto itself.
 fn triangle_permutation(
     mesh: &Mesh,
-    index: &HashMap<[usize; 3], usize>,
+    index: &FastMap<[usize; 3], usize>,
     perm: &[usize],
     proper: bool,
 ) -> Result<Vec<usize>, String> {
@@ -182,22 +188,29 @@ impl GroupAction {
         let tol = tolerance(mesh);
         let loc = locator(mesh);
         let index = triangle_index(mesh);
-        let mut node_perm = Vec::with_capacity(group.order());
-        let mut triangle_perm = Vec::with_capacity(group.order());
-        for (g, r) in group.elements().iter().enumerate() {
-            let perm = node_permutation(mesh, &loc, r, tol).ok_or_else(|| {
-                MeshError::Symmetry(format!(
-                    "element {g} of {} does not map the nodes onto nodes",
-                    group.name()
-                ))
-            })?;
-            let tri =
-                triangle_permutation(mesh, &index, &perm, r.determinant() > 0.0).map_err(|m| {
-                    MeshError::Symmetry(format!("element {g} of {}: {m}", group.name()))
+        // Elements are independent: one rayon task each.
+        let (node_perm, triangle_perm): (Vec<_>, Vec<_>) = group
+            .elements()
+            .par_iter()
+            .enumerate()
+            .map(|(g, r)| {
+                let perm = node_permutation(mesh, &loc, r, tol).ok_or_else(|| {
+                    MeshError::Symmetry(format!(
+                        "element {g} of {} does not map the nodes onto nodes",
+                        group.name()
+                    ))
                 })?;
-            node_perm.push(perm);
-            triangle_perm.push(tri);
-        }
+                let tri = triangle_permutation(mesh, &index, &perm, r.determinant() > 0.0)
+                    .map_err(|m| {
+                        MeshError::Symmetry(format!("element {g} of {}: {m}", group.name()))
+                    })?;
+                Ok((perm, tri))
+            })
+            .collect::<Vec<Result<_, MeshError>>>()
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()? // the first failing element, in order
+            .into_iter()
+            .unzip();
         Ok(Self {
             group,
             node_perm,
@@ -348,7 +361,7 @@ impl SymmetricMesh {
         let mut nodes: Vec<Vec3> = Vec::new();
         let mut loc = NodeLocator::new(&[], (domain.min_edge() * 0.25).max(tol * 4.0));
         let mut triangles = Vec::new();
-        let mut seen: HashMap<[usize; 3], usize> = HashMap::new();
+        let mut seen: FastMap<[usize; 3], usize> = FastMap::default();
         let mut sets: HashMap<String, Vec<usize>> = HashMap::new();
         for r in group.elements() {
             let map: Vec<usize> = domain
