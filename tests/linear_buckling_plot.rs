@@ -8,6 +8,9 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use std::process::Command;
 
+mod common;
+use common::{polylines, texts};
+
 /// The ponding scene on a 6-division disc (252 triangles) swept in 46 samples: a fraction of
 /// a second.
 fn coarse_ponding(dir: &Path) -> String {
@@ -23,38 +26,6 @@ fn coarse_ponding(dir: &Path) -> String {
     let path = dir.join("ponding6.toml");
     std::fs::write(&path, text).unwrap();
     path.to_str().unwrap().to_string()
-}
-
-/// The `<polyline>`s of an SVG: stroke colour and points.
-fn polylines(svg: &str) -> Vec<(String, Vec<(i64, i64)>)> {
-    svg.split("<polyline")
-        .skip(1)
-        .map(|p| {
-            let attr = |name: &str| {
-                let start = p.find(&format!("{name}=\"")).unwrap() + name.len() + 2;
-                p[start..start + p[start..].find('"').unwrap()].to_string()
-            };
-            let points = attr("points")
-                .split_whitespace()
-                .map(|xy| {
-                    let (x, y) = xy.split_once(',').unwrap();
-                    (x.parse().unwrap(), y.parse().unwrap())
-                })
-                .collect();
-            (attr("stroke"), points)
-        })
-        .collect()
-}
-
-/// The contents of the SVG's `<text>` elements, trimmed.
-fn texts(svg: &str) -> Vec<String> {
-    svg.split("<text")
-        .skip(1)
-        .filter_map(|t| {
-            let body = &t[t.find('>')? + 1..];
-            Some(body[..body.find("</text>")?].trim().to_string())
-        })
-        .collect()
 }
 
 #[test]

@@ -16,6 +16,9 @@ use meshes::{Mesh, Vec3};
 use std::fs;
 use std::path::Path;
 
+mod common;
+use common::{polylines, texts};
+
 /// p R/(μH) of the Mooney-Rivlin sphere at stretch l.
 fn pressure(k: f64, l: f64) -> f64 {
     2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l)
@@ -106,17 +109,6 @@ fn listing(dir: &Path) -> Vec<String> {
         .collect();
     names.sort();
     names
-}
-
-/// The contents of the SVG's `<text>` elements, trimmed.
-fn texts(svg: &str) -> Vec<String> {
-    svg.split("<text")
-        .skip(1)
-        .filter_map(|t| {
-            let body = &t[t.find('>')? + 1..];
-            Some(body[..body.find("</text>")?].trim().to_string())
-        })
-        .collect()
 }
 
 #[test]
@@ -407,27 +399,6 @@ fn a_quiet_progress_bar_is_silent() {
     assert!(!bar.is_visible());
     bar.set(3, "p = 1.2");
     bar.finish("done");
-}
-
-/// The `<polyline>`s of an SVG: stroke colour and points.
-fn polylines(svg: &str) -> Vec<(String, Vec<(i64, i64)>)> {
-    svg.split("<polyline")
-        .skip(1)
-        .map(|p| {
-            let attr = |name: &str| {
-                let start = p.find(&format!("{name}=\"")).unwrap() + name.len() + 2;
-                p[start..start + p[start..].find('"').unwrap()].to_string()
-            };
-            let points = attr("points")
-                .split_whitespace()
-                .map(|xy| {
-                    let (x, y) = xy.split_once(',').unwrap();
-                    (x.parse().unwrap(), y.parse().unwrap())
-                })
-                .collect();
-            (attr("stroke"), points)
-        })
-        .collect()
 }
 
 /// `#RRGGBB` of the zero line.

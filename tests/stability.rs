@@ -39,6 +39,29 @@ fn balloon(frequency: usize, k: f64) -> (SymmetricMesh, FeModel) {
     (sym, model)
 }
 
+/// The k = 0.1 balloon holding the amount of gas C = (p + P) V (a global volume, a rank-one
+/// stiffness), no parameters.
+fn closed_balloon(sym: &SymmetricMesh, c: f64, ambient: f64) -> FeModel {
+    let m = &sym.mesh;
+    let effects: Vec<Box<dyn Effect>> = vec![
+        Box::new(
+            Membrane::new(
+                &m.nodes,
+                &m.triangles,
+                MooneyRivlin::new(1.0, 0.1, 1.0),
+                1.0,
+            )
+            .unwrap(),
+        ),
+        Box::new(GasAmount {
+            amount: Quantity::Value(c),
+            ambient,
+            closing_volume: 0.0,
+        }),
+    ];
+    FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec![])
+}
+
 /// Converged symmetric states (u, p, stretch) along the pressure-controlled path.
 fn states(sym: &SymmetricMesh, model: &FeModel, to_stretch: f64) -> Vec<(Vec<f64>, f64, f64)> {
     let basis = SparseBasis::fixed_point(&sym.action, model.layout());
@@ -190,24 +213,7 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
     let constraints: Vec<Box<dyn Constraint>> = vec![Box::new(amount)];
     let bordered = stab.spectrum(&u, &[p], &constraints, &mut eval).unwrap();
 
-    let m = &sym.mesh;
-    let effects: Vec<Box<dyn Effect>> = vec![
-        Box::new(
-            Membrane::new(
-                &m.nodes,
-                &m.triangles,
-                MooneyRivlin::new(1.0, 0.1, 1.0),
-                1.0,
-            )
-            .unwrap(),
-        ),
-        Box::new(GasAmount {
-            amount: Quantity::Value(c),
-            ambient,
-            closing_volume: 0.0,
-        }),
-    ];
-    let closed = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec![]);
+    let closed = closed_balloon(&sym, c, ambient);
     let basis2 = AdaptedBasis::new(&sym.action, closed.layout()).unwrap();
     let stab2 = Stability::new(&closed, &basis2);
     let mut eval2 = closed.new_evaluation();
@@ -315,24 +321,7 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
             }
             seen.insert(a.negatives());
         }
-        let m = &sym.mesh;
-        let effects: Vec<Box<dyn Effect>> = vec![
-            Box::new(
-                Membrane::new(
-                    &m.nodes,
-                    &m.triangles,
-                    MooneyRivlin::new(1.0, 0.1, 1.0),
-                    1.0,
-                )
-                .unwrap(),
-            ),
-            Box::new(GasAmount {
-                amount: Quantity::Value(c),
-                ambient,
-                closing_volume: 0.0,
-            }),
-        ];
-        let closed = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec![]);
+        let closed = closed_balloon(&sym, c, ambient);
         let basis2 = AdaptedBasis::new(&sym.action, closed.layout()).unwrap();
         let mut eval2 = closed.new_evaluation();
         let a = Stability::new(&closed, &basis2)

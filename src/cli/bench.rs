@@ -493,6 +493,16 @@ fn turning(v: Option<f64>) -> f64 {
     v.unwrap_or(f64::NAN)
 }
 
+/// max |a_i − b_i| / s_i over the points where both values are finite.
+fn max_scaled_difference(a: &[f64], b: &[f64], scales: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .zip(scales)
+        .filter(|((a, b), _)| a.is_finite() && b.is_finite())
+        .map(|((a, b), s)| (a - b).abs() / s)
+        .fold(0.0, f64::max)
+}
+
 fn balloon_tables(md: &mut String, levels: &[BalloonLevel]) {
     let _ = writeln!(
         md,
@@ -814,14 +824,7 @@ fn path_tables(md: &mut String, levels: &[BalloonLevel], paths: &[(usize, FullPa
             c.dedup();
             c
         };
-        let lowest_diff = l
-            .lowest
-            .iter()
-            .zip(&full.lowest)
-            .zip(&full.scales)
-            .filter(|((a, b), _)| a.is_finite() && b.is_finite())
-            .map(|((a, b), s)| (a - b).abs() / s)
-            .fold(0.0f64, f64::max);
+        let lowest_diff = max_scaled_difference(&l.lowest, &full.lowest, &full.scales);
         let _ = writeln!(
             md,
             "- f = {f}: index along the path by blocks {}; without symmetry (inertia of K + τI) \
@@ -847,14 +850,7 @@ fn path_tables(md: &mut String, levels: &[BalloonLevel], paths: &[(usize, FullPa
             let mut dz = d.zero_cluster.clone();
             dz.sort_unstable();
             dz.dedup();
-            let dense_lowest = l
-                .lowest
-                .iter()
-                .zip(&d.lowest)
-                .zip(&full.scales)
-                .filter(|((a, b), _)| a.is_finite() && b.is_finite())
-                .map(|((a, b), s)| (a - b).abs() / s)
-                .fold(0.0f64, f64::max);
+            let dense_lowest = max_scaled_difference(&l.lowest, &d.lowest, &full.scales);
             let _ = writeln!(
                 md,
                 "  Dense (iii): index {}; eigenvalues in [−τ, τ]: {}; lowest outside them vs by \
