@@ -314,23 +314,7 @@ impl Runner<'_> {
             if n0 == n1 {
                 continue;
             }
-            // Along a path only the negative counts are computed at every point; the
-            // eigenvalues of the block that changed are computed at both ends here.
-            let mut ends = [
-                a.blocks[mu].eigenvalues.clone(),
-                b.blocks[mu].eigenvalues.clone(),
-            ];
-            if ends[0].is_empty() {
-                for (end, s) in ends.iter_mut().zip([0.0, s1]) {
-                    if let Some((u, p)) = state(s) {
-                        if let Ok(sp) =
-                            stab.spectrum_of(&u, &p, &study.constraints, eval, Some(mu), false)
-                        {
-                            *end = sp.blocks[mu].eigenvalues.clone();
-                        }
-                    }
-                }
-            }
+            let ends = [&a.blocks[mu].eigenvalues, &b.blocks[mu].eigenvalues];
             if ends[0].is_empty() || ends[1].is_empty() {
                 warnings.push(format!(
                     "the index of {} changed between steps {after_step} and {} (by {}); its block has {} columns, more than the {} whose eigenvalues are computed, so the crossing was not localised",
@@ -499,7 +483,8 @@ impl Runner<'_> {
             }
         };
         let last = path.points.len() - 1;
-        let mut previous: Option<Spectrum> = None;
+        // The previous point's index spectrum and state.
+        let mut previous: Option<(Spectrum, Vec<f64>, Vec<f64>)> = None;
         for (i, p) in path.points.iter().enumerate() {
             let u = probe.displacement(&p.q);
             let params = probe.parameters(&p.lambda);
@@ -515,26 +500,29 @@ impl Runner<'_> {
                 });
             }
             self.rows
-                .push(self.row(i, p.arclength, &u, params, p.iterations, index));
-            if let (Some(a), Some(b)) = (&previous, &spectrum) {
+                .push(self.row(i, p.arclength, &u, params.clone(), p.iterations, index));
+            if let (Some((a, u0, p0)), Some(b)) = (&previous, &spectrum) {
                 if a.negatives() != b.negatives() {
-                    let from = &path.points[i - 1];
-                    let s1 = p.arclength - from.arclength;
-                    let mut local = SymmetricProblem::new(
-                        &study.model,
-                        &study.basis,
-                        &study.constraints,
-                        params_start.to_vec(),
-                        study.control,
-                    );
-                    let (a, b) = (a.clone(), b.clone());
-                    self.critical_between(&a, &b, i - 1, s1, |s| {
-                        let q = step(&mut local, from, s, &opts).ok()?;
-                        Some((local.displacement(&q.q), local.parameters(&q.lambda)))
-                    });
+                    // The index changed: now the eigenvalues at both points.
+                    let ends = (self.spectrum(u0, p0), self.spectrum(&u, &params));
+                    if let (Some(a), Some(b)) = ends {
+                        let from = &path.points[i - 1];
+                        let s1 = p.arclength - from.arclength;
+                        let mut local = SymmetricProblem::new(
+                            &study.model,
+                            &study.basis,
+                            &study.constraints,
+                            params_start.to_vec(),
+                            study.control,
+                        );
+                        self.critical_between(&a, &b, i - 1, s1, |s| {
+                            let q = step(&mut local, from, s, &opts).ok()?;
+                            Some((local.displacement(&q.q), local.parameters(&q.lambda)))
+                        });
+                    }
                 }
             }
-            previous = spectrum;
+            previous = spectrum.map(|s| (s, u, params));
         }
         for t in &path.turning_points {
             let u = probe.displacement(&t.point.q);

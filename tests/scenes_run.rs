@@ -30,6 +30,29 @@ fn column(report: &memstab::report::PathReport, name: &str) -> usize {
         .unwrap_or_else(|| panic!("measure {name}"))
 }
 
+/// Along the path only the index is computed at every point; where it changes the crossing
+/// must still be localised and classified: under pressure control the balloon's maximum
+/// and minimum are limit points in Ag, at the pressures of the turning points.
+#[test]
+fn demo_balloon_path_finds_its_limit_points_in_the_trivial_irrep() {
+    let r = run_scene("demo.toml").report;
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    let found: Vec<(&str, &str)> = r
+        .critical
+        .iter()
+        .map(|c| (c.kind.as_str(), c.irrep.as_str()))
+        .collect();
+    assert_eq!(found, [("limit point", "Ag"), ("limit point", "Ag")]);
+    let p = r.parameters.iter().position(|n| n == "p").unwrap();
+    for (c, t) in r.critical.iter().zip(&r.turning_points) {
+        let (pc, pt) = (c.parameters[p], t.parameters[p]);
+        assert!(
+            (pc - pt).abs() <= 1e-6 * pt,
+            "critical p {pc} vs turning p {pt}"
+        );
+    }
+}
+
 #[test]
 fn demo_balloon_passes_the_pressure_maximum_and_minimum() {
     let r = run_scene("demo.toml").report;
