@@ -382,12 +382,16 @@ impl<'a> Stability<'a> {
         let rigid_residual = if rigid_modes > 0 {
             let mut worst = 0.0f64;
             let mut y = vec![0.0; m];
+            let rank_one: Vec<(f64, DVector<f64>)> = eval
+                .rank_one
+                .iter()
+                .map(|(c, a)| (*c, b.restrict(a)))
+                .collect();
             for col in r.column_iter() {
                 pattern.matvec(&values, col.as_slice(), &mut y);
                 let mut ky = DVector::from_vec(y.clone());
-                for (c, a) in &eval.rank_one {
-                    let ar = b.restrict(a);
-                    ky += &ar * (c * ar.dot(&col));
+                for (c, ar) in &rank_one {
+                    ky += ar * (c * ar.dot(&col));
                 }
                 worst = worst.max(ky.amax() / col.amax().max(1e-300));
             }
@@ -494,10 +498,22 @@ impl<'a> Stability<'a> {
             .max(1e-300);
         let x = model.positions(u);
         // Unit rigid fields: their projections onto a block are of order one or round-off.
-        let rigid_norms: Vec<f64> = model
-            .rigid_modes(&self.motions, &x)
+        // ‖t + ω × x_i‖ over the free nodes: the norm of each rigid field, without building it.
+        let rigid_norms: Vec<f64> = self
+            .motions
             .iter()
-            .map(|v| v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-300))
+            .map(|m| {
+                let (t, w) = (
+                    nalgebra::Vector3::new(m[0], m[1], m[2]),
+                    nalgebra::Vector3::new(m[3], m[4], m[5]),
+                );
+                (0..x.len())
+                    .filter(|&i| layout.dof(i, 0).is_some())
+                    .map(|i| (t + w.cross(&x[i])).norm_squared())
+                    .sum::<f64>()
+                    .sqrt()
+                    .max(1e-300)
+            })
             .collect();
         let eval: &Evaluation = eval;
         // The constraints' border of the trivial block, before the blocks go parallel.

@@ -1002,54 +1002,39 @@ fn payoff_tables(md: &mut String, case: &PayoffCase) {
             .join(", ")
     );
     let _ = writeln!(md, "| what | time (ms) |\n|---|---|");
-    let _ = writeln!(
-        md,
-        "| assembly of K (`model.evaluate`) | {} |",
-        ms(po.assembly)
-    );
-    let _ = writeln!(
-        md,
-        "| adapted basis (once per mesh and group, not per matrix) | {} |",
-        ms(po.adapted_basis)
-    );
-    let _ = writeln!(
-        md,
-        "| (a) restrict K to every block | {} |",
-        ms(po.restrict)
-    );
-    let _ = writeln!(
-        md,
-        "| (a) dense eigenvalues of every block (faer) | {} |",
-        ms(po.block_eigen)
-    );
-    let _ = writeln!(
-        md,
-        "| (a) all eigenvalues by blocks, total | {} |",
-        ms(po.blocks_time())
-    );
-    let _ = writeln!(
-        md,
-        "| (a') `Stability::spectrum_of` as `run` calls it (assembly, restriction, rigid-mode \
-         deflation, Zᵀ K Z, eigen) | {} |",
-        ms(po.stability_spectrum)
-    );
-    let _ = writeln!(md, "| (b) build dense K | {} |", opt_ms(po.dense_build));
-    let _ = writeln!(
-        md,
-        "| (b) dense full eigenvalues of K (faer `self_adjoint_eigenvalues`) | {} |",
-        opt_ms(po.dense_eigen)
-    );
+    let mut rows: Vec<(&str, String)> =
+        vec![
+        ("assembly of K (`model.evaluate`)", ms(po.assembly)),
+        (
+            "adapted basis (once per mesh and group, not per matrix)",
+            ms(po.adapted_basis),
+        ),
+        ("(a) restrict K to every block", ms(po.restrict)),
+        ("(a) dense eigenvalues of every block (faer)", ms(po.block_eigen)),
+        ("(a) all eigenvalues by blocks, total", ms(po.blocks_time())),
+        (
+            "(a') `Stability::spectrum_of` as `run` calls it (assembly, restriction, rigid-mode \
+             deflation, Zᵀ K Z, eigen)",
+            ms(po.stability_spectrum),
+        ),
+        ("(b) build dense K", opt_ms(po.dense_build)),
+        (
+            "(b) dense full eigenvalues of K (faer `self_adjoint_eigenvalues`)",
+            opt_ms(po.dense_eigen),
+        ),
+    ];
     if let Some(si) = &po.shift_invert {
-        let _ = writeln!(
-            md,
-            "| (d) sparse LBLᵀ of K − σI (symbolic + numeric) | {} |",
-            ms(si.factorisation)
-        );
-        let _ = writeln!(
-            md,
-            "| (d) faer `partial_self_adjoint_eigen` on (K − σI)⁻¹, 20 values | {} |",
-            ms(si.lanczos)
-        );
+        rows.push((
+            "(d) sparse LBLᵀ of K − σI (symbolic + numeric)",
+            ms(si.factorisation),
+        ));
+        rows.push((
+            "(d) faer `partial_self_adjoint_eigen` on (K − σI)⁻¹, 20 values",
+            ms(si.lanczos),
+        ));
+    }
+    for (what, time) in rows {
+        let _ = writeln!(md, "| {what} | {time} |");
     }
     if let Some(Ok(p)) = &case.peer {
         let _ = writeln!(
