@@ -8,8 +8,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use std::process::Command;
 
-mod common;
-use common::{polylines, texts};
+use crate::common::{polylines, texts};
 
 /// The ponding scene on a 6-division disc (252 triangles) swept in 46 samples: a fraction of
 /// a second.

@@ -16,8 +16,7 @@ use meshes::{Mesh, Vec3};
 use std::fs;
 use std::path::Path;
 
-mod common;
-use common::{polylines, texts};
+use crate::common::{polylines, texts};
 
 /// p R/(μH) of the Mooney-Rivlin sphere at stretch l.
 fn pressure(k: f64, l: f64) -> f64 {

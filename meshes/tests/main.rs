@@ -1,0 +1,6 @@
+//! The integration tests of the meshes crate, as one test binary.
+
+mod actions;
+mod generators;
+mod readers;
+mod writers;

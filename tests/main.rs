@@ -1,0 +1,28 @@
+//! The integration tests, as one test binary (one link of the whole crate instead of one
+//! per file). Each module is one former test file; shared helpers are in `common`.
+
+mod common;
+
+mod adapted;
+mod balloon;
+mod bench_smoke;
+mod cli;
+mod cli_compare;
+mod cli_run;
+mod cli_spectrum;
+mod effects_model;
+mod export_rank_one;
+mod fluid_volume;
+mod hard_cases;
+mod linalg;
+mod linear_buckling_plot;
+mod model_derivatives;
+mod near_double;
+mod newton;
+mod output;
+mod ponding;
+mod scene_mesh_file;
+mod scene_validation;
+mod scenes_run;
+mod sparse_path;
+mod stability;
