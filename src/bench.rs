@@ -21,13 +21,14 @@
 //! column. Critical-point localisation and output writing, which `run` also does, are not
 //! part of this study.
 
-use crate::adapted::{AdaptedBasis, SymmetricProblem};
-use crate::continuation::{follow, solve_at, PathOptions};
+use crate::adapted::AdaptedBasis;
+use crate::analysis::events::Extremum;
 use crate::linalg::{SymmetricFactorization, SymmetricPattern};
 use crate::model::{Evaluation, FeModel, Model, Request};
+use crate::report::StateKind;
 use crate::scene::{Analysis, Scene};
-use crate::stability::{Detail, Stability, DENSE_BLOCK_LIMIT};
-use crate::study::{Measure, Study};
+use crate::stability::{Stability, DENSE_BLOCK_LIMIT};
+use crate::study::Study;
 use nalgebra::DMatrix;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -71,13 +72,10 @@ pub fn ponding_scene(divisions: usize, max: f64, samples: usize) -> Result<Scene
         .map_err(|e| e.to_string())
 }
 
-pub use crate::run::{path_options, state_scale};
-
-/// Solves the start state as `run` does (the reference scaled by `start.stretch`, every
-/// parameter at `params`, no constraint active, at least 50 Newton iterations), then sets the
-/// `"initial"` constraint targets there. Returns the displacement over all unknowns.
+/// The start state as `run` solves it ([`crate::analysis::equilibrium::solve_start`]): the
+/// displacement over all unknowns.
 pub fn solve_start(study: &mut Study, params: &[f64]) -> Result<Vec<f64>, String> {
-    crate::run::solve_start(study, params)
+    crate::analysis::equilibrium::solve_start(study, params)
         .map(|(u, _, _)| u)
         .map_err(|e| e.to_string())
 }
@@ -117,9 +115,12 @@ pub struct BalloonLevel {
     /// irrep costs along the path, the adapted basis excepted); `None` when skipped.
     pub spectra: Option<Duration>,
     /// Wall time of the index by irrep blocks at every point, as `run` computes it
-    /// ([`Detail::Inertia`] on the representatives' evaluation, its assembly included);
-    /// `None` without stability.
+    /// ([`crate::stability::Detail::Inertia`] on the representatives' evaluation, its assembly
+    /// included); `None` without stability.
     pub index: Option<Duration>,
+    /// The rest of the run's events: turning points, and eigenvalues and localisation where
+    /// the index changed.
+    pub localisation: Duration,
     /// The instability index by irrep blocks at every point (empty without stability).
     pub indices: Vec<usize>,
     /// The lowest eigenvalue over all blocks at every point (rigid modes deflated; empty
@@ -220,6 +221,11 @@ pub fn balloon_level(frequency: usize, stability: bool) -> Result<(BalloonLevel,
 
 /// As [`balloon_level`], with the options of [`LevelOptions`]; a turning point the path does
 /// not reach is `None`.
+///
+/// The path is what `memstab run` computes ([`crate::analysis::run_with`]: start solve,
+/// adapted basis, path with the index by blocks at every point and the critical points
+/// localised), with the run's own phase times; the eigenvalue spectra of `stability` are
+/// computed by an observer at every accepted state and timed apart.
 pub fn balloon_level_with(
     frequency: usize,
     options: &LevelOptions,
@@ -228,145 +234,62 @@ pub fn balloon_level_with(
         return Err("a path has at least one point".into());
     }
     let start = Instant::now();
-    let mut study = Study::build(balloon_scene(frequency)?).map_err(|e| e.to_string())?;
-    let params0 = study.start.clone();
-    let mut assembly = Duration::ZERO;
-    let mut projection = Duration::ZERO;
-    let mut evaluations = 0;
-    let t_start = Instant::now();
-    // The start, timed like the path.
-    let (q_start, params_start) = {
-        let opts = PathOptions {
-            max_iterations: path_options(&study).max_iterations.max(50),
-            ..path_options(&study)
-        };
-        let u0 = study.start_displacement();
-        let q0 = study.basis.restrict(&u0);
-        let mut problem = SymmetricProblem::new(
-            &study.model,
-            &study.basis,
-            &[],
-            params0.clone(),
-            study.control,
-        );
-        let lambda = problem.free_values(&params0);
-        let (q, lambda, _) = solve_at(&mut problem, &q0, &lambda, &opts)
-            .map_err(|e| format!("the start state did not converge: {e}"))?;
-        assembly += problem.times.assembly;
-        projection += problem.times.projection;
-        evaluations += problem.times.evaluations;
-        (q, problem.parameters(&lambda))
-    };
-    let u_start = {
-        let mut u = vec![0.0; study.basis.unknowns()];
-        study.basis.expand(&q_start, &mut u);
-        u
-    };
-    study.set_targets(&u_start, &params_start);
-    let study_ref: &Study = &study;
-    let mut opts = path_options(study_ref);
-    if let Some(n) = options.max_points {
-        // `follow` accepts up to max_steps steps after the start.
-        opts.max_steps = opts.max_steps.min(n - 1);
+    let mut scene = balloon_scene(frequency)?;
+    if let (Some(n), Analysis::Path(p)) = (options.max_points, &mut scene.analysis) {
+        // The path accepts up to `steps` steps after the start.
+        p.steps = p.steps.min(n - 1);
     }
-    let stretch = study_ref
-        .measures
-        .iter()
-        .position(|(_, m)| *m == Measure::Stretch)
-        .ok_or("the balloon has no stretch measure")?;
-    let stop_stretch = match &study_ref.scene.analysis {
-        Analysis::Path(p) => p.stop_stretch,
-        _ => None,
-    };
-    let problem_for = || {
-        SymmetricProblem::new(
-            &study_ref.model,
-            &study_ref.basis,
-            &study_ref.constraints,
-            params_start.clone(),
-            study_ref.control,
-        )
-    };
-    let mut problem = problem_for();
-    let lambda0 = problem.free_values(&params_start);
-    let probe = problem_for();
-    let path = follow(
-        &mut problem,
-        &q_start,
-        &lambda0,
-        &opts,
-        |p| {
-            stop_stretch.is_some_and(|s| {
-                let u = probe.displacement(&p.q);
-                study_ref.measure(&u, &probe.parameters(&p.lambda))[stretch] >= s
-            })
-        },
-        |_| {},
-    )?;
-    let path_time = t_start.elapsed();
-    assembly += problem.times.assembly;
-    projection += problem.times.projection;
-    evaluations += problem.times.evaluations;
-    let continuation = path_time.saturating_sub(assembly + projection);
-    let turning = |kind: f64| {
-        path.turning_points
+    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
+    let mut observer = SpectraObserver::default();
+    let result = crate::analysis::run_with(&mut study, &mut observer).map_err(|e| e.to_string())?;
+    let wall = start.elapsed();
+    let study_ref: &Study = &study;
+    let report = &result.report;
+    let times = result.times;
+    let turning = |kind: Extremum| {
+        report
+            .turning_points
             .iter()
-            .find(|t| t.kind * kind > 0.0)
-            .map(|t| t.point.clone())
+            .find(|t| t.kind == kind)
+            .map(|t| t.parameters[0])
     };
-    let max = turning(1.0);
-    let min = turning(-1.0);
-    let at_max = max
-        .as_ref()
-        .map(|m| (probe.displacement(&m.q), probe.parameters(&m.lambda)));
-
-    let (mut adapted_basis, mut eigen, mut eigen_restrict) = (Duration::ZERO, None, None);
-    let mut index = None;
-    let (mut spectra_wall, mut indices, mut lowest) = (None, Vec::new(), Vec::new());
-    let mut retimed = Duration::ZERO;
-    if options.stability {
-        let t = Instant::now();
+    let at_max = result.states.iter().find_map(|s| match &s.kind {
+        StateKind::Turning(Extremum::Maximum) => {
+            let mut params = study_ref.start.clone();
+            params[0] = s.control;
+            Some((s.u.clone(), params))
+        }
+        _ => None,
+    });
+    let indices: Vec<usize> = if options.stability {
+        report.rows.iter().filter_map(|r| r.index).collect()
+    } else {
+        Vec::new()
+    };
+    // The eigenvalue spectra at every state, as a second pass over the states the observer
+    // kept (timed apart: not part of what `run` does).
+    let (mut eigen, mut eigen_restrict, mut spectra_wall) = (None, None, None);
+    let mut lowest = Vec::new();
+    let mut retimed_assembly = Duration::ZERO;
+    if options.stability && !options.index_only {
         let adapted = AdaptedBasis::new(&study_ref.action, study_ref.model.layout())
             .map_err(|e| e.to_string())?;
-        adapted_basis = t.elapsed();
         let stab = Stability::new(&study_ref.model, &adapted);
         let mut eval = study_ref.model.new_evaluation();
-        let mut local = stab.new_evaluation();
-        let mut by_index = Duration::ZERO;
-        let mut spectra = Duration::ZERO;
-        let mut in_spectra_assembly = Duration::ZERO;
-        let mut restrict = Duration::ZERO;
-        let sample = [0, path.points.len() / 2, path.points.len() - 1];
+        let (mut spectra, mut restrict) = (Duration::ZERO, Duration::ZERO);
+        let n = observer.states.len();
+        let sample = [0, n / 2, n.saturating_sub(1)];
         let mut work = Vec::new();
-        for (i, p) in path.points.iter().enumerate() {
-            let u = probe.displacement(&p.q);
-            let params = probe.parameters(&p.lambda);
-            let t = Instant::now();
-            let inertia = stab
-                .analyse(
-                    &u,
-                    &params,
-                    &study_ref.constraints,
-                    &mut local,
-                    None,
-                    Detail::Inertia,
-                )
-                .map_err(|e| e.to_string())?;
-            by_index += t.elapsed();
-            indices.push(inertia.index);
-            if options.index_only {
-                continue;
-            }
+        for (i, ((u, params), index)) in observer.states.iter().zip(&indices).enumerate() {
             let t = Instant::now();
             let spectrum = stab
-                .spectrum_of(&u, &params, &study_ref.constraints, &mut eval, None, false)
+                .spectrum_of(u, params, &study_ref.constraints, &mut eval, None, false)
                 .map_err(|e| e.to_string())?;
             spectra += t.elapsed();
-            if spectrum.negatives() != inertia.negatives() {
+            if spectrum.index != *index {
                 return Err(format!(
-                    "f = {frequency}, point {i}: negative counts by eigenvalues {:?} and by inertia {:?} differ",
-                    spectrum.negatives(),
-                    inertia.negatives()
+                    "f = {frequency}, point {i}: the index by eigenvalues {} and by inertia {index} differ",
+                    spectrum.index
                 ));
             }
             lowest.push(
@@ -377,16 +300,14 @@ pub fn balloon_level_with(
                     .copied()
                     .fold(f64::INFINITY, f64::min),
             );
-            // Re-timing (not counted in the total): the assembly inside spectrum_of, and at
-            // three points the block restrictions (dense, or sparse above the dense limit).
+            // The assembly inside spectrum_of, and at three points the block restrictions
+            // (dense, or sparse above the dense limit).
             let t = Instant::now();
             study_ref
                 .model
-                .evaluate(&u, &params, Request::ALL, &mut eval)
+                .evaluate(u, params, Request::ALL, &mut eval)
                 .map_err(|e| e.to_string())?;
-            let dt = t.elapsed();
-            in_spectra_assembly += dt;
-            retimed += dt;
+            retimed_assembly += t.elapsed();
             if sample.contains(&i) {
                 let t = Instant::now();
                 let layout = study_ref.model.layout();
@@ -397,54 +318,63 @@ pub fn balloon_level_with(
                         std::hint::black_box(ib.first().restrict_tangent(layout, &eval, &mut work));
                     }
                 }
-                let dt = t.elapsed();
-                restrict += dt;
-                retimed += dt;
+                restrict += t.elapsed();
             }
         }
-        index = Some(by_index);
-        if options.index_only {
-            eigen_restrict = None;
-        } else {
-            assembly += in_spectra_assembly;
-            spectra_wall = Some(spectra);
-            eigen = Some(spectra.saturating_sub(in_spectra_assembly));
-            eigen_restrict = Some(restrict.mul_f64(path.points.len() as f64 / sample.len() as f64));
-        }
+        spectra_wall = Some(spectra);
+        eigen = Some(spectra.saturating_sub(retimed_assembly));
+        eigen_restrict = Some(restrict.mul_f64(n as f64 / sample.len() as f64));
     }
-    let total = start.elapsed().saturating_sub(retimed);
-    let states = if options.keep_states {
-        path.points
-            .iter()
-            .map(|p| (probe.displacement(&p.q), probe.parameters(&p.lambda)))
-            .collect()
-    } else {
-        Vec::new()
+    let problem = {
+        let mut p = times.start_problem;
+        p += times.steps.steps_problem;
+        p
     };
+    // The path follower without its evaluations: the start solve and the steps.
+    let continuation =
+        (times.start + times.steps.steps).saturating_sub(problem.assembly + problem.projection);
+    let total = wall.saturating_sub(times.steps.progress);
     let level = BalloonLevel {
         frequency,
         elements: study_ref.model.layout().triangles().len(),
         unknowns: study_ref.basis.unknowns(),
         symmetric_unknowns: study_ref.basis.dim(),
-        points: path.points.len(),
-        evaluations,
-        p_max: max.map(|m| m.lambda[0]),
-        p_min: min.map(|m| m.lambda[0]),
-        assembly,
-        projection,
+        points: report.rows.len(),
+        evaluations: problem.evaluations,
+        p_max: turning(Extremum::Maximum),
+        p_min: turning(Extremum::Minimum),
+        assembly: problem.assembly + retimed_assembly,
+        projection: problem.projection,
         continuation,
-        adapted_basis,
+        adapted_basis: times.adapted_basis,
         eigen,
         eigen_restrict,
         spectra: spectra_wall,
-        index,
+        index: options.stability.then_some(times.index),
+        localisation: times.steps.events.saturating_sub(times.index),
         indices,
         lowest,
-        total,
+        total: total + spectra_wall.unwrap_or_default(),
         at_max,
-        states,
+        states: if options.keep_states {
+            observer.states
+        } else {
+            Vec::new()
+        },
     };
     Ok((level, study))
+}
+
+/// Keeps every accepted state of a run.
+#[derive(Default)]
+struct SpectraObserver {
+    states: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+impl crate::analysis::Observer for SpectraObserver {
+    fn state(&mut self, u: &[f64], params: &[f64]) {
+        self.states.push((u.to_vec(), params.to_vec()));
+    }
 }
 
 /// Observed order between two levels of frequency f and 2f: log2(e_f / e_2f).
@@ -1331,11 +1261,11 @@ pub struct PondingLevel {
 }
 
 /// The ponding ladder on a C7v disc with `divisions`, density swept over [0, 20] in 60 steps
-/// (past the (3, 1) rung at 14.65 even on coarse discs), by [`crate::run::run`].
+/// (past the (3, 1) rung at 14.65 even on coarse discs), by [`crate::analysis::run`].
 pub fn ponding_level(divisions: usize) -> Result<PondingLevel, String> {
     let t = Instant::now();
     let mut study = Study::build(ponding_scene(divisions, 20.0, 60)?).map_err(|e| e.to_string())?;
-    let r = crate::run::run(&mut study, |_, _| {})
+    let r = crate::analysis::run(&mut study, |_, _| {})
         .map_err(|e| e.to_string())?
         .report;
     let time = t.elapsed();
@@ -1365,9 +1295,9 @@ pub fn ponding_level(divisions: usize) -> Result<PondingLevel, String> {
     })
 }
 
-/// The wave number of a critical mode about z (see [`crate::critical::wave_number`]).
+/// The wave number of a critical mode about z (see [`crate::analysis::critical::wave_number`]).
 pub fn wave_number(study: &Study, mode: &[f64]) -> usize {
-    crate::critical::wave_number(study.model.reference(), study.model.layout(), mode, 12)
+    crate::analysis::critical::wave_number(study.model.reference(), study.model.layout(), mode, 12)
 }
 
 /// Writes `path` whole: into a temporary file in the same directory, then renamed over it.

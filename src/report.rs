@@ -2,6 +2,8 @@
 //! points, why it stopped, and the states saved for visualisation. Writers (see
 //! [`crate::output`]) turn it into CSV, JSON, VTU + PVD and an SVG diagram.
 
+use crate::analysis::critical::{CriticalKind, CriticalPoint};
+use crate::analysis::events::{Extremum, StopReason};
 use serde::Serialize;
 
 /// The mesh a run used.
@@ -41,7 +43,7 @@ pub struct PathRow {
 #[derive(Debug, Clone, Serialize)]
 pub struct TurningRow {
     /// `maximum` or `minimum` of the control.
-    pub kind: String,
+    pub kind: Extremum,
     /// The path step just before it.
     pub after_step: usize,
     /// Parameters at the localised point.
@@ -95,10 +97,10 @@ pub struct PathReport {
     pub rows: Vec<PathRow>,
     /// Turning points of the control.
     pub turning_points: Vec<TurningRow>,
-    /// Why the path ended, in words.
-    pub stop: String,
+    /// Why the path ended (written in words).
+    pub stop: StopReason,
     /// Critical points, localised and classified by irrep.
-    pub critical: Vec<crate::critical::CriticalPoint>,
+    pub critical: Vec<CriticalPoint>,
     /// Things the analysis could not settle (a crossing that could not be localised …).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
@@ -165,5 +167,58 @@ impl Spectra {
     /// The index of the irrep named `name`.
     pub fn irrep(&self, name: &str) -> Option<usize> {
         self.irreps.iter().position(|i| i.name == name)
+    }
+}
+
+/// What a state to write is.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StateKind {
+    /// A point of the path (every `save-every` steps, and the last one).
+    Step,
+    /// A turning point of the control.
+    Turning(Extremum),
+    /// A critical point, written with its mode.
+    Critical {
+        /// Its kind.
+        kind: CriticalKind,
+        /// The irrep of the singular block.
+        irrep: String,
+    },
+    /// The held state of a linear-buckling sweep.
+    Held,
+}
+
+impl StateKind {
+    /// The state's label: `step N`, `maximum`, `double bifurcation in E1`, `held state`.
+    pub fn label(&self, step: usize) -> String {
+        match self {
+            Self::Step => format!("step {step}"),
+            Self::Turning(e) => e.to_string(),
+            Self::Critical { kind, irrep } => format!("{kind} in {irrep}"),
+            Self::Held => "held state".into(),
+        }
+    }
+}
+
+/// A state to write: path step, what it is, control value, full displacement, and a mode
+/// for critical points.
+#[derive(Debug, Clone)]
+pub struct State {
+    /// Path step (turning and critical points carry the step before them).
+    pub step: usize,
+    /// What the state is.
+    pub kind: StateKind,
+    /// The control's value.
+    pub control: f64,
+    /// Displacement over the unknowns.
+    pub u: Vec<f64>,
+    /// The critical mode over the unknowns, for critical points.
+    pub mode: Option<Vec<f64>>,
+}
+
+impl State {
+    /// The state's label (see [`StateKind::label`]).
+    pub fn label(&self) -> String {
+        self.kind.label(self.step)
     }
 }

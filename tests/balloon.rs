@@ -8,8 +8,11 @@
 //! at λ = 3.1426213. The path is followed under pressure control in the Ih fixed-point space
 //! of icospheres; the turning points must approach the closed form at second order in h.
 
-use memstab::adapted::{SparseBasis, SymmetricProblem};
-use memstab::continuation::{follow, PathOptions, StopReason};
+use crate::common::follow;
+use memstab::adapted::SparseBasis;
+use memstab::analysis::continuation::PathOptions;
+use memstab::analysis::events::{Extremum, StopReason};
+use memstab::analysis::SymmetricProblem;
 use memstab::effects::gas::GasPressure;
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
@@ -88,7 +91,6 @@ fn balloon(frequency: usize, k: f64, to_stretch: f64) -> Extrema {
             &DVector::from_element(1, 0.0),
             &opts,
             |p| stretch_of(&probe, &p.q) >= to_stretch,
-            |_| {},
         )
         .unwrap()
     };
@@ -105,17 +107,19 @@ fn balloon(frequency: usize, k: f64, to_stretch: f64) -> Extrema {
         assert!(p.lambda[0].is_finite() && p.q.iter().all(|v| v.is_finite()));
         on_curve = on_curve.max((p.lambda[0] - closed_form(k, l)).abs());
     }
-    let tp: Vec<(f64, f64, f64)> = path
-        .turning_points
-        .iter()
+    let tp: Vec<(Extremum, f64, f64)> = path
+        .turning_points()
         .map(|t| (t.kind, stretch_of(&probe, &t.point.q), t.point.lambda[0]))
         .collect();
     let max = tp
         .iter()
-        .find(|t| t.0 > 0.0)
+        .find(|t| t.0 == Extremum::Maximum)
         .map(|t| (t.1, t.2))
         .expect("a pressure maximum");
-    let min = tp.iter().find(|t| t.0 < 0.0).map(|t| (t.1, t.2));
+    let min = tp
+        .iter()
+        .find(|t| t.0 == Extremum::Minimum)
+        .map(|t| (t.1, t.2));
     Extrema {
         max,
         min,

@@ -2,10 +2,10 @@
 //! plate): against the closed form of a sphere segment, converging at second order; and the
 //! fixed-fluid-volume constraint holds it along a path (the docs/scenes.md example).
 
+use memstab::analysis::run;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::Quantity;
 use memstab::model::constraint::{Constraint, FluidVolume};
-use memstab::run::run;
 use memstab::scene::Scene;
 use memstab::study::Study;
 use std::f64::consts::PI;

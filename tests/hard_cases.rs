@@ -13,8 +13,12 @@
 //!
 //! Scenes live in `tests/data/hard/`; the k = 0 balloon is the bundled `scenes/balloon_k0.toml`.
 
-use memstab::adapted::{SparseBasis, SymmetricProblem};
-use memstab::continuation::{follow, step, Path, PathOptions, StopReason};
+use memstab::adapted::SparseBasis;
+use memstab::analysis::continuation::{step_from, Continuation, PathOptions};
+use memstab::analysis::events::{Branch, StopReason};
+use memstab::analysis::path::trace;
+use memstab::analysis::SymmetricProblem;
+use memstab::analysis::{run, RunResult};
 use memstab::effects::gas::GasPressure;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
@@ -22,7 +26,6 @@ use memstab::effects::Quantity;
 use memstab::model::check::check_derivatives;
 use memstab::model::{Effect, Evaluation, FeModel, Model, ModelError, Request, Vec3};
 use memstab::report::PathReport;
-use memstab::run::{run, RunResult};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use meshes::generators::{
@@ -93,10 +96,10 @@ fn run_checked(study: &mut Study) -> RunResult {
         assert!(
             s.u.iter().all(|v| v.is_finite()),
             "non-finite state {}",
-            s.label
+            s.label()
         );
     }
-    assert_clear_stop(&r.stop);
+    assert_clear_stop(&r.stop.to_string());
     result
 }
 
@@ -135,7 +138,7 @@ fn last_positions(study: &Study, result: &RunResult) -> Vec<Vec3> {
     let state = result
         .states
         .iter()
-        .find(|s| s.label == label)
+        .find(|s| s.label() == label)
         .expect("the last point is saved");
     study.model.positions(&state.u)
 }
@@ -289,7 +292,7 @@ fn k0_balloon_reaches_stretch_5_on_one_branch_without_stalling() {
     let (p, s) = (parameter(r, "p"), column(r, "stretch"));
     // It reaches the stretch 5, and says so.
     let last = r.rows.last().unwrap();
-    assert!(r.stop.contains("stretch reached"), "{}", r.stop);
+    assert!(r.stop.to_string().contains("stretch reached"), "{}", r.stop);
     assert!(
         last.measures[s] >= 5.0,
         "final stretch {}",
@@ -297,7 +300,11 @@ fn k0_balloon_reaches_stretch_5_on_one_branch_without_stalling() {
     );
     // Exactly one turning point, the maximum, near the closed form (f = 8: the
     // discretisation error is about 0.4 % in p).
-    let kinds: Vec<&str> = r.turning_points.iter().map(|t| t.kind.as_str()).collect();
+    let kinds: Vec<String> = r
+        .turning_points
+        .iter()
+        .map(|t| t.kind.to_string())
+        .collect();
     assert_eq!(kinds, ["maximum"], "turning points");
     let max = &r.turning_points[0];
     let (p_max, l_max) = (max.parameters[p], max.measures[s]);
@@ -419,7 +426,7 @@ fn squeeze(
     let vol = column(r, "volume");
     let last = r.rows.last().unwrap();
     assert!(
-        r.stop.contains("left its [min, max]") && last.parameters[d] >= -0.3,
+        r.stop.to_string().contains("left its [min, max]") && last.parameters[d] >= -0.3,
         "the plane must reach d = -0.3: {} at d = {}",
         r.stop,
         last.parameters[d]
@@ -717,7 +724,7 @@ fn waterline_through_fixed_nodes_along_a_whole_density_path() {
     );
     let last = r.rows.last().unwrap();
     assert!(
-        r.stop.contains("left its [min, max]") && last.parameters[rho] >= 1.5,
+        r.stop.to_string().contains("left its [min, max]") && last.parameters[rho] >= 1.5,
         "{}",
         r.stop
     );
@@ -774,7 +781,11 @@ fn level_swept_from_below_the_lowest_node_to_above_the_highest() {
         column(r, "max_z"),
     );
     let (first, last) = (&r.rows[0], r.rows.last().unwrap());
-    assert!(r.stop.contains("left its [min, max]"), "{}", r.stop);
+    assert!(
+        r.stop.to_string().contains("left its [min, max]"),
+        "{}",
+        r.stop
+    );
     assert!(first.parameters[h] <= -1.5 && first.parameters[h] < first.measures[min_z]);
     assert!(last.parameters[h] >= 1.5 && last.parameters[h] > last.measures[max_z]);
     // The level really passes through the membrane, in many steps.
@@ -937,24 +948,29 @@ fn disc_options(model: &FeModel) -> PathOptions {
 
 /// Follows the level from 0 (the flat disc: every triangle horizontal exactly at the level)
 /// to 1; every point finite.
-fn follow_level(model: &FeModel, action: &GroupAction, opts: &PathOptions) -> Path {
+fn follow_level(model: &FeModel, action: &GroupAction, opts: &PathOptions) -> Branch {
     let basis = SparseBasis::fixed_point(action, model.layout());
     assert_eq!(basis.dim(), model.unknowns());
-    let mut problem = SymmetricProblem::new(model, &basis, &[], vec![0.0], Some(0));
-    let path = follow(
-        &mut problem,
+    let problem = SymmetricProblem::new(model, &basis, &[], vec![0.0], Some(0));
+    let mut driver = Continuation::start(
+        problem,
         &DVector::zeros(basis.dim()),
         &DVector::from_element(1, 0.0),
-        opts,
-        |p| p.lambda[0] >= 1.0,
-        |_| {},
+        opts.clone(),
     )
     .unwrap_or_else(|e| panic!("the start failed: {e}"));
+    let path = trace(
+        &mut driver,
+        opts.max_steps,
+        |_, p| (p.lambda[0] >= 1.0).then_some(StopReason::Condition),
+        &mut [],
+        |_, _| {},
+    );
     for p in &path.points {
         assert!(p.q.iter().chain(p.lambda.iter()).all(|v| v.is_finite()));
     }
-    if let StopReason::StepTooSmall(why) = &path.stop {
-        assert_clear_stop(why);
+    if let StopReason::Stalled(why) = &path.stop {
+        assert_clear_stop(&why.to_string());
     }
     path
 }
@@ -1125,24 +1141,21 @@ fn too_large_steps_are_cut_not_a_panic() {
     let basis = SparseBasis::fixed_point(&action, model.layout());
     let opts = disc_options(&model);
     let mut problem = SymmetricProblem::new(&model, &basis, &[], vec![0.0], Some(0));
-    let start = follow(
+    let start = Continuation::start(
         &mut problem,
         &DVector::zeros(basis.dim()),
         &DVector::from_element(1, 0.0),
-        &PathOptions {
-            max_steps: 0,
-            ..opts.clone()
-        },
-        |_| false,
-        |_| {},
+        opts.clone(),
     )
     .unwrap()
-    .points
-    .remove(0);
+    .point()
+    .clone();
     // A predictor 1000 mesh sizes long: the corrector fails — an Err, not a panic.
     let mut messages = Vec::new();
     for s in [50.0, 1e3, 1e6, 1e150, 1e300] {
-        let err = step(&mut problem, &start, s, &opts).expect_err("a huge step cannot converge");
+        let err = step_from(&mut problem, &start, s, &opts)
+            .expect_err("a huge step cannot converge")
+            .to_string();
         assert!(!err.is_empty() && !err.contains('\n'), "{err}");
         messages.push(err);
     }
@@ -1194,11 +1207,16 @@ fn too_large_steps_in_a_scene_are_cut() {
         let h = parameter(r, "h");
         let vf = column(r, "fluid_volume");
         assert!(
-            r.stop.contains("left its [min, max]") && r.rows.last().unwrap().parameters[h] < -0.5,
+            r.stop.to_string().contains("left its [min, max]")
+                && r.rows.last().unwrap().parameters[h] < -0.5,
             "{what}: {}",
             r.stop
         );
-        let kinds: Vec<&str> = r.turning_points.iter().map(|t| t.kind.as_str()).collect();
+        let kinds: Vec<String> = r
+            .turning_points
+            .iter()
+            .map(|t| t.kind.to_string())
+            .collect();
         assert_eq!(kinds, ["maximum"], "{what}");
         let t = &r.turning_points[0];
         eprintln!(

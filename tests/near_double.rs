@@ -4,11 +4,11 @@
 //! declared group, and never two points on the perfect mesh.
 
 use memstab::adapted::SparseBasis;
+use memstab::analysis::run;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel};
-use memstab::run::run;
 use memstab::scene::Scene;
 use memstab::study::Study;
 use meshes::SymmetricMesh;

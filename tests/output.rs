@@ -2,7 +2,8 @@
 //! with its pressure maximum and minimum as turning points) and a small icosphere: CSV, JSON,
 //! SVG, VTU + PVD, and their errors.
 
-use memstab::critical::{CriticalPoint, Isotropy};
+use memstab::analysis::critical::{CriticalKind, CriticalPoint, Isotropy};
+use memstab::analysis::events::{Extremum, StopReason};
 use memstab::output::{
     default_axes, write_csv, write_diagram, write_diagram_with, write_json, write_spectrum_diagram,
     Diagram, Marker, MarkerKind, OutputError, Progress, PvdTime, Segment, StateWriter, ZERO_LINE,
@@ -49,8 +50,8 @@ fn report() -> PathReport {
     rows[0].measures[2] = 5e-324;
     rows[1].measures[2] = 1.7e300;
     rows[2].arclength = 0.1 + 0.2;
-    let turning = |kind: &str, after_step, l: f64, p: f64| TurningRow {
-        kind: kind.to_string(),
+    let turning = |kind: Extremum, after_step, l: f64, p: f64| TurningRow {
+        kind,
         after_step,
         parameters: vec![p, 9.81],
         measures: measures(l),
@@ -82,10 +83,10 @@ fn report() -> PathReport {
         warnings: Vec::new(),
         stability_note: None,
         turning_points: vec![
-            turning("maximum", 6, 1.4760699, 1.3551069),
-            turning("minimum", 28, 3.1426213, 1.1487477),
+            turning(Extremum::Maximum, 6, 1.4760699, 1.3551069),
+            turning(Extremum::Minimum, 28, 3.1426213, 1.1487477),
         ],
-        stop: "reached the bound stretch = 4".to_string(),
+        stop: StopReason::Stretch { target: 4.0 },
         saved: Vec::new(),
         spectra: Spectra::default(),
     }
@@ -461,8 +462,8 @@ fn sweep() -> PathReport {
             })
             .collect(),
     };
-    let critical = |kind: &str, irrep: &str, dim, rho: f64| CriticalPoint {
-        kind: kind.to_string(),
+    let critical = |kind: CriticalKind, irrep: &str, dim, rho: f64| CriticalPoint {
+        kind,
         irrep: irrep.to_string(),
         multiplicity: dim,
         parameters: vec![rho],
@@ -478,8 +479,8 @@ fn sweep() -> PathReport {
         state: Vec::new(),
     };
     r.critical = vec![
-        critical("symmetric bifurcation", "A1", 1, 2.5),
-        critical("double bifurcation", "E1", 2, 20.0 / 3.0),
+        critical(CriticalKind::SymmetricBifurcation, "A1", 1, 2.5),
+        critical(CriticalKind::MultipleBifurcation(2), "E1", 2, 20.0 / 3.0),
     ];
     r
 }

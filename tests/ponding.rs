@@ -4,8 +4,8 @@
 //! content (the wave number m of the mode's deflection), never by sorted order; doubles are
 //! exact on symmetric meshes and splits are measured, with their gap under refinement.
 
-use memstab::critical::CriticalPoint;
-use memstab::run::run;
+use memstab::analysis::critical::CriticalPoint;
+use memstab::analysis::run;
 use memstab::scene::Scene;
 use memstab::study::Study;
 

@@ -4,8 +4,8 @@
 //! bad files, groups and keys are one-line errors naming the key, and `memstab run` exits
 //! with code 2 without writing anything.
 
+use memstab::analysis::run;
 use memstab::report::PathReport;
-use memstab::run::run;
 use memstab::scene::{MeshSpec, Scene};
 use memstab::study::Study;
 use meshes::write::{write_mesh, Fields, Format};
@@ -149,7 +149,7 @@ fn the_group_defaults_to_c1_and_hidden_symmetry_is_a_warning() {
     // The warning reaches the run's report (path.json and the terminal).
     let warning = warning.clone();
     let mut study = study;
-    let result = memstab::run::run(&mut study, |_, _| {}).unwrap();
+    let result = memstab::analysis::run(&mut study, |_, _| {}).unwrap();
     assert!(
         result.report.warnings.contains(&warning),
         "{:?}",

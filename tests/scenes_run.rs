@@ -1,11 +1,12 @@
 //! Bundled scenes run end to end through scene → study → path: the right turning points,
 //! finite numbers everywhere, and a stop reason that says why.
 
-use memstab::run::run;
+use memstab::analysis::critical::CriticalKind;
+use memstab::analysis::run;
 use memstab::scene::Scene;
 use memstab::study::Study;
 
-fn run_scene(name: &str) -> memstab::run::RunResult {
+fn run_scene(name: &str) -> memstab::analysis::RunResult {
     let scene = Scene::load(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR")))
         .expect("bundled scene loads");
     let mut study = Study::build(scene).expect("bundled scene builds");
@@ -37,12 +38,18 @@ fn column(report: &memstab::report::PathReport, name: &str) -> usize {
 fn demo_balloon_path_finds_its_limit_points_in_the_trivial_irrep() {
     let r = run_scene("demo.toml").report;
     assert!(r.warnings.is_empty(), "{:?}", r.warnings);
-    let found: Vec<(&str, &str)> = r
+    let found: Vec<(CriticalKind, &str)> = r
         .critical
         .iter()
-        .map(|c| (c.kind.as_str(), c.irrep.as_str()))
+        .map(|c| (c.kind, c.irrep.as_str()))
         .collect();
-    assert_eq!(found, [("limit point", "Ag"), ("limit point", "Ag")]);
+    assert_eq!(
+        found,
+        [
+            (CriticalKind::LimitPoint, "Ag"),
+            (CriticalKind::LimitPoint, "Ag")
+        ]
+    );
     let p = r.parameters.iter().position(|n| n == "p").unwrap();
     for (c, t) in r.critical.iter().zip(&r.turning_points) {
         let (pc, pt) = (c.parameters[p], t.parameters[p]);
@@ -57,8 +64,12 @@ fn demo_balloon_path_finds_its_limit_points_in_the_trivial_irrep() {
 fn demo_balloon_passes_the_pressure_maximum_and_minimum() {
     let r = run_scene("demo.toml").report;
     assert_eq!(r.group, "Ih");
-    assert!(r.stop.contains("stretch"), "{}", r.stop);
-    let kinds: Vec<&str> = r.turning_points.iter().map(|t| t.kind.as_str()).collect();
+    assert!(r.stop.to_string().contains("stretch"), "{}", r.stop);
+    let kinds: Vec<String> = r
+        .turning_points
+        .iter()
+        .map(|t| t.kind.to_string())
+        .collect();
     assert_eq!(kinds, ["maximum", "minimum"]);
     let s = column(&r, "stretch");
     let max = &r.turning_points[0];

@@ -4,8 +4,10 @@
 //! representatives: the balloon under pressure control through its pressure maximum, and
 //! under control of the amount of gas (a rank-one stiffness and a global volume).
 
-use memstab::adapted::{SparseBasis, SymmetricProblem};
-use memstab::continuation::{follow, PathOptions};
+use crate::common::follow;
+use memstab::adapted::SparseBasis;
+use memstab::analysis::continuation::PathOptions;
+use memstab::analysis::SymmetricProblem;
 use memstab::effects::gas::{GasAmount, GasPressure};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
@@ -38,7 +40,6 @@ fn path(
         &DVector::from_element(1, start),
         &opts,
         |_| false,
-        |_| {},
     )
     .unwrap();
     path.points

@@ -2,8 +2,10 @@
 //! first instability as a limit point in the trivial irrep, and the constrained index
 //! against a dense computation on the full matrix.
 
-use memstab::adapted::{AdaptedBasis, SparseBasis, SymmetricProblem};
-use memstab::continuation::{follow, PathOptions};
+use crate::common::follow;
+use memstab::adapted::{AdaptedBasis, SparseBasis};
+use memstab::analysis::continuation::PathOptions;
+use memstab::analysis::SymmetricProblem;
 use memstab::effects::gas::{GasAmount, GasPressure};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
@@ -91,7 +93,6 @@ fn states(sym: &SymmetricMesh, model: &FeModel, to_stretch: f64) -> Vec<(Vec<f64
         &DVector::from_element(1, 0.0),
         &opts,
         |p| stretch(&p.q) > to_stretch,
-        |_| {},
     )
     .unwrap();
     path.points

@@ -26,9 +26,6 @@
 //! orbits and carry no unknowns.
 
 mod orbit;
-mod problem;
-
-pub use problem::{PhaseTimes, SymmetricProblem, SPARSE_TANGENT_FROM};
 
 use crate::linalg::SymmetricPattern;
 use crate::model::{Evaluation, Layout};

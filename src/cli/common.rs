@@ -49,7 +49,7 @@ pub(super) fn check_real_irreps(study: &Study, what: &str) -> Result<(), CliErro
 /// there, so the constraints border the tangent as on `run`'s first point. Returns the
 /// displacement over the unknowns and the Newton iterations; the error is one line.
 pub(super) fn solve_start(study: &mut Study, params: &[f64]) -> Result<(Vec<f64>, usize), String> {
-    memstab::run::solve_start(study, params)
+    memstab::analysis::equilibrium::solve_start(study, params)
         .map(|(u, _, iterations)| (u, iterations))
         .map_err(|e| one_line(&e.to_string()))
 }

@@ -24,7 +24,7 @@
 //!
 //! # Matching
 //!
-//! Every variant is run as `memstab run` runs it ([`memstab::run::run`]), in parallel. For the
+//! Every variant is run as `memstab run` runs it ([`memstab::analysis::run`]), in parallel. For the
 //! disc and the truncated sphere each critical mode is labelled by its wave number m about z
 //! (the m = 0…24 whose cos mθ / sin mθ carries most of the mode's cylindrical components).
 //! Critical points of one mesh with the same m ≥ 1 and values within 10 % are grouped into a
@@ -48,9 +48,9 @@ use super::common::{build_study, check_real_irreps, load_scene, one_line, sci, s
 use super::CliError;
 use clap::Args;
 use memstab::adapted::AdaptedBasis;
-use memstab::critical::CriticalPoint;
+use memstab::analysis::critical::CriticalPoint;
+use memstab::analysis::run as run_study;
 use memstab::model::Model;
-use memstab::run::run as run_study;
 use memstab::scene::{Analysis, MeshSpec, Scene};
 use memstab::stability::Stability;
 use memstab::study::Study;
@@ -446,9 +446,9 @@ struct Level {
     critical: Vec<Point>,
 }
 
-/// The wave number of a critical mode about z (see [`memstab::critical::wave_number`]).
+/// The wave number of a critical mode about z (see [`memstab::analysis::critical::wave_number`]).
 fn wave_number(study: &Study, mode: &[f64]) -> usize {
-    memstab::critical::wave_number(
+    memstab::analysis::critical::wave_number(
         study.model.reference(),
         study.model.layout(),
         mode,
@@ -481,7 +481,7 @@ fn execute(label: &str, mut study: Study, quiet: bool) -> Result<Level, CliError
         .iter()
         .zip(precisions)
         .map(|(cp, precision): (&CriticalPoint, Option<f64>)| Point {
-            kind: cp.kind.clone(),
+            kind: cp.kind.to_string(),
             irrep: cp.irrep.clone(),
             multiplicity: cp.multiplicity,
             value: control.map_or(f64::NAN, |c| cp.parameters[c]),
@@ -508,7 +508,7 @@ fn execute(label: &str, mut study: Study, quiet: bool) -> Result<Level, CliError
         order: report.group_order,
         unknowns: report.unknowns,
         symmetric_unknowns: report.symmetric_unknowns,
-        stop: report.stop.clone(),
+        stop: report.stop.to_string(),
         note: report.stability_note.clone(),
         warnings,
         seconds,

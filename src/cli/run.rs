@@ -15,16 +15,13 @@
 
 use super::CliError;
 use clap::Args;
-use memstab::output::{
-    default_axes, write_critical, write_csv, write_diagram_with, write_json,
-    write_spectrum_diagram, Diagram, Marker, MarkerKind, OutputError, Progress, PvdTime, Segment,
-    StateWriter, SPECTRUM_AXIS,
-};
+use memstab::analysis::events::Extremum;
+use memstab::analysis::{run as run_study, RunResult};
+use memstab::output::{file_name, write_run, Progress, Written};
+use memstab::reference::{sphere_extrema, sphere_pressure};
 use memstab::report::PathReport;
-use memstab::run::{run as run_study, RunResult};
 use memstab::scene::{Effect, MeshSpec, Scene};
 use memstab::study::{Study, StudyError};
-use meshes::write::Fields;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -83,33 +80,6 @@ struct RunJson {
     group_order: usize,
     symmetric_unknowns: usize,
     unknowns: usize,
-}
-
-/// What a finished run wrote.
-struct Written {
-    csv: PathBuf,
-    json: PathBuf,
-    critical: PathBuf,
-    svg: PathBuf,
-    /// What the SVG shows, for the summary.
-    plotted: String,
-    pvd: PathBuf,
-    states: Vec<PathBuf>,
-}
-
-impl Written {
-    /// Every file, in the order written to the summary.
-    fn files(&self) -> Vec<PathBuf> {
-        let mut files = vec![
-            self.csv.clone(),
-            self.json.clone(),
-            self.critical.clone(),
-            self.svg.clone(),
-            self.pvd.clone(),
-        ];
-        files.extend(self.states.iter().cloned());
-        files
-    }
 }
 
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
@@ -179,7 +149,8 @@ fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, W
     };
     progress.finish(format!("stopped: {}", result.report.stop));
     let mut result = result;
-    let written = write_outputs(&study, &mut result, out)?;
+    let written = write_run(&study, &mut result, out)
+        .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     Ok((study, result, written))
 }
 
@@ -206,220 +177,6 @@ fn check_out(out: &Path) -> Result<(), CliError> {
         )));
     }
     Ok(())
-}
-
-/// Writes `path.csv`, the states with `path.pvd`, `path.json` (with the saved states) and
-/// `path.svg`, in that order. An error names the file and what was already written.
-fn write_outputs(study: &Study, result: &mut RunResult, out: &Path) -> Result<Written, CliError> {
-    let mut done: Vec<PathBuf> = Vec::new();
-    let fail = |e: OutputError, done: &[PathBuf]| {
-        let already = if done.is_empty() {
-            "nothing else was written".to_string()
-        } else {
-            let names: Vec<String> = done.iter().map(|p| file_name(p)).collect::<Vec<_>>();
-            format!("already written: {}", names.join(", "))
-        };
-        CliError::Failure(format!("{}; {already}", one_line(&e.to_string())))
-    };
-    let csv = write_csv(out, &result.report).map_err(|e| fail(e, &done))?;
-    done.push(csv.clone());
-
-    // Path states go into the collection (PVD time = path step: ParaView orders datasets by
-    // time, and along a path that turns back in the control — a balloon past its pressure
-    // maximum — the control would not follow the path). Turning and critical points are
-    // written beside it under their own names; critical states carry their mode.
-    let mut writer = StateWriter::new(out, &study.mesh.mesh)
-        .map_err(|e| fail(e, &done))?
-        .with_time(PvdTime::Step);
-    let mut states: Vec<PathBuf> = Vec::new();
-    let (mut turning, mut critical) = (0usize, 0usize);
-    for s in &result.states {
-        let positions = study.model.positions(&s.u);
-        let saved = if s.label.starts_with("step ") {
-            writer.save(s.step, s.control, &positions, Fields::new())
-        } else if let Some(mode) = &s.mode {
-            critical += 1;
-            let field: Vec<[f64; 3]> = study
-                .model
-                .positions(mode)
-                .iter()
-                .zip(study.model.reference())
-                .map(|(x, x0)| (x - x0).into())
-                .collect();
-            let name = format!("critical_{critical:02}");
-            writer.save_as(
-                &name,
-                &s.label,
-                false,
-                s.step,
-                s.control,
-                &positions,
-                Fields::new().point_vector("critical_mode", field),
-            )
-        } else {
-            // A turning point ("maximum", "minimum"), or the held state of a sweep; file
-            // names without spaces.
-            let stem: String = s
-                .label
-                .chars()
-                .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-                .collect();
-            let name = if matches!(s.label.as_str(), "maximum" | "minimum") {
-                turning += 1;
-                format!("turning_{turning:02}_{stem}")
-            } else {
-                stem
-            };
-            writer.save_as(
-                &name,
-                &s.label,
-                false,
-                s.step,
-                s.control,
-                &positions,
-                Fields::new(),
-            )
-        }
-        .map_err(|e| fail(e, &done))?;
-        let path = out.join(&saved.file);
-        if !states.contains(&path) {
-            states.push(path.clone());
-            done.push(path);
-        }
-    }
-    let pvd = writer.pvd_path();
-    result.report.saved = writer.finish().map_err(|e| fail(e, &done))?;
-    done.push(pvd.clone());
-
-    let json = write_json(out, &result.report).map_err(|e| fail(e, &done))?;
-    done.push(json.clone());
-    let critical_json = write_critical(out, &result.report).map_err(|e| fail(e, &done))?;
-    done.push(critical_json.clone());
-    let report = &result.report;
-    let (svg, plotted) = if report.spectra.is_empty() {
-        let axes = axes(report);
-        let svg = write_diagram_with(out, report, &diagram(report, &axes));
-        let plotted = format!("{} against {}, turning points marked", axes.1, axes.0);
-        (svg, plotted)
-    } else {
-        let skipped: Vec<&str> = report
-            .spectra
-            .irreps
-            .iter()
-            .filter(|i| !i.eigenvalues)
-            .map(|i| i.name.as_str())
-            .collect();
-        let skipped = if skipped.is_empty() {
-            String::new()
-        } else {
-            format!(" ({} not plotted: no eigenvalues)", skipped.join(", "))
-        };
-        let plotted = format!(
-            "{SPECTRUM_AXIS} per irrep against {}{skipped}, critical points marked",
-            report.control
-        );
-        (write_spectrum_diagram(out, report), plotted)
-    };
-    let svg = svg.map_err(|e| fail(e, &done))?;
-    Ok(Written {
-        csv,
-        json,
-        critical: critical_json,
-        svg,
-        plotted,
-        pvd,
-        states,
-    })
-}
-
-/// The diagram: stable (index 0) and unstable stretches of the path drawn differently, turning
-/// points and critical points marked.
-fn diagram(report: &PathReport, axes: &(String, String)) -> Diagram {
-    let mut segments = Vec::new();
-    let mut start = 0;
-    for i in 1..=report.rows.len() {
-        let stable = |k: usize| report.rows[k].index.is_none_or(|x| x == 0);
-        if i == report.rows.len() || stable(i) != stable(start) {
-            // Segments share their end rows so that the line is continuous.
-            segments.push(Segment {
-                first: start,
-                last: i.min(report.rows.len() - 1),
-                stable: stable(start),
-            });
-            start = i;
-        }
-    }
-    // A critical point at a turning point of the control (a limit point) shares its marker.
-    let control = report.parameters.iter().position(|p| *p == report.control);
-    let same = |a: &[f64], b: &[f64]| {
-        control.is_some_and(|c| (a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1e-12))
-    };
-    let mut markers: Vec<Marker> = Vec::new();
-    for t in &report.turning_points {
-        let mut m = Marker::turning(report, t);
-        if let Some(cp) = report
-            .critical
-            .iter()
-            .find(|cp| same(&cp.parameters, &t.parameters))
-        {
-            m.label = format!("{} ({} {})", m.label, short_kind(&cp.kind), cp.irrep);
-        }
-        markers.push(m);
-    }
-    for cp in &report.critical {
-        if report
-            .turning_points
-            .iter()
-            .any(|t| same(&cp.parameters, &t.parameters))
-        {
-            continue;
-        }
-        markers.push(Marker {
-            parameters: cp.parameters.clone(),
-            measures: cp.measures.clone(),
-            label: format!("{} {}", short_kind(&cp.kind), cp.irrep),
-            kind: if cp.kind == "limit point" {
-                MarkerKind::Other
-            } else {
-                MarkerKind::Bifurcation
-            },
-        });
-    }
-    let mut d = Diagram::new(&axes.0, &axes.1).markers(markers);
-    d.turning_points = false;
-    if report.rows.iter().any(|r| r.index.is_some()) && !report.rows.is_empty() {
-        d.segments(segments)
-    } else {
-        d
-    }
-}
-
-/// `limit`, `simple`, `double`, `3-fold` …
-fn short_kind(kind: &str) -> &str {
-    kind.split_whitespace().next().unwrap_or(kind)
-}
-
-/// The diagram's axes: [`default_axes`], except that an equilibrium analysis (no control)
-/// plots its first parameter (or, with none, a second measure) instead of the empty control.
-fn axes(report: &PathReport) -> (String, String) {
-    let (x, y) = default_axes(report);
-    if !y.is_empty() {
-        return (x, y);
-    }
-    let y = report
-        .parameters
-        .first()
-        .or_else(|| report.measures.iter().find(|m| **m != x))
-        .cloned()
-        .unwrap_or_else(|| x.clone());
-    (x, y)
-}
-
-fn file_name(p: &Path) -> String {
-    p.file_name().map_or_else(
-        || p.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    )
 }
 
 /// Joins the lines of a message into one.
@@ -466,13 +223,13 @@ fn summary_json(study: &Study, report: &PathReport, out: &Path, written: &Writte
             .turning_points
             .iter()
             .map(|t| TurningJson {
-                kind: t.kind.clone(),
+                kind: t.kind.to_string(),
                 after_step: t.after_step,
                 value: c.map_or(f64::NAN, |c| t.parameters[c]),
                 stretch: s.map(|s| t.measures[s]),
             })
             .collect(),
-        stop: report.stop.clone(),
+        stop: report.stop.to_string(),
         group: report.group.clone(),
         group_order: report.group_order,
         symmetric_unknowns: study.basis.dim(),
@@ -611,39 +368,6 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     }
 }
 
-/// The closed-form Mooney–Rivlin sphere: p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²).
-fn sphere_pressure(k: f64, l: f64) -> f64 {
-    2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l)
-}
-
-/// The stretches where the closed-form pressure has a maximum or minimum for λ in (1, 20),
-/// each with `true` for a maximum.
-fn sphere_extremes(k: f64) -> Vec<(f64, bool)> {
-    // d/dλ of (λ⁻¹ − λ⁻⁷)(1 + kλ²) = −λ⁻² + 7λ⁻⁸ + k + 5kλ⁻⁶.
-    let slope = |l: f64| -l.powi(-2) + 7.0 * l.powi(-8) + k + 5.0 * k * l.powi(-6);
-    let mut found = Vec::new();
-    let n = 20_000;
-    let at = |i: usize| 1.0 + 19.0 * i as f64 / n as f64;
-    for i in 1..n {
-        let (mut a, mut b) = (at(i), at(i + 1));
-        let (fa, fb) = (slope(a), slope(b));
-        if fa == 0.0 || fa.signum() == fb.signum() {
-            continue;
-        }
-        let maximum = fa > 0.0;
-        for _ in 0..200 {
-            let m = 0.5 * (a + b);
-            if slope(m).signum() == fa.signum() {
-                a = m;
-            } else {
-                b = m;
-            }
-        }
-        found.push((0.5 * (a + b), maximum));
-    }
-    found
-}
-
 /// Compares the turning points of a balloon under pressure control with the closed form.
 fn print_closed_form(study: &Study, report: &PathReport) {
     let scene = &study.scene;
@@ -668,15 +392,15 @@ fn print_closed_form(study: &Study, report: &PathReport) {
     println!(
         "closed form for a Mooney-Rivlin sphere, k = {k}: p R/(mu H) = 2/(1+k) (1/l - 1/l^7) (1 + k l^2)"
     );
-    let extremes = sphere_extremes(k);
+    let extremes = sphere_extrema(k);
     let list: Vec<String> = extremes
         .iter()
-        .map(|(l, maximum)| {
+        .map(|e| {
             format!(
                 "{} {:.7} at l = {:.7}",
-                if *maximum { "maximum" } else { "minimum" },
-                sphere_pressure(k, *l),
-                l
+                if e.maximum { "maximum" } else { "minimum" },
+                e.pressure,
+                e.stretch
             )
         })
         .collect();
@@ -701,8 +425,8 @@ fn print_closed_form(study: &Study, report: &PathReport) {
         let exact = sphere_pressure(k, l);
         let nearest = extremes
             .iter()
-            .filter(|(_, maximum)| *maximum == (t.kind == "maximum"))
-            .map(|(le, _)| *le)
+            .filter(|e| e.maximum == (t.kind == Extremum::Maximum))
+            .map(|e| e.stretch)
             .min_by(|a, b| (a - l).abs().total_cmp(&(b - l).abs()));
         let stretch_diff = nearest.map_or_else(String::new, |le| {
             format!(

@@ -10,6 +10,7 @@
 //! [`faer::Par::Seq`]); [`set_sequential`] does the same for faer's dense routines called
 //! elsewhere (eigen solvers), which was faster than rayon on the project's 2-core machines.
 
+pub mod bordered;
 mod ldlt;
 mod sparse;
 

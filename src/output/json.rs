@@ -27,7 +27,7 @@ pub fn write_json(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputErro
 /// One critical point as written to `critical.json`.
 #[derive(serde::Serialize)]
 struct CriticalJson<'a> {
-    kind: &'a str,
+    kind: crate::analysis::critical::CriticalKind,
     irrep: &'a str,
     multiplicity: usize,
     parameters: std::collections::BTreeMap<&'a str, f64>,
@@ -50,7 +50,7 @@ pub fn write_critical(dir: &Path, report: &PathReport) -> Result<PathBuf, Output
         .critical
         .iter()
         .map(|c| CriticalJson {
-            kind: &c.kind,
+            kind: c.kind,
             irrep: &c.irrep,
             multiplicity: c.multiplicity,
             parameters: report

@@ -8,6 +8,8 @@
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
 //! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
 //!
+//! [`write_run`] writes all of them for a finished run.
+//!
 //! [`Progress`] is the terminal progress bar (silent when quiet or when stderr is not a
 //! terminal).
 //!
@@ -23,12 +25,14 @@
 mod csv;
 mod json;
 mod progress;
+mod run;
 mod states;
 mod svg;
 
 pub use csv::write_csv;
 pub use json::{write_critical, write_json};
 pub use progress::Progress;
+pub use run::{file_name, write_run, WriteRunError, Written};
 pub use states::{PvdTime, StateWriter};
 pub use svg::{
     default_axes, write_diagram, write_diagram_with, write_spectrum_diagram, Diagram, Marker,

@@ -47,7 +47,7 @@ pub struct Marker {
 impl Marker {
     /// The marker of a turning point of the control, labelled like `max p = 1.3551`.
     pub fn turning(report: &PathReport, t: &TurningRow) -> Self {
-        let kind = if t.kind == "minimum" {
+        let kind = if t.kind == crate::analysis::events::Extremum::Minimum {
             MarkerKind::Minimum
         } else {
             MarkerKind::Maximum
@@ -417,7 +417,7 @@ pub fn write_spectrum_diagram(dir: &Path, report: &PathReport) -> Result<PathBuf
         match x {
             Some(x) if x.is_finite() => marks.push(CriticalMark {
                 x,
-                label: format!("{} {}", short_kind(&cp.kind), cp.irrep),
+                label: format!("{} {}", cp.kind.short(), cp.irrep),
                 irrep: spectra.irrep(&cp.irrep),
             }),
             _ => {
@@ -760,11 +760,6 @@ fn tick(v: f64, span: f64) -> String {
     } else {
         format!("{v:.2e}")
     }
-}
-
-/// `limit`, `simple`, `double`, `symmetric`, `3-fold` … (the first word of a kind).
-fn short_kind(kind: &str) -> &str {
-    kind.split_whitespace().next().unwrap_or(kind)
 }
 
 /// A quantity of the report: a parameter or a measure, by index.

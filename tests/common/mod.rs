@@ -33,3 +33,27 @@ pub fn texts(svg: &str) -> Vec<String> {
         })
         .collect()
 }
+
+/// Follows `problem` from (q0, λ0) (solved at its control first) until `stop` holds at a
+/// point, the control leaves `opts.bounds` or `opts.max_steps` steps were taken: the
+/// library's driver ([`Continuation`]) with its turning-point detection ([`trace`]).
+#[allow(dead_code)]
+pub fn follow<P: memstab::analysis::continuation::Problem>(
+    problem: P,
+    q0: &nalgebra::DVector<f64>,
+    lambda0: &nalgebra::DVector<f64>,
+    opts: &memstab::analysis::continuation::PathOptions,
+    mut stop: impl FnMut(&memstab::analysis::continuation::PathPoint) -> bool,
+) -> Result<memstab::analysis::events::Branch, memstab::analysis::continuation::SolveError> {
+    use memstab::analysis::continuation::Continuation;
+    use memstab::analysis::events::StopReason;
+    use memstab::analysis::path::trace;
+    let mut driver = Continuation::start(problem, q0, lambda0, opts.clone())?;
+    Ok(trace(
+        &mut driver,
+        opts.max_steps,
+        |_, p| stop(p).then_some(StopReason::Condition),
+        &mut [],
+        |_, _| {},
+    ))
+}

@@ -1,6 +1,8 @@
-//! A model restricted to the fixed-point space of its group, for the path follower.
+//! A model restricted to the fixed-point space of a (sub)group, for the path follower.
 
-use super::SparseBasis;
+use crate::adapted::SparseBasis;
+use crate::analysis::continuation::{Linearization, PhaseTimes, Problem, Tangent};
+use crate::linalg::bordered::SharedFactorization;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Subset};
 use nalgebra::{DMatrix, DVector};
@@ -23,7 +25,7 @@ pub struct SymmetricProblem<'a> {
     /// From this many columns on the restricted tangent is passed on sparse.
     sparse_from: usize,
     /// The sparse LBLᵀ of the restricted tangent, its symbolic analysis done once.
-    solver: crate::continuation::SharedFactorization,
+    solver: SharedFactorization,
     /// Where the evaluations' time went (for `memstab bench`).
     pub times: PhaseTimes,
 }
@@ -31,17 +33,6 @@ pub struct SymmetricProblem<'a> {
 /// Default [`SymmetricProblem::with_sparse_tangent_from`]: below this size a dense LU of the
 /// extended system is cheaper than a sparse one (f = 32: 272 columns; f = 64: 1 056).
 pub const SPARSE_TANGENT_FROM: usize = 600;
-
-/// Time spent by a [`SymmetricProblem`]'s evaluations, by phase.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct PhaseTimes {
-    /// In `model.evaluate` (assembly).
-    pub assembly: std::time::Duration,
-    /// Restricting residual, loads, constraints and tangent to the basis (projection).
-    pub projection: std::time::Duration,
-    /// Number of evaluations.
-    pub evaluations: usize,
-}
 
 impl<'a> SymmetricProblem<'a> {
     /// Restricts `model` to `basis` with the given control parameter (if any) and
@@ -94,8 +85,7 @@ impl<'a> SymmetricProblem<'a> {
     }
 
     /// Bᵀ K B of the last evaluation, sparse for a large basis built from a group action.
-    fn restricted_tangent(&mut self) -> crate::continuation::Tangent {
-        use crate::continuation::Tangent;
+    fn restricted_tangent(&mut self) -> Tangent {
         let layout = self.model.layout();
         if self.basis.dim() >= self.sparse_from {
             if let Some((pattern, values)) = self.basis.restrict_tangent_sparse(layout, &self.eval)
@@ -147,7 +137,11 @@ impl<'a> SymmetricProblem<'a> {
     }
 }
 
-impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
+impl Problem for SymmetricProblem<'_> {
+    fn phase_times(&self) -> PhaseTimes {
+        self.times
+    }
+
     fn dim(&self) -> usize {
         self.basis.dim()
     }
@@ -160,7 +154,7 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
         &mut self,
         q: &DVector<f64>,
         lambda: &DVector<f64>,
-    ) -> Result<crate::continuation::Linearization, crate::model::ModelError> {
+    ) -> Result<Linearization, crate::model::ModelError> {
         use crate::model::{Model, Request};
         let t0 = std::time::Instant::now();
         self.basis.expand(q, &mut self.u);
@@ -193,7 +187,7 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
                 }
             }
         }
-        let lin = crate::continuation::Linearization {
+        let lin = Linearization {
             residual: self.basis.restrict_invariant(&self.eval.residual),
             tangent: self.restricted_tangent(),
             loads,
@@ -203,5 +197,15 @@ impl crate::continuation::DenseProblem for SymmetricProblem<'_> {
         };
         self.times.projection += t1.elapsed();
         Ok(lin)
+    }
+}
+
+impl crate::analysis::events::States for SymmetricProblem<'_> {
+    fn displacement(&self, q: &DVector<f64>) -> Vec<f64> {
+        SymmetricProblem::displacement(self, q)
+    }
+
+    fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
+        SymmetricProblem::parameters(self, lambda)
     }
 }

@@ -1,4 +1,4 @@
-//! Critical points (DESIGN §3, §4.4): where the negative count of an irrep's block changes
+//! Critical points (docs/theory.md §7, §8): where the negative count of an irrep's block changes
 //! between two states of a path, the crossing eigenvalue is localised by a safeguarded secant
 //! search on the path parameter until it is at round-off relative to ‖K‖, and the point is
 //! classified by its irrep:
@@ -27,11 +27,66 @@ pub struct Isotropy {
     pub elements: Vec<usize>,
 }
 
+/// What kind of critical point a singular block makes (docs/theory.md §8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CriticalKind {
+    /// The trivial block on a path: a symmetric fold of the path.
+    LimitPoint,
+    /// The trivial block on a held state (linear buckling), which cannot fold.
+    SymmetricBifurcation,
+    /// A non-trivial 1-D irrep: a simple symmetry-breaking bifurcation.
+    SimpleBifurcation,
+    /// A d-dimensional irrep (d ≥ 2): a d-fold bifurcation, the zero d-fold in K.
+    MultipleBifurcation(usize),
+}
+
+impl CriticalKind {
+    /// The kind of a singular block in an irrep of dimension `dim` (`trivial`: the first
+    /// irrep), on a held state when `held`.
+    pub fn of(trivial: bool, dim: usize, held: bool) -> Self {
+        match (trivial, dim) {
+            (true, _) if held => Self::SymmetricBifurcation,
+            (true, _) => Self::LimitPoint,
+            (false, 1) => Self::SimpleBifurcation,
+            (false, d) => Self::MultipleBifurcation(d),
+        }
+    }
+
+    /// The first word of the name: `limit`, `symmetric`, `simple`, `double`, `3-fold` …
+    pub fn short(&self) -> String {
+        match self {
+            Self::LimitPoint => "limit".into(),
+            Self::SymmetricBifurcation => "symmetric".into(),
+            Self::SimpleBifurcation => "simple".into(),
+            Self::MultipleBifurcation(2) => "double".into(),
+            Self::MultipleBifurcation(d) => format!("{d}-fold"),
+        }
+    }
+}
+
+impl std::fmt::Display for CriticalKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::LimitPoint => f.write_str("limit point"),
+            Self::SymmetricBifurcation => f.write_str("symmetric bifurcation"),
+            Self::SimpleBifurcation => f.write_str("simple bifurcation"),
+            Self::MultipleBifurcation(2) => f.write_str("double bifurcation"),
+            Self::MultipleBifurcation(d) => write!(f, "{d}-fold bifurcation"),
+        }
+    }
+}
+
+impl Serialize for CriticalKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
 /// A localised and classified critical point.
 #[derive(Debug, Clone, Serialize)]
 pub struct CriticalPoint {
     /// `limit point`, `simple bifurcation`, `double bifurcation`, `3-fold bifurcation` …
-    pub kind: String,
+    pub kind: CriticalKind,
     /// The irrep whose block became singular.
     pub irrep: String,
     /// Multiplicity of the zero eigenvalue in K (the irrep's dimension).
@@ -52,73 +107,6 @@ pub struct CriticalPoint {
     /// The state over the unknowns.
     #[serde(skip)]
     pub state: Vec<f64>,
-}
-
-/// The name of a critical point in an irrep of dimension `dim` (`trivial`: the first irrep).
-/// On a path the trivial block becomes singular at a fold of the path (a limit point); on a
-/// held state (linear buckling) the state cannot fold, and a singular trivial block is a
-/// symmetric bifurcation of the held state.
-pub fn classify(trivial: bool, dim: usize) -> String {
-    classify_on(trivial, dim, false)
-}
-
-/// As [`classify`], for a held state when `held`.
-pub fn classify_on(trivial: bool, dim: usize, held: bool) -> String {
-    match (trivial, dim) {
-        (true, _) if held => "symmetric bifurcation".into(),
-        (true, _) => "limit point".into(),
-        (false, 1) => "simple bifurcation".into(),
-        (false, 2) => "double bifurcation".into(),
-        (false, d) => format!("{d}-fold bifurcation"),
-    }
-}
-
-/// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
-/// by the Illinois variant of regula falsi. Stops when |g| ≤ `tol` or after 60 evaluations;
-/// returns the best s and g(s) found, or `None` when an evaluation fails.
-pub fn locate_sign_change(
-    mut g: impl FnMut(f64) -> Option<f64>,
-    g0: f64,
-    s1: f64,
-    g1: f64,
-    tol: f64,
-) -> Option<(f64, f64)> {
-    let (mut a, mut fa, mut b, mut fb) = (0.0, g0, s1, g1);
-    let (mut best, mut fbest) = if fa.abs() < fb.abs() {
-        (a, fa)
-    } else {
-        (b, fb)
-    };
-    let mut side = 0i8;
-    for _ in 0..60 {
-        if fbest.abs() <= tol || (b - a).abs() <= 1e-14 * s1.abs() {
-            break;
-        }
-        let s = (a * fb - b * fa) / (fb - fa);
-        let s = if s > a.min(b) && s < a.max(b) {
-            s
-        } else {
-            0.5 * (a + b)
-        };
-        let fs = g(s)?;
-        if fs.abs() < fbest.abs() {
-            (best, fbest) = (s, fs);
-        }
-        if fs.signum() == fb.signum() {
-            (b, fb) = (s, fs);
-            if side == -1 {
-                fa *= 0.5;
-            }
-            side = -1;
-        } else {
-            (a, fa) = (s, fs);
-            if side == 1 {
-                fb *= 0.5;
-            }
-            side = 1;
-        }
-    }
-    Some((best, fbest))
 }
 
 /// The elements g of the action's group with T(g) u = u (to 1e-8 relative), named.
@@ -219,20 +207,31 @@ pub fn wave_number(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
-    #[test]
-    fn regula_falsi_finds_a_root_to_round_off() {
-        let f = |s: f64| Some((s - 0.3).powi(3) + 0.5 * (s - 0.3));
-        let (s, fs) = locate_sign_change(f, f(0.0).unwrap(), 1.0, f(1.0).unwrap(), 1e-14).unwrap();
-        assert!((s - 0.3).abs() < 1e-12 && fs.abs() <= 1e-14, "{s} {fs}");
-    }
+    use super::CriticalKind;
 
     #[test]
     fn names() {
-        assert_eq!(classify(true, 1), "limit point");
-        assert_eq!(classify(false, 1), "simple bifurcation");
-        assert_eq!(classify(false, 2), "double bifurcation");
-        assert_eq!(classify(false, 5), "5-fold bifurcation");
+        assert_eq!(CriticalKind::of(true, 1, false).to_string(), "limit point");
+        assert_eq!(
+            CriticalKind::of(true, 1, true).to_string(),
+            "symmetric bifurcation"
+        );
+        assert_eq!(
+            CriticalKind::of(false, 1, false).to_string(),
+            "simple bifurcation"
+        );
+        assert_eq!(
+            CriticalKind::of(false, 2, false).to_string(),
+            "double bifurcation"
+        );
+        assert_eq!(
+            CriticalKind::of(false, 5, false).to_string(),
+            "5-fold bifurcation"
+        );
+        assert_eq!(CriticalKind::of(false, 5, false).short(), "5-fold");
+        assert_eq!(
+            serde_json::to_string(&CriticalKind::of(false, 2, false)).unwrap(),
+            "\"double bifurcation\""
+        );
     }
 }

@@ -1,0 +1,133 @@
+//! The `linear-buckling` analysis: the start state held while the control sweeps
+//! `[min, max]` in `samples` steps. At every sample the tangent at the held state is split by
+//! irrep; where a block's negative count changes between samples its eigenvalue crossing is
+//! localised in the control and classified (a singular trivial block of a held state is a
+//! symmetric bifurcation: the state cannot fold). The lowest eigenvalue of every block at
+//! every sample goes into the report's [`Spectra`] (what `path.svg` plots for this analysis).
+
+use super::events::{Crossings, Event, StopReason};
+use super::{Observer, Record};
+use crate::report::{Spectra, SpectrumIrrep, SpectrumRow, StateKind};
+use crate::stability::Spectrum;
+use crate::study::Study;
+
+/// Sweeps the control over its range at the held state `u` (solved at `params_start`).
+pub(super) fn run(
+    study: &Study,
+    record: &mut Record,
+    mut crossings: Option<Crossings<'_>>,
+    u: &[f64],
+    params_start: &[f64],
+    samples: usize,
+    observer: &mut dyn Observer,
+) -> StopReason {
+    let Some(c) = study.control else {
+        return StopReason::NoControl;
+    };
+    let spec = &study.scene.parameters[&study.parameters[c]];
+    let (lo, hi) = (spec.min.unwrap_or(0.0), spec.max.unwrap_or(1.0));
+    let at = |value: f64| {
+        let mut p = params_start.to_vec();
+        p[c] = value;
+        p
+    };
+    let mut previous: Option<(Spectrum, f64)> = None;
+    let mut sampled: Vec<(usize, f64, Option<Sample>)> = Vec::with_capacity(samples + 1);
+    for i in 0..=samples {
+        let value = lo + (hi - lo) * i as f64 / samples as f64;
+        observer.progress(i, value);
+        let params = at(value);
+        observer.state(u, &params);
+        let spectrum = crossings.as_mut().and_then(|x| x.spectrum(u, &params));
+        sampled.push((i, value, spectrum.as_ref().map(Sample::of)));
+        let index = spectrum.as_ref().map(|s| s.index);
+        record.row(study, i, value - lo, u, params, 0, index);
+        if let (Some((a, va)), Some(b), Some(x)) = (&previous, &spectrum, crossings.as_mut()) {
+            if a.negatives() != b.negatives() {
+                let va = *va;
+                for event in x.localise(a, b, i - 1, value - va, |s| Some((u.to_vec(), at(va + s))))
+                {
+                    match event {
+                        Event::Critical(cp) => record.critical(cp),
+                        Event::Warning(w) => record.warnings.push(w),
+                        Event::Turning(_) | Event::Stop(_) => {}
+                    }
+                }
+            }
+        }
+        previous = spectrum.map(|s| (s, value));
+    }
+    record.spectra = spectra_of(sampled);
+    record.state(0, StateKind::Held, u.to_vec(), &at(lo));
+    StopReason::Swept {
+        min: lo,
+        max: hi,
+        samples,
+    }
+}
+
+/// What the report keeps of one sample's spectrum: per block, its irrep, its lowest
+/// eigenvalue relative to the scale (finite, or none) and its negative count.
+struct Sample {
+    scale: f64,
+    blocks: Vec<(SpectrumIrrep, Option<f64>, usize)>,
+}
+
+impl Sample {
+    fn of(s: &Spectrum) -> Self {
+        Self {
+            scale: s.scale,
+            blocks: s
+                .blocks
+                .iter()
+                .map(|b| {
+                    let irrep = SpectrumIrrep {
+                        name: b.irrep.clone(),
+                        dim: b.dim,
+                        size: b.size,
+                        eigenvalues: !b.eigenvalues.is_empty(),
+                    };
+                    let lowest = b
+                        .eigenvalues
+                        .first()
+                        .map(|l| l / s.scale)
+                        .filter(|l| l.is_finite());
+                    (irrep, lowest, b.negative)
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The report's [`Spectra`] from the samples `(step, control, sample)` of a sweep: the irreps
+/// of the first analysed sample, a row per sample (all `None` where it was not analysed).
+fn spectra_of(sampled: Vec<(usize, f64, Option<Sample>)>) -> Spectra {
+    let Some(first) = sampled.iter().find_map(|s| s.2.as_ref()) else {
+        return Spectra::default();
+    };
+    let mut irreps: Vec<SpectrumIrrep> = first.blocks.iter().map(|b| b.0.clone()).collect();
+    let n = irreps.len();
+    let rows: Vec<SpectrumRow> = sampled
+        .into_iter()
+        .map(|(step, control, sample)| {
+            let sample = sample.filter(|s| s.blocks.len() == n && s.scale.is_finite());
+            SpectrumRow {
+                step,
+                control,
+                scale: sample.as_ref().map_or(0.0, |s| s.scale),
+                lowest: sample
+                    .as_ref()
+                    .map_or_else(|| vec![None; n], |s| s.blocks.iter().map(|b| b.1).collect()),
+                negative: sample.as_ref().map_or_else(
+                    || vec![None; n],
+                    |s| s.blocks.iter().map(|b| Some(b.2)).collect(),
+                ),
+            }
+        })
+        .collect();
+    // A block counts as having eigenvalues if any sample computed them.
+    for (mu, irrep) in irreps.iter_mut().enumerate() {
+        irrep.eigenvalues = rows.iter().any(|r| r.lowest[mu].is_some());
+    }
+    Spectra { irreps, rows }
+}

@@ -1,0 +1,699 @@
+//! Pseudo-arclength continuation in several parameters (docs/theory.md §5): a stepping
+//! driver, [`Continuation`], that starts from any converged point and tangent of any
+//! [`Problem`] — here the fixed-point space of a subgroup of the scene's group
+//! ([`crate::analysis::SymmetricProblem`]) — and advances one accepted point per
+//! [`Continuation::step`]. What happens along the way (turning points, changes of stability,
+//! stops) is the business of [`crate::analysis::events`], not of the driver.
+//!
+//! Unknowns y = (q, λ) with q ∈ ℝ^m and the free parameters λ ∈ ℝ^{c+1}; equations
+//! R(q, λ) = 0 (m) and c augmenting equations g(q, λ) = 0 (fixed fluid volume, fixed amount
+//! of gas …); λ_0 is the control parameter. From a point y_k with unit tangent t_k, the
+//! predictor is y_k + s t_k and the corrector solves, by Newton,
+//!
+//! ```text
+//!   R = 0,  g = 0,  t_kᵀ (y − y_k) − s = 0,     J = [[K, L], [G_q, G_λ], [t_kᵀ]],
+//! ```
+//!
+//! with K = ∂R/∂q, L = ∂R/∂λ, G = ∂g/∂(q, λ). The new tangent is the null vector of the
+//! first m + c rows, found from J t = [0, …, 0, 1], normalised and oriented by continuity
+//! (t·t_k > 0), so limit points and snap-backs are passed, not stopped at. q and λ_j are
+//! measured in units of `state_scale` and `parameter_scales[j]` in the arclength.
+//! A corrector that does not converge, or that ends far from its predictor, halves the step;
+//! below `min_step` the driver reports where and why it stalled.
+
+use crate::linalg::bordered::{bordered_solve, solve_dense, sparse_lu_solve, SharedFactorization};
+use crate::linalg::SymmetricPattern;
+use crate::model::ModelError;
+use nalgebra::{DMatrix, DVector};
+use std::sync::Arc;
+
+/// Largest distance, in steps, between the converged point and the predictor.
+const MAX_CORRECTOR_DISTANCE: f64 = 0.5;
+/// Smallest cosine between consecutive tangents (about 35°).
+const MIN_TANGENT_COSINE: f64 = 0.8;
+
+/// A problem R(q, λ), g(q, λ) with its derivatives, as the path follower sees it.
+pub trait Problem {
+    /// Dimension m of q.
+    fn dim(&self) -> usize;
+    /// Number of free parameters (augmenting equations + 1).
+    fn free_parameters(&self) -> usize;
+    /// R, g and their derivatives at (q, λ).
+    fn evaluate(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Linearization, ModelError>;
+    /// Where the evaluations' time went so far (zero unless the problem keeps count).
+    fn phase_times(&self) -> PhaseTimes {
+        PhaseTimes::default()
+    }
+}
+
+impl<P: Problem + ?Sized> Problem for &mut P {
+    fn dim(&self) -> usize {
+        (**self).dim()
+    }
+    fn free_parameters(&self) -> usize {
+        (**self).free_parameters()
+    }
+    fn evaluate(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Linearization, ModelError> {
+        (**self).evaluate(q, lambda)
+    }
+    fn phase_times(&self) -> PhaseTimes {
+        (**self).phase_times()
+    }
+}
+
+/// Time spent by a problem's evaluations, by phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Assembling the model (`Model::evaluate`).
+    pub assembly: std::time::Duration,
+    /// Restricting residual, loads, constraints and tangent to the problem's basis.
+    pub projection: std::time::Duration,
+    /// Number of evaluations.
+    pub evaluations: usize,
+}
+
+impl std::ops::Sub for PhaseTimes {
+    type Output = PhaseTimes;
+    fn sub(self, o: PhaseTimes) -> PhaseTimes {
+        PhaseTimes {
+            assembly: self.assembly.saturating_sub(o.assembly),
+            projection: self.projection.saturating_sub(o.projection),
+            evaluations: self.evaluations.saturating_sub(o.evaluations),
+        }
+    }
+}
+
+impl std::ops::AddAssign for PhaseTimes {
+    fn add_assign(&mut self, o: PhaseTimes) {
+        self.assembly += o.assembly;
+        self.projection += o.projection;
+        self.evaluations += o.evaluations;
+    }
+}
+
+/// R, K, L and the augmenting equations at a point.
+#[derive(Debug, Clone)]
+pub struct Linearization {
+    /// R(q, λ) (m).
+    pub residual: DVector<f64>,
+    /// ∂R/∂q (m × m, symmetric).
+    pub tangent: Tangent,
+    /// ∂R/∂λ (m × (c+1)).
+    pub loads: DMatrix<f64>,
+    /// g(q, λ) (c).
+    pub constraints: DVector<f64>,
+    /// ∂g/∂q (c × m).
+    pub constraint_q: DMatrix<f64>,
+    /// ∂g/∂λ (c × (c+1)).
+    pub constraint_lambda: DMatrix<f64>,
+}
+
+/// ∂R/∂q: dense for small problems; for large ones sparse, plus rank-one terms
+/// Σ c a aᵀ (a gas amount's stiffness) kept apart so that they do not fill the matrix.
+#[derive(Debug, Clone)]
+pub enum Tangent {
+    /// A dense symmetric matrix.
+    Dense(DMatrix<f64>),
+    /// A symmetric sparse matrix (both triangles stored) and rank-one terms (c, a).
+    Sparse {
+        /// The pattern.
+        pattern: Arc<SymmetricPattern>,
+        /// Values aligned with the pattern's row indices.
+        values: Vec<f64>,
+        /// The terms c a aᵀ.
+        rank_one: Vec<(f64, DVector<f64>)>,
+        /// A sparse LBLᵀ on `pattern`, kept by the problem from one evaluation to the next
+        /// (the symbolic analysis is done once).
+        solver: SharedFactorization,
+    },
+}
+
+impl Tangent {
+    /// max |K_ij| (of the sparse part and of each rank-one term).
+    pub fn amax(&self) -> f64 {
+        match self {
+            Tangent::Dense(k) => k.amax(),
+            Tangent::Sparse {
+                values, rank_one, ..
+            } => rank_one
+                .iter()
+                .map(|(c, a)| c.abs() * a.amax().powi(2))
+                .fold(values.iter().fold(0.0, |m, v| m.max(v.abs())), f64::max),
+        }
+    }
+}
+
+/// Why Newton at a fixed control failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// The model could not be evaluated.
+    #[error("{0}")]
+    Model(#[from] ModelError),
+    /// The extended Jacobian was singular.
+    #[error("singular tangent at λ = {control}")]
+    Singular {
+        /// The control's value.
+        control: f64,
+    },
+    /// The iterates left the finite numbers.
+    #[error("Newton diverged at λ = {control}")]
+    Diverged {
+        /// The control's value.
+        control: f64,
+    },
+    /// The iteration budget was used.
+    #[error("Newton did not converge at λ = {control} in {iterations} iterations")]
+    NotConverged {
+        /// The control's value.
+        control: f64,
+        /// The budget used.
+        iterations: usize,
+    },
+    /// No tangent could be computed at the converged point.
+    #[error("singular tangent at the start")]
+    SingularTangent,
+}
+
+/// Why one predictor–corrector step failed (the driver then cuts the step).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// The model could not be evaluated.
+    #[error("{0}")]
+    Model(#[from] ModelError),
+    /// The extended Jacobian was singular.
+    #[error("singular extended Jacobian")]
+    Singular,
+    /// The corrector left the finite numbers.
+    #[error("the corrector diverged (non-finite state)")]
+    Diverged,
+    /// No tangent at the converged point.
+    #[error("singular tangent system")]
+    SingularTangent,
+    /// The corrector converged far from its predictor or the tangent turned sharply.
+    #[error("the corrector moved {distance:.2} steps from the predictor and the tangent turned by {angle:.0}°: a possible branch jump")]
+    BranchJump {
+        /// Distance from the predictor, in steps.
+        distance: f64,
+        /// Angle between the tangents, in degrees.
+        angle: f64,
+    },
+    /// The iteration budget was used.
+    #[error("the corrector did not converge in {iterations} iterations")]
+    NotConverged {
+        /// The budget.
+        iterations: usize,
+    },
+}
+
+/// An extended Jacobian ready to solve.
+enum Extended {
+    Dense(DMatrix<f64>),
+    /// [[A, B], [C, D]] with A = K σ_q sparse symmetric (m × m) and a border of nb rows and
+    /// columns: the loads, constraint rows, the arclength row, and one unknown
+    /// y_r = c_r σ_q a_rᵀ x per rank-one term (the last `extra` of the border).
+    Sparse {
+        pattern: Arc<SymmetricPattern>,
+        values: Vec<f64>,
+        b: DMatrix<f64>,
+        c: DMatrix<f64>,
+        d: DMatrix<f64>,
+        extra: usize,
+        solver: SharedFactorization,
+    },
+}
+
+impl Extended {
+    /// Solves A x = rhs (rhs of the extended system's size); `None` if A is singular.
+    fn solve(self, rhs: &DVector<f64>) -> Option<DVector<f64>> {
+        match self {
+            Extended::Dense(a) => solve_dense(a, rhs),
+            Extended::Sparse {
+                pattern,
+                values,
+                b,
+                c,
+                d,
+                extra,
+                solver,
+            } => {
+                let m = pattern.n();
+                let nb = d.nrows();
+                let mut full = DVector::zeros(m + nb);
+                full.rows_mut(0, m + nb - extra)
+                    .copy_from(&rhs.rows(0, m + nb - extra));
+                let x = bordered_solve(&pattern, &values, &b, &c, &d, &solver, &full)
+                    .or_else(|| sparse_lu_solve(&pattern, &values, &b, &c, &d, &full))?;
+                let x = x.rows(0, m + nb - extra).into_owned();
+                x.iter().all(|v| v.is_finite()).then_some(x)
+            }
+        }
+    }
+}
+
+impl Linearization {
+    /// [[K σ_q, L diag(σ_λ)], [G_q σ_q, G_λ diag(σ_λ)], [last_rowᵀ]]: the Jacobian in the
+    /// scaled unknowns, with `last_row` (the arclength or "control fixed" equation) last.
+    fn extended(&self, opts: &PathOptions, last_row: &DVector<f64>) -> Extended {
+        let (m, c) = (self.residual.len(), self.constraints.len());
+        let n = m + c + 1;
+        let sq = opts.state_scale;
+        let sl = |j: usize| opts.parameter_scale(j);
+        match &self.tangent {
+            Tangent::Dense(k) => {
+                let mut a = DMatrix::zeros(n, n);
+                a.view_mut((0, 0), (m, m)).copy_from(&(k * sq));
+                a.view_mut((m, 0), (c, m))
+                    .copy_from(&(&self.constraint_q * sq));
+                for j in 0..=c {
+                    a.view_mut((0, m + j), (m, 1))
+                        .copy_from(&(self.loads.column(j) * sl(j)));
+                    a.view_mut((m, m + j), (c, 1))
+                        .copy_from(&(self.constraint_lambda.column(j) * sl(j)));
+                }
+                a.row_mut(n - 1).copy_from(&last_row.transpose());
+                Extended::Dense(a)
+            }
+            Tangent::Sparse {
+                pattern,
+                values,
+                rank_one,
+                solver,
+            } => {
+                let extra = rank_one.len();
+                let nb = c + 1 + extra;
+                let mut bm = DMatrix::zeros(m, nb);
+                let mut cm = DMatrix::zeros(nb, m);
+                let mut dm = DMatrix::zeros(nb, nb);
+                for j in 0..=c {
+                    bm.set_column(j, &(self.loads.column(j) * sl(j)));
+                    for i in 0..c {
+                        dm[(i, j)] = self.constraint_lambda[(i, j)] * sl(j);
+                    }
+                }
+                for i in 0..c {
+                    cm.set_row(i, &(self.constraint_q.row(i) * sq));
+                }
+                cm.row_mut(c).copy_from(&last_row.rows(0, m).transpose());
+                for j in 0..=c {
+                    dm[(c, j)] = last_row[m + j];
+                }
+                for (r, (cr, a)) in rank_one.iter().enumerate() {
+                    bm.set_column(c + 1 + r, a);
+                    cm.set_row(c + 1 + r, &(a.transpose() * (cr * sq)));
+                    dm[(c + 1 + r, c + 1 + r)] = -1.0;
+                }
+                Extended::Sparse {
+                    pattern: pattern.clone(),
+                    values: values.iter().map(|v| v * sq).collect(),
+                    b: bm,
+                    c: cm,
+                    d: dm,
+                    extra,
+                    solver: solver.clone(),
+                }
+            }
+        }
+    }
+
+    /// |R| small against the forces a unit scaled change of q or λ makes (‖K‖ σ_q and
+    /// ‖L‖ σ_λ), and |g| small against its derivatives.
+    fn converged(&self, opts: &PathOptions) -> bool {
+        let force = (self.loads.amax() * opts.parameter_scale(0))
+            .max(self.tangent.amax() * opts.state_scale)
+            .max(1e-300);
+        let gscale = self
+            .constraint_q
+            .amax()
+            .max(self.constraint_lambda.amax())
+            .max(1e-300)
+            * opts.state_scale;
+        self.residual.amax() <= opts.tolerance * force
+            && self.constraints.amax() <= opts.tolerance * gscale
+    }
+}
+
+/// Settings of the path follower.
+#[derive(Debug, Clone)]
+pub struct PathOptions {
+    /// First arclength step.
+    pub initial_step: f64,
+    /// Smallest step before giving up.
+    pub min_step: f64,
+    /// Largest step.
+    pub max_step: f64,
+    /// Budget of accepted steps.
+    pub max_steps: usize,
+    /// Newton iterations per corrector before the step is cut.
+    pub max_iterations: usize,
+    /// Relative tolerance of the corrector (on R, relative to the load scale, and on Δy).
+    pub tolerance: f64,
+    /// Range of the control parameter λ_0; the path stops on leaving it.
+    pub bounds: (f64, f64),
+    /// Unit of each free parameter λ_j in the arclength norm.
+    pub parameter_scales: Vec<f64>,
+    /// Unit of q in the arclength norm (e.g. R·√nodes, so that a step is an RMS
+    /// displacement).
+    pub state_scale: f64,
+    /// Initial direction of the control λ_0: +1 increasing, −1 decreasing.
+    pub direction: f64,
+}
+
+impl PathOptions {
+    /// The unit of free parameter j (1 where none is given).
+    pub fn parameter_scale(&self, j: usize) -> f64 {
+        self.parameter_scales.get(j).copied().unwrap_or(1.0)
+    }
+}
+
+impl Default for PathOptions {
+    fn default() -> Self {
+        Self {
+            initial_step: 0.05,
+            min_step: 1e-8,
+            max_step: 0.5,
+            max_steps: 500,
+            max_iterations: 10,
+            tolerance: 1e-10,
+            bounds: (f64::NEG_INFINITY, f64::INFINITY),
+            parameter_scales: vec![1.0],
+            state_scale: 1.0,
+            direction: 1.0,
+        }
+    }
+}
+
+/// One converged point of the path.
+#[derive(Debug, Clone)]
+pub struct PathPoint {
+    /// q.
+    pub q: DVector<f64>,
+    /// The free parameters, the control first.
+    pub lambda: DVector<f64>,
+    /// Arclength from the start (in the scaled norm).
+    pub arclength: f64,
+    /// Newton iterations the corrector took.
+    pub iterations: usize,
+    /// Unit tangent in scaled variables (q/σ_q, λ_j/σ_j).
+    pub tangent: DVector<f64>,
+}
+
+/// Newton in (q, λ_1 … λ_c) at a fixed control λ_0, from (q0, λ0); at least 20 iterations.
+/// Returns q, λ and the iterations taken.
+pub fn solve_at<P: Problem + ?Sized>(
+    problem: &mut P,
+    q0: &DVector<f64>,
+    lambda0: &DVector<f64>,
+    opts: &PathOptions,
+) -> Result<(DVector<f64>, DVector<f64>, usize), SolveError> {
+    let m = problem.dim();
+    let (mut q, mut lambda) = (q0.clone(), lambda0.clone());
+    let budget = opts.max_iterations.max(20);
+    for it in 1..=budget {
+        let lin = problem.evaluate(&q, &lambda)?;
+        let c = lin.constraints.len();
+        // The arclength row becomes "control fixed".
+        let mut last = DVector::zeros(m + c + 1);
+        last[m] = 1.0;
+        let a = lin.extended(opts, &last);
+        let mut rhs = DVector::zeros(m + c + 1);
+        rhs.rows_mut(0, m).copy_from(&(-&lin.residual));
+        rhs.rows_mut(m, c).copy_from(&(-&lin.constraints));
+        let d = a
+            .solve(&rhs)
+            .ok_or(SolveError::Singular { control: lambda[0] })?;
+        q += d.rows(0, m) * opts.state_scale;
+        for j in 1..=c {
+            lambda[j] += d[m + j] * opts.parameter_scale(j);
+        }
+        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
+            return Err(SolveError::Diverged { control: lambda[0] });
+        }
+        if lin.converged(opts) && d.amax() <= opts.tolerance {
+            return Ok((q, lambda, it));
+        }
+    }
+    Err(SolveError::NotConverged {
+        control: lambda[0],
+        iterations: budget,
+    })
+}
+
+/// The unit tangent of the path at a solution, oriented along `previous` (or so that the
+/// control moves in `opts.direction` when there is none).
+fn tangent_at(
+    lin: &Linearization,
+    opts: &PathOptions,
+    previous: Option<&DVector<f64>>,
+) -> Option<DVector<f64>> {
+    let (m, c) = (lin.residual.len(), lin.constraints.len());
+    let n = m + c + 1;
+    let mut rhs = DVector::zeros(n);
+    rhs[n - 1] = 1.0;
+    let last = match previous {
+        Some(t) => t.clone(),
+        None => {
+            let mut e = DVector::zeros(n);
+            e[m] = 1.0;
+            e
+        }
+    };
+    let mut t = lin.extended(opts, &last).solve(&rhs)?;
+    t /= t.norm();
+    let sign = match previous {
+        Some(p) => t.dot(p),
+        None => t[m] * opts.direction,
+    };
+    if sign < 0.0 {
+        t = -t;
+    }
+    Some(t)
+}
+
+/// The converged point of `problem` at (q, λ), with its tangent oriented so that the
+/// control moves in `opts.direction` (or along `previous`, when given): a start for
+/// [`Continuation::new`] from any solution.
+pub fn point_at<P: Problem + ?Sized>(
+    problem: &mut P,
+    q: DVector<f64>,
+    lambda: DVector<f64>,
+    iterations: usize,
+    opts: &PathOptions,
+    previous: Option<&DVector<f64>>,
+) -> Result<PathPoint, SolveError> {
+    let lin = problem.evaluate(&q, &lambda)?;
+    let tangent = tangent_at(&lin, opts, previous).ok_or(SolveError::SingularTangent)?;
+    Ok(PathPoint {
+        q,
+        lambda,
+        arclength: 0.0,
+        iterations,
+        tangent,
+    })
+}
+
+/// One predictor–corrector step from `from` with arclength `s` along `from.tangent`.
+pub fn step_from<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    s: f64,
+    opts: &PathOptions,
+) -> Result<PathPoint, StepError> {
+    let m = problem.dim();
+    let nl = from.lambda.len();
+    let sq = opts.state_scale;
+    let sl = |j: usize| opts.parameter_scale(j);
+    let t = &from.tangent;
+    let mut q = &from.q + t.rows(0, m) * (s * sq);
+    let mut lambda = from.lambda.clone();
+    for j in 0..nl {
+        lambda[j] += t[m + j] * s * sl(j);
+    }
+    for it in 1..=opts.max_iterations {
+        let lin = problem.evaluate(&q, &lambda)?;
+        let c = lin.constraints.len();
+        let a = lin.extended(opts, t);
+        let mut g = DVector::zeros(m + c + 1);
+        g.rows_mut(0, m).copy_from(&lin.residual);
+        g.rows_mut(m, c).copy_from(&lin.constraints);
+        let mut arc = t.rows(0, m).dot(&(&q - &from.q)) / sq - s;
+        for j in 0..nl {
+            arc += t[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
+        }
+        g[m + c] = arc;
+        let converged = lin.converged(opts);
+        let d = a.solve(&(-&g)).ok_or(StepError::Singular)?;
+        q += d.rows(0, m) * sq;
+        for j in 0..nl {
+            lambda[j] += d[m + j] * sl(j);
+        }
+        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
+            return Err(StepError::Diverged);
+        }
+        if converged && d.amax() <= opts.tolerance {
+            let lin = problem.evaluate(&q, &lambda)?;
+            let tangent = tangent_at(&lin, opts, Some(t)).ok_or(StepError::SingularTangent)?;
+            // Stay on the branch: the corrector must end near the predictor and the tangent
+            // must not turn sharply; otherwise the step is cut rather than a jump accepted.
+            let mut dist2 = (&q - &from.q - t.rows(0, m) * (s * sq)).norm_squared() / (sq * sq);
+            for j in 0..nl {
+                dist2 += ((lambda[j] - from.lambda[j] - t[m + j] * s * sl(j)) / sl(j)).powi(2);
+            }
+            if dist2.sqrt() > MAX_CORRECTOR_DISTANCE * s || tangent.dot(t) < MIN_TANGENT_COSINE {
+                return Err(StepError::BranchJump {
+                    distance: dist2.sqrt() / s,
+                    angle: tangent.dot(t).clamp(-1.0, 1.0).acos().to_degrees(),
+                });
+            }
+            return Ok(PathPoint {
+                q,
+                lambda,
+                arclength: from.arclength + s,
+                iterations: it,
+                tangent,
+            });
+        }
+    }
+    Err(StepError::NotConverged {
+        iterations: opts.max_iterations,
+    })
+}
+
+/// Why the driver could not advance: every step was cut below the minimum.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("step cut below {min_step:e} after point {after} (control = {control}): {why}")]
+pub struct Stalled {
+    /// The minimum step.
+    pub min_step: f64,
+    /// The index of the last accepted point.
+    pub after: usize,
+    /// The control's value there.
+    pub control: f64,
+    /// Why the last attempt failed.
+    pub why: StepError,
+}
+
+/// An accepted step.
+#[derive(Debug, Clone)]
+pub struct Accepted {
+    /// The point it started from.
+    pub from: PathPoint,
+    /// The arclength step it took.
+    pub step: f64,
+}
+
+/// The stepping driver: from a converged point and its tangent, one accepted point per call
+/// of [`Continuation::step`], with step control (grow after easy correctors, shrink after
+/// hard ones, halve after failures).
+pub struct Continuation<P> {
+    problem: P,
+    opts: PathOptions,
+    point: PathPoint,
+    /// Accepted points so far, the start included.
+    accepted: usize,
+    /// The next step to try.
+    next_step: f64,
+}
+
+impl<P: Problem> Continuation<P> {
+    /// A driver at `point` (converged, with its unit tangent), stepping first by
+    /// `opts.initial_step`.
+    pub fn new(problem: P, point: PathPoint, opts: PathOptions) -> Self {
+        Self {
+            problem,
+            next_step: opts.initial_step,
+            opts,
+            point,
+            accepted: 1,
+        }
+    }
+
+    /// Solves (q0, λ0) at its control value, then starts there with the tangent that moves
+    /// the control in `opts.direction`.
+    pub fn start(
+        mut problem: P,
+        q0: &DVector<f64>,
+        lambda0: &DVector<f64>,
+        opts: PathOptions,
+    ) -> Result<Self, SolveError> {
+        let (q, lambda, iterations) = solve_at(&mut problem, q0, lambda0, &opts)?;
+        let point = point_at(&mut problem, q, lambda, iterations, &opts, None)?;
+        Ok(Self::new(problem, point, opts))
+    }
+
+    /// The current (last accepted) point.
+    pub fn point(&self) -> &PathPoint {
+        &self.point
+    }
+
+    /// The options.
+    pub fn options(&self) -> &PathOptions {
+        &self.opts
+    }
+
+    /// The problem.
+    pub fn problem(&self) -> &P {
+        &self.problem
+    }
+
+    /// The problem, mutably (for evaluations between steps).
+    pub fn problem_mut(&mut self) -> &mut P {
+        &mut self.problem
+    }
+
+    /// Gives the problem back.
+    pub fn into_problem(self) -> P {
+        self.problem
+    }
+
+    /// Accepted points so far, the start included.
+    pub fn accepted(&self) -> usize {
+        self.accepted
+    }
+
+    /// Advances to the next accepted point; the step is halved after each failure, and the
+    /// driver stalls when it falls below the minimum. Returns the step taken and the point
+    /// it started from; [`Continuation::point`] is the new point.
+    pub fn step(&mut self) -> Result<Accepted, Stalled> {
+        loop {
+            let s = self.next_step;
+            match step_from(&mut self.problem, &self.point, s, &self.opts) {
+                Ok(next) => {
+                    // Step control: grow after easy steps, shrink after hard ones.
+                    if next.iterations <= 3 {
+                        self.next_step = (s * 1.5).min(self.opts.max_step);
+                    } else if next.iterations >= 6 {
+                        self.next_step = s * 0.7;
+                    }
+                    self.accepted += 1;
+                    let from = std::mem::replace(&mut self.point, next);
+                    return Ok(Accepted { from, step: s });
+                }
+                Err(why) => {
+                    self.next_step = s * 0.5;
+                    if self.next_step < self.opts.min_step {
+                        return Err(Stalled {
+                            min_step: self.opts.min_step,
+                            after: self.accepted - 1,
+                            control: self.point.lambda[0],
+                            why,
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    /// The point reached by one predictor–corrector step of arclength `s` from `from` (for
+    /// localising an event between two accepted points); the driver's state is unchanged.
+    pub fn step_from(&mut self, from: &PathPoint, s: f64) -> Result<PathPoint, StepError> {
+        step_from(&mut self.problem, from, s, &self.opts)
+    }
+}

@@ -1,0 +1,281 @@
+//! Everything that follows equilibria (docs/architecture.md): the stepping driver
+//! ([`continuation`]), the one event mechanism ([`events`]: turning points, critical points,
+//! stops), the problem in the fixed-point space of a (sub)group ([`SymmetricProblem`]),
+//! classification ([`critical`]), and the analyses a scene asks for — one file each:
+//!
+//! - [`equilibrium`]: the start state (the one start solve every command uses) or a single
+//!   equilibrium;
+//! - [`path`]: the path in the control through turning points, with the index by irrep at
+//!   every point and the critical points where it changes;
+//! - [`buckling`]: the start state held while the control sweeps its range;
+//! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
+//!   splits measured.
+//!
+//! [`run`] dispatches on the scene's analysis and collects a [`RunResult`]: the report, the
+//! states to write and where the time went.
+
+pub mod buckling;
+pub mod continuation;
+pub mod critical;
+pub mod equilibrium;
+pub mod events;
+pub mod path;
+mod problem;
+
+pub use continuation::PhaseTimes;
+pub use problem::{SymmetricProblem, SPARSE_TANGENT_FROM};
+
+use crate::adapted::AdaptedBasis;
+use crate::report::{MeshInfo, PathReport, PathRow, Spectra, State, TurningRow};
+use crate::scene::Analysis;
+use crate::stability::Stability;
+use crate::study::Study;
+use continuation::SolveError;
+use critical::CriticalPoint;
+use events::{BranchTimes, Crossings, StopReason};
+use std::time::{Duration, Instant};
+
+/// A finished run.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// What was found.
+    pub report: PathReport,
+    /// States to write (every `save-every` steps, the last one, turning and critical points).
+    pub states: Vec<State>,
+    /// Where the time went.
+    pub times: RunTimes,
+}
+
+/// Why a run failed before it produced a path.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunError {
+    /// Newton did not converge at the start.
+    #[error("the start state did not converge: {0}")]
+    Start(#[from] SolveError),
+    /// Newton converged to a membrane turned inside out.
+    #[error("the start state did not converge: Newton converged to an inside-out membrane (enclosed volume {volume:e}); start closer to the intended state (start.stretch, the start values)")]
+    InsideOut {
+        /// The enclosed volume found.
+        volume: f64,
+    },
+}
+
+/// Where a run's time went, by phase (what `memstab bench` reports).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RunTimes {
+    /// The start solve (wall time).
+    pub start: Duration,
+    /// Of `start`: the evaluations of the fixed-point problem.
+    pub start_problem: PhaseTimes,
+    /// Building the symmetry-adapted basis of every irrep (once).
+    pub adapted_basis: Duration,
+    /// The path (wall time of its correction at fixed control, the steps and the events).
+    pub path: Duration,
+    /// Of `path`: the steps of the driver (wall time), and of those the evaluations.
+    pub steps: BranchTimes,
+    /// Of `path`'s events: the index by irrep blocks at every point.
+    pub index: Duration,
+}
+
+/// What a caller sees of a run while it goes: the progress, and every accepted state.
+pub trait Observer {
+    /// A point converged: its index along the path and the control's value.
+    fn progress(&mut self, _point: usize, _control: f64) {}
+    /// The state (u over the model's unknowns, every parameter) of every accepted point.
+    fn state(&mut self, _u: &[f64], _params: &[f64]) {}
+}
+
+/// An [`Observer`] that only reports progress.
+pub struct Progress<F>(pub F);
+
+impl<F: FnMut(usize, f64)> Observer for Progress<F> {
+    fn progress(&mut self, point: usize, control: f64) {
+        (self.0)(point, control)
+    }
+}
+
+/// Runs the scene's analysis; `progress(step, control)` is called at every converged point.
+pub fn run(study: &mut Study, progress: impl FnMut(usize, f64)) -> Result<RunResult, RunError> {
+    run_with(study, &mut Progress(progress))
+}
+
+/// As [`run`], with an [`Observer`] that also sees every accepted state.
+pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunResult, RunError> {
+    let mut times = RunTimes::default();
+    let t = Instant::now();
+    let start = study.start.clone();
+    let (u_start, params_start, start_problem) = equilibrium::solve_start_timed(study, &start)?;
+    times.start = t.elapsed();
+    times.start_problem = start_problem;
+    let study: &Study = study;
+    let t = Instant::now();
+    let (adapted, stability_note) = match AdaptedBasis::new(&study.action, study.model.layout()) {
+        Ok(b) => (Some(b), None),
+        Err(e) => (None, Some(format!("stability not analysed: {e}"))),
+    };
+    times.adapted_basis = t.elapsed();
+    let measure = |u: &[f64], p: &[f64]| study.measure(u, p);
+    let held = matches!(study.scene.analysis, Analysis::LinearBuckling(_));
+    let crossings = adapted.as_ref().map(|b| {
+        Crossings::new(
+            Stability::new(&study.model, b),
+            &study.model,
+            &study.constraints,
+            &study.action,
+            &measure,
+            study.control,
+            held,
+        )
+    });
+    let mut record = Record::new(study);
+    let stop = match &study.scene.analysis {
+        Analysis::Path(_) => path::run(
+            study,
+            &mut record,
+            crossings,
+            &u_start,
+            &params_start,
+            observer,
+            &mut times,
+        )?,
+        Analysis::Equilibrium(_) => equilibrium::run(
+            study,
+            &mut record,
+            crossings,
+            &u_start,
+            &params_start,
+            observer,
+        )?,
+        Analysis::LinearBuckling(a) => buckling::run(
+            study,
+            &mut record,
+            crossings,
+            &u_start,
+            &params_start,
+            a.samples,
+            observer,
+        ),
+    };
+    Ok(record.finish(study, stop, stability_note, times))
+}
+
+/// What an analysis collects for the report, in the order it finds it.
+pub(crate) struct Record {
+    rows: Vec<PathRow>,
+    states: Vec<State>,
+    turning: Vec<TurningRow>,
+    critical: Vec<CriticalPoint>,
+    warnings: Vec<String>,
+    spectra: Spectra,
+    control: Option<usize>,
+}
+
+impl Record {
+    fn new(study: &Study) -> Self {
+        Self {
+            rows: Vec::new(),
+            states: Vec::new(),
+            turning: Vec::new(),
+            critical: Vec::new(),
+            warnings: study.warnings.clone(),
+            spectra: Spectra::default(),
+            control: study.control,
+        }
+    }
+
+    fn control_of(&self, params: &[f64]) -> f64 {
+        self.control.map_or(0.0, |c| params[c])
+    }
+
+    /// A row of the path table.
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        &mut self,
+        study: &Study,
+        step: usize,
+        arclength: f64,
+        u: &[f64],
+        params: Vec<f64>,
+        iterations: usize,
+        index: Option<usize>,
+    ) {
+        self.rows.push(PathRow {
+            step,
+            arclength,
+            measures: study.measure(u, &params),
+            parameters: params,
+            iterations,
+            index,
+        });
+    }
+
+    /// A state to write.
+    fn state(&mut self, step: usize, kind: crate::report::StateKind, u: Vec<f64>, params: &[f64]) {
+        self.states.push(State {
+            step,
+            kind,
+            control: self.control_of(params),
+            u,
+            mode: None,
+        });
+    }
+
+    /// A critical point, with its state and mode to write.
+    fn critical(&mut self, cp: CriticalPoint) {
+        self.states.push(State {
+            step: cp.after_step,
+            kind: crate::report::StateKind::Critical {
+                kind: cp.kind,
+                irrep: cp.irrep.clone(),
+            },
+            control: self.control_of(&cp.parameters),
+            u: cp.state.clone(),
+            mode: Some(cp.mode.clone()),
+        });
+        self.critical.push(cp);
+    }
+
+    fn finish(
+        self,
+        study: &Study,
+        stop: StopReason,
+        stability_note: Option<String>,
+        times: RunTimes,
+    ) -> RunResult {
+        let m = &study.mesh;
+        let report = PathReport {
+            scene: study.scene.info.name.clone(),
+            origin: study.scene.origin.clone(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            mesh: MeshInfo {
+                generator: study.scene.mesh.generator().to_string(),
+                nodes: m.mesh.nodes.len(),
+                elements: m.mesh.triangles.len(),
+                group: m.group().name().to_string(),
+                order: m.group().order(),
+            },
+            group: study.action.group().name().to_string(),
+            group_order: study.action.group().order(),
+            unknowns: study.basis.unknowns(),
+            symmetric_unknowns: study.basis.dim(),
+            control: study
+                .control
+                .map_or_else(String::new, |c| study.parameters[c].clone()),
+            parameters: study.parameters.clone(),
+            measures: study.measures.iter().map(|(n, _)| n.clone()).collect(),
+            rows: self.rows,
+            turning_points: self.turning,
+            stop,
+            critical: self.critical,
+            warnings: self.warnings,
+            stability_note,
+            saved: Vec::new(),
+            spectra: self.spectra,
+        };
+        RunResult {
+            report,
+            states: self.states,
+            times,
+        }
+    }
+}

@@ -1,0 +1,136 @@
+//! The `path` analysis: the equilibrium path in the control from the start state, in the
+//! fixed-point space of the scene's group, through turning points, with the index by irrep
+//! at every point and every critical point where it changes localised and classified
+//! (docs/theory.md §5–§8).
+
+use super::continuation::{Continuation, PathPoint, Problem};
+use super::events::{
+    follow, Branch, Crossings, Detector, Event, IndexChanges, StopReason, StopWhen, TurningPoints,
+};
+use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
+use crate::report::{StateKind, TurningRow};
+use crate::scene::Analysis;
+use crate::study::{Measure, Study};
+use std::time::Instant;
+
+/// The path of any problem in its control from the driver's point: turning points of the
+/// control, the `extra` detectors, and the stops — the control leaving the driver's bounds
+/// (the last point is the first beyond them), `stop`, or `max_steps` accepted steps.
+pub fn trace<P: Problem>(
+    driver: &mut Continuation<P>,
+    max_steps: usize,
+    mut stop: impl FnMut(&P, &PathPoint) -> Option<StopReason>,
+    extra: &mut [&mut (dyn Detector<P> + '_)],
+    progress: impl FnMut(&P, &PathPoint),
+) -> Branch {
+    let bounds = driver.options().bounds;
+    let mut stops = StopWhen(move |problem: &P, p: &PathPoint| {
+        if p.lambda[0] < bounds.0 || p.lambda[0] > bounds.1 {
+            return Some(StopReason::Bounds);
+        }
+        stop(problem, p)
+    });
+    let mut turning = TurningPoints::of_control();
+    let mut detectors: Vec<&mut dyn Detector<P>> = vec![&mut turning];
+    detectors.extend(extra.iter_mut().map(|d| &mut **d as &mut dyn Detector<P>));
+    detectors.push(&mut stops);
+    follow(driver, &mut detectors, max_steps, progress)
+}
+
+/// Follows the path from the start state (u_start, params_start); returns why it stopped.
+pub(super) fn run(
+    study: &Study,
+    record: &mut Record,
+    crossings: Option<Crossings<'_>>,
+    u_start: &[f64],
+    params_start: &[f64],
+    observer: &mut dyn Observer,
+    times: &mut RunTimes,
+) -> Result<StopReason, RunError> {
+    let Analysis::Path(analysis) = &study.scene.analysis else {
+        unreachable!("path::run runs path analyses")
+    };
+    let t0 = Instant::now();
+    let opts = super::equilibrium::path_options(study);
+    let problem = SymmetricProblem::new(
+        &study.model,
+        &study.basis,
+        &study.constraints,
+        params_start.to_vec(),
+        study.control,
+    );
+    let lambda0 = problem.free_values(params_start);
+    let q_start = study.basis.restrict(u_start);
+    let max_steps = opts.max_steps;
+    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)?;
+    let stretch = study
+        .measures
+        .iter()
+        .position(|(_, m)| *m == Measure::Stretch);
+    let stop_stretch = analysis.stop_stretch;
+    let stops = |problem: &SymmetricProblem, p: &PathPoint| {
+        let (target, k) = (stop_stretch?, stretch?);
+        let u = problem.displacement(&p.q);
+        (study.measure(&u, &problem.parameters(&p.lambda))[k] >= target)
+            .then_some(StopReason::Stretch { target })
+    };
+    let mut index = crossings.map(IndexChanges::new);
+    let mut count = 0usize;
+    let branch = {
+        let mut extra: Vec<&mut dyn Detector<SymmetricProblem>> = Vec::new();
+        if let Some(index) = index.as_mut() {
+            extra.push(index);
+        }
+        trace(&mut driver, max_steps, stops, &mut extra, |problem, p| {
+            observer.progress(count, p.lambda[0]);
+            observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
+            count += 1;
+        })
+    };
+    let problem = driver.into_problem();
+    times.steps = branch.times;
+    let indices = match &index {
+        Some(ix) => {
+            times.index = ix.index_time;
+            ix.indices.clone()
+        }
+        None => vec![None; branch.points.len()],
+    };
+    let save_every = analysis.save_every.max(1);
+    let last = branch.points.len() - 1;
+    let mut critical = branch
+        .critical_points()
+        .cloned()
+        .collect::<Vec<_>>()
+        .into_iter()
+        .peekable();
+    for (i, p) in branch.points.iter().enumerate() {
+        let u = problem.displacement(&p.q);
+        let params = problem.parameters(&p.lambda);
+        if i % save_every == 0 || i == last {
+            record.state(i, StateKind::Step, u.clone(), &params);
+        }
+        record.row(study, i, p.arclength, &u, params, p.iterations, indices[i]);
+        while let Some(cp) = critical.next_if(|cp| cp.after_step + 1 == i) {
+            record.critical(cp);
+        }
+    }
+    for event in &branch.events {
+        if let Event::Warning(w) = event {
+            record.warnings.push(w.clone());
+        }
+    }
+    for t in branch.turning_points() {
+        let u = problem.displacement(&t.point.q);
+        let params = problem.parameters(&t.point.lambda);
+        record.state(t.after_step, StateKind::Turning(t.kind), u.clone(), &params);
+        record.turning.push(TurningRow {
+            kind: t.kind,
+            after_step: t.after_step,
+            measures: study.measure(&u, &params),
+            parameters: params,
+        });
+    }
+    times.path = t0.elapsed();
+    Ok(branch.stop)
+}

@@ -1,0 +1,278 @@
+//! Every output of a run, written into its directory in one call: [`write_run`].
+
+use super::{
+    default_axes, write_critical, write_csv, write_diagram_with, write_json,
+    write_spectrum_diagram, Diagram, Marker, MarkerKind, OutputError, PvdTime, Segment,
+    StateWriter, SPECTRUM_AXIS,
+};
+use crate::analysis::critical::CriticalKind;
+use crate::analysis::RunResult;
+use crate::report::{PathReport, StateKind};
+use crate::study::Study;
+use meshes::write::Fields;
+use std::path::{Path, PathBuf};
+
+/// What [`write_run`] wrote.
+#[derive(Debug, Clone)]
+pub struct Written {
+    /// `path.csv`.
+    pub csv: PathBuf,
+    /// `path.json`.
+    pub json: PathBuf,
+    /// `critical.json`.
+    pub critical: PathBuf,
+    /// `path.svg`.
+    pub svg: PathBuf,
+    /// What the SVG shows, in words.
+    pub plotted: String,
+    /// `path.pvd`.
+    pub pvd: PathBuf,
+    /// The state files, in the order written.
+    pub states: Vec<PathBuf>,
+}
+
+impl Written {
+    /// Every file, in the order of the run's summary.
+    pub fn files(&self) -> Vec<PathBuf> {
+        let mut files = vec![
+            self.csv.clone(),
+            self.json.clone(),
+            self.critical.clone(),
+            self.svg.clone(),
+            self.pvd.clone(),
+        ];
+        files.extend(self.states.iter().cloned());
+        files
+    }
+}
+
+/// Why writing a run's outputs stopped: the error, and the files already written.
+#[derive(Debug, thiserror::Error)]
+#[error("{error}; {}", already(.done))]
+pub struct WriteRunError {
+    /// What failed (it names the file).
+    pub error: OutputError,
+    /// The files written before it.
+    pub done: Vec<PathBuf>,
+}
+
+fn already(done: &[PathBuf]) -> String {
+    if done.is_empty() {
+        "nothing else was written".to_string()
+    } else {
+        let names: Vec<String> = done.iter().map(|p| file_name(p)).collect();
+        format!("already written: {}", names.join(", "))
+    }
+}
+
+/// The file name of a path, for messages.
+pub fn file_name(p: &Path) -> String {
+    p.file_name().map_or_else(
+        || p.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// Writes `path.csv`, the states with `path.pvd`, `path.json` (with the saved states, which
+/// it records in the report), `critical.json` and `path.svg` into `out`, in that order.
+///
+/// Path states go into the collection (PVD time = path step: ParaView orders datasets by
+/// time, and along a path that turns back in the control — a balloon past its pressure
+/// maximum — the control would not follow the path). Turning and critical points are written
+/// beside it under their own names; critical states carry their mode.
+pub fn write_run(
+    study: &Study,
+    result: &mut RunResult,
+    out: &Path,
+) -> Result<Written, WriteRunError> {
+    let mut done: Vec<PathBuf> = Vec::new();
+    macro_rules! attempt {
+        ($e:expr) => {
+            match $e {
+                Ok(v) => v,
+                Err(error) => return Err(WriteRunError { error, done }),
+            }
+        };
+    }
+    let csv = attempt!(write_csv(out, &result.report));
+    done.push(csv.clone());
+    let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
+    let mut states: Vec<PathBuf> = Vec::new();
+    let (mut turning, mut critical) = (0usize, 0usize);
+    for s in &result.states {
+        let positions = study.model.positions(&s.u);
+        let label = s.label();
+        let saved = match (&s.kind, &s.mode) {
+            (StateKind::Step, _) => writer.save(s.step, s.control, &positions, Fields::new()),
+            (StateKind::Critical { .. }, Some(mode)) => {
+                critical += 1;
+                let field: Vec<[f64; 3]> = study
+                    .model
+                    .positions(mode)
+                    .iter()
+                    .zip(study.model.reference())
+                    .map(|(x, x0)| (x - x0).into())
+                    .collect();
+                writer.save_as(
+                    &format!("critical_{critical:02}"),
+                    &label,
+                    false,
+                    s.step,
+                    s.control,
+                    &positions,
+                    Fields::new().point_vector("critical_mode", field),
+                )
+            }
+            (StateKind::Turning(_) | StateKind::Held | StateKind::Critical { .. }, _) => {
+                // File names without spaces.
+                let stem: String = label
+                    .chars()
+                    .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                    .collect();
+                let name = if let StateKind::Turning(_) = s.kind {
+                    turning += 1;
+                    format!("turning_{turning:02}_{stem}")
+                } else {
+                    stem
+                };
+                writer.save_as(
+                    &name,
+                    &label,
+                    false,
+                    s.step,
+                    s.control,
+                    &positions,
+                    Fields::new(),
+                )
+            }
+        };
+        let saved = attempt!(saved);
+        let path = out.join(&saved.file);
+        if !states.contains(&path) {
+            states.push(path.clone());
+            done.push(path);
+        }
+    }
+    let pvd = writer.pvd_path();
+    result.report.saved = attempt!(writer.finish());
+    done.push(pvd.clone());
+
+    let json = attempt!(write_json(out, &result.report));
+    done.push(json.clone());
+    let critical_json = attempt!(write_critical(out, &result.report));
+    done.push(critical_json.clone());
+    let report = &result.report;
+    let (svg, plotted) = if report.spectra.is_empty() {
+        let axes = axes(report);
+        let svg = write_diagram_with(out, report, &diagram(report, &axes));
+        let plotted = format!("{} against {}, turning points marked", axes.1, axes.0);
+        (svg, plotted)
+    } else {
+        let skipped: Vec<&str> = report
+            .spectra
+            .irreps
+            .iter()
+            .filter(|i| !i.eigenvalues)
+            .map(|i| i.name.as_str())
+            .collect();
+        let skipped = if skipped.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} not plotted: no eigenvalues)", skipped.join(", "))
+        };
+        let plotted = format!(
+            "{SPECTRUM_AXIS} per irrep against {}{skipped}, critical points marked",
+            report.control
+        );
+        (write_spectrum_diagram(out, report), plotted)
+    };
+    let svg = attempt!(svg);
+    Ok(Written {
+        csv,
+        json,
+        critical: critical_json,
+        svg,
+        plotted,
+        pvd,
+        states,
+    })
+}
+
+/// The diagram: stable (index 0) and unstable stretches of the path drawn differently, turning
+/// points and critical points marked.
+fn diagram(report: &PathReport, axes: &(String, String)) -> Diagram {
+    let mut segments = Vec::new();
+    let mut start = 0;
+    for i in 1..=report.rows.len() {
+        let stable = |k: usize| report.rows[k].index.is_none_or(|x| x == 0);
+        if i == report.rows.len() || stable(i) != stable(start) {
+            // Segments share their end rows so that the line is continuous.
+            segments.push(Segment {
+                first: start,
+                last: i.min(report.rows.len() - 1),
+                stable: stable(start),
+            });
+            start = i;
+        }
+    }
+    // A critical point at a turning point of the control (a limit point) shares its marker.
+    let control = report.parameters.iter().position(|p| *p == report.control);
+    let same = |a: &[f64], b: &[f64]| {
+        control.is_some_and(|c| (a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1e-12))
+    };
+    let mut markers: Vec<Marker> = Vec::new();
+    for t in &report.turning_points {
+        let mut m = Marker::turning(report, t);
+        if let Some(cp) = report
+            .critical
+            .iter()
+            .find(|cp| same(&cp.parameters, &t.parameters))
+        {
+            m.label = format!("{} ({} {})", m.label, cp.kind.short(), cp.irrep);
+        }
+        markers.push(m);
+    }
+    for cp in &report.critical {
+        if report
+            .turning_points
+            .iter()
+            .any(|t| same(&cp.parameters, &t.parameters))
+        {
+            continue;
+        }
+        markers.push(Marker {
+            parameters: cp.parameters.clone(),
+            measures: cp.measures.clone(),
+            label: format!("{} {}", cp.kind.short(), cp.irrep),
+            kind: match cp.kind {
+                CriticalKind::LimitPoint => MarkerKind::Other,
+                CriticalKind::SymmetricBifurcation
+                | CriticalKind::SimpleBifurcation
+                | CriticalKind::MultipleBifurcation(_) => MarkerKind::Bifurcation,
+            },
+        });
+    }
+    let mut d = Diagram::new(&axes.0, &axes.1).markers(markers);
+    d.turning_points = false;
+    if report.rows.iter().any(|r| r.index.is_some()) && !report.rows.is_empty() {
+        d.segments(segments)
+    } else {
+        d
+    }
+}
+
+/// The diagram's axes: [`default_axes`], except that an equilibrium analysis (no control)
+/// plots its first parameter (or, with none, a second measure) instead of the empty control.
+fn axes(report: &PathReport) -> (String, String) {
+    let (x, y) = default_axes(report);
+    if !y.is_empty() {
+        return (x, y);
+    }
+    let y = report
+        .parameters
+        .first()
+        .or_else(|| report.measures.iter().find(|m| **m != x))
+        .cloned()
+        .unwrap_or_else(|| x.clone());
+    (x, y)
+}
