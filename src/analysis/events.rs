@@ -17,6 +17,8 @@ use serde::Serialize;
 
 /// Relative size below which a localised eigenvalue counts as zero.
 const ZERO_EIGENVALUE: f64 = 1e-10;
+/// The control's component of the unit tangent below which a turning point is localised.
+const TURNING_TOLERANCE: f64 = 1e-12;
 
 /// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
 /// by the Illinois variant of regula falsi. Stops when |g| ≤ `tol` or after 60 evaluations;
@@ -346,9 +348,9 @@ impl<P: Problem> Detector<P> for TurningPoints {
     }
 }
 
-/// Localises the turning point between `from` (tangent component `k` of one sign) and a
-/// point reached with step `s_hi` (component `t_hi` of the other) by a secant search on the
-/// step length.
+/// Localises the turning point between `from` (tangent component `k` of one sign) and the
+/// point reached with step `s_hi` (component `t_hi` of the other) where the component
+/// vanishes, by [`locate`] on the step length.
 fn localise_turning<P: Problem>(
     driver: &mut Continuation<P>,
     from: &PathPoint,
@@ -356,35 +358,14 @@ fn localise_turning<P: Problem>(
     k: usize,
     t_hi: f64,
 ) -> Option<PathPoint> {
-    let (mut s0, mut f0) = (0.0, from.tangent[k]);
-    let (mut s1, mut f1) = (s_hi, t_hi);
-    let mut best = None;
-    for _ in 0..40 {
-        let s = if (f1 - f0).abs() > 0.0 {
-            s1 - f1 * (s1 - s0) / (f1 - f0)
-        } else {
-            0.5 * (s0 + s1)
-        };
-        // Keep the secant inside the bracket; fall back to bisection.
-        let s = if s <= s0.min(s1) || s >= s0.max(s1) {
-            0.5 * (s0 + s1)
-        } else {
-            s
-        };
-        let p = driver.step_from(from, s).ok()?;
-        let f = p.tangent[k];
-        let done = f.abs() < 1e-12 || (s1 - s0).abs() < 1e-14 * s_hi;
-        best = Some(p);
-        if done {
-            break;
-        }
-        if f.signum() == f0.signum() {
-            (s0, f0) = (s, f);
-        } else {
-            (s1, f1) = (s, f);
-        }
-    }
-    best
+    let (s, _) = locate(
+        |s| driver.step_from(from, s).ok().map(|p| p.tangent[k]),
+        from.tangent[k],
+        s_hi,
+        t_hi,
+        TURNING_TOLERANCE,
+    )?;
+    driver.step_from(from, s).ok()
 }
 
 /// Stops the path where `test` says so (checked at every accepted point, not localised).
