@@ -61,7 +61,7 @@ fn read_mm(path: &Path) -> (String, Vec<String>, Vec<String>) {
 }
 
 /// The sparse symmetric part: n and the entries (i, j, v), 0-based, lower triangle.
-fn read_sparse(path: &Path) -> (usize, Vec<(usize, usize, f64)>, Vec<String>) {
+pub(crate) fn read_sparse(path: &Path) -> (usize, Vec<(usize, usize, f64)>, Vec<String>) {
     let (header, comments, data) = read_mm(path);
     assert_eq!(header, "%%MatrixMarket matrix coordinate real symmetric");
     let size: Vec<usize> = data[0]

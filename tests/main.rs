@@ -19,6 +19,7 @@ mod linear_buckling_plot;
 mod model_derivatives;
 mod near_double;
 mod newton;
+mod one_point;
 mod output;
 mod ponding;
 mod scene_mesh_file;

@@ -1,6 +1,6 @@
-//! Helpers shared by `memstab spectrum` and `memstab compare`: loading a scene and building its
-//! study with the exit codes of `memstab run`, solving the start state as `run` does, the
-//! chiral-group check, and number formatting.
+//! Helpers shared by the commands: loading a scene and building its study with the exit
+//! codes of `memstab run`, the `--at NAME=VALUE` overrides, the chiral-group check, and
+//! number formatting.
 
 use super::CliError;
 use memstab::scene::Scene;
@@ -43,15 +43,37 @@ pub(super) fn check_real_irreps(study: &Study, what: &str) -> Result<(), CliErro
     Ok(())
 }
 
-/// The start state as `memstab run` solves it: the reference scaled by `start.stretch`, every
-/// parameter at `params`, no constraint active, Newton in the fixed-point space of the scene's
-/// group (at least 50 iterations). Constraint targets declared `"initial"` are then measured
-/// there, so the constraints border the tangent as on `run`'s first point. Returns the
-/// displacement over the unknowns and the Newton iterations; the error is one line.
-pub(super) fn solve_start(study: &mut Study, params: &[f64]) -> Result<(Vec<f64>, usize), String> {
-    memstab::analysis::equilibrium::solve_start(study, params)
-        .map(|(u, _, iterations)| (u, iterations))
-        .map_err(|e| one_line(&e.to_string()))
+/// Parses the `--at` list against the parameter names: (index, value) pairs.
+pub(super) fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f64)>, CliError> {
+    let mut out = Vec::new();
+    for item in at {
+        let Some((name, value)) = item.split_once('=') else {
+            return Err(CliError::Input(format!(
+                "--at '{item}': expected NAME=VALUE, e.g. --at p=1.3"
+            )));
+        };
+        let (name, value) = (name.trim(), value.trim());
+        let Some(i) = names.iter().position(|n| n == name) else {
+            let known = if names.is_empty() {
+                "the scene has no parameters".to_string()
+            } else {
+                format!("the scene's parameters: {}", names.join(", "))
+            };
+            return Err(CliError::Input(format!(
+                "--at '{item}': unknown parameter '{name}' ({known})"
+            )));
+        };
+        let v: f64 = match value.parse::<f64>() {
+            Ok(v) if v.is_finite() => v,
+            _ => {
+                return Err(CliError::Input(format!(
+                    "--at '{item}': the value '{value}' of '{name}' is not a finite number"
+                )))
+            }
+        };
+        out.push((i, v));
+    }
+    Ok(out)
 }
 
 /// Joins the lines of a message into one.

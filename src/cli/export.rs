@@ -2,18 +2,20 @@
 //! scene's start state in Matrix Market format, so that an external solver (scipy `eigsh`,
 //! `scripts/peer_eigsh.py`) works on exactly our matrix.
 //!
-//! The state is solved as `memstab run` solves its start, with `--at` overriding start values;
-//! for a `linear-buckling` scene the start state is held and an `--at` only enters the tangent.
+//! The state is the one `memstab spectrum` analyses
+//! ([`memstab::analysis::equilibrium::state_at`]): solved as `memstab run` solves its start,
+//! with `--at` overriding start values; on a `linear-buckling` scene the start state is held
+//! and an `--at` of its control enters only the tangent.
 //! The file is `coordinate real symmetric`, the lower triangle of the pattern (explicit zeros
 //! included), 1-based, written whole (temporary file + rename). Rank-one terms of K (a
 //! `gas-amount` effect: K = S + Σ c_k a_k a_kᵀ, dense) go into a companion file next to it,
 //! `K.rank1.mtx` (see [`memstab::bench::write_matrix_market`] and the `--help` text).
 
-use super::common::{build_study, load_scene, one_line};
+use super::common::{build_study, load_scene, one_line, parse_at};
 use super::CliError;
 use clap::Args;
+use memstab::analysis::equilibrium::{state_at, StartState};
 use memstab::model::{Model, Request};
-use memstab::scene::Analysis;
 use std::path::PathBuf;
 
 /// Arguments of `memstab export-matrix`.
@@ -47,35 +49,6 @@ Files:
 K and prints JSON; it finds the rank-one file by that comment line and inverts K - sigma I by a
 sparse LU of S - sigma I and the Sherman-Morrison-Woodbury formula.";
 
-/// Parses `--at NAME=VALUE` items against the parameter names.
-fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f64)>, CliError> {
-    at.iter()
-        .map(|item| {
-            let (name, value) = item.split_once('=').ok_or_else(|| {
-                CliError::Input(format!(
-                    "--at '{item}': expected NAME=VALUE, e.g. --at p=1.3"
-                ))
-            })?;
-            let i = names.iter().position(|n| n == name.trim()).ok_or_else(|| {
-                CliError::Input(format!(
-                    "--at '{item}': no parameter '{}'; the scene's parameters: {}",
-                    name.trim(),
-                    names.join(", ")
-                ))
-            })?;
-            let v: f64 = value
-                .trim()
-                .parse()
-                .ok()
-                .filter(|v: &f64| v.is_finite())
-                .ok_or_else(|| {
-                    CliError::Input(format!("--at '{item}': '{}' is not a number", value.trim()))
-                })?;
-            Ok((i, v))
-        })
-        .collect()
-}
-
 pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
     let dir = match args.out.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -97,18 +70,8 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
     let scene = load_scene(&args.scene)?;
     let mut study = build_study(scene)?;
     let at = parse_at(&args.at, &study.parameters)?;
-    let mut params = study.start.clone();
-    for &(i, v) in &at {
-        params[i] = v;
-    }
-    let held = matches!(study.scene.analysis, Analysis::LinearBuckling(_));
-    let solve_params = if held {
-        study.start.clone()
-    } else {
-        params.clone()
-    };
-    let u = memstab::bench::solve_start(&mut study, &solve_params)
-        .map_err(|e| CliError::Failure(one_line(&e)))?;
+    let StartState { u, params, .. } =
+        state_at(&mut study, &at).map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     let mut eval = study.model.new_evaluation();
     study
         .model

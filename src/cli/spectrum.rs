@@ -13,12 +13,12 @@
 //! number, a chiral group — is one line and exit code 2; a start state that does not converge
 //! is exit code 1.
 
-use super::common::{build_study, check_real_irreps, load_scene, one_line, sci, solve_start};
+use super::common::{build_study, check_real_irreps, load_scene, one_line, parse_at, sci};
 use super::CliError;
 use clap::Args;
 use memstab::adapted::AdaptedBasis;
+use memstab::analysis::equilibrium::{held, state_at, StartState};
 use memstab::model::Model;
-use memstab::scene::Analysis;
 use memstab::stability::Stability;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -77,57 +77,18 @@ struct SpectrumJson {
     irreps: Vec<IrrepJson>,
 }
 
-/// Parses the `--at` list against the parameter names: (index, value) pairs.
-fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f64)>, CliError> {
-    let mut out = Vec::new();
-    for item in at {
-        let Some((name, value)) = item.split_once('=') else {
-            return Err(CliError::Input(format!(
-                "--at '{item}': expected NAME=VALUE, e.g. --at p=1.3"
-            )));
-        };
-        let (name, value) = (name.trim(), value.trim());
-        let Some(i) = names.iter().position(|n| n == name) else {
-            let known = if names.is_empty() {
-                "the scene has no parameters".to_string()
-            } else {
-                format!("the scene's parameters: {}", names.join(", "))
-            };
-            return Err(CliError::Input(format!(
-                "--at '{item}': unknown parameter '{name}' ({known})"
-            )));
-        };
-        let v: f64 = match value.parse::<f64>() {
-            Ok(v) if v.is_finite() => v,
-            _ => {
-                return Err(CliError::Input(format!(
-                    "--at '{item}': the value '{value}' of '{name}' is not a finite number"
-                )))
-            }
-        };
-        out.push((i, v));
-    }
-    Ok(out)
-}
-
 pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let scene = load_scene(&args.scene)?;
     let mut study = build_study(scene)?;
     let origin = study.scene.origin.clone();
     check_real_irreps(&study, &format!("scene '{origin}'"))?;
     let at = parse_at(&args.at, &study.parameters)?;
-    let held = matches!(study.scene.analysis, Analysis::LinearBuckling(_));
-    // The parameters of the state and those of the solve (a held state is solved with its
-    // control at the start value).
-    let mut params = study.start.clone();
-    for &(i, v) in &at {
-        params[i] = v;
-    }
-    let mut solve_params = params.clone();
-    if let (true, Some(c)) = (held, study.control) {
-        solve_params[c] = study.start[c];
-    }
-    let (u, iterations) = solve_start(&mut study, &solve_params).map_err(CliError::Failure)?;
+    let held = held(&study);
+    let StartState {
+        u,
+        params,
+        iterations,
+    } = state_at(&mut study, &at).map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     let adapted = AdaptedBasis::new(&study.action, study.model.layout())
         .map_err(|e| CliError::Input(format!("scene '{origin}': {e}")))?;
     let stability = Stability::new(&study.model, &adapted);
