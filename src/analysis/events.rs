@@ -389,6 +389,9 @@ pub trait States {
     fn parameters(&self, lambda: &nalgebra::DVector<f64>) -> Vec<f64>;
 }
 
+/// The measures of a state (u, every parameter), in the report's order.
+pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
+
 /// Index changes of the irrep blocks, localised and classified: the stability analysis of
 /// states of one model under one group (docs/theory.md §6–§8).
 pub struct Crossings<'a> {
@@ -396,7 +399,7 @@ pub struct Crossings<'a> {
     constraints: &'a [Box<dyn Constraint>],
     action: &'a GroupAction,
     model: &'a FeModel,
-    measure: &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync),
+    measure: MeasureFn<'a>,
     control: Option<usize>,
     held: bool,
     /// The model's evaluation buffer, reused by every spectrum (the tangent of a large mesh
@@ -416,7 +419,7 @@ impl<'a> Crossings<'a> {
         model: &'a FeModel,
         constraints: &'a [Box<dyn Constraint>],
         action: &'a GroupAction,
-        measure: &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync),
+        measure: MeasureFn<'a>,
         control: Option<usize>,
         held: bool,
     ) -> Self {
