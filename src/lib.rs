@@ -21,3 +21,4 @@ pub mod report;
 pub mod scene;
 pub mod stability;
 pub mod study;
+pub mod text;

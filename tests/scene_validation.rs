@@ -2,6 +2,7 @@
 //! line naming the key path and the value; garbage never panics.
 
 use memstab::scene::{
+    ConstraintKind,
     Analysis, Constraint, Effect, FluidSide, MeshSpec, Quantity, Scene, SceneError, Target,
 };
 use proptest::prelude::*;
@@ -378,7 +379,10 @@ fn constraints_are_checked_against_effects_and_parameters() {
     rejects(&two, &["'parameters.p'", "neither the control"]);
     let fixed = format!("{two}\n[[constraint]]\ntype = \"fixed\"\nparameter = \"p\"\n");
     let scene = Scene::from_toml_str(&fixed, "t").expect("p is held fixed");
-    assert_eq!(scene.governing("p").map(Constraint::kind), Some("fixed"));
+    assert_eq!(
+        scene.governing("p").map(Constraint::kind),
+        Some(ConstraintKind::Fixed)
+    );
     // The control cannot be governed.
     rejects(
         &format!("{fixed}\n[[constraint]]\ntype = \"fixed\"\nparameter = \"rho\"\n"),
@@ -635,6 +639,6 @@ fn the_documented_example_loads_and_builds() {
     scene.build_mesh().unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         scene.governing("h").map(Constraint::kind),
-        Some("fluid-volume")
+        Some(ConstraintKind::FluidVolume)
     );
 }

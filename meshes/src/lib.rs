@@ -28,6 +28,15 @@ pub enum MeshError {
     /// Bad input to a generator or constructor (names the bad value).
     #[error("{0}")]
     Invalid(String),
+    /// A generator option has a bad value: `option` is its name (as in the generator's
+    /// options struct), `message` the rest of the sentence, e.g. `must be >= 1, got 0`.
+    #[error("{option} {message}")]
+    Option {
+        /// The option's name.
+        option: String,
+        /// What is wrong with its value.
+        message: String,
+    },
     /// The mesh is not a connected, consistently oriented 2-manifold.
     #[error("topology: {0}")]
     Topology(String),

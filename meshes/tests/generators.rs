@@ -127,7 +127,8 @@ fn order(coarse: f64, fine: f64) -> f64 {
 fn invalid(result: Result<SymmetricMesh, MeshError>) -> String {
     match result {
         Err(MeshError::Invalid(m)) => m,
-        Err(e) => panic!("expected MeshError::Invalid, got {e}"),
+        Err(e @ MeshError::Option { .. }) => e.to_string(),
+        Err(e) => panic!("expected MeshError::Invalid or Option, got {e}"),
         Ok(_) => panic!("expected an error"),
     }
 }

@@ -15,6 +15,7 @@
 //! states to write and where the time went.
 
 pub mod buckling;
+pub mod compare;
 pub mod continuation;
 pub mod critical;
 pub mod equilibrium;
@@ -75,6 +76,27 @@ pub struct RunTimes {
     pub steps: BranchTimes,
     /// Of `path`'s events: the index by irrep blocks at every point.
     pub index: Duration,
+}
+
+/// Fails, naming `what` and the irrep, when the study's group has an irrep of complex type
+/// (a chiral group `C<n>`, n ≥ 3), whose blocks the symmetry-adapted analysis does not
+/// support yet.
+pub fn check_real_irreps(study: &Study, what: &str) -> Result<(), String> {
+    let group = study.action.group();
+    match group
+        .irreps()
+        .iter()
+        .find(|i| i.kind() != symmetry::IrrepKind::Real)
+    {
+        Some(irrep) => Err(format!(
+            "{what}: the scene's group {} is chiral: its irrep {} is of complex type, whose \
+             block the symmetry-adapted analysis does not support yet; use a group with mirrors \
+             (C<n>v)",
+            group.name(),
+            irrep.name()
+        )),
+        None => Ok(()),
+    }
 }
 
 /// What a caller sees of a run while it goes: the progress, and every accepted state.

@@ -22,25 +22,10 @@ pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
     })
 }
 
-/// Fails with bad input when the scene's group has an irrep of complex type (a chiral group
-/// `C<n>`, n ≥ 3), whose blocks the adapted basis does not support yet. `what` names the scene
-/// or mesh in the message.
+/// Fails with bad input when the scene's group has an irrep of complex type
+/// ([`memstab::analysis::check_real_irreps`]).
 pub(super) fn check_real_irreps(study: &Study, what: &str) -> Result<(), CliError> {
-    let group = study.action.group();
-    if let Some(irrep) = group
-        .irreps()
-        .iter()
-        .find(|i| i.kind() != symmetry::IrrepKind::Real)
-    {
-        return Err(CliError::Input(format!(
-            "{what}: the scene's group {} is chiral: its irrep {} is of complex type, whose \
-             block the symmetry-adapted analysis does not support yet; use a group with mirrors \
-             (C<n>v)",
-            group.name(),
-            irrep.name()
-        )));
-    }
-    Ok(())
+    memstab::analysis::check_real_irreps(study, what).map_err(CliError::Input)
 }
 
 /// Parses the `--at` list against the parameter names: (index, value) pairs.
@@ -76,34 +61,4 @@ pub(super) fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f6
     Ok(out)
 }
 
-/// Joins the lines of a message into one.
-pub(super) fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-/// `x` with `digits` significant digits, plain for moderate sizes (`1.35511`, `0.000123457`),
-/// else in exponent form (`1.23457e7`).
-pub(super) fn sig_digits(x: f64, digits: usize) -> String {
-    let a = x.abs();
-    if a == 0.0 || !a.is_finite() {
-        return format!("{x}");
-    }
-    let e = a.log10().floor() as i32;
-    let digits = digits.max(1) as i32;
-    if (-4..6).contains(&e) {
-        let decimals = (digits - 1 - e).max(0) as usize;
-        format!("{x:.decimals$}")
-    } else {
-        let decimals = (digits - 1) as usize;
-        format!("{x:.decimals$e}")
-    }
-}
-
-/// A short scientific form for eigenvalues and gaps: `1.234e-3`, `-5.000e0`, `0`.
-pub(super) fn sci(x: f64) -> String {
-    if x == 0.0 {
-        "0".to_string()
-    } else {
-        format!("{x:.3e}")
-    }
-}
+pub(super) use memstab::text::{one_line, sci, sig_digits};

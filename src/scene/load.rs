@@ -27,14 +27,6 @@ const SECTIONS: [&str; 9] = [
     "start",
 ];
 
-const GENERATORS: [&str; 4] = ["disc", "icosphere", "truncated-sphere", "file"];
-const DISC_OPTIONS: [&str; 4] = ["radius", "sectors", "divisions", "group"];
-const ICOSPHERE_OPTIONS: [&str; 3] = ["radius", "frequency", "down"];
-const TRUNCATED_OPTIONS: [&str; 4] = ["radius", "cut-height", "pattern", "divisions"];
-const FILE_OPTIONS: [&str; 2] = ["path", "group"];
-const EFFECTS: [&str; 5] = ["gas", "gas-amount", "fluid", "spin", "plane"];
-const CONSTRAINTS: [&str; 3] = ["fluid-volume", "gas-amount", "fixed"];
-const ANALYSES: [&str; 3] = ["path", "equilibrium", "linear-buckling"];
 
 pub(super) fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
     let doc: Table = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
@@ -174,13 +166,12 @@ pub(super) struct RawGasAmount {
 }
 
 fn read_mesh(v: &Value) -> Result<MeshSpec, Problem> {
-    let (generator, rest) = tagged(v, "mesh", "generator", &GENERATORS)?;
+    let (generator, rest) = tagged(v, "mesh", "generator", Generator::NAMES)?;
+    let generator = Generator::from_name(&generator).expect("a listed generator");
     let others = |own: &[&str]| -> Vec<&'static str> {
-        DISC_OPTIONS
+        Generator::ALL
             .iter()
-            .chain(&ICOSPHERE_OPTIONS)
-            .chain(&TRUNCATED_OPTIONS)
-            .chain(&FILE_OPTIONS)
+            .flat_map(|g| g.options())
             .copied()
             .filter(|o| !own.contains(o))
             .collect()
@@ -200,52 +191,48 @@ fn read_mesh(v: &Value) -> Result<MeshSpec, Problem> {
             _ => p,
         }
     };
-    match generator.as_str() {
-        "disc" => de(&rest, "mesh")
-            .map(MeshSpec::Disc)
-            .map_err(|p| explain(&DISC_OPTIONS, p)),
-        "icosphere" => de(&rest, "mesh")
-            .map(MeshSpec::Icosphere)
-            .map_err(|p| explain(&ICOSPHERE_OPTIONS, p)),
-        "truncated-sphere" => de(&rest, "mesh")
-            .map(MeshSpec::TruncatedSphere)
-            .map_err(|p| explain(&TRUNCATED_OPTIONS, p)),
-        _ => de(&rest, "mesh")
-            .map(MeshSpec::File)
-            .map_err(|p| explain(&FILE_OPTIONS, p)),
+    let own = generator.options();
+    match generator {
+        Generator::Disc => de(&rest, "mesh").map(MeshSpec::Disc),
+        Generator::Icosphere => de(&rest, "mesh").map(MeshSpec::Icosphere),
+        Generator::TruncatedSphere => de(&rest, "mesh").map(MeshSpec::TruncatedSphere),
+        Generator::File => de(&rest, "mesh").map(MeshSpec::File),
     }
+    .map_err(|p| explain(own, p))
     .map_err(with_tag("generator"))
 }
 
 fn read_effect(v: &Value, path: &str) -> Result<Effect, Problem> {
-    let (kind, rest) = tagged(v, path, "type", &EFFECTS)?;
-    match kind.as_str() {
-        "gas" => de(&rest, path).map(Effect::Gas),
-        "gas-amount" => de(&rest, path).map(Effect::GasAmount),
-        "fluid" => de(&rest, path).map(Effect::Fluid),
-        "spin" => de(&rest, path).map(Effect::Spin),
-        _ => de(&rest, path).map(Effect::Plane),
+    let (kind, rest) = tagged(v, path, "type", EffectKind::NAMES)?;
+    match EffectKind::from_name(&kind).expect("a listed effect") {
+        EffectKind::Gas => de(&rest, path).map(Effect::Gas),
+        EffectKind::GasAmount => de(&rest, path).map(Effect::GasAmount),
+        EffectKind::Fluid => de(&rest, path).map(Effect::Fluid),
+        EffectKind::Spin => de(&rest, path).map(Effect::Spin),
+        EffectKind::Plane => de(&rest, path).map(Effect::Plane),
     }
     .map_err(with_tag("type"))
 }
 
 fn read_constraint(v: &Value, path: &str) -> Result<RawConstraint, Problem> {
-    let (kind, rest) = tagged(v, path, "type", &CONSTRAINTS)?;
+    let (kind, rest) = tagged(v, path, "type", ConstraintKind::NAMES)?;
     let path = path.to_string();
-    match kind.as_str() {
-        "fluid-volume" => de(&rest, &path).map(|c| RawConstraint::FluidVolume(c, path)),
-        "gas-amount" => de(&rest, &path).map(|c| RawConstraint::GasAmount(c, path)),
-        _ => de(&rest, &path).map(RawConstraint::Fixed),
+    match ConstraintKind::from_name(&kind).expect("a listed constraint") {
+        ConstraintKind::FluidVolume => {
+            de(&rest, &path).map(|c| RawConstraint::FluidVolume(c, path))
+        }
+        ConstraintKind::GasAmount => de(&rest, &path).map(|c| RawConstraint::GasAmount(c, path)),
+        ConstraintKind::Fixed => de(&rest, &path).map(RawConstraint::Fixed),
     }
     .map_err(with_tag("type"))
 }
 
 fn read_analysis(v: &Value) -> Result<Analysis, Problem> {
-    let (kind, rest) = tagged(v, "analysis", "type", &ANALYSES)?;
-    match kind.as_str() {
-        "path" => de(&rest, "analysis").map(Analysis::Path),
-        "linear-buckling" => de(&rest, "analysis").map(Analysis::LinearBuckling),
-        _ => de(&rest, "analysis").map(Analysis::Equilibrium),
+    let (kind, rest) = tagged(v, "analysis", "type", AnalysisKind::NAMES)?;
+    match AnalysisKind::from_name(&kind).expect("a listed analysis") {
+        AnalysisKind::Path => de(&rest, "analysis").map(Analysis::Path),
+        AnalysisKind::LinearBuckling => de(&rest, "analysis").map(Analysis::LinearBuckling),
+        AnalysisKind::Equilibrium => de(&rest, "analysis").map(Analysis::Equilibrium),
     }
     .map_err(with_tag("type"))
 }

@@ -28,9 +28,11 @@
 
 mod error;
 mod load;
+mod tags;
 mod validate;
 
 pub use error::SceneError;
+pub use tags::{AnalysisKind, ConstraintKind, EffectKind, Generator};
 
 use meshes::generators::{self, DiscOptions, Down, IcosphereOptions, TruncatedSphereOptions};
 use meshes::{MeshError, SymmetricMesh};
@@ -258,14 +260,14 @@ pub enum Effect {
 }
 
 impl Effect {
-    /// The `type` string of this effect.
-    pub fn kind(&self) -> &'static str {
+    /// The `type` of this effect.
+    pub fn kind(&self) -> EffectKind {
         match self {
-            Effect::Gas(_) => "gas",
-            Effect::GasAmount(_) => "gas-amount",
-            Effect::Fluid(_) => "fluid",
-            Effect::Spin(_) => "spin",
-            Effect::Plane(_) => "plane",
+            Effect::Gas(_) => EffectKind::Gas,
+            Effect::GasAmount(_) => EffectKind::GasAmount,
+            Effect::Fluid(_) => EffectKind::Fluid,
+            Effect::Spin(_) => EffectKind::Spin,
+            Effect::Plane(_) => EffectKind::Plane,
         }
     }
 
@@ -418,12 +420,12 @@ impl Constraint {
         }
     }
 
-    /// The `type` string of this constraint.
-    pub fn kind(&self) -> &'static str {
+    /// The `type` of this constraint.
+    pub fn kind(&self) -> ConstraintKind {
         match self {
-            Constraint::FluidVolume(_) => "fluid-volume",
-            Constraint::GasAmount(_) => "gas-amount",
-            Constraint::Fixed(_) => "fixed",
+            Constraint::FluidVolume(_) => ConstraintKind::FluidVolume,
+            Constraint::GasAmount(_) => ConstraintKind::GasAmount,
+            Constraint::Fixed(_) => ConstraintKind::Fixed,
         }
     }
 }
@@ -635,14 +637,25 @@ fn default_max_iterations() -> usize {
     25
 }
 
-impl MeshSpec {
-    /// The `generator` string.
-    pub fn generator(&self) -> &'static str {
+impl Analysis {
+    /// The `type` of this analysis.
+    pub fn kind(&self) -> AnalysisKind {
         match self {
-            MeshSpec::Disc(_) => "disc",
-            MeshSpec::Icosphere(_) => "icosphere",
-            MeshSpec::TruncatedSphere(_) => "truncated-sphere",
-            MeshSpec::File(_) => "file",
+            Analysis::Path(_) => AnalysisKind::Path,
+            Analysis::Equilibrium(_) => AnalysisKind::Equilibrium,
+            Analysis::LinearBuckling(_) => AnalysisKind::LinearBuckling,
+        }
+    }
+}
+
+impl MeshSpec {
+    /// The generator.
+    pub fn generator(&self) -> Generator {
+        match self {
+            MeshSpec::Disc(_) => Generator::Disc,
+            MeshSpec::Icosphere(_) => Generator::Icosphere,
+            MeshSpec::TruncatedSphere(_) => Generator::TruncatedSphere,
+            MeshSpec::File(_) => Generator::File,
         }
     }
 
@@ -715,27 +728,25 @@ impl MeshSpec {
         built.map_err(|e| self.mesh_error(e).into())
     }
 
-    /// A generator error as a problem naming `mesh.<option>`.
+    /// A generator error as a problem naming `mesh.<option>` when the generator names one
+    /// of this generator's options.
     fn mesh_error(&self, e: MeshError) -> error::Problem {
-        let text = e.to_string();
-        let first: String = text
-            .chars()
-            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-            .collect();
-        let options: &[&str] = match self {
-            MeshSpec::Disc(_) => &["radius", "sectors", "divisions", "group"],
-            MeshSpec::Icosphere(_) => &["radius", "frequency", "down"],
-            MeshSpec::TruncatedSphere(_) => &["radius", "cut_height", "pattern", "divisions"],
-            MeshSpec::File(_) => &["path", "group"],
-        };
-        if options.contains(&first.as_str()) {
-            let key = format!("mesh.{}", first.replace('_', "-"));
-            match text.strip_prefix(&format!("{first} must")) {
-                Some(rest) => error::Problem::at(&key, format!("must{rest}")),
-                None => error::Problem::new(&key, format!("'{key}': {text}")),
+        let options = self.generator().options();
+        match e {
+            MeshError::Option { option, message }
+                if options.contains(&option.replace('_', "-").as_str()) =>
+            {
+                let key = format!("mesh.{}", option.replace('_', "-"));
+                if message.starts_with("must") {
+                    error::Problem::at(&key, message)
+                } else {
+                    error::Problem::new(&key, format!("'{key}': {option} {message}"))
+                }
             }
-        } else {
-            error::Problem::new("mesh", format!("'mesh' ({}): {text}", self.generator()))
+            other => error::Problem::new(
+                "mesh",
+                format!("'mesh' ({}): {other}", self.generator()),
+            ),
         }
     }
 }

@@ -102,7 +102,7 @@ pub(super) fn resolve_constraints(
     raw.into_iter()
         .map(|c| match c {
             RawConstraint::FluidVolume(r, path) => {
-                let effect = pick_effect(effects, &path, "fluid-volume", "fluid", r.effect)?;
+                let effect = pick_effect(effects, &path, "fluid-volume", EffectKind::Fluid, r.effect)?;
                 let Effect::Fluid(fluid) = &effects[effect] else {
                     unreachable!("pick_effect returns a fluid effect")
                 };
@@ -115,7 +115,7 @@ pub(super) fn resolve_constraints(
                 }))
             }
             RawConstraint::GasAmount(r, path) => {
-                let effect = pick_effect(effects, &path, "gas-amount", "gas", r.effect)?;
+                let effect = pick_effect(effects, &path, "gas-amount", EffectKind::Gas, r.effect)?;
                 let Effect::Gas(gas) = &effects[effect] else {
                     unreachable!("pick_effect returns a gas effect")
                 };
@@ -140,7 +140,7 @@ fn pick_effect(
     effects: &[Effect],
     path: &str,
     constraint: &str,
-    kind: &str,
+    kind: EffectKind,
     given: Option<usize>,
 ) -> Result<usize, Problem> {
     let candidates: Vec<usize> = (0..effects.len())
@@ -488,7 +488,7 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
                 .constraints
                 .iter()
                 .enumerate()
-                .find(|(_, c)| c.kind() != "fixed")
+                .find(|(_, c)| c.kind() != ConstraintKind::Fixed)
             {
                 return Err(Problem::at(
                     &format!("constraint[{i}]"),

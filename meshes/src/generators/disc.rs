@@ -92,7 +92,7 @@ impl Default for DiscOptions {
 ///
 /// # Errors
 ///
-/// [`MeshError::Invalid`], naming the option and value: radius not finite and > 0,
+/// [`MeshError::Option`], naming the option and value: radius not finite and > 0,
 /// sectors < 3, divisions = 0, a group that does not parse or is not a subgroup of `C_Nv`,
 /// divisions = 1 with a proper subgroup (no interior node can be moved to break the
 /// symmetry), or more than 5·10⁷ triangles.
@@ -125,9 +125,10 @@ pub(crate) fn check_radius(radius: f64) -> Result<(), MeshError> {
     if radius.is_finite() && radius > 0.0 {
         Ok(())
     } else {
-        Err(MeshError::Invalid(format!(
-            "radius must be finite and > 0, got {radius}"
-        )))
+        Err(MeshError::Option {
+            option: "radius".into(),
+            message: format!("must be finite and > 0, got {radius}"),
+        })
     }
 }
 
@@ -135,23 +136,30 @@ pub(crate) fn check_radius(radius: f64) -> Result<(), MeshError> {
 /// large.
 pub(crate) fn check_pattern(sectors: usize, divisions: usize) -> Result<(), MeshError> {
     if sectors < 3 {
-        return Err(MeshError::Invalid(format!(
-            "sectors must be >= 3 (a sector must be narrower than a half-plane), got {sectors}"
-        )));
+        return Err(MeshError::Option {
+            option: "sectors".into(),
+            message: format!(
+                "must be >= 3 (a sector must be narrower than a half-plane), got {sectors}"
+            ),
+        });
     }
     if divisions == 0 {
-        return Err(MeshError::Invalid(format!(
-            "divisions must be >= 1, got {divisions}"
-        )));
+        return Err(MeshError::Option {
+            option: "divisions".into(),
+            message: format!("must be >= 1, got {divisions}"),
+        });
     }
     match divisions
         .checked_mul(divisions)
         .and_then(|d2| d2.checked_mul(sectors))
     {
         Some(n) if n <= MAX_TRIANGLES => Ok(()),
-        _ => Err(MeshError::Invalid(format!(
-            "sectors = {sectors}, divisions = {divisions}: more than {MAX_TRIANGLES} triangles"
-        ))),
+        _ => Err(MeshError::Option {
+            option: "sectors".into(),
+            message: format!(
+                "= {sectors}, divisions = {divisions}: more than {MAX_TRIANGLES} triangles"
+            ),
+        }),
     }
 }
 
@@ -168,7 +176,10 @@ impl AxialSymmetry {
     /// Parses `C{M}v` or `C{M}` and checks that it is a subgroup of `C_Nv` (M divides N =
     /// `sectors`); errors name `option`.
     pub(crate) fn parse(name: &str, sectors: usize, option: &str) -> Result<Self, MeshError> {
-        let bad = |why: String| MeshError::Invalid(format!("{option} '{name}' {why}"));
+        let bad = |why: String| MeshError::Option {
+            option: option.to_string(),
+            message: format!("'{name}' {why}"),
+        };
         let rest = name
             .strip_prefix('C')
             .ok_or_else(|| bad("is not of the form C<M> or C<M>v".into()))?;
@@ -220,10 +231,13 @@ pub(crate) fn sector_domain(
 ) -> Result<SectorDomain, MeshError> {
     let (n, d) = (sectors, divisions);
     if d < 2 && (symmetry.order < n || !symmetry.mirrors) {
-        return Err(MeshError::Invalid(format!(
-            "divisions = {d} leaves no interior node to break C{n}v down to {}; use divisions >= 2",
-            symmetry.group().name()
-        )));
+        return Err(MeshError::Option {
+            option: "divisions".into(),
+            message: format!(
+                "= {d} leaves no interior node to break C{n}v down to {}; use divisions >= 2",
+                symmetry.group().name()
+            ),
+        });
     }
     // The wedge in half-sectors: π/M = N/M half-sectors, 2π/M = 2N/M.
     let half_sectors = if symmetry.mirrors {

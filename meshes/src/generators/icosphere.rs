@@ -75,23 +75,25 @@ pub enum Down {
 ///
 /// # Errors
 ///
-/// [`MeshError::Invalid`], naming the option and value: radius not finite and > 0,
+/// [`MeshError::Option`], naming the option and value: radius not finite and > 0,
 /// frequency = 0, or more than 5·10⁷ triangles.
 pub fn icosphere(opts: &IcosphereOptions) -> Result<SymmetricMesh, MeshError> {
     check_radius(opts.radius)?;
     let f = opts.frequency;
     if f == 0 {
-        return Err(MeshError::Invalid(format!(
-            "frequency must be >= 1, got {f}"
-        )));
+        return Err(MeshError::Option {
+            option: "frequency".into(),
+            message: format!("must be >= 1, got {f}"),
+        });
     }
     if f.checked_mul(f)
         .and_then(|f2| f2.checked_mul(20))
         .is_none_or(|t| t > MAX_TRIANGLES)
     {
-        return Err(MeshError::Invalid(format!(
-            "frequency = {f} gives more than {MAX_TRIANGLES} triangles"
-        )));
+        return Err(MeshError::Option {
+            option: "frequency".into(),
+            message: format!("= {f} gives more than {MAX_TRIANGLES} triangles"),
+        });
     }
     // Three mutually adjacent vertices (edge length 2), counter-clockwise seen from outside.
     let face = [

@@ -103,7 +103,7 @@ impl Default for TruncatedSphereOptions {
 ///
 /// # Errors
 ///
-/// [`MeshError::Invalid`], naming the option and value: radius not finite and > 0, cut_height
+/// [`MeshError::Option`], naming the option and value: radius not finite and > 0, cut_height
 /// not within (−R, R), an unknown pattern, divisions = 0, or divisions = 1 with a pattern
 /// other than `C8v` (no interior node to break the symmetry with).
 pub fn truncated_sphere(opts: &TruncatedSphereOptions) -> Result<SymmetricMesh, MeshError> {
@@ -111,10 +111,13 @@ pub fn truncated_sphere(opts: &TruncatedSphereOptions) -> Result<SymmetricMesh, 
     check_radius(r)?;
     let c = opts.cut_height;
     if !(c.is_finite() && c > -r && c < r) {
-        return Err(MeshError::Invalid(format!(
-            "cut_height must lie strictly between -radius and radius ({}, {r}), got {c}",
-            -r
-        )));
+        return Err(MeshError::Option {
+            option: "cut_height".into(),
+            message: format!(
+                "must lie strictly between -radius and radius ({}, {r}), got {c}",
+                -r
+            ),
+        });
     }
     let symmetry = AxialSymmetry::parse(&opts.pattern, SECTORS, "pattern")?;
     check_pattern(SECTORS, opts.divisions)?;
