@@ -277,4 +277,3 @@ fn print_table(c: &Comparison) {
         }
     }
 }
-

@@ -27,7 +27,6 @@ const SECTIONS: [&str; 9] = [
     "start",
 ];
 
-
 pub(super) fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
     let doc: Table = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
     let mut scene = read(&doc).map_err(|p| p.into_error(origin))?;

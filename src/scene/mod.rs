@@ -743,10 +743,7 @@ impl MeshSpec {
                     error::Problem::new(&key, format!("'{key}': {option} {message}"))
                 }
             }
-            other => error::Problem::new(
-                "mesh",
-                format!("'mesh' ({}): {other}", self.generator()),
-            ),
+            other => error::Problem::new("mesh", format!("'mesh' ({}): {other}", self.generator())),
         }
     }
 }

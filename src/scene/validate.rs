@@ -102,7 +102,8 @@ pub(super) fn resolve_constraints(
     raw.into_iter()
         .map(|c| match c {
             RawConstraint::FluidVolume(r, path) => {
-                let effect = pick_effect(effects, &path, "fluid-volume", EffectKind::Fluid, r.effect)?;
+                let effect =
+                    pick_effect(effects, &path, "fluid-volume", EffectKind::Fluid, r.effect)?;
                 let Effect::Fluid(fluid) = &effects[effect] else {
                     unreachable!("pick_effect returns a fluid effect")
                 };

@@ -1,0 +1,386 @@
+//! Rungs of critical points and their images on the other meshes, measured.
+
+use super::{MeshRuns, Point, Unmatched, MATCH_TOLERANCE, PAIR_TOLERANCE, ROUND_OFF};
+use crate::analysis::critical::CriticalKind;
+use crate::text::sci;
+use serde::Serialize;
+
+/// The multiplicity a rung of this point should reach: 2 for a wave number m ≥ 1 (the cos/sin
+/// pair), 1 for m = 0, the point's own without a label.
+fn expected(p: &Point) -> usize {
+    match p.m {
+        Some(0) => 1,
+        Some(_) => 2,
+        None => p.multiplicity,
+    }
+    .max(p.multiplicity)
+}
+
+/// Groups the points of one mesh that are not `taken` into rungs (indices, the first point
+/// first).
+fn rungs(points: &[Point], floor: f64, taken: &[bool]) -> Vec<Vec<usize>> {
+    let mut used = taken.to_vec();
+    let mut out = Vec::new();
+    for i in 0..points.len() {
+        if used[i] {
+            continue;
+        }
+        used[i] = true;
+        let mut group = vec![i];
+        let target = expected(&points[i]);
+        let mut have = points[i].multiplicity;
+        let v = points[i].value;
+        while have < target {
+            let next = (0..points.len())
+                .filter(|&j| !used[j] && points[j].m == points[i].m && points[i].m.is_some())
+                .filter(|&j| (points[j].value - v).abs() <= PAIR_TOLERANCE * v.abs() + floor)
+                .min_by(|&a, &b| {
+                    (points[a].value - v)
+                        .abs()
+                        .total_cmp(&(points[b].value - v).abs())
+                });
+            let Some(j) = next else { break };
+            used[j] = true;
+            have += points[j].multiplicity;
+            group.push(j);
+        }
+        out.push(group);
+    }
+    out
+}
+
+/// The images of a rung (label m, value v, multiplicity `target`) among the unused points.
+fn images(
+    points: &[Point],
+    used: &mut [bool],
+    m: Option<usize>,
+    v: f64,
+    target: usize,
+    floor: f64,
+) -> Vec<usize> {
+    let mut found = Vec::new();
+    let mut have = 0;
+    while have < target {
+        let next = (0..points.len())
+            .filter(|&j| !used[j] && points[j].m == m)
+            .filter(|&j| (points[j].value - v).abs() <= MATCH_TOLERANCE * v.abs() + floor)
+            .min_by(|&a, &b| {
+                (points[a].value - v)
+                    .abs()
+                    .total_cmp(&(points[b].value - v).abs())
+            });
+        let Some(j) = next else { break };
+        used[j] = true;
+        have += points[j].multiplicity;
+        found.push(j);
+    }
+    found.sort_by(|&a, &b| points[a].value.total_cmp(&points[b].value));
+    found
+}
+
+/// The images of one rung on one mesh at one resolution, measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct Image {
+    /// The resolution of the run.
+    pub resolution: usize,
+    /// Indices into that run's `critical`.
+    pub points: Vec<usize>,
+    /// Their irreps.
+    pub irreps: Vec<String>,
+    /// Their control values, ascending.
+    pub values: Vec<f64>,
+    /// Their multiplicities, summed.
+    pub multiplicity: usize,
+    /// Spread of the values of two or more points; 0 for one point in a d ≥ 2 irrep (double by
+    /// construction); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gap: Option<f64>,
+    /// Gap above round-off, for two or more points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub split: Option<bool>,
+    /// What the images say.
+    pub verdict: Verdict,
+}
+
+/// What a rung's images on one mesh say.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Verdict {
+    /// The measurement.
+    pub kind: VerdictKind,
+    /// Fewer images than the rung's multiplicity were found in range.
+    pub missing: Option<Missing>,
+}
+
+/// The measurement of a rung's images.
+#[derive(Debug, Clone, PartialEq)]
+pub enum VerdictKind {
+    /// No image in range.
+    NotFound,
+    /// One point of a d ≥ 2 irrep: a multiple point by construction.
+    Multiple {
+        /// Its kind.
+        kind: CriticalKind,
+        /// Its irrep.
+        irrep: String,
+    },
+    /// One simple point.
+    Single(CriticalKind),
+    /// Two or more points at exactly the same value.
+    NotSplitZero,
+    /// Two or more points whose gap is within the localisation's uncertainty.
+    NotSplitRoundOff {
+        /// The uncertainty.
+        precision: f64,
+    },
+    /// Two or more points whose gap exceeds the localisation's uncertainty.
+    Split,
+}
+
+/// Which images were not found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Missing {
+    /// The partner of a lone simple point.
+    Partner,
+    /// Some other image.
+    Image,
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.kind {
+            VerdictKind::NotFound => f.write_str("not found")?,
+            VerdictKind::Multiple { kind, irrep } => write!(f, "not split: {kind} in {irrep}")?,
+            VerdictKind::Single(kind) => write!(f, "{kind}")?,
+            VerdictKind::NotSplitZero => f.write_str("not split (gap 0)")?,
+            VerdictKind::NotSplitRoundOff { precision } => {
+                write!(f, "not split (gap at round-off, +-{})", sci(*precision))?
+            }
+            VerdictKind::Split => f.write_str("split")?,
+        }
+        match self.missing {
+            Some(Missing::Partner) => f.write_str("; partner not found in range"),
+            Some(Missing::Image) => f.write_str("; an image not found in range"),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Serialize for Verdict {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+fn measure(points: &[Point], found: Vec<usize>, target: usize, resolution: usize) -> Image {
+    let values: Vec<f64> = found.iter().map(|&j| points[j].value).collect();
+    let irreps: Vec<String> = found.iter().map(|&j| points[j].irrep.clone()).collect();
+    let multiplicity: usize = found.iter().map(|&j| points[j].multiplicity).sum();
+    let (gap, split, kind) = match found.as_slice() {
+        [] => (None, None, VerdictKind::NotFound),
+        [j] if points[*j].multiplicity >= 2 => (
+            Some(0.0),
+            None,
+            VerdictKind::Multiple {
+                kind: points[*j].kind,
+                irrep: points[*j].irrep.clone(),
+            },
+        ),
+        [j] => (None, None, VerdictKind::Single(points[*j].kind)),
+        _ => {
+            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let gap = hi - lo;
+            let scale = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            // Resolved when the gap exceeds twice the summed uncertainties of the two ends
+            // (or, without them, ROUND_OFF of the value).
+            let ends = |x: f64| {
+                found
+                    .iter()
+                    .filter(|&&j| points[j].value == x)
+                    .map(|&j| points[j].precision)
+                    .next()
+                    .flatten()
+            };
+            let precision = match (ends(lo), ends(hi)) {
+                (Some(a), Some(b)) => a + b,
+                _ => ROUND_OFF * scale,
+            };
+            if gap == 0.0 {
+                (Some(gap), Some(false), VerdictKind::NotSplitZero)
+            } else if gap <= 2.0 * precision {
+                (
+                    Some(gap),
+                    Some(false),
+                    VerdictKind::NotSplitRoundOff { precision },
+                )
+            } else {
+                (Some(gap), Some(true), VerdictKind::Split)
+            }
+        }
+    };
+    let missing = (!found.is_empty() && multiplicity < target).then_some(
+        if found.len() == 1 && multiplicity == 1 {
+            Missing::Partner
+        } else {
+            Missing::Image
+        },
+    );
+    Image {
+        resolution,
+        points: found,
+        irreps,
+        values,
+        multiplicity,
+        gap,
+        split,
+        verdict: Verdict { kind, missing },
+    }
+}
+
+/// A rung's images on one mesh, at each resolution, and the observed order of the gap.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshImages {
+    /// The mesh's label.
+    pub mesh: String,
+    /// One per resolution.
+    pub levels: Vec<Image>,
+    /// log2(gap_coarse / gap_fine) when both resolutions split the rung.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub order: Option<f64>,
+}
+
+/// A rung of the reference mesh.
+#[derive(Debug, Clone, Serialize)]
+pub struct Rung {
+    /// The wave number about z.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
+    /// The kinds of its points on the reference mesh.
+    pub kind: RungKind,
+    /// Their irreps.
+    pub irreps: Vec<String>,
+    /// Their control values.
+    pub values: Vec<f64>,
+    /// Their multiplicities, summed.
+    pub multiplicity: usize,
+    /// The reference's resolution where the rung was found (its first, or the refined one).
+    pub found_at: usize,
+    /// The images on every mesh, the reference first.
+    pub images: Vec<MeshImages>,
+}
+
+/// The kinds of a rung's points: one kind, or several joined by `+`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RungKind(pub Vec<CriticalKind>);
+
+impl std::fmt::Display for RungKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0.as_slice() {
+            [first, rest @ ..] if rest.iter().all(|k| k == first) => write!(f, "{first}"),
+            kinds => {
+                let names: Vec<String> = kinds.iter().map(|k| k.to_string()).collect();
+                f.write_str(&names.join(" + "))
+            }
+        }
+    }
+}
+
+impl Serialize for RungKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+/// Matches every mesh's points to the reference's rungs: those of its first resolution, then
+/// (with `--refine`) those of its refined run that the first did not have.
+pub(super) fn match_rungs(meshes: &[MeshRuns], floor: f64) -> (Vec<Rung>, Vec<Unmatched>) {
+    // Used points per (mesh, level).
+    let mut used: Vec<Vec<Vec<bool>>> = meshes
+        .iter()
+        .map(|m| {
+            m.levels
+                .iter()
+                .map(|l| vec![false; l.critical.len()])
+                .collect()
+        })
+        .collect();
+    let mut out = Vec::new();
+    for source in 0..meshes[0].levels.len() {
+        let groups = rungs(&meshes[0].levels[source].critical, floor, &used[0][source]);
+        for group in &groups {
+            out.push(rung(meshes, &mut used, source, group, floor));
+        }
+    }
+    let mut unmatched = Vec::new();
+    for (k, mesh) in meshes.iter().enumerate() {
+        for (l, level) in mesh.levels.iter().enumerate() {
+            for (i, p) in level.critical.iter().enumerate() {
+                if !used[k][l][i] {
+                    unmatched.push(Unmatched {
+                        mesh: mesh.label.clone(),
+                        resolution: level.resolution,
+                        point: i,
+                        irrep: p.irrep.clone(),
+                        value: p.value,
+                        m: p.m,
+                    });
+                }
+            }
+        }
+    }
+    (out, unmatched)
+}
+
+/// The rung `group` of the reference's level `source` with its images on every mesh.
+fn rung(
+    meshes: &[MeshRuns],
+    used: &mut [Vec<Vec<bool>>],
+    source: usize,
+    group: &[usize],
+    floor: f64,
+) -> Rung {
+    let reference = &meshes[0].levels[source].critical;
+    let first = &reference[group[0]];
+    let m = first.m;
+    let multiplicity: usize = group.iter().map(|&i| reference[i].multiplicity).sum();
+    let target = multiplicity.max(expected(first));
+    let v = group.iter().map(|&i| reference[i].value).sum::<f64>() / group.len() as f64;
+    let mut sorted = group.to_vec();
+    sorted.sort_by(|&a, &b| reference[a].value.total_cmp(&reference[b].value));
+    let mut all = Vec::new();
+    for (k, mesh) in meshes.iter().enumerate() {
+        let mut levels = Vec::new();
+        for (l, level) in mesh.levels.iter().enumerate() {
+            let found = if k == 0 && l == source {
+                for &i in &sorted {
+                    used[0][source][i] = true;
+                }
+                sorted.clone()
+            } else {
+                images(&level.critical, &mut used[k][l], m, v, target, floor)
+            };
+            levels.push(measure(&level.critical, found, target, level.resolution));
+        }
+        let order = match levels.as_slice() {
+            [a, b] => match (a.split, b.split, a.gap, b.gap) {
+                (Some(true), Some(true), Some(ga), Some(gb)) => Some((ga / gb).log2()),
+                _ => None,
+            },
+            _ => None,
+        };
+        all.push(MeshImages {
+            mesh: mesh.label.clone(),
+            levels,
+            order,
+        });
+    }
+    Rung {
+        m,
+        kind: RungKind(sorted.iter().map(|&i| reference[i].kind).collect()),
+        irreps: sorted.iter().map(|&i| reference[i].irrep.clone()).collect(),
+        values: sorted.iter().map(|&i| reference[i].value).collect(),
+        multiplicity,
+        found_at: meshes[0].levels[source].resolution,
+        images: all,
+    }
+}

@@ -1,0 +1,629 @@
+//! One scene on meshes of different symmetry, side by side (docs/theory.md §11.6): the
+//! analysis behind `memstab compare`.
+//!
+//! # Meshes
+//!
+//! Each mesh ([`MeshChoice`]) is
+//! - a group name, `C8v`, `C2v`, `C1v`, `C4` …: the scene's own generator with that group. A
+//!   disc takes any subgroup `C<M>v` / `C<M>` of its `C<N>v` with M | N; the group names of one
+//!   comparison share one sector count N: the scene's `sectors` if every M divides it, else the
+//!   smallest multiple of the least common multiple of the Ms that is at least the scene's
+//!   (the ponding scene's 7 sectors become 8 for `C8v,C2v,C1v`). A truncated sphere takes the
+//!   name as its `pattern` (a subgroup of its `C8v`). An icosphere has no group option: name
+//!   it by a full override.
+//! - a full override `GENERATOR:KEY=VALUE,…`, e.g. `disc:sectors=8,divisions=12,group=C2v`:
+//!   the scene's mesh options (or the generator's defaults for another generator) with these
+//!   keys (the scene file's `[mesh]` keys) replaced. Its commas are its own: a `KEY=VALUE`
+//!   item continues the override before it.
+//!
+//! The first mesh is the reference. [`CompareOptions::divisions`] sets the divisions of every
+//! disc and truncated sphere (an icosphere's frequency) unless a full override sets them;
+//! `refine` runs every mesh again at twice its divisions (frequency). `max` sets the
+//! control's upper bound; a linear-buckling sweep then keeps the scene's sample spacing
+//! unless `samples` says otherwise.
+//!
+//! # Matching
+//!
+//! Every variant is run as `memstab run` runs it ([`crate::analysis::run`]), in parallel. For
+//! the disc and the truncated sphere each critical mode is labelled by its wave number m about
+//! z (the m = 0…24 whose cos mθ / sin mθ carries most of the mode's cylindrical components).
+//! Critical points of one mesh with the same m ≥ 1 and values within 10 % are grouped into a
+//! *rung* of multiplicity 2 (the cos/sin pair of an axisymmetric structure), m = 0 into rungs
+//! of multiplicity 1. For every rung of the reference mesh, the images on each mesh are the
+//! points with the same m nearest in value (within 20 %), taken until their multiplicities
+//! reach the rung's. An icosphere's modes get no label: images are then matched by value
+//! alone, up to the reference point's multiplicity.
+//!
+//! A rung's *gap* on a mesh is measured: the spread of the values of its images there. One
+//! point in a 2-D irrep is a double by construction ("not split: double … in E1"); two points
+//! are "split" when their gap exceeds twice the summed uncertainties of the two ends — on a
+//! held state (linear buckling) each point's |eigenvalue| / |d eigenvalue / d control|, else
+//! 1e-8 of the value (the localisation's precision) — otherwise "not split (gap 0)" / "(gap at
+//! round-off)". With `refine` the observed order of the gap is log2(gap_coarse / gap_fine).
+//!
+//! Bad input (a mesh that is not a subgroup or does not parse, a chiral group, an equilibrium
+//! analysis, a bad `max`) is a [`CompareError::Input`] before anything runs; a start state
+//! that does not converge is a [`CompareError::Failure`].
+
+mod matching;
+mod meshes;
+
+pub use matching::{Image, MeshImages, Missing, Rung, RungKind, Verdict, VerdictKind};
+pub use meshes::{parse_meshes, MeshChoice};
+
+use super::critical::{CriticalKind, CriticalPoint};
+use super::events::StopReason;
+use crate::adapted::AdaptedBasis;
+use crate::model::Model;
+use crate::report::PathReport;
+use crate::scene::{Analysis, MeshSpec, Scene};
+use crate::stability::Stability;
+use crate::study::{Study, StudyError};
+use crate::text::{one_line, sig_digits};
+use matching::match_rungs;
+use meshes::{common_sectors, describe, resolution, variant, Common};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Largest wave number tried when labelling a mode.
+const MAX_WAVE_NUMBER: usize = 24;
+/// Relative distance within which two points of one mesh with the same m form a rung.
+const PAIR_TOLERANCE: f64 = 0.1;
+/// Relative distance within which a point on another mesh is an image of a reference rung.
+const MATCH_TOLERANCE: f64 = 0.2;
+/// A gap at most this fraction of the value is round-off (the localisation's precision).
+const ROUND_OFF: f64 = 1e-8;
+
+/// Why a comparison could not be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CompareError {
+    /// The request is wrong (a mesh that does not parse, a bad bound …); nothing ran.
+    #[error("{0}")]
+    Input(String),
+    /// A run failed (a start state did not converge).
+    #[error("{0}")]
+    Failure(String),
+}
+
+/// What to compare, besides the scene.
+#[derive(Debug, Clone, Default)]
+pub struct CompareOptions {
+    /// The meshes, the reference first ([`parse_meshes`]).
+    pub meshes: Vec<MeshChoice>,
+    /// Also run every mesh at twice its divisions and measure how the gaps shrink.
+    pub refine: bool,
+    /// The control's upper bound (default: the scene's `max`).
+    pub max: Option<f64>,
+    /// Divisions of every disc or truncated sphere (an icosphere's frequency), unless a full
+    /// override sets them.
+    pub divisions: Option<usize>,
+    /// Samples of a linear-buckling sweep (a path's step budget).
+    pub samples: Option<usize>,
+}
+
+/// A critical point as compared.
+#[derive(Debug, Clone, Serialize)]
+pub struct Point {
+    /// Its kind.
+    pub kind: CriticalKind,
+    /// The irrep of the singular block.
+    pub irrep: String,
+    /// Its multiplicity in K.
+    pub multiplicity: usize,
+    /// The control's value.
+    pub value: f64,
+    /// Wave number of the mode about z (disc, truncated sphere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
+    /// |eigenvalue| / ‖K‖ at the localised point.
+    pub residual_eigenvalue: f64,
+    /// Uncertainty of `value` from the localisation: |eigenvalue| / |d eigenvalue / d control|
+    /// at the point (held states of a linear-buckling sweep only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub precision: Option<f64>,
+    /// The name of the mode's isotropy subgroup.
+    pub isotropy: String,
+}
+
+/// One run of one mesh at one resolution.
+#[derive(Debug, Clone, Serialize)]
+pub struct Level {
+    /// The mesh options as one line, e.g. `disc sectors=8 divisions=6 group=C8v`.
+    pub mesh: String,
+    /// Divisions (an icosphere's frequency).
+    pub resolution: usize,
+    /// Nodes.
+    pub nodes: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// The scene's group on this mesh.
+    pub group: String,
+    /// Its order.
+    pub order: usize,
+    /// Unknowns of the model.
+    pub unknowns: usize,
+    /// Unknowns of the fixed-point space.
+    pub symmetric_unknowns: usize,
+    /// Why the run's path ended.
+    pub stop: StopReason,
+    /// Why stability was not analysed, if it was not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    /// Steps where the instability index changes by more than the critical points localised
+    /// there account for (a crossing the run could not localise, or a jump of the path).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+    /// Wall time of the run.
+    pub seconds: f64,
+    /// Its critical points.
+    pub critical: Vec<Point>,
+}
+
+/// One mesh's runs.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshRuns {
+    /// The label, as written.
+    pub label: String,
+    /// Its generator.
+    pub generator: String,
+    /// One run per resolution.
+    pub levels: Vec<Level>,
+}
+
+/// A critical point without a counterpart on the reference mesh.
+#[derive(Debug, Clone, Serialize)]
+pub struct Unmatched {
+    /// The mesh's label.
+    pub mesh: String,
+    /// The run's resolution.
+    pub resolution: usize,
+    /// The index into that run's `critical`.
+    pub point: usize,
+    /// Its irrep.
+    pub irrep: String,
+    /// Its control value.
+    pub value: f64,
+    /// Its wave number about z.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
+}
+
+/// A finished comparison.
+#[derive(Debug, Clone, Serialize)]
+pub struct Comparison {
+    /// The scene's name.
+    pub scene: String,
+    /// Where it came from.
+    pub origin: String,
+    /// Its analysis.
+    pub analysis: &'static str,
+    /// The control parameter.
+    pub control: String,
+    /// The control's range.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range: Option<[f64; 2]>,
+    /// A sweep's samples, a path's step budget.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples: Option<usize>,
+    /// `m` when modes are labelled by their wave number about z.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub label: Option<&'static str>,
+    /// Whether every mesh ran at a second, doubled resolution.
+    pub refine: bool,
+    /// The reference mesh's label.
+    pub reference: String,
+    /// Every mesh's runs.
+    pub meshes: Vec<MeshRuns>,
+    /// The reference's rungs with their images.
+    pub rungs: Vec<Rung>,
+    /// Points matched to no rung.
+    pub unmatched: Vec<Unmatched>,
+}
+
+/// The wave number of a critical mode about z (see [`super::critical::wave_number`]).
+fn wave_number(study: &Study, mode: &[f64]) -> usize {
+    super::critical::wave_number(
+        study.model.reference(),
+        study.model.layout(),
+        mode,
+        MAX_WAVE_NUMBER,
+    )
+}
+
+/// Whether modes are labelled by their wave number about z.
+fn labelled(scene: &Scene) -> bool {
+    matches!(scene.mesh, MeshSpec::Disc(_) | MeshSpec::TruncatedSphere(_))
+}
+
+/// Runs one variant and collects its critical points.
+fn execute(
+    label: &str,
+    mut study: Study,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Level, CompareError> {
+    let start = Instant::now();
+    let mesh = describe(&study.scene.mesh);
+    let resolution = resolution(&study.scene.mesh);
+    let result = super::run(&mut study, |_, _| {}).map_err(|e| {
+        CompareError::Failure(format!(
+            "mesh '{label}' ({mesh}): {}",
+            one_line(&e.to_string())
+        ))
+    })?;
+    let report = &result.report;
+    let control = study.control;
+    let label_modes = labelled(&study.scene);
+    let precisions = precisions(&study, &report.critical);
+    let critical: Vec<Point> = report
+        .critical
+        .iter()
+        .zip(precisions)
+        .map(|(cp, precision): (&CriticalPoint, Option<f64>)| Point {
+            kind: cp.kind,
+            irrep: cp.irrep.clone(),
+            multiplicity: cp.multiplicity,
+            value: control.map_or(f64::NAN, |c| cp.parameters[c]),
+            m: label_modes.then(|| wave_number(&study, &cp.mode)),
+            residual_eigenvalue: cp.residual_eigenvalue,
+            precision,
+            isotropy: cp.isotropy.name.clone(),
+        })
+        .collect();
+    let warnings = unaccounted(report);
+    let seconds = start.elapsed().as_secs_f64();
+    progress(&format!(
+        "{label} ({mesh}): {} critical points in {seconds:.1} s",
+        critical.len()
+    ));
+    Ok(Level {
+        mesh,
+        resolution,
+        nodes: report.mesh.nodes,
+        triangles: report.mesh.elements,
+        group: report.group.clone(),
+        order: report.group_order,
+        unknowns: report.unknowns,
+        symmetric_unknowns: report.symmetric_unknowns,
+        stop: report.stop.clone(),
+        note: report.stability_note.clone(),
+        warnings,
+        seconds,
+        critical,
+    })
+}
+
+/// Every interval of the path whose change of the instability index exceeds the
+/// multiplicities of the critical points localised in it: such a crossing was not localised
+/// (or the path jumped), so a comparison of that mesh may miss points.
+fn unaccounted(report: &PathReport) -> Vec<String> {
+    let control = report.parameters.iter().position(|p| *p == report.control);
+    let mut out = Vec::new();
+    for w in report.rows.windows(2) {
+        let (Some(a), Some(b)) = (w[0].index, w[1].index) else {
+            continue;
+        };
+        let found: usize = report
+            .critical
+            .iter()
+            .filter(|c| c.after_step == w[0].step)
+            .map(|c| c.multiplicity)
+            .sum();
+        if a.abs_diff(b) > found {
+            let at = control.map_or_else(String::new, |c| {
+                format!(
+                    " ({} {} to {})",
+                    report.control,
+                    sig_digits(w[0].parameters[c], 6),
+                    sig_digits(w[1].parameters[c], 6)
+                )
+            });
+            out.push(format!(
+                "the index changes from {a} to {b} between steps {} and {}{at} but critical \
+                 points of multiplicity {found} were localised there",
+                w[0].step, w[1].step
+            ));
+        }
+    }
+    out
+}
+
+/// The uncertainty of each critical value of a linear-buckling sweep: the localised
+/// eigenvalue's |g| / |dg/dλ|, the slope taken by central differences on the held state (the
+/// tangent is affine in the control there). `None` for path analyses, whose state moves with
+/// the control.
+fn precisions(study: &Study, critical: &[CriticalPoint]) -> Vec<Option<f64>> {
+    let none = vec![None; critical.len()];
+    let (Analysis::LinearBuckling(_), Some(c)) = (&study.scene.analysis, study.control) else {
+        return none;
+    };
+    let Ok(adapted) = AdaptedBasis::new(&study.action, study.model.layout()) else {
+        return none;
+    };
+    let stability = Stability::new(&study.model, &adapted);
+    let mut eval = study.model.new_evaluation();
+    let spec = &study.scene.parameters[&study.parameters[c]];
+    let range = match (spec.min, spec.max) {
+        (Some(lo), Some(hi)) => (hi - lo).abs(),
+        _ => 1.0,
+    };
+    critical
+        .iter()
+        .map(|cp| {
+            let mu = adapted.irreps.iter().position(|i| i.name == cp.irrep)?;
+            let v = cp.parameters[c];
+            let delta = 1e-5 * range.max(v.abs()).max(1e-300);
+            let mut at = |x: f64| {
+                let mut p = cp.parameters.clone();
+                p[c] = x;
+                let sp = stability
+                    .spectrum_of(
+                        &cp.state,
+                        &p,
+                        &study.constraints,
+                        &mut eval,
+                        Some(mu),
+                        false,
+                    )
+                    .ok()?;
+                let g = sp.blocks[mu]
+                    .eigenvalues
+                    .iter()
+                    .copied()
+                    .min_by(|a, b| a.abs().total_cmp(&b.abs()))?;
+                Some((g, sp.scale))
+            };
+            let (gp, scale) = at(v + delta)?;
+            let (gm, _) = at(v - delta)?;
+            let slope = (gp - gm) / (2.0 * delta) / scale;
+            (slope != 0.0 && slope.is_finite())
+                .then(|| (cp.residual_eigenvalue / slope.abs()).max(4e-16 * v.abs()))
+        })
+        .collect()
+}
+
+/// Runs `scene` on every mesh of `options` (in parallel; `progress` hears of each run as it
+/// ends), matches their critical points to the reference's rungs and measures the gaps.
+pub fn compare(
+    scene: &Scene,
+    options: &CompareOptions,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Comparison, CompareError> {
+    let Some(control) = scene.control().map(str::to_string) else {
+        return Err(CompareError::Input(format!(
+            "scene '{}': compare needs a path or linear-buckling analysis (an equilibrium has \
+             no control to compare critical values in)",
+            scene.origin
+        )));
+    };
+    if let Some(max) = options.max {
+        if !max.is_finite() {
+            return Err(CompareError::Input(format!(
+                "--max {max}: must be a finite number"
+            )));
+        }
+    }
+    if options.divisions == Some(0) {
+        return Err(CompareError::Input("--divisions 0: must be >= 1".into()));
+    }
+    if options.samples == Some(0) {
+        return Err(CompareError::Input("--samples 0: must be >= 1".into()));
+    }
+    if let (Some(max), Some(p)) = (options.max, scene.parameters.get(&control)) {
+        if p.min.is_some_and(|lo| max <= lo) || max < p.start {
+            return Err(CompareError::Input(format!(
+                "--max {max}: the upper bound of {control} must exceed its min{} and be at \
+                 least its start value {}",
+                p.min.map_or_else(String::new, |lo| format!(" {lo}")),
+                p.start
+            )));
+        }
+    }
+    let typed = &options.meshes;
+    if typed.is_empty() {
+        return Err(CompareError::Input("--meshes: no mesh given".into()));
+    }
+    let common = Common {
+        control: control.clone(),
+        max: options.max,
+        samples: options.samples,
+        divisions: options.divisions,
+        sectors: match &scene.mesh {
+            MeshSpec::Disc(d) => common_sectors(d.sectors, typed),
+            _ => 0,
+        },
+    };
+    // Every variant is built (and checked) before anything runs.
+    let levels = if options.refine { 2 } else { 1 };
+    let mut jobs: Vec<(usize, usize, Study)> = Vec::new();
+    let mut first_scene: Option<Scene> = None;
+    for (k, t) in typed.iter().enumerate() {
+        let coarse = variant(scene, t, &common)?;
+        for l in 0..levels {
+            let mut s = coarse.clone();
+            if l == 1 {
+                match &mut s.mesh {
+                    MeshSpec::Disc(d) => d.divisions *= 2,
+                    MeshSpec::Icosphere(i) => i.frequency *= 2,
+                    MeshSpec::TruncatedSphere(t) => {
+                        t.divisions = Some(t.divisions_or_default() * 2)
+                    }
+                    MeshSpec::File(_) => {
+                        return Err(CompareError::Input(format!(
+                            "mesh '{}': --refine cannot refine a mesh file",
+                            t.label
+                        )))
+                    }
+                }
+            }
+            let study = Study::build(s).map_err(|e| match e {
+                StudyError::Scene(_) | StudyError::Unsupported(_) => {
+                    CompareError::Input(one_line(&e.to_string()))
+                }
+            })?;
+            super::check_real_irreps(&study, &format!("mesh '{}'", t.label))
+                .map_err(CompareError::Input)?;
+            jobs.push((k, l, study));
+        }
+        if k == 0 {
+            first_scene = Some(coarse);
+        }
+    }
+    let reference_scene = first_scene.expect("at least one mesh");
+    // The largest meshes first, so that the parallel runs end together.
+    jobs.sort_by_key(|(_, _, s)| std::cmp::Reverse(s.basis.unknowns()));
+    let results: Vec<Result<(usize, usize, Level), CompareError>> = jobs
+        .into_par_iter()
+        .map(|(k, l, study)| execute(&typed[k].label, study, progress).map(|r| (k, l, r)))
+        .collect();
+    let mut meshes: Vec<MeshRuns> = typed
+        .iter()
+        .map(|t| MeshRuns {
+            label: t.label.clone(),
+            generator: String::new(),
+            levels: Vec::new(),
+        })
+        .collect();
+    let mut slots: Vec<Vec<Option<Level>>> = vec![vec![None; levels]; typed.len()];
+    for r in results {
+        let (k, l, level) = r?;
+        slots[k][l] = Some(level);
+    }
+    for (k, s) in slots.into_iter().enumerate() {
+        meshes[k].levels = s.into_iter().map(|l| l.expect("every job ran")).collect();
+        meshes[k].generator = meshes[k].levels[0]
+            .mesh
+            .split_whitespace()
+            .next()
+            .unwrap_or("")
+            .to_string();
+    }
+    let p = &reference_scene.parameters[&control];
+    let range = match (p.min, p.max) {
+        (Some(lo), Some(hi)) => Some([lo, hi]),
+        _ => None,
+    };
+    let floor = range.map_or(1e-12, |[lo, hi]| 1e-3 * (hi - lo).abs());
+    let (rung_list, unmatched) = match_rungs(&meshes, floor);
+    let samples = match &reference_scene.analysis {
+        Analysis::LinearBuckling(b) => Some(b.samples),
+        Analysis::Path(p) => Some(p.steps),
+        Analysis::Equilibrium(_) => None,
+    };
+    Ok(Comparison {
+        scene: scene.info.name.clone(),
+        origin: scene.origin.clone(),
+        analysis: reference_scene.analysis.kind().name(),
+        control,
+        range,
+        samples,
+        label: labelled(&reference_scene).then_some("m"),
+        refine: options.refine,
+        reference: typed[0].label.clone(),
+        meshes,
+        rungs: rung_list,
+        unmatched,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(irrep: &str, multiplicity: usize, value: f64, m: usize) -> Point {
+        Point {
+            kind: CriticalKind::of(false, multiplicity, false),
+            irrep: irrep.into(),
+            multiplicity,
+            value,
+            m: Some(m),
+            residual_eigenvalue: 0.0,
+            precision: None,
+            isotropy: String::new(),
+        }
+    }
+
+    #[test]
+    fn full_overrides_keep_their_commas() {
+        let t = parse_meshes(&["C8v,disc:sectors=8,divisions=12,group=C2v,C1v".into()]).unwrap();
+        let labels: Vec<&str> = t.iter().map(|t| t.label.as_str()).collect();
+        assert_eq!(
+            labels,
+            ["C8v", "disc:sectors=8,divisions=12,group=C2v", "C1v"]
+        );
+        assert!(parse_meshes(&["C8v,divisions=3".into()]).is_err());
+        assert!(parse_meshes(&["C8v,,C2v".into()]).is_err());
+        assert!(parse_meshes(&["C2v,C2v".into()]).is_err());
+    }
+
+    #[test]
+    fn sectors_are_shared() {
+        let t = parse_meshes(&["C8v,C2v,C1v".into()]).unwrap();
+        assert_eq!(common_sectors(7, &t), 8);
+        assert_eq!(common_sectors(8, &t), 8);
+        let t = parse_meshes(&["C7v,C1v".into()]).unwrap();
+        assert_eq!(common_sectors(7, &t), 7);
+        let t = parse_meshes(&["C7v,C2v".into()]).unwrap();
+        assert_eq!(common_sectors(7, &t), 14);
+    }
+
+    #[test]
+    fn a_double_and_its_split_images_are_matched() {
+        let reference = vec![
+            point("A1", 1, 2.0, 0),
+            point("E1", 2, 5.0, 1),
+            point("B1", 1, 9.0, 4),
+            point("B2", 1, 9.01, 4),
+        ];
+        let other = vec![
+            point("A1", 1, 2.01, 0),
+            point("B2", 1, 5.02, 1),
+            point("B1", 1, 4.99, 1),
+            point("A1", 1, 9.02, 4),
+        ];
+        let level = |critical: Vec<Point>| Level {
+            mesh: String::new(),
+            resolution: 6,
+            nodes: 0,
+            triangles: 0,
+            group: String::new(),
+            order: 1,
+            unknowns: 0,
+            symmetric_unknowns: 0,
+            stop: StopReason::Condition,
+            note: None,
+            warnings: Vec::new(),
+            seconds: 0.0,
+            critical,
+        };
+        let meshes = vec![
+            MeshRuns {
+                label: "C8v".into(),
+                generator: "disc".into(),
+                levels: vec![level(reference)],
+            },
+            MeshRuns {
+                label: "C2v".into(),
+                generator: "disc".into(),
+                levels: vec![level(other)],
+            },
+        ];
+        let (rungs, unmatched) = match_rungs(&meshes, 1e-3);
+        assert_eq!(rungs.len(), 3);
+        assert!(unmatched.is_empty());
+        let e1 = &rungs[1].images;
+        assert_eq!(
+            e1[0].levels[0].verdict.to_string(),
+            "not split: double bifurcation in E1"
+        );
+        assert_eq!(e1[1].levels[0].irreps, ["B1", "B2"]);
+        assert!((e1[1].levels[0].gap.unwrap() - 0.03).abs() < 1e-12);
+        assert_eq!(e1[1].levels[0].verdict.to_string(), "split");
+        let m4 = &rungs[2].images;
+        assert_eq!(m4[0].levels[0].irreps, ["B1", "B2"]);
+        assert!(m4[1].levels[0]
+            .verdict
+            .to_string()
+            .contains("partner not found"));
+    }
+}
