@@ -11,6 +11,7 @@ pub use symmetry;
 pub mod adapted;
 pub mod analysis;
 pub mod bench;
+pub mod demo;
 pub mod effects;
 pub mod linalg;
 pub mod model;

@@ -15,20 +15,14 @@
 
 use super::CliError;
 use clap::Args;
-use memstab::analysis::events::Extremum;
 use memstab::analysis::{run as run_study, RunResult};
-use memstab::output::{file_name, write_run, Progress, Written};
-use memstab::reference::{sphere_extrema, sphere_pressure};
+use memstab::demo::closed_form_check;
+use memstab::output::{file_name, write_run, Progress, RunSummary, Written};
 use memstab::report::PathReport;
-use memstab::scene::{Effect, MeshSpec, Scene};
+use memstab::scene::Scene;
 use memstab::study::{Study, StudyError};
-use serde::Serialize;
+use memstab::text::{one_line, sig_digits};
 use std::path::{Path, PathBuf};
-
-/// The demo scene, bundled into the binary so that `memstab demo` works from anywhere.
-const DEMO_SCENE: &str = include_str!("../../scenes/demo.toml");
-/// How the bundled demo scene is named in messages and in `path.json`.
-const DEMO_ORIGIN: &str = "scenes/demo.toml (bundled)";
 
 #[derive(Debug, Args)]
 pub(crate) struct RunArgs {
@@ -55,38 +49,11 @@ pub(crate) struct DemoArgs {
     quiet: bool,
 }
 
-/// A turning point in the `--json` summary.
-#[derive(Debug, Serialize)]
-struct TurningJson {
-    kind: String,
-    after_step: usize,
-    /// The control's value there.
-    value: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    stretch: Option<f64>,
-}
-
-/// The `--json` summary.
-#[derive(Debug, Serialize)]
-struct RunJson {
-    scene: String,
-    out: PathBuf,
-    files: Vec<PathBuf>,
-    points: usize,
-    control: String,
-    turning_points: Vec<TurningJson>,
-    stop: String,
-    group: String,
-    group_order: usize,
-    symmetric_unknowns: usize,
-    unknowns: usize,
-}
-
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
     if args.json {
-        let json = summary_json(&study, &result.report, &args.out, &written);
+        let json = RunSummary::new(&result.report, &args.out, &written);
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
         println!("{text}");
     } else {
@@ -96,7 +63,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
 }
 
 pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
-    let scene = Scene::from_toml_str(DEMO_SCENE, DEMO_ORIGIN)
+    let scene = memstab::demo::scene()
         .map_err(|e| CliError::Failure(format!("the bundled demo scene is broken: {e}")))?;
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
     print_summary(&study, &result.report, &args.out, &written);
@@ -128,7 +95,7 @@ fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, W
     };
     let progress = Progress::new(total, quiet);
     let result = run_study(&mut study, |step, value| {
-        progress.set(step, format!("{control} = {}", sig(value)));
+        progress.set(step, format!("{control} = {}", sig_digits6(value)));
     });
     let result = match result {
         Ok(r) => r,
@@ -179,27 +146,6 @@ fn check_out(out: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Joins the lines of a message into one.
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-/// `x` with six significant digits, plain for moderate sizes (`1.35511`, `0.000123457`,
-/// `1.23457e7`).
-fn sig(x: f64) -> String {
-    let a = x.abs();
-    if a == 0.0 || !a.is_finite() {
-        return format!("{x}");
-    }
-    let e = a.log10().floor() as i32;
-    if (-4..6).contains(&e) {
-        let decimals = (5 - e).max(0) as usize;
-        format!("{x:.decimals$}")
-    } else {
-        format!("{x:.5e}")
-    }
-}
-
 /// The index of the measure `stretch`, if the report has it.
 fn stretch_index(report: &PathReport) -> Option<usize> {
     report.measures.iter().position(|m| m == "stretch")
@@ -208,33 +154,6 @@ fn stretch_index(report: &PathReport) -> Option<usize> {
 /// The index of the control among the parameters.
 fn control_index(report: &PathReport) -> Option<usize> {
     report.parameters.iter().position(|p| *p == report.control)
-}
-
-fn summary_json(study: &Study, report: &PathReport, out: &Path, written: &Written) -> RunJson {
-    let s = stretch_index(report);
-    let c = control_index(report);
-    RunJson {
-        scene: report.scene.clone(),
-        out: out.to_path_buf(),
-        files: written.files(),
-        points: report.rows.len(),
-        control: report.control.clone(),
-        turning_points: report
-            .turning_points
-            .iter()
-            .map(|t| TurningJson {
-                kind: t.kind.to_string(),
-                after_step: t.after_step,
-                value: c.map_or(f64::NAN, |c| t.parameters[c]),
-                stretch: s.map(|s| t.measures[s]),
-            })
-            .collect(),
-        stop: report.stop.to_string(),
-        group: report.group.clone(),
-        group_order: report.group_order,
-        symmetric_unknowns: study.basis.dim(),
-        unknowns: study.basis.unknowns(),
-    }
 }
 
 fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Written) {
@@ -263,14 +182,14 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
         (Some(c), Some(first), Some(last)) if n > 1 => println!(
             "path: {points}, {} from {} to {}",
             report.control,
-            sig(first.parameters[c]),
-            sig(last.parameters[c])
+            sig_digits6(first.parameters[c]),
+            sig_digits6(last.parameters[c])
         ),
         (Some(c), Some(first), _) => {
             println!(
                 "path: {points}, {} = {}",
                 report.control,
-                sig(first.parameters[c])
+                sig_digits6(first.parameters[c])
             )
         }
         _ => println!("equilibrium: {points}"),
@@ -282,7 +201,7 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
             println!(
                 "warning: the enclosed volume is {} at step {}: the membrane is inside out there, \
                  the path is not physical",
-                sig(r.measures[v]),
+                sig_digits6(r.measures[v]),
                 r.step
             );
         }
@@ -294,9 +213,9 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     } else {
         println!("turning points of {}:", report.control);
         for t in &report.turning_points {
-            let value = c.map_or_else(|| "?".to_string(), |c| sig(t.parameters[c]));
+            let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(t.parameters[c]));
             let stretch = s.map_or_else(String::new, |s| {
-                format!(" at stretch {}", sig(t.measures[s]))
+                format!(" at stretch {}", sig_digits6(t.measures[s]))
             });
             println!(
                 "  {:<7} {} = {value}{stretch} (after step {})",
@@ -317,7 +236,7 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     } else {
         println!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
         for cp in &report.critical {
-            let value = c.map_or_else(|| "?".to_string(), |c| sig(cp.parameters[c]));
+            let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(cp.parameters[c]));
             println!(
                 "  {:<20} in {:<4} x{} at {} = {value} (isotropy {}, |eigenvalue|/|K| = {:.0e})",
                 cp.kind,
@@ -368,97 +287,64 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     }
 }
 
-/// Compares the turning points of a balloon under pressure control with the closed form.
+/// Prints the closed-form check of a balloon under pressure control.
 fn print_closed_form(study: &Study, report: &PathReport) {
-    let scene = &study.scene;
-    let MeshSpec::Icosphere(ico) = &scene.mesh else {
+    let Some(check) = closed_form_check(study, report) else {
         return;
     };
-    let (Some(c), Some(s)) = (control_index(report), stretch_index(report)) else {
-        return;
-    };
-    // Only a balloon under pressure control: the control is the pressure of a gas effect.
-    let pressure_control = scene.effects.iter().any(
-        |e| matches!(e, Effect::Gas(g) if g.pressure.parameter() == Some(report.control.as_str())),
-    );
-    if !pressure_control || scene.effects.len() != 1 {
-        return;
-    }
-    let mat = &scene.material;
-    // The stress-free sphere: radius R/λ0, thickness H.
-    let scale = ico.radius / mat.prestretch / (mat.mu * mat.thickness);
-    let k = mat.k;
     println!();
     println!(
-        "closed form for a Mooney-Rivlin sphere, k = {k}: p R/(mu H) = 2/(1+k) (1/l - 1/l^7) (1 + k l^2)"
+        "closed form for a Mooney-Rivlin sphere, k = {}: p R/(mu H) = 2/(1+k) (1/l - 1/l^7) (1 + k l^2)",
+        check.k
     );
-    let extremes = sphere_extrema(k);
-    let list: Vec<String> = extremes
+    let list: Vec<String> = check
+        .extrema
         .iter()
         .map(|e| {
-            format!(
-                "{} {:.7} at l = {:.7}",
-                if e.maximum { "maximum" } else { "minimum" },
-                e.pressure,
-                e.stretch
-            )
+            let kind = if e.maximum { "maximum" } else { "minimum" };
+            format!("{kind} {:.7} at l = {:.7}", e.pressure, e.stretch)
         })
         .collect();
     if !list.is_empty() {
         println!("  its {}", list.join(", its "));
     }
-    // A polyhedron's pressure scale: p = dW/dV, with dW ∝ area and dV ∝ 3·volume, so the
-    // discrete balloon's pressure exceeds the sphere's by R·A/(3V) − 1.
-    let mesh = &study.mesh.mesh;
-    let polyhedron = ico.radius * mesh.area() / (3.0 * mesh.volume()) - 1.0;
-    if report.turning_points.is_empty() {
+    if check.turning.is_empty() {
         println!("memstab found no turning point to compare");
         return;
     }
     println!(
         "memstab's turning points, p R/(mu H) against the closed form at the stretch l memstab found:"
     );
-    let mut differences = Vec::new();
-    for t in &report.turning_points {
-        let l = t.measures[s];
-        let found = t.parameters[c] * scale;
-        let exact = sphere_pressure(k, l);
-        let nearest = extremes
-            .iter()
-            .filter(|e| e.maximum == (t.kind == Extremum::Maximum))
-            .map(|e| e.stretch)
-            .min_by(|a, b| (a - l).abs().total_cmp(&(b - l).abs()));
-        let stretch_diff = nearest.map_or_else(String::new, |le| {
+    for t in &check.turning {
+        let stretch_diff = t.stretch_difference.map_or_else(String::new, |d| {
             format!(
-                " (l differs by {:+.1e} relative from the closed-form {}'s)",
-                l / le - 1.0,
+                " (l differs by {d:+.1e} relative from the closed-form {}'s)",
                 t.kind
             )
         });
-        let difference = found / exact - 1.0;
         println!(
             "  {:<7} {:.7} at l = {:.7}: closed form {:.7}, difference {:+.3} %{stretch_diff}",
-            t.kind,
-            found,
-            l,
-            exact,
-            100.0 * difference
+            t.kind.to_string(),
+            t.pressure,
+            t.stretch,
+            t.exact,
+            100.0 * t.difference()
         );
-        differences.push(difference);
     }
-    // Is the polyhedron's pressure scale most of the difference?
-    let explained = differences
-        .iter()
-        .all(|d| (d - polyhedron).abs() < 0.5 * d.abs());
     let what = format!(
         "the polyhedron's R A/(3V) exceeds the sphere's 1 by {:.3} %, an error that falls as 1/f^2 \
          with the frequency (f = {} here)",
-        100.0 * polyhedron,
-        ico.frequency
+        100.0 * check.polyhedron,
+        check.frequency
     );
-    if explained {
+    if check.explained_by_mesh() {
         println!("most of the difference is the mesh: {what}");
     } else {
         println!("for comparison, {what}");
     }
+}
+
+/// Six significant digits.
+fn sig_digits6(x: f64) -> String {
+    sig_digits(x, 6)
 }

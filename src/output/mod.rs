@@ -32,7 +32,7 @@ mod svg;
 pub use csv::write_csv;
 pub use json::{write_critical, write_json};
 pub use progress::Progress;
-pub use run::{file_name, write_run, WriteRunError, Written};
+pub use run::{file_name, write_run, RunSummary, TurningSummary, WriteRunError, Written};
 pub use states::{PvdTime, StateWriter};
 pub use svg::{
     default_axes, write_diagram, write_diagram_with, write_spectrum_diagram, Diagram, Marker,

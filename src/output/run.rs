@@ -6,6 +6,7 @@ use super::{
     StateWriter, SPECTRUM_AXIS,
 };
 use crate::analysis::critical::CriticalKind;
+use crate::analysis::events::{Extremum, StopReason};
 use crate::analysis::RunResult;
 use crate::report::{PathReport, StateKind};
 use crate::study::Study;
@@ -275,4 +276,75 @@ fn axes(report: &PathReport) -> (String, String) {
         .cloned()
         .unwrap_or_else(|| x.clone());
     (x, y)
+}
+
+/// A turning point in [`RunSummary`].
+#[derive(Debug, serde::Serialize)]
+pub struct TurningSummary {
+    /// `maximum` or `minimum`.
+    pub kind: Extremum,
+    /// The path step before it.
+    pub after_step: usize,
+    /// The control's value there.
+    pub value: f64,
+    /// The stretch there (closed membranes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stretch: Option<f64>,
+}
+
+/// What `memstab run --json` prints: the run in one object.
+#[derive(Debug, serde::Serialize)]
+pub struct RunSummary {
+    /// The scene's name.
+    pub scene: String,
+    /// The output directory.
+    pub out: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    /// Path points.
+    pub points: usize,
+    /// The control parameter.
+    pub control: String,
+    /// Turning points of the control.
+    pub turning_points: Vec<TurningSummary>,
+    /// Why the path ended.
+    pub stop: StopReason,
+    /// The scene's group.
+    pub group: String,
+    /// Its order.
+    pub group_order: usize,
+    /// Unknowns of the fixed-point space.
+    pub symmetric_unknowns: usize,
+    /// Unknowns of the model.
+    pub unknowns: usize,
+}
+
+impl RunSummary {
+    /// The summary of `report`, written into `out` as `written` says.
+    pub fn new(report: &PathReport, out: &Path, written: &Written) -> Self {
+        let s = report.measures.iter().position(|m| m == "stretch");
+        let c = report.parameters.iter().position(|p| *p == report.control);
+        Self {
+            scene: report.scene.clone(),
+            out: out.to_path_buf(),
+            files: written.files(),
+            points: report.rows.len(),
+            control: report.control.clone(),
+            turning_points: report
+                .turning_points
+                .iter()
+                .map(|t| TurningSummary {
+                    kind: t.kind,
+                    after_step: t.after_step,
+                    value: c.map_or(f64::NAN, |c| t.parameters[c]),
+                    stretch: s.map(|s| t.measures[s]),
+                })
+                .collect(),
+            stop: report.stop.clone(),
+            group: report.group.clone(),
+            group_order: report.group_order,
+            symmetric_unknowns: report.symmetric_unknowns,
+            unknowns: report.unknowns,
+        }
+    }
 }
