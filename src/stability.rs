@@ -2,7 +2,7 @@
 //! symmetric state, its eigenvalues, negative count and zero modes.
 //!
 //! - Rigid-body modes. A free body has a zero eigenvalue for every rigid motion all its
-//!   effects keep (see [`crate::model::FeModel::rigid_motions`]); at the current positions
+//!   effects keep (see [`crate::model::Model::rigid_motions`]); at the current positions
 //!   those fields u_i = t + ω × x_i are projected into each block, reported there as zero
 //!   modes (T1u and T1g for a free sphere in Ih) and deflated: the block's spectrum is taken on
 //!   their orthogonal complement, so they never count in the index.
@@ -18,7 +18,7 @@
 use crate::adapted::AdaptedBasis;
 use crate::linalg::{SymmetricFactorization, SymmetricPattern};
 use crate::model::constraint::Constraint;
-use crate::model::{Evaluation, FeModel, Model, ModelError, Request};
+use crate::model::{Evaluation, Model, ModelError, Request};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -79,7 +79,7 @@ pub enum Detail {
 
 /// Everything needed to analyse states of one model under one group.
 pub struct Stability<'a> {
-    model: &'a FeModel,
+    model: &'a dyn Model,
     basis: &'a AdaptedBasis,
     motions: Vec<[f64; 6]>,
     /// Blocks with more columns than this get only their inertia, from a sparse LBLᵀ.
@@ -268,7 +268,7 @@ fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
 
 impl<'a> Stability<'a> {
     /// The analysis of `model` with the adapted `basis` of the scene's group.
-    pub fn new(model: &'a FeModel, basis: &'a AdaptedBasis) -> Self {
+    pub fn new(model: &'a dyn Model, basis: &'a AdaptedBasis) -> Self {
         Self {
             model,
             basis,

@@ -12,7 +12,7 @@ use crate::effects::plane::{PenaltyLaw, Plane};
 use crate::effects::spin::Spin;
 use crate::effects::Quantity;
 use crate::model::constraint::{self, Constraint};
-use crate::model::{Effect, FeModel, Vec3};
+use crate::model::{Effect, FeModel, Model, Vec3};
 use crate::scene::{self, Scene};
 use meshes::{GroupAction, SymmetricMesh};
 

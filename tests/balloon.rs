@@ -16,7 +16,7 @@ use memstab::analysis::SymmetricProblem;
 use memstab::effects::gas::GasPressure;
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
-use memstab::model::{Effect, FeModel};
+use memstab::model::{Effect, FeModel, Model};
 use meshes::generators::{icosphere, IcosphereOptions};
 use nalgebra::DVector;
 

@@ -6,6 +6,7 @@ use memstab::analysis::run;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::Quantity;
 use memstab::model::constraint::{Constraint, FluidVolume};
+use memstab::model::Model;
 use memstab::scene::Scene;
 use memstab::study::Study;
 use std::f64::consts::PI;

@@ -111,14 +111,17 @@ fn a_wrong_tangent_is_detected() {
     assert!(good.tangent < 1e-6);
     struct NoRankOne(FeModel);
     impl Model for NoRankOne {
-        fn unknowns(&self) -> usize {
-            self.0.unknowns()
+        fn layout(&self) -> &memstab::model::Layout {
+            self.0.layout()
+        }
+        fn reference(&self) -> &[memstab::model::Vec3] {
+            self.0.reference()
+        }
+        fn rigid_motions(&self) -> Vec<[f64; 6]> {
+            self.0.rigid_motions()
         }
         fn parameters(&self) -> &[String] {
             self.0.parameters()
-        }
-        fn pattern(&self) -> &memstab::linalg::SymmetricPattern {
-            self.0.pattern()
         }
         fn new_evaluation(&self) -> memstab::model::Evaluation {
             self.0.new_evaluation()

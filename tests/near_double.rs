@@ -8,7 +8,7 @@ use memstab::analysis::run;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
-use memstab::model::{Effect, FeModel};
+use memstab::model::{Effect, FeModel, Model};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use meshes::SymmetricMesh;

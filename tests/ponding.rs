@@ -6,6 +6,7 @@
 
 use memstab::analysis::critical::CriticalPoint;
 use memstab::analysis::run;
+use memstab::model::Model;
 use memstab::scene::Scene;
 use memstab::study::Study;
 

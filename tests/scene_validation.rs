@@ -2,8 +2,8 @@
 //! line naming the key path and the value; garbage never panics.
 
 use memstab::scene::{
-    ConstraintKind,
-    Analysis, Constraint, Effect, FluidSide, MeshSpec, Quantity, Scene, SceneError, Target,
+    Analysis, Constraint, ConstraintKind, Effect, FluidSide, MeshSpec, Quantity, Scene, SceneError,
+    Target,
 };
 use proptest::prelude::*;
 use std::path::Path;

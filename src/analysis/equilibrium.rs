@@ -10,6 +10,7 @@
 use super::continuation::{solve_at, PathOptions, PhaseTimes};
 use super::events::{Crossings, StopReason};
 use super::{Observer, Record, RunError, SymmetricProblem};
+use crate::model::Model;
 use crate::report::StateKind;
 use crate::scene::{Analysis, Direction};
 use crate::study::{Measure, Study};

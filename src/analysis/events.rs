@@ -10,7 +10,7 @@
 use super::continuation::{Accepted, Continuation, PathPoint, Problem, Stalled};
 use super::critical::{isotropy, CriticalKind, CriticalPoint};
 use crate::model::constraint::Constraint;
-use crate::model::{Evaluation, FeModel, Model};
+use crate::model::{Evaluation, Model};
 use crate::stability::{Detail, Spectrum, Stability};
 use meshes::GroupAction;
 use serde::Serialize;
@@ -398,7 +398,7 @@ pub struct Crossings<'a> {
     stability: Stability<'a>,
     constraints: &'a [Box<dyn Constraint>],
     action: &'a GroupAction,
-    model: &'a FeModel,
+    model: &'a dyn Model,
     measure: MeasureFn<'a>,
     control: Option<usize>,
     held: bool,
@@ -416,7 +416,7 @@ impl<'a> Crossings<'a> {
     /// (linear buckling) name a singular trivial block a symmetric bifurcation.
     pub fn new(
         stability: Stability<'a>,
-        model: &'a FeModel,
+        model: &'a dyn Model,
         constraints: &'a [Box<dyn Constraint>],
         action: &'a GroupAction,
         measure: MeasureFn<'a>,

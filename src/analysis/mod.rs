@@ -27,6 +27,7 @@ pub use continuation::PhaseTimes;
 pub use problem::{SymmetricProblem, SPARSE_TANGENT_FROM};
 
 use crate::adapted::AdaptedBasis;
+use crate::model::Model;
 use crate::report::{MeshInfo, PathReport, PathRow, Spectra, State, TurningRow};
 use crate::scene::Analysis;
 use crate::stability::Stability;

@@ -14,7 +14,7 @@ use std::sync::Arc;
 /// Every other parameter is held at its value in `params`. Without a control (a single
 /// equilibrium), λ_0 is a dummy with a zero load column.
 pub struct SymmetricProblem<'a> {
-    model: &'a crate::model::FeModel,
+    model: &'a dyn crate::model::Model,
     basis: &'a SparseBasis,
     constraints: &'a [Box<dyn Constraint>],
     params: Vec<f64>,
@@ -38,13 +38,12 @@ impl<'a> SymmetricProblem<'a> {
     /// Restricts `model` to `basis` with the given control parameter (if any) and
     /// constraints, each of which frees its parameter.
     pub fn new(
-        model: &'a crate::model::FeModel,
+        model: &'a dyn crate::model::Model,
         basis: &'a SparseBasis,
         constraints: &'a [Box<dyn Constraint>],
         params: Vec<f64>,
         control: Option<usize>,
     ) -> Self {
-        use crate::model::Model;
         let free = std::iter::once(control)
             .chain(constraints.iter().map(|c| Some(c.frees())))
             .collect();
@@ -72,7 +71,6 @@ impl<'a> SymmetricProblem<'a> {
     /// Assembles the whole mesh at every evaluation instead of only the triangles around the
     /// orbit representatives (for checks and timing comparisons).
     pub fn with_full_assembly(mut self) -> Self {
-        use crate::model::Model;
         self.eval = self.model.new_evaluation();
         self
     }
@@ -155,7 +153,7 @@ impl Problem for SymmetricProblem<'_> {
         q: &DVector<f64>,
         lambda: &DVector<f64>,
     ) -> Result<Linearization, crate::model::ModelError> {
-        use crate::model::{Model, Request};
+        use crate::model::Request;
         let t0 = std::time::Instant::now();
         self.basis.expand(q, &mut self.u);
         self.params = self.parameters(lambda);

@@ -110,8 +110,9 @@
 //! with c_f the centroid of the fluid. With the orientation flipped (fluid outside) it is
 //! Archimedes' buoyancy (0, 0, +V_f) acting at the centre of buoyancy.
 
-use super::local::{area_vector, area_vector_gradient, area_vector_hessian, Local};
+use super::local::{area_vector, area_vector_gradient, area_vector_hessian};
 use super::Quantity;
+use crate::model::Local;
 use crate::model::{Assembler, Effect, ModelError, Vec3};
 use nalgebra::Vector3;
 use symmetry::Invariant;

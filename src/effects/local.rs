@@ -1,8 +1,7 @@
-//! What every per-triangle kernel returns, and the derivatives of the area vector they share.
-//!
-//! A kernel sees one flat triangle `x = [x1, x2, x3]` whose nodes run counter-clockwise seen
-//! from the side its normal points to (outward for a closed surface) and returns a value with
-//! its gradient (9) and Hessian (9×9) in node-major order x1, y1, z1, x2, …, z3.
+//! The derivatives of the area vector that the per-triangle kernels share. A kernel sees one
+//! flat triangle `x = [x1, x2, x3]` whose nodes run counter-clockwise seen from the side its
+//! normal points to (outward for a closed surface) and returns a [`crate::model::Local`]: a value with its
+//! gradient (9) and Hessian (9×9) in node-major order x1, y1, z1, x2, …, z3.
 //!
 //! The area vector of the triangle is
 //!
@@ -16,53 +15,6 @@
 //! ε_{cjk} (δ_{m,i+1} − δ_{m,i−1}) (node indices cyclic), a constant matrix.
 
 use nalgebra::Vector3;
-
-/// Value, gradient (9) and Hessian (9×9) of one triangle's contribution, node-major dofs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Local {
-    /// The contribution itself.
-    pub value: f64,
-    /// ∂/∂(x1, y1, z1, x2, …, z3).
-    pub grad: [f64; 9],
-    /// ∂²/∂x∂x, symmetric.
-    pub hess: [[f64; 9]; 9],
-}
-
-impl Local {
-    /// `s` times value, gradient and Hessian.
-    pub fn scaled(&self, s: f64) -> Local {
-        let mut out = *self;
-        out.value *= s;
-        out.grad.iter_mut().for_each(|g| *g *= s);
-        out.hess.iter_mut().flatten().for_each(|h| *h *= s);
-        out
-    }
-}
-
-impl Local {
-    /// Zero value, gradient and Hessian.
-    pub const ZERO: Local = Local {
-        value: 0.0,
-        grad: [0.0; 9],
-        hess: [[0.0; 9]; 9],
-    };
-
-    /// Copies the upper triangle of the Hessian onto the lower one, so that it is symmetric to
-    /// the last bit whatever order the kernel summed its terms in.
-    pub fn mirror_upper(&mut self) {
-        for a in 0..9 {
-            for b in 0..a {
-                self.hess[a][b] = self.hess[b][a];
-            }
-        }
-    }
-}
-
-impl Default for Local {
-    fn default() -> Self {
-        Self::ZERO
-    }
-}
 
 /// Levi-Civita symbol ε_{cjk} for indices in 0..3.
 fn levi_civita(c: usize, j: usize, k: usize) -> f64 {
@@ -109,7 +61,7 @@ pub fn area_vector_hessian(c: usize) -> [[f64; 9]; 9] {
 /// Finite-difference checks shared by every kernel's tests.
 #[cfg(test)]
 pub(crate) mod fd {
-    use super::Local;
+    use crate::model::Local;
     use nalgebra::Vector3;
 
     /// x + s·d with d a 9-vector in node-major order.
@@ -312,6 +264,7 @@ pub(crate) mod fd {
 mod tests {
     use super::fd::{check_kernel, nodes};
     use super::*;
+    use crate::model::Local;
     use proptest::prelude::*;
 
     /// The area-vector component as a kernel (a check of the helpers themselves).

@@ -22,7 +22,7 @@
 //! (∇²t = 2I, ∇²J in closed form), carried to the edges by f1 = m11 a, f2 = m12 a + m22 b
 //! and to the nodes by a = x2 − x1, b = x3 − x1: x1 takes −(∂/∂a + ∂/∂b), x2 ∂/∂a, x3 ∂/∂b.
 
-use super::local::Local;
+use crate::model::Local;
 use crate::model::{Assembler, Effect, ModelError, Vec3};
 use nalgebra::Vector3;
 use symmetry::Invariant;

@@ -1,5 +1,5 @@
 //! Effects: every load a potential (DESIGN §2). One effect per file, its potential in the
-//! module doc; the per-triangle kernels return value, gradient and Hessian ([`local::Local`]).
+//! module doc; the per-triangle kernels return value, gradient and Hessian ([`crate::model::Local`]).
 
 pub mod gas;
 pub mod hydrostatic;

@@ -37,8 +37,9 @@
 //! conservative (an inexact rule, e.g. the centroid, would lose both).
 
 use super::hydrostatic::FluidSide;
-use super::local::{area_vector, area_vector_gradient, area_vector_hessian, Local};
+use super::local::{area_vector, area_vector_gradient, area_vector_hessian};
 use super::Quantity;
+use crate::model::Local;
 use crate::model::{Assembler, Effect, ModelError, Vec3};
 use nalgebra::Vector3;
 use symmetry::Invariant;

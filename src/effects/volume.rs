@@ -19,7 +19,7 @@
 //! F = (P_atm − C/V) ∇V, K = (P_atm − C/V) ∇²V + (C/V²) ∇V ∇Vᵀ.
 //! For an open membrane with a fixed rim, the closing surface only adds a constant to V.
 
-use super::local::Local;
+use crate::model::Local;
 use nalgebra::Vector3;
 
 /// Signed volume V_T = x1·(x2 × x3)/6 with its gradient and Hessian (node-major dofs).

@@ -7,8 +7,8 @@
 //! into a scratch buffer owned by the [`Evaluation`] (allocated once), then scatters the
 //! results in one sequential pass.
 
+use super::Local;
 use super::{ModelError, Vec3};
-use crate::effects::local::Local;
 use crate::linalg::SymmetricPattern;
 use rayon::prelude::*;
 

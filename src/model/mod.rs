@@ -9,8 +9,10 @@
 mod assembly;
 pub mod check;
 pub mod constraint;
+mod local;
 
 pub use assembly::{Assembler, Evaluation, Layout, NodeTerms, Request, Subset, TriangleTerms};
+pub use local::Local;
 
 use crate::linalg::SymmetricPattern;
 use nalgebra::Vector3;
@@ -87,14 +89,33 @@ pub const ALL_RIGID_MOTIONS: [[f64; 6]; 6] = [
     [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
 ];
 
-/// What a solver needs from a model.
+/// What the solvers and the analysis need from a model: nodes with their unknowns (the
+/// group acts on nodes), Π and its derivatives at a state, and the rigid motions it keeps.
+/// Nothing here names a particular effect.
 pub trait Model: Sync {
+    /// The nodes, their unknowns, the triangles and the tangent's pattern.
+    fn layout(&self) -> &Layout;
+    /// Reference node positions X.
+    fn reference(&self) -> &[Vec3];
+    /// The rigid motions (t, ω) under which Π is invariant, as an orthonormal basis of that
+    /// subspace of ℝ⁶ (empty when a node is fixed).
+    fn rigid_motions(&self) -> Vec<[f64; 6]>;
     /// Number of unknowns N.
-    fn unknowns(&self) -> usize;
+    fn unknowns(&self) -> usize {
+        self.layout().unknowns()
+    }
     /// Names of the parameters Λ, in order.
     fn parameters(&self) -> &[String];
     /// The fixed sparsity pattern of the tangent.
-    fn pattern(&self) -> &SymmetricPattern;
+    fn pattern(&self) -> &SymmetricPattern {
+        self.layout().pattern()
+    }
+    /// Current node positions x = X + u (fixed nodes at X).
+    fn positions(&self, u: &[f64]) -> Vec<Vec3> {
+        let mut x = self.reference().to_vec();
+        self.layout().add_displacements(u, &mut x);
+        x
+    }
     /// Evaluates what `request` asks for at (u, Λ) into `out` (buffers are reused).
     fn evaluate(
         &self,
@@ -134,25 +155,45 @@ impl FeModel {
         }
     }
 
-    /// The layout (dof map, pattern, scatter slots).
-    pub fn layout(&self) -> &Layout {
-        &self.layout
-    }
-
-    /// Reference node positions X.
-    pub fn reference(&self) -> &[Vec3] {
-        &self.reference
-    }
-
     /// The effects, in assembly order.
     pub fn effects(&self) -> &[Box<dyn Effect>] {
         &self.effects
     }
 
+    /// The displacement fields of rigid motions at positions `x`: u_i = t + ω × x_i.
+    pub fn rigid_modes(&self, motions: &[[f64; 6]], x: &[Vec3]) -> Vec<Vec<f64>> {
+        motions
+            .iter()
+            .map(|m| {
+                let (t, w) = (Vec3::new(m[0], m[1], m[2]), Vec3::new(m[3], m[4], m[5]));
+                let mut u = vec![0.0; self.layout.unknowns()];
+                for (i, xi) in x.iter().enumerate() {
+                    let v = t + w.cross(xi);
+                    for k in 0..3 {
+                        if let Some(d) = self.layout.dof(i, k) {
+                            u[d] = v[k];
+                        }
+                    }
+                }
+                u
+            })
+            .collect()
+    }
+}
+
+impl Model for FeModel {
+    fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    fn reference(&self) -> &[Vec3] {
+        &self.reference
+    }
+
     /// The rigid motions (t, ω) that every effect keeps, as an orthonormal basis of that
     /// subspace of ℝ⁶: the intersection of the effects' subspaces, computed as the null space
     /// of Σ_e (I − P_e). Empty when any node is fixed.
-    pub fn rigid_motions(&self) -> Vec<[f64; 6]> {
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
         if self.layout.unknowns() < 3 * self.reference.len() {
             return Vec::new();
         }
@@ -179,45 +220,8 @@ impl FeModel {
             .collect()
     }
 
-    /// The displacement fields of rigid motions at positions `x`: u_i = t + ω × x_i.
-    pub fn rigid_modes(&self, motions: &[[f64; 6]], x: &[Vec3]) -> Vec<Vec<f64>> {
-        motions
-            .iter()
-            .map(|m| {
-                let (t, w) = (Vec3::new(m[0], m[1], m[2]), Vec3::new(m[3], m[4], m[5]));
-                let mut u = vec![0.0; self.layout.unknowns()];
-                for (i, xi) in x.iter().enumerate() {
-                    let v = t + w.cross(xi);
-                    for k in 0..3 {
-                        if let Some(d) = self.layout.dof(i, k) {
-                            u[d] = v[k];
-                        }
-                    }
-                }
-                u
-            })
-            .collect()
-    }
-
-    /// Current node positions x = X + u (fixed nodes at X).
-    pub fn positions(&self, u: &[f64]) -> Vec<Vec3> {
-        let mut x = self.reference.clone();
-        self.layout.add_displacements(u, &mut x);
-        x
-    }
-}
-
-impl Model for FeModel {
-    fn unknowns(&self) -> usize {
-        self.layout.unknowns()
-    }
-
     fn parameters(&self) -> &[String] {
         &self.parameters
-    }
-
-    fn pattern(&self) -> &SymmetricPattern {
-        self.layout.pattern()
     }
 
     fn new_evaluation(&self) -> Evaluation {

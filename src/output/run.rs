@@ -8,6 +8,7 @@ use super::{
 use crate::analysis::critical::CriticalKind;
 use crate::analysis::events::{Extremum, StopReason};
 use crate::analysis::RunResult;
+use crate::model::Model;
 use crate::report::{PathReport, StateKind};
 use crate::study::Study;
 use meshes::write::Fields;
