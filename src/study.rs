@@ -5,13 +5,14 @@
 //! and the path is followed in that group's fixed-point space.
 
 use crate::adapted::SparseBasis;
-use crate::effects::gas::{GasAmount, GasPressure};
-use crate::effects::hydrostatic::{Fluid, FluidSide};
+use crate::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
+use crate::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
 use crate::effects::membrane::{Membrane, MooneyRivlin};
 use crate::effects::plane::{PenaltyLaw, Plane};
 use crate::effects::spin::Spin;
+use crate::effects::volume::ClosingFace;
 use crate::effects::Quantity;
-use crate::model::constraint::{self, Constraint};
+use crate::model::constraint::Constraint;
 use crate::model::{Effect, FeModel, Model, Vec3};
 use crate::scene::{self, Scene};
 use meshes::{GroupAction, SymmetricMesh};
@@ -73,7 +74,7 @@ pub struct Study {
     pub warnings: Vec<String>,
     fluids: Vec<Fluid>,
     closed: bool,
-    closing: Option<constraint::ClosingFace>,
+    closing: Option<ClosingFace>,
     stress_free_volume: f64,
     targets_from_start: Vec<bool>,
 }
@@ -186,7 +187,7 @@ impl Study {
                     };
                     let (target, initial) = target(&fv.value);
                     (
-                        Box::new(constraint::FluidVolume {
+                        Box::new(FluidVolumeConstraint {
                             fluid,
                             level: index(&fv.level),
                             target,
@@ -198,7 +199,7 @@ impl Study {
                 scene::Constraint::GasAmount(ga) => {
                     let (target, initial) = target(&ga.value);
                     (
-                        Box::new(constraint::GasAmount {
+                        Box::new(GasAmountConstraint {
                             pressure: index(&ga.pressure),
                             ambient: ga.ambient_pressure,
                             target,
@@ -344,11 +345,7 @@ impl Study {
 /// The flat plate closing an open membrane: every boundary loop fixed and in one horizontal
 /// plane. Its area vector is minus that of the loops as they run in the triangles, so that it
 /// is oriented like the membrane (outward for the closed body).
-fn closing_face(
-    m: &meshes::Mesh,
-    loops: &[Vec<usize>],
-    fixed: &[usize],
-) -> Option<constraint::ClosingFace> {
+fn closing_face(m: &meshes::Mesh, loops: &[Vec<usize>], fixed: &[usize]) -> Option<ClosingFace> {
     let first = *loops.first()?.first()?;
     let z = m.nodes[first].z;
     let tol = 1e-12 * m.size().max(1e-300);
@@ -363,7 +360,7 @@ fn closing_face(
             area_z -= 0.5 * (a.x * b.y - a.y * b.x);
         }
     }
-    Some(constraint::ClosingFace { z, area_z })
+    Some(ClosingFace { z, area_z })
 }
 
 fn target(t: &scene::Target) -> (f64, bool) {

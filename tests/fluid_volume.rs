@@ -3,9 +3,10 @@
 //! fixed-fluid-volume constraint holds it along a path (the docs/scenes.md example).
 
 use memstab::analysis::run;
+use memstab::effects::hydrostatic::FluidVolumeConstraint as FluidVolume;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::Quantity;
-use memstab::model::constraint::{Constraint, FluidVolume};
+use memstab::model::constraint::Constraint;
 use memstab::model::Model;
 use memstab::scene::Scene;
 use memstab::study::Study;

@@ -6,10 +6,11 @@ use crate::common::follow;
 use memstab::adapted::{AdaptedBasis, SparseBasis};
 use memstab::analysis::continuation::PathOptions;
 use memstab::analysis::SymmetricProblem;
+use memstab::effects::gas::GasAmountConstraint;
 use memstab::effects::gas::{GasAmount, GasPressure};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
-use memstab::model::constraint::{self, Constraint};
+use memstab::model::constraint::Constraint;
 use memstab::model::{Effect, FeModel, Model, Request};
 use memstab::stability::{Detail, Stability};
 use meshes::generators::{icosphere, IcosphereOptions};
@@ -203,7 +204,7 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
 
     let ambient = 1.0;
     let x = model.positions(&u);
-    let mut amount = constraint::GasAmount {
+    let mut amount = GasAmountConstraint {
         pressure: 0,
         ambient,
         target: 0.0,
@@ -293,7 +294,7 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
     let ambient = 1.0;
     for (u, p, s) in states(&sym, &model, 3.6) {
         let x = model.positions(&u);
-        let mut amount = constraint::GasAmount {
+        let mut amount = GasAmountConstraint {
             pressure: 0,
             ambient,
             target: 0.0,

@@ -13,7 +13,8 @@
 
 use super::volume::volume;
 use super::Quantity;
-use crate::model::{Assembler, Effect, ModelError, Vec3};
+use crate::model::constraint::{gather, Constraint, ConstraintValue};
+use crate::model::{Assembler, Effect, Layout, ModelError, Vec3};
 use symmetry::Invariant;
 
 /// Gas at a fixed over-pressure p (parameter index `pressure`).
@@ -118,5 +119,57 @@ impl Effect for GasAmount {
             out.add_rank_one(c / (v * v), grad_v);
         }
         Ok(())
+    }
+}
+
+/// Fixed amount of gas (P_atm + p) V = C* for a fixed-pressure gas effect; frees p.
+#[derive(Debug, Clone)]
+pub struct GasAmountConstraint {
+    /// The pressure's parameter index.
+    pub pressure: usize,
+    /// Ambient absolute pressure.
+    pub ambient: f64,
+    /// C*.
+    pub target: f64,
+    /// Volume between the membrane and fixed walls, added to Σ V_T.
+    pub closing_volume: f64,
+}
+
+impl Constraint for GasAmountConstraint {
+    fn name(&self) -> &str {
+        "gas-amount"
+    }
+    fn frees(&self) -> usize {
+        self.pressure
+    }
+    fn measure(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> f64 {
+        let v: f64 = layout
+            .triangles()
+            .iter()
+            .map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value)
+            .sum();
+        (params[self.pressure] + self.ambient) * v
+    }
+    fn target(&self) -> f64 {
+        self.target
+    }
+    fn set_target(&mut self, target: f64) {
+        self.target = target;
+    }
+    fn evaluate(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> ConstraintValue {
+        let pa = params[self.pressure] + self.ambient;
+        let v: f64 = layout
+            .triangles()
+            .iter()
+            .map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value)
+            .sum();
+        let grad_u = gather(layout, x, |xt| volume(xt).grad.map(|g| pa * g));
+        let mut grad_params = vec![0.0; params.len()];
+        grad_params[self.pressure] = v;
+        ConstraintValue {
+            value: pa * v - self.target,
+            grad_u,
+            grad_params,
+        }
     }
 }

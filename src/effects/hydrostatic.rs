@@ -112,8 +112,9 @@
 
 use super::local::{area_vector, area_vector_gradient, area_vector_hessian};
 use super::Quantity;
+use crate::model::constraint::{gather, Constraint, ConstraintValue};
 use crate::model::Local;
-use crate::model::{Assembler, Effect, ModelError, Vec3};
+use crate::model::{Assembler, Effect, Layout, ModelError, Vec3};
 use nalgebra::Vector3;
 use symmetry::Invariant;
 
@@ -382,6 +383,73 @@ pub fn fluid_volume(x: &[Vector3<f64>; 3], h: f64) -> FluidVolume {
         value: nz * c,
         grad,
         d_dh: nz * (0.5 - wet_area),
+    }
+}
+
+/// Fixed fluid volume of a fluid effect; frees its level.
+#[derive(Debug, Clone)]
+pub struct FluidVolumeConstraint {
+    /// The fluid effect (its level must be a parameter).
+    pub fluid: Fluid,
+    /// The level's parameter index.
+    pub level: usize,
+    /// V*.
+    pub target: f64,
+    /// The fixed face closing an open membrane, if any.
+    pub closing: Option<super::volume::ClosingFace>,
+}
+
+impl FluidVolumeConstraint {
+    fn sign(&self) -> f64 {
+        match self.fluid.side {
+            FluidSide::Behind => 1.0,
+            FluidSide::Front => -1.0,
+        }
+    }
+}
+
+impl Constraint for FluidVolumeConstraint {
+    fn name(&self) -> &str {
+        "fluid-volume"
+    }
+    fn frees(&self) -> usize {
+        self.level
+    }
+    fn measure(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> f64 {
+        let closing = self
+            .closing
+            .map_or(0.0, |c| self.sign() * c.fluid_volume(params[self.level]).0);
+        self.fluid.fluid_volume(layout.triangles(), x, params) + closing
+    }
+    fn target(&self) -> f64 {
+        self.target
+    }
+    fn set_target(&mut self, target: f64) {
+        self.target = target;
+    }
+    fn evaluate(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> ConstraintValue {
+        let h = params[self.level];
+        let s = self.sign();
+        let mut value = 0.0;
+        let mut d_dh = 0.0;
+        for &[a, b, c] in layout.triangles() {
+            let v = fluid_volume(&[x[a], x[b], x[c]], h);
+            value += s * v.value;
+            d_dh += s * v.d_dh;
+        }
+        if let Some(c) = self.closing {
+            let (v, dv) = c.fluid_volume(h);
+            value += s * v;
+            d_dh += s * dv;
+        }
+        let grad_u = gather(layout, x, |xt| fluid_volume(xt, h).grad.map(|g| s * g));
+        let mut grad_params = vec![0.0; params.len()];
+        grad_params[self.level] = d_dh;
+        ConstraintValue {
+            value: value - self.target,
+            grad_u,
+            grad_params,
+        }
     }
 }
 

@@ -104,3 +104,30 @@ mod tests {
         }
     }
 }
+
+/// A fixed flat horizontal face that closes an open membrane along its fixed rim (a plate),
+/// oriented like the membrane: the z-component of its area vector and its height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClosingFace {
+    /// Height z_c of the face.
+    pub z: f64,
+    /// z-component of its area vector (signed by the outward orientation of the closed body).
+    pub area_z: f64,
+}
+
+impl ClosingFace {
+    /// Its contribution (1/3)∫ x·n dA = z_c A_z / 3 to the enclosed volume.
+    pub fn volume(&self) -> f64 {
+        self.z * self.area_z / 3.0
+    }
+
+    /// Its contribution ∫ min(z, h) n_z dA = min(z_c, h) A_z to the fluid volume below h,
+    /// and the derivative in h.
+    pub fn fluid_volume(&self, h: f64) -> (f64, f64) {
+        if h < self.z {
+            (h * self.area_z, self.area_z)
+        } else {
+            (self.z * self.area_z, 0.0)
+        }
+    }
+}
