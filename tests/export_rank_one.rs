@@ -193,7 +193,7 @@ fn export_with_rank_one_terms_round_trips_and_scipy_agrees() {
     );
     let stdout = String::from_utf8_lossy(&o.stdout);
     let rank1 = dir.path().join("K.rank1.mtx");
-    assert_eq!(rank1, memstab::bench::rank_one_path(&mtx));
+    assert_eq!(rank1, memstab::output::rank_one_path(&mtx));
     assert!(stdout.contains("K.rank1.mtx"), "{stdout}");
     let (n, lower, comments) = read_sparse(&mtx);
     assert!(

@@ -5,7 +5,7 @@ use crate::mesh::{Mesh, Vec3};
 use crate::MeshError;
 use rayon::prelude::*;
 use std::collections::HashMap;
-use symmetry::{Group, Invariant, Matrix3};
+use symmetry::{Group, Invariant, Matrix3, Subgroup};
 
 /// A hash map with a fast, fixed hasher (foldhash): the keys are grid cells and node
 /// triples of our own meshes, not untrusted input, and SipHash made the lookups the cost
@@ -250,18 +250,48 @@ impl GroupAction {
             .group
             .stabilizer(keep)
             .map_err(|e| MeshError::Symmetry(e.to_string()))?;
+        self.restrict_to(&sub)
+    }
+
+    /// The action of a subgroup of the acting group, e.g. an isotropy subgroup `Σ` made a
+    /// group of its own by [`Group::subgroup`]: its element `i` acts by the permutations of
+    /// the parent's element `subgroup.parent_index[i]`, so symmetry-adapted bases of `Σ` (its
+    /// own irreps) can be built on this mesh.
+    ///
+    /// Fails if `subgroup` does not belong to this action's group: an index out of range, or
+    /// an element whose matrix is not the parent element's (to [`symmetry::MATRIX_TOL`]).
+    pub fn restrict_to(&self, subgroup: &Subgroup) -> Result<Self, MeshError> {
+        let sub = &subgroup.group;
+        if subgroup.parent_index.len() != sub.order() {
+            return Err(MeshError::Symmetry(format!(
+                "subgroup {} has {} elements but {} parent indices",
+                sub.name(),
+                sub.order(),
+                subgroup.parent_index.len()
+            )));
+        }
+        for (i, &g) in subgroup.parent_index.iter().enumerate() {
+            let same = g < self.group.order()
+                && (sub.element(i) - self.group.element(g)).amax() <= symmetry::MATRIX_TOL;
+            if !same {
+                return Err(MeshError::Symmetry(format!(
+                    "element {i} of {} is not element {g} of {}",
+                    sub.name(),
+                    self.group.name()
+                )));
+            }
+        }
+        let pick = |perms: &[Vec<usize>]| -> Vec<Vec<usize>> {
+            subgroup
+                .parent_index
+                .iter()
+                .map(|&g| perms[g].clone())
+                .collect()
+        };
         Ok(Self {
-            node_perm: sub
-                .parent_index
-                .iter()
-                .map(|&g| self.node_perm[g].clone())
-                .collect(),
-            triangle_perm: sub
-                .parent_index
-                .iter()
-                .map(|&g| self.triangle_perm[g].clone())
-                .collect(),
-            group: sub.group,
+            node_perm: pick(&self.node_perm),
+            triangle_perm: pick(&self.triangle_perm),
+            group: sub.clone(),
         })
     }
 }

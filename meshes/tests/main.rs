@@ -3,4 +3,5 @@
 mod actions;
 mod generators;
 mod readers;
+mod subgroup_actions;
 mod writers;

@@ -9,13 +9,14 @@
 //! The file is `coordinate real symmetric`, the lower triangle of the pattern (explicit zeros
 //! included), 1-based, written whole (temporary file + rename). Rank-one terms of K (a
 //! `gas-amount` effect: K = S + Σ c_k a_k a_kᵀ, dense) go into a companion file next to it,
-//! `K.rank1.mtx` (see [`memstab::bench::write_matrix_market`] and the `--help` text).
+//! `K.rank1.mtx` (see [`memstab::output::write_matrix_market`] and the `--help` text).
 
 use super::common::{build_study, load_scene, one_line, parse_at};
 use super::CliError;
 use clap::Args;
 use memstab::analysis::equilibrium::{state_at, StartState};
 use memstab::model::{Model, Request};
+use memstab::output::{rank_one_path, write_matrix_market};
 use std::path::PathBuf;
 
 /// Arguments of `memstab export-matrix`.
@@ -89,7 +90,7 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let companion = memstab::bench::rank_one_path(&args.out);
+    let companion = rank_one_path(&args.out);
     if !eval.rank_one.is_empty() && companion.is_dir() {
         return Err(CliError::Input(format!(
             "--out {}: K has rank-one terms, and their file {} is a directory",
@@ -97,8 +98,8 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
             companion.display()
         )));
     }
-    let files = memstab::bench::write_matrix_market(&args.out, &study.model, &eval, &comment)
-        .map_err(CliError::Failure)?;
+    let files = write_matrix_market(&args.out, &study.model, &eval, &comment)
+        .map_err(|e| CliError::Failure(e.to_string()))?;
     let n = study.model.unknowns();
     match &files.rank_one {
         None => println!(

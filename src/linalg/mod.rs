@@ -11,6 +11,7 @@
 //! elsewhere (eigen solvers), which was faster than rayon on the project's 2-core machines.
 
 pub mod bordered;
+pub mod eigen;
 mod ldlt;
 mod sparse;
 

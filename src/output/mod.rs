@@ -24,6 +24,7 @@
 
 mod csv;
 mod json;
+mod matrix_market;
 mod progress;
 mod run;
 mod states;
@@ -31,6 +32,10 @@ mod svg;
 
 pub use csv::write_csv;
 pub use json::{write_critical, write_json};
+pub use matrix_market::{
+    rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,
+    RANK_ONE_FILE_TAG,
+};
 pub use progress::Progress;
 pub use run::{file_name, write_run, RunSummary, TurningSummary, WriteRunError, Written};
 pub use states::{PvdTime, StateWriter};

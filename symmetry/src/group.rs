@@ -18,6 +18,9 @@ pub enum GroupError {
     /// A subgroup whose structure is not one of the supported families.
     #[error("unsupported subgroup structure: {0}")]
     Unsupported(String),
+    /// An irrep or subgroup lattice used with a group it does not belong to.
+    #[error("mismatched group data: {0}")]
+    Mismatch(String),
 }
 
 /// A finite subgroup of O(3) with a complete set of real irreducible representations.
@@ -99,6 +102,12 @@ impl Group {
             class_of,
             irreps,
         })
+    }
+
+    /// Replaces the irreps (for groups whose irreps are computed from their table and
+    /// classes, see [`Group::subgroup`]).
+    pub(crate) fn set_irreps(&mut self, irreps: Vec<Irrep>) {
+        self.irreps = irreps;
     }
 
     /// Parses `C<n>`, `C<n>v` (n ≥ 1), `I` or `Ih` (case of the letters as written here).

@@ -65,7 +65,9 @@ impl Group {
     /// If every element keeps them, this is the group itself (same name and order).
     /// Otherwise the stabiliser must be an axial group `C_n` or `C_nv` (which is always the case
     /// when a direction or an off-origin plane is kept); other structures are an
-    /// [`GroupError::Unsupported`] error.
+    /// [`GroupError::Unsupported`] error. (Any subgroup, axial or not, becomes a group of its
+    /// own with [`Group::subgroup`]; for an axial stabiliser,
+    /// `subgroup_along(elements, keep[0]'s direction)` gives exactly this result.)
     pub fn stabilizer(&self, keep: &[Invariant]) -> Result<Subgroup, GroupError> {
         let members: Vec<usize> = (0..self.order())
             .filter(|&g| keep.iter().all(|k| k.kept_by(self.element(g))))
@@ -80,7 +82,7 @@ impl Group {
     }
 
     /// Recognises the elements `members` (a subgroup) as `C_n` or `C_nv` about a common axis.
-    fn axial_subgroup(
+    pub(crate) fn axial_subgroup(
         &self,
         members: &[usize],
         hint: Option<Vector3<f64>>,
@@ -147,7 +149,7 @@ impl Group {
 }
 
 /// The unit axis of a rotation `R ≠ I`: `R + Rᵀ − (tr R − 1) I = 2 (1 − cos θ) a aᵀ`.
-fn rotation_axis(r: &Matrix3) -> Vector3<f64> {
+pub(crate) fn rotation_axis(r: &Matrix3) -> Vector3<f64> {
     let m = r + r.transpose() - Matrix3::identity() * (r.trace() - 1.0);
     let col = (0..3)
         .max_by(|&a, &b| m.column(a).norm().total_cmp(&m.column(b).norm()))

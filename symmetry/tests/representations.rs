@@ -13,7 +13,7 @@ fn close(a: &DMatrix<f64>, b: &DMatrix<f64>) -> bool {
 }
 
 /// Group axioms from the table: identity, inverses, associativity, table = matrix product.
-fn check_group(g: &Group) {
+pub(crate) fn check_group(g: &Group) {
     let n = g.order();
     for a in 0..n {
         assert_eq!(g.mul(0, a), a);
@@ -40,7 +40,7 @@ fn check_group(g: &Group) {
 }
 
 /// Every irrep: orthogonal matrices, D(gh) = D(g) D(h), constant characters on classes.
-fn check_homomorphism(g: &Group) {
+pub(crate) fn check_homomorphism(g: &Group) {
     for irrep in g.irreps() {
         let d = irrep.dim();
         assert!(
@@ -78,7 +78,7 @@ fn check_homomorphism(g: &Group) {
 
 /// Schur's relations: (1/|G|) Σ_g D^μ_ij(g) D^ν_kl(g) = 0 for μ ≠ ν, and for μ = ν
 /// δ_ik δ_jl / d (real type) or (δ_ik δ_jl + J_ik J_jl) / d (complex type).
-fn check_schur(g: &Group) {
+pub(crate) fn check_schur(g: &Group) {
     let order = g.order() as f64;
     for (m, mu) in g.irreps().iter().enumerate() {
         for (n, nu) in g.irreps().iter().enumerate() {
@@ -126,7 +126,7 @@ fn check_schur(g: &Group) {
 
 /// Characters: (1/|G|) Σ χ_μ χ_ν = c_μ δ_μν (c = commutant dimension); Σ d²/c = |G|;
 /// Σ c = number of classes (the real irreps account for every complex one).
-fn check_characters(g: &Group) {
+pub(crate) fn check_characters(g: &Group) {
     let order = g.order() as f64;
     let mut sum_d2 = 0.0;
     let mut sum_c = 0;
@@ -163,7 +163,7 @@ fn check_characters(g: &Group) {
     assert!(g.irreps()[0].is_trivial());
 }
 
-fn check_all(g: &Group) {
+pub(crate) fn check_all(g: &Group) {
     check_group(g);
     check_homomorphism(g);
     check_schur(g);

@@ -1,0 +1,219 @@
+//! `memstab bench` as a library call: every study of the bench ([`run_accuracy`]) or the
+//! scaling study alone ([`run_scaling`]), their tables built by [`super::report`] and written
+//! whole into an output directory. The command line checks its flags, calls one of these and
+//! prints the markdown they return.
+
+use super::balloon::{balloon_level_with, BalloonLevel, LevelOptions};
+use super::full_path::{full_path_stability, FullPathStability};
+use super::one_line;
+use super::payoff::{c8v_payoff, payoff, PayoffCase};
+use super::peer::run_peer;
+use super::ponding::ponding_level;
+use super::report;
+use super::scaling::{scaling_level, ScalingFits};
+use crate::output::write_atomic;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What [`run_accuracy`] runs.
+#[derive(Debug, Clone, Default)]
+pub struct AccuracyOptions {
+    /// The output directory (created if missing; its parent must exist).
+    pub out: PathBuf,
+    /// Small sizes only: balloon f = 4, 8; the payoff at f = 8 and on a C8v disc of 8
+    /// divisions; the path comparison at f = 4, 8, dense at f = 4; ponding divisions 4, 8.
+    pub quick: bool,
+    /// Balloon frequencies, each at least 1 (empty: 4, 8, 16, 32; quick 4, 8). Stability
+    /// spectra at every point for f ≤ 32 only; the Ih payoff at f = 16 (quick 8) when the
+    /// list has it; stability without symmetry along the path for f ≤ 16 (quick 8).
+    pub frequencies: Vec<usize>,
+}
+
+/// What [`run_scaling`] runs.
+#[derive(Debug, Clone, Default)]
+pub struct ScalingOptions {
+    /// The output directory (created if missing; its parent must exist).
+    pub out: PathBuf,
+    /// Icosphere frequencies, each at least 1.
+    pub frequencies: Vec<usize>,
+    /// Points of each path, the start included (at least 2).
+    pub points: usize,
+}
+
+/// What a run of the bench wrote.
+#[derive(Debug, Clone)]
+pub struct BenchFiles {
+    /// The markdown report (the content of `accuracy.md` or `scaling.md`).
+    pub markdown: String,
+    /// The files written, the markdown first (the peer's `K.mtx` not listed).
+    pub files: Vec<PathBuf>,
+}
+
+/// Writes `text` to `out`/`name` whole.
+fn write_text(out: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
+    let path = out.join(name);
+    write_atomic(&path, |w| w.write_all(text.as_bytes())).map_err(|e| e.to_string())?;
+    Ok(path)
+}
+
+fn create_dir(out: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))
+}
+
+/// The bench: the balloon levels (with the Ih payoff at one level and stability without
+/// symmetry along the path at the small ones), the C8v payoff, the ponding ladder; writes
+/// `accuracy.md`, `accuracy.csv`, `payoff.csv`, `accuracy.svg` (and, with a peer, `K.mtx`)
+/// into [`AccuracyOptions::out`]. `progress` is told what starts, e.g. `balloon f = 8 …`.
+pub fn run_accuracy(
+    options: &AccuracyOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<BenchFiles, String> {
+    let out = &options.out;
+    let quick = options.quick;
+    let mut freqs = options.frequencies.clone();
+    if freqs.is_empty() {
+        freqs = if quick {
+            vec![4, 8]
+        } else {
+            vec![4, 8, 16, 32]
+        };
+    }
+    // The payoff runs on the level of this frequency when the list has it.
+    let payoff_f = if quick { 8 } else { 16 };
+    // Stability without symmetry along the path up to this frequency, dense up to the other.
+    let (compare_max_f, dense_path_max_f) = if quick { (8, 4) } else { (16, 8) };
+    let disc_divisions = if quick { 8 } else { 16 };
+    freqs.sort_unstable();
+    freqs.dedup();
+    create_dir(out)?;
+    let started = Instant::now();
+    let mut md = report::accuracy_heading(quick);
+
+    // 1. The balloon, with the Ih payoff at one level and the path comparison at the small ones.
+    let mut levels: Vec<BalloonLevel> = Vec::new();
+    let mut cases: Vec<PayoffCase> = Vec::new();
+    let mut paths: Vec<(usize, FullPathStability)> = Vec::new();
+    for &f in &freqs {
+        progress(&format!("balloon f = {f} …"));
+        let stability = f <= 32;
+        let options = LevelOptions {
+            stability,
+            keep_states: stability && f <= compare_max_f,
+            max_points: None,
+            index_only: false,
+        };
+        let failure = |e: &str| format!("balloon f = {f}: {}", one_line(e));
+        let (mut level, study) = balloon_level_with(f, &options).map_err(|e| failure(&e))?;
+        if level.p_max.is_none() || level.p_min.is_none() {
+            return Err(failure("the path did not reach both turning points"));
+        }
+        if f == payoff_f {
+            progress(&format!("symmetry payoff at f = {f} …"));
+            let (u, p) = level
+                .at_max
+                .as_ref()
+                .ok_or_else(|| failure("no state at the pressure maximum"))?;
+            let mut po = payoff(&study, u, p, true, true, 20)
+                .map_err(|e| format!("payoff at f = {f}: {e}"))?;
+            po.frequency = f;
+            po.case = format!("the balloon of frequency {f} at its pressure maximum");
+            let sigma = po.shift_invert.as_ref().map_or(0.0, |s| s.shift);
+            let peer = run_peer(out, &study, u, p, sigma);
+            cases.push(PayoffCase {
+                name: format!("balloon-Ih-f{f}"),
+                payoff: po,
+                peer: Some(peer),
+            });
+        }
+        if !level.states.is_empty() {
+            progress(&format!(
+                "stability along the path without symmetry at f = {f} …"
+            ));
+            let full = full_path_stability(&study, &level.states, 20, f <= dense_path_max_f)
+                .map_err(|e| failure(&format!("stability without symmetry: {e}")))?;
+            level.states = Vec::new();
+            paths.push((f, full));
+        }
+        levels.push(level);
+    }
+    progress(&format!(
+        "symmetry payoff on a C8v disc with {disc_divisions} divisions …"
+    ));
+    let mut c8v = c8v_payoff(disc_divisions, true, true, 20).map_err(|e| {
+        format!(
+            "C8v payoff (disc, {disc_divisions} divisions): {}",
+            one_line(&e)
+        )
+    })?;
+    c8v.frequency = 0;
+    cases.push(PayoffCase {
+        name: format!("disc-C8v-d{disc_divisions}"),
+        payoff: c8v,
+        peer: None,
+    });
+    md += &report::balloon_tables(&levels);
+
+    // 2. The payoffs.
+    for case in &cases {
+        md += &report::payoff_table(case);
+    }
+
+    // 3. Stability along the path with and without symmetry.
+    md += &report::path_tables(&levels, &paths);
+
+    // 4. Ponding.
+    let divisions: [usize; 2] = if quick { [4, 8] } else { [8, 16] };
+    let mut ponding = Vec::new();
+    for d in divisions {
+        progress(&format!("ponding, C7v disc with {d} divisions …"));
+        ponding.push(ponding_level(d).map_err(|e| format!("ponding d = {d}: {}", one_line(&e)))?);
+    }
+    md += &report::ponding_table(&ponding);
+    md += &report::total_time("bench", started.elapsed());
+
+    // Outputs.
+    let md_path = write_text(out, "accuracy.md", &md)?;
+    let csv_path = write_text(out, "accuracy.csv", &report::balloon_csv(&levels, &paths))?;
+    let payoff_path = write_text(out, "payoff.csv", &report::payoff_csv(&cases))?;
+    let svg = report::accuracy_svg(&levels).map_err(|e| format!("accuracy.svg: {e}"))?;
+    let svg_path = write_text(out, "accuracy.svg", &svg)?;
+    Ok(BenchFiles {
+        markdown: md,
+        files: vec![md_path, csv_path, payoff_path, svg_path],
+    })
+}
+
+/// The scaling study alone: per frequency a balloon path of [`ScalingOptions::points`]
+/// points with the index by irrep at every point, its time by phase and peak memory, and the
+/// growth exponents; writes `scaling.md` and `scaling.csv` into [`ScalingOptions::out`].
+pub fn run_scaling(
+    options: &ScalingOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<BenchFiles, String> {
+    let out = &options.out;
+    let points = options.points;
+    let mut freqs = options.frequencies.clone();
+    freqs.sort_unstable();
+    freqs.dedup();
+    create_dir(out)?;
+    let started = Instant::now();
+    let mut levels = Vec::new();
+    for &f in &freqs {
+        progress(&format!(
+            "scaling, balloon f = {f}, {points} points with stability …"
+        ));
+        levels.push(
+            scaling_level(f, points).map_err(|e| format!("scaling f = {f}: {}", one_line(&e)))?,
+        );
+    }
+    let fits = ScalingFits::new(&levels);
+    let mut md = report::scaling_heading(&freqs);
+    md += &report::scaling_table(&levels, &fits, points);
+    md += &report::total_time("study", started.elapsed());
+    let md_path = write_text(out, "scaling.md", &md)?;
+    let csv_path = write_text(out, "scaling.csv", &report::scaling_csv(&levels, &fits))?;
+    Ok(BenchFiles {
+        markdown: md,
+        files: vec![md_path, csv_path],
+    })
+}
