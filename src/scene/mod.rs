@@ -273,12 +273,26 @@ impl Effect {
 
     /// The quantities of this effect with their keys, in declaration order.
     pub fn quantities(&self) -> Vec<(&'static str, &Quantity)> {
+        self.ruled_quantities()
+            .into_iter()
+            .map(|(k, q, _)| (k, q))
+            .collect()
+    }
+
+    /// The quantities with their keys and the range a literal value must lie in.
+    pub fn ruled_quantities(&self) -> Vec<(&'static str, &Quantity, Range)> {
         match self {
-            Effect::Gas(e) => vec![("pressure", &e.pressure)],
-            Effect::GasAmount(e) => vec![("amount", &e.amount)],
-            Effect::Fluid(e) => vec![("density", &e.density), ("level", &e.level)],
-            Effect::Spin(e) => vec![("density", &e.density), ("omega2", &e.omega2)],
-            Effect::Plane(e) => vec![("offset", &e.offset)],
+            Effect::Gas(e) => vec![("pressure", &e.pressure, Range::Finite)],
+            Effect::GasAmount(e) => vec![("amount", &e.amount, Range::Positive)],
+            Effect::Fluid(e) => vec![
+                ("density", &e.density, Range::NonNegative),
+                ("level", &e.level, Range::Finite),
+            ],
+            Effect::Spin(e) => vec![
+                ("density", &e.density, Range::NonNegative),
+                ("omega2", &e.omega2, Range::NonNegative),
+            ],
+            Effect::Plane(e) => vec![("offset", &e.offset, Range::Finite)],
         }
     }
 
@@ -295,6 +309,17 @@ impl Effect {
     pub fn encloses(&self) -> bool {
         !matches!(self, Effect::Plane(_))
     }
+}
+
+/// What a literal value of a quantity must be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Range {
+    /// Any finite number.
+    Finite,
+    /// Finite and ≥ 0.
+    NonNegative,
+    /// Finite and > 0.
+    Positive,
 }
 
 /// `type = "gas"`.

@@ -48,24 +48,6 @@ fn at_least(key: &str, n: usize, min: usize) -> Result<(), Problem> {
     }
 }
 
-/// What a literal quantity must satisfy.
-#[derive(Clone, Copy)]
-enum Rule {
-    Finite,
-    NonNegative,
-    Positive,
-}
-
-/// The rule for each quantity key of each effect type.
-fn rule(effect: &Effect, key: &str) -> Rule {
-    match (effect, key) {
-        (Effect::GasAmount(_), "amount") => Rule::Positive,
-        (Effect::Fluid(_) | Effect::Spin(_), "density") => Rule::NonNegative,
-        (Effect::Spin(_), "omega2") => Rule::NonNegative,
-        _ => Rule::Finite,
-    }
-}
-
 fn declared(parameters: &BTreeMap<String, Parameter>) -> String {
     if parameters.is_empty() {
         "no parameters are declared".into()
@@ -321,14 +303,14 @@ fn check_effect(
     parameters: &BTreeMap<String, Parameter>,
 ) -> Result<(), Problem> {
     let path = format!("effect[{i}]");
-    for (key, q) in effect.quantities() {
+    for (key, q, range) in effect.ruled_quantities() {
         let key_path = format!("{path}.{key}");
         match q {
             Quantity::Parameter(name) => known_parameter(parameters, &key_path, name)?,
-            Quantity::Value(v) => match rule(effect, key) {
-                Rule::Finite => finite(&key_path, *v)?,
-                Rule::NonNegative => non_negative(&key_path, *v)?,
-                Rule::Positive => positive(&key_path, *v)?,
+            Quantity::Value(v) => match range {
+                Range::Finite => finite(&key_path, *v)?,
+                Range::NonNegative => non_negative(&key_path, *v)?,
+                Range::Positive => positive(&key_path, *v)?,
             },
         }
     }
