@@ -280,7 +280,7 @@ fn closed_form_k0(l: f64) -> f64 {
     2.0 * (1.0 / l - l.powi(-7))
 }
 
-const P_MAX_K0: f64 = 1.2394629;
+use memstab::reference::P_MAX_K0;
 const L_MAX_K0: f64 = 1.3830876;
 
 #[test]
