@@ -1,4 +1,4 @@
-//! Closed-form reference solutions (docs/theory.md §9), shared by the tests, `memstab demo`
+//! Closed-form reference solutions (docs/theory.md §13), shared by the tests, `memstab demo`
 //! and `memstab bench`: the inflated Mooney–Rivlin sphere and the ponding ladder of a
 //! pre-stretched clamped disc.
 

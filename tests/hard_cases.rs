@@ -1,4 +1,4 @@
-//! Hard cases stay numerically stable (issue 3, item 8): each case converges or stops with a
+//! Hard cases stay numerically stable: each case converges or stops with a
 //! clear report — never a panic, never NaN or infinity in any output row — and each is a test.
 //!
 //! 1. The neo-Hookean (k = 0) balloon driven to stretch 5: one pressure maximum, then the
