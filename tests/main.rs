@@ -22,6 +22,7 @@ mod newton;
 mod one_point;
 mod output;
 mod ponding;
+mod reliability;
 mod scene_mesh_file;
 mod scene_validation;
 mod scenes_run;

@@ -51,6 +51,14 @@ pub enum MeshError {
         /// The cause.
         source: std::io::Error,
     },
+    /// An output path exists and is not a regular file; it is never replaced.
+    #[error("{path}: exists and is {what}, not a regular file; refusing to replace it")]
+    Target {
+        /// The path.
+        path: std::path::PathBuf,
+        /// What it is: `a directory`, `a FIFO`, `a device`, `a symbolic link` …
+        what: &'static str,
+    },
     /// A mesh file cannot be read: an unsupported extension, or content that is malformed or
     /// not supported ([`read`]); the message says where (a line, a data array) and what.
     #[error("{path}: {message}")]

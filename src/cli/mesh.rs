@@ -159,13 +159,8 @@ pub(crate) fn run(args: &MeshArgs) -> Result<(), CliError> {
         .map(|p| Format::from_path(p, args.binary))
         .transpose()
         .map_err(input)?;
-    if let Some(dir) = args.out.as_deref().and_then(|p| p.parent()) {
-        if !dir.as_os_str().is_empty() && !dir.is_dir() {
-            return Err(CliError::Input(format!(
-                "output directory '{}' does not exist",
-                dir.display()
-            )));
-        }
+    if let Some(out) = &args.out {
+        super::common::check_out_file("--out", out)?;
     }
     let sym = generate(&args.kind).map_err(input)?;
     let check = sym

@@ -17,7 +17,7 @@ use super::CliError;
 use clap::Args;
 use memstab::analysis::{run as run_study, RunResult};
 use memstab::demo::closed_form_check;
-use memstab::output::{file_name, write_run, Progress, RunSummary, Written};
+use memstab::output::{file_name, write_run, Progress, RunSummary, Written, RUN_FILES};
 use memstab::report::PathReport;
 use memstab::scene::Scene;
 use memstab::study::{Study, StudyError};
@@ -125,6 +125,9 @@ fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, W
 fn check_out(out: &Path) -> Result<(), CliError> {
     if out.exists() {
         if out.is_dir() {
+            for name in RUN_FILES {
+                super::common::check_out_file("--out", &out.join(name))?;
+            }
             return Ok(());
         }
         return Err(CliError::Input(format!(

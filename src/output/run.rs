@@ -14,6 +14,15 @@ use crate::study::Study;
 use meshes::write::Fields;
 use std::path::{Path, PathBuf};
 
+/// The files every run writes into its directory, besides its states.
+pub const RUN_FILES: [&str; 5] = [
+    "path.csv",
+    "path.json",
+    "critical.json",
+    "path.svg",
+    "path.pvd",
+];
+
 /// What [`write_run`] wrote.
 #[derive(Debug, Clone)]
 pub struct Written {

@@ -1,0 +1,102 @@
+//! What fuzzing and interrupts found, each a test: outputs never replace what is not a
+//! regular file, user input never panics or exhausts memory, and the messages name what is
+//! wrong.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn memstab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn scene(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Exit code 2 and one line on stderr containing every needle.
+fn assert_rejected(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{err:?} lacks {n:?}");
+    }
+}
+
+fn fifo(path: &Path) {
+    let ok = Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(ok.success());
+}
+
+#[cfg(unix)]
+fn is_fifo(path: &Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}
+
+#[cfg(unix)]
+#[test]
+fn outputs_never_replace_a_fifo_a_symlink_or_a_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("precious.txt");
+    std::fs::write(&target, "keep me").unwrap();
+    let link = dir.path().join("link.mtx");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let dangling = dir.path().join("dangling.mtx");
+    std::os::unix::fs::symlink(dir.path().join("nowhere"), &dangling).unwrap();
+    let pipe = dir.path().join("pipe.mtx");
+    fifo(&pipe);
+    let demo = scene("demo.toml");
+    for (out, what) in [
+        (&link, "a symbolic link"),
+        (&dangling, "a symbolic link"),
+        (&pipe, "a FIFO"),
+    ] {
+        let o = memstab(&["export-matrix", &demo, "--out", out.to_str().unwrap()]);
+        assert_rejected(&o, &["--out", what]);
+        let o = memstab(&["mesh", "disc", "--out", &format!("{}.vtu", out.display())]);
+        assert_eq!(o.status.code(), Some(0), "a new file beside it is fine");
+    }
+    // Mesh files: a FIFO with the right extension.
+    let pipe_vtu = dir.path().join("pipe.vtu");
+    fifo(&pipe_vtu);
+    let o = memstab(&["mesh", "disc", "--out", pipe_vtu.to_str().unwrap()]);
+    assert_rejected(&o, &["--out", "a FIFO"]);
+    // Nothing was replaced.
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep me");
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(std::fs::symlink_metadata(&dangling)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(is_fifo(&pipe) && is_fifo(&pipe_vtu));
+    // A run directory whose path.csv is a link: refused before anything runs.
+    let run_dir = dir.path().join("run");
+    std::fs::create_dir(&run_dir).unwrap();
+    std::os::unix::fs::symlink(&target, run_dir.join("path.csv")).unwrap();
+    let o = memstab(&["run", &demo, "--out", run_dir.to_str().unwrap(), "--quiet"]);
+    assert_rejected(&o, &["path.csv", "a symbolic link"]);
+    let left: Vec<PathBuf> = std::fs::read_dir(&run_dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(left, [run_dir.join("path.csv")], "nothing written");
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep me");
+}
