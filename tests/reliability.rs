@@ -100,3 +100,28 @@ fn outputs_never_replace_a_fifo_a_symlink_or_a_directory() {
     assert_eq!(left, [run_dir.join("path.csv")], "nothing written");
     assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep me");
 }
+
+/// Every command that prints ends quietly with exit code 0 when its reader has gone.
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let demo = scene("demo.toml");
+    for args in [
+        vec!["group", "Ih"],
+        vec!["spectrum", demo.as_str()],
+        vec!["demo", "--quiet", "--out", out.to_str().unwrap()],
+        vec!["mesh", "icosphere", "--json"],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(&args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
+    }
+}

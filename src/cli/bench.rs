@@ -117,7 +117,7 @@ fn progress(message: &str) {
 /// Prints the report and the files written.
 fn print(files: &BenchFiles) {
     print!("{}", files.markdown);
-    println!(
+    out!(
         "\nwrote {}",
         files
             .files

@@ -79,12 +79,12 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::Failure(e.to_string()))?;
     let n = study.model.unknowns();
     match &files.rank_one {
-        None => println!(
+        None => out!(
             "wrote {} ({n} x {n}, {} entries in the lower triangle)",
             args.out.display(),
             files.entries
         ),
-        Some((file, r)) => println!(
+        Some((file, r)) => out!(
             "wrote {} ({n} x {n}, {} entries in the lower triangle: the sparse part S) and {} \
              ({r} rank-one term(s) c a a^T: K = S + sum_k c_k a_k a_k^T)",
             args.out.display(),

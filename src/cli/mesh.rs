@@ -190,26 +190,26 @@ pub(crate) fn run(args: &MeshArgs) -> Result<(), CliError> {
     };
     if args.json {
         let text = serde_json::to_string(&summary).map_err(|e| CliError::Failure(e.to_string()))?;
-        println!("{text}");
+        out!("{text}");
     } else {
-        println!(
+        out!(
             "{} nodes, {} triangles, group {} (order {}), action verified (max |R X - X_pi| = {:.1e} of the mesh size)",
             summary.nodes, summary.elements, summary.group, summary.order, summary.max_position_error
         );
         for (name, count) in &summary.boundaries {
-            println!("node set '{name}': {count} nodes");
+            out!("node set '{name}': {count} nodes");
         }
         if summary.hidden_symmetries.is_empty() {
-            println!("no symmetry beyond {}", summary.group);
+            out!("no symmetry beyond {}", summary.group);
         } else {
-            println!(
+            out!(
                 "warning: symmetry beyond {}: {}",
                 summary.group,
                 summary.hidden_symmetries.join("; ")
             );
         }
         if let Some(p) = &summary.file {
-            println!("wrote {}", p.display());
+            out!("wrote {}", p.display());
         }
     }
     Ok(())

@@ -3,6 +3,17 @@
 //! Exit codes: 0 success; 2 bad input (one line on stderr naming the bad value, nothing
 //! written); 1 a failure that is not the user's input (a verification or I/O failure).
 
+/// `println!` for the commands' output: when stdout is a pipe whose reader has gone (`memstab
+/// demo | head -1`), the process ends quietly with exit code 0 instead of panicking.
+macro_rules! out {
+    () => {
+        $crate::cli::print_line(format_args!(""))
+    };
+    ($($arg:tt)*) => {
+        $crate::cli::print_line(format_args!($($arg)*))
+    };
+}
+
 mod bench;
 mod common;
 mod compare;
@@ -41,6 +52,23 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Write the full tangent K at the scene's start state in Matrix Market format.
     ExportMatrix(export::ExportArgs),
+}
+
+/// Writes one line to stdout; a closed pipe ends the process quietly (exit 0), any other
+/// write error with exit code 1.
+pub(crate) fn print_line(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout
+        .write_fmt(args)
+        .and_then(|()| stdout.write_all(b"\n"))
+    {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: cannot write to stdout: {e}");
+        std::process::exit(1);
+    }
 }
 
 /// An error that ends the command: bad input (exit 2) or a failure (exit 1).

@@ -55,7 +55,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
-        println!("{text}");
+        out!("{text}");
     } else {
         print_summary(&study, &result.report, &args.out, &written);
     }
@@ -161,12 +161,16 @@ fn control_index(report: &PathReport) -> Option<usize> {
 
 fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Written) {
     let m = &report.mesh;
-    println!("scene '{}' ({})", report.scene, report.origin);
-    println!(
+    out!("scene '{}' ({})", report.scene, report.origin);
+    out!(
         "mesh: {} with {} nodes, {} triangles, group {} (order {})",
-        m.generator, m.nodes, m.elements, m.group, m.order
+        m.generator,
+        m.nodes,
+        m.elements,
+        m.group,
+        m.order
     );
-    println!(
+    out!(
         "scene group {} (order {}): solved in {} symmetric unknowns of {}",
         report.group,
         report.group_order,
@@ -182,26 +186,26 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
         format!("{n} points")
     };
     match (c, report.rows.first(), report.rows.last()) {
-        (Some(c), Some(first), Some(last)) if n > 1 => println!(
+        (Some(c), Some(first), Some(last)) if n > 1 => out!(
             "path: {points}, {} from {} to {}",
             report.control,
             sig_digits6(first.parameters[c]),
             sig_digits6(last.parameters[c])
         ),
         (Some(c), Some(first), _) => {
-            println!(
+            out!(
                 "path: {points}, {} = {}",
                 report.control,
                 sig_digits6(first.parameters[c])
             )
         }
-        _ => println!("equilibrium: {points}"),
+        _ => out!("equilibrium: {points}"),
     }
     // A closed membrane with a negative enclosed volume has turned inside out: the numbers
     // are finite but not physical.
     if let Some(v) = report.measures.iter().position(|m| m == "volume") {
         if let Some(r) = report.rows.iter().find(|r| r.measures[v] <= 0.0) {
-            println!(
+            out!(
                 "warning: the enclosed volume is {} at step {}: the membrane is inside out there, \
                  the path is not physical",
                 sig_digits6(r.measures[v]),
@@ -211,36 +215,38 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     }
     if report.turning_points.is_empty() {
         if c.is_some() {
-            println!("turning points of {}: none", report.control);
+            out!("turning points of {}: none", report.control);
         }
     } else {
-        println!("turning points of {}:", report.control);
+        out!("turning points of {}:", report.control);
         for t in &report.turning_points {
             let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(t.parameters[c]));
             let stretch = s.map_or_else(String::new, |s| {
                 format!(" at stretch {}", sig_digits6(t.measures[s]))
             });
-            println!(
+            out!(
                 "  {:<7} {} = {value}{stretch} (after step {})",
-                t.kind, report.control, t.after_step
+                t.kind,
+                report.control,
+                t.after_step
             );
         }
     }
     for w in &report.warnings {
-        println!("warning: {w}");
+        out!("warning: {w}");
     }
     if let Some(note) = &report.stability_note {
-        println!("{note}");
+        out!("{note}");
     } else if report.critical.is_empty() {
-        println!(
+        out!(
             "critical points: none (the index stays {})",
             report.rows.first().and_then(|r| r.index).unwrap_or(0)
         );
     } else {
-        println!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
+        out!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
         for cp in &report.critical {
             let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(cp.parameters[c]));
-            println!(
+            out!(
                 "  {:<20} in {:<4} x{} at {} = {value} (isotropy {}, |eigenvalue|/|K| = {:.0e})",
                 cp.kind,
                 cp.irrep,
@@ -251,8 +257,8 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
             );
         }
     }
-    println!("stopped: {}", report.stop);
-    println!(
+    out!("stopped: {}", report.stop);
+    out!(
         "wrote {} files into {}:",
         written.files().len(),
         out.display()
@@ -264,29 +270,29 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
         .map(String::as_str)
         .collect::<Vec<_>>()
         .join(", ");
-    println!(
+    out!(
         "  {:<10} {} rows: step, arclength, {header}, iterations",
         file_name(&written.csv),
         report.rows.len()
     );
-    println!(
+    out!(
         "  {:<10} the report: metadata, path, turning points, critical points, saved states",
         file_name(&written.json)
     );
-    println!(
+    out!(
         "  {:<10} {} critical points: kind, irrep, multiplicity, parameters, step",
         file_name(&written.critical),
         report.critical.len()
     );
-    println!("  {:<10} {}", file_name(&written.svg), written.plotted);
+    out!("  {:<10} {}", file_name(&written.svg), written.plotted);
     let in_collection = report.saved.iter().filter(|s| s.in_collection).count();
-    println!(
+    out!(
         "  {:<10} ParaView collection of the {in_collection} path states (time = path step); turning and critical points beside it",
         file_name(&written.pvd),
     );
     for chunk in written.states.chunks(5) {
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
-        println!("  {}", names.join(" "));
+        out!("  {}", names.join(" "));
     }
 }
 
@@ -295,8 +301,8 @@ fn print_closed_form(study: &Study, report: &PathReport) {
     let Some(check) = closed_form_check(study, report) else {
         return;
     };
-    println!();
-    println!(
+    out!();
+    out!(
         "closed form for a Mooney-Rivlin sphere, k = {}: p R/(mu H) = 2/(1+k) (1/l - 1/l^7) (1 + k l^2)",
         check.k
     );
@@ -309,13 +315,13 @@ fn print_closed_form(study: &Study, report: &PathReport) {
         })
         .collect();
     if !list.is_empty() {
-        println!("  its {}", list.join(", its "));
+        out!("  its {}", list.join(", its "));
     }
     if check.turning.is_empty() {
-        println!("memstab found no turning point to compare");
+        out!("memstab found no turning point to compare");
         return;
     }
-    println!(
+    out!(
         "memstab's turning points, p R/(mu H) against the closed form at the stretch l memstab found:"
     );
     for t in &check.turning {
@@ -325,7 +331,7 @@ fn print_closed_form(study: &Study, report: &PathReport) {
                 t.kind
             )
         });
-        println!(
+        out!(
             "  {:<7} {:.7} at l = {:.7}: closed form {:.7}, difference {:+.3} %{stretch_diff}",
             t.kind.to_string(),
             t.pressure,
@@ -341,9 +347,9 @@ fn print_closed_form(study: &Study, report: &PathReport) {
         check.frequency
     );
     if check.explained_by_mesh() {
-        println!("most of the difference is the mesh: {what}");
+        out!("most of the difference is the mesh: {what}");
     } else {
-        println!("for comparison, {what}");
+        out!("for comparison, {what}");
     }
 }
 
