@@ -24,6 +24,7 @@ pub mod analysis;
 pub mod bench;
 pub mod demo;
 pub mod effects;
+pub mod limits;
 pub mod linalg;
 pub mod model;
 pub mod output;

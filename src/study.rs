@@ -12,6 +12,7 @@ use crate::effects::plane::{PenaltyLaw, Plane};
 use crate::effects::spin::Spin;
 use crate::effects::volume::ClosingFace;
 use crate::effects::Quantity;
+use crate::limits::Limits;
 use crate::model::constraint::Constraint;
 use crate::model::{Effect, FeModel, Model, Vec3};
 use crate::scene::{self, Scene};
@@ -26,6 +27,9 @@ pub enum StudyError {
     /// The scene asks for something this version cannot do (user input).
     #[error("{0}")]
     Unsupported(String),
+    /// The scene would cost more than the limits allow (user input).
+    #[error("{0}")]
+    Limit(#[from] crate::limits::LimitError),
 }
 
 /// Measures reported along a path.
@@ -90,6 +94,18 @@ fn side(s: scene::FluidSide) -> FluidSide {
 impl Study {
     /// Builds mesh, effects, model, constraints and basis from a validated scene.
     pub fn build(scene: Scene) -> Result<Self, StudyError> {
+        let limits = Limits::from_env()?;
+        Self::build_within(scene, &limits)
+    }
+
+    /// As [`Study::build`], refusing a scene whose group or estimated memory
+    /// ([`Scene::estimated_bytes`]) exceeds `limits` before anything is allocated.
+    pub fn build_within(scene: Scene, limits: &Limits) -> Result<Self, StudyError> {
+        limits.check_group(&scene.mesh.group_name())?;
+        limits.check_memory(
+            format!("scene '{}' ({})", scene.info.name, scene.mesh.describe()),
+            scene.estimated_bytes(),
+        )?;
         let mesh = scene.build_mesh()?;
         let warnings = scene.mesh_warnings(&mesh);
         let m = &mesh.mesh;

@@ -125,3 +125,62 @@ fn a_closed_stdout_is_not_a_panic() {
         assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
     }
 }
+
+/// A scene, a group or a mesh over the limits is refused with its estimate before anything
+/// is allocated or written; the limits are configurable.
+#[test]
+fn requests_over_the_limits_are_refused_before_they_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    for samples in ["9223372036854775807", "100000000"] {
+        let path = dir.path().join(format!("s{samples}.toml"));
+        std::fs::write(
+            &path,
+            ponding.replace("samples = 92", &format!("samples = {samples}")),
+        )
+        .unwrap();
+        let o = memstab(&["run", path.to_str().unwrap(), "--out", out]);
+        assert_rejected(&o, &["would need about", "MEMSTAB_MAX_MEMORY"]);
+        assert!(!Path::new(out).exists(), "nothing written");
+    }
+    assert_rejected(
+        &memstab(&["run", "/dev/zero", "--out", out]),
+        &["/dev/zero", "larger than"],
+    );
+    assert_rejected(
+        &memstab(&["group", "C800v"]),
+        &["1600", "MEMSTAB_MAX_GROUP_ORDER"],
+    );
+    assert_rejected(
+        &memstab(&["mesh", "disc", "--sectors", "1000000"]),
+        &["the disc mesh", "MEMSTAB_MAX_MEMORY"],
+    );
+    assert_rejected(
+        &memstab(&["mesh", "icosphere", "--frequency", "1000"]),
+        &["the icosphere mesh", "MEMSTAB_MAX_MEMORY"],
+    );
+    // Configurable: the demo in 1 MB, and a bad value named.
+    let demo = scene("demo.toml");
+    let run = |var: &str, value: &str| {
+        Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(["run", &demo, "--out", out, "--quiet"])
+            .env(var, value)
+            .output()
+            .unwrap()
+    };
+    assert_rejected(
+        &run("MEMSTAB_MAX_MEMORY", "1M"),
+        &["scene 'demo'", "1.0 MB"],
+    );
+    assert_rejected(
+        &run("MEMSTAB_MAX_MEMORY", "lots"),
+        &["MEMSTAB_MAX_MEMORY", "'lots'"],
+    );
+    assert_rejected(
+        &run("MEMSTAB_MAX_SCENE_BYTES", "100"),
+        &["larger than 100 B"],
+    );
+    assert!(!Path::new(out).exists(), "nothing written");
+}

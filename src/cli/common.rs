@@ -16,7 +16,7 @@ pub(super) fn load_scene(path: &Path) -> Result<Scene, CliError> {
 /// bad input (exit 2), as in `memstab run`.
 pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
     Study::build(scene).map_err(|e| match e {
-        StudyError::Scene(_) | StudyError::Unsupported(_) => {
+        StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
             CliError::Input(one_line(&e.to_string()))
         }
     })

@@ -49,6 +49,9 @@ fn clean(x: f64) -> f64 {
 }
 
 pub(crate) fn run(args: &GroupArgs) -> Result<(), CliError> {
+    memstab::limits::Limits::from_env()
+        .and_then(|l| l.check_group(&args.name))
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let g = Group::by_name(&args.name).map_err(|e| CliError::Input(e.to_string()))?;
     if args.json {
         let json = GroupJson {

@@ -75,7 +75,9 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
 fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, Written), CliError> {
     check_out(out)?;
     let mut study = Study::build(scene).map_err(|e| match e {
-        StudyError::Scene(_) | StudyError::Unsupported(_) => CliError::Input(e.to_string()),
+        StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
+            CliError::Input(e.to_string())
+        }
     })?;
     let created = !out.exists();
     if created {
