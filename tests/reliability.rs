@@ -184,3 +184,80 @@ fn requests_over_the_limits_are_refused_before_they_start() {
     );
     assert!(!Path::new(out).exists(), "nothing written");
 }
+
+/// Names from a scene reach the SVG as valid XML text; parameter names are identifiers that
+/// do not collide with a column; messages are one bounded line whatever the value.
+#[test]
+fn names_and_messages_stay_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    let named = demo.replacen("name = \"demo\"", r#"name = "a<b&c\u0001d\uFFFE""#, 1);
+    assert_ne!(named, demo);
+    let path = dir.path().join("named.toml");
+    std::fs::write(&path, named).unwrap();
+    let out = dir.path().join("named");
+    let o = memstab(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(out.join("path.svg")).unwrap();
+    let xml_char = |c: char| {
+        matches!(c, '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}')
+            || c >= '\u{10000}'
+    };
+    assert!(svg.chars().all(xml_char), "a character XML does not allow");
+    assert!(svg.contains("a&lt;b&amp;c"), "markup escaped");
+
+    // Parameter names.
+    for (name, needle) in [
+        ("volume", "column of path.csv"),
+        ("step", "column of path.csv"),
+        ("\"a b\"", "not an identifier"),
+        ("\"\"", "not an identifier"),
+        ("\"1p\"", "not an identifier"),
+    ] {
+        let text = demo
+            .replace("[parameters.p]", &format!("[parameters.{name}]"))
+            .replace("pressure = \"p\"", &format!("pressure = {}", quoted(name)))
+            .replace("control = \"p\"", &format!("control = {}", quoted(name)));
+        let path = dir.path().join("p.toml");
+        std::fs::write(&path, text).unwrap();
+        let o = memstab(&["run", path.to_str().unwrap(), "--out", "unused"]);
+        assert_rejected(&o, &["parameters", needle]);
+    }
+    // A negative spin or density parameter.
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    let text = ponding
+        .replace("start = 0.0 ", "start = -1.0 ")
+        .replace("min = 0.0", "min = -2.0");
+    let path = dir.path().join("neg.toml");
+    std::fs::write(&path, text).unwrap();
+    let o = memstab(&["run", path.to_str().unwrap(), "--out", "unused"]);
+    assert_rejected(&o, &["parameters.rho.start", ">= 0", "effect[0].density"]);
+
+    // A value with line breaks, and a huge one: one bounded line.
+    for value in [
+        "\"C7\\nv\"".to_string(),
+        format!("\"{}\"", "C".repeat(100_000)),
+    ] {
+        let text = demo.replacen("frequency = 4", &format!("frequency = {value}"), 1);
+        let path = dir.path().join("v.toml");
+        std::fs::write(&path, text).unwrap();
+        let o = memstab(&["run", path.to_str().unwrap(), "--out", "unused"]);
+        assert_rejected(&o, &["mesh.frequency"]);
+        assert!(stderr(&o).len() < 600, "{} bytes", stderr(&o).len());
+    }
+}
+
+/// `name` as a TOML string (already quoted names stay as they are).
+fn quoted(name: &str) -> String {
+    if name.starts_with('"') {
+        name.to_string()
+    } else {
+        format!("\"{name}\"")
+    }
+}

@@ -12,6 +12,7 @@ use super::critical::{isotropy, CriticalKind, CriticalPoint};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model};
 use crate::stability::{Detail, Spectrum, Stability};
+use crate::text::num;
 use meshes::GroupAction;
 use serde::Serialize;
 
@@ -151,13 +152,20 @@ impl std::fmt::Display for StopReason {
                 "the control parameter left its [min, max] range (the last point is the first beyond it)",
             ),
             Self::StepBudget { steps } => write!(f, "the step budget ({steps}) was used"),
-            Self::Stretch { target } => write!(f, "the stretch reached {target}"),
-            Self::Displacement { target } => write!(f, "the largest displacement reached {target}"),
+            Self::Stretch { target } => write!(f, "the stretch reached {}", num(*target)),
+            Self::Displacement { target } => {
+                write!(f, "the largest displacement reached {}", num(*target))
+            }
             Self::Condition => f.write_str("the stop condition held"),
             Self::Stalled(s) => write!(f, "{s}"),
             Self::Equilibrium => f.write_str("equilibrium found"),
             Self::Swept { min, max, samples } => {
-                write!(f, "the control swept [{min}, {max}] in {samples} steps")
+                write!(
+                    f,
+                    "the control swept [{}, {}] in {samples} steps",
+                    num(*min),
+                    num(*max)
+                )
             }
             Self::NoControl => f.write_str("no control parameter"),
         }

@@ -129,11 +129,11 @@ pub(crate) fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(CliError::Input(m)) => {
-            eprintln!("error: {m}");
+            eprintln!("error: {}", memstab::text::message(&m));
             ExitCode::from(2)
         }
         Err(CliError::Failure(m)) => {
-            eprintln!("error: {m}");
+            eprintln!("error: {}", memstab::text::message(&m));
             ExitCode::from(1)
         }
     }

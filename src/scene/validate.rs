@@ -228,8 +228,10 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
         }
     }
     for (name, p) in &scene.parameters {
+        check_parameter_name(name)?;
         check_parameter(&key_path("parameters", name), p)?;
     }
+    check_parameter_ranges(scene)?;
     check_constraints(scene)?;
     check_analysis(scene)?;
     check_parameter_use(scene)?;
@@ -346,6 +348,82 @@ fn check_effect(
         }
         Effect::Gas(_) | Effect::Spin(_) => Ok(()),
     }
+}
+
+/// The columns of `path.csv` besides the parameters: no parameter may take their names.
+const COLUMNS: [&str; 10] = [
+    "step",
+    "arclength",
+    "iterations",
+    "index",
+    "max_displacement",
+    "min_z",
+    "max_z",
+    "volume",
+    "stretch",
+    "fluid_volume",
+];
+
+/// A parameter's name is an identifier (a letter or `_`, then letters, digits, `_` or `-`,
+/// at most 64 characters) and not a column of `path.csv`.
+fn check_parameter_name(name: &str) -> Result<(), Problem> {
+    let key = key_path("parameters", name);
+    let shown: String = name.chars().take(64).collect();
+    let mut chars = name.chars();
+    let identifier = chars
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        && name.len() <= 64;
+    if !identifier {
+        return Err(Problem::new(
+            "parameters",
+            format!(
+                "'parameters': the name {shown:?} is not an identifier (a letter or '_', then \
+                 letters, digits, '_' or '-'; at most 64 characters)"
+            ),
+        ));
+    }
+    if COLUMNS.contains(&name) || name.starts_with("fluid_volume_") {
+        return Err(Problem::new(
+            &key,
+            format!("'{key}': \"{name}\" is a column of path.csv; choose another name"),
+        ));
+    }
+    Ok(())
+}
+
+/// A parameter that feeds a quantity with a range (a density ≥ 0, an amount of gas > 0)
+/// keeps its start and bounds in that range.
+fn check_parameter_ranges(scene: &Scene) -> Result<(), Problem> {
+    for (i, effect) in scene.effects.iter().enumerate() {
+        for (key, q, range) in effect.ruled_quantities() {
+            let Some(name) = q.parameter() else { continue };
+            let Some(p) = scene.parameters.get(name) else {
+                continue;
+            };
+            let pkey = key_path("parameters", name);
+            let check = |field: &str, v: f64| -> Result<(), Problem> {
+                let (ok, what) = match range {
+                    Range::Finite => (true, ""),
+                    Range::NonNegative => (v >= 0.0, ">= 0"),
+                    Range::Positive => (v > 0.0, "> 0"),
+                };
+                if ok {
+                    return Ok(());
+                }
+                Err(Problem::at(
+                    &format!("{pkey}.{field}"),
+                    format!("must be {what} (it is effect[{i}].{key}), got {}", num(v)),
+                ))
+            };
+            check("start", p.start)?;
+            if let Some(min) = p.min {
+                check("min", min)?;
+            }
+        }
+    }
+    Ok(())
 }
 
 fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
