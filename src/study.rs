@@ -112,7 +112,7 @@ impl Study {
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
         let topology = m
             .topology()
-            .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
+            .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let closed = topology.closed;
         let fixed = scene.fixed_nodes(&mesh);
         let closing = if closed {
@@ -137,7 +137,7 @@ impl Study {
             MooneyRivlin::new(mat.mu, mat.k, mat.thickness),
             mat.prestretch,
         )
-        .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
+        .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
         let mut fluids = Vec::new();
         for e in &scene.effects {
@@ -383,5 +383,14 @@ fn target(t: &scene::Target) -> (f64, bool) {
     match *t {
         scene::Target::Initial => (0.0, true),
         scene::Target::Value(v) => (v, false),
+    }
+}
+
+/// How a message about the mesh names it: the file and its key for a mesh file, else the
+/// generator.
+fn mesh_key(scene: &Scene) -> String {
+    match &scene.mesh {
+        scene::MeshSpec::File(f) => format!("'mesh.path' = \"{}\"", f.path.display()),
+        other => format!("mesh ({})", other.generator()),
     }
 }

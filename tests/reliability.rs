@@ -261,3 +261,156 @@ fn quoted(name: &str) -> String {
         format!("\"{name}\"")
     }
 }
+
+/// A VTU file (ascii) of the given points and triangles.
+fn vtu(points: &[[f64; 3]], triangles: &[[usize; 3]]) -> String {
+    let p: Vec<String> = points
+        .iter()
+        .map(|x| format!("{} {} {}", x[0], x[1], x[2]))
+        .collect();
+    let c: Vec<String> = triangles
+        .iter()
+        .map(|t| format!("{} {} {}", t[0], t[1], t[2]))
+        .collect();
+    let offsets: Vec<String> = (1..=triangles.len()).map(|i| (3 * i).to_string()).collect();
+    let types = vec!["5"; triangles.len()].join(" ");
+    format!(
+        r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">
+<UnstructuredGrid>
+<Piece NumberOfPoints="{}" NumberOfCells="{}">
+<Points>
+<DataArray type="Float64" Name="Points" NumberOfComponents="3" format="ascii">
+{}
+</DataArray>
+</Points>
+<Cells>
+<DataArray type="Int64" Name="connectivity" format="ascii">
+{}
+</DataArray>
+<DataArray type="Int64" Name="offsets" format="ascii">
+{}
+</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">
+{types}
+</DataArray>
+</Cells>
+</Piece>
+</UnstructuredGrid>
+</VTKFile>
+"#,
+        points.len(),
+        triangles.len(),
+        p.join("\n"),
+        c.join("\n"),
+        offsets.join(" ")
+    )
+}
+
+/// The messages and exit codes of what fuzzing found: each names the key or flag at fault.
+#[test]
+fn messages_name_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    // A mesh file with a repeated node, and one with a degenerate triangle.
+    let s = 0.5 * 3f64.sqrt();
+    let file_scene = |mesh: &str| {
+        format!(
+            "[scene]\nname = \"file\"\n[mesh]\ngenerator = \"file\"\npath = \"{mesh}\"\n\
+             [material]\nmodel = \"mooney-rivlin\"\nmu = 1.0\nk = 0.0\nthickness = 1.0\n\
+             [analysis]\ntype = \"equilibrium\"\n"
+        )
+    };
+    write(
+        "twice.vtu",
+        &vtu(
+            &[
+                [0., 0., 0.],
+                [1., 0., 0.],
+                [-0.5, s, 0.],
+                [-0.5, -s, 0.],
+                [1., 0., 0.],
+            ],
+            &[[0, 1, 2], [0, 2, 3], [0, 3, 4]],
+        ),
+    );
+    let o = memstab(&["spectrum", &write("twice.toml", &file_scene("twice.vtu"))]);
+    assert_rejected(&o, &["mesh.path", "twice.vtu", "nodes 1 and 4 coincide"]);
+    write(
+        "flat.vtu",
+        &vtu(&[[0., 0., 0.], [1., 0., 0.], [2., 0., 0.]], &[[0, 1, 2]]),
+    );
+    let o = memstab(&["spectrum", &write("flat.toml", &file_scene("flat.vtu"))]);
+    assert_rejected(&o, &["mesh.path", "flat.vtu", "triangle 0 is degenerate"]);
+
+    // Newton settings no double precision can meet, and a range of infinite width.
+    let demo = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    let with = |extra: &str| demo.replace("[analysis]\n", &format!("[analysis]\n{extra}\n"));
+    let o = memstab(&["spectrum", &write("t.toml", &with("tolerance = 1e-300"))]);
+    assert_rejected(&o, &["analysis.tolerance", "1e-300"]);
+    let o = memstab(&[
+        "spectrum",
+        &write("m.toml", &with("max-iterations = 9223372036854775807")),
+    ]);
+    assert_rejected(&o, &["analysis.max-iterations", "at most 1000"]);
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    let wide = ponding
+        .replace("min = 0.0\n", "min = -1.7e308\n")
+        .replace("max = 46.0 ", "max = 1.7e308 ");
+    assert_ne!(wide, ponding);
+    let o = memstab(&["spectrum", &write("w.toml", &wide)]);
+    assert_rejected(&o, &["parameters.rho.max", "finite width"]);
+
+    // Flags.
+    let o = memstab(&[
+        "compare",
+        &scene("ponding.toml"),
+        "--meshes",
+        "C8v",
+        "--max",
+        "1e300",
+    ]);
+    assert_rejected(&o, &["--max 1e300", "--samples"]);
+    let o = memstab(&[
+        "bench",
+        "--frequencies",
+        "4,100000",
+        "--out",
+        "unused-bench",
+    ]);
+    assert_rejected(&o, &["--frequencies 100000", "MEMSTAB_MAX_MEMORY"]);
+    assert!(!Path::new("unused-bench").exists());
+    #[cfg(unix)]
+    {
+        let link = dir.path().join("dangling");
+        std::os::unix::fs::symlink(dir.path().join("nowhere"), &link).unwrap();
+        let o = memstab(&["run", &scene("demo.toml"), "--out", link.to_str().unwrap()]);
+        assert_rejected(&o, &["--out", "symbolic link"]);
+    }
+}
+
+/// A spinning body on an icosphere keeps the elements that map the spin axis to itself as a
+/// line: D5d with a vertex down, D2h in the reference orientation (a 2-fold axis along z).
+#[test]
+fn spin_on_an_icosphere_keeps_the_axis_stabiliser() {
+    let dir = tempfile::tempdir().unwrap();
+    for (down, group) in [("down = \"vertex\"\n", "D5d"), ("", "D2h")] {
+        let text = format!(
+            "[scene]\nname = \"spinning balloon\"\n[mesh]\ngenerator = \"icosphere\"\n\
+             frequency = 2\n{down}[material]\nmodel = \"mooney-rivlin\"\nmu = 100.0\nk = 0.1\n\
+             thickness = 0.01\n[[effect]]\ntype = \"gas\"\npressure = 1.2\n[[effect]]\n\
+             type = \"spin\"\ndensity = 1.0\nomega2 = 0.5\n[analysis]\ntype = \"equilibrium\"\n\
+             [start]\nstretch = 1.3\n"
+        );
+        let path = dir.path().join("spin.toml");
+        std::fs::write(&path, text).unwrap();
+        let o = memstab(&["spectrum", path.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(json["group"], group);
+    }
+}

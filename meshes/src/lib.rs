@@ -19,7 +19,7 @@ mod mesh;
 pub mod read;
 pub mod write;
 
-pub use action::{GroupAction, SymmetricMesh, Verification, ACTION_TOL};
+pub use action::{coincident_nodes, GroupAction, SymmetricMesh, Verification, ACTION_TOL};
 pub use mesh::{Mesh, Topology, Vec3};
 
 /// Errors from building, verifying, reading or writing meshes.

@@ -92,3 +92,16 @@ pub fn dense_tangent(model: &FeModel, eval: &Evaluation) -> faer::Mat<f64> {
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
+
+/// Fails, before any level runs, when the balloon of some frequency is over the limits
+/// ([`crate::limits`]): the message names the flag and the estimate.
+pub fn check_frequencies(flag: &str, frequencies: &[usize]) -> Result<(), String> {
+    let limits = crate::limits::Limits::from_env().map_err(|e| e.to_string())?;
+    for &f in frequencies {
+        let scene = balloon::balloon_scene(f)?;
+        limits
+            .check_memory(format!("{flag} {f}: the balloon"), scene.estimated_bytes())
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}

@@ -138,6 +138,8 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
             "--frequencies: {f} is not a frequency"
         )));
     }
+    memstab::bench::check_frequencies("--frequencies", &args.frequencies)
+        .map_err(CliError::Input)?;
     let options = AccuracyOptions {
         out: args.out.clone(),
         quick: args.quick,
@@ -167,6 +169,7 @@ fn scaling(args: &BenchArgs, freqs: &[usize]) -> Result<(), CliError> {
             args.scaling_points
         )));
     }
+    memstab::bench::check_frequencies("--scaling", freqs).map_err(CliError::Input)?;
     let options = ScalingOptions {
         out: args.out.clone(),
         frequencies: freqs.to_vec(),

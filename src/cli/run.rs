@@ -137,6 +137,12 @@ fn check_out(out: &Path) -> Result<(), CliError> {
             out.display()
         )));
     }
+    if std::fs::symlink_metadata(out).is_ok() {
+        return Err(CliError::Input(format!(
+            "--out '{}' is a symbolic link to nothing; give a directory",
+            out.display()
+        )));
+    }
     let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

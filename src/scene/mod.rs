@@ -844,6 +844,16 @@ impl FileMesh {
                 other => other.to_string(),
             })
         })?;
+        if let Some((a, b)) = meshes::coincident_nodes(&mesh) {
+            let x = mesh.nodes[b];
+            return Err(bad_file(format!(
+                "nodes {a} and {b} coincide at ({}, {}, {}); a membrane's nodes are distinct \
+                 points (merge them and renumber the triangles)",
+                error::num(x.x),
+                error::num(x.y),
+                error::num(x.z)
+            )));
+        }
         let sym = SymmetricMesh::new(mesh, group).map_err(|e| not_symmetric(inner(e)))?;
         sym.verify().map_err(|e| match e {
             MeshError::Topology(m) => bad_file(format!("not a usable membrane: {m}")),

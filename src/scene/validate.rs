@@ -435,6 +435,16 @@ fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
         finite(&format!("{key}.max"), max)?;
     }
     if let (Some(min), Some(max)) = (p.min, p.max) {
+        if !(max - min).is_finite() {
+            return Err(Problem::at(
+                &format!("{key}.max"),
+                format!(
+                    "- min overflows ({} - {}): the range must have a finite width",
+                    num(max),
+                    num(min)
+                ),
+            ));
+        }
         if min >= max {
             return Err(Problem::at(
                 &format!("{key}.min"),
@@ -562,15 +572,28 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
     }
 }
 
+/// Newton's relative tolerance lies in [1e-15, 1): below that no double-precision residual
+/// can meet it, and the corrector would iterate to its budget at every step; the budget is
+/// at most 1000 iterations.
 fn check_newton(tolerance: f64, max_iterations: usize) -> Result<(), Problem> {
     positive("analysis.tolerance", tolerance)?;
-    if tolerance >= 1.0 {
+    if !(1e-15..1.0).contains(&tolerance) {
         return Err(Problem::at(
             "analysis.tolerance",
-            format!("must be < 1 (a relative residual), got {}", num(tolerance)),
+            format!(
+                "must lie in [1e-15, 1) (a relative residual that double precision can meet), got {}",
+                num(tolerance)
+            ),
         ));
     }
-    at_least("analysis.max-iterations", max_iterations, 1)
+    at_least("analysis.max-iterations", max_iterations, 1)?;
+    if max_iterations > 1000 {
+        return Err(Problem::at(
+            "analysis.max-iterations",
+            format!("must be at most 1000, got {max_iterations}"),
+        ));
+    }
+    Ok(())
 }
 
 /// Every declared parameter is used by an effect; on a path, every parameter but the control
