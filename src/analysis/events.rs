@@ -20,7 +20,7 @@ const ZERO_EIGENVALUE: f64 = 1e-10;
 /// The narrowest bracket, relative to the step, in which a crossing is localised: states that
 /// close differ in an eigenvalue by far less than [`ZERO_EIGENVALUE`] unless it jumps.
 const LOCATE_WIDTH: f64 = 1e-10;
-/// Relative size of the best eigenvalue found above which a crossing is not localised: the
+/// Relative size of the best eigenvalue found above which a crossing is not localised (docs/theory.md §8.9): the
 /// eigenvalue jumps instead of crossing zero (two branches, not one).
 const JUMP_EIGENVALUE: f64 = 1e-8;
 /// The control's component of the unit tangent below which a turning point is localised.

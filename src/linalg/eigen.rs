@@ -39,7 +39,7 @@
 //! **Operators.** The iteration ([`nearest_eigenpairs`]) runs on any [`Operator`]: a plain
 //! factorisation of A − σI, or [`Bordered`], the leading block of the inverse of a bordered
 //! matrix [[A − σI, U], [Uᵀ, E]] on the complement of the border's E = 0 columns — the
-//! restricted operator whose inertia a stability block counts (docs/theory.md §8.7). Ritz
+//! restricted operator whose inertia a stability block counts (docs/theory.md §8.8). Ritz
 //! vectors come with the values when asked for.
 //!
 //! **The lowest eigenvalues, certified.** [`lowest_eigenpairs`] finds the n lowest
@@ -215,7 +215,7 @@ impl Operator for SymmetricFactorization {
 }
 
 /// The shift-invert operator of a matrix restricted and bordered as a stability block is
-/// (docs/theory.md §8.7): `factorization` holds the bordered matrix
+/// (docs/theory.md §8.8): `factorization` holds the bordered matrix
 ///
 /// ```text
 ///     M_σ = [[A − σI, U], [Uᵀ, E]]      (A: m × m, U: m × b, E: b × b),
@@ -436,7 +436,7 @@ const LOWEST_ATTEMPTS: usize = 8;
 
 /// The `n` lowest eigenvalues (and, with `vectors`, eigenvectors) of a [`ShiftFamily`], by
 /// shift-invert Lanczos at a shift near them and the inertia as the count the result must
-/// reproduce (docs/theory.md §8.7):
+/// reproduce (docs/theory.md §8.8):
 ///
 /// 1. factorise at σ (starting from `shift`; a singular factorisation moves σ down by
 ///    `step`) and read ν = #{λ < σ} from the inertia;
