@@ -235,7 +235,7 @@ struct BlockFamily<'b> {
 }
 
 impl Operator for BlockFamily<'_> {
-    fn len(&self) -> usize {
+    fn dim(&self) -> usize {
         self.block.m
     }
     fn rank(&self) -> usize {

@@ -59,8 +59,8 @@ fn locate_within(
         (b, fb)
     };
     let mut side = 0i8;
-    let mut evaluated = 0;
-    for _ in 0..60 {
+    // Every earlier iteration evaluated a trial point.
+    for evaluated in 0..60 {
         if fbest.abs() <= tol || (b - a).abs() <= width * s1.abs() {
             break;
         }
@@ -81,7 +81,6 @@ fn locate_within(
         let Some(fs) = fs else {
             return (evaluated > 0 || fbest.abs() <= tol).then_some((best, fbest));
         };
-        evaluated += 1;
         if fs.abs() < fbest.abs() {
             (best, fbest) = (s, fs);
         }

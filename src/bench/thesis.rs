@@ -13,6 +13,7 @@
 use super::full_path::{full_path_stability, FullPathStability};
 use super::peer::{run_peer, PeerResult};
 use crate::analysis::{run_with, Observer, RunTimes};
+use crate::model::Model;
 use crate::report::PathReport;
 use crate::scene::Scene;
 use crate::study::Study;

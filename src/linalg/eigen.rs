@@ -194,10 +194,10 @@ pub fn nearest_eigenvalues(
 /// of it for a plain factorisation; the complement of a constraint border for [`Bordered`]).
 pub trait Operator {
     /// Length n of the vectors.
-    fn len(&self) -> usize;
+    fn dim(&self) -> usize;
     /// Dimension of the subspace the operator acts on (its range).
     fn rank(&self) -> usize {
-        self.len()
+        self.dim()
     }
     /// x ← (A − σI)⁻¹ x, the result in the subspace.
     fn apply(&self, x: &mut [f64]) -> Result<(), FactorError>;
@@ -206,7 +206,7 @@ pub trait Operator {
 }
 
 impl Operator for SymmetricFactorization {
-    fn len(&self) -> usize {
+    fn dim(&self) -> usize {
         self.n()
     }
     fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
@@ -252,7 +252,7 @@ impl<'a> Bordered<'a> {
 }
 
 impl Operator for Bordered<'_> {
-    fn len(&self) -> usize {
+    fn dim(&self) -> usize {
         self.m
     }
     fn rank(&self) -> usize {
@@ -301,7 +301,7 @@ pub fn nearest_eigenpairs(
     vectors: bool,
     attempt: u64,
 ) -> Result<Pairs, EigenError> {
-    let dim = op.len();
+    let dim = op.dim();
     let rank = op.rank().min(dim);
     let k = n.min(rank);
     if k == 0 {
@@ -981,7 +981,7 @@ mod tests {
     }
 
     impl Operator for Family {
-        fn len(&self) -> usize {
+        fn dim(&self) -> usize {
             self.m
         }
         fn rank(&self) -> usize {
