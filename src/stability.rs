@@ -134,12 +134,13 @@ pub enum BlockEigen {
 pub const DEFAULT_LOWEST: usize = 8;
 
 /// Seconds per m³ of faer's dense eigenvalues of an m × m block (tridiagonalisation and QR),
-/// measured on the project's 2-core machine (`cargo bench --bench eigen`, BENCHMARKS.md §7).
+/// an estimate from the timings of the thesis study on the project's 2-core machine
+/// (BENCHMARKS.md §7; a crossover benchmark in `benches/` is still to be written).
 const DENSE_EIGEN_SECONDS_PER_M3: f64 = 2.2e-10;
 /// Seconds per estimated flop of a numeric sparse LBLᵀ ([`SymmetricFactorization::flops`]),
-/// measured as above.
+/// estimated as above.
 const SPARSE_FACTOR_SECONDS_PER_FLOP: f64 = 1.0e-9;
-/// Seconds per stored factor value of one sparse solve, measured as above.
+/// Seconds per stored factor value of one sparse solve, estimated as above.
 const SPARSE_SOLVE_SECONDS_PER_VALUE: f64 = 4.0e-9;
 
 /// Whether the lowest `lowest` eigenvalues of an m-column block cost less by shift-invert

@@ -38,12 +38,13 @@ pub struct SymmetricProblem<'a> {
 /// from it on, dense or sparse by estimated cost ([`sparse_is_cheaper`]).
 pub const SPARSE_TANGENT_FROM: usize = 128;
 
-/// Seconds per flop of the dense LU of the extended system (2/3 n³ flops), measured on the
-/// project's 2-core machine (BENCHMARKS.md §7).
+/// Seconds per flop of the dense LU of the extended system (2/3 n³ flops), an estimate for
+/// the project's 2-core machine (BENCHMARKS.md §7; a crossover benchmark in `benches/` is
+/// still to be written).
 const DENSE_LU_SECONDS_PER_FLOP: f64 = 2.5e-10;
-/// Seconds per estimated flop of a numeric sparse LBLᵀ, measured as above.
+/// Seconds per estimated flop of a numeric sparse LBLᵀ, estimated as above.
 const SPARSE_FACTOR_SECONDS_PER_FLOP: f64 = 1.0e-9;
-/// Seconds per stored factor value of one sparse solve, measured as above.
+/// Seconds per stored factor value of one sparse solve, estimated as above.
 const SPARSE_SOLVE_SECONDS_PER_VALUE: f64 = 4.0e-9;
 
 /// Whether a Newton step of the fixed-point system of m unknowns with `border` rows and
