@@ -14,6 +14,7 @@ mod effects_model;
 mod export_rank_one;
 mod fluid_volume;
 mod hard_cases;
+mod lanczos_cap;
 mod linalg;
 mod linear_buckling_plot;
 mod model_derivatives;

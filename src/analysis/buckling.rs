@@ -5,7 +5,7 @@
 //! symmetric bifurcation: the state cannot fold). The lowest eigenvalue of every block at
 //! every sample goes into the report's [`Spectra`] (what `path.svg` plots for this analysis).
 
-use super::events::{Crossings, Event, StopReason};
+use super::events::{Crossings, End, Event, StopReason};
 use super::{Observer, Record};
 use crate::report::{Spectra, SpectrumIrrep, SpectrumRow, StateKind};
 use crate::stability::Spectrum;
@@ -41,12 +41,26 @@ pub(super) fn run(
         let spectrum = crossings.as_mut().and_then(|x| x.spectrum(u, &params));
         sampled.push((i, value, spectrum.as_ref().map(Sample::of)));
         let index = spectrum.as_ref().map(|s| s.index);
-        record.row(study, i, value - lo, u, params, 0, index);
+        record.row(study, i, value - lo, u, params.clone(), 0, index);
         if let (Some((a, va)), Some(b), Some(x)) = (&previous, &spectrum, crossings.as_mut()) {
             if a.negatives() != b.negatives() {
                 let va = *va;
-                for event in x.localise(a, b, i - 1, value - va, |s| Some((u.to_vec(), at(va + s))))
-                {
+                let pa = at(va);
+                let ends = (
+                    End {
+                        spectrum: a,
+                        u,
+                        params: &pa,
+                    },
+                    End {
+                        spectrum: b,
+                        u,
+                        params: &params,
+                    },
+                );
+                for event in x.localise(ends.0, ends.1, i - 1, value - va, |s| {
+                    Some((u.to_vec(), at(va + s)))
+                }) {
                     match event {
                         Event::Critical(cp) => record.critical(cp),
                         Event::Warning(w) => record.warnings.push(w),

@@ -19,7 +19,7 @@ use clap::Args;
 use memstab::adapted::AdaptedBasis;
 use memstab::analysis::equilibrium::{held, state_at, StartState};
 use memstab::model::Model;
-use memstab::stability::Stability;
+use memstab::stability::{Detail, Stability};
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -94,7 +94,14 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let stability = Stability::new(&study.model, &adapted);
     let mut eval = study.model.new_evaluation();
     let spectrum = stability
-        .spectrum_of(&u, &params, &study.constraints, &mut eval, None, false)
+        .analyse(
+            &u,
+            &params,
+            &study.constraints,
+            &mut eval,
+            None,
+            Detail::Eigenvalues { lowest: args.count },
+        )
         .map_err(|e| {
             CliError::Failure(format!(
                 "the tangent could not be evaluated: {}",
