@@ -790,6 +790,8 @@ impl<'a> Stability<'a> {
             let border = if mu == 0 { border0.clone() } else { None };
             // The sparse bordered block first, unless the dense solve is certain.
             const ALWAYS_DENSE: usize = 64;
+            // Blocks up to this size fall back to dense eigenvalues when Lanczos fails.
+            const DENSE_FALLBACK: usize = 2500;
             let inertia_only = match self.method {
                 _ if detail == Detail::Inertia => true,
                 BlockEigen::DenseUpTo(limit) => m > limit,
@@ -816,8 +818,14 @@ impl<'a> Stability<'a> {
                         };
                     if inertia_only || lanczos {
                         let wanted = if lanczos { lowest } else { 0 };
-                        if let Some(spectrum) =
-                            self.block_sparse(mu, &block, scale, wanted, with_vectors)
+                        // A Lanczos that could not certify its eigenvalues falls back to
+                        // the dense solve where that is affordable.
+                        let certified = |s: &BlockSpectrum| {
+                            inertia_only || s.eigen_error.is_none() || m > DENSE_FALLBACK
+                        };
+                        if let Some(spectrum) = self
+                            .block_sparse(mu, &block, scale, wanted, with_vectors)
+                            .filter(certified)
                         {
                             return BlockSpectrum {
                                 irrep: ib.name.clone(),
