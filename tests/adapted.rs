@@ -39,7 +39,7 @@ fn model(sym: &SymmetricMesh, fixed: &[usize], fluid: bool) -> FeModel {
     let load: Box<dyn Effect> = if fluid {
         Box::new(Fluid {
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Value(0.2),
             side: if fixed.is_empty() {
                 FluidSide::Behind

@@ -507,7 +507,7 @@ fn fluid_model(
         }),
         Box::new(Fluid {
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Parameter(0),
             side: FluidSide::Behind,
         }),
@@ -865,7 +865,7 @@ fn disc_model(
         Box::new(membrane),
         Box::new(Fluid {
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Parameter(0),
             side: FluidSide::Behind,
         }),

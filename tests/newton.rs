@@ -147,7 +147,7 @@ fn a_free_body_is_refused_clearly() {
         ),
         Box::new(Fluid {
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Value(0.0),
             side: FluidSide::Behind,
         }),

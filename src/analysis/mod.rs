@@ -8,6 +8,7 @@
 //! - [`path`]: the path in the control through turning points, with the index by irrep at
 //!   every point and the critical points where it changes;
 //! - [`buckling`]: the start state held while the control sweeps its range;
+//! - [`curve`]: a critical point followed in two parameters (cusps of limit-point curves);
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
 //!   splits measured.
 //!
@@ -18,6 +19,7 @@ pub mod buckling;
 pub mod compare;
 pub mod continuation;
 pub mod critical;
+pub mod curve;
 pub mod equilibrium;
 pub mod events;
 pub mod newton;
@@ -47,6 +49,8 @@ pub struct RunResult {
     pub states: Vec<State>,
     /// Where the time went.
     pub times: RunTimes,
+    /// The critical curve of a `critical-curve` analysis.
+    pub curve: Option<crate::report::CurveReport>,
 }
 
 /// Why a run failed before it produced a path.
@@ -61,6 +65,9 @@ pub enum RunError {
         /// The enclosed volume found.
         volume: f64,
     },
+    /// A critical curve could not be found or started.
+    #[error("critical curve: {0}")]
+    Curve(String),
 }
 
 /// Where a run's time went, by phase (what `memstab bench` reports).
@@ -179,6 +186,19 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
             a.samples,
             observer,
         ),
+        Analysis::CriticalCurve(_) => {
+            let (stop, curve) = curve::run(
+                study,
+                &mut record,
+                crossings,
+                &u_start,
+                &params_start,
+                observer,
+                &mut times,
+            )?;
+            record.curve = Some(curve);
+            stop
+        }
     };
     Ok(record.finish(study, stop, stability_note, times))
 }
@@ -192,6 +212,7 @@ pub(crate) struct Record {
     warnings: Vec<String>,
     spectra: Spectra,
     control: Option<usize>,
+    curve: Option<crate::report::CurveReport>,
 }
 
 impl Record {
@@ -204,6 +225,7 @@ impl Record {
             warnings: study.warnings.clone(),
             spectra: Spectra::default(),
             control: study.control,
+            curve: None,
         }
     }
 
@@ -300,6 +322,7 @@ impl Record {
             report,
             states: self.states,
             times,
+            curve: self.curve,
         }
     }
 }

@@ -96,7 +96,30 @@ pub(super) fn run(
         }
         None => vec![None; branch.points.len()],
     };
-    let save_every = analysis.save_every.max(1);
+    record_branch(
+        study,
+        record,
+        &problem,
+        &branch,
+        &indices,
+        analysis.save_every,
+    );
+    times.path = t0.elapsed();
+    Ok(branch.stop)
+}
+
+/// Records a followed branch of `problem`: a row per point (with its index), every
+/// `save_every`-th state and the last, the critical points after the rows they follow, the
+/// warnings, and the turning points with their states.
+pub(super) fn record_branch(
+    study: &Study,
+    record: &mut Record,
+    problem: &SymmetricProblem,
+    branch: &Branch,
+    indices: &[Option<usize>],
+    save_every: usize,
+) {
+    let save_every = save_every.max(1);
     let last = branch.points.len() - 1;
     let mut critical = branch
         .critical_points()
@@ -110,7 +133,8 @@ pub(super) fn run(
         if i % save_every == 0 || i == last {
             record.state(i, StateKind::Step, u.clone(), &params);
         }
-        record.row(study, i, p.arclength, &u, params, p.iterations, indices[i]);
+        let index = indices.get(i).copied().flatten();
+        record.row(study, i, p.arclength, &u, params, p.iterations, index);
         while let Some(cp) = critical.next_if(|cp| cp.after_step + 1 == i) {
             record.critical(cp);
         }
@@ -131,6 +155,4 @@ pub(super) fn run(
             parameters: params,
         });
     }
-    times.path = t0.elapsed();
-    Ok(branch.stop)
 }

@@ -131,13 +131,14 @@ pub enum FluidSide {
 
 /// Fluid under gravity (density ρ, gravity g along −z, level h): Π_f = ±ρ g Σ_T φ_T, the sign
 /// plus for fluid [`FluidSide::Behind`] the membrane and minus in [`FluidSide::Front`]. Fixed walls
-/// closing the fluid region add only constants. Loads: ∂F/∂ρ = ±g ∇φ, ∂F/∂h = ±ρ g ∂∇φ/∂h.
+/// closing the fluid region add only constants. Loads: ∂F/∂ρ = ±g ∇φ, ∂F/∂h = ±ρ g ∂∇φ/∂h,
+/// ∂F/∂g = ±ρ ∇φ.
 #[derive(Debug, Clone)]
 pub struct Fluid {
     /// Density ρ.
     pub density: Quantity,
     /// Gravitational acceleration g (> 0, along −z).
-    pub gravity: f64,
+    pub gravity: Quantity,
     /// Level h of the free surface.
     pub level: Quantity,
     /// Side of the membrane the fluid is on.
@@ -187,15 +188,21 @@ impl Effect for Fluid {
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError> {
         let (rho, h) = (self.density.value(params), self.level.value(params));
-        let s = self.sign() * self.gravity;
+        let g = self.gravity.value(params);
+        let s = self.sign() * g;
         out.add_triangles(
             x,
-            [self.density.parameter(), self.level.parameter()],
+            [
+                self.density.parameter(),
+                self.level.parameter(),
+                self.gravity.parameter(),
+            ],
             |_, xt, terms| {
                 let f = potential(xt, h);
                 terms.local = f.local.scaled(s * rho);
-                terms.loads[0] = f.local.grad.map(|g| s * g);
-                terms.loads[1] = f.grad_d_dh.map(|g| s * rho * g);
+                terms.loads[0] = f.local.grad.map(|v| s * v);
+                terms.loads[1] = f.grad_d_dh.map(|v| s * rho * v);
+                terms.loads[2] = f.local.grad.map(|v| self.sign() * rho * v);
                 Ok(())
             },
         )

@@ -6,6 +6,7 @@
 //! | `path.json` | [`write_json`] | the whole [`PathReport`]: metadata, path, turning points, saved states |
 //! | `path.svg` | [`write_diagram`], [`write_diagram_with`] | the path in two chosen quantities, turning points marked |
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
+//! | `curve.csv`, `curve.json`, `curve.svg` | [`write_curve`] | a critical curve: a row per point (both parameters, the measures, the block's eigenvalues, the irrep), its events, the second parameter against the control |
 //! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
 //!
 //! [`write_run`] writes all of them for a finished run.
@@ -23,6 +24,7 @@
 //! [`PathReport`]: crate::report::PathReport
 
 mod csv;
+mod curve;
 mod json;
 mod matrix_market;
 mod progress;
@@ -31,6 +33,7 @@ mod states;
 mod svg;
 
 pub use csv::write_csv;
+pub use curve::write_curve;
 pub use json::{write_critical, write_json};
 pub use matrix_market::{
     rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,

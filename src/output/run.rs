@@ -40,6 +40,8 @@ pub struct Written {
     pub pvd: PathBuf,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// `curve.csv`, `curve.json`, `curve.svg` of a critical curve.
+    pub curve: Vec<PathBuf>,
 }
 
 impl Written {
@@ -53,6 +55,7 @@ impl Written {
             self.pvd.clone(),
         ];
         files.extend(self.states.iter().cloned());
+        files.extend(self.curve.iter().cloned());
         files
     }
 }
@@ -198,6 +201,11 @@ pub fn write_run(
         (write_spectrum_diagram(out, report), plotted)
     };
     let svg = attempt!(svg);
+    done.push(svg.clone());
+    let curve = match &result.curve {
+        Some(c) => attempt!(super::write_curve(out, c)),
+        None => Vec::new(),
+    };
     Ok(Written {
         csv,
         json,
@@ -206,6 +214,7 @@ pub fn write_run(
         plotted,
         pvd,
         states,
+        curve,
     })
 }
 

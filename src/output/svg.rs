@@ -799,7 +799,7 @@ fn unknown(report: &PathReport, name: &str) -> String {
 
 /// The range of `values` widened by 5 % on each side (a single value: ±5 % of it, or ±1 at
 /// zero; no values: 0..1).
-fn padded(values: impl Iterator<Item = f64>) -> Range<f64> {
+pub(super) fn padded(values: impl Iterator<Item = f64>) -> Range<f64> {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
         (lo.min(v), hi.max(v))
     });
@@ -835,7 +835,7 @@ fn short(x: f64) -> String {
 /// `text` with every character XML 1.0 does not allow (control characters but tab, newline
 /// and carriage return; the surrogates; U+FFFE and U+FFFF) replaced by U+FFFD: names from a
 /// scene file reach the diagram's text, and the plotting library escapes only markup.
-fn xml_chars(text: &str) -> String {
+pub(super) fn xml_chars(text: &str) -> String {
     text.chars()
         .map(|c| match c {
             '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' => c,
