@@ -259,3 +259,107 @@ fn a_critical_curve_run_writes_its_curve() {
     let svg = std::fs::read_to_string(dir.path().join("curve.svg")).unwrap();
     assert!(svg.contains("cusp"));
 }
+
+/// Every accepted state of a run.
+#[derive(Default)]
+struct States(Vec<(Vec<f64>, Vec<f64>)>);
+
+impl memstab::analysis::Observer for States {
+    fn state(&mut self, u: &[f64], params: &[f64]) {
+        self.0.push((u.to_vec(), params.to_vec()));
+    }
+}
+
+/// The eigenvalues of the full tangent K (all unknowns, no symmetry used) at a state, by a
+/// dense solve, sorted by modulus and relative to max|K_ij|.
+fn full_spectrum(model: &memstab::model::FeModel, u: &[f64], params: &[f64]) -> Vec<f64> {
+    let mut eval = model.new_evaluation();
+    model
+        .evaluate(u, params, memstab::model::Request::ALL, &mut eval)
+        .unwrap();
+    let n = model.unknowns();
+    let mut k = nalgebra::DMatrix::zeros(n, n);
+    let mut e = vec![0.0; n];
+    for j in 0..n {
+        e[j] = 1.0;
+        let col = memstab::model::check::tangent_times(model, &eval, &e);
+        k.set_column(j, &nalgebra::DVector::from_vec(col));
+        e[j] = 0.0;
+    }
+    let scale = k.amax();
+    let mut values: Vec<f64> = nalgebra::SymmetricEigen::new(k)
+        .eigenvalues
+        .iter()
+        .map(|v| v / scale)
+        .collect();
+    values.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
+    values
+}
+
+/// The first E1 double bifurcation of the bundled C7v disc pushed up by fluid from below (8
+/// rings) is followed in (level h, prestretch): its block's zero is simple, so the curve is
+/// an ordinary one in that block, and at its ends the full tangent — all unknowns, no
+/// symmetry used — has exactly two zero eigenvalues: the point stays double.
+#[test]
+fn a_double_point_of_the_c7v_disc_stays_double_along_its_curve() {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/disc_fluid_below.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let analysis = text.find("[analysis]").unwrap();
+    let text = format!(
+        "{}{}",
+        &text[..analysis],
+        r#"[parameters.l0]
+start = 1.1
+min = 1.05
+max = 1.2
+
+[analysis]
+type = "critical-curve"
+control = "h"
+second = "l0"
+from = "E1"
+steps = 6
+path-steps = 400
+max-step = 0.05
+"#
+    )
+    .replacen("divisions = 16", "divisions = 8", 1)
+    .replacen("prestretch = 1.1", "prestretch = \"l0\"", 1);
+    let scene = Scene::from_toml_str(&text, "disc-double-curve").unwrap();
+    let mut study = Study::build(scene).unwrap();
+    let mut states = States::default();
+    let result = memstab::analysis::run_with(&mut study, &mut states).expect("the curve runs");
+    let curve = result.curve.expect("a curve");
+    assert_eq!(curve.kind, CriticalKind::MultipleBifurcation(2));
+    assert_eq!((curve.irrep.as_str(), curve.multiplicity), ("E1", 2));
+    let l0 = col(&curve, "l0");
+    let first = curve.rows.first().unwrap().parameters[l0];
+    let last = curve.rows.last().unwrap().parameters[l0];
+    assert!(
+        (first - 1.1).abs() < 1e-12 && last > 1.1 + 0.01,
+        "l0 {first} → {last}"
+    );
+    for r in &curve.rows {
+        assert!(r.critical_eigenvalue.abs() < 1e-8, "{r:?}");
+    }
+    // The curve's points are the run's last accepted states.
+    let n = curve.rows.len();
+    let curve_states = &states.0[states.0.len() - n..];
+    for (i, (u, p)) in [(0, &curve_states[0]), (n - 1, &curve_states[n - 1])] {
+        assert_eq!(p, &curve.rows[i].parameters);
+        let values = full_spectrum(&study.model, u, p);
+        eprintln!(
+            "curve point {i}: |eigenvalues| of K nearest zero {:?}",
+            &values[..4]
+        );
+        assert!(
+            values[0].abs() < 1e-8 && values[1].abs() < 1e-8,
+            "{:?}",
+            &values[..4]
+        );
+        assert!(values[2].abs() > 1e-5, "a third zero: {:?}", &values[..4]);
+    }
+}
