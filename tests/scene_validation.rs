@@ -683,3 +683,45 @@ fn material_gravity_and_penalty_quantities_may_be_parameters() {
         &["'effect[0].gravity': unknown parameter \"g\""],
     );
 }
+
+/// A critical curve names two free parameters and where it starts; bad keys are one line.
+#[test]
+fn critical_curve_keys_are_checked() {
+    let curve = |analysis: &str| {
+        let base = edit("k = 0.1", "k = \"kk\"");
+        let at = base.find("[analysis]").unwrap();
+        format!(
+            "{}[parameters.kk]\nstart = 0.1\nmin = 0.0\nmax = 0.3\n\n[analysis]\ntype = \"critical-curve\"\n{analysis}",
+            &base[..at]
+        )
+    };
+    Scene::from_toml_str(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nfrom = \"E1\"\n"),
+        "t",
+    )
+    .expect("a valid curve");
+    Scene::from_toml_str(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nfrom = 2\n"),
+        "t",
+    )
+    .expect("a valid curve from an index");
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"rho\"\n"),
+        &["'analysis.second' = \"rho\" is the control"],
+    );
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"q\"\n"),
+        &["'analysis.second': unknown parameter \"q\""],
+    );
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nfrom = -1\n"),
+        &["'analysis.from'"],
+    );
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nsteps = 0\n"),
+        &["'analysis.steps' must be >= 1, got 0"],
+    );
+    // Without the second parameter free, kk would be neither free nor governed.
+    let text = edit("k = 0.1", "k = \"kk\"") + "\n[parameters.kk]\nstart = 0.1\n";
+    rejects(&text, &["'parameters.kk' is neither the control"]);
+}

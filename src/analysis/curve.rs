@@ -1,4 +1,4 @@
-//! The `critical-curve` analysis (docs/theory.md §12): a critical point of the path in the
+//! The `critical-curve` analysis (docs/theory.md §11.7): a critical point of the path in the
 //! control, followed as a second parameter varies.
 //!
 //! The point is found on the path in the control (the second parameter held), by the index

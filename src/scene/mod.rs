@@ -535,7 +535,7 @@ pub enum Analysis {
 /// `type = "critical-curve"`: the path in `control` from the start state (second parameter
 /// held at its start value) up to the critical point `from`; then that point followed as
 /// `second` varies — the equilibrium in the fixed-point space and a singular block of its
-/// irrep, in (u, control, second), with the constraints active (docs/theory.md §12). The
+/// irrep, in (u, control, second), with the constraints active (docs/theory.md §11.7). The
 /// curve stops when `second` or `control` leaves its `[min, max]`, or after `steps` steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
