@@ -159,37 +159,39 @@ fn balloon_limit_curve_reaches_its_cusp_on_the_closed_form_fold_line() {
     );
 }
 
-/// The test function's derivatives: ∂σ/∂u (directional differences of the tangent) and ∂σ/∂Λ
-/// (differences of the loads) agree with differences of σ itself, and the chosen step is
-/// accurate: its error, estimated by Richardson extrapolation from ε and 2ε, is far below
-/// what Newton needs.
-#[test]
-fn block_test_function_derivatives_match_differences_of_sigma() {
-    let mut study = Study::build(balloon_curve_scene(4)).unwrap();
-    let result = run(&mut study, |_, _| {}).unwrap();
-    let cp = result.report.critical.first().expect("a limit point");
+/// Checks the test function of block `mu` near the critical point `cp` of `study`: ∂σ/∂q
+/// (directional differences of the tangent) and ∂σ/∂Λ (differences of the loads) against
+/// differences of σ itself, and the step's truncation error, estimated by Richardson
+/// extrapolation from ε and 2ε, against 1e-7 of the derivative.
+fn check_test_derivatives(study: &Study, cp: &memstab::analysis::critical::CriticalPoint) {
     let adapted = memstab::adapted::AdaptedBasis::new(&study.action, study.model.layout()).unwrap();
-    let block = adapted.irreps[0].first();
+    let mu = adapted
+        .irreps
+        .iter()
+        .position(|i| i.name == cp.irrep)
+        .unwrap();
+    let block = adapted.irreps[mu].first();
     let length = 1.0;
     let mut border = block.restrict(&cp.mode);
     // A border off the null vector, so that the test is generic.
     border[0] += 0.3;
-    let mut test = BlockTest::new(&study.model, block, &border, length);
-    // A state near the limit point.
+    let mut test = BlockTest::new(&study.model, block, &study.basis, mu == 0, &border, length);
+    // A state near the critical point.
     let u: Vec<f64> = cp.state.iter().map(|v| v * 1.01).collect();
     let params = cp.parameters.clone();
     let t = test.evaluate(&u, &params).unwrap();
-    // Along a symmetric direction d (the state itself), dσ = ∂σ/∂u · d.
+    // Along a symmetric direction d (the state itself), dσ = ∂σ/∂q · B₀ᵀ d.
     let d = u.clone();
     let h = 1e-5;
     let shifted = |s: f64| -> Vec<f64> { u.iter().zip(&d).map(|(a, b)| a + s * b).collect() };
     let sp = test.value(&shifted(h), &params).unwrap().0;
     let sm = test.value(&shifted(-h), &params).unwrap().0;
     let fd = (sp - sm) / (2.0 * h);
-    let exact: f64 = t.grad_u.iter().zip(&d).map(|(g, x)| g * x).sum();
+    let exact = t.grad_q.dot(&study.basis.restrict(&d));
     assert!(
         (fd - exact).abs() < 1e-5 * exact.abs(),
-        "dσ/du·d: {exact} vs difference {fd}"
+        "{}: dσ/du·d: {exact} vs difference {fd}",
+        cp.irrep
     );
     for (j, name) in study.parameters.iter().enumerate() {
         let mut pp = params.clone();
@@ -199,26 +201,44 @@ fn block_test_function_derivatives_match_differences_of_sigma() {
         pp[j] -= 2.0 * hj;
         let sm = test.value(&u, &pp).unwrap().0;
         let fd = (sp - sm) / (2.0 * hj);
+        let scale = fd.abs().max(t.grad_params[j].abs());
         assert!(
-            (fd - t.grad_params[j]).abs() < 1e-5 * fd.abs().max(t.grad_params[j].abs()),
-            "dσ/d{name}: {} vs difference {fd}",
+            (fd - t.grad_params[j]).abs() < 1e-5 * scale,
+            "{}: dσ/d{name}: {} vs difference {fd}",
+            cp.irrep,
             t.grad_params[j]
         );
     }
-    // The step: Richardson's estimate of the truncation error of the central difference at
-    // ε, (D(2ε) − D(ε))/3, is below 1e-7 of D.
-    let mut a = vec![0.0; study.model.unknowns()];
-    block.expand(&t.vector, &mut a);
+    let (a, eps) = test.critical_vector(&t.vector);
     let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let eps = DIFFERENCE_STEP * length / amax;
+    assert!((eps * amax - DIFFERENCE_STEP * length).abs() < 1e-12 * eps * amax);
     let (d1, _) = test.third_derivatives(&u, &params, &a, eps).unwrap();
     let (d2, _) = test.third_derivatives(&u, &params, &a, 2.0 * eps).unwrap();
-    let norm = d1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let err = d1
-        .iter()
-        .zip(&d2)
-        .fold(0.0f64, |m, (x, y)| m.max((y - x).abs() / 3.0));
-    assert!(norm > 0.0 && err < 1e-7 * norm, "error {err:e} of {norm:e}");
+    let norm = d1.amax();
+    let err = (&d2 - &d1).amax() / 3.0;
+    assert!(
+        norm > 0.0 && err < 1e-7 * norm,
+        "{}: error {err:e} of {norm:e}",
+        cp.irrep
+    );
+}
+
+/// The test function's derivatives on the balloon's limit point (the trivial block: every
+/// evaluation around the orbit representatives) and on the C7v disc's E1 double point (the
+/// states u ± εa not symmetric: the whole mesh).
+#[test]
+fn block_test_function_derivatives_match_differences_of_sigma() {
+    let mut study = Study::build(balloon_curve_scene(4)).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
+    check_test_derivatives(
+        &study,
+        result.report.critical.first().expect("a limit point"),
+    );
+    let mut study = Study::build(disc_curve_scene()).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
+    let cp = result.report.critical.last().expect("a critical point");
+    assert_eq!(cp.irrep, "E1");
+    check_test_derivatives(&study, cp);
 }
 
 /// A run writes curve.csv, curve.json and curve.svg; the CSV has a row per point with both
@@ -258,6 +278,38 @@ fn a_critical_curve_run_writes_its_curve() {
         .any(|e| e["kind"] == "cusp"));
     let svg = std::fs::read_to_string(dir.path().join("curve.svg")).unwrap();
     assert!(svg.contains("cusp"));
+}
+
+/// The bundled C7v disc pushed up by fluid from below (8 rings) with prestretch = "l0" and a
+/// critical curve from its first E1 double point, in (h, l0).
+fn disc_curve_scene() -> Scene {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/disc_fluid_below.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let analysis = text.find("[analysis]").unwrap();
+    let text = format!(
+        "{}{}",
+        &text[..analysis],
+        r#"[parameters.l0]
+start = 1.1
+min = 1.05
+max = 1.2
+
+[analysis]
+type = "critical-curve"
+control = "h"
+second = "l0"
+from = "E1"
+steps = 6
+path-steps = 400
+max-step = 0.05
+"#
+    )
+    .replacen("divisions = 16", "divisions = 8", 1)
+    .replacen("prestretch = 1.1", "prestretch = \"l0\"", 1);
+    Scene::from_toml_str(&text, "disc-double-curve").unwrap()
 }
 
 /// Every accepted state of a run.
@@ -302,33 +354,7 @@ fn full_spectrum(model: &memstab::model::FeModel, u: &[f64], params: &[f64]) -> 
 /// symmetry used — has exactly two zero eigenvalues: the point stays double.
 #[test]
 fn a_double_point_of_the_c7v_disc_stays_double_along_its_curve() {
-    let text = std::fs::read_to_string(format!(
-        "{}/scenes/disc_fluid_below.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let analysis = text.find("[analysis]").unwrap();
-    let text = format!(
-        "{}{}",
-        &text[..analysis],
-        r#"[parameters.l0]
-start = 1.1
-min = 1.05
-max = 1.2
-
-[analysis]
-type = "critical-curve"
-control = "h"
-second = "l0"
-from = "E1"
-steps = 6
-path-steps = 400
-max-step = 0.05
-"#
-    )
-    .replacen("divisions = 16", "divisions = 8", 1)
-    .replacen("prestretch = 1.1", "prestretch = \"l0\"", 1);
-    let scene = Scene::from_toml_str(&text, "disc-double-curve").unwrap();
+    let scene = disc_curve_scene();
     let mut study = Study::build(scene).unwrap();
     let mut states = States::default();
     let result = memstab::analysis::run_with(&mut study, &mut states).expect("the curve runs");

@@ -21,7 +21,10 @@
 //! With a = B_μ v the critical vector in the full space, vᵀ (∂K_μ/∂u · e) v = D³Π[a, a, e]
 //! = eᵀ (d/dε) K(u + εa) a, and vᵀ (∂K_μ/∂Λ_j) v = (d/dε) aᵀ ∂F/∂Λ_j(u + εa): both come
 //! from one pair of evaluations at u ± εa, by central differences of the tangent and of the
-//! loads ([`BlockTest::evaluate`]; the step is [`DIFFERENCE_STEP`], tested for accuracy).
+//! loads ([`BlockTest::evaluate`]; the step is [`DIFFERENCE_STEP`], tested for accuracy). On
+//! a limit curve a is symmetric, and every evaluation assembles only the triangles around the
+//! orbit representatives; for another block u ± εa is not symmetric, and those two assemble
+//! the whole mesh.
 
 use super::continuation::{
     Accepted, Continuation, Linearization, PathOptions, PathPoint, PhaseTimes, Problem,
@@ -31,7 +34,7 @@ use super::events::{Crossings, Detector, Event, IndexChanges, States, StopReason
 use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
 use crate::adapted::SparseBasis;
 use crate::model::check::tangent_times;
-use crate::model::{Evaluation, Model, ModelError, Request};
+use crate::model::{Evaluation, Model, ModelError, Request, Subset};
 use crate::report::{CurveEvent, CurveEventKind, CurveReport, CurveRow};
 use crate::scene::{Analysis, CurveStart, Direction};
 use crate::study::Study;
@@ -48,8 +51,11 @@ pub const DIFFERENCE_STEP: f64 = 1e-5;
 pub struct BlockTest<'a> {
     model: &'a dyn Model,
     block: &'a SparseBasis,
+    fixed: &'a SparseBasis,
+    trivial: bool,
     border: DVector<f64>,
     length: f64,
+    /// Around the block's orbit representatives: all its restriction reads.
     eval: Evaluation,
     plus: Evaluation,
     minus: Evaluation,
@@ -63,30 +69,55 @@ pub struct TestValue {
     pub sigma: f64,
     /// v in the block's coordinates (bᵀ v = 1).
     pub vector: DVector<f64>,
-    /// ∂σ/∂u over the model's unknowns: −D³Π[a, a, ·].
-    pub grad_u: Vec<f64>,
+    /// ∂σ/∂q in the fixed-point coordinates: −B₀ᵀ D³Π[a, a, ·].
+    pub grad_q: DVector<f64>,
     /// ∂σ/∂Λ_j for every parameter of the model.
     pub grad_params: Vec<f64>,
 }
 
+/// An evaluation of `model` around the orbit representatives of `basis` (the whole mesh
+/// for a basis without orbit-local form).
+fn local_evaluation(model: &dyn Model, basis: &SparseBasis) -> Evaluation {
+    match basis.representatives() {
+        Some(reps) => model
+            .new_evaluation()
+            .restricted_to(std::sync::Arc::new(Subset::around(model.layout(), &reps))),
+        None => model.new_evaluation(),
+    }
+}
+
 impl<'a> BlockTest<'a> {
-    /// The test function of the block with basis `block` (the first partner of an irrep),
+    /// The test function of the block with basis `block` (the first partner of an irrep;
+    /// `trivial` for the trivial irrep, whose block is the fixed-point space `fixed`),
     /// bordered by `border` (block coordinates, normalised here); `length` is the mesh size
     /// that scales the difference step.
     pub fn new(
         model: &'a dyn Model,
         block: &'a SparseBasis,
+        fixed: &'a SparseBasis,
+        trivial: bool,
         border: &DVector<f64>,
         length: f64,
     ) -> Self {
+        // A critical vector of the trivial block is symmetric, and so are the states u ± εa:
+        // the orbit representatives carry everything. Any other needs the whole mesh there.
+        let shifted = || {
+            if trivial {
+                local_evaluation(model, fixed)
+            } else {
+                model.new_evaluation()
+            }
+        };
         Self {
             model,
             block,
+            fixed,
+            trivial,
             border: border / border.norm().max(1e-300),
             length,
-            eval: model.new_evaluation(),
-            plus: model.new_evaluation(),
-            minus: model.new_evaluation(),
+            eval: local_evaluation(model, block),
+            plus: shifted(),
+            minus: shifted(),
             work: Vec::new(),
         }
     }
@@ -97,7 +128,7 @@ impl<'a> BlockTest<'a> {
     }
 
     /// K_μ = B_μᵀ K B_μ at (u, params) (the state symmetric under the scene's group), and
-    /// max|K_ij| as its scale.
+    /// max|K_ij| (of the assembled part) as its scale.
     pub fn block_tangent(
         &mut self,
         u: &[f64],
@@ -117,7 +148,7 @@ impl<'a> BlockTest<'a> {
         Ok((k, scale))
     }
 
-    /// σ and v from the bordered block at the last [`BlockTest::block_tangent`].
+    /// σ and v from the bordered block `k`.
     fn solve(&self, k: &DMatrix<f64>) -> Result<(f64, DVector<f64>), ModelError> {
         let m = k.nrows();
         let mut a = DMatrix::zeros(m + 1, m + 1);
@@ -143,32 +174,38 @@ impl<'a> BlockTest<'a> {
         self.solve(&k)
     }
 
-    /// σ, v and the derivatives of σ at (u, params), the directional differences along a = B_μ v
-    /// with the step [`DIFFERENCE_STEP`] · L.
+    /// The critical vector a = B_μ v over the model's unknowns, and the difference step ε
+    /// along it ([`DIFFERENCE_STEP`] · L / |a|∞).
+    pub fn critical_vector(&self, v: &DVector<f64>) -> (Vec<f64>, f64) {
+        let mut a = vec![0.0; self.model.unknowns()];
+        self.block.expand(v, &mut a);
+        let amax = a.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-300);
+        (a, DIFFERENCE_STEP * self.length / amax)
+    }
+
+    /// σ, v and the derivatives of σ at (u, params), the directional differences along
+    /// a = B_μ v with the step of [`BlockTest::critical_vector`].
     pub fn evaluate(&mut self, u: &[f64], params: &[f64]) -> Result<TestValue, ModelError> {
         let (sigma, vector) = self.value(u, params)?;
-        let mut a = vec![0.0; self.model.unknowns()];
-        self.block.expand(&vector, &mut a);
-        let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
-        let eps = DIFFERENCE_STEP * self.length / amax;
-        let (grad_u, grad_params) = self.third_derivatives(u, params, &a, eps)?;
+        let (a, eps) = self.critical_vector(&vector);
+        let (grad_q, grad_params) = self.third_derivatives(u, params, &a, eps)?;
         Ok(TestValue {
             sigma,
             vector,
-            grad_u,
+            grad_q,
             grad_params,
         })
     }
 
-    /// −D³Π[a, a, ·] over the unknowns and −aᵀ ∂K/∂Λ_j a for every parameter, by central
-    /// differences with step `eps` along `a`.
+    /// −B₀ᵀ D³Π[a, a, ·] (fixed-point coordinates) and −aᵀ ∂K/∂Λ_j a for every parameter,
+    /// by central differences of the tangent and the loads with step `eps` along `a`.
     pub fn third_derivatives(
         &mut self,
         u: &[f64],
         params: &[f64],
         a: &[f64],
         eps: f64,
-    ) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+    ) -> Result<(DVector<f64>, Vec<f64>), ModelError> {
         let shifted = |s: f64| -> Vec<f64> { u.iter().zip(a).map(|(x, d)| x + s * d).collect() };
         self.model
             .evaluate(&shifted(eps), params, Request::ALL, &mut self.plus)?;
@@ -176,16 +213,29 @@ impl<'a> BlockTest<'a> {
             .evaluate(&shifted(-eps), params, Request::ALL, &mut self.minus)?;
         let kp = tangent_times(self.model, &self.plus, a);
         let km = tangent_times(self.model, &self.minus, a);
-        let grad_u = kp
+        let d3: Vec<f64> = kp
             .iter()
             .zip(&km)
             .map(|(p, m)| -(p - m) / (2.0 * eps))
             .collect();
-        let dot = |x: &[f64]| x.iter().zip(a).map(|(x, y)| x * y).sum::<f64>();
-        let grad_params = (0..params.len())
-            .map(|j| -(dot(&self.plus.loads[j]) - dot(&self.minus.loads[j])) / (2.0 * eps))
-            .collect();
-        Ok((grad_u, grad_params))
+        let (grad_q, grad_params) = if self.trivial {
+            // Everything is G-invariant: exact at the orbit representatives, where the
+            // restriction reads it; aᵀ L = αᵀ B₀ᵀ L with α = B₀ᵀ a.
+            let alpha = self.fixed.restrict(a);
+            let dot =
+                |e: &Evaluation, j: usize| alpha.dot(&self.fixed.restrict_invariant(&e.loads[j]));
+            let grad_params = (0..params.len())
+                .map(|j| -(dot(&self.plus, j) - dot(&self.minus, j)) / (2.0 * eps))
+                .collect();
+            (self.fixed.restrict_invariant(&d3), grad_params)
+        } else {
+            let dot = |x: &[f64]| x.iter().zip(a).map(|(x, y)| x * y).sum::<f64>();
+            let grad_params = (0..params.len())
+                .map(|j| -(dot(&self.plus.loads[j]) - dot(&self.minus.loads[j])) / (2.0 * eps))
+                .collect();
+            (self.fixed.restrict(&d3), grad_params)
+        };
+        Ok((grad_q, grad_params))
     }
 }
 
@@ -194,26 +244,37 @@ impl<'a> BlockTest<'a> {
 pub struct CurveProblem<'a> {
     inner: SymmetricProblem<'a>,
     test: BlockTest<'a>,
-    fixed: &'a SparseBasis,
     /// The parameter index of every free parameter, in the order of λ.
     free: Vec<usize>,
+    /// The last evaluated (q, λ) and its null vector v.
+    last: Option<(DVector<f64>, DVector<f64>, DVector<f64>)>,
 }
 
 impl<'a> CurveProblem<'a> {
-    /// The curve of `test`'s block in the problem `inner` (whose free parameters are the
-    /// parameter indices `free`), with fixed-point basis `fixed`.
-    pub fn new(
-        inner: SymmetricProblem<'a>,
-        test: BlockTest<'a>,
-        fixed: &'a SparseBasis,
-        free: Vec<usize>,
-    ) -> Self {
+    /// The curve of `test`'s block in the problem `inner`, whose free parameters are the
+    /// parameter indices `free`.
+    pub fn new(inner: SymmetricProblem<'a>, test: BlockTest<'a>, free: Vec<usize>) -> Self {
         Self {
             inner,
             test,
-            fixed,
             free,
+            last: None,
         }
+    }
+
+    /// The null vector v at (q, λ): from the last evaluation when it was there.
+    fn null_vector(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<DVector<f64>, ModelError> {
+        if let Some((lq, ll, v)) = &self.last {
+            if lq == q && ll == lambda {
+                return Ok(v.clone());
+            }
+        }
+        let (u, params) = (self.inner.displacement(q), self.inner.parameters(lambda));
+        Ok(self.test.value(&u, &params)?.1)
     }
 
     /// The test function, to refresh its border or evaluate it at a point.
@@ -241,7 +302,8 @@ impl Problem for CurveProblem<'_> {
         let params = self.inner.parameters(lambda);
         let t = self.test.evaluate(&u, &params)?;
         let (m, c, nf) = (q.len(), lin.constraints.len(), lambda.len());
-        let sigma_q = self.fixed.restrict(&t.grad_u);
+        let sigma_q = &t.grad_q;
+        self.last = Some((q.clone(), lambda.clone(), t.vector.clone()));
         let mut constraints = DVector::zeros(c + 1);
         constraints.rows_mut(0, c).copy_from(&lin.constraints);
         constraints[c] = t.sigma;
@@ -288,9 +350,8 @@ impl Detector<CurveProblem<'_>> for RefreshBorder {
     ) -> Vec<Event> {
         let p = driver.point().clone();
         let problem = driver.problem_mut();
-        let (u, params) = (problem.displacement(&p.q), problem.parameters(&p.lambda));
-        match problem.test_mut().value(&u, &params) {
-            Ok((_, v)) => {
+        match problem.null_vector(&p.q, &p.lambda) {
+            Ok(v) => {
                 problem.test_mut().set_border(&v);
                 Vec::new()
             }
@@ -483,7 +544,7 @@ fn follow_curve(
         .fold(0.0, f64::max)
         .max(1e-300);
     let border = block.restrict(&cp.mode);
-    let test = BlockTest::new(&study.model, block, &border, length);
+    let test = BlockTest::new(&study.model, block, &study.basis, mu == 0, &border, length);
     let inner = SymmetricProblem::new(
         &study.model,
         &study.basis,
@@ -521,7 +582,7 @@ fn follow_curve(
         },
     };
     let last = free.len() - 1;
-    let problem = CurveProblem::new(inner, test, &study.basis, free);
+    let problem = CurveProblem::new(inner, test, free);
     let mut driver = Continuation::start(problem, &q0, &lambda0, opts).map_err(|e| {
         RunError::Curve(format!(
             "the critical point did not converge as the first point of the curve: {e}"
