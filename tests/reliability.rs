@@ -414,3 +414,60 @@ fn spin_on_an_icosphere_keeps_the_axis_stabiliser() {
         assert_eq!(json["group"], group);
     }
 }
+
+/// SIGINT stops a run at its next point: what the path has is written with the stop reason
+/// "interrupted", exit code 130, a manifest with every file's checksum last, and no temporary
+/// file left (a stale one of an earlier, killed run is swept).
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_writes_what_it_has_and_a_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    std::fs::create_dir(&out).unwrap();
+    let stale = out.join(".memstab-stale.tmp");
+    std::fs::write(&stale, "debris").unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            &scene("disc_fluid_above.toml"),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+    assert_eq!(report["stop"], "interrupted");
+    let rows = report["rows"].as_array().unwrap().len();
+    assert!((1..400).contains(&rows), "{rows} rows");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["stop"], "interrupted");
+    let files = manifest["files"].as_array().unwrap();
+    assert!(files.len() >= 6);
+    for f in files {
+        let path = out.join(f["file"].as_str().unwrap());
+        assert_eq!(
+            memstab::output::sha256(&path).unwrap(),
+            f["sha256"].as_str().unwrap()
+        );
+    }
+    let left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}

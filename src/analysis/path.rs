@@ -25,6 +25,9 @@ pub fn trace<P: Problem>(
 ) -> Branch {
     let bounds = driver.options().bounds;
     let mut stops = StopWhen(move |problem: &P, p: &PathPoint| {
+        if super::interrupt::requested() {
+            return Some(StopReason::Interrupted);
+        }
         if p.lambda[0] < bounds.0 || p.lambda[0] > bounds.1 {
             return Some(StopReason::Bounds);
         }

@@ -78,9 +78,19 @@ pub(crate) enum CliError {
     Input(String),
     /// Something failed that is not the user's input.
     Failure(String),
+    /// A signal stopped the command after it wrote what it had (exit code 130).
+    Interrupted(String),
 }
 
 pub(crate) fn main() -> ExitCode {
+    // SIGINT and SIGTERM: the analyses stop at their next point and their outputs are
+    // written; a second signal ends the process at once.
+    let _ = ctrlc::set_handler(|| {
+        if memstab::analysis::interrupt::requested() {
+            std::process::exit(130);
+        }
+        memstab::analysis::interrupt::request();
+    });
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -135,6 +145,10 @@ pub(crate) fn main() -> ExitCode {
         Err(CliError::Failure(m)) => {
             eprintln!("error: {}", memstab::text::message(&m));
             ExitCode::from(1)
+        }
+        Err(CliError::Interrupted(m)) => {
+            eprintln!("interrupted: {}", memstab::text::message(&m));
+            ExitCode::from(130)
         }
     }
 }

@@ -15,6 +15,7 @@
 
 use super::CliError;
 use clap::Args;
+use memstab::analysis::events::StopReason;
 use memstab::analysis::{run as run_study, RunResult};
 use memstab::demo::closed_form_check;
 use memstab::output::{file_name, write_run, Progress, RunSummary, Written, RUN_FILES};
@@ -59,6 +60,17 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     } else {
         print_summary(&study, &result.report, &args.out, &written);
     }
+    interrupted(&result, &args.out)
+}
+
+/// Exit code 130 after a run that a signal stopped (its outputs are written).
+fn interrupted(result: &RunResult, out: &Path) -> Result<(), CliError> {
+    if result.report.stop == StopReason::Interrupted {
+        return Err(CliError::Interrupted(format!(
+            "the path so far is written into {}",
+            out.display()
+        )));
+    }
     Ok(())
 }
 
@@ -68,6 +80,7 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
     print_summary(&study, &result.report, &args.out, &written);
     print_closed_form(&study, &result.report);
+    interrupted(&result, &args.out)?;
     Ok(())
 }
 

@@ -24,6 +24,7 @@
 
 mod csv;
 mod json;
+mod manifest;
 mod matrix_market;
 mod progress;
 mod run;
@@ -32,6 +33,7 @@ mod svg;
 
 pub use csv::write_csv;
 pub use json::{write_critical, write_json};
+pub use manifest::{remove_manifest, sha256, sweep_temporaries, write_manifest, MANIFEST};
 pub use matrix_market::{
     rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,
     RANK_ONE_FILE_TAG,

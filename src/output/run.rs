@@ -40,6 +40,8 @@ pub struct Written {
     pub pvd: PathBuf,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// `manifest.json`, written last.
+    pub manifest: PathBuf,
 }
 
 impl Written {
@@ -53,6 +55,7 @@ impl Written {
             self.pvd.clone(),
         ];
         files.extend(self.states.iter().cloned());
+        files.push(self.manifest.clone());
         files
     }
 }
@@ -85,7 +88,9 @@ pub fn file_name(p: &Path) -> String {
 }
 
 /// Writes `path.csv`, the states with `path.pvd`, `path.json` (with the saved states, which
-/// it records in the report), `critical.json` and `path.svg` into `out`, in that order.
+/// it records in the report), `critical.json`, `path.svg` and, last, `manifest.json` into
+/// `out`, in that order, after removing the old manifest and the temporary files a killed run
+/// left there.
 ///
 /// Path states go into the collection (PVD time = path step: ParaView orders datasets by
 /// time, and along a path that turns back in the control — a balloon past its pressure
@@ -97,6 +102,7 @@ pub fn write_run(
     out: &Path,
 ) -> Result<Written, WriteRunError> {
     let mut done: Vec<PathBuf> = Vec::new();
+    super::sweep_temporaries(out);
     macro_rules! attempt {
         ($e:expr) => {
             match $e {
@@ -105,6 +111,7 @@ pub fn write_run(
             }
         };
     }
+    attempt!(super::remove_manifest(out));
     let csv = attempt!(write_csv(out, &result.report));
     done.push(csv.clone());
     let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
@@ -198,6 +205,8 @@ pub fn write_run(
         (write_spectrum_diagram(out, report), plotted)
     };
     let svg = attempt!(svg);
+    done.push(svg.clone());
+    let manifest = attempt!(super::write_manifest(out, &done, &result.report.stop));
     Ok(Written {
         csv,
         json,
@@ -206,6 +215,7 @@ pub fn write_run(
         plotted,
         pvd,
         states,
+        manifest,
     })
 }
 
