@@ -637,8 +637,19 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
             self.crossings.spectrum(u1, p1),
         );
         let (Some(a), Some(b)) = ends else {
-            return Vec::new();
+            return vec![Event::Warning(format!(
+                "the index changed between steps {after} and {} but the spectrum at one of them could not be computed, so the crossing was not localised",
+                after + 1
+            ))];
         };
+        if a.negatives() == b.negatives() {
+            // The inertia and the eigenvalues disagree on a sign: an eigenvalue at round-off
+            // at one of the two points.
+            return vec![Event::Warning(format!(
+                "the index changed between steps {after} and {} but the eigenvalues at both have the same signs (an eigenvalue at round-off at one of them), so the crossing was not localised",
+                after + 1
+            ))];
+        }
         let s1 = point.arclength - step.from.arclength;
         self.crossings.localise(&a, &b, after, s1, |s| {
             let q = driver.step_from(&step.from, s).ok()?;
