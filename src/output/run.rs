@@ -31,6 +31,8 @@ pub struct Written {
     pub pvd: PathBuf,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// The branches' files, when the run has branches.
+    pub branches: Option<super::BranchesWritten>,
 }
 
 impl Written {
@@ -44,6 +46,9 @@ impl Written {
             self.pvd.clone(),
         ];
         files.extend(self.states.iter().cloned());
+        if let Some(b) = &self.branches {
+            files.extend(b.files.iter().cloned());
+        }
         files
     }
 }
@@ -189,6 +194,23 @@ pub fn write_run(
         (write_spectrum_diagram(out, report), plotted)
     };
     let svg = attempt!(svg);
+    done.push(svg.clone());
+    let branches = match &result.branches {
+        Some(b) => {
+            let primary = super::PrimaryPath::of(&result.report);
+            match super::write_branches(study, b, &primary, out) {
+                Ok(w) => Some(w),
+                Err(mut e) => {
+                    done.append(&mut e.done);
+                    return Err(WriteRunError {
+                        error: e.error,
+                        done,
+                    });
+                }
+            }
+        }
+        None => None,
+    };
     Ok(Written {
         csv,
         json,
@@ -197,6 +219,7 @@ pub fn write_run(
         plotted,
         pvd,
         states,
+        branches,
     })
 }
 
