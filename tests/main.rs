@@ -6,6 +6,7 @@ mod common;
 mod adapted;
 mod balloon;
 mod bench_smoke;
+mod branch;
 mod cli;
 mod cli_compare;
 mod cli_run;

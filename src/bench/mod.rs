@@ -8,6 +8,8 @@
 //! - [`full_path`]: stability along the balloon path with and without symmetry;
 //! - [`scaling`]: the scaling study with peak memory;
 //! - [`ponding`]: the ponding ladder against its closed form;
+//! - [`branching`]: branch switching, timed — the abstract Hg potential on the icosahedron
+//!   (branches in closed form) and the upward-loaded disc;
 //! - [`report`]: the markdown tables, CSV files and the accuracy plot of those numbers;
 //! - [`run`]: the whole bench (or the scaling study) into an output directory.
 //!
@@ -28,6 +30,7 @@
 //! column. Output writing, which `run` also does, is not part of this study.
 
 pub mod balloon;
+pub mod branching;
 pub mod full_path;
 pub mod payoff;
 pub mod peer;
