@@ -480,3 +480,72 @@ fn split_pair_branches_approach_the_double_point_branch() {
         "the branches approach C8v's: {gaps:?}"
     );
 }
+
+/// Depth 2: the critical points found along the C1v branches of the upward disc are switched
+/// in their turn, in C1v: a simple point in A2 (the antisymmetric irrep of the mirror) gets
+/// one branch with the kernel of A2 as isotropy — the trivial group C1 — and a limit point
+/// (A1) none. At depth 1 the same points are nodes without branches.
+#[test]
+fn depth_two_switches_at_the_branches_points() {
+    let mut s = study(&upward(7, 6, None, 4.9, false));
+    let critical = run(&mut s, |_, _| {}).expect("runs").report.critical;
+    let scene: Scene = Scene::from_toml_str(&upward(7, 6, None, 4.9, true), "t").unwrap();
+    let memstab::scene::Analysis::Path(p) = &scene.analysis else {
+        panic!("a path")
+    };
+    let mut opts = branch::options(&s, p.branches.as_ref());
+    opts.depth = 2;
+    opts.steps = 40;
+    opts.path.max_steps = 40;
+    let b = branch::run(&s, &critical, opts);
+    let primary: Vec<&SwitchedBranch> = b
+        .graph
+        .branches
+        .iter()
+        .filter(|x| x.parent.is_none())
+        .collect();
+    assert_eq!(primary.len(), 2);
+    let mut secondary = 0;
+    for n in b.graph.graph.node_indices() {
+        let Node::Critical {
+            on: Some(parent),
+            point,
+            skipped,
+            ..
+        } = &b.graph.graph[n]
+        else {
+            continue;
+        };
+        let out = b.graph.leaving(n);
+        if b.graph.branches[*parent].parent.is_some() {
+            // On a branch of depth 2: not switched again.
+            assert!(out.is_empty());
+            assert!(matches!(
+                skipped,
+                Some(branch::Skip::LimitPoint | branch::Skip::Depth)
+            ));
+            continue;
+        }
+        match point.irrep.as_str() {
+            "A1" => {
+                assert!(out.is_empty());
+                assert_eq!(skipped, &Some(branch::Skip::LimitPoint));
+            }
+            "A2" => {
+                assert_eq!(out.len(), 1, "the kernel of A2, one branch");
+                let br = &b.graph.branches[out[0]];
+                assert_eq!(br.parent, Some(*parent));
+                assert_eq!((br.irrep.as_str(), br.isotropy.as_str()), ("A2", "C1"));
+                assert_eq!(br.elements, vec![0]);
+                assert!(br.points.len() > 3, "{:?}", br.stop);
+                assert!(br.isotropy_exact(), "{:?}", br.warnings);
+                for q in &br.points[1..] {
+                    assert_eq!(stabiliser(&s, &q.u), vec![0]);
+                }
+                secondary += 1;
+            }
+            other => panic!("unexpected critical point in {other} on a C1v branch"),
+        }
+    }
+    assert!(secondary >= 1, "some A2 point on the C1v branches");
+}

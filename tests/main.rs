@@ -8,6 +8,7 @@ mod balloon;
 mod bench_smoke;
 mod branch;
 mod cli;
+mod cli_branch;
 mod cli_compare;
 mod cli_run;
 mod cli_spectrum;
