@@ -27,6 +27,8 @@ pub const IH_COEFFICIENTS: [f64; 3] = [0.3, 0.2, 0.5];
 
 /// The abstract problem: the icosahedron (12 nodes, Ih) with the Hg potential.
 pub struct IhProblem {
+    /// [c₃, c₃', c₄].
+    pub coefficients: [f64; 3],
     /// The mesh and its action.
     pub mesh: SymmetricMesh,
     /// The potential (also inside the model).
@@ -52,6 +54,7 @@ pub fn ih_problem(coefficients: [f64; 3]) -> Result<IhProblem, String> {
         vec!["lambda".to_string()],
     );
     Ok(IhProblem {
+        coefficients,
         mesh,
         potential,
         model,
@@ -166,4 +169,99 @@ pub fn disc_upward_branches(
         .take()
         .ok_or("the scene asks for no branches")?;
     Ok((result, branches))
+}
+
+/// The largest |λ − λ_closed-form| over the points of the abstract problem's branches, with
+/// λ = 1 + 3 (c₃ I₃(v) + c₃' J₃(v)) a + 4 c₄ a² on the line z = a v of each branch
+/// (docs/theory.md §14.6).
+pub fn closed_form_error(problem: &IhProblem, graph: &BranchGraph) -> f64 {
+    let [c3, c3t, c4] = problem.coefficients;
+    let mut worst: f64 = 0.0;
+    for b in &graph.branches {
+        let z = |k: usize| {
+            let x = problem.model.positions(&b.points[k].u);
+            problem.potential.project(&problem.potential.radial(&x))
+        };
+        if b.points.len() < 2 {
+            continue;
+        }
+        let v = z(1).normalize();
+        let (i3, j3) = problem.potential.cubics(&v);
+        for k in 1..b.points.len() {
+            let a = z(k).dot(&v);
+            let exact = 1.0 + 3.0 * (c3 * i3 + c3t * j3) * a + 4.0 * c4 * a * a;
+            worst = worst.max((b.points[k].parameters[0] - exact).abs());
+        }
+    }
+    worst
+}
+
+/// The bench's branch-switching section (markdown): the abstract Hg problem (every branch
+/// of its 5-fold point, against the closed form) and the upward-loaded disc on
+/// `divisions` (16: the thesis mesh), each timed.
+pub fn branching_section(divisions: usize) -> Result<String, String> {
+    use std::fmt::Write;
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "\n## Branch switching\n\n\
+         All branches from a bifurcation point by the equivariant branching lemma \
+         (docs/theory.md §14): one per conjugacy class of axial isotropy subgroups (both \
+         halves where they are not conjugate), each followed in its fixed-point space with the \
+         index by the irreps of its isotropy subgroup at every point and its critical points \
+         localised. Time: wall time of all switches and branches (the path before them \
+         apart). Target: < 10 s each.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| case | unknowns | point | branches | points per branch | closed form max error | path (s) | branches (s) |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let problem = ih_problem(IH_COEFFICIENTS)?;
+    let run = ih_branches(&problem, 20)?;
+    let names = |g: &BranchGraph| {
+        g.branches
+            .iter()
+            .map(|b| format!("{}{}", b.isotropy, b.half))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let points = |g: &BranchGraph| {
+        g.branches
+            .iter()
+            .map(|b| b.points.len().to_string())
+            .collect::<Vec<_>>()
+            .join("/")
+    };
+    let point = |c: &[CriticalPoint]| {
+        c.first().map_or("none".to_string(), |c| {
+            format!("{} in {} at {:.6}", c.kind, c.irrep, c.parameters[0])
+        })
+    };
+    let _ = writeln!(
+        md,
+        "| abstract Hg potential, icosahedron (Ih) | {} | {} | {} | {} | {:.1e} | {:.3} | {:.3} |",
+        problem.model.unknowns(),
+        point(&run.critical),
+        names(&run.graph),
+        points(&run.graph),
+        closed_form_error(&problem, &run.graph),
+        run.path_time.as_secs_f64(),
+        run.branch_time.as_secs_f64()
+    );
+    let t = Instant::now();
+    let (result, branches) = disc_upward_branches(divisions, 30)?;
+    let total = t.elapsed();
+    let _ = writeln!(
+        md,
+        "| upward-loaded disc (C7v, k = 0.1, {} triangles) | {} | {} | {} | {} | – | {:.3} | {:.3} |",
+        result.report.mesh.elements,
+        result.report.unknowns,
+        point(&result.report.critical),
+        names(&branches.graph),
+        points(&branches.graph),
+        (total.saturating_sub(branches.time)).as_secs_f64(),
+        branches.time.as_secs_f64()
+    );
+    Ok(md)
 }

@@ -51,7 +51,9 @@ pub use payoff::{
 };
 pub use peer::{run_peer, PeerResult};
 pub use ponding::{ponding_level, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML};
-pub use run::{run_accuracy, run_scaling, AccuracyOptions, BenchFiles, ScalingOptions};
+pub use run::{
+    run_accuracy, run_branching, run_scaling, AccuracyOptions, BenchFiles, ScalingOptions,
+};
 pub use scaling::{fit_exponent, memory, scaling_level, ScalingFits, ScalingLevel};
 
 use crate::model::{Evaluation, FeModel, Model};

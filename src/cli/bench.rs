@@ -22,6 +22,9 @@
 //!    nearest σ by sparse shift-invert, and (iii) at the small sizes (f ≤ 8; quick f = 4) a
 //!    dense eigen-decomposition of the full K ([`memstab::bench::full_path_stability`]).
 //! 4. The ponding ladder on a C7v disc at two refinements against its closed form.
+//! 5. Branch switching: every branch from the 5-fold Hg point of the abstract invariant
+//!    potential on the icosahedron (against its closed form), and the branches of the
+//!    upward-loaded C7v disc's first E1 point on the thesis mesh (quick: 8 divisions).
 //!
 //! Writes DIR/accuracy.md (every table, also printed), DIR/accuracy.csv (the balloon levels,
 //! with the path comparison of 3.), DIR/payoff.csv (one row per payoff case), DIR/accuracy.svg
@@ -52,6 +55,9 @@ Outputs (in DIR):
                  f = 16 / quick 8; the C8v disc under fluid, 16 / quick 8 divisions)
   accuracy.svg   relative error of the turning pressures against wall time, log-log
   K.mtx          the Ih payoff tangent, when a python with scipy runs scripts/peer_eigsh.py
+With --branching (nothing else is run):
+  branching.md   the branch-switching table of the bench alone (the abstract Hg problem; the
+                 upward disc on 16 divisions, quick: 8)
 With --scaling (nothing else is run):
   scaling.md     per frequency: a balloon path of --scaling-points points with the spectrum
                  by irrep at every point, time by phase, resident memory at the start of the
@@ -82,6 +88,10 @@ pub(crate) struct BenchArgs {
     /// phase, with its peak memory; writes scaling.md and scaling.csv.
     #[arg(long, value_delimiter = ',', value_name = "F1,F2,...")]
     scaling: Option<Vec<usize>>,
+    /// Only the branch-switching study (item 5; quick: the disc on 8 divisions); writes
+    /// branching.md.
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
+    branching: bool,
     /// Points of each scaling path, the start included.
     #[arg(long, default_value_t = 20, requires = "scaling", value_name = "N")]
     scaling_points: usize,
@@ -131,6 +141,13 @@ fn print(files: &BenchFiles) {
 pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
     if let Some(freqs) = &args.scaling {
         return scaling(args, freqs);
+    }
+    if args.branching {
+        prepare_out(&args.out)?;
+        let files = memstab::bench::run_branching(&args.out, args.quick, &mut |m| progress(m))
+            .map_err(CliError::Failure)?;
+        print(&files);
+        return Ok(());
     }
     prepare_out(&args.out)?;
     if let Some(f) = args.frequencies.iter().find(|&&f| f == 0) {
