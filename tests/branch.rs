@@ -1,4 +1,4 @@
-//! Branch switching by the equivariant branching lemma (docs/theory.md §15): the branches an
+//! Branch switching by the equivariant branching lemma (docs/theory.md §14): the branches an
 //! abstract Hg potential has in closed form, the mirror branches of the upward-loaded C7v disc,
 //! the reflection classes of E1, E2, E3 (and the kernels of B1, A2) on a C8v disc, and a split
 //! pair on a C2v disc whose branches approach the C8v double's under refinement.
@@ -99,7 +99,7 @@ fn control(b: &SwitchedBranch, k: usize) -> f64 {
 /// On every branch point, z = a v with v fixed, v has the closed form of its class (D5d: the
 /// two vertices on the 5-fold axis at ±1/√2.4, the ten others at ∓1/(5√2.4); D3d: the two
 /// triangles around the 3-fold axis at ±1/√12, the other six vertices at ∓1/√12), the
-/// displacement is purely radial and λ = 1 + 3 (c₃ I₃(v) + c₃' J₃(v)) a + 4 c₄ a² (§15.6).
+/// displacement is purely radial and λ = 1 + 3 (c₃ I₃(v) + c₃' J₃(v)) a + 4 c₄ a² (§14.6).
 #[test]
 fn abstract_hg_potential_has_the_d5d_and_d3d_branches_in_closed_form() {
     let problem = ih_problem(IH_COEFFICIENTS).expect("problem");

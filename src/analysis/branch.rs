@@ -1,5 +1,5 @@
 //! Branch switching at critical points by the equivariant branching lemma (docs/theory.md
-//! §15): the branches that leave a bifurcation point of a path, one per conjugacy class of
+//! §14): the branches that leave a bifurcation point of a path, one per conjugacy class of
 //! axial isotropy subgroups of its irrep (and per half where ±v are not conjugate), each
 //! followed in its own fixed-point space with stability by the irreps of its isotropy
 //! subgroup — and, to a chosen depth, the branches that leave those.
@@ -8,14 +8,14 @@
 //! 1. the kernel V_μ is spanned by the d partners x_a = P_{a0} x_0 of the block's null vector
 //!    x_0 (§10.1); for an axial isotropy subgroup Σ of μ (dim Fix_{V_μ}(Σ) = 1, from
 //!    [`symmetry::Group::isotropy`]) the kernel direction in Fix(Σ) is φ = Σ_a c_a x_a with c
-//!    spanning Fix_{V_μ}(Σ) in the irrep's coordinates (§15.2);
+//!    spanning Fix_{V_μ}(Σ) in the irrep's coordinates (§14.2);
 //! 2. in Fix(Σ) the point is a simple bifurcation of the path; the reduced equation along φ,
 //!    g(a, s) = a (b s + ½ C₃ a + …), gives the branch's tangent: (φ, 0) for a pitchfork
 //!    (C₃ = 0 by symmetry: −v conjugate to v, or no invariant cubic), φ + κ t_path with
-//!    κ = −C₃/(2b) for a transcritical one (§15.3);
+//!    κ = −C₃/(2b) for a transcritical one (§14.3);
 //! 3. the branch is followed by the pseudo-arclength driver in Fix(Σ) from the critical point
 //!    along that tangent (both halves when ±v are not conjugate), its index by the irreps of
-//!    Σ at every point, its critical points localised and classified in Σ (§15.4).
+//!    Σ at every point, its critical points localised and classified in Σ (§14.4).
 //!
 //! Limit points (the trivial irrep) have no branches; a simple point in a 1-D irrep has one
 //! axial subgroup, the irrep's kernel. A split pair of simple points is two such points, each
@@ -223,7 +223,7 @@ pub struct Direction {
 }
 
 /// The reduced bifurcation equation along φ in Fix(Σ): g(a, s) = a (b s + ½ C₃ a + …), a the
-/// amplitude along φ, s the parent path's scaled arclength (docs/theory.md §15.3).
+/// amplitude along φ, s the parent path's scaled arclength (docs/theory.md §14.3).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reduced {
     /// b/‖K‖: the critical eigenvalue's rate of change along the path (per unit scaled
@@ -412,7 +412,7 @@ fn norm(v: &[f64]) -> f64 {
 }
 
 /// The partners x_a = P_{a0} x_0 = (d/|G|) Σ_g D_{a0}(g) T(g) x_0 of a mode x_0 of the first
-/// partner of irrep `irrep` (docs/theory.md §15.2); x_0 itself first.
+/// partner of irrep `irrep` (docs/theory.md §14.2); x_0 itself first.
 pub fn partners(
     action: &GroupAction,
     layout: &Layout,
@@ -439,7 +439,7 @@ pub fn partners(
 }
 
 /// The kernel directions of a critical point of a path in Fix(level's group), one per
-/// conjugacy class of axial isotropy subgroups of its irrep (docs/theory.md §15.1–15.2); or
+/// conjugacy class of axial isotropy subgroups of its irrep (docs/theory.md §14.1–14.2); or
 /// why there are none.
 pub fn kernel_directions(
     level: &Level,
@@ -671,7 +671,7 @@ impl Switching<'_> {
         }
     }
 
-    /// The reduced equation along `dir` at `cp` (docs/theory.md §15.3): b from φᵀKφ at the
+    /// The reduced equation along `dir` at `cp` (docs/theory.md §14.3): b from φᵀKφ at the
     /// path's linear predictor ±δ, C₃ from φᵀKφ at u ± hφ (central differences, both
     /// exact to O(δ²)); C₃ = 0 exactly where symmetry forbids it.
     fn reduced(
@@ -869,7 +869,7 @@ impl Switching<'_> {
             tangent: tangent.clone(),
         };
         // The first step leaves the critical point on the plane of fixed amplitude along φ
-        // (§15.4), which the parent path does not meet; it is taken before any detector sees
+        // (§14.4), which the parent path does not meet; it is taken before any detector sees
         // a point: the singular block at the critical point is not a crossing of the branch.
         let m = child.basis.dim();
         let mut plane = DVector::zeros(tangent.len());

@@ -1,4 +1,4 @@
-//! An abstract invariant potential with branches known in closed form (docs/theory.md §15.6):
+//! An abstract invariant potential with branches known in closed form (docs/theory.md §14.6):
 //! not a load, but a test problem for branch switching on a mesh with a large group.
 //!
 //! A node's radial displacement is w_i = n_i · u_i (n_i the unit vector from the origin to
@@ -18,7 +18,7 @@
 //! every λ; its tangent is I − λ N P Nᵀ (N: w ↦ u, u_i = w_i n_i, an isometry), so the
 //! eigenvalue 1 − λ of the fields in range(P) crosses zero at λ = 1 in irrep μ, d-fold. On an
 //! axial line z = a v (v ∈ Fix(Σ) ∩ range(P), |v| = 1) the equilibrium equations reduce to
-//! the closed form λ = 1 + 3 (c₃ I₃(v) + c₃' J₃(v)) a + 4 c₄ a² (docs/theory.md §15.6).
+//! the closed form λ = 1 + 3 (c₃ I₃(v) + c₃' J₃(v)) a + 4 c₄ a² (docs/theory.md §14.6).
 //!
 //! The Hessian of the z-terms has rank d: it is handed over as d rank-one terms c a aᵀ, from
 //! the eigen-decomposition of its d × d restriction to an orthonormal basis of range(P).
