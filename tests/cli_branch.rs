@@ -256,6 +256,33 @@ fn bad_branch_input_is_exit_code_2() {
         assert!(err.contains(needle), "'{needle}' not in {err}");
     }
     assert!(!run.join("branches.json").exists(), "nothing written");
+    // A held state's critical points are not points of a path.
+    let ponding = std::fs::read_to_string(format!(
+        "{}/scenes/ponding.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replace("divisions = 16 ", "divisions = 4 ")
+    .replace("max = 46.0 ", "max = 8.0 ")
+    .replace("samples = 92", "samples = 16");
+    let held = tmp.path().join("ponding.toml");
+    std::fs::write(&held, ponding).unwrap();
+    let held_run = tmp.path().join("held");
+    assert_success(
+        &memstab(&[
+            "run",
+            held.to_str().unwrap(),
+            "--out",
+            held_run.to_str().unwrap(),
+            "--quiet",
+        ]),
+        "memstab run (linear buckling)",
+    );
+    let out = memstab(&["branch", held_run.to_str().unwrap(), "--critical", "1"]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("linear-buckling analysis"), "{err}");
+    assert!(!held_run.join("branches.json").exists());
     // A scene that is not the run's.
     let other = tmp.path().join("other.toml");
     std::fs::write(

@@ -161,8 +161,11 @@ pub(crate) fn print_branches(b: &Branches, written: &BranchesWritten, control: &
             }
             _ => {}
         }
+        let also = skipped
+            .as_ref()
+            .map_or_else(String::new, |why| format!(" (not every direction: {why})"));
         println!(
-            "  {on} #{number} {} in {}: {} branch{}",
+            "  {on} #{number} {} in {}: {} branch{}{also}",
             point.kind,
             point.irrep,
             leaving.len(),

@@ -143,6 +143,18 @@ impl FinishedRun {
                     .unwrap_or(0.0),
             });
         }
+        let measures = field(&v, "measures", &file)?.as_array().map_or(0, Vec::len);
+        for (k, c) in critical.iter().enumerate() {
+            if c.parameters.len() != parameters.len() || c.measures.len() != measures {
+                return Err(ReopenError(format!(
+                    "{}: critical[{k}] has {} parameters and {} measures, the run names {} and {measures}",
+                    file.display(),
+                    c.parameters.len(),
+                    c.measures.len(),
+                    parameters.len()
+                )));
+            }
+        }
         let scene = text(&v, "scene", &file)?;
         let group = text(&v, "group", &file)?;
         Ok(Self {
@@ -163,9 +175,17 @@ impl FinishedRun {
         })
     }
 
-    /// Fails unless `study` is the model the run solved: the same scene name, group,
-    /// parameters and number of unknowns.
+    /// Fails unless `study` is the model the run solved — the same scene name, group,
+    /// parameters and number of unknowns — and its analysis is a path (a held state's
+    /// critical points are not points of a path of equilibria).
     pub fn check(&self, study: &Study) -> Result<(), ReopenError> {
+        if !matches!(study.scene.analysis, crate::scene::Analysis::Path(_)) {
+            return Err(ReopenError(format!(
+                "the scene of the run in '{}' is a {} analysis: branches leave the critical points of a path (type = \"path\") only",
+                self.dir.display(),
+                study.scene.analysis.kind()
+            )));
+        }
         let mismatch = |what: &str, run: String, now: String| {
             ReopenError(format!(
                 "the scene does not match the run in '{}': {what} is {now}, the run's was {run} (give the run's scene with --scene)",
