@@ -637,12 +637,15 @@ impl Switching<'_> {
                 Halves::Conjugate => vec![Half::Plus],
                 Halves::Distinct => vec![Half::Plus, Half::Minus],
             };
+            // The set-up (Σ's action and bases, the reduced equation) is shared by the halves.
+            let setup = t0.elapsed() / halves.len() as u32;
             for half in halves {
+                let t1 = std::time::Instant::now();
                 let mut branch = self.follow(level, &child, cp, dir, &reduced, half);
                 branch.from = node;
                 branch.parent = parent;
                 branch.sign = sign * half.sign();
-                branch.time += t0.elapsed();
+                branch.time = setup + t1.elapsed();
                 let id = g.branches.len();
                 let end = g.graph.add_node(Node::End {
                     branch: id,
@@ -680,7 +683,7 @@ impl Switching<'_> {
         cp: &CriticalPoint,
         dir: &Direction,
     ) -> Result<Reduced, String> {
-        let (_, tangent) = self.path_tangent(level, cp)?;
+        let tangent = self.path_tangent(level, cp)?;
         let opts = &self.options.path;
         let phi = &dir.field;
         let mut eval = self.model.new_evaluation();
@@ -742,12 +745,9 @@ impl Switching<'_> {
     }
 
     /// The unit tangent (scaled variables) of the path in Fix(level's group) at `cp`, the
-    /// control increasing, and the point's coordinates there.
-    fn path_tangent(
-        &self,
-        level: &Level,
-        cp: &CriticalPoint,
-    ) -> Result<(PathPoint, DVector<f64>), String> {
+    /// control increasing (the critical point is a regular point of that path: its singular
+    /// block is not the trivial one).
+    fn path_tangent(&self, level: &Level, cp: &CriticalPoint) -> Result<DVector<f64>, String> {
         let mut problem = SymmetricProblem::new(
             self.model,
             &level.basis,
@@ -761,10 +761,9 @@ impl Switching<'_> {
             direction: 1.0,
             ..self.options.path.clone()
         };
-        let p = point_at(&mut problem, q, lambda, 0, &opts, None)
-            .map_err(|e| format!("the path's tangent at the critical point: {e}"))?;
-        let t = p.tangent.clone();
-        Ok((p, t))
+        point_at(&mut problem, q, lambda, 0, &opts, None)
+            .map(|p| p.tangent)
+            .map_err(|e| format!("the path's tangent at the critical point: {e}"))
     }
 
     /// The unit tangent of the branch at the critical point in Fix(Σ) (scaled variables,
@@ -787,7 +786,7 @@ impl Switching<'_> {
             .copy_from(&child.basis.restrict(&dir.field));
         let k = reduced.path_per_amplitude;
         if k != 0.0 {
-            let (_, tp) = self.path_tangent(level, cp)?;
+            let tp = self.path_tangent(level, cp)?;
             let mp = level.basis.dim();
             let mut up = vec![0.0; level.basis.unknowns()];
             level.basis.expand(&tp.rows(0, mp).into_owned(), &mut up);
