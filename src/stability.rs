@@ -1,4 +1,4 @@
-//! Stability by irrep (DESIGN §3, §4.3): every block K_μ = B_μᵀ K B_μ of the tangent at a
+//! Stability by irrep (docs/theory.md §8, §10): every block K_μ = B_μᵀ K B_μ of the tangent at a
 //! symmetric state, its eigenvalues, negative count and zero modes.
 //!
 //! - Rigid-body modes. A free body has a zero eigenvalue for every rigid motion all its
@@ -8,7 +8,7 @@
 //!   their orthogonal complement, so they never count in the index.
 //! - Physical constraints. With augmenting equations g = 0 active (their parameters free) the
 //!   trivial block is bordered, K̃ = [[K_A, L], [Lᵀ, C]], each constraint row scaled so that
-//!   the border is symmetric (L = Bᵀ ∂F/∂μ and s·∂g/∂q agree; DESIGN §2.3 "scale it by −ρg").
+//!   the border is symmetric (L = Bᵀ ∂F/∂μ and s·∂g/∂q agree; docs/theory.md §8.3).
 //!   By Haynsworth the index is that of the Schur complement: on the constraints' tangent
 //!   space Zᵀ K_A Z when C = 0, K_A − L C⁻¹ Lᵀ when C is invertible; that matrix's spectrum is
 //!   reported for the trivial block.
@@ -223,7 +223,7 @@ fn sorted_eigen(a: &DMatrix<f64>, with_vectors: bool) -> (Vec<f64>, DMatrix<f64>
 
 /// The constraints' border of the trivial block: L = Bᵀ ∂F/∂μ_k (the loads of the parameters
 /// the constraints free) and C, each constraint row scaled by s so that s·∂g/∂q agrees with
-/// L (the border is symmetric; DESIGN §2.3).
+/// L (the border is symmetric; docs/theory.md §8.3).
 fn constraint_border(
     b: &crate::adapted::SparseBasis,
     layout: &crate::model::Layout,

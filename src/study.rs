@@ -1,4 +1,4 @@
-//! A scene made ready to solve: scene → mesh + group → effects → model (DESIGN §5).
+//! A scene made ready to solve: scene → mesh + group → effects → model (docs/architecture.md).
 //!
 //! Only the effects the scene lists are built. The scene's group is the mesh group restricted
 //! to what every effect keeps (computed from [`crate::model::Effect::keeps`], never typed in),

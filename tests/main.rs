@@ -29,3 +29,4 @@ mod scene_validation;
 mod scenes_run;
 mod sparse_path;
 mod stability;
+mod subgroup_path;

@@ -1,4 +1,4 @@
-//! Events along a path, one mechanism for all (docs/theory.md §5.4, §7): at every accepted
+//! Events along a path, one mechanism for all (docs/theory.md §7.6, §11.1–§11.2): at every accepted
 //! step of a [`Continuation`] each [`Detector`] compares the new point with the previous one
 //! and reports what happened in between — a turning point of a free parameter, a change of
 //! the index of an irrep block (a critical point), a user's stop — localised between the two
@@ -393,7 +393,7 @@ pub trait States {
 pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
 
 /// Index changes of the irrep blocks, localised and classified: the stability analysis of
-/// states of one model under one group (docs/theory.md §6–§8).
+/// states of one model under one group (docs/theory.md §8, §10, §11).
 pub struct Crossings<'a> {
     stability: Stability<'a>,
     constraints: &'a [Box<dyn Constraint>],

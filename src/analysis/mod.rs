@@ -24,6 +24,7 @@ pub mod continuation;
 pub mod critical;
 pub mod equilibrium;
 pub mod events;
+pub mod newton;
 pub mod path;
 mod problem;
 

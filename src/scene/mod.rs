@@ -1,7 +1,7 @@
 //! Scene files: what to compute, in one TOML file.
 //!
 //! A scene names the mesh (a generator and its options), the membrane's material, the loads
-//! (*effects*, each a potential — DESIGN §2), the fixed node sets, the load parameters with
+//! (*effects*, each a potential — docs/theory.md §1), the fixed node sets, the load parameters with
 //! their start values and bounds, the augmenting constraints, the analysis and how it starts.
 //! The format, with every key, its default and its validation rule, is documented in
 //! `docs/scenes.md`; the types below mirror it one to one (a TOML key `cut-height` is the
@@ -186,7 +186,7 @@ pub struct FileMesh {
 }
 
 /// `[material]`: an incompressible Mooney–Rivlin membrane,
-/// W = c1(I1 − 3) + c2(I2 − 3), μ/2 = c1 + c2, k = c2/c1 (DESIGN §2.1).
+/// W = c1(I1 − 3) + c2(I2 − 3), μ/2 = c1 + c2, k = c2/c1 (docs/theory.md §2).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct Material {
@@ -243,7 +243,7 @@ impl Quantity {
     }
 }
 
-/// `[[effect]]`, tagged by `type`: one load, with its potential (DESIGN §2).
+/// `[[effect]]`, tagged by `type`: one load, with its potential (docs/theory.md §1).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "kebab-case")]
 pub enum Effect {
@@ -421,7 +421,7 @@ pub struct Parameter {
 }
 
 /// `[[constraint]]`, tagged by `type`: one augmenting equation, which governs (frees) one
-/// parameter (DESIGN §2.6).
+/// parameter (docs/theory.md §7.1).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "kebab-case")]
 pub enum Constraint {
