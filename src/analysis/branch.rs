@@ -1245,3 +1245,70 @@ fn branch_run(
         directory: directory(i),
     }
 }
+
+/// A critical point as a finished run records it (`path.json`), without its state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordedPoint {
+    /// Its irrep.
+    pub irrep: String,
+    /// Every parameter.
+    pub parameters: Vec<f64>,
+    /// Every measure.
+    pub measures: Vec<f64>,
+    /// The path step before it.
+    pub after_step: usize,
+    /// |eigenvalue|/‖K‖ there.
+    pub residual_eigenvalue: f64,
+}
+
+/// The recorded critical points of a run of `study` as [`CriticalPoint`]s, point `n`
+/// (1-based) with its `state` and unit `mode` (the others have none: they are nodes of the
+/// graph, not switched at). Fails naming the irrep when the study's group has no such irrep.
+pub fn recorded_points(
+    study: &crate::study::Study,
+    recorded: &[RecordedPoint],
+    n: usize,
+    state: Vec<f64>,
+    mode: Vec<f64>,
+) -> Result<Vec<CriticalPoint>, String> {
+    let group = study.action.group();
+    let layout = study.model.layout();
+    let (mut state, mut mode) = (Some(state), Some(mode));
+    let mut out = Vec::with_capacity(recorded.len());
+    for (k, c) in recorded.iter().enumerate() {
+        let irrep = group.irrep(&c.irrep).ok_or_else(|| {
+            format!(
+                "critical point {}: {} has no irrep {}",
+                k + 1,
+                group.name(),
+                c.irrep
+            )
+        })?;
+        let (u, m) = if k + 1 == n {
+            (
+                state.take().unwrap_or_default(),
+                mode.take().unwrap_or_default(),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let iso = if m.is_empty() {
+            isotropy(&study.action, layout, &vec![0.0; layout.unknowns()])
+        } else {
+            isotropy(&study.action, layout, &m)
+        };
+        out.push(CriticalPoint {
+            kind: CriticalKind::of(irrep.is_trivial(), irrep.dim(), false),
+            irrep: c.irrep.clone(),
+            multiplicity: irrep.dim(),
+            parameters: c.parameters.clone(),
+            measures: c.measures.clone(),
+            after_step: c.after_step,
+            residual_eigenvalue: c.residual_eigenvalue,
+            isotropy: iso,
+            mode: m,
+            state: u,
+        });
+    }
+    Ok(out)
+}

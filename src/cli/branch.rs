@@ -79,9 +79,9 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
         .unwrap_or_else(|| PathBuf::from(&finished.origin));
     let mut study = build_study(load_scene(&scene_file)?)?;
     finished.check(&study).map_err(input)?;
-    let critical = finished
-        .critical_points(&study, args.critical)
-        .map_err(input)?;
+    let (state, mode) = finished.state(&study, args.critical).map_err(input)?;
+    let critical = branch::recorded_points(&study, &finished.critical, args.critical, state, mode)
+        .map_err(CliError::Input)?;
     let start = study.start.clone();
     solve_start(&mut study, &start).map_err(|e| {
         CliError::Failure(format!("{}; nothing was written", one_line(&e.to_string())))

@@ -47,7 +47,7 @@ pub use matrix_market::{
     RANK_ONE_FILE_TAG,
 };
 pub use progress::Progress;
-pub use reopen::{FinishedRun, ReopenError, RunCritical};
+pub use reopen::{FinishedRun, ReopenError};
 pub use run::{file_name, write_run, RunSummary, TurningSummary, WriteRunError, Written};
 pub use states::{PvdTime, StateWriter};
 pub use svg::{

@@ -9,7 +9,7 @@
 //! its file, and must give the same model (name, group, unknowns).
 
 use super::PrimaryPath;
-use crate::analysis::critical::{isotropy, CriticalKind, CriticalPoint};
+use crate::analysis::branch::RecordedPoint;
 use crate::model::Model;
 use crate::study::Study;
 use serde_json::Value;
@@ -20,21 +20,6 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{0}")]
 pub struct ReopenError(pub String);
-
-/// One critical point of a finished run, as `path.json` lists it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunCritical {
-    /// Its irrep.
-    pub irrep: String,
-    /// Every parameter.
-    pub parameters: Vec<f64>,
-    /// Every measure.
-    pub measures: Vec<f64>,
-    /// The path step before it.
-    pub after_step: usize,
-    /// |eigenvalue|/‖K‖ there.
-    pub residual_eigenvalue: f64,
-}
 
 /// A finished run's directory, read back.
 #[derive(Debug, Clone)]
@@ -52,7 +37,7 @@ pub struct FinishedRun {
     /// The path (control and index at every point).
     pub path: PrimaryPath,
     /// The critical points, in order (critical point N is `critical[N - 1]`).
-    pub critical: Vec<RunCritical>,
+    pub critical: Vec<RecordedPoint>,
 }
 
 fn field<'a>(v: &'a Value, key: &str, file: &Path) -> Result<&'a Value, ReopenError> {
@@ -133,7 +118,7 @@ impl FinishedRun {
             .ok_or_else(|| ReopenError(format!("{}: 'critical' is not a list", file.display())))?;
         for (k, cp) in list.iter().enumerate() {
             let what = |key: &str| format!("critical[{k}].{key}");
-            critical.push(RunCritical {
+            critical.push(RecordedPoint {
                 irrep: text(cp, "irrep", &file)?,
                 parameters: numbers(field(cp, "parameters", &file)?, &what("parameters"), &file)?,
                 measures: numbers(field(cp, "measures", &file)?, &what("measures"), &file)?,
@@ -223,14 +208,9 @@ impl FinishedRun {
         Ok(())
     }
 
-    /// The critical points of the run as [`CriticalPoint`]s of `study`, with the state and
-    /// mode of point `n` (1-based) read from `critical_NN.vtu` (the others have none); `n`
-    /// out of range is an error naming the range.
-    pub fn critical_points(
-        &self,
-        study: &Study,
-        n: usize,
-    ) -> Result<Vec<CriticalPoint>, ReopenError> {
+    /// The state and the unit mode of critical point `n` (1-based) from `critical_NN.vtu`,
+    /// over the unknowns of `study`; `n` out of range is an error naming the range.
+    pub fn state(&self, study: &Study, n: usize) -> Result<(Vec<f64>, Vec<f64>), ReopenError> {
         if n == 0 || n > self.critical.len() {
             return Err(ReopenError(format!(
                 "--critical {n}: the run in '{}' has {} critical point{} (numbered from 1)",
@@ -239,46 +219,6 @@ impl FinishedRun {
                 if self.critical.len() == 1 { "" } else { "s" }
             )));
         }
-        let group = study.action.group();
-        let layout = study.model.layout();
-        let mut out = Vec::new();
-        for (k, c) in self.critical.iter().enumerate() {
-            let irrep = group.irrep(&c.irrep).ok_or_else(|| {
-                ReopenError(format!(
-                    "critical point {}: {} has no irrep {}",
-                    k + 1,
-                    group.name(),
-                    c.irrep
-                ))
-            })?;
-            let (state, mode) = if k + 1 == n {
-                self.state(study, k + 1)?
-            } else {
-                (Vec::new(), Vec::new())
-            };
-            let iso = if mode.is_empty() {
-                isotropy(&study.action, layout, &vec![0.0; layout.unknowns()])
-            } else {
-                isotropy(&study.action, layout, &mode)
-            };
-            out.push(CriticalPoint {
-                kind: CriticalKind::of(irrep.is_trivial(), irrep.dim(), false),
-                irrep: c.irrep.clone(),
-                multiplicity: irrep.dim(),
-                parameters: c.parameters.clone(),
-                measures: c.measures.clone(),
-                after_step: c.after_step,
-                residual_eigenvalue: c.residual_eigenvalue,
-                isotropy: iso,
-                mode,
-                state,
-            });
-        }
-        Ok(out)
-    }
-
-    /// The state and the unit mode of critical point `n` from `critical_NN.vtu`.
-    fn state(&self, study: &Study, n: usize) -> Result<(Vec<f64>, Vec<f64>), ReopenError> {
         let file = self.dir.join(format!("critical_{n:02}.vtu"));
         let (mesh, mode) = meshes::read::read_vtu_field(&file, "critical_mode")
             .map_err(|e| ReopenError(e.to_string()))?;
