@@ -57,6 +57,17 @@ fn run_with_branches_writes_the_graph_the_directories_and_the_diagram() {
     let tmp = tempfile::tempdir().unwrap();
     let scene = coarse_scene(tmp.path(), "[analysis.branches]\ndepth = 1\nsteps = 8\n");
     let dir = tmp.path().join("out");
+    let json_out = memstab(&[
+        "run",
+        &scene,
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+        "--json",
+    ]);
+    assert_success(&json_out, "memstab run --json");
+    let summary: Value = serde_json::from_str(text(&json_out.stdout).trim()).expect("JSON");
+    assert_eq!(summary["branches"], 2);
     let out = memstab(&["run", &scene, "--out", dir.to_str().unwrap(), "--quiet"]);
     assert_success(&out, "memstab run");
     let stdout = text(&out.stdout);
@@ -173,6 +184,16 @@ fn run_without_branches_writes_none() {
     assert!(!dir.join("diagram.svg").exists());
     assert!(!dir.join("branch_01").exists());
     assert!(!text(&out.stdout).contains("branches ("));
+    let out = memstab(&[
+        "run",
+        &scene,
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+        "--json",
+    ]);
+    let summary: Value = serde_json::from_str(text(&out.stdout).trim()).expect("JSON");
+    assert!(summary.get("branches").is_none(), "{summary}");
 }
 
 /// Bad `[analysis.branches]` values and bad `memstab branch` arguments: one line naming the

@@ -341,6 +341,9 @@ pub struct RunSummary {
     pub symmetric_unknowns: usize,
     /// Unknowns of the model.
     pub unknowns: usize,
+    /// The number of branches followed, with `[analysis.branches]` (left out otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches: Option<usize>,
 }
 
 impl RunSummary {
@@ -369,6 +372,7 @@ impl RunSummary {
             group_order: report.group_order,
             symmetric_unknowns: report.symmetric_unknowns,
             unknowns: report.unknowns,
+            branches: written.branches.as_ref().map(|b| b.directories.len()),
         }
     }
 }
