@@ -906,7 +906,7 @@ impl Switching<'_> {
                 false,
             )
         });
-        let mut index = crossings.map(IndexChanges::new);
+        let mut index = crossings.map(|c| Numbered(IndexChanges::new(c)));
         let followed = {
             let mut extra: Vec<&mut dyn Detector<SymmetricProblem>> = Vec::new();
             if let Some(ix) = index.as_mut() {
@@ -929,7 +929,7 @@ impl Switching<'_> {
             other => other,
         };
         let problem = driver.into_problem();
-        let indices = index.map(|ix| ix.indices).unwrap_or_default();
+        let indices = index.map(|ix| ix.0.indices).unwrap_or_default();
         for (i, p) in followed.points.iter().enumerate() {
             let u = problem.displacement(&p.q);
             let params = problem.parameters(&p.lambda);
@@ -939,13 +939,10 @@ impl Switching<'_> {
                 .push(self.point(&u, &params, p.arclength, p.iterations, index));
         }
         // Points of the followed path are numbered from 1 on the branch (0 is the critical
-        // point it leaves).
+        // point it leaves); the index detector numbers its findings so already.
         for event in followed.events {
             match event {
-                Event::Critical(mut c) => {
-                    c.after_step += 1;
-                    branch.critical.push(c);
-                }
+                Event::Critical(c) => branch.critical.push(c),
                 Event::Turning(t) => branch.turning.push(BranchTurning {
                     kind: t.kind,
                     after_step: t.after_step + 1,
@@ -1012,6 +1009,25 @@ impl Switching<'_> {
             stabiliser: stab.elements,
             stabiliser_class,
         }
+    }
+}
+
+/// A detector whose findings are numbered by the branch's points — the critical point the
+/// branch leaves is point 0, the driver's first point is point 1.
+struct Numbered<D>(D);
+
+impl<P: super::continuation::Problem, D: Detector<P>> Detector<P> for Numbered<D> {
+    fn start(&mut self, driver: &mut Continuation<P>) -> Vec<Event> {
+        self.0.start(driver)
+    }
+
+    fn check(
+        &mut self,
+        driver: &mut Continuation<P>,
+        step: &super::continuation::Accepted,
+        after: usize,
+    ) -> Vec<Event> {
+        self.0.check(driver, step, after + 1)
     }
 }
 
