@@ -40,6 +40,8 @@ pub struct Written {
     pub pvd: PathBuf,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// The branches' files, when the run has branches.
+    pub branches: Option<super::BranchesWritten>,
     /// `manifest.json`, written last.
     pub manifest: PathBuf,
 }
@@ -55,6 +57,9 @@ impl Written {
             self.pvd.clone(),
         ];
         files.extend(self.states.iter().cloned());
+        if let Some(b) = &self.branches {
+            files.extend(b.files.iter().cloned());
+        }
         files.push(self.manifest.clone());
         files
     }
@@ -206,6 +211,25 @@ pub fn write_run(
     };
     let svg = attempt!(svg);
     done.push(svg.clone());
+    let branches = match &result.branches {
+        Some(b) => {
+            let primary = super::PrimaryPath::of(&result.report);
+            match super::write_branches(study, b, &primary, out) {
+                Ok(w) => {
+                    done.extend(w.files.iter().cloned());
+                    Some(w)
+                }
+                Err(mut e) => {
+                    done.append(&mut e.done);
+                    return Err(WriteRunError {
+                        error: e.error,
+                        done,
+                    });
+                }
+            }
+        }
+        None => None,
+    };
     let manifest = attempt!(super::write_manifest(out, &done, &result.report.stop));
     Ok(Written {
         csv,
@@ -215,6 +239,7 @@ pub fn write_run(
         plotted,
         pvd,
         states,
+        branches,
         manifest,
     })
 }
@@ -337,6 +362,9 @@ pub struct RunSummary {
     pub symmetric_unknowns: usize,
     /// Unknowns of the model.
     pub unknowns: usize,
+    /// The number of branches followed, with `[analysis.branches]` (left out otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches: Option<usize>,
 }
 
 impl RunSummary {
@@ -365,6 +393,7 @@ impl RunSummary {
             group_order: report.group_order,
             symmetric_unknowns: report.symmetric_unknowns,
             unknowns: report.unknowns,
+            branches: written.branches.as_ref().map(|b| b.directories.len()),
         }
     }
 }
