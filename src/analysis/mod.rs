@@ -69,6 +69,9 @@ pub enum RunError {
         /// The enclosed volume found.
         volume: f64,
     },
+    /// Newton converged to a state that is no membrane state.
+    #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
+    Degenerate(crate::model::StateDefect),
 }
 
 /// Where a run's time went, by phase (what `memstab bench` reports).
