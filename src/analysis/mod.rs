@@ -10,11 +10,15 @@
 //! - [`buckling`]: the start state held while the control sweeps its range;
 //! - [`curve`]: a critical point followed in two parameters (cusps of limit-point curves);
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
-//!   splits measured.
+//!   splits measured;
+//! - [`branch`]: the branches that leave a path's bifurcation points (`[analysis.branches]`),
+//!   by the equivariant branching lemma, each followed in its isotropy subgroup's
+//!   fixed-point space.
 //!
 //! [`run`] dispatches on the scene's analysis and collects a [`RunResult`]: the report, the
 //! states to write and where the time went.
 
+pub mod branch;
 pub mod buckling;
 pub mod compare;
 pub mod continuation;
@@ -22,6 +26,7 @@ pub mod critical;
 pub mod curve;
 pub mod equilibrium;
 pub mod events;
+pub mod interrupt;
 pub mod newton;
 pub mod path;
 mod problem;
@@ -51,6 +56,9 @@ pub struct RunResult {
     pub times: RunTimes,
     /// The critical curve of a `critical-curve` analysis.
     pub curve: Option<crate::report::CurveReport>,
+    /// The branches of the path's bifurcation points, when the scene asks for them
+    /// (`[analysis.branches]`).
+    pub branches: Option<branch::Branches>,
 }
 
 /// Why a run failed before it produced a path.
@@ -68,6 +76,9 @@ pub enum RunError {
     /// A critical curve could not be found or started.
     #[error("critical curve: {0}")]
     Curve(String),
+    /// Newton converged to a state that is no membrane state.
+    #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
+    Degenerate(crate::model::StateDefect),
 }
 
 /// Where a run's time went, by phase (what `memstab bench` reports).
@@ -200,7 +211,14 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
             stop
         }
     };
-    Ok(record.finish(study, stop, stability_note, times))
+    let mut result = record.finish(study, stop, stability_note, times);
+    if let Analysis::Path(p) = &study.scene.analysis {
+        if let Some(b) = &p.branches {
+            let opts = branch::options(study, Some(b));
+            result.branches = Some(branch::run(study, &result.report.critical, opts));
+        }
+    }
+    Ok(result)
 }
 
 /// What an analysis collects for the report, in the order it finds it.
@@ -323,6 +341,7 @@ impl Record {
             states: self.states,
             times,
             curve: self.curve,
+            branches: None,
         }
     }
 }

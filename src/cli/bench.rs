@@ -22,6 +22,9 @@
 //!    nearest σ by sparse shift-invert, and (iii) at the small sizes (f ≤ 8; quick f = 4) a
 //!    dense eigen-decomposition of the full K ([`memstab::bench::full_path_stability`]).
 //! 4. The ponding ladder on a C7v disc at two refinements against its closed form.
+//! 5. Branch switching: every branch from the 5-fold Hg point of the abstract invariant
+//!    potential on the icosahedron (against its closed form), and the branches of the
+//!    upward-loaded C7v disc's first E1 point on the thesis mesh (quick: 8 divisions).
 //!
 //! Writes DIR/accuracy.md (every table, also printed), DIR/accuracy.csv (the balloon levels,
 //! with the path comparison of 3.), DIR/payoff.csv (one row per payoff case), DIR/accuracy.svg
@@ -64,6 +67,9 @@ With --curves (nothing else is run):
                  through its cusp, and the C7v disc's first E1 double point followed in its
                  prestretch (16 divisions, --quick: 8): points, time of the path to the point
                  and of the curve, time per point, cusps and folds
+With --branching (nothing else is run):
+  branching.md   the branch-switching table of the bench alone (the abstract Hg problem; the
+                 upward disc on 16 divisions, quick: 8)
 With --scaling (nothing else is run):
   scaling.md     per frequency: a balloon path of --scaling-points points with the spectrum
                  by irrep at every point, time by phase, resident memory at the start of the
@@ -97,13 +103,17 @@ pub(crate) struct BenchArgs {
     /// The thesis-size study instead of the bench: the spinning fluid-filled cap on C8v, C4v,
     /// C2v, C1v and C1 meshes of 5 408 triangles (with --quick: 512) against the same states
     /// without symmetry, and on C2v at 21 632; writes thesis.md.
-    #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies", "branching"])]
     thesis: bool,
     /// The critical-curve study instead of the bench: 200 points of the balloon's fold line
     /// in (p, k) at f = 16 (--quick: 8) through its cusp, and the C7v disc's E1 double point
     /// followed in its prestretch; writes curves.md.
-    #[arg(long, conflicts_with_all = ["scaling", "frequencies", "thesis"])]
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies", "thesis", "branching"])]
     curves: bool,
+    /// Only the branch-switching study (quick: the disc on 8 divisions); writes
+    /// branching.md.
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
+    branching: bool,
     /// Points of each scaling path, the start included.
     #[arg(long, default_value_t = 20, requires = "scaling", value_name = "N")]
     scaling_points: usize,
@@ -162,6 +172,13 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
         };
         let study = if args.curves { run_curves } else { run_thesis };
         let files = study(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
+        print(&files);
+        return Ok(());
+    }
+    if args.branching {
+        prepare_out(&args.out)?;
+        let files = memstab::bench::run_branching(&args.out, args.quick, &mut |m| progress(m))
+            .map_err(CliError::Failure)?;
         print(&files);
         return Ok(());
     }

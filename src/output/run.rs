@@ -42,6 +42,10 @@ pub struct Written {
     pub states: Vec<PathBuf>,
     /// `curve.csv`, `curve.json`, `curve.svg` of a critical curve.
     pub curve: Vec<PathBuf>,
+    /// The branches' files, when the run has branches.
+    pub branches: Option<super::BranchesWritten>,
+    /// `manifest.json`, written last.
+    pub manifest: PathBuf,
 }
 
 impl Written {
@@ -56,6 +60,10 @@ impl Written {
         ];
         files.extend(self.states.iter().cloned());
         files.extend(self.curve.iter().cloned());
+        if let Some(b) = &self.branches {
+            files.extend(b.files.iter().cloned());
+        }
+        files.push(self.manifest.clone());
         files
     }
 }
@@ -88,7 +96,9 @@ pub fn file_name(p: &Path) -> String {
 }
 
 /// Writes `path.csv`, the states with `path.pvd`, `path.json` (with the saved states, which
-/// it records in the report), `critical.json` and `path.svg` into `out`, in that order.
+/// it records in the report), `critical.json`, `path.svg` and, last, `manifest.json` into
+/// `out`, in that order, after removing the old manifest and the temporary files a killed run
+/// left there.
 ///
 /// Path states go into the collection (PVD time = path step: ParaView orders datasets by
 /// time, and along a path that turns back in the control — a balloon past its pressure
@@ -100,6 +110,7 @@ pub fn write_run(
     out: &Path,
 ) -> Result<Written, WriteRunError> {
     let mut done: Vec<PathBuf> = Vec::new();
+    super::sweep_temporaries(out);
     macro_rules! attempt {
         ($e:expr) => {
             match $e {
@@ -108,6 +119,7 @@ pub fn write_run(
             }
         };
     }
+    attempt!(super::remove_manifest(out));
     let csv = attempt!(write_csv(out, &result.report));
     done.push(csv.clone());
     let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
@@ -206,6 +218,27 @@ pub fn write_run(
         Some(c) => attempt!(super::write_curve(out, c)),
         None => Vec::new(),
     };
+    done.extend(curve.iter().cloned());
+    let branches = match &result.branches {
+        Some(b) => {
+            let primary = super::PrimaryPath::of(&result.report);
+            match super::write_branches(study, b, &primary, out) {
+                Ok(w) => {
+                    done.extend(w.files.iter().cloned());
+                    Some(w)
+                }
+                Err(mut e) => {
+                    done.append(&mut e.done);
+                    return Err(WriteRunError {
+                        error: e.error,
+                        done,
+                    });
+                }
+            }
+        }
+        None => None,
+    };
+    let manifest = attempt!(super::write_manifest(out, &done, &result.report.stop));
     Ok(Written {
         csv,
         json,
@@ -215,6 +248,8 @@ pub fn write_run(
         pvd,
         states,
         curve,
+        branches,
+        manifest,
     })
 }
 
@@ -336,6 +371,9 @@ pub struct RunSummary {
     pub symmetric_unknowns: usize,
     /// Unknowns of the model.
     pub unknowns: usize,
+    /// The number of branches followed, with `[analysis.branches]` (left out otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches: Option<usize>,
 }
 
 impl RunSummary {
@@ -364,6 +402,7 @@ impl RunSummary {
             group_order: report.group_order,
             symmetric_unknowns: report.symmetric_unknowns,
             unknowns: report.unknowns,
+            branches: written.branches.as_ref().map(|b| b.directories.len()),
         }
     }
 }
