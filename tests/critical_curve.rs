@@ -278,6 +278,20 @@ fn a_critical_curve_run_writes_its_curve() {
         .any(|e| e["kind"] == "cusp"));
     let svg = std::fs::read_to_string(dir.path().join("curve.svg")).unwrap();
     assert!(svg.contains("cusp"));
+    // critical.json: the path's limit point, then the curve's events with parameters by name.
+    let critical: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("critical.json")).unwrap())
+            .unwrap();
+    let list = critical.as_array().unwrap();
+    assert_eq!(list[0]["kind"], "limit point");
+    let cusp = list
+        .iter()
+        .find(|e| e["kind"] == "cusp")
+        .expect("the cusp in critical.json");
+    assert_eq!(cusp["curve"], true);
+    assert_eq!(cusp["extremum"], "maximum");
+    assert!(cusp["parameters"]["k"].as_f64().unwrap() > 0.2);
+    assert!(cusp["measures"]["stretch"].as_f64().unwrap() > 1.8);
 }
 
 /// The bundled C7v disc pushed up by fluid from below (8 rings) with prestretch = "l0" and a

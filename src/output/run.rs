@@ -185,7 +185,10 @@ pub fn write_run(
 
     let json = attempt!(write_json(out, &result.report));
     done.push(json.clone());
-    let critical_json = attempt!(write_critical(out, &result.report));
+    let critical_json = match &result.curve {
+        Some(c) => attempt!(super::write_critical_with(out, &result.report, &c.events)),
+        None => attempt!(write_critical(out, &result.report)),
+    };
     done.push(critical_json.clone());
     let report = &result.report;
     let (svg, plotted) = if report.spectra.is_empty() {
