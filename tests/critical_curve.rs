@@ -250,6 +250,11 @@ fn a_critical_curve_run_writes_its_curve() {
     let dir = tempfile::tempdir().unwrap();
     let written = memstab::output::write_run(&study, &mut result, dir.path()).unwrap();
     let curve = result.curve.as_ref().unwrap();
+    // The path stopped at the point the curve starts from.
+    assert_eq!(
+        result.report.stop,
+        memstab::analysis::events::StopReason::CriticalPoint
+    );
     for name in ["curve.csv", "curve.json", "curve.svg"] {
         assert!(written.files().contains(&dir.path().join(name)), "{name}");
     }

@@ -398,7 +398,7 @@ impl<'b> Detector<SymmetricProblem<'b>> for FirstCritical<'_> {
             _ => false,
         });
         if found {
-            events.push(Event::Stop(StopReason::Condition));
+            events.push(Event::Stop(StopReason::CriticalPoint));
         }
         events
     }
@@ -476,7 +476,7 @@ pub(super) fn run(
     super::path::record_branch(study, record, &path_problem, &branch, &indices, usize::MAX);
     times.path = t0.elapsed();
     let Some(cp) = (match branch.stop {
-        StopReason::Condition => branch.critical_points().last().cloned(),
+        StopReason::CriticalPoint => branch.critical_points().last().cloned(),
         _ => None,
     }) else {
         return Err(RunError::Curve(format!(
