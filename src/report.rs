@@ -212,6 +212,8 @@ pub struct State {
     pub control: f64,
     /// Displacement over the unknowns.
     pub u: Vec<f64>,
+    /// Every parameter's value there.
+    pub params: Vec<f64>,
     /// The critical mode over the unknowns, for critical points.
     pub mode: Option<Vec<f64>>,
 }

@@ -32,4 +32,5 @@ mod scene_validation;
 mod scenes_run;
 mod sparse_path;
 mod stability;
+mod state_fields;
 mod subgroup_path;

@@ -258,6 +258,7 @@ impl Record {
             kind,
             control: self.control_of(params),
             u,
+            params: params.to_vec(),
             mode: None,
         });
     }
@@ -272,6 +273,7 @@ impl Record {
             },
             control: self.control_of(&cp.parameters),
             u: cp.state.clone(),
+            params: cp.parameters.clone(),
             mode: Some(cp.mode.clone()),
         });
         self.critical.push(cp);

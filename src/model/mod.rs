@@ -79,6 +79,61 @@ pub trait Effect: Send + Sync {
         params: &[f64],
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError>;
+
+    /// The per-triangle quantities this effect can show at a state (stretches, tensions, a
+    /// pressure), for the state files; none by default.
+    fn cell_fields(
+        &self,
+        _x: &[Vec3],
+        _triangles: &[[usize; 3]],
+        _params: &[f64],
+    ) -> Vec<CellField> {
+        Vec::new()
+    }
+}
+
+/// What a per-triangle field of a state holds (its name in the state files is
+/// [`CellQuantity::name`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CellQuantity {
+    /// The larger principal stretch λ₁ from the stress-free state.
+    Stretch1,
+    /// The smaller principal stretch λ₂.
+    Stretch2,
+    /// The current thickness h = H λ₃ = H/(λ₁λ₂).
+    Thickness,
+    /// The larger principal Cauchy tension (force per current length).
+    Tension1,
+    /// The smaller principal Cauchy tension.
+    Tension2,
+    /// 1 where the smaller principal tension is negative (the membrane would wrinkle), else 0.
+    Wrinkled,
+    /// The fluid pressure at the triangle's centroid.
+    FluidPressure,
+}
+
+impl CellQuantity {
+    /// The field's name in the state files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Stretch1 => "stretch_1",
+            Self::Stretch2 => "stretch_2",
+            Self::Thickness => "thickness",
+            Self::Tension1 => "tension_1",
+            Self::Tension2 => "tension_2",
+            Self::Wrinkled => "wrinkled",
+            Self::FluidPressure => "fluid_pressure",
+        }
+    }
+}
+
+/// One value per triangle of a [`CellQuantity`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellField {
+    /// What it holds.
+    pub quantity: CellQuantity,
+    /// One value per triangle, in the mesh's order.
+    pub values: Vec<f64>,
 }
 
 /// All six rigid motions.
@@ -148,6 +203,28 @@ pub struct FeModel {
 }
 
 impl FeModel {
+    /// Every effect's per-triangle fields at (u, Λ), in effect order (a quantity that two
+    /// effects show, such as two fluids' pressures, is summed).
+    pub fn cell_fields(&self, u: &[f64], params: &[f64]) -> Vec<CellField> {
+        let x = self.positions(u);
+        let mut fields: Vec<CellField> = Vec::new();
+        for f in self
+            .effects
+            .iter()
+            .flat_map(|e| e.cell_fields(&x, self.layout.triangles(), params))
+        {
+            match fields.iter_mut().find(|g| g.quantity == f.quantity) {
+                Some(g) => g
+                    .values
+                    .iter_mut()
+                    .zip(&f.values)
+                    .for_each(|(a, b)| *a += b),
+                None => fields.push(f),
+            }
+        }
+        fields
+    }
+
     /// A model of the mesh (reference positions and triangles) with the nodes in `fixed`
     /// held in place, the given effects, and parameter names.
     pub fn new(

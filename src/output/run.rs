@@ -125,8 +125,9 @@ pub fn write_run(
     for s in &result.states {
         let positions = study.model.positions(&s.u);
         let label = s.label();
+        let fields = state_fields(study, s);
         let saved = match (&s.kind, &s.mode) {
-            (StateKind::Step, _) => writer.save(s.step, s.control, &positions, Fields::new()),
+            (StateKind::Step, _) => writer.save(s.step, s.control, &positions, fields),
             (StateKind::Critical { .. }, Some(mode)) => {
                 critical += 1;
                 let field: Vec<[f64; 3]> = study
@@ -143,7 +144,7 @@ pub fn write_run(
                     s.step,
                     s.control,
                     &positions,
-                    Fields::new().point_vector("critical_mode", field),
+                    fields.point_vector("critical_mode", field),
                 )
             }
             (StateKind::Turning(_) | StateKind::Held | StateKind::Critical { .. }, _) => {
@@ -158,15 +159,7 @@ pub fn write_run(
                 } else {
                     stem
                 };
-                writer.save_as(
-                    &name,
-                    &label,
-                    false,
-                    s.step,
-                    s.control,
-                    &positions,
-                    Fields::new(),
-                )
+                writer.save_as(&name, &label, false, s.step, s.control, &positions, fields)
             }
         };
         let saved = attempt!(saved);
@@ -242,6 +235,24 @@ pub fn write_run(
         branches,
         manifest,
     })
+}
+
+/// The per-triangle fields of a state that the model's effects show (stretches, thickness,
+/// tensions, where the membrane would wrinkle, pressures); a non-finite value (never at an
+/// accepted state) is written as 0 rather than as NaN.
+pub fn state_fields(study: &Study, s: &crate::report::State) -> Fields {
+    study
+        .model
+        .cell_fields(&s.u, &s.params)
+        .into_iter()
+        .fold(Fields::new(), |f, c| {
+            f.cell_scalar(
+                c.quantity.name(),
+                c.values
+                    .iter()
+                    .map(|v| if v.is_finite() { *v } else { 0.0 }),
+            )
+        })
 }
 
 /// The diagram: stable (index 0) and unstable stretches of the path drawn differently, turning
