@@ -27,3 +27,4 @@ mod scene_validation;
 mod scenes_run;
 mod sparse_path;
 mod stability;
+mod thesis;

@@ -45,8 +45,9 @@ pub(super) fn run(
         if let (Some((a, va)), Some(b), Some(x)) = (&previous, &spectrum, crossings.as_mut()) {
             if a.negatives() != b.negatives() {
                 let va = *va;
-                for event in x.localise(a, b, i - 1, value - va, |s| Some((u.to_vec(), at(va + s))))
-                {
+                for event in x.localise(a, b, i - 1, value - va, false, |s| {
+                    Some((u.to_vec(), at(va + s)))
+                }) {
                     match event {
                         Event::Critical(cp) => record.critical(cp),
                         Event::Warning(w) => record.warnings.push(w),

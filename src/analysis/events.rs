@@ -466,13 +466,17 @@ impl<'a> Crossings<'a> {
     /// Localises every eigenvalue of every block whose negative count differs between `a`
     /// and `b` (spectra with eigenvalues), with `state(s)` giving (u, params) for
     /// s ∈ [0, s1] (s = 0 at a, s1 at b); the critical points sorted by the control, and the
-    /// crossings that could not be localised as warnings.
+    /// crossings that could not be localised as warnings. `control_turns` says whether the
+    /// control turns between `a` and `b`: a zero of the trivial block is a limit point only
+    /// there (docs/theory.md §11.3); elsewhere, and on a held state, it is a symmetric
+    /// bifurcation.
     pub fn localise(
         &mut self,
         a: &Spectrum,
         b: &Spectrum,
         after_step: usize,
         s1: f64,
+        control_turns: bool,
         mut state: impl FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
     ) -> Vec<Event> {
         let stab = &self.stability;
@@ -552,7 +556,7 @@ impl<'a> Crossings<'a> {
                 let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
                 mode.iter_mut().for_each(|x| *x /= norm);
                 found.push(CriticalPoint {
-                    kind: CriticalKind::of(mu == 0, ib.dim, self.held),
+                    kind: CriticalKind::of(mu == 0, ib.dim, self.held || !control_turns),
                     irrep: ib.name.clone(),
                     multiplicity: ib.dim,
                     measures: (self.measure)(&u, &p),
@@ -640,8 +644,10 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
             return Vec::new();
         };
         let s1 = point.arclength - step.from.arclength;
-        self.crossings.localise(&a, &b, after, s1, |s| {
-            let q = driver.step_from(&step.from, s).ok()?;
+        let m = driver.problem().dim();
+        let turns = step.from.tangent[m].signum() != point.tangent[m].signum();
+        self.crossings.localise(&a, &b, after, s1, turns, |s| {
+            let q = driver.corrected_from(&step.from, s).ok()?;
             let problem = driver.problem();
             Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
         })

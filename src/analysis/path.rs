@@ -62,17 +62,33 @@ pub(super) fn run(
     let lambda0 = problem.free_values(params_start);
     let q_start = study.basis.restrict(u_start);
     let max_steps = opts.max_steps;
-    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)?;
+    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)
+        .map_err(|e| RunError::start(study, e))?;
     let stretch = study
         .measures
         .iter()
         .position(|(_, m)| *m == Measure::Stretch);
-    let stop_stretch = analysis.stop_stretch;
+    let displacement = study
+        .measures
+        .iter()
+        .position(|(_, m)| *m == Measure::MaxDisplacement);
+    let (stop_stretch, stop_displacement) = (analysis.stop_stretch, analysis.stop_displacement);
     let stops = |problem: &SymmetricProblem, p: &PathPoint| {
-        let (target, k) = (stop_stretch?, stretch?);
+        if stop_stretch.is_none() && stop_displacement.is_none() {
+            return None;
+        }
         let u = problem.displacement(&p.q);
-        (study.measure(&u, &problem.parameters(&p.lambda))[k] >= target)
-            .then_some(StopReason::Stretch { target })
+        let measures = study.measure(&u, &problem.parameters(&p.lambda));
+        let reached = |target: Option<f64>, k: Option<usize>| match (target, k) {
+            (Some(t), Some(k)) => (measures[k] >= t).then_some(t),
+            _ => None,
+        };
+        reached(stop_stretch, stretch)
+            .map(|target| StopReason::Stretch { target })
+            .or_else(|| {
+                reached(stop_displacement, displacement)
+                    .map(|target| StopReason::Displacement { target })
+            })
     };
     let mut index = crossings.map(IndexChanges::new);
     let mut count = 0usize;

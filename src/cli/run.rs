@@ -20,7 +20,7 @@ use memstab::demo::closed_form_check;
 use memstab::output::{file_name, write_run, Progress, RunSummary, Written};
 use memstab::report::PathReport;
 use memstab::scene::Scene;
-use memstab::study::{Study, StudyError};
+use memstab::study::Study;
 use memstab::text::{one_line, sig_digits};
 use std::path::{Path, PathBuf};
 
@@ -74,9 +74,7 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
 /// Checks `out`, builds the study, creates `out`, runs and writes every output.
 fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, Written), CliError> {
     check_out(out)?;
-    let mut study = Study::build(scene).map_err(|e| match e {
-        StudyError::Scene(_) | StudyError::Unsupported(_) => CliError::Input(e.to_string()),
-    })?;
+    let mut study = super::common::build_study(scene)?;
     let created = !out.exists();
     if created {
         std::fs::create_dir(out).map_err(|e| {
@@ -229,10 +227,14 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     if let Some(note) = &report.stability_note {
         println!("{note}");
     } else if report.critical.is_empty() {
-        println!(
-            "critical points: none (the index stays {})",
-            report.rows.first().and_then(|r| r.index).unwrap_or(0)
-        );
+        match report.index_range() {
+            Some((lo, hi)) if lo == hi => println!("critical points: none (the index stays {lo})"),
+            Some((lo, hi)) => println!(
+                "critical points: none localised, although the index ranges from {lo} to {hi} \
+                 along the path (see the warnings)"
+            ),
+            None => println!("critical points: none (no index was computed)"),
+        }
     } else {
         println!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
         for cp in &report.critical {
@@ -280,6 +282,10 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     println!(
         "  {:<10} ParaView collection of the {in_collection} path states (time = path step); turning and critical points beside it",
         file_name(&written.pvd),
+    );
+    println!(
+        "  {:<10} every point's parameters and displacement, binary ([start] from reads it)",
+        file_name(&written.points),
     );
     for chunk in written.states.chunks(5) {
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();

@@ -7,6 +7,7 @@
 //! | `path.svg` | [`write_diagram`], [`write_diagram_with`] | the path in two chosen quantities, turning points marked |
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
 //! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
+//! | `path.states` | [`store::write_states`] | every path point's parameters and displacement, binary (what `[start] from` reads, [`store::read_states`]) |
 //!
 //! [`write_run`] writes all of them for a finished run.
 //!
@@ -28,6 +29,7 @@ mod matrix_market;
 mod progress;
 mod run;
 mod states;
+pub mod store;
 mod svg;
 
 pub use csv::write_csv;

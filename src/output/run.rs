@@ -29,6 +29,8 @@ pub struct Written {
     pub plotted: String,
     /// `path.pvd`.
     pub pvd: PathBuf,
+    /// `path.states`: every path point's state.
+    pub points: PathBuf,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
 }
@@ -42,6 +44,7 @@ impl Written {
             self.critical.clone(),
             self.svg.clone(),
             self.pvd.clone(),
+            self.points.clone(),
         ];
         files.extend(self.states.iter().cloned());
         files
@@ -75,8 +78,9 @@ pub fn file_name(p: &Path) -> String {
     )
 }
 
-/// Writes `path.csv`, the states with `path.pvd`, `path.json` (with the saved states, which
-/// it records in the report), `critical.json` and `path.svg` into `out`, in that order.
+/// Writes `path.csv`, `path.states` (every point's state), the states with `path.pvd`,
+/// `path.json` (with the saved states, which it records in the report), `critical.json` and
+/// `path.svg` into `out`, in that order.
 ///
 /// Path states go into the collection (PVD time = path step: ParaView orders datasets by
 /// time, and along a path that turns back in the control — a balloon past its pressure
@@ -98,6 +102,17 @@ pub fn write_run(
     }
     let csv = attempt!(write_csv(out, &result.report));
     done.push(csv.clone());
+    let (points, info) = attempt!(super::store::write_states(
+        out,
+        &result.points,
+        result.report.parameters.len(),
+        study.basis.unknowns(),
+        |q, u| study
+            .basis
+            .expand(&nalgebra::DVector::from_column_slice(q), u),
+    ));
+    result.report.states = Some(info);
+    done.push(points.clone());
     let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
     let mut states: Vec<PathBuf> = Vec::new();
     let (mut turning, mut critical) = (0usize, 0usize);
@@ -196,6 +211,7 @@ pub fn write_run(
         svg,
         plotted,
         pvd,
+        points,
         states,
     })
 }
