@@ -1,10 +1,21 @@
 //! memstab — stability of pressurized thin membranes.
 //!
-//! The toolkit is layered so that data flows one way: scene → mesh + group → effects →
-//! model → solver → path and critical points → writers. The lower layers are crates of
-//! their own and are re-exported here:
-//! - [`symmetry`]: finite point groups, real irreps, characters, stabilisers;
-//! - [`meshes`]: symmetric meshes with verified group actions, and writers that meshio reads.
+//! Data flows one way (docs/architecture.md): scene → mesh + group → effects → model →
+//! analysis → results → writers. The lower layers are crates of their own, re-exported here:
+//! - [`symmetry`]: finite point groups, real irreps, characters, subgroups and isotropy;
+//! - [`meshes`]: symmetric meshes with verified group actions, readers, and writers that
+//!   meshio reads.
+//!
+//! This crate, bottom up:
+//! - [`linalg`]: sparse symmetric LBLᵀ with inertia, bordered solves, shift-invert Lanczos;
+//! - [`scene`]: the scene file (parse, validate); [`study`]: a scene made into a model;
+//! - [`effects`]: one potential per file; [`model`]: assembly of Π, F, K on a fixed pattern;
+//! - [`adapted`]: symmetry-adapted bases; [`stability`]: inertia and spectra by irrep;
+//! - [`analysis`]: the path driver, events, and the analyses a scene asks for;
+//! - [`report`]: typed results; [`output`]: the writers;
+//! - [`reference`](mod@reference): closed forms; [`demo`]: the bundled demo;
+//!   [`bench`](mod@bench): the studies behind
+//!   `memstab bench` (a leaf: nothing else uses it); [`text`]: number formatting.
 
 pub use meshes;
 pub use symmetry;
@@ -13,9 +24,9 @@ pub mod analysis;
 pub mod bench;
 pub mod demo;
 pub mod effects;
+pub mod limits;
 pub mod linalg;
 pub mod model;
-pub mod newton;
 pub mod output;
 pub mod reference;
 pub mod report;

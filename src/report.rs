@@ -159,9 +159,9 @@ pub struct SpectrumIrrep {
     pub dim: usize,
     /// Block size m (columns of one partner).
     pub size: usize,
-    /// Whether the block's eigenvalues are computed; a block larger than
-    /// [`DENSE_BLOCK_LIMIT`](crate::stability::DENSE_BLOCK_LIMIT) (or an empty one) gets its
-    /// negative count only, and its `lowest` is `null` throughout.
+    /// Whether the block's eigenvalues are computed (at any sample); an empty block, or one
+    /// whose eigenvalues could not be computed, has its negative count only and `lowest`
+    /// `null` throughout.
     pub eigenvalues: bool,
 }
 

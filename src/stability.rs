@@ -1,4 +1,4 @@
-//! Stability by irrep (DESIGN §3, §4.3): every block K_μ = B_μᵀ K B_μ of the tangent at a
+//! Stability by irrep (docs/theory.md §8, §10): every block K_μ = B_μᵀ K B_μ of the tangent at a
 //! symmetric state, its eigenvalues, negative count and zero modes.
 //!
 //! - Rigid-body modes. A free body has a zero eigenvalue for every rigid motion all its
@@ -12,15 +12,27 @@
 //!   rotation Σ (X_i − c) × u_i held) and reported as `held`, never counted.
 //! - Physical constraints. With augmenting equations g = 0 active (their parameters free) the
 //!   trivial block is bordered, K̃ = [[K_A, L], [Lᵀ, C]], each constraint row scaled so that
-//!   the border is symmetric (L = Bᵀ ∂F/∂μ and s·∂g/∂q agree; DESIGN §2.3 "scale it by −ρg").
+//!   the border is symmetric (L = Bᵀ ∂F/∂μ and s·∂g/∂q agree; docs/theory.md §8.3).
 //!   By Haynsworth the index is that of the Schur complement: on the constraints' tangent
 //!   space Zᵀ K_A Z when C = 0, K_A − L C⁻¹ Lᵀ when C is invertible; that matrix's spectrum is
 //!   reported for the trivial block.
 //!
 //! The index of the state is Σ_μ d_μ · neg(block μ).
+//!
+//! How a block is solved (docs/theory.md §8.6–§8.8):
+//! - the negative count, at every path point, from the inertia of one sparse LBLᵀ of the
+//!   block bordered by its rigid modes, constraints and rank-one terms (Haynsworth);
+//! - eigenvalues, where they are needed (a crossing to localise, `spectrum`, a linear-buckling
+//!   sweep): either every eigenvalue of the dense restricted matrix, or the lowest few by
+//!   shift-invert Lanczos on the same bordered sparse factorisation — the operator is the
+//!   leading block of its inverse, which is the inverse of the restricted matrix on the
+//!   complement ([`crate::linalg::eigen::Bordered`]) — certified by the inertia. Which one is
+//!   chosen by their estimated cost ([`BlockEigen::ByCost`]), not by a size limit: both give
+//!   the eigenvalues of the same matrix.
 
 use crate::adapted::AdaptedBasis;
-use crate::linalg::{SymmetricFactorization, SymmetricPattern};
+use crate::linalg::eigen::{self, Bordered, EigenError, Operator, ShiftFamily};
+use crate::linalg::{FactorError, SymmetricFactorization, SymmetricPattern};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model, ModelError, Request};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -45,8 +57,16 @@ pub struct BlockSpectrum {
     /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium).
     pub rigid_residual: f64,
     /// Eigenvalues on the complement of the rigid modes (and of the constraints' border for the
-    /// trivial block), ascending.
+    /// trivial block), ascending: all of them when [`BlockSpectrum::complete`], else the lowest
+    /// ones (every negative one and at least one more); empty when none were asked for or
+    /// they could not be computed ([`BlockSpectrum::eigen_error`]).
     pub eigenvalues: Vec<f64>,
+    /// Whether `eigenvalues` is the whole spectrum of the block (a dense solve) rather than
+    /// its lowest values (Lanczos).
+    pub complete: bool,
+    /// Why the eigenvalues could not be computed, when they were asked for and are missing.
+    #[serde(skip)]
+    pub eigen_error: Option<EigenError>,
     /// Number of negative eigenvalues.
     pub negative: usize,
     /// Eigenvectors (columns, in block coordinates of the first partner) of the lowest
@@ -78,10 +98,68 @@ impl Spectrum {
 pub enum Detail {
     /// The negative count only (inertia of a sparse LBLᵀ); no eigenvalues.
     Inertia,
-    /// All eigenvalues of blocks up to the dense limit.
-    Eigenvalues,
-    /// Eigenvalues and the eigenvectors of the lowest ones.
-    Vectors,
+    /// Eigenvalues: all of a block solved dense, at least the `lowest` lowest (and every
+    /// negative one) of a block solved by Lanczos.
+    Eigenvalues {
+        /// The lowest eigenvalues wanted.
+        lowest: usize,
+    },
+    /// Eigenvalues as above and the eigenvectors of the lowest ones.
+    Vectors {
+        /// The lowest eigenvalues wanted.
+        lowest: usize,
+    },
+}
+
+impl Detail {
+    /// The lowest eigenvalues wanted (0 for the inertia).
+    pub fn lowest(self) -> usize {
+        match self {
+            Detail::Inertia => 0,
+            Detail::Eigenvalues { lowest } | Detail::Vectors { lowest } => lowest,
+        }
+    }
+}
+
+/// How the eigenvalues of a block are computed when they are asked for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BlockEigen {
+    /// Dense or Lanczos, whichever is estimated cheaper for the block ([`lanczos_is_cheaper`]).
+    ByCost,
+    /// Every block dense: all its eigenvalues.
+    Dense,
+    /// Every block by shift-invert Lanczos on its bordered sparse factorisation: its lowest
+    /// eigenvalues.
+    Lanczos,
+    /// Dense up to this many columns; larger blocks get their negative count only (no
+    /// eigenvalues). For comparisons with the inertia alone.
+    DenseUpTo(usize),
+}
+
+/// The lowest eigenvalues [`Stability::spectrum_of`] asks of a block solved by Lanczos (all of
+/// a dense block are computed anyway).
+pub const DEFAULT_LOWEST: usize = 8;
+
+/// Seconds per m³ of faer's dense eigenvalues of an m × m block (tridiagonalisation and QR),
+/// an estimate from the timings of the thesis study on the project's 2-core machine
+/// (BENCHMARKS.md §7; a crossover benchmark in `benches/` is still to be written).
+const DENSE_EIGEN_SECONDS_PER_M3: f64 = 2.2e-10;
+/// Seconds per estimated flop of a numeric sparse LBLᵀ ([`SymmetricFactorization::flops`]),
+/// estimated as above.
+const SPARSE_FACTOR_SECONDS_PER_FLOP: f64 = 1.0e-9;
+/// Seconds per stored factor value of one sparse solve, estimated as above.
+const SPARSE_SOLVE_SECONDS_PER_VALUE: f64 = 4.0e-9;
+
+/// Whether the lowest `lowest` eigenvalues of an m-column block cost less by shift-invert
+/// Lanczos on `factorization` (its bordered sparse LBLᵀ, symbolic analysis done) than all its
+/// eigenvalues by a dense solve: three numeric factorisations (the count at 0, the shift,
+/// the check) and about max(3·lowest, 40) + 20 solves, against the m³ of the dense solve.
+pub fn lanczos_is_cheaper(m: usize, lowest: usize, factorization: &SymmetricFactorization) -> bool {
+    let dense = DENSE_EIGEN_SECONDS_PER_M3 * (m as f64).powi(3);
+    let solves = (3 * lowest).max(40) as f64 + 20.0;
+    let sparse = 3.0 * SPARSE_FACTOR_SECONDS_PER_FLOP * factorization.flops()
+        + solves * SPARSE_SOLVE_SECONDS_PER_VALUE * factorization.factor_len() as f64;
+    sparse < dense
 }
 
 /// Everything needed to analyse states of one model under one group.
@@ -91,16 +169,108 @@ pub struct Stability<'a> {
     motions: Vec<[f64; 6]>,
     /// Mean motions held (fields at the reference positions).
     holds: Vec<[f64; 6]>,
-    /// Blocks with more columns than this get only their inertia, from a sparse LBLᵀ.
-    dense_limit: usize,
+    /// How block eigenvalues are computed.
+    method: BlockEigen,
     /// Per block, the sparse factorisation of its bordered matrix and its border size.
     factorizations: Vec<Mutex<Option<(usize, SymmetricFactorization)>>>,
 }
 
-/// Default [`Stability::with_dense_limit`]: blocks up to this size get all their eigenvalues
-/// from a dense eigen-solve (≈ 1–2 s at m = 2000 on one core, growing as m³), which crossings
-/// are localised with; larger blocks get their exact negative count only.
-pub const DENSE_BLOCK_LIMIT: usize = 2000;
+/// The bordered sparse matrix of one block at a state (docs/theory.md §8.6):
+/// M = [[K_μ, U], [Uᵀ, E]] with U = [P, U_D], P an orthonormal basis of the rigid modes and
+/// of zero-C constraint loads (E = 0) and U_D the rank-one vectors and the loads of constraints
+/// with an invertible C (E = E_D). Factorised at any shift σ of K_μ's diagonal, its inertia
+/// counts the eigenvalues of the restricted matrix below σ.
+struct BorderedBlock {
+    /// Columns m of K_μ.
+    m: usize,
+    /// The orthonormal E = 0 columns (rigid span, zero-C constraints).
+    constrained: Vec<Vec<f64>>,
+    /// Negative eigenvalues of E_D.
+    d_negative: usize,
+    /// Values of M at σ = 0, on the bordered pattern.
+    values: Vec<f64>,
+    /// Positions of K_μ's diagonal in `values`.
+    diagonal: Vec<usize>,
+    /// Rigid modes found in the block.
+    rigid_modes: usize,
+    /// Mean motions held in the block.
+    held: usize,
+    /// Largest |B_μᵀ K r| over the rigid modes, relative to ‖K‖.
+    rigid_residual: f64,
+}
+
+impl BorderedBlock {
+    /// The values of M with σ subtracted from K_μ's diagonal.
+    fn shifted(&self, sigma: f64) -> Vec<f64> {
+        let mut v = self.values.clone();
+        for &p in &self.diagonal {
+            v[p] -= sigma;
+        }
+        v
+    }
+
+    /// The eigenvalues of the restricted matrix below σ, from a factorisation of M − σ J:
+    /// In(M) = In(E_D) + In(S − σ) + (p, p, 0). A zero pivot (σ an eigenvalue to round-off)
+    /// is an error with `strict`, else it counts as neither negative nor positive.
+    fn count_below(
+        &self,
+        fact: &mut SymmetricFactorization,
+        sigma: f64,
+        strict: bool,
+    ) -> Result<usize, EigenError> {
+        match fact.factorize(&self.shifted(sigma)) {
+            Ok(()) => {}
+            Err(e @ FactorError::Singular { .. }) if strict => return Err(EigenError::Factor(e)),
+            Err(FactorError::Singular { .. }) => {}
+            Err(e) => return Err(EigenError::Factor(e)),
+        }
+        let inertia = fact
+            .inertia()
+            .ok_or(EigenError::Factor(FactorError::NotFactorized))?;
+        let p = self.constrained.len();
+        inertia
+            .negative
+            .checked_sub(p + self.d_negative)
+            .ok_or(EigenError::Unverified {
+                attempts: 0,
+                counted: inertia.negative,
+                found: p + self.d_negative,
+            })
+    }
+}
+
+/// A bordered block with its factorisation, as a family of shifted matrices for
+/// [`eigen::lowest_eigenpairs`].
+struct BlockFamily<'b> {
+    block: &'b BorderedBlock,
+    fact: &'b mut SymmetricFactorization,
+}
+
+impl Operator for BlockFamily<'_> {
+    fn dim(&self) -> usize {
+        self.block.m
+    }
+    fn rank(&self) -> usize {
+        Bordered::new(self.fact, self.block.m, &self.block.constrained).rank()
+    }
+    fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
+        Bordered::new(self.fact, self.block.m, &self.block.constrained).apply(x)
+    }
+    fn project(&self, x: &mut [f64]) {
+        Bordered::new(self.fact, self.block.m, &self.block.constrained).project(x)
+    }
+}
+
+impl ShiftFamily for BlockFamily<'_> {
+    fn factor(&mut self, shift: f64) -> Result<usize, EigenError> {
+        self.block.count_below(self.fact, shift, true)
+    }
+}
+
+/// The shift of the Lanczos iteration below zero, relative to max|K_ij|: far enough from a
+/// crossing eigenvalue (zero at the critical point) for the factorisation to stay regular,
+/// close enough to keep the wanted eigenvalues the nearest.
+const LANCZOS_SHIFT: f64 = 1e-6;
 
 /// The orthogonal complement of the columns of an m × c matrix r (c small: rigid modes,
 /// constraint gradients), as Q = H_1 ⋯ H_k, a product of Householder reflections from a
@@ -232,7 +402,7 @@ fn sorted_eigen(a: &DMatrix<f64>, with_vectors: bool) -> (Vec<f64>, DMatrix<f64>
 
 /// The constraints' border of the trivial block: L = Bᵀ ∂F/∂μ_k (the loads of the parameters
 /// the constraints free) and C, each constraint row scaled by s so that s·∂g/∂q agrees with
-/// L (the border is symmetric; DESIGN §2.3).
+/// L (the border is symmetric; docs/theory.md §8.3).
 fn constraint_border(
     b: &crate::adapted::SparseBasis,
     layout: &crate::model::Layout,
@@ -295,7 +465,7 @@ impl<'a> Stability<'a> {
             basis,
             motions: model.rigid_motions(),
             holds: model.held_motions(),
-            dense_limit: DENSE_BLOCK_LIMIT,
+            method: BlockEigen::ByCost,
             factorizations: basis.irreps.iter().map(|_| Mutex::new(None)).collect(),
         }
     }
@@ -303,22 +473,28 @@ impl<'a> Stability<'a> {
     /// Blocks with more than `limit` columns are analysed by the inertia of a sparse LBLᵀ
     /// factorisation of the block, bordered by its rigid modes, constraints and rank-one
     /// terms (Haynsworth): the negative count is exact, no eigenvalues are computed. With
-    /// `usize::MAX` every block gets its full dense spectrum.
+    /// `usize::MAX` every block gets its full dense spectrum. (`BlockEigen::DenseUpTo`.)
     pub fn with_dense_limit(mut self, limit: usize) -> Self {
-        self.dense_limit = limit;
+        self.method = BlockEigen::DenseUpTo(limit);
         self
     }
 
-    /// The negative count of block `mu` by Haynsworth's inertia additivity, from one sparse
-    /// LBLᵀ of M = [[K_μ, U], [Uᵀ, E]]: U holds an orthonormal basis of the rigid modes r and,
-    /// for the trivial block, the constraint loads L, with E = 0 for those (zero-C
-    /// constraints) and the rank-one vectors a with E = −1/c, L with E = C otherwise.
+    /// How block eigenvalues are computed (default [`BlockEigen::ByCost`]).
+    pub fn with_block_eigen(mut self, method: BlockEigen) -> Self {
+        self.method = method;
+        self
+    }
+
+    /// The bordered matrix of block `mu` by Haynsworth's inertia additivity (docs/theory.md
+    /// §8.6), M = [[K_μ, U], [Uᵀ, E]]: U holds an orthonormal basis of the rigid modes r and,
+    /// for the trivial block, of the zero-C constraint loads L (E = 0 for those), then the
+    /// rank-one vectors a with E = −1/c and the loads L with E = C when C is invertible.
     /// Eliminating the invertible part D of E and then the zero part (p columns, full rank)
     /// gives In(M) = In(D) + In(Zᵀ (K + Σ c a aᵀ − L C⁻¹ Lᵀ) Z) + (p, p, 0): the same
-    /// matrix the dense path takes eigenvalues of. `None` if the block has no orbit-local
-    /// form or the factorisation breaks down (the caller then goes dense).
+    /// matrix the dense path takes eigenvalues of. Makes sure the block's cached
+    /// factorisation has M's pattern. `None` if the block has no orbit-local form.
     #[allow(clippy::too_many_arguments)]
-    fn block_inertia(
+    fn bordered_block(
         &self,
         mu: usize,
         b: &crate::adapted::SparseBasis,
@@ -327,7 +503,7 @@ impl<'a> Stability<'a> {
         (r, rigid_modes): (&DMatrix<f64>, usize),
         border: Option<&(DMatrix<f64>, DMatrix<f64>)>,
         scale: f64,
-    ) -> Option<BlockSpectrum> {
+    ) -> Option<BorderedBlock> {
         let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
         let m = b.dim();
         // Border columns: zero-E first (rigid and held span, zero-C constraints), then
@@ -366,18 +542,28 @@ impl<'a> Stability<'a> {
                     .count();
             }
         }
-        let p = zero_cols.len();
+        // An orthonormal basis of the zero-E columns (dependent ones dropped).
+        let constrained: Vec<Vec<f64>> = if zero_cols.is_empty() {
+            Vec::new()
+        } else {
+            let span = Complement::of(&DMatrix::from_columns(&zero_cols), 1e-12);
+            (0..span.rank())
+                .map(|k| span.span_column(k, m).as_slice().to_vec())
+                .collect()
+        };
+        let p = constrained.len();
         let nb = p + d_cols.len();
-        let mut guard = self.factorizations[mu].lock().ok()?;
-        if guard.as_ref().is_none_or(|(n, _)| *n != nb) {
-            let fact = SymmetricFactorization::new(&bordered_pattern(&pattern, nb)).ok()?;
-            *guard = Some((nb, fact));
+        {
+            let mut guard = self.factorizations[mu].lock().ok()?;
+            if guard.as_ref().is_none_or(|(n, _)| *n != nb) {
+                let fact = SymmetricFactorization::new(&bordered_pattern(&pattern, nb)).ok()?;
+                *guard = Some((nb, fact));
+            }
         }
-        let (_, fact) = guard.as_mut()?;
         let col_ptr = pattern.col_ptr();
         let u = |i: usize, t: usize| {
             if t < p {
-                zero_cols[t][i]
+                constrained[t][i]
             } else {
                 d_cols[t - p][i]
             }
@@ -386,8 +572,11 @@ impl<'a> Stability<'a> {
         for &(i, j, v) in &d_block {
             e[(p + i, p + j)] = v;
         }
-        let mut mv = Vec::with_capacity(fact.pattern().nnz());
+        let mut mv = Vec::with_capacity(pattern.nnz() + 2 * nb * m + nb * nb);
+        let mut diagonal = Vec::with_capacity(m);
         for j in 0..m {
+            let diag = pattern.position(j, j).expect("diagonal in pattern") - col_ptr[j];
+            diagonal.push(mv.len() + diag);
             mv.extend_from_slice(&values[col_ptr[j]..col_ptr[j + 1]]);
             mv.extend((0..nb).map(|t| u(j, t)));
         }
@@ -395,13 +584,6 @@ impl<'a> Stability<'a> {
             mv.extend((0..m).map(|i| u(i, t)));
             mv.extend((0..nb).map(|t2| e[(t2, t)]));
         }
-        debug_assert_eq!(mv.len(), fact.pattern().nnz());
-        match fact.factorize(&mv) {
-            Ok(()) | Err(crate::linalg::FactorError::Singular { .. }) => {}
-            Err(_) => return None,
-        }
-        let inertia = fact.inertia()?;
-        let negative = inertia.negative.checked_sub(p + d_negative)?;
         let rigid_residual = if rigid_modes > 0 {
             let mut worst = 0.0f64;
             let mut y = vec![0.0; m];
@@ -422,17 +604,66 @@ impl<'a> Stability<'a> {
         } else {
             0.0
         };
-        Some(BlockSpectrum {
-            irrep: String::new(),
-            dim: 0,
-            size: m,
+        Some(BorderedBlock {
+            m,
+            constrained,
+            d_negative,
+            values: mv,
+            diagonal,
             rigid_modes,
             held: deflated - rigid_modes,
             rigid_residual,
+        })
+    }
+
+    /// The negative count of block `mu` from the inertia of its bordered sparse LBLᵀ `block`
+    /// and, with `lowest > 0`, its lowest eigenvalues (at least `lowest`, and every negative
+    /// one) by shift-invert Lanczos on the same factorisation
+    /// ([`eigen::lowest_eigenpairs`]), with their eigenvectors when asked for. `None` if its
+    /// inertia could not be computed (the caller then goes dense).
+    fn block_sparse(
+        &self,
+        mu: usize,
+        block: &BorderedBlock,
+        scale: f64,
+        lowest: usize,
+        vectors: bool,
+    ) -> Option<BlockSpectrum> {
+        let mut guard = self.factorizations[mu].lock().ok()?;
+        let (_, fact) = guard.as_mut()?;
+        let negative = block.count_below(fact, 0.0, false).ok()?;
+        let m = block.m;
+        let mut spectrum = BlockSpectrum {
+            irrep: String::new(),
+            dim: 0,
+            size: m,
+            rigid_modes: block.rigid_modes,
+            held: block.held,
+            rigid_residual: block.rigid_residual,
             eigenvalues: Vec::new(),
+            complete: false,
+            eigen_error: None,
             negative,
             vectors: DMatrix::zeros(m, 0),
-        })
+        };
+        if lowest == 0 {
+            return Some(spectrum);
+        }
+        let shift = -LANCZOS_SHIFT * scale;
+        let mut family = BlockFamily { block, fact };
+        let wanted = lowest.max(negative + 1);
+        match eigen::lowest_eigenpairs(&mut family, wanted, shift, shift.abs(), vectors) {
+            Ok(found) => {
+                spectrum.complete = found.values.len() >= family.rank();
+                if vectors && !found.vectors.is_empty() {
+                    spectrum.vectors =
+                        DMatrix::from_fn(m, found.vectors.len(), |i, j| found.vectors[j][i]);
+                }
+                spectrum.eigenvalues = found.values;
+            }
+            Err(e) => spectrum.eigen_error = Some(e),
+        }
+        Some(spectrum)
     }
 
     /// The basis by irrep.
@@ -453,7 +684,9 @@ impl<'a> Stability<'a> {
     }
 
     /// As [`Stability::spectrum`], but with `only = Some(μ)` the other blocks are left empty
-    /// (for localising a crossing in one block), and eigenvectors only when asked for.
+    /// (for localising a crossing in one block), and eigenvectors only when asked for: all
+    /// eigenvalues of a block solved dense, the lowest [`DEFAULT_LOWEST`] (and every negative
+    /// one) of a block solved by Lanczos.
     pub fn spectrum_of(
         &self,
         u: &[f64],
@@ -463,10 +696,11 @@ impl<'a> Stability<'a> {
         only: Option<usize>,
         with_vectors: bool,
     ) -> Result<Spectrum, ModelError> {
+        let lowest = DEFAULT_LOWEST;
         let detail = if with_vectors {
-            Detail::Vectors
+            Detail::Vectors { lowest }
         } else {
-            Detail::Eigenvalues
+            Detail::Eigenvalues { lowest }
         };
         self.analyse(u, params, constraints, eval, only, detail)
     }
@@ -493,7 +727,9 @@ impl<'a> Stability<'a> {
     /// The analysis by irrep at (u, params) with `constraints` active, to the `detail`
     /// asked for: [`Detail::Inertia`] gives every block's exact negative count from a
     /// sparse LBLᵀ (the cheap test of stability at every path point); the other two give
-    /// the eigenvalues (and vectors) of blocks up to the dense limit. `only = Some(μ)` leaves
+    /// the eigenvalues (and vectors) of every block, dense or by Lanczos as
+    /// [`BlockEigen`] says, the negative count always from the inertia (a Lanczos block) or the
+    /// dense eigenvalues (a dense one). `only = Some(μ)` leaves
     /// the other blocks empty. `eval` is a reusable buffer, from `model.new_evaluation()` or
     /// [`Stability::new_evaluation`].
     pub fn analyse(
@@ -505,7 +741,8 @@ impl<'a> Stability<'a> {
         only: Option<usize>,
         detail: Detail,
     ) -> Result<Spectrum, ModelError> {
-        let with_vectors = detail == Detail::Vectors;
+        let with_vectors = matches!(detail, Detail::Vectors { .. });
+        let lowest = detail.lowest();
         let model = self.model;
         let layout = model.layout();
         model.evaluate(u, params, Request::ALL, eval)?;
@@ -559,6 +796,8 @@ impl<'a> Stability<'a> {
                     held: 0,
                     rigid_residual: 0.0,
                     eigenvalues: Vec::new(),
+                    complete: false,
+                    eigen_error: None,
                     negative: 0,
                     vectors: DMatrix::zeros(m, 0),
                 };
@@ -595,8 +834,23 @@ impl<'a> Stability<'a> {
                 )
             };
             let border = if mu == 0 { border0.clone() } else { None };
-            if detail == Detail::Inertia || m > self.dense_limit {
-                if let Some(block) = self.block_inertia(
+            // The sparse bordered block first, unless the dense solve is certain.
+            const ALWAYS_DENSE: usize = 64;
+            // Blocks up to this size fall back to dense eigenvalues when Lanczos fails.
+            const DENSE_FALLBACK: usize = 2500;
+            let inertia_only = match self.method {
+                _ if detail == Detail::Inertia => true,
+                BlockEigen::DenseUpTo(limit) => m > limit,
+                _ => false,
+            };
+            let sparse_first = inertia_only
+                || match self.method {
+                    BlockEigen::Lanczos => true,
+                    BlockEigen::ByCost => m > ALWAYS_DENSE,
+                    BlockEigen::Dense | BlockEigen::DenseUpTo(_) => false,
+                };
+            if sparse_first {
+                if let Some(block) = self.bordered_block(
                     mu,
                     b,
                     layout,
@@ -605,12 +859,34 @@ impl<'a> Stability<'a> {
                     border.as_ref(),
                     scale,
                 ) {
-                    return BlockSpectrum {
-                        irrep: ib.name.clone(),
-                        dim: ib.dim,
-                        size: m,
-                        ..block
-                    };
+                    let lanczos = !inertia_only
+                        && match self.method {
+                            BlockEigen::Lanczos => true,
+                            BlockEigen::ByCost => self.factorizations[mu].lock().is_ok_and(|g| {
+                                g.as_ref()
+                                    .is_some_and(|(_, f)| lanczos_is_cheaper(m, lowest, f))
+                            }),
+                            BlockEigen::Dense | BlockEigen::DenseUpTo(_) => false,
+                        };
+                    if inertia_only || lanczos {
+                        let wanted = if lanczos { lowest } else { 0 };
+                        // A Lanczos that could not certify its eigenvalues falls back to
+                        // the dense solve where that is affordable.
+                        let certified = |s: &BlockSpectrum| {
+                            inertia_only || s.eigen_error.is_none() || m > DENSE_FALLBACK
+                        };
+                        if let Some(spectrum) = self
+                            .block_sparse(mu, &block, scale, wanted, with_vectors)
+                            .filter(certified)
+                        {
+                            return BlockSpectrum {
+                                irrep: ib.name.clone(),
+                                dim: ib.dim,
+                                size: m,
+                                ..spectrum
+                            };
+                        }
+                    }
                 }
             }
             let k = b.restrict_tangent(layout, eval, &mut Vec::new());
@@ -656,6 +932,8 @@ impl<'a> Stability<'a> {
                 held,
                 rigid_residual,
                 eigenvalues: values,
+                complete: true,
+                eigen_error: None,
                 negative,
                 vectors,
             }

@@ -1,4 +1,4 @@
-//! A scene made ready to solve: scene → mesh + group → effects → model (DESIGN §5).
+//! A scene made ready to solve: scene → mesh + group → effects → model (docs/architecture.md).
 //!
 //! Only the effects the scene lists are built. The scene's group is the mesh group restricted
 //! to what every effect keeps (computed from [`crate::model::Effect::keeps`], never typed in),
@@ -12,6 +12,7 @@ use crate::effects::plane::{PenaltyLaw, Plane};
 use crate::effects::spin::Spin;
 use crate::effects::volume::ClosingFace;
 use crate::effects::Quantity;
+use crate::limits::Limits;
 use crate::model::constraint::Constraint;
 use crate::model::{Effect, FeModel, Model, Vec3};
 use crate::scene::{self, Scene};
@@ -28,6 +29,9 @@ pub enum StudyError {
     /// The scene asks for something this version cannot do (user input).
     #[error("{0}")]
     Unsupported(String),
+    /// The scene would cost more than the limits allow (user input).
+    #[error("{0}")]
+    Limit(#[from] crate::limits::LimitError),
 }
 
 /// Measures reported along a path.
@@ -103,13 +107,25 @@ fn side(s: scene::FluidSide, normals_up: bool) -> FluidSide {
 impl Study {
     /// Builds mesh, effects, model, constraints and basis from a validated scene.
     pub fn build(scene: Scene) -> Result<Self, StudyError> {
+        let limits = Limits::from_env()?;
+        Self::build_within(scene, &limits)
+    }
+
+    /// As [`Study::build`], refusing a scene whose group or estimated memory
+    /// ([`Scene::estimated_bytes`]) exceeds `limits` before anything is allocated.
+    pub fn build_within(scene: Scene, limits: &Limits) -> Result<Self, StudyError> {
+        limits.check_group(&scene.mesh.group_name())?;
+        limits.check_memory(
+            format!("scene '{}' ({})", scene.info.name, scene.mesh.describe()),
+            scene.estimated_bytes(),
+        )?;
         let mesh = scene.build_mesh()?;
         let warnings = scene.mesh_warnings(&mesh);
         let m = &mesh.mesh;
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
         let topology = m
             .topology()
-            .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
+            .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let closed = topology.closed;
         let fixed = scene.fixed_nodes(&mesh);
         let sliding: Vec<(usize, Vec3)> = scene
@@ -178,7 +194,7 @@ impl Study {
             MooneyRivlin::new(mat.mu, mat.k, mat.thickness),
             mat.prestretch,
         )
-        .map_err(|e| StudyError::Unsupported(format!("mesh: {e}")))?;
+        .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
         let mut fluids = Vec::new();
         let mut gases = Vec::new();
@@ -533,5 +549,14 @@ fn target(t: &scene::Target, index: &dyn Fn(&str) -> usize) -> (f64, bool, Optio
         scene::Target::Initial => (0.0, true, None),
         scene::Target::Value(v) => (*v, false, None),
         scene::Target::Parameter(name) => (0.0, false, Some(index(name))),
+    }
+}
+
+/// How a message about the mesh names it: the file and its key for a mesh file, else the
+/// generator.
+fn mesh_key(scene: &Scene) -> String {
+    match &scene.mesh {
+        scene::MeshSpec::File(f) => format!("'mesh.path' = \"{}\"", f.path.display()),
+        other => format!("mesh ({})", other.generator()),
     }
 }

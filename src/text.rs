@@ -5,6 +5,38 @@ pub fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// Longest message [`message`] keeps whole.
+pub const MESSAGE_LENGTH: usize = 400;
+
+/// A message as one line of at most [`MESSAGE_LENGTH`] characters: line breaks and runs of
+/// white space become one space, and a longer message (a value echoed from a huge input)
+/// keeps its start and its end around ` … `.
+pub fn message(s: &str) -> String {
+    let line = one_line(s);
+    let n = line.chars().count();
+    if n <= MESSAGE_LENGTH {
+        return line;
+    }
+    let head: String = line.chars().take(MESSAGE_LENGTH - 100).collect();
+    let tail: String = line.chars().skip(n - 80).collect();
+    format!(
+        "{head} … ({} characters) … {tail}",
+        n - (MESSAGE_LENGTH - 100) - 80
+    )
+}
+
+/// A number for a message: the shortest form that reads back to the same value, in
+/// exponent form when that is shorter (`1e300`, not three hundred digits).
+pub fn num(x: f64) -> String {
+    let plain = format!("{x}");
+    let exp = format!("{x:e}");
+    if exp.len() < plain.len() {
+        exp
+    } else {
+        plain
+    }
+}
+
 /// `x` with `digits` significant digits, plain for moderate sizes (`1.35511`, `0.000123457`),
 /// else in exponent form (`1.23457e7`).
 pub fn sig_digits(x: f64, digits: usize) -> String {
@@ -44,5 +76,13 @@ mod tests {
         assert_eq!(sci(0.0), "0");
         assert_eq!(sci(-5.0), "-5.000e0");
         assert_eq!(one_line("a\n  b\tc"), "a b c");
+        assert_eq!(num(1e300), "1e300");
+        assert_eq!(num(0.25), "0.25");
+        assert_eq!(num(1.5e-7), "1.5e-7");
+        let long = format!("key = '{}' and more", "x".repeat(100_000));
+        let m = message(&long);
+        assert!(m.chars().count() < MESSAGE_LENGTH + 40, "{}", m.len());
+        assert!(m.starts_with("key = 'xxx") && m.ends_with("and more"));
+        assert_eq!(message("two\nlines"), "two lines");
     }
 }

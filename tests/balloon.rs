@@ -1,10 +1,10 @@
-//! The inflated Mooney-Rivlin balloon against the closed form (shared/reference/README.md):
+//! The inflated Mooney-Rivlin balloon against the closed form (docs/theory.md §13.1):
 //!
 //! ```text
 //!   p R/(μH) = 2/(1+k) (λ⁻¹ − λ⁻⁷)(1 + k λ²),   λ = (V/V0)^(1/3)
 //! ```
 //!
-//! For k = 0.1 the pressure has a maximum 1.3551069 at λ = 1.4760699 and a minimum 1.1487477
+//! For k = 0.1 the pressure has a maximum 1.3551069 at λ = 1.4760698 and a minimum 1.1487477
 //! at λ = 3.1426213. The path is followed under pressure control in the Ih fixed-point space
 //! of icospheres; the turning points must approach the closed form at second order in h.
 
@@ -20,14 +20,7 @@ use memstab::model::{Effect, FeModel, Model};
 use meshes::generators::{icosphere, IcosphereOptions};
 use nalgebra::DVector;
 
-const P_MAX: f64 = 1.3551069;
-const L_MAX: f64 = 1.4760699;
-const P_MIN: f64 = 1.1487477;
-const L_MIN: f64 = 3.1426213;
-
-fn closed_form(k: f64, l: f64) -> f64 {
-    2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l)
-}
+use memstab::reference::{sphere_pressure as closed_form, L_MAX, L_MIN, P_MAX, P_MIN};
 
 struct Extrema {
     max: (f64, f64),

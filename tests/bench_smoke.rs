@@ -258,3 +258,27 @@ fn bench_rejects_bad_flags_with_exit_code_2() {
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
 }
+
+/// `memstab bench --thesis --quick` (the library call): the five meshes run, every crossing of
+/// the C8v and C2v caps is localised (no warning there), and thesis.md is written.
+#[test]
+fn thesis_quick_runs_every_group() {
+    let dir = tempfile::tempdir().unwrap();
+    let options = memstab::bench::ThesisOptions {
+        out: dir.path().to_path_buf(),
+        quick: true,
+    };
+    let files = memstab::bench::run_thesis(&options, &mut |_| {}).unwrap();
+    let md = std::fs::read_to_string(dir.path().join("thesis.md")).unwrap();
+    assert_eq!(md, files.markdown);
+    for group in ["C8v", "C4v", "C2v", "C1v", "C1"] {
+        let row = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| {group} |")))
+            .unwrap_or_else(|| panic!("no row for {group}"));
+        assert!(!row.contains("NaN"), "{row}");
+        if group == "C8v" || group == "C2v" {
+            assert!(row.ends_with("| 0 |"), "{row}");
+        }
+    }
+}

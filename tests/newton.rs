@@ -3,6 +3,7 @@
 //! rank-one terms are handled by Woodbury; free bodies are refused clearly.
 
 use memstab::adapted::SparseBasis;
+use memstab::analysis::newton::{newton, NewtonOptions};
 use memstab::analysis::run;
 use memstab::effects::gas::GasAmount;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
@@ -10,7 +11,6 @@ use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::volume::ClosingFace;
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel, Model, Request};
-use memstab::newton::{newton, NewtonOptions};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use meshes::generators::{truncated_sphere, TruncatedSphereOptions};

@@ -1,4 +1,4 @@
-//! The ponding ladder (shared/reference/README.md): critical densities of the flat,
+//! The ponding ladder (docs/theory.md §13.3): critical densities of the flat,
 //! pre-stretched, clamped disc under fluid at its rim, by irrep, against the closed form
 //! γ_{m,k} = j²_{m,k} T0/(μ H λ0²). Modes are identified by their irrep and their Fourier
 //! content (the wave number m of the mode's deflection), never by sorted order; doubles are
@@ -7,28 +7,20 @@
 use memstab::analysis::critical::CriticalPoint;
 use memstab::analysis::run;
 use memstab::model::Model;
+use memstab::reference::{BESSEL_J2, PONDING_SCALE};
 use memstab::scene::Scene;
 use memstab::study::Study;
 
 /// T0/(μ H λ0²) for k = 0, λ0 = 1.1.
-const SCALE: f64 = 0.3599389;
+const SCALE: f64 = PONDING_SCALE;
 
 /// j²_{m,k} from the reference table.
 fn j2(m: usize, k: usize) -> f64 {
-    [
-        ((0, 1), 5.783186),
-        ((1, 1), 14.681971),
-        ((2, 1), 26.374616),
-        ((0, 2), 30.471262),
-        ((3, 1), 40.706466),
-        ((1, 2), 49.218456),
-        ((4, 1), 57.582941),
-        ((7, 1), 122.907600),
-    ]
-    .iter()
-    .find(|e| e.0 == (m, k))
-    .map(|e| e.1)
-    .expect("tabulated")
+    BESSEL_J2
+        .iter()
+        .find(|e| e.0 == (m, k))
+        .map(|e| e.1)
+        .expect("tabulated")
 }
 
 /// A critical point with the wave number of its mode.

@@ -3,6 +3,7 @@
 
 use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
+use memstab::reference::{L_MAX, L_MIN, P_MAX, P_MIN};
 use memstab::scene::Scene;
 use memstab::study::Study;
 
@@ -75,15 +76,11 @@ fn demo_balloon_passes_the_pressure_maximum_and_minimum() {
     let max = &r.turning_points[0];
     // f = 4 is coarse: within 2 % of the closed form 1.3551 at stretch 1.476.
     assert!(
-        (max.parameters[0] - 1.3551069).abs() < 0.03 * 1.3551069,
+        (max.parameters[0] - P_MAX).abs() < 0.03 * P_MAX,
         "{:?}",
         max.parameters
     );
-    assert!(
-        (max.measures[s] - 1.4760699).abs() < 0.01,
-        "{:?}",
-        max.measures
-    );
+    assert!((max.measures[s] - L_MAX).abs() < 0.01, "{:?}", max.measures);
 }
 
 #[test]
@@ -93,20 +90,16 @@ fn balloon_scene_matches_the_closed_form() {
     let max = &r.turning_points[0];
     let min = &r.turning_points[1];
     assert!(
-        (max.parameters[0] / 1.3551069 - 1.0).abs() < 5e-3,
+        (max.parameters[0] / P_MAX - 1.0).abs() < 5e-3,
         "{:?}",
         max.parameters
     );
     assert!(
-        (min.parameters[0] / 1.1487477 - 1.0).abs() < 5e-3,
+        (min.parameters[0] / P_MIN - 1.0).abs() < 5e-3,
         "{:?}",
         min.parameters
     );
-    assert!(
-        (min.measures[s] - 3.1426213).abs() < 0.01,
-        "{:?}",
-        min.measures
-    );
+    assert!((min.measures[s] - L_MIN).abs() < 0.01, "{:?}", min.measures);
 }
 
 /// J0 by its power series (enough terms for |x| < 5).

@@ -361,3 +361,108 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
     // The comparison covered stable and unstable states (the index changes along the path).
     assert!(seen.len() >= 2, "only {seen:?}");
 }
+
+/// The lowest eigenvalues of every block by shift-invert Lanczos on the bordered sparse
+/// factorisation are the dense ones, along the balloon path through both pressure extrema:
+/// with the rigid modes deflated (T1u, T1g), with the gas amount as a constraint (the trivial
+/// block bordered by L and an invertible C) and with the gas-amount effect (a rank-one term).
+/// The index from the inertia and from the eigenvalues agree at every point, and the Lanczos
+/// eigenvectors are the dense ones (up to sign) where the eigenvalue is simple.
+#[test]
+fn lanczos_block_eigenvalues_agree_with_dense_along_the_path() {
+    use memstab::stability::BlockEigen;
+    let (sym, model) = balloon(3, 0.1);
+    let basis = AdaptedBasis::new(&sym.action, model.layout()).unwrap();
+    let dense = Stability::new(&model, &basis).with_block_eigen(BlockEigen::Dense);
+    let lanczos = Stability::new(&model, &basis).with_block_eigen(BlockEigen::Lanczos);
+    let mut eval = model.new_evaluation();
+    let lowest = 6;
+    let compare =
+        |a: &memstab::stability::Spectrum, b: &memstab::stability::Spectrum, what: &str| {
+            assert_eq!(a.negatives(), b.negatives(), "{what}");
+            for (x, y) in a.blocks.iter().zip(&b.blocks) {
+                assert!(x.complete && y.eigen_error.is_none(), "{what} {}", x.irrep);
+                let n = lowest.max(y.negative + 1).min(x.eigenvalues.len());
+                assert!(
+                    y.eigenvalues.len() >= n,
+                    "{what} {}: {:?}",
+                    x.irrep,
+                    y.eigenvalues
+                );
+                for (i, (u, v)) in x.eigenvalues.iter().zip(&y.eigenvalues).take(n).enumerate() {
+                    assert!(
+                        (u - v).abs() <= 1e-9 * a.scale,
+                        "{what} {} λ_{i}: dense {u}, Lanczos {v}",
+                        x.irrep
+                    );
+                }
+                // The index from the computed eigenvalues is the inertia's.
+                let below = y.eigenvalues.iter().filter(|&&v| v < 0.0).count();
+                assert_eq!(below, y.negative, "{what} {}", x.irrep);
+                // Eigenvectors of simple eigenvalues agree up to sign.
+                for i in 0..n.min(x.vectors.ncols()).min(y.vectors.ncols()) {
+                    let gap = |k: usize| {
+                        [k.wrapping_sub(1), k + 1]
+                            .iter()
+                            .filter_map(|&j| x.eigenvalues.get(j))
+                            .map(|w| (w - x.eigenvalues[k]).abs())
+                            .fold(f64::INFINITY, f64::min)
+                    };
+                    if gap(i) > 1e-6 * a.scale {
+                        let c = x.vectors.column(i).dot(&y.vectors.column(i)).abs();
+                        assert!(
+                            (c - 1.0).abs() < 1e-6,
+                            "{what} {} vector {i}: |cos| = {c}",
+                            x.irrep
+                        );
+                    }
+                }
+            }
+        };
+    let ambient = 1.0;
+    let mut seen = std::collections::BTreeSet::new();
+    for (u, p, s) in states(&sym, &model, 3.6) {
+        let x = model.positions(&u);
+        let mut amount = GasAmountConstraint {
+            pressure: 0,
+            ambient,
+            target: 0.0,
+            target_parameter: None,
+            closing: None,
+            fluid: None,
+        };
+        let c = amount.measure(model.layout(), &x, &[p]);
+        amount.set_target(c);
+        let constraints: Vec<Box<dyn Constraint>> = vec![Box::new(amount)];
+        for cons in [&[][..], &constraints[..]] {
+            let detail = Detail::Vectors { lowest };
+            let a = dense
+                .analyse(&u, &[p], cons, &mut eval, None, detail)
+                .unwrap();
+            let b = lanczos
+                .analyse(&u, &[p], cons, &mut eval, None, detail)
+                .unwrap();
+            compare(&a, &b, &format!("stretch {s}, {} constraints", cons.len()));
+            // The index at the point (inertia only) is the same.
+            let c = lanczos
+                .analyse(&u, &[p], cons, &mut eval, None, Detail::Inertia)
+                .unwrap();
+            assert_eq!(c.negatives(), b.negatives(), "stretch {s}");
+            seen.insert(a.negatives());
+        }
+        let closed = closed_balloon(&sym, c, ambient);
+        let basis2 = AdaptedBasis::new(&sym.action, closed.layout()).unwrap();
+        let mut eval2 = closed.new_evaluation();
+        let detail = Detail::Vectors { lowest };
+        let a = Stability::new(&closed, &basis2)
+            .with_block_eigen(BlockEigen::Dense)
+            .analyse(&u, &[], &[], &mut eval2, None, detail)
+            .unwrap();
+        let b = Stability::new(&closed, &basis2)
+            .with_block_eigen(BlockEigen::Lanczos)
+            .analyse(&u, &[], &[], &mut eval2, None, detail)
+            .unwrap();
+        compare(&a, &b, &format!("gas-amount effect, stretch {s}"));
+    }
+    assert!(seen.len() >= 2, "only {seen:?}");
+}

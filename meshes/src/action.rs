@@ -176,6 +176,20 @@ fn tolerance(mesh: &Mesh) -> f64 {
     ACTION_TOL * mesh.size().max(f64::MIN_POSITIVE)
 }
 
+/// Two nodes of `mesh` at the same point (within the tolerance group actions are verified
+/// to, relative to the mesh size), if there are any: a mesh file that repeats a node.
+pub fn coincident_nodes(mesh: &Mesh) -> Option<(usize, usize)> {
+    let tol = tolerance(mesh);
+    let mut loc = NodeLocator::new(&[], tol * 4.0);
+    for (i, x) in mesh.nodes.iter().enumerate() {
+        if let Some(j) = loc.find_within(&mesh.nodes, x, tol) {
+            return Some((j, i));
+        }
+        loc.insert(i, x);
+    }
+    None
+}
+
 fn locator(mesh: &Mesh) -> NodeLocator {
     let cell = (mesh.min_edge() * 0.25).max(tolerance(mesh) * 4.0);
     NodeLocator::new(&mesh.nodes, cell)

@@ -19,7 +19,7 @@ mod mesh;
 pub mod read;
 pub mod write;
 
-pub use action::{GroupAction, SymmetricMesh, Verification, ACTION_TOL};
+pub use action::{coincident_nodes, GroupAction, SymmetricMesh, Verification, ACTION_TOL};
 pub use mesh::{Mesh, Topology, Vec3};
 
 /// Errors from building, verifying, reading or writing meshes.
@@ -50,6 +50,14 @@ pub enum MeshError {
         path: std::path::PathBuf,
         /// The cause.
         source: std::io::Error,
+    },
+    /// An output path exists and is not a regular file; it is never replaced.
+    #[error("{path}: exists and is {what}, not a regular file; refusing to replace it")]
+    Target {
+        /// The path.
+        path: std::path::PathBuf,
+        /// What it is: `a directory`, `a FIFO`, `a device`, `a symbolic link` …
+        what: &'static str,
     },
     /// A mesh file cannot be read: an unsupported extension, or content that is malformed or
     /// not supported ([`read`]); the message says where (a line, a data array) and what.

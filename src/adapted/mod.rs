@@ -1,4 +1,4 @@
-//! Symmetry-adapted bases (DESIGN §4.3): the fixed-point space of the group — the
+//! Symmetry-adapted bases (docs/theory.md §10): the fixed-point space of the group — the
 //! displacements u with T(g) u = u for every g, where (T(g) u)_{π_g(i)} = R_g u_i — and, for
 //! every irrep μ, the blocks on which the tangent at a symmetric state is block diagonal.
 //!
@@ -368,7 +368,7 @@ impl SparseBasis {
     }
 }
 
-/// The columns of one partner of one irrep, and the blocks of every irrep (DESIGN §4.3).
+/// The columns of one partner of one irrep, and the blocks of every irrep (docs/theory.md §10).
 #[derive(Debug, Clone)]
 pub struct IrrepBasis {
     /// Irrep name.

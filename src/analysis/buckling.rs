@@ -5,7 +5,7 @@
 //! symmetric bifurcation: the state cannot fold). The lowest eigenvalue of every block at
 //! every sample goes into the report's [`Spectra`] (what `path.svg` plots for this analysis).
 
-use super::events::{Crossings, Event, StopReason};
+use super::events::{Crossings, End, Event, StopReason};
 use super::{Observer, Record};
 use crate::report::{Spectra, SpectrumIrrep, SpectrumRow, StateKind};
 use crate::stability::Spectrum;
@@ -33,7 +33,16 @@ pub(super) fn run(
     };
     let mut previous: Option<(Spectrum, f64)> = None;
     let mut sampled: Vec<(usize, f64, Option<Sample>)> = Vec::with_capacity(samples + 1);
+    let mut stop = StopReason::Swept {
+        min: lo,
+        max: hi,
+        samples,
+    };
     for i in 0..=samples {
+        if i > 0 && super::interrupt::requested() {
+            stop = StopReason::Interrupted;
+            break;
+        }
         let value = lo + (hi - lo) * i as f64 / samples as f64;
         observer.progress(i, value);
         let params = at(value);
@@ -41,11 +50,24 @@ pub(super) fn run(
         let spectrum = crossings.as_mut().and_then(|x| x.spectrum(u, &params));
         sampled.push((i, value, spectrum.as_ref().map(Sample::of)));
         let index = spectrum.as_ref().map(|s| s.index);
-        record.row(study, i, value - lo, u, params, 0, index);
+        record.row(study, i, value - lo, u, params.clone(), 0, index);
         if let (Some((a, va)), Some(b), Some(x)) = (&previous, &spectrum, crossings.as_mut()) {
             if a.negatives() != b.negatives() {
                 let va = *va;
-                for event in x.localise(a, b, i - 1, value - va, false, |s| {
+                let pa = at(va);
+                let ends = (
+                    End {
+                        spectrum: a,
+                        u,
+                        params: &pa,
+                    },
+                    End {
+                        spectrum: b,
+                        u,
+                        params: &params,
+                    },
+                );
+                for event in x.localise(ends.0, ends.1, i - 1, value - va, false, |s| {
                     Some((u.to_vec(), at(va + s)))
                 }) {
                     match event {
@@ -60,11 +82,7 @@ pub(super) fn run(
     }
     record.spectra = spectra_of(sampled);
     record.state(0, StateKind::Held, u.to_vec(), &at(lo));
-    StopReason::Swept {
-        min: lo,
-        max: hi,
-        samples,
-    }
+    stop
 }
 
 /// What the report keeps of one sample's spectrum: per block, its irrep, its lowest

@@ -1,4 +1,4 @@
-//! Pseudo-arclength continuation in several parameters (docs/theory.md §5): a stepping
+//! Pseudo-arclength continuation in several parameters (docs/theory.md §7.3–§7.7): a stepping
 //! driver, [`Continuation`], that starts from any converged point and tangent of any
 //! [`Problem`] — here the fixed-point space of a subgroup of the scene's group
 //! ([`crate::analysis::SymmetricProblem`]) — and advances one accepted point per

@@ -1,4 +1,4 @@
-//! Critical points (docs/theory.md §7, §8): where the negative count of an irrep's block changes
+//! Critical points (docs/theory.md §8.6, §11): where the negative count of an irrep's block changes
 //! between two states of a path, the crossing eigenvalue is localised by a safeguarded secant
 //! search on the path parameter until it is at round-off relative to ‖K‖, and the point is
 //! classified by its irrep:
@@ -28,7 +28,7 @@ pub struct Isotropy {
     pub elements: Vec<usize>,
 }
 
-/// What kind of critical point a singular block makes (docs/theory.md §8).
+/// What kind of critical point a singular block makes (docs/theory.md §11.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CriticalKind {
     /// The trivial block on a path: a symmetric fold of the path.

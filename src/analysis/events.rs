@@ -1,4 +1,4 @@
-//! Events along a path, one mechanism for all (docs/theory.md §5.4, §7): at every accepted
+//! Events along a path, one mechanism for all (docs/theory.md §7.6, §11.1–§11.2): at every accepted
 //! step of a [`Continuation`] each [`Detector`] compares the new point with the previous one
 //! and reports what happened in between — a turning point of a free parameter, a change of
 //! the index of an irrep block (a critical point), a user's stop — localised between the two
@@ -12,23 +12,46 @@ use super::critical::{isotropy, CriticalKind, CriticalPoint};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model};
 use crate::stability::{Detail, Spectrum, Stability};
+use crate::text::num;
 use meshes::GroupAction;
 use serde::Serialize;
 
 /// Relative size below which a localised eigenvalue counts as zero.
 const ZERO_EIGENVALUE: f64 = 1e-10;
+/// The narrowest bracket, relative to the step, in which a crossing is localised: states that
+/// close differ in an eigenvalue by far less than [`ZERO_EIGENVALUE`] unless it jumps.
+const LOCATE_WIDTH: f64 = 1e-10;
+/// Relative size of the best eigenvalue found above which a crossing is not localised (docs/theory.md §8.9): the
+/// eigenvalue jumps instead of crossing zero (two branches, not one).
+const JUMP_EIGENVALUE: f64 = 1e-8;
 /// The control's component of the unit tangent below which a turning point is localised.
 const TURNING_TOLERANCE: f64 = 1e-12;
 
 /// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
 /// by the Illinois variant of regula falsi. Stops when |g| ≤ `tol` or after 60 evaluations;
-/// returns the best s and g(s) found, or `None` when an evaluation fails.
+/// returns the best s and g(s) found. Where an evaluation fails (a state that does not
+/// converge, as right at a singular point of the path), the trial point is moved halfway
+/// towards the best point so far, up to 8 times; `None` only when no trial point inside the
+/// bracket could be evaluated.
 pub fn locate(
+    g: impl FnMut(f64) -> Option<f64>,
+    g0: f64,
+    s1: f64,
+    g1: f64,
+    tol: f64,
+) -> Option<(f64, f64)> {
+    locate_within(g, g0, s1, g1, tol, 1e-14)
+}
+
+/// As [`locate`], stopping also when the bracket is narrower than `width` · |s1| (a jump of
+/// `g` rather than a zero then shows as a bracket that shrinks while |g| does not).
+fn locate_within(
     mut g: impl FnMut(f64) -> Option<f64>,
     g0: f64,
     s1: f64,
     g1: f64,
     tol: f64,
+    width: f64,
 ) -> Option<(f64, f64)> {
     let (mut a, mut fa, mut b, mut fb) = (0.0, g0, s1, g1);
     let (mut best, mut fbest) = if fa.abs() < fb.abs() {
@@ -37,17 +60,28 @@ pub fn locate(
         (b, fb)
     };
     let mut side = 0i8;
-    for _ in 0..60 {
-        if fbest.abs() <= tol || (b - a).abs() <= 1e-14 * s1.abs() {
+    // Every earlier iteration evaluated a trial point.
+    for evaluated in 0..60 {
+        if fbest.abs() <= tol || (b - a).abs() <= width * s1.abs() {
             break;
         }
         let s = (a * fb - b * fa) / (fb - fa);
-        let s = if s > a.min(b) && s < a.max(b) {
+        let mut s = if s > a.min(b) && s < a.max(b) {
             s
         } else {
             0.5 * (a + b)
         };
-        let fs = g(s)?;
+        let mut fs = g(s);
+        for _ in 0..8 {
+            if fs.is_some() {
+                break;
+            }
+            s = 0.5 * (s + best);
+            fs = g(s);
+        }
+        let Some(fs) = fs else {
+            return (evaluated > 0 || fbest.abs() <= tol).then_some((best, fbest));
+        };
         if fs.abs() < fbest.abs() {
             (best, fbest) = (s, fs);
         }
@@ -142,6 +176,8 @@ pub enum StopReason {
     },
     /// A sweep without a control parameter.
     NoControl,
+    /// A stop was requested (SIGINT, SIGTERM): the path ends at its last point.
+    Interrupted,
 }
 
 impl std::fmt::Display for StopReason {
@@ -151,15 +187,23 @@ impl std::fmt::Display for StopReason {
                 "the control parameter left its [min, max] range (the last point is the first beyond it)",
             ),
             Self::StepBudget { steps } => write!(f, "the step budget ({steps}) was used"),
-            Self::Stretch { target } => write!(f, "the stretch reached {target}"),
-            Self::Displacement { target } => write!(f, "the largest displacement reached {target}"),
+            Self::Stretch { target } => write!(f, "the stretch reached {}", num(*target)),
+            Self::Displacement { target } => {
+                write!(f, "the largest displacement reached {}", num(*target))
+            }
             Self::Condition => f.write_str("the stop condition held"),
             Self::Stalled(s) => write!(f, "{s}"),
             Self::Equilibrium => f.write_str("equilibrium found"),
             Self::Swept { min, max, samples } => {
-                write!(f, "the control swept [{min}, {max}] in {samples} steps")
+                write!(
+                    f,
+                    "the control swept [{}, {}] in {samples} steps",
+                    num(*min),
+                    num(*max)
+                )
             }
             Self::NoControl => f.write_str("no control parameter"),
+            Self::Interrupted => f.write_str("interrupted"),
         }
     }
 }
@@ -393,7 +437,7 @@ pub trait States {
 pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
 
 /// Index changes of the irrep blocks, localised and classified: the stability analysis of
-/// states of one model under one group (docs/theory.md §6–§8).
+/// states of one model under one group (docs/theory.md §8, §10, §11).
 pub struct Crossings<'a> {
     stability: Stability<'a>,
     constraints: &'a [Box<dyn Constraint>],
@@ -456,86 +500,177 @@ impl<'a> Crossings<'a> {
             .ok()
     }
 
-    /// Every block's eigenvalues (up to the dense limit) and negative count.
+    /// Every block's negative count and eigenvalues: all of a block solved dense, the lowest
+    /// [`crate::stability::DEFAULT_LOWEST`] of one solved by Lanczos.
     pub fn spectrum(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
         self.stability
             .spectrum_of(u, params, self.constraints, &mut self.eval, None, false)
             .ok()
     }
 
-    /// Localises every eigenvalue of every block whose negative count differs between `a`
-    /// and `b` (spectra with eigenvalues), with `state(s)` giving (u, params) for
-    /// s ∈ [0, s1] (s = 0 at a, s1 at b); the critical points sorted by the control, and the
-    /// crossings that could not be localised as warnings. `control_turns` says whether the
-    /// control turns between `a` and `b`: a zero of the trivial block is a limit point only
-    /// there (docs/theory.md §11.3); elsewhere, and on a held state, it is a symmetric
-    /// bifurcation.
+    /// The lowest `lowest` eigenvalues of block `mu` at (u, params) (all of them for a block
+    /// solved dense), with eigenvectors when asked for; the other blocks left empty.
+    fn block_eigen(
+        &mut self,
+        u: &[f64],
+        params: &[f64],
+        mu: usize,
+        lowest: usize,
+        vectors: bool,
+    ) -> Option<Spectrum> {
+        let detail = if vectors {
+            Detail::Vectors { lowest }
+        } else {
+            Detail::Eigenvalues { lowest }
+        };
+        self.stability
+            .analyse(
+                u,
+                params,
+                self.constraints,
+                &mut self.eval,
+                Some(mu),
+                detail,
+            )
+            .ok()
+    }
+
+    /// Localises every eigenvalue of every block whose negative count differs between the
+    /// ends `a` and `b` of a step (index spectra, with or without eigenvalues, and their
+    /// states), with `state(s)` giving (u, params) for s ∈ [0, s1] (s = 0 at a, s1 at b): a
+    /// crossing of the k-th lowest eigenvalue of the block (k between the two counts) is
+    /// found by [`locate`] on that eigenvalue, computed at each trial point — densely or by
+    /// Lanczos, whatever the block's size ([`Stability::analyse`]). Returns the critical
+    /// points sorted by the control, and the crossings that could not be localised as
+    /// warnings. `control_turns` says whether the control turns between `a` and `b`: a zero
+    /// of the trivial block is a limit point only there (docs/theory.md §11.3); elsewhere,
+    /// and on a held state, it is a symmetric bifurcation.
     pub fn localise(
         &mut self,
-        a: &Spectrum,
-        b: &Spectrum,
+        a: End<'_>,
+        b: End<'_>,
         after_step: usize,
         s1: f64,
         control_turns: bool,
         mut state: impl FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
     ) -> Vec<Event> {
-        let stab = &self.stability;
-        let eval = &mut self.eval;
-        let constraints = self.constraints;
         let mut found = Vec::new();
         let mut warnings = Vec::new();
-        for mu in 0..a.blocks.len() {
-            let (n0, n1) = (a.blocks[mu].negative, b.blocks[mu].negative);
+        let control = self.control;
+        for mu in 0..a.spectrum.blocks.len() {
+            let (n0, n1) = (
+                a.spectrum.blocks[mu].negative,
+                b.spectrum.blocks[mu].negative,
+            );
             if n0 == n1 {
                 continue;
             }
-            let ends = [&a.blocks[mu].eigenvalues, &b.blocks[mu].eigenvalues];
-            if ends[0].is_empty() || ends[1].is_empty() {
-                warnings.push(format!(
-                    "the index of {} changed between steps {after_step} and {} (by {}); its block has {} columns, more than the {} whose eigenvalues are computed, so the crossing was not localised",
-                    a.blocks[mu].irrep,
+            let irrep = a.spectrum.blocks[mu].irrep.clone();
+            let not_localised = |why: &str| {
+                format!(
+                    "the index of {irrep} changed between steps {after_step} and {} (by {}) but the crossing could not be localised ({why})",
                     after_step + 1,
                     n1 as i64 - n0 as i64,
-                    a.blocks[mu].size,
-                    crate::stability::DENSE_BLOCK_LIMIT
-                ));
+                )
+            };
+            // The eigenvalues k = min(n0, n1) … max(n0, n1) − 1 at both ends.
+            let needed = n0.max(n1) + 1;
+            let mut ends: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+            let mut missing = None;
+            for (slot, end) in ends.iter_mut().zip([&a, &b]) {
+                let block = &end.spectrum.blocks[mu];
+                if block.complete || block.eigenvalues.len() >= needed {
+                    *slot = block.eigenvalues.clone();
+                    continue;
+                }
+                match self.block_eigen(end.u, end.params, mu, needed, false) {
+                    Some(sp) if !sp.blocks[mu].eigenvalues.is_empty() => {
+                        *slot = sp.blocks[mu].eigenvalues.clone()
+                    }
+                    Some(sp) => {
+                        missing = Some(sp.blocks[mu].eigen_error.as_ref().map_or_else(
+                            || "no eigenvalues were computed".to_string(),
+                            |e| format!("its eigenvalues could not be computed: {e}"),
+                        ))
+                    }
+                    None => missing = Some("the end state could not be evaluated".into()),
+                }
+            }
+            if let Some(why) = missing {
+                warnings.push(not_localised(&why));
                 continue;
             }
             for k in n0.min(n1)..n0.max(n1) {
                 let g0 = ends[0].get(k).copied().unwrap_or(0.0);
                 let g1 = ends[1].get(k).copied().unwrap_or(0.0);
-                let tol = ZERO_EIGENVALUE * a.scale;
-                let located = locate(
+                let tol = ZERO_EIGENVALUE * a.spectrum.scale;
+                let mut failure = None;
+                // Every evaluated (s, eigenvalue, control), to tell a jump from a crossing.
+                let mut trials: Vec<(f64, f64, Option<f64>)> = Vec::new();
+                let located = locate_within(
                     |s| {
-                        let (u, p) = state(s)?;
-                        let sp = stab
-                            .spectrum_of(&u, &p, constraints, eval, Some(mu), false)
-                            .ok()?;
-                        sp.blocks[mu].eigenvalues.get(k).copied()
+                        let Some((u, p)) = state(s) else {
+                            failure = Some(format!(
+                                "the state at {:.3} of the step did not converge",
+                                s / s1
+                            ));
+                            return None;
+                        };
+                        let sp = self.block_eigen(&u, &p, mu, k + 1, false)?;
+                        let value = sp.blocks[mu].eigenvalues.get(k).copied();
+                        if let Some(g) = value {
+                            trials.push((s, g, control.and_then(|c| p.get(c).copied())));
+                        }
+                        if value.is_none() {
+                            failure = Some(sp.blocks[mu].eigen_error.as_ref().map_or_else(
+                                || "no eigenvalue was computed".to_string(),
+                                |e| format!("its eigenvalues could not be computed: {e}"),
+                            ));
+                        }
+                        value
                     },
                     g0,
                     s1,
                     g1,
                     tol,
+                    LOCATE_WIDTH,
                 );
-                let not_localised = |why: &str| {
-                    format!(
-                        "the index of {} changed between steps {after_step} and {} but the crossing could not be localised ({why})",
-                        a.blocks[mu].irrep,
-                        after_step + 1
-                    )
-                };
                 let Some((s_best, g_best)) = located else {
                     warnings.push(not_localised(
-                        "a state inside the interval did not converge",
+                        failure
+                            .as_deref()
+                            .unwrap_or("the tangent at a state could not be evaluated"),
                     ));
                     continue;
                 };
+                if g_best.abs() > JUMP_EIGENVALUE * a.spectrum.scale {
+                    // No zero: the eigenvalue jumps between two neighbouring states.
+                    let side = |positive: bool| {
+                        trials
+                            .iter()
+                            .filter(|t| (t.1 > 0.0) == positive)
+                            .min_by(|x, y| (x.0 - s_best).abs().total_cmp(&(y.0 - s_best).abs()))
+                            .copied()
+                    };
+                    let why = match (side(true), side(false)) {
+                        (Some(p), Some(n)) => format!(
+                            "its eigenvalue jumps from {:+.2e} to {:+.2e} of max|K_ij|{} between states {:.1e} of the step apart instead of crossing zero: the step went over a sharp turn of the path, as at a nearly symmetric bifurcation that the mesh breaks, onto another branch; no critical point is reported",
+                            p.1 / a.spectrum.scale,
+                            n.1 / a.spectrum.scale,
+                            p.2.map_or_else(String::new, |c| format!(" at control {c:.6}")),
+                            (p.0 - n.0).abs() / s1,
+                        ),
+                        _ => format!(
+                            "the smallest |eigenvalue| found is {:.1e} of max|K_ij|",
+                            g_best.abs() / a.spectrum.scale
+                        ),
+                    };
+                    warnings.push(not_localised(&why));
+                    continue;
+                }
                 // Re-evaluate at the best point, with the eigenvectors for the critical mode.
                 let evaluated = state(s_best).and_then(|(u, p)| {
-                    let sp = stab
-                        .spectrum_of(&u, &p, constraints, eval, Some(mu), true)
-                        .ok()?;
+                    let sp = self.block_eigen(&u, &p, mu, k + 1, true)?;
                     Some((u, p, sp))
                 });
                 let Some((u, p, sp)) = evaluated else {
@@ -543,14 +678,12 @@ impl<'a> Crossings<'a> {
                     continue;
                 };
                 let block = &sp.blocks[mu];
-                if block.vectors.ncols() == 0 {
+                if block.vectors.ncols() <= k {
                     warnings.push(not_localised("no eigenvector at the best point"));
                     continue;
                 }
-                let ib = &stab.basis().irreps[mu];
-                let v = block
-                    .vectors
-                    .column(k.min(block.vectors.ncols().saturating_sub(1)));
+                let ib = &self.stability.basis().irreps[mu];
+                let v = block.vectors.column(k);
                 let mut mode = vec![0.0; ib.first().unknowns()];
                 ib.first().expand(&v.into_owned(), &mut mode);
                 let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
@@ -577,6 +710,18 @@ impl<'a> Crossings<'a> {
             .chain(found.into_iter().map(Event::Critical))
             .collect()
     }
+}
+
+/// One end of a step for [`Crossings::localise`]: its spectrum (the index at least) and its
+/// state.
+#[derive(Debug, Clone, Copy)]
+pub struct End<'s> {
+    /// The spectrum there.
+    pub spectrum: &'s Spectrum,
+    /// The displacement.
+    pub u: &'s [f64],
+    /// Every parameter.
+    pub params: &'s [f64],
 }
 
 /// The index of every block at every point, and the critical points where it changes: the
@@ -635,21 +780,72 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
         if a.negatives() == b.negatives() {
             return Vec::new();
         }
-        // The index changed: now the eigenvalues at both points.
-        let ends = (
-            self.crossings.spectrum(u0, p0),
-            self.crossings.spectrum(u1, p1),
-        );
-        let (Some(a), Some(b)) = ends else {
-            return Vec::new();
-        };
+        // The index changed: localise in the blocks whose count changed.
         let s1 = point.arclength - step.from.arclength;
         let m = driver.problem().dim();
         let turns = step.from.tangent[m].signum() != point.tangent[m].signum();
-        self.crossings.localise(&a, &b, after, s1, turns, |s| {
-            let q = driver.corrected_from(&step.from, s).ok()?;
-            let problem = driver.problem();
-            Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
-        })
+        let ends = (
+            End {
+                spectrum: a,
+                u: u0,
+                params: p0,
+            },
+            End {
+                spectrum: b,
+                u: u1,
+                params: p1,
+            },
+        );
+        // A state inside the step: corrected from the earlier point (without the branch-jump
+        // guard, which a step next to a branch point of the path would trip). Where that fails — near a
+        // singular point of the path, such as a nearly symmetric (imperfect) bifurcation that
+        // the step went over, where the corrector's basin shrinks — from the nearest state
+        // found so far on the same side, forwards from the earlier point's side or backwards
+        // from the later point's.
+        let mut back = point.clone();
+        back.tangent = -back.tangent;
+        let mut forward: Vec<(f64, PathPoint)> = Vec::new();
+        let mut backward: Vec<(f64, PathPoint)> = vec![(s1, back)];
+        // The corrector from the earlier point failed at and beyond this s (not tried again).
+        let mut fails_from = f64::INFINITY;
+        self.crossings
+            .localise(ends.0, ends.1, after, s1, turns, |s| {
+                let direct = if s < fails_from {
+                    driver.corrected_from(&step.from, s).ok()
+                } else {
+                    None
+                };
+                let q = match direct {
+                    Some(q) => q,
+                    None => {
+                        fails_from = fails_from.min(s);
+                        let near_forward = forward
+                            .iter()
+                            .filter(|(t, _)| *t < s)
+                            .max_by(|x, y| x.0.total_cmp(&y.0));
+                        let chained =
+                            near_forward.and_then(|(t, p)| driver.step_from(p, s - t).ok());
+                        match chained {
+                            Some(q) => q,
+                            None => {
+                                let (t, p) = backward
+                                    .iter()
+                                    .filter(|(t, _)| *t > s)
+                                    .min_by(|x, y| x.0.total_cmp(&y.0))?;
+                                let q = driver.step_from(p, t - s).ok()?;
+                                backward.push((s, q.clone()));
+                                let problem = driver.problem();
+                                return Some((
+                                    problem.displacement(&q.q),
+                                    problem.parameters(&q.lambda),
+                                ));
+                            }
+                        }
+                    }
+                };
+                forward.push((s, q.clone()));
+                let problem = driver.problem();
+                Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
+            })
     }
 }

@@ -20,6 +20,8 @@ pub mod continuation;
 pub mod critical;
 pub mod equilibrium;
 pub mod events;
+pub mod interrupt;
+pub mod newton;
 pub mod path;
 mod problem;
 

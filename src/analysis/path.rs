@@ -1,7 +1,7 @@
 //! The `path` analysis: the equilibrium path in the control from the start state, in the
 //! fixed-point space of the scene's group, through turning points, with the index by irrep
 //! at every point and every critical point where it changes localised and classified
-//! (docs/theory.md §5–§8).
+//! (docs/theory.md §7, §8, §11).
 
 use super::continuation::{Continuation, PathPoint, Problem};
 use super::events::{
@@ -25,6 +25,9 @@ pub fn trace<P: Problem>(
 ) -> Branch {
     let bounds = driver.options().bounds;
     let mut stops = StopWhen(move |problem: &P, p: &PathPoint| {
+        if super::interrupt::requested() {
+            return Some(StopReason::Interrupted);
+        }
         if p.lambda[0] < bounds.0 || p.lambda[0] > bounds.1 {
             return Some(StopReason::Bounds);
         }

@@ -3,6 +3,7 @@
 use crate::adapted::SparseBasis;
 use crate::analysis::continuation::{Linearization, PhaseTimes, Problem, Tangent};
 use crate::linalg::bordered::SharedFactorization;
+use crate::linalg::SymmetricFactorization;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Subset};
 use nalgebra::{DMatrix, DVector};
@@ -22,17 +23,42 @@ pub struct SymmetricProblem<'a> {
     eval: Evaluation,
     u: Vec<f64>,
     work: Vec<f64>,
-    /// From this many columns on the restricted tangent is passed on sparse.
-    sparse_from: usize,
+    /// From this many columns on the restricted tangent is passed on sparse (`None`: when the
+    /// sparse solve is estimated cheaper, [`sparse_is_cheaper`]).
+    sparse_from: Option<usize>,
+    /// The choice by cost, made at the first evaluation.
+    sparse_by_cost: Option<bool>,
     /// The sparse LBLᵀ of the restricted tangent, its symbolic analysis done once.
     solver: SharedFactorization,
     /// Where the evaluations' time went (for `memstab bench`).
     pub times: PhaseTimes,
 }
 
-/// Default [`SymmetricProblem::with_sparse_tangent_from`]: below this size a dense LU of the
-/// extended system is cheaper than a sparse one (f = 32: 272 columns; f = 64: 1 056).
-pub const SPARSE_TANGENT_FROM: usize = 600;
+/// Below this size the fixed-point system is always solved dense (its LU takes microseconds);
+/// from it on, dense or sparse by estimated cost ([`sparse_is_cheaper`]).
+pub const SPARSE_TANGENT_FROM: usize = 128;
+
+/// Seconds per flop of the dense LU of the extended system (2/3 n³ flops), an estimate for
+/// the project's 2-core machine (BENCHMARKS.md §7; a crossover benchmark in `benches/` is
+/// still to be written).
+const DENSE_LU_SECONDS_PER_FLOP: f64 = 2.5e-10;
+/// Seconds per estimated flop of a numeric sparse LBLᵀ, estimated as above.
+const SPARSE_FACTOR_SECONDS_PER_FLOP: f64 = 1.0e-9;
+/// Seconds per stored factor value of one sparse solve, estimated as above.
+const SPARSE_SOLVE_SECONDS_PER_VALUE: f64 = 4.0e-9;
+
+/// Whether a Newton step of the fixed-point system of m unknowns with `border` rows and
+/// columns (loads, constraints, arclength, rank-one terms) costs less by block elimination on
+/// the sparse LBLᵀ `factorization` (symbolic analysis done: one numeric factorisation and
+/// about 2 (border + 2) solves) than by a dense LU of the whole extended system.
+pub fn sparse_is_cheaper(m: usize, border: usize, factorization: &SymmetricFactorization) -> bool {
+    let n = (m + border) as f64;
+    let dense = DENSE_LU_SECONDS_PER_FLOP * 2.0 / 3.0 * n * n * n;
+    let solves = 2.0 * (border as f64 + 2.0);
+    let sparse = SPARSE_FACTOR_SECONDS_PER_FLOP * factorization.flops()
+        + solves * SPARSE_SOLVE_SECONDS_PER_VALUE * factorization.factor_len() as f64;
+    sparse < dense
+}
 
 impl<'a> SymmetricProblem<'a> {
     /// Restricts `model` to `basis` with the given control parameter (if any) and
@@ -57,7 +83,8 @@ impl<'a> SymmetricProblem<'a> {
             eval,
             u: vec![0.0; model.unknowns()],
             work: Vec::new(),
-            sparse_from: SPARSE_TANGENT_FROM,
+            sparse_from: None,
+            sparse_by_cost: None,
             solver: Default::default(),
             model,
             basis,
@@ -77,16 +104,55 @@ impl<'a> SymmetricProblem<'a> {
 
     /// Passes the restricted tangent on as a sparse matrix (to a sparse LU of the extended
     /// system) when the basis has at least `columns` columns; `usize::MAX` keeps it dense.
+    /// By default the choice is by estimated cost ([`sparse_is_cheaper`]).
     pub fn with_sparse_tangent_from(mut self, columns: usize) -> Self {
-        self.sparse_from = columns;
+        self.sparse_from = Some(columns);
         self
+    }
+
+    /// Whether the tangent goes on sparse: as asked, or by cost (decided once, at the first
+    /// sparse restriction, from the symbolic analysis it needs anyway).
+    fn sparse(&mut self, pattern: &crate::linalg::SymmetricPattern) -> bool {
+        let m = self.basis.dim();
+        if let Some(from) = self.sparse_from {
+            return m >= from;
+        }
+        if m < SPARSE_TANGENT_FROM {
+            return false;
+        }
+        if let Some(choice) = self.sparse_by_cost {
+            return choice;
+        }
+        let border = self.free.len() + self.constraints.len() + self.eval.rank_one.len();
+        let choice = match SymmetricFactorization::new(pattern) {
+            Ok(f) => {
+                let cheaper = sparse_is_cheaper(m, border, &f);
+                if cheaper {
+                    if let Ok(mut guard) = self.solver.lock() {
+                        *guard = Some(f);
+                    }
+                }
+                cheaper
+            }
+            Err(_) => false,
+        };
+        self.sparse_by_cost = Some(choice);
+        choice
     }
 
     /// Bᵀ K B of the last evaluation, sparse for a large basis built from a group action.
     fn restricted_tangent(&mut self) -> Tangent {
         let layout = self.model.layout();
-        if self.basis.dim() >= self.sparse_from {
-            if let Some((pattern, values)) = self.basis.restrict_tangent_sparse(layout, &self.eval)
+        let candidate = match (self.sparse_from, self.sparse_by_cost) {
+            (Some(from), _) => self.basis.dim() >= from,
+            (None, Some(choice)) => choice,
+            (None, None) => self.basis.dim() >= SPARSE_TANGENT_FROM,
+        };
+        if candidate {
+            if let Some((pattern, values)) = self
+                .basis
+                .restrict_tangent_sparse(layout, &self.eval)
+                .filter(|(pattern, _)| self.sparse(pattern))
             {
                 let rank_one = self
                     .eval

@@ -9,7 +9,7 @@ use crate::model::{Model, Request};
 use crate::reference::{P_MAX, P_MIN};
 use crate::report::StateKind;
 use crate::scene::{Analysis, Scene};
-use crate::stability::{Stability, DENSE_BLOCK_LIMIT};
+use crate::stability::{BlockEigen, Stability};
 use crate::study::Study;
 use std::time::{Duration, Instant};
 
@@ -217,7 +217,8 @@ pub fn balloon_level_with(
     if options.stability && !options.index_only {
         let adapted = AdaptedBasis::new(&study_ref.action, study_ref.model.layout())
             .map_err(|e| e.to_string())?;
-        let stab = Stability::new(&study_ref.model, &adapted);
+        // All eigenvalues of every block: dense whatever their size.
+        let stab = Stability::new(&study_ref.model, &adapted).with_block_eigen(BlockEigen::Dense);
         let mut eval = study_ref.model.new_evaluation();
         let (mut spectra, mut restrict) = (Duration::ZERO, Duration::ZERO);
         let n = observer.states.len();
@@ -243,8 +244,8 @@ pub fn balloon_level_with(
                     .copied()
                     .fold(f64::INFINITY, f64::min),
             );
-            // The assembly inside spectrum_of, and at three points the block restrictions
-            // (dense, or sparse above the dense limit).
+            // The assembly inside spectrum_of, and at three points the dense block
+            // restrictions.
             let t = Instant::now();
             study_ref
                 .model
@@ -255,11 +256,7 @@ pub fn balloon_level_with(
                 let t = Instant::now();
                 let layout = study_ref.model.layout();
                 for ib in &adapted.irreps {
-                    if ib.first().dim() > DENSE_BLOCK_LIMIT {
-                        std::hint::black_box(ib.first().restrict_tangent_sparse(layout, &eval));
-                    } else {
-                        std::hint::black_box(ib.first().restrict_tangent(layout, &eval, &mut work));
-                    }
+                    std::hint::black_box(ib.first().restrict_tangent(layout, &eval, &mut work));
                 }
                 restrict += t.elapsed();
             }

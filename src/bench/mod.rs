@@ -8,6 +8,8 @@
 //! - [`full_path`]: stability along the balloon path with and without symmetry;
 //! - [`scaling`]: the scaling study with peak memory;
 //! - [`ponding`]: the ponding ladder against its closed form;
+//! - [`thesis`]: the thesis-size spinning cap on meshes of five symmetry groups, against the
+//!   same states without symmetry;
 //! - [`report`]: the markdown tables, CSV files and the accuracy plot of those numbers;
 //! - [`run`]: the whole bench (or the scaling study) into an output directory.
 //!
@@ -35,6 +37,7 @@ pub mod ponding;
 pub mod report;
 pub mod run;
 pub mod scaling;
+pub mod thesis;
 
 pub use balloon::{
     balloon_level, balloon_level_with, balloon_scene, BalloonLevel, LevelOptions, BALLOON_TOML,
@@ -48,8 +51,12 @@ pub use payoff::{
 };
 pub use peer::{run_peer, PeerResult};
 pub use ponding::{ponding_level, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML};
-pub use run::{run_accuracy, run_scaling, AccuracyOptions, BenchFiles, ScalingOptions};
+pub use run::{
+    run_accuracy, run_scaling, run_thesis, AccuracyOptions, BenchFiles, ScalingOptions,
+    ThesisOptions,
+};
 pub use scaling::{fit_exponent, memory, scaling_level, ScalingFits, ScalingLevel};
+pub use thesis::{spinning_cap_scene, thesis_run, thesis_table, ThesisRun, SPINNING_CAP_TOML};
 
 use crate::model::{Evaluation, FeModel, Model};
 use crate::study::Study;
@@ -91,4 +98,17 @@ pub fn dense_tangent(model: &FeModel, eval: &Evaluation) -> faer::Mat<f64> {
 /// `s` on one line (runs of white space, newlines included, as one space): error messages.
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Fails, before any level runs, when the balloon of some frequency is over the limits
+/// ([`crate::limits`]): the message names the flag and the estimate.
+pub fn check_frequencies(flag: &str, frequencies: &[usize]) -> Result<(), String> {
+    let limits = crate::limits::Limits::from_env().map_err(|e| e.to_string())?;
+    for &f in frequencies {
+        let scene = balloon::balloon_scene(f)?;
+        limits
+            .check_memory(format!("{flag} {f}: the balloon"), scene.estimated_bytes())
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }

@@ -179,8 +179,8 @@ pub fn balloon_tables(levels: &[BalloonLevel]) -> String {
          blocks = the negative count of every irrep block at every path point, as `memstab \
          run` computes it (`Stability::analyse` with `Detail::Inertia`: sparse LBLᵀ per \
          block, assembly around the orbit representatives included); eigen = in addition, \
-         all eigenvalues of every block at every point (`spectrum_of`, dense per block up to \
-         `DENSE_BLOCK_LIMIT`) without its assembly (of which `restrict` is the block \
+         all eigenvalues of every block at every point (`spectrum_of` with \
+         `BlockEigen::Dense`: a dense solve per block) without its assembly (of which `restrict` is the block \
          restrictions B_μᵀ K B_μ, estimated from three points); rest = the remainder (scene, \
          mesh, study). points/s = points / (total − eigenvalue spectra), i.e. path + index \
          at every point, what `run` pays.\n"

@@ -217,3 +217,61 @@ pub fn run_scaling(
         files: vec![md_path, csv_path],
     })
 }
+
+/// What [`run_thesis`] runs.
+#[derive(Debug, Clone, Default)]
+pub struct ThesisOptions {
+    /// The output directory (created if missing; its parent must exist).
+    pub out: PathBuf,
+    /// Small caps only (8 divisions, 512 triangles), without the finest level.
+    pub quick: bool,
+}
+
+/// The thesis-size study ([`super::thesis`]): the spinning cap on C8v, C4v, C2v, C1v and C1
+/// at 26 divisions (5 408 triangles), each against the same states without symmetry, and on
+/// C2v at 52 divisions (21 632 triangles); writes `thesis.md` into [`ThesisOptions::out`]
+/// (and `K.mtx`, the last C2v point's tangent, when scipy is found).
+pub fn run_thesis(
+    options: &ThesisOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<BenchFiles, String> {
+    use super::thesis::{thesis_run, thesis_table};
+    let out = &options.out;
+    create_dir(out)?;
+    let started = Instant::now();
+    let (divisions, finest) = if options.quick {
+        (8, None)
+    } else {
+        (26, Some(52))
+    };
+    let steps = 8;
+    let mut runs = Vec::new();
+    for pattern in ["C8v", "C4v", "C2v", "C1v", "C1"] {
+        progress(&format!("thesis cap, {pattern}, {divisions} divisions …"));
+        let peer = (pattern == "C2v").then_some(out.as_path());
+        runs.push(
+            thesis_run(pattern, divisions, steps, true, peer)
+                .map_err(|e| format!("thesis cap {pattern}: {}", one_line(&e)))?,
+        );
+    }
+    if let Some(d) = finest {
+        progress(&format!("thesis cap, C2v, {d} divisions …"));
+        runs.push(
+            thesis_run("C2v", d, steps, false, None)
+                .map_err(|e| format!("thesis cap C2v, {d} divisions: {}", one_line(&e)))?,
+        );
+    }
+    let mut md = format!(
+        "# memstab bench --thesis{}\n\nmemstab {}; {} core(s) seen.\n\n",
+        if options.quick { " --quick" } else { "" },
+        env!("CARGO_PKG_VERSION"),
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    );
+    md += &thesis_table(&runs);
+    md += &report::total_time("study", started.elapsed());
+    let md_path = write_text(out, "thesis.md", &md)?;
+    Ok(BenchFiles {
+        markdown: md,
+        files: vec![md_path],
+    })
+}

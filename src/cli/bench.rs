@@ -38,7 +38,10 @@
 
 use super::CliError;
 use clap::Args;
-use memstab::bench::{run_accuracy, run_scaling, AccuracyOptions, BenchFiles, ScalingOptions};
+use memstab::bench::{
+    run_accuracy, run_scaling, run_thesis, AccuracyOptions, BenchFiles, ScalingOptions,
+    ThesisOptions,
+};
 use std::path::{Path, PathBuf};
 
 /// Shown by `memstab bench --help`.
@@ -52,6 +55,10 @@ Outputs (in DIR):
                  f = 16 / quick 8; the C8v disc under fluid, 16 / quick 8 divisions)
   accuracy.svg   relative error of the turning pressures against wall time, log-log
   K.mtx          the Ih payoff tangent, when a python with scipy runs scripts/peer_eigsh.py
+With --thesis (nothing else is run):
+  thesis.md      the spinning fluid-filled cap on C8v, C4v, C2v, C1v and C1 meshes of 5408
+                 triangles (--quick: 512) and on C2v at 21632: time by phase, the critical
+                 points, the same states without symmetry (full-K index per point)
 With --scaling (nothing else is run):
   scaling.md     per frequency: a balloon path of --scaling-points points with the spectrum
                  by irrep at every point, time by phase, resident memory at the start of the
@@ -82,6 +89,11 @@ pub(crate) struct BenchArgs {
     /// phase, with its peak memory; writes scaling.md and scaling.csv.
     #[arg(long, value_delimiter = ',', value_name = "F1,F2,...")]
     scaling: Option<Vec<usize>>,
+    /// The thesis-size study instead of the bench: the spinning fluid-filled cap on C8v, C4v,
+    /// C2v, C1v and C1 meshes of 5 408 triangles (with --quick: 512) against the same states
+    /// without symmetry, and on C2v at 21 632; writes thesis.md.
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
+    thesis: bool,
     /// Points of each scaling path, the start included.
     #[arg(long, default_value_t = 20, requires = "scaling", value_name = "N")]
     scaling_points: usize,
@@ -117,7 +129,7 @@ fn progress(message: &str) {
 /// Prints the report and the files written.
 fn print(files: &BenchFiles) {
     print!("{}", files.markdown);
-    println!(
+    out!(
         "\nwrote {}",
         files
             .files
@@ -132,12 +144,24 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
     if let Some(freqs) = &args.scaling {
         return scaling(args, freqs);
     }
+    if args.thesis {
+        prepare_out(&args.out)?;
+        let options = ThesisOptions {
+            out: args.out.clone(),
+            quick: args.quick,
+        };
+        let files = run_thesis(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
+        print(&files);
+        return Ok(());
+    }
     prepare_out(&args.out)?;
     if let Some(f) = args.frequencies.iter().find(|&&f| f == 0) {
         return Err(CliError::Input(format!(
             "--frequencies: {f} is not a frequency"
         )));
     }
+    memstab::bench::check_frequencies("--frequencies", &args.frequencies)
+        .map_err(CliError::Input)?;
     let options = AccuracyOptions {
         out: args.out.clone(),
         quick: args.quick,
@@ -167,6 +191,7 @@ fn scaling(args: &BenchArgs, freqs: &[usize]) -> Result<(), CliError> {
             args.scaling_points
         )));
     }
+    memstab::bench::check_frequencies("--scaling", freqs).map_err(CliError::Input)?;
     let options = ScalingOptions {
         out: args.out.clone(),
         frequencies: freqs.to_vec(),

@@ -19,7 +19,7 @@ pub(super) fn load_scene(path: &Path) -> Result<Scene, CliError> {
 pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
     let origin = scene.origin.clone();
     let mut study = Study::build(scene).map_err(|e| match e {
-        StudyError::Scene(_) | StudyError::Unsupported(_) => {
+        StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
             CliError::Input(one_line(&e.to_string()))
         }
     })?;
@@ -65,6 +65,30 @@ pub(super) fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f6
         out.push((i, v));
     }
     Ok(out)
+}
+
+/// Checks a file to be written by `flag` before any work: its directory must exist, and the
+/// file must not exist as anything but a regular file (a directory, a device, a FIFO, a
+/// symbolic link — never replaced). Bad input otherwise (exit 2).
+pub(super) fn check_out_file(flag: &str, path: &Path) -> Result<(), CliError> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(CliError::Input(format!(
+            "{flag} '{}': the directory '{}' does not exist",
+            path.display(),
+            dir.display()
+        )));
+    }
+    memstab::output::check_target(path).map_err(|e| match e {
+        memstab::output::OutputError::NotRegular { what, .. } => CliError::Input(format!(
+            "{flag} '{}': it exists and is {what}, not a regular file; nothing was written",
+            path.display()
+        )),
+        other => CliError::Input(one_line(&other.to_string())),
+    })
 }
 
 pub(super) use memstab::text::{one_line, sci, sig_digits};

@@ -71,7 +71,7 @@ pub(crate) fn run(args: &CompareArgs) -> Result<(), CliError> {
     if args.json {
         let text =
             serde_json::to_string(&comparison).map_err(|e| CliError::Failure(e.to_string()))?;
-        println!("{text}");
+        out!("{text}");
     } else {
         print_table(&comparison);
     }
@@ -112,8 +112,8 @@ fn print_table(c: &Comparison) {
         ),
         _ => format!("control {}", c.control),
     };
-    println!("compare '{}' ({}): {what}", c.scene, c.origin);
-    println!("meshes (the first is the reference):");
+    out!("compare '{}' ({}): {what}", c.scene, c.origin);
+    out!("meshes (the first is the reference):");
     let lw = c
         .meshes
         .iter()
@@ -128,13 +128,19 @@ fn print_table(c: &Comparison) {
         .max()
         .unwrap_or(4)
         .max(4);
-    println!(
+    out!(
         "  {:<lw$}  {:<mw$}  {:<12} {:>6} {:>8} {:>8} {:>7}",
-        "mesh", "options", "group", "nodes", "unknowns", "critical", "time"
+        "mesh",
+        "options",
+        "group",
+        "nodes",
+        "unknowns",
+        "critical",
+        "time"
     );
     for m in &c.meshes {
         for (l, level) in m.levels.iter().enumerate() {
-            println!(
+            out!(
                 "  {:<lw$}  {:<mw$}  {:<12} {:>6} {:>8} {:>8} {:>6.1}s",
                 if l == 0 { m.label.as_str() } else { "" },
                 level.mesh,
@@ -145,32 +151,32 @@ fn print_table(c: &Comparison) {
                 level.seconds
             );
             if let Some(note) = &level.note {
-                println!("  {:<lw$}  {note}", "");
+                out!("  {:<lw$}  {note}", "");
             }
             if level.critical.is_empty() {
-                println!("  {:<lw$}  no critical point; stopped: {}", "", level.stop);
+                out!("  {:<lw$}  no critical point; stopped: {}", "", level.stop);
             }
             for w in &level.warnings {
-                println!("  {:<lw$}  warning: {w}", "");
+                out!("  {:<lw$}  warning: {w}", "");
             }
         }
     }
     if c.label.is_some() {
-        println!(
+        out!(
             "images are matched by the wave number m of the critical mode about z and the \
              nearest {}; a gap is measured between the images on a mesh, never inferred from \
              its group",
             c.control
         );
     } else {
-        println!(
+        out!(
             "images are matched by the nearest {} (no wave number for this generator); a gap is \
              measured between the images on a mesh, never inferred from its group",
             c.control
         );
     }
     if c.rungs.is_empty() {
-        println!(
+        out!(
             "the reference mesh '{}' has no critical point in range",
             c.reference
         );
@@ -203,9 +209,9 @@ fn print_table(c: &Comparison) {
             "rung", "m", "mesh", "irreps", c.control, "gap"
         );
         if refine {
-            println!("{head} {:>10} {:>6}  verdict", "gap fine", "order");
+            out!("{head} {:>10} {:>6}  verdict", "gap fine", "order");
         } else {
-            println!("{head}  verdict");
+            out!("{head}  verdict");
         }
         for (n, r) in c.rungs.iter().enumerate() {
             for (k, im) in r.images.iter().enumerate() {
@@ -246,20 +252,20 @@ fn print_table(c: &Comparison) {
                             verdict = format!("{verdict} (refined: {})", f.verdict);
                         }
                     }
-                    println!(
+                    out!(
                         "{line} {:>10} {order:>6}  {verdict}",
                         fine.map_or_else(|| "-".to_string(), gap_text)
                     );
                 } else {
-                    println!("{line}  {}", coarse.verdict);
+                    out!("{line}  {}", coarse.verdict);
                 }
             }
         }
     }
     if !c.unmatched.is_empty() {
-        println!("points without a counterpart on the reference mesh:");
+        out!("points without a counterpart on the reference mesh:");
         for u in &c.unmatched {
-            println!(
+            out!(
                 "  {} ({} {}): {} at {} = {}{}",
                 u.mesh,
                 c.meshes

@@ -11,7 +11,7 @@
 //! `gas-amount` effect: K = S + Σ c_k a_k a_kᵀ, dense) go into a companion file next to it,
 //! `K.rank1.mtx` (see [`memstab::output::write_matrix_market`] and the `--help` text).
 
-use super::common::{build_study, load_scene, one_line, parse_at};
+use super::common::{build_study, check_out_file, load_scene, one_line, parse_at};
 use super::CliError;
 use clap::Args;
 use memstab::analysis::equilibrium::{state_at, StartState};
@@ -51,23 +51,8 @@ K and prints JSON; it finds the rank-one file by that comment line and inverts K
 sparse LU of S - sigma I and the Sherman-Morrison-Woodbury formula.";
 
 pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
-    let dir = match args.out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    if !dir.is_dir() {
-        return Err(CliError::Input(format!(
-            "--out {}: the directory {} does not exist",
-            args.out.display(),
-            dir.display()
-        )));
-    }
-    if args.out.is_dir() {
-        return Err(CliError::Input(format!(
-            "--out {}: is a directory",
-            args.out.display()
-        )));
-    }
+    check_out_file("--out", &args.out)?;
+    check_out_file("--out (its rank-one file)", &rank_one_path(&args.out))?;
     let scene = load_scene(&args.scene)?;
     if !scene.boundary.slide.is_empty() {
         return Err(CliError::Input(format!(
@@ -97,24 +82,16 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let companion = rank_one_path(&args.out);
-    if !eval.rank_one.is_empty() && companion.is_dir() {
-        return Err(CliError::Input(format!(
-            "--out {}: K has rank-one terms, and their file {} is a directory",
-            args.out.display(),
-            companion.display()
-        )));
-    }
     let files = write_matrix_market(&args.out, &study.model, &eval, &comment)
         .map_err(|e| CliError::Failure(e.to_string()))?;
     let n = study.model.unknowns();
     match &files.rank_one {
-        None => println!(
+        None => out!(
             "wrote {} ({n} x {n}, {} entries in the lower triangle)",
             args.out.display(),
             files.entries
         ),
-        Some((file, r)) => println!(
+        Some((file, r)) => out!(
             "wrote {} ({n} x {n}, {} entries in the lower triangle: the sparse part S) and {} \
              ({r} rank-one term(s) c a a^T: K = S + sum_k c_k a_k a_k^T)",
             args.out.display(),

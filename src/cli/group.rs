@@ -49,6 +49,9 @@ fn clean(x: f64) -> f64 {
 }
 
 pub(crate) fn run(args: &GroupArgs) -> Result<(), CliError> {
+    memstab::limits::Limits::from_env()
+        .and_then(|l| l.check_group(&args.name))
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let g = Group::by_name(&args.name).map_err(|e| CliError::Input(e.to_string()))?;
     if args.json {
         let json = GroupJson {
@@ -77,28 +80,28 @@ pub(crate) fn run(args: &GroupArgs) -> Result<(), CliError> {
                 .collect(),
         };
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
-        println!("{text}");
+        out!("{text}");
         return Ok(());
     }
-    println!(
+    out!(
         "{}: order {}, {} classes, {} real irreps",
         g.name(),
         g.order(),
         g.classes().len(),
         g.irreps().len()
     );
-    println!("character table (one column per class; size x representative):");
+    out!("character table (one column per class; size x representative):");
     print!("{:>6}", "");
     for c in g.classes() {
         print!(" {:>9}", format!("{}x{}", c.len(), c[0]));
     }
-    println!();
+    out!();
     for r in g.irreps() {
         print!("{:>6}", r.name());
         for c in g.classes() {
             print!(" {:>9.4}", clean(r.character(c[0])));
         }
-        println!();
+        out!();
     }
     Ok(())
 }

@@ -6,7 +6,8 @@
 
 use super::CliError;
 use clap::{Args, Subcommand, ValueEnum};
-use meshes::generators::{self, DiscOptions, Down, IcosphereOptions, TruncatedSphereOptions};
+use memstab::limits::Limits;
+use memstab::scene::{DiscMesh, DownSpec, IcosphereMesh, MeshSpec, TruncatedSphereMesh};
 use meshes::write::{write_mesh, Fields, Format};
 use meshes::{MeshError, SymmetricMesh};
 use serde::Serialize;
@@ -100,14 +101,15 @@ fn input(e: MeshError) -> CliError {
     CliError::Input(e.to_string())
 }
 
-fn generate(kind: &MeshKind) -> Result<SymmetricMesh, MeshError> {
+/// The scene's mesh options for these arguments.
+fn spec(kind: &MeshKind) -> MeshSpec {
     match kind {
         MeshKind::Disc {
             radius,
             sectors,
             divisions,
             group,
-        } => generators::disc(&DiscOptions {
+        } => MeshSpec::Disc(DiscMesh {
             radius: *radius,
             sectors: *sectors,
             divisions: *divisions,
@@ -117,37 +119,26 @@ fn generate(kind: &MeshKind) -> Result<SymmetricMesh, MeshError> {
             radius,
             frequency,
             down,
-        } => {
-            let opts = IcosphereOptions {
-                radius: *radius,
-                frequency: *frequency,
-            };
-            match down {
-                None => generators::icosphere(&opts),
-                Some(d) => generators::icosphere_oriented(
-                    &opts,
-                    match d {
-                        DownArg::Vertex => Down::Vertex,
-                        DownArg::Face => Down::Face,
-                        DownArg::Edge => Down::Edge,
-                    },
-                ),
-            }
-        }
+        } => MeshSpec::Icosphere(IcosphereMesh {
+            radius: *radius,
+            frequency: *frequency,
+            down: down.map(|d| match d {
+                DownArg::Vertex => DownSpec::Vertex,
+                DownArg::Face => DownSpec::Face,
+                DownArg::Edge => DownSpec::Edge,
+            }),
+        }),
         MeshKind::TruncatedSphere {
             radius,
             cut_height,
             pattern,
             divisions,
-        } => {
-            let mut opts = TruncatedSphereOptions::for_pattern(pattern);
-            opts.radius = *radius;
-            opts.cut_height = *cut_height;
-            if let Some(d) = divisions {
-                opts.divisions = *d;
-            }
-            generators::truncated_sphere(&opts)
-        }
+        } => MeshSpec::TruncatedSphere(TruncatedSphereMesh {
+            radius: *radius,
+            cut_height: *cut_height,
+            pattern: pattern.clone(),
+            divisions: *divisions,
+        }),
     }
 }
 
@@ -159,15 +150,16 @@ pub(crate) fn run(args: &MeshArgs) -> Result<(), CliError> {
         .map(|p| Format::from_path(p, args.binary))
         .transpose()
         .map_err(input)?;
-    if let Some(dir) = args.out.as_deref().and_then(|p| p.parent()) {
-        if !dir.as_os_str().is_empty() && !dir.is_dir() {
-            return Err(CliError::Input(format!(
-                "output directory '{}' does not exist",
-                dir.display()
-            )));
-        }
+    if let Some(out) = &args.out {
+        super::common::check_out_file("--out", out)?;
     }
-    let sym = generate(&args.kind).map_err(input)?;
+    let spec = spec(&args.kind);
+    let limits = Limits::from_env().map_err(|e| CliError::Input(e.to_string()))?;
+    limits
+        .check_group(&spec.group_name())
+        .and_then(|()| limits.check_memory(spec.describe(), spec.estimated_bytes()))
+        .map_err(|e| CliError::Input(e.to_string()))?;
+    let sym = spec.generate().map_err(input)?;
     let check = sym
         .verify()
         .map_err(|e| CliError::Failure(format!("the generated mesh failed verification: {e}")))?;
@@ -195,26 +187,26 @@ pub(crate) fn run(args: &MeshArgs) -> Result<(), CliError> {
     };
     if args.json {
         let text = serde_json::to_string(&summary).map_err(|e| CliError::Failure(e.to_string()))?;
-        println!("{text}");
+        out!("{text}");
     } else {
-        println!(
+        out!(
             "{} nodes, {} triangles, group {} (order {}), action verified (max |R X - X_pi| = {:.1e} of the mesh size)",
             summary.nodes, summary.elements, summary.group, summary.order, summary.max_position_error
         );
         for (name, count) in &summary.boundaries {
-            println!("node set '{name}': {count} nodes");
+            out!("node set '{name}': {count} nodes");
         }
         if summary.hidden_symmetries.is_empty() {
-            println!("no symmetry beyond {}", summary.group);
+            out!("no symmetry beyond {}", summary.group);
         } else {
-            println!(
+            out!(
                 "warning: symmetry beyond {}: {}",
                 summary.group,
                 summary.hidden_symmetries.join("; ")
             );
         }
         if let Some(p) = &summary.file {
-            println!("wrote {}", p.display());
+            out!("wrote {}", p.display());
         }
     }
     Ok(())

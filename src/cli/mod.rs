@@ -3,6 +3,17 @@
 //! Exit codes: 0 success; 2 bad input (one line on stderr naming the bad value, nothing
 //! written); 1 a failure that is not the user's input (a verification or I/O failure).
 
+/// `println!` for the commands' output: when stdout is a pipe whose reader has gone (`memstab
+/// demo | head -1`), the process ends quietly with exit code 0 instead of panicking.
+macro_rules! out {
+    () => {
+        $crate::cli::print_line(format_args!(""))
+    };
+    ($($arg:tt)*) => {
+        $crate::cli::print_line(format_args!($($arg)*))
+    };
+}
+
 mod bench;
 mod common;
 mod compare;
@@ -43,6 +54,23 @@ enum Command {
     ExportMatrix(export::ExportArgs),
 }
 
+/// Writes one line to stdout; a closed pipe ends the process quietly (exit 0), any other
+/// write error with exit code 1.
+pub(crate) fn print_line(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout
+        .write_fmt(args)
+        .and_then(|()| stdout.write_all(b"\n"))
+    {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: cannot write to stdout: {e}");
+        std::process::exit(1);
+    }
+}
+
 /// An error that ends the command: bad input (exit 2) or a failure (exit 1).
 #[derive(Debug)]
 pub(crate) enum CliError {
@@ -50,9 +78,19 @@ pub(crate) enum CliError {
     Input(String),
     /// Something failed that is not the user's input.
     Failure(String),
+    /// A signal stopped the command after it wrote what it had (exit code 130).
+    Interrupted(String),
 }
 
 pub(crate) fn main() -> ExitCode {
+    // SIGINT and SIGTERM: the analyses stop at their next point and their outputs are
+    // written; a second signal ends the process at once.
+    let _ = ctrlc::set_handler(|| {
+        if memstab::analysis::interrupt::requested() {
+            std::process::exit(130);
+        }
+        memstab::analysis::interrupt::request();
+    });
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -101,12 +139,16 @@ pub(crate) fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(CliError::Input(m)) => {
-            eprintln!("error: {m}");
+            eprintln!("error: {}", memstab::text::message(&m));
             ExitCode::from(2)
         }
         Err(CliError::Failure(m)) => {
-            eprintln!("error: {m}");
+            eprintln!("error: {}", memstab::text::message(&m));
             ExitCode::from(1)
+        }
+        Err(CliError::Interrupted(m)) => {
+            eprintln!("interrupted: {}", memstab::text::message(&m));
+            ExitCode::from(130)
         }
     }
 }

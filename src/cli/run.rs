@@ -15,9 +15,10 @@
 
 use super::CliError;
 use clap::Args;
+use memstab::analysis::events::StopReason;
 use memstab::analysis::{run as run_study, RunResult};
 use memstab::demo::closed_form_check;
-use memstab::output::{file_name, write_run, Progress, RunSummary, Written};
+use memstab::output::{file_name, write_run, Progress, RunSummary, Written, RUN_FILES};
 use memstab::report::PathReport;
 use memstab::scene::Scene;
 use memstab::study::Study;
@@ -55,9 +56,20 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
-        println!("{text}");
+        out!("{text}");
     } else {
         print_summary(&study, &result.report, &args.out, &written);
+    }
+    interrupted(&result, &args.out)
+}
+
+/// Exit code 130 after a run that a signal stopped (its outputs are written).
+fn interrupted(result: &RunResult, out: &Path) -> Result<(), CliError> {
+    if result.report.stop == StopReason::Interrupted {
+        return Err(CliError::Interrupted(format!(
+            "the path so far is written into {}",
+            out.display()
+        )));
     }
     Ok(())
 }
@@ -68,6 +80,7 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
     print_summary(&study, &result.report, &args.out, &written);
     print_closed_form(&study, &result.report);
+    interrupted(&result, &args.out)?;
     Ok(())
 }
 
@@ -123,10 +136,19 @@ fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, W
 fn check_out(out: &Path) -> Result<(), CliError> {
     if out.exists() {
         if out.is_dir() {
+            for name in RUN_FILES {
+                super::common::check_out_file("--out", &out.join(name))?;
+            }
             return Ok(());
         }
         return Err(CliError::Input(format!(
             "--out '{}' exists and is not a directory",
+            out.display()
+        )));
+    }
+    if std::fs::symlink_metadata(out).is_ok() {
+        return Err(CliError::Input(format!(
+            "--out '{}' is a symbolic link to nothing; give a directory",
             out.display()
         )));
     }
@@ -156,12 +178,16 @@ fn control_index(report: &PathReport) -> Option<usize> {
 
 fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Written) {
     let m = &report.mesh;
-    println!("scene '{}' ({})", report.scene, report.origin);
-    println!(
+    out!("scene '{}' ({})", report.scene, report.origin);
+    out!(
         "mesh: {} with {} nodes, {} triangles, group {} (order {})",
-        m.generator, m.nodes, m.elements, m.group, m.order
+        m.generator,
+        m.nodes,
+        m.elements,
+        m.group,
+        m.order
     );
-    println!(
+    out!(
         "scene group {} (order {}): solved in {} symmetric unknowns of {}",
         report.group,
         report.group_order,
@@ -177,26 +203,26 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
         format!("{n} points")
     };
     match (c, report.rows.first(), report.rows.last()) {
-        (Some(c), Some(first), Some(last)) if n > 1 => println!(
+        (Some(c), Some(first), Some(last)) if n > 1 => out!(
             "path: {points}, {} from {} to {}",
             report.control,
             sig_digits6(first.parameters[c]),
             sig_digits6(last.parameters[c])
         ),
         (Some(c), Some(first), _) => {
-            println!(
+            out!(
                 "path: {points}, {} = {}",
                 report.control,
                 sig_digits6(first.parameters[c])
             )
         }
-        _ => println!("equilibrium: {points}"),
+        _ => out!("equilibrium: {points}"),
     }
     // A closed membrane with a negative enclosed volume has turned inside out: the numbers
     // are finite but not physical.
     if let Some(v) = report.measures.iter().position(|m| m == "volume") {
         if let Some(r) = report.rows.iter().find(|r| r.measures[v] <= 0.0) {
-            println!(
+            out!(
                 "warning: the enclosed volume is {} at step {}: the membrane is inside out there, \
                  the path is not physical",
                 sig_digits6(r.measures[v]),
@@ -206,40 +232,42 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     }
     if report.turning_points.is_empty() {
         if c.is_some() {
-            println!("turning points of {}: none", report.control);
+            out!("turning points of {}: none", report.control);
         }
     } else {
-        println!("turning points of {}:", report.control);
+        out!("turning points of {}:", report.control);
         for t in &report.turning_points {
             let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(t.parameters[c]));
             let stretch = s.map_or_else(String::new, |s| {
                 format!(" at stretch {}", sig_digits6(t.measures[s]))
             });
-            println!(
+            out!(
                 "  {:<7} {} = {value}{stretch} (after step {})",
-                t.kind, report.control, t.after_step
+                t.kind,
+                report.control,
+                t.after_step
             );
         }
     }
     for w in &report.warnings {
-        println!("warning: {w}");
+        out!("warning: {w}");
     }
     if let Some(note) = &report.stability_note {
-        println!("{note}");
+        out!("{note}");
     } else if report.critical.is_empty() {
         match report.index_range() {
-            Some((lo, hi)) if lo == hi => println!("critical points: none (the index stays {lo})"),
-            Some((lo, hi)) => println!(
+            Some((lo, hi)) if lo == hi => out!("critical points: none (the index stays {lo})"),
+            Some((lo, hi)) => out!(
                 "critical points: none localised, although the index ranges from {lo} to {hi} \
                  along the path (see the warnings)"
             ),
-            None => println!("critical points: none (no index was computed)"),
+            None => out!("critical points: none (no index was computed)"),
         }
     } else {
-        println!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
+        out!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
         for cp in &report.critical {
             let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(cp.parameters[c]));
-            println!(
+            out!(
                 "  {:<20} in {:<4} x{} at {} = {value} (isotropy {}, |eigenvalue|/|K| = {:.0e})",
                 cp.kind,
                 cp.irrep,
@@ -250,8 +278,8 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
             );
         }
     }
-    println!("stopped: {}", report.stop);
-    println!(
+    out!("stopped: {}", report.stop);
+    out!(
         "wrote {} files into {}:",
         written.files().len(),
         out.display()
@@ -263,33 +291,33 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
         .map(String::as_str)
         .collect::<Vec<_>>()
         .join(", ");
-    println!(
+    out!(
         "  {:<10} {} rows: step, arclength, {header}, iterations",
         file_name(&written.csv),
         report.rows.len()
     );
-    println!(
+    out!(
         "  {:<10} the report: metadata, path, turning points, critical points, saved states",
         file_name(&written.json)
     );
-    println!(
+    out!(
         "  {:<10} {} critical points: kind, irrep, multiplicity, parameters, step",
         file_name(&written.critical),
         report.critical.len()
     );
-    println!("  {:<10} {}", file_name(&written.svg), written.plotted);
+    out!("  {:<10} {}", file_name(&written.svg), written.plotted);
     let in_collection = report.saved.iter().filter(|s| s.in_collection).count();
-    println!(
+    out!(
         "  {:<10} ParaView collection of the {in_collection} path states (time = path step); turning and critical points beside it",
         file_name(&written.pvd),
     );
-    println!(
+    out!(
         "  {:<10} every point's parameters and displacement, binary ([start] from reads it)",
         file_name(&written.points),
     );
     for chunk in written.states.chunks(5) {
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
-        println!("  {}", names.join(" "));
+        out!("  {}", names.join(" "));
     }
 }
 
@@ -298,8 +326,8 @@ fn print_closed_form(study: &Study, report: &PathReport) {
     let Some(check) = closed_form_check(study, report) else {
         return;
     };
-    println!();
-    println!(
+    out!();
+    out!(
         "closed form for a Mooney-Rivlin sphere, k = {}: p R/(mu H) = 2/(1+k) (1/l - 1/l^7) (1 + k l^2)",
         check.k
     );
@@ -312,13 +340,13 @@ fn print_closed_form(study: &Study, report: &PathReport) {
         })
         .collect();
     if !list.is_empty() {
-        println!("  its {}", list.join(", its "));
+        out!("  its {}", list.join(", its "));
     }
     if check.turning.is_empty() {
-        println!("memstab found no turning point to compare");
+        out!("memstab found no turning point to compare");
         return;
     }
-    println!(
+    out!(
         "memstab's turning points, p R/(mu H) against the closed form at the stretch l memstab found:"
     );
     for t in &check.turning {
@@ -328,7 +356,7 @@ fn print_closed_form(study: &Study, report: &PathReport) {
                 t.kind
             )
         });
-        println!(
+        out!(
             "  {:<7} {:.7} at l = {:.7}: closed form {:.7}, difference {:+.3} %{stretch_diff}",
             t.kind.to_string(),
             t.pressure,
@@ -344,9 +372,9 @@ fn print_closed_form(study: &Study, report: &PathReport) {
         check.frequency
     );
     if check.explained_by_mesh() {
-        println!("most of the difference is the mesh: {what}");
+        out!("most of the difference is the mesh: {what}");
     } else {
-        println!("for comparison, {what}");
+        out!("for comparison, {what}");
     }
 }
 

@@ -19,7 +19,7 @@ use clap::Args;
 use memstab::adapted::AdaptedBasis;
 use memstab::analysis::equilibrium::{held, state_at, StartState};
 use memstab::model::Model;
-use memstab::stability::Stability;
+use memstab::stability::{Detail, Stability};
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -96,7 +96,14 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let stability = Stability::new(&study.model, &adapted);
     let mut eval = study.model.new_evaluation();
     let spectrum = stability
-        .spectrum_of(&u, &params, &study.constraints, &mut eval, None, false)
+        .analyse(
+            &u,
+            &params,
+            &study.constraints,
+            &mut eval,
+            None,
+            Detail::Eigenvalues { lowest: args.count },
+        )
         .map_err(|e| {
             CliError::Failure(format!(
                 "the tangent could not be evaluated: {}",
@@ -139,13 +146,13 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
                 .collect(),
         };
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
-        println!("{text}");
+        out!("{text}");
         return Ok(());
     }
 
     let m = &study.mesh.mesh;
-    println!("scene '{}' ({origin})", study.scene.info.name);
-    println!(
+    out!("scene '{}' ({origin})", study.scene.info.name);
+    out!(
         "mesh: {} with {} nodes, {} triangles; scene group {} (order {}), {} unknowns",
         study.scene.mesh.generator(),
         m.nodes.len(),
@@ -177,22 +184,22 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
         let c = study
             .control
             .map_or("the control", |c| &study.parameters[c]);
-        println!(
+        out!(
             "state: the start state (Newton: {}), held as in linear buckling; tangent at \
              {values} ({c} enters the tangent only)",
             plural(iterations, "iteration")
         );
     } else {
-        println!(
+        out!(
             "state: {values} (Newton: {} from the start guess)",
             plural(iterations, "iteration")
         );
     }
     if !study.constraints.is_empty() {
         let names: Vec<&str> = study.constraints.iter().map(|c| c.name()).collect();
-        println!("constraints border the trivial block: {}", names.join(", "));
+        out!("constraints border the trivial block: {}", names.join(", "));
     }
-    println!(
+    out!(
         "eigenvalues of each irrep's block K_mu, ascending, in units of max|K_ij| = {}; \
          each counts d times in K; rigid-body zero modes are deflated (not among the \
          eigenvalues, not in the index)",
@@ -205,9 +212,15 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
         .max()
         .unwrap_or(5)
         .max(5);
-    println!(
+    out!(
         "{:<name_width$} {:>2} {:>6} {:>7} {:>4} {:>4}  lowest {} eigenvalues",
-        "irrep", "d", "m", "m*d", "neg", "zero", args.count
+        "irrep",
+        "d",
+        "m",
+        "m*d",
+        "neg",
+        "zero",
+        args.count
     );
     for b in &spectrum.blocks {
         let lowest: Vec<String> = b
@@ -216,7 +229,7 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
             .take(args.count)
             .map(|v| format!("{:>10}", sci(v / scale)))
             .collect();
-        println!(
+        out!(
             "{:<name_width$} {:>2} {:>6} {:>7} {:>4} {:>4}  {}",
             b.irrep,
             b.dim,
@@ -235,7 +248,7 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
         .map(|b| format!("{} {}x{}", b.irrep, b.rigid_modes, b.dim))
         .collect();
     let zero_total: usize = spectrum.blocks.iter().map(|b| b.rigid_modes * b.dim).sum();
-    println!(
+    out!(
         "sum of m*d = {total} of {} unknowns; rigid-body zero modes: {}",
         study.basis.unknowns(),
         if zero.is_empty() {
@@ -251,13 +264,13 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
         .map(|b| format!("{} {}x{}", b.irrep, b.held, b.dim))
         .collect();
     if !held.is_empty() {
-        println!(
+        out!(
             "held mean motions (the rolling of a spherical reference, a drift across a spin \
              axis; deflated like the rigid modes, not in the index): {}",
             held.join(", ")
         );
     }
-    println!(
+    out!(
         "instability index {} (sum of d*neg){}",
         spectrum.index,
         if spectrum.index == 0 { ": stable" } else { "" }

@@ -1,4 +1,4 @@
-//! Enclosed gas (DESIGN §2.2), with V = Σ_T V_T the enclosed volume ([`super::volume`]).
+//! Enclosed gas (docs/theory.md §3), with V = Σ_T V_T the enclosed volume ([`super::volume`]).
 //!
 //! - Fixed over-pressure p (a parameter): `Π = −p V`, so `F = −p ∇V`, `K = −p ∇²V`,
 //!   `∂F/∂p = −∇V`.

@@ -1,4 +1,4 @@
-//! Fluid under gravity, one triangle at a time, with exact clipping at the level (DESIGN §2.3).
+//! Fluid under gravity, one triangle at a time, with exact clipping at the level (docs/theory.md §4).
 //!
 //! # Potential
 //!

@@ -1,4 +1,4 @@
-//! Effects: every load a potential (DESIGN §2). One effect per file, its potential in the
+//! Effects: every load a potential (docs/theory.md §1). One effect per file, its potential in the
 //! module doc; the per-triangle kernels return value, gradient and Hessian ([`crate::model::Local`]).
 
 pub mod gas;

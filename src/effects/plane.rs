@@ -1,4 +1,4 @@
-//! A rigid frictionless plane with a penalty (DESIGN §2.5).
+//! A rigid frictionless plane with a penalty (docs/theory.md §6).
 //!
 //! The plane n·x ≥ d (unit normal n, offset d) acts on every node with the gap
 //! δ_i = n·x_i − d:

@@ -1,4 +1,4 @@
-//! Fluid spinning about the z-axis, one triangle at a time (DESIGN §2.4).
+//! Fluid spinning about the z-axis, one triangle at a time (docs/theory.md §5).
 //!
 //! In the frame rotating at ω the fluid filling Ω has the potential
 //! Π_ω = −(ρ ω²/2) ∫_Ω (x² + y²) dV. The divergence theorem with the field (x³/3, y³/3, 0),

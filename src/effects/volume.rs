@@ -1,4 +1,4 @@
-//! Enclosed volume, one triangle at a time (DESIGN §2.2).
+//! Enclosed volume, one triangle at a time (docs/theory.md §3).
 //!
 //! ```text
 //!   V_T = (1/6) x1·(x2 × x3) = (1/6) ε_{ijk} x1_i x2_j x3_k

@@ -23,7 +23,9 @@
 //! twice), so no spurious copies of converged Ritz values appear. The Ritz values θ_i of T_m
 //! (eigenvector s_i) approximate eigenvalues of (A − σI)⁻¹ with residual
 //! ‖(A − σI)⁻¹ V_m s_i − θ_i V_m s_i‖ = |β_m s_mi|; an eigenvalue is accepted when that is at
-//! most 1e-8 max|θ|, which makes the error of θ_i of the order of its square over the gap.
+//! most 1e-8 |θ_i| — relative to its *own* θ, so that the distance |λ_i − σ| = 1/|θ_i| is
+//! known to 1e-8 relative whatever the other values are (the error of θ_i is of the order of
+//! the residual's square over the gap).
 //!
 //! **Restarts on breakdown.** When β_j ≈ 0 (below 1e-12 max|α|) the Krylov space is an
 //! invariant subspace. With a symmetric A this is common: a single start vector reaches one
@@ -31,13 +33,25 @@
 //! balloon's tangent), so repeated eigenvalues would be found once. The iteration then goes
 //! on from a fresh pseudo-random direction orthogonal to V_j (β_j = 0 is kept in T, whose
 //! relation above still holds), so it never stalls and finds further copies of degenerate
-//! eigenvalues. The space grows from max(3n, 60) by max(n, 30) vectors at a time until the
+//! eigenvalues. The space grows from max(3n, 40) by max(n, 30) vectors at a time until the
 //! n Ritz values of largest |θ| have converged or the space is the whole space.
 //!
-//! **The shift.** The tolerance is relative to the largest |θ|, so σ must be a distance from
-//! the spectrum comparable to the gaps of the wanted eigenvalues: with σ an eigenvalue of A
-//! to round-off, that one θ is huge and the other Ritz values pass the test unconverged.
-//! A σ that is an eigenvalue exactly fails the factorisation ([`EigenError::Factor`]).
+//! **Operators.** The iteration ([`nearest_eigenpairs`]) runs on any [`Operator`]: a plain
+//! factorisation of A − σI, or [`Bordered`], the leading block of the inverse of a bordered
+//! matrix [[A − σI, U], [Uᵀ, E]] on the complement of the border's E = 0 columns — the
+//! restricted operator whose inertia a stability block counts (docs/theory.md §8.8). Ritz
+//! vectors come with the values when asked for.
+//!
+//! **The lowest eigenvalues, certified.** [`lowest_eigenpairs`] finds the n lowest
+//! eigenvalues of a [`ShiftFamily`] (a matrix that can be factorised at any shift, with the
+//! inertia of each factorisation): the inertia at σ says how many eigenvalues lie below σ,
+//! which the Lanczos result must reproduce, and a second factorisation just above the n-th
+//! value found must count exactly n. A value missed by the iteration (a near-double whose
+//! second copy the Krylov space has not reached) fails that count and the search repeats;
+//! no uncertified list is returned.
+//!
+//! **The shift.** A σ that is an eigenvalue to round-off fails the factorisation
+//! ([`EigenError::Factor`]); [`lowest_eigenpairs`] then moves it.
 //!
 //! [`nearest_eigenvalues_faer`] is faer's `partial_self_adjoint_eigen` (thick-restart
 //! Lanczos) on the same operator, kept for comparison: it can loop forever in its
@@ -49,12 +63,14 @@
 
 use super::{FactorError, SymmetricFactorization, SymmetricPattern};
 
-/// A Ritz value has converged when its residual |β_m s_mi| is at most this times max|θ|.
+/// A Ritz value has converged when its residual |β_m s_mi| is at most this times its |θ_i|.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
 /// β_j below this times max|α| is a breakdown of the Lanczos recurrence.
 const BREAKDOWN_TOLERANCE: f64 = 1e-12;
 /// The state of the pseudo-random directions (xorshift), fixed: results are reproducible.
 const SEED: u64 = 0x2545_F491_4F6C_DD1D;
+/// The smallest Krylov space of the first Lanczos pass.
+const START_SPACE: usize = 40;
 
 /// Why the eigenvalues could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -90,6 +106,16 @@ pub enum EigenError {
     /// The dense eigenproblem of the Lanczos tridiagonal matrix failed.
     #[error("Lanczos tridiagonal eigen: {0}")]
     Tridiagonal(String),
+    /// The eigenvalues found did not reproduce the inertia ([`lowest_eigenpairs`]).
+    #[error("after {attempts} attempts the inertia counts {counted} eigenvalues where Lanczos found {found}")]
+    Unverified {
+        /// Attempts made.
+        attempts: usize,
+        /// The count by inertia in the last check.
+        counted: usize,
+        /// The count of the values found.
+        found: usize,
+    },
 }
 
 /// The eigenvalues of A nearest the shift.
@@ -157,19 +183,140 @@ pub fn nearest_eigenvalues(
     shift: f64,
     n: usize,
 ) -> Result<Nearest, EigenError> {
-    let dim = f.n();
-    let k = n.min(dim);
+    let pairs = nearest_eigenpairs(f, shift, n, false, 0)?;
+    Ok(Nearest {
+        values: pairs.values,
+        converged: pairs.converged,
+    })
+}
+
+/// A symmetric operator for shift-invert Lanczos: x ↦ (A − σI)⁻¹ x on a subspace of ℝⁿ (all
+/// of it for a plain factorisation; the complement of a constraint border for [`Bordered`]).
+pub trait Operator {
+    /// Length n of the vectors.
+    fn dim(&self) -> usize;
+    /// Dimension of the subspace the operator acts on (its range).
+    fn rank(&self) -> usize {
+        self.dim()
+    }
+    /// x ← (A − σI)⁻¹ x, the result in the subspace.
+    fn apply(&self, x: &mut [f64]) -> Result<(), FactorError>;
+    /// x ← its orthogonal projection onto the subspace (the identity by default).
+    fn project(&self, _x: &mut [f64]) {}
+}
+
+impl Operator for SymmetricFactorization {
+    fn dim(&self) -> usize {
+        self.n()
+    }
+    fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
+        self.solve_in_place(x)
+    }
+}
+
+/// The shift-invert operator of a matrix restricted and bordered as a stability block is
+/// (docs/theory.md §8.8): `factorization` holds the bordered matrix
+///
+/// ```text
+///     M_σ = [[A − σI, U], [Uᵀ, E]]      (A: m × m, U: m × b, E: b × b),
+/// ```
+///
+/// whose border columns with E = 0 span a subspace P (orthonormal basis `constrained`) and
+/// whose other border columns have an invertible E_D. With Z an orthonormal basis of P's
+/// complement and S = Zᵀ (A − U_D E_D⁻¹ U_Dᵀ) Z, the first m rows of M_σ⁻¹ [y; 0] are
+/// Z (S − σI)⁻¹ Zᵀ y: this operator on ℝᵐ has the eigenvalues 1/(λ − σ) of S on the
+/// complement and 0 on P, so Lanczos on it finds the eigenvalues of S nearest σ, and its
+/// Ritz vectors are S's eigenvectors in the coordinates of A.
+pub struct Bordered<'a> {
+    factorization: &'a SymmetricFactorization,
+    m: usize,
+    constrained: &'a [Vec<f64>],
+}
+
+impl<'a> Bordered<'a> {
+    /// The operator of the leading m × m block of `factorization`'s inverse, on the
+    /// complement of the orthonormal columns `constrained` (each of length m).
+    pub fn new(
+        factorization: &'a SymmetricFactorization,
+        m: usize,
+        constrained: &'a [Vec<f64>],
+    ) -> Self {
+        debug_assert!(m <= factorization.n());
+        debug_assert!(constrained.iter().all(|c| c.len() == m));
+        Self {
+            factorization,
+            m,
+            constrained,
+        }
+    }
+}
+
+impl Operator for Bordered<'_> {
+    fn dim(&self) -> usize {
+        self.m
+    }
+    fn rank(&self) -> usize {
+        self.m.saturating_sub(self.constrained.len())
+    }
+    fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
+        let mut w = vec![0.0; self.factorization.n()];
+        w[..self.m].copy_from_slice(x);
+        self.factorization.solve_in_place(&mut w)?;
+        x.copy_from_slice(&w[..self.m]);
+        self.project(x);
+        Ok(())
+    }
+    fn project(&self, x: &mut [f64]) {
+        // Twice, as the Lanczos vectors are orthogonalised.
+        for _ in 0..2 {
+            for c in self.constrained {
+                let d: f64 = c.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+                x.iter_mut().zip(c).for_each(|(xi, ci)| *xi -= d * ci);
+            }
+        }
+    }
+}
+
+/// Eigenpairs nearest a shift.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pairs {
+    /// At most the number asked for, ascending.
+    pub values: Vec<f64>,
+    /// How many of them converged (all of them unless the space was exhausted first).
+    pub converged: usize,
+    /// Unit eigenvectors (Ritz vectors), one per value, when asked for.
+    pub vectors: Vec<Vec<f64>>,
+    /// Whether the Krylov space became the whole subspace (every eigenvalue found).
+    pub exhausted: bool,
+}
+
+/// The (at most) `n` eigenpairs of the operator's matrix nearest `shift`, ascending: Lanczos
+/// on `op` = (A − shift·I)⁻¹ with full reorthogonalisation, restarted from a fresh direction
+/// on breakdown (see the [module documentation](self)); with `vectors`, the Ritz vectors too.
+/// `attempt` varies the start vector (0 is the default one).
+pub fn nearest_eigenpairs(
+    op: &dyn Operator,
+    shift: f64,
+    n: usize,
+    vectors: bool,
+    attempt: u64,
+) -> Result<Pairs, EigenError> {
+    let dim = op.dim();
+    let rank = op.rank().min(dim);
+    let k = n.min(rank);
     if k == 0 {
-        return Ok(Nearest {
+        return Ok(Pairs {
             values: Vec::new(),
             converged: 0,
+            vectors: Vec::new(),
+            exhausted: rank == 0,
         });
     }
-    let mut rng = SEED;
-    let mut target = (3 * k).max(60).min(dim);
+    let mut rng = SEED ^ attempt.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut target = (3 * k).max(START_SPACE).min(rank);
     // Columns 0..=m: the Lanczos vectors and the next one.
     let mut v = faer::Mat::<f64>::zeros(dim, target + 1);
-    let start = fresh_direction(v.as_ref(), 0, &mut rng).ok_or(EigenError::StartVector)?;
+    let start = fresh_direction(op, v.as_ref(), 0, &mut rng).ok_or(EigenError::StartVector)?;
     v.col_mut(0).copy_from(&start);
     let (mut alpha, mut beta): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut exhausted = false;
@@ -184,20 +331,23 @@ pub fn nearest_eigenvalues(
             for (wi, vi) in w.iter_mut().zip(v.col(j).iter()) {
                 *wi = *vi;
             }
-            f.solve_in_place(&mut w).map_err(EigenError::Solve)?;
+            op.apply(&mut w).map_err(EigenError::Solve)?;
             let mut wc = faer::ColMut::from_slice_mut(&mut w);
             let a = v.col(j).transpose() * wc.as_ref();
             alpha.push(a);
             largest = largest.max(a.abs());
             orthogonalise(v.as_ref(), j + 1, wc.as_mut());
             let b = wc.norm_l2();
-            if b > BREAKDOWN_TOLERANCE * largest {
+            if b > BREAKDOWN_TOLERANCE * largest && j + 1 < rank {
                 wc /= faer::Scale(b);
                 beta.push(b);
                 v.col_mut(j + 1).copy_from(wc.as_ref());
             } else {
                 beta.push(0.0);
-                match fresh_direction(v.as_ref(), j + 1, &mut rng) {
+                match (j + 1 < rank)
+                    .then(|| fresh_direction(op, v.as_ref(), j + 1, &mut rng))
+                    .flatten()
+                {
                     Some(r) => v.col_mut(j + 1).copy_from(&r),
                     None => exhausted = true,
                 }
@@ -221,18 +371,171 @@ pub fn nearest_eigenvalues(
         let mut order: Vec<usize> = (0..m).collect();
         order.sort_by(|&x, &y| theta[y].abs().total_cmp(&theta[x].abs()));
         order.truncate(k);
-        let top = order.first().map_or(0.0, |&i| theta[i].abs());
+        // Each Ritz value against its own size: the eigenvalue nearest the shift (largest θ)
+        // does not let the others pass unconverged.
         let converged = order
             .iter()
-            .filter(|&&i| (trailing * s[(m - 1, i)]).abs() <= RESIDUAL_TOLERANCE * top)
+            .filter(|&&i| (trailing * s[(m - 1, i)]).abs() <= RESIDUAL_TOLERANCE * theta[i].abs())
             .count();
-        if converged == order.len() || exhausted || m >= dim {
-            let mut values: Vec<f64> = order.iter().map(|&i| shift + 1.0 / theta[i]).collect();
-            values.sort_by(f64::total_cmp);
-            return Ok(Nearest { values, converged });
+        if converged == order.len() || exhausted || m >= rank {
+            order.sort_by(|&x, &y| (shift + 1.0 / theta[x]).total_cmp(&(shift + 1.0 / theta[y])));
+            let values = order.iter().map(|&i| shift + 1.0 / theta[i]).collect();
+            let vectors = if vectors {
+                let basis = v.subcols(0, m);
+                order
+                    .iter()
+                    .map(|&i| {
+                        let x = basis * s.col(i);
+                        let norm = x.norm_l2().max(1e-300);
+                        x.iter().map(|xi| xi / norm).collect()
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            return Ok(Pairs {
+                values,
+                converged,
+                vectors,
+                exhausted: exhausted || m >= rank,
+            });
         }
-        target = (target + k.max(30)).min(dim);
+        target = (target + k.max(30)).min(rank);
     }
+}
+
+/// A family of shifted matrices A − σI (restricted and bordered as the operator is) that can
+/// be factorised at any shift, with the inertia of each factorisation: what
+/// [`lowest_eigenpairs`] needs.
+pub trait ShiftFamily: Operator {
+    /// Factorises at `shift` and returns the number of eigenvalues below it (Sylvester's law
+    /// of inertia on the factorisation); [`Operator::apply`] then solves at that shift.
+    fn factor(&mut self, shift: f64) -> Result<usize, EigenError>;
+}
+
+/// The lowest eigenpairs of a [`ShiftFamily`], certified by inertia.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lowest {
+    /// The lowest eigenvalues λ_0 ≤ λ_1 ≤ …, as many as asked (fewer only if the space is
+    /// smaller).
+    pub values: Vec<f64>,
+    /// Unit eigenvectors, one per value, when asked for.
+    pub vectors: Vec<Vec<f64>>,
+    /// The shift the Lanczos iteration ran at.
+    pub shift: f64,
+    /// The number of eigenvalues below that shift, from the inertia of its factorisation.
+    pub below_shift: usize,
+    /// The shift above the last value at which the inertia was checked (`None` when every
+    /// eigenvalue of the space was found, so no check was needed) and its count, which
+    /// equals `values.len()`.
+    pub checked_at: Option<f64>,
+}
+
+/// Attempts of [`lowest_eigenpairs`] before it gives up.
+const LOWEST_ATTEMPTS: usize = 8;
+
+/// The `n` lowest eigenvalues (and, with `vectors`, eigenvectors) of a [`ShiftFamily`], by
+/// shift-invert Lanczos at a shift near them and the inertia as the count the result must
+/// reproduce (docs/theory.md §8.8):
+///
+/// 1. factorise at σ (starting from `shift`; a singular factorisation moves σ down by
+///    `step`) and read ν = #{λ < σ} from the inertia;
+/// 2. Lanczos for the n + ν + 1 eigenvalues nearest σ; it must find exactly ν below σ (fewer:
+///    the lowest lie further down, so σ moves below what was found and the search repeats);
+/// 3. the lowest n are then the first n found, and the inertia at a shift σ′ between the
+///    n-th value and the next one must count exactly n — otherwise an eigenvalue was missed
+///    and the search repeats with more vectors and another start vector.
+///
+/// Errors when no attempt passes the checks ([`EigenError::Unverified`]).
+pub fn lowest_eigenpairs(
+    family: &mut dyn ShiftFamily,
+    n: usize,
+    shift: f64,
+    step: f64,
+    vectors: bool,
+) -> Result<Lowest, EigenError> {
+    let rank = family.rank();
+    let n = n.min(rank);
+    let step = step.abs().max(f64::MIN_POSITIVE);
+    let mut sigma = shift;
+    let mut extra = 0;
+    let mut last = None;
+    for attempt in 0..LOWEST_ATTEMPTS {
+        let nu = match family.factor(sigma) {
+            Ok(nu) => nu,
+            Err(EigenError::Factor(FactorError::Singular { .. })) => {
+                sigma -= step * (1 << attempt) as f64;
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        if n == 0 {
+            return Ok(Lowest {
+                values: Vec::new(),
+                vectors: Vec::new(),
+                shift: sigma,
+                below_shift: nu,
+                checked_at: None,
+            });
+        }
+        let want = (n + nu + 1 + extra).min(rank);
+        let pairs = nearest_eigenpairs(&*family, sigma, want, vectors, attempt as u64)?;
+        let below = pairs.values.iter().filter(|&&v| v < sigma).count();
+        if below < nu {
+            // The lowest eigenvalues lie below the ones found: move the shift beneath them.
+            let lowest = pairs.values.first().copied().unwrap_or(sigma);
+            sigma = lowest - (sigma - lowest).max(step);
+            last = Some((nu, below));
+            continue;
+        }
+        if below > nu || pairs.values.len() < n {
+            last = Some((nu, below));
+            extra += n + 1;
+            continue;
+        }
+        let values = pairs.values[..n].to_vec();
+        let vecs = if vectors {
+            pairs.vectors[..n].to_vec()
+        } else {
+            Vec::new()
+        };
+        let done = |checked_at| Lowest {
+            values: values.clone(),
+            vectors: vecs.clone(),
+            shift: sigma,
+            below_shift: nu,
+            checked_at,
+        };
+        if pairs.exhausted && pairs.values.len() >= rank {
+            return Ok(done(None));
+        }
+        // The check above the n-th value: between it and the next value found, past any
+        // cluster of equal values (the count must then include the whole cluster).
+        let scale = pairs.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let gap = 1e-12 * scale.max(f64::MIN_POSITIVE);
+        let j = (n..pairs.values.len()).find(|&j| pairs.values[j] - pairs.values[j - 1] > gap);
+        let Some(j) = j else {
+            extra += n + 1;
+            last = Some((n, pairs.values.len()));
+            continue;
+        };
+        let top = 0.5 * (pairs.values[j - 1] + pairs.values[j]);
+        match family.factor(top) {
+            Ok(count) if count == j => return Ok(done(Some(top))),
+            Ok(count) => {
+                last = Some((count, j));
+                extra += n + 1;
+            }
+            Err(EigenError::Factor(FactorError::Singular { .. })) => extra += 1,
+            Err(e) => return Err(e),
+        }
+    }
+    let (counted, found) = last.unwrap_or((0, 0));
+    Err(EigenError::Unverified {
+        attempts: LOWEST_ATTEMPTS,
+        counted,
+        found,
+    })
 }
 
 /// As [`nearest_eigenvalues`], by faer's `partial_self_adjoint_eigen` (thick-restart Lanczos)
@@ -367,15 +670,24 @@ fn orthogonalise(v: faer::MatRef<'_, f64>, j: usize, mut w: faer::ColMut<'_, f64
     }
 }
 
-/// A pseudo-random unit vector orthogonal to the first `j` columns of `v` (xorshift state
-/// `rng`), or `None` when they span the space.
-fn fresh_direction(v: faer::MatRef<'_, f64>, j: usize, rng: &mut u64) -> Option<faer::Col<f64>> {
-    let mut r = faer::Col::<f64>::from_fn(v.nrows(), |_| {
-        *rng ^= *rng << 13;
-        *rng ^= *rng >> 7;
-        *rng ^= *rng << 17;
-        (*rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    });
+/// A pseudo-random unit vector in the operator's subspace orthogonal to the first `j` columns
+/// of `v` (xorshift state `rng`), or `None` when they span the subspace.
+fn fresh_direction(
+    op: &dyn Operator,
+    v: faer::MatRef<'_, f64>,
+    j: usize,
+    rng: &mut u64,
+) -> Option<faer::Col<f64>> {
+    let mut x: Vec<f64> = (0..v.nrows())
+        .map(|_| {
+            *rng ^= *rng << 13;
+            *rng ^= *rng >> 7;
+            *rng ^= *rng << 17;
+            (*rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect();
+    op.project(&mut x);
+    let mut r = faer::Col::<f64>::from_fn(x.len(), |i| x[i]);
     let before = r.norm_l2();
     orthogonalise(v, j, r.as_mut());
     let norm = r.norm_l2();
@@ -561,6 +873,234 @@ mod tests {
                 krylov: 64
             })
         );
+    }
+
+    /// A block as the stability analysis borders it: A (sparse, indefinite), p orthonormal
+    /// constraint columns P (E = 0) and one rank-one column a with E = −1/c, factorised at
+    /// any shift of A's diagonal.
+    struct Family {
+        values: Vec<f64>,
+        diagonal: Vec<usize>,
+        m: usize,
+        d_negative: usize,
+        constrained: Vec<Vec<f64>>,
+        fact: SymmetricFactorization,
+    }
+
+    impl Family {
+        /// The bordered matrix of A with `p` constraint columns and a rank-one term c a aᵀ
+        /// (none for c = 0); also the dense restricted matrix Zᵀ (A + c a aᵀ) Z.
+        fn new(a: (SymmetricPattern, Vec<f64>), p: usize, c: f64) -> (Self, faer::Mat<f64>) {
+            let (pattern, values) = a;
+            let m = pattern.n();
+            let f = |i: usize, j: usize| ((i * 13 + j * 7 + 3) as f64 * 0.61).sin();
+            // Orthonormal constraint columns (Gram–Schmidt).
+            let mut constrained: Vec<Vec<f64>> = Vec::new();
+            for j in 0..p {
+                let mut v: Vec<f64> = (0..m).map(|i| f(i, j)).collect();
+                for _ in 0..2 {
+                    for q in &constrained {
+                        let d: f64 = q.iter().zip(&v).map(|(a, b)| a * b).sum();
+                        v.iter_mut().zip(q).for_each(|(x, y)| *x -= d * y);
+                    }
+                }
+                let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                v.iter_mut().for_each(|x| *x /= n);
+                constrained.push(v);
+            }
+            let a_col: Vec<f64> = (0..m).map(|i| f(i, 17) * 0.3).collect();
+            // c = 0: no rank-one term.
+            let nb = p + usize::from(c != 0.0);
+            let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+            let entries = (0..m)
+                .flat_map(|j| {
+                    row_idx[col_ptr[j]..col_ptr[j + 1]]
+                        .iter()
+                        .map(move |&i| (i, j))
+                })
+                .chain((m..m + nb).flat_map(|j| (0..m + nb).map(move |i| (i, j))))
+                .collect::<Vec<_>>();
+            let bordered = SymmetricPattern::from_entries(m + nb, entries);
+            let border = |i: usize, t: usize| {
+                if t < p {
+                    constrained[t][i]
+                } else {
+                    a_col[i]
+                }
+            };
+            let mut mv = Vec::new();
+            let mut diagonal = Vec::new();
+            for j in 0..m {
+                diagonal.push(mv.len() + pattern.position(j, j).unwrap() - col_ptr[j]);
+                mv.extend_from_slice(&values[col_ptr[j]..col_ptr[j + 1]]);
+                mv.extend((0..nb).map(|t| border(j, t)));
+            }
+            for t in 0..nb {
+                mv.extend((0..m).map(|i| border(i, t)));
+                mv.extend((0..nb).map(|t2| if t2 == t && t == p { -1.0 / c } else { 0.0 }));
+            }
+            assert_eq!(mv.len(), bordered.nnz());
+            // The dense reference: Z spans the complement of P.
+            let mut k = pattern.to_dense(&values);
+            for i in 0..m {
+                for j in 0..m {
+                    k[(i, j)] += c * a_col[i] * a_col[j];
+                }
+            }
+            let mut basis: Vec<Vec<f64>> = constrained.clone();
+            let mut z = Vec::new();
+            for e in 0..m {
+                let mut v = vec![0.0; m];
+                v[e] = 1.0;
+                for _ in 0..2 {
+                    for q in &basis {
+                        let d: f64 = q.iter().zip(&v).map(|(a, b)| a * b).sum();
+                        v.iter_mut().zip(q).for_each(|(x, y)| *x -= d * y);
+                    }
+                }
+                let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if n > 1e-6 {
+                    v.iter_mut().for_each(|x| *x /= n);
+                    basis.push(v.clone());
+                    z.push(v);
+                }
+            }
+            assert_eq!(z.len(), m - p);
+            let zm = faer::Mat::<f64>::from_fn(m, m - p, |i, j| z[j][i]);
+            let s = zm.transpose() * &k * &zm;
+            let family = Self {
+                values: mv,
+                diagonal,
+                m,
+                d_negative: usize::from(c > 0.0),
+                constrained,
+                fact: SymmetricFactorization::new(&bordered).unwrap(),
+            };
+            (family, s)
+        }
+    }
+
+    impl Operator for Family {
+        fn dim(&self) -> usize {
+            self.m
+        }
+        fn rank(&self) -> usize {
+            self.m - self.constrained.len()
+        }
+        fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
+            Bordered::new(&self.fact, self.m, &self.constrained).apply(x)
+        }
+        fn project(&self, x: &mut [f64]) {
+            Bordered::new(&self.fact, self.m, &self.constrained).project(x)
+        }
+    }
+
+    impl ShiftFamily for Family {
+        fn factor(&mut self, shift: f64) -> Result<usize, EigenError> {
+            let mut v = self.values.clone();
+            for &p in &self.diagonal {
+                v[p] -= shift;
+            }
+            self.fact.factorize(&v).map_err(EigenError::Factor)?;
+            let negative = self.fact.inertia().unwrap().negative;
+            Ok(negative - self.constrained.len() - self.d_negative)
+        }
+    }
+
+    fn sorted_dense(s: &faer::Mat<f64>) -> Vec<f64> {
+        let mut v = s.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
+        v.sort_by(f64::total_cmp);
+        v
+    }
+
+    /// The lowest eigenvalues of the restricted, bordered operator are those of the dense
+    /// restricted matrix Zᵀ (A + c a aᵀ) Z, its Ritz vectors are its eigenvectors in A's
+    /// coordinates (orthogonal to P), and the inertia of the bordered factorisation counts
+    /// its eigenvalues below any shift.
+    #[test]
+    fn bordered_lowest_eigenpairs_are_those_of_the_restricted_matrix() {
+        for (m, p, c, n) in [(60, 2, 0.7, 6), (150, 3, -0.4, 10), (40, 0, 1.3, 40)] {
+            let (mut family, s) = Family::new(indefinite(m), p, c);
+            let dense = sorted_dense(&s);
+            let scale = dense.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for shift in [-0.3, 0.05, 2.1] {
+                let below = dense.iter().filter(|&&v| v < shift).count();
+                assert_eq!(family.factor(shift).unwrap(), below, "m = {m}, σ = {shift}");
+            }
+            let found = lowest_eigenpairs(&mut family, n, -1e-6 * scale, 1e-6 * scale, true)
+                .unwrap_or_else(|e| panic!("m = {m}: {e}"));
+            let n = n.min(m - p);
+            assert_close(&found.values, &dense[..n], scale, 1e-10);
+            assert_eq!(
+                found.below_shift,
+                dense.iter().filter(|&&v| v < found.shift).count()
+            );
+            // Eigenvectors: unit, orthogonal to P, and eigenvectors of the restricted matrix
+            // (the residual of (A + c a aᵀ) x − λ x has no component in the complement).
+            for (lambda, x) in found.values.iter().zip(&found.vectors) {
+                let norm: f64 = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+                assert!((norm - 1.0).abs() < 1e-12);
+                for q in &family.constrained {
+                    let d: f64 = q.iter().zip(x).map(|(a, b)| a * b).sum();
+                    assert!(d.abs() < 1e-10, "m = {m}: {d}");
+                }
+                // The shift-invert relation: (S − σ)⁻¹ x = x / (λ − σ) on the complement.
+                family.factor(found.shift - 0.01 * scale).unwrap();
+                let mut y = x.clone();
+                family.apply(&mut y).unwrap();
+                let theta = 1.0 / (lambda - (found.shift - 0.01 * scale));
+                let r: f64 = y
+                    .iter()
+                    .zip(x)
+                    .map(|(a, b)| (a - theta * b).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(
+                    r <= 1e-7 * theta.abs(),
+                    "m = {m}: residual {r} of θ = {theta}"
+                );
+            }
+            if found.values.len() < m - p {
+                let top = found.checked_at.expect("checked by inertia");
+                assert_eq!(
+                    dense.iter().filter(|&&v| v < top).count(),
+                    found.values.len()
+                );
+            }
+        }
+    }
+
+    /// Repeated eigenvalues in one block (three uncoupled copies): the lowest are found with
+    /// their multiplicity, or not at all — never a list that the inertia contradicts.
+    #[test]
+    fn lowest_eigenpairs_reproduce_the_inertia_with_repeated_values() {
+        let (block, copies) = (7, 3);
+        let n = block * copies;
+        let mut entries = Vec::new();
+        for c in 0..copies {
+            for i in 0..block {
+                for j in 0..i {
+                    entries.push((c * block + i, c * block + j));
+                }
+            }
+        }
+        let a = matrix(n, &entries, |i, j| {
+            let (a, b) = (i % block, j % block);
+            if a == b {
+                a as f64 - 2.2
+            } else {
+                0.5 / (1.0 + a.abs_diff(b) as f64)
+            }
+        });
+        let (mut family, s) = Family::new(a, 0, 0.0);
+        let dense = sorted_dense(&s);
+        // Three copies of each value: the lowest 7 are 3 + 3 + 1.
+        assert!((dense[0] - dense[2]).abs() < 1e-12 && (dense[3] - dense[5]).abs() < 1e-12);
+        let found = lowest_eigenpairs(&mut family, 7, -3.0, 1e-3, false).unwrap();
+        assert_close(&found.values, &dense[..7], 3.0, 1e-9);
+        // The check above the 7th value includes the whole cluster it belongs to.
+        let top = found.checked_at.unwrap();
+        assert_eq!(dense.iter().filter(|&&v| v < top).count(), 9);
     }
 
     #[test]

@@ -221,6 +221,24 @@ impl SymmetricFactorization {
         self.l_values.len()
     }
 
+    /// The floating-point operations of one numeric factorisation, from the symbolic
+    /// structure: a supernode of c columns and r rows (c + its off-diagonal pattern) costs
+    /// c³/3 for its diagonal block, (r − c) c² for the panel and (r − c)² c for the update of
+    /// its ancestors. A cost estimate (for choosing between sparse and dense solvers), not a
+    /// count of what faer executes.
+    pub fn flops(&self) -> f64 {
+        let SymbolicCholeskyRaw::Supernodal(sn) = self.symbolic.raw() else {
+            return 0.0;
+        };
+        (0..sn.n_supernodes())
+            .map(|s| {
+                let c = (sn.supernode_end()[s] - sn.supernode_begin()[s]) as f64;
+                let below = sn.supernode(s).pattern().len() as f64;
+                c * c * c / 3.0 + below * c * c + below * below * c
+            })
+            .sum()
+    }
+
     /// Numeric factorisation of the matrix with `values` (aligned with the pattern; only the
     /// lower triangle is read), reusing the symbolic analysis and the buffers.
     ///

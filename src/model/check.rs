@@ -1,4 +1,4 @@
-//! Derivative checks of an assembled model (DESIGN §2: "check every effect the same way").
+//! Derivative checks of an assembled model (docs/theory.md §1.2).
 //!
 //! At a state (u, Λ): the residual against central differences of Π, the tangent (sparse part
 //! plus rank-one terms) against central differences of the residual, its symmetry, and every

@@ -1,4 +1,4 @@
-//! The model: Π(u; Λ) = Σ_effects Π_e(x(u); Λ), x = X + u (DESIGN §2).
+//! The model: Π(u; Λ) = Σ_effects Π_e(x(u); Λ), x = X + u (docs/theory.md §1).
 //!
 //! A [`FeModel`] owns the reference mesh, the map from nodes to unknowns (fixed nodes have
 //! none), the sparsity pattern of the tangent (computed once) and the effects a scene asked

@@ -25,6 +25,7 @@
 
 mod csv;
 mod json;
+mod manifest;
 mod matrix_market;
 mod progress;
 mod run;
@@ -34,12 +35,15 @@ mod svg;
 
 pub use csv::write_csv;
 pub use json::{write_critical, write_json};
+pub use manifest::{remove_manifest, sha256, sweep_temporaries, write_manifest, MANIFEST};
 pub use matrix_market::{
     rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,
     RANK_ONE_FILE_TAG,
 };
 pub use progress::Progress;
-pub use run::{file_name, write_run, RunSummary, TurningSummary, WriteRunError, Written};
+pub use run::{
+    file_name, write_run, RunSummary, TurningSummary, WriteRunError, Written, RUN_FILES,
+};
 pub use states::{PvdTime, StateWriter};
 pub use svg::{
     default_axes, write_diagram, write_diagram_with, write_spectrum_diagram, Diagram, Marker,
@@ -69,6 +73,15 @@ pub enum OutputError {
         /// The cause.
         source: io::Error,
     },
+    /// The path exists and is not a regular file (a directory, a device, a FIFO, a symbolic
+    /// link …); it is never replaced.
+    #[error("cannot write {path}: it exists and is {what}, not a regular file")]
+    NotRegular {
+        /// The path.
+        path: PathBuf,
+        /// What it is.
+        what: &'static str,
+    },
     /// The data cannot be written as asked: a non-finite value, an unknown axis name, a
     /// field of the wrong length, a failure of the plotting library.
     #[error("cannot write {path}: {message}")]
@@ -86,6 +99,7 @@ impl OutputError {
         match self {
             OutputError::NoDirectory { path, .. }
             | OutputError::Io { path, .. }
+            | OutputError::NotRegular { path, .. }
             | OutputError::Invalid { path, .. } => path,
         }
     }
@@ -101,6 +115,7 @@ impl OutputError {
     fn from_mesh(path: &Path, e: meshes::MeshError) -> Self {
         match e {
             meshes::MeshError::Io { path, source } => OutputError::Io { path, source },
+            meshes::MeshError::Target { path, what } => OutputError::NotRegular { path, what },
             other => OutputError::invalid(path, other.to_string()),
         }
     }
@@ -130,13 +145,13 @@ fn write_whole(
     fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<(), OutputError> {
     check_dir(path)?;
-    meshes::write::write_whole(path, fill).map_err(|e| match e {
-        meshes::MeshError::Io { source, .. } => OutputError::Io {
-            path: path.to_path_buf(),
-            source,
-        },
-        other => OutputError::invalid(path, other.to_string()),
-    })
+    meshes::write::write_whole(path, fill).map_err(|e| OutputError::from_mesh(path, e))
+}
+
+/// Fails with [`OutputError::NotRegular`] when `path` exists and is not a regular file: what
+/// every writer refuses to replace, for commands to check before they start work.
+pub fn check_target(path: &Path) -> Result<(), OutputError> {
+    meshes::write::check_target(path).map_err(|e| OutputError::from_mesh(path, e))
 }
 
 /// Checks that every number of the report is finite; the error names the row (or turning

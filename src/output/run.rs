@@ -14,6 +14,16 @@ use crate::study::Study;
 use meshes::write::Fields;
 use std::path::{Path, PathBuf};
 
+/// The files every run writes into its directory, besides its states.
+pub const RUN_FILES: [&str; 6] = [
+    "path.csv",
+    "path.states",
+    "path.json",
+    "critical.json",
+    "path.svg",
+    "path.pvd",
+];
+
 /// What [`write_run`] wrote.
 #[derive(Debug, Clone)]
 pub struct Written {
@@ -33,6 +43,8 @@ pub struct Written {
     pub points: PathBuf,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// `manifest.json`, written last.
+    pub manifest: PathBuf,
 }
 
 impl Written {
@@ -47,6 +59,7 @@ impl Written {
             self.points.clone(),
         ];
         files.extend(self.states.iter().cloned());
+        files.push(self.manifest.clone());
         files
     }
 }
@@ -79,8 +92,9 @@ pub fn file_name(p: &Path) -> String {
 }
 
 /// Writes `path.csv`, `path.states` (every point's state), the states with `path.pvd`,
-/// `path.json` (with the saved states, which it records in the report), `critical.json` and
-/// `path.svg` into `out`, in that order.
+/// `path.json` (with the saved states, which it records in the report), `critical.json`,
+/// `path.svg` and, last, `manifest.json` into `out`, in that order, after removing the old
+/// manifest and the temporary files a killed run left there.
 ///
 /// Path states go into the collection (PVD time = path step: ParaView orders datasets by
 /// time, and along a path that turns back in the control — a balloon past its pressure
@@ -92,6 +106,7 @@ pub fn write_run(
     out: &Path,
 ) -> Result<Written, WriteRunError> {
     let mut done: Vec<PathBuf> = Vec::new();
+    super::sweep_temporaries(out);
     macro_rules! attempt {
         ($e:expr) => {
             match $e {
@@ -100,6 +115,7 @@ pub fn write_run(
             }
         };
     }
+    attempt!(super::remove_manifest(out));
     let csv = attempt!(write_csv(out, &result.report));
     done.push(csv.clone());
     let (points, info) = attempt!(super::store::write_states(
@@ -204,6 +220,8 @@ pub fn write_run(
         (write_spectrum_diagram(out, report), plotted)
     };
     let svg = attempt!(svg);
+    done.push(svg.clone());
+    let manifest = attempt!(super::write_manifest(out, &done, &result.report.stop));
     Ok(Written {
         csv,
         json,
@@ -213,6 +231,7 @@ pub fn write_run(
         pvd,
         points,
         states,
+        manifest,
     })
 }
 

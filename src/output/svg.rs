@@ -260,6 +260,7 @@ pub fn write_diagram_with(
 
     let svg = render(report, diagram, &path_points, &markers, &points)
         .map_err(|e| invalid(format!("plotting failed: {e}")))?;
+    let svg = xml_chars(&svg);
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
     Ok(path)
 }
@@ -452,6 +453,7 @@ pub fn write_spectrum_diagram(dir: &Path, report: &PathReport) -> Result<PathBuf
         .collect();
     let svg = render_spectra(report, &curves, &marks)
         .map_err(|e| invalid(format!("plotting failed: {e}")))?;
+    let svg = xml_chars(&svg);
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
     Ok(path)
 }
@@ -828,6 +830,19 @@ fn short(x: f64) -> String {
     } else {
         format!("{x:.4e}")
     }
+}
+
+/// `text` with every character XML 1.0 does not allow (control characters but tab, newline
+/// and carriage return; the surrogates; U+FFFE and U+FFFF) replaced by U+FFFD: names from a
+/// scene file reach the diagram's text, and the plotting library escapes only markup.
+fn xml_chars(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' => c,
+            c if c >= '\u{10000}' => c,
+            _ => '\u{FFFD}',
+        })
+        .collect()
 }
 
 #[cfg(test)]

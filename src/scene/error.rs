@@ -15,6 +15,17 @@ pub enum SceneError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The file is larger than a scene may be (`MEMSTAB_MAX_SCENE_BYTES`).
+    #[error("{}: the scene file is larger than {} (MEMSTAB_MAX_SCENE_BYTES); a scene is a short text", path.display(), crate::limits::bytes(*limit))]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit, bytes.
+        limit: u64,
+    },
+    /// A limit in the environment does not parse.
+    #[error("{0}")]
+    Limit(#[from] crate::limits::LimitError),
     /// The text is not valid TOML.
     #[error("{}{line}:{column}: TOML syntax error: {message}", prefix(origin, ":"))]
     Syntax {

@@ -248,8 +248,10 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     check_slides(&mut scene.boundary)?;
     check_start(scene)?;
     for (name, p) in &scene.parameters {
+        check_parameter_name(name)?;
         check_parameter(&key_path("parameters", name), p)?;
     }
+    check_parameter_ranges(scene)?;
     check_constraints(scene)?;
     check_analysis(scene)?;
     check_parameter_use(scene)?;
@@ -529,6 +531,82 @@ fn check_effect(
     }
 }
 
+/// The columns of `path.csv` besides the parameters: no parameter may take their names.
+const COLUMNS: [&str; 10] = [
+    "step",
+    "arclength",
+    "iterations",
+    "index",
+    "max_displacement",
+    "min_z",
+    "max_z",
+    "volume",
+    "stretch",
+    "fluid_volume",
+];
+
+/// A parameter's name is an identifier (a letter or `_`, then letters, digits, `_` or `-`,
+/// at most 64 characters) and not a column of `path.csv`.
+fn check_parameter_name(name: &str) -> Result<(), Problem> {
+    let key = key_path("parameters", name);
+    let shown: String = name.chars().take(64).collect();
+    let mut chars = name.chars();
+    let identifier = chars
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        && name.len() <= 64;
+    if !identifier {
+        return Err(Problem::new(
+            "parameters",
+            format!(
+                "'parameters': the name {shown:?} is not an identifier (a letter or '_', then \
+                 letters, digits, '_' or '-'; at most 64 characters)"
+            ),
+        ));
+    }
+    if COLUMNS.contains(&name) || name.starts_with("fluid_volume_") {
+        return Err(Problem::new(
+            &key,
+            format!("'{key}': \"{name}\" is a column of path.csv; choose another name"),
+        ));
+    }
+    Ok(())
+}
+
+/// A parameter that feeds a quantity with a range (a density ≥ 0, an amount of gas > 0)
+/// keeps its start and bounds in that range.
+fn check_parameter_ranges(scene: &Scene) -> Result<(), Problem> {
+    for (i, effect) in scene.effects.iter().enumerate() {
+        for (key, q, range) in effect.ruled_quantities() {
+            let Some(name) = q.parameter() else { continue };
+            let Some(p) = scene.parameters.get(name) else {
+                continue;
+            };
+            let pkey = key_path("parameters", name);
+            let check = |field: &str, v: f64| -> Result<(), Problem> {
+                let (ok, what) = match range {
+                    Range::Finite => (true, ""),
+                    Range::NonNegative => (v >= 0.0, ">= 0"),
+                    Range::Positive => (v > 0.0, "> 0"),
+                };
+                if ok {
+                    return Ok(());
+                }
+                Err(Problem::at(
+                    &format!("{pkey}.{field}"),
+                    format!("must be {what} (it is effect[{i}].{key}), got {}", num(v)),
+                ))
+            };
+            check("start", p.start)?;
+            if let Some(min) = p.min {
+                check("min", min)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
     finite(&format!("{key}.start"), p.start)?;
     if let Some(min) = p.min {
@@ -538,6 +616,16 @@ fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
         finite(&format!("{key}.max"), max)?;
     }
     if let (Some(min), Some(max)) = (p.min, p.max) {
+        if !(max - min).is_finite() {
+            return Err(Problem::at(
+                &format!("{key}.max"),
+                format!(
+                    "- min overflows ({} - {}): the range must have a finite width",
+                    num(max),
+                    num(min)
+                ),
+            ));
+        }
         if min >= max {
             return Err(Problem::at(
                 &format!("{key}.min"),
@@ -682,15 +770,28 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
     }
 }
 
+/// Newton's relative tolerance lies in [1e-15, 1): below that no double-precision residual
+/// can meet it, and the corrector would iterate to its budget at every step; the budget is
+/// at most 1000 iterations.
 fn check_newton(tolerance: f64, max_iterations: usize) -> Result<(), Problem> {
     positive("analysis.tolerance", tolerance)?;
-    if tolerance >= 1.0 {
+    if !(1e-15..1.0).contains(&tolerance) {
         return Err(Problem::at(
             "analysis.tolerance",
-            format!("must be < 1 (a relative residual), got {}", num(tolerance)),
+            format!(
+                "must lie in [1e-15, 1) (a relative residual that double precision can meet), got {}",
+                num(tolerance)
+            ),
         ));
     }
-    at_least("analysis.max-iterations", max_iterations, 1)
+    at_least("analysis.max-iterations", max_iterations, 1)?;
+    if max_iterations > 1000 {
+        return Err(Problem::at(
+            "analysis.max-iterations",
+            format!("must be at most 1000, got {max_iterations}"),
+        ));
+    }
+    Ok(())
 }
 
 /// Every declared parameter is used by an effect; on a path, every parameter but the control

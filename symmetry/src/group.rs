@@ -110,6 +110,26 @@ impl Group {
         self.irreps = irreps;
     }
 
+    /// The order of the group `name` (as [`Group::by_name`] reads it) without building it;
+    /// `None` for a name that is not a group.
+    pub fn order_of(name: &str) -> Option<usize> {
+        match name {
+            "I" => return Some(60),
+            "Ih" => return Some(120),
+            _ => {}
+        }
+        let rest = name.strip_prefix('C')?;
+        let (digits, mirrors) = match rest.strip_suffix('v') {
+            Some(d) => (d, true),
+            None => (rest, false),
+        };
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        let n: usize = digits.parse().ok().filter(|&n| n > 0 && n <= 10_000)?;
+        Some(if mirrors { 2 * n } else { n })
+    }
+
     /// Parses `C<n>`, `C<n>v` (n ≥ 1), `I` or `Ih` (case of the letters as written here).
     pub fn by_name(name: &str) -> Result<Self, GroupError> {
         let unknown = || GroupError::UnknownName(name.to_string());

@@ -64,12 +64,11 @@ pub struct Subgroup {
 impl Group {
     /// The subgroup of elements that keep every invariant in `keep`.
     ///
-    /// If every element keeps them, this is the group itself (same name and order).
-    /// Otherwise the stabiliser must be an axial group `C_n` or `C_nv` (which is always the case
-    /// when a direction or an off-origin plane is kept); other structures are an
-    /// [`GroupError::Unsupported`] error. (Any subgroup, axial or not, becomes a group of its
-    /// own with [`Group::subgroup`]; for an axial stabiliser,
-    /// `subgroup_along(elements, keep[0]'s direction)` gives exactly this result.)
+    /// If every element keeps them, this is the group itself (same name and order). An axial
+    /// stabiliser (`C_n` or `C_nv` — always the case when a direction or an off-origin plane
+    /// is kept) is built about the first invariant's direction; any other (an axis kept as a
+    /// line, such as the spin axis of an icosphere: `D2h`, `D3d`, `D5d`) by
+    /// [`Group::subgroup`], with its own irreps.
     pub fn stabilizer(&self, keep: &[Invariant]) -> Result<Subgroup, GroupError> {
         let members: Vec<usize> = (0..self.order())
             .filter(|&g| keep.iter().all(|k| k.kept_by(self.element(g))))
@@ -81,6 +80,7 @@ impl Group {
             });
         }
         self.axial_subgroup(&members, keep.first().map(Invariant::direction))
+            .or_else(|_| self.subgroup(&members))
     }
 
     /// Recognises the elements `members` (a subgroup) as `C_n` or `C_nv` about a common axis.

@@ -92,15 +92,19 @@ fn a_horizontal_plane_through_the_centre_keeps_more_than_one_above_it() {
         offset: 0.0,
     };
     // z = 0 is a mirror of Ih: elements keeping the plane include those flipping z; that is
-    // not an axial group (it is D2h), so it is reported as unsupported rather than misnamed;
-    // `Group::subgroup` makes those elements a group of its own.
-    assert!(ih.stabilizer(&[through]).is_err());
+    // not an axial group but D2h, which the stabiliser builds as a group of its own (with
+    // `Group::subgroup`), named and with its irreps, not as a misnamed axial group.
     let flips_or_keeps_z: Vec<usize> = (0..ih.order())
         .filter(|&g| (ih.element(g) * Vector3::z()).z.abs() > 1.0 - 1e-9)
         .collect();
     let d2h = ih.subgroup(&flips_or_keeps_z).expect("D2h");
     assert_eq!((d2h.group.name(), d2h.group.order()), ("D2h", 8));
     assert_eq!(d2h.group.irreps().len(), 8);
+    let kept = ih
+        .stabilizer(&[through])
+        .expect("the stabiliser of the plane");
+    assert_eq!(kept.group.name(), "D2h");
+    assert_eq!(kept.parent_index, d2h.parent_index);
     let above = Invariant::Plane {
         normal: Vector3::z(),
         offset: 0.5,

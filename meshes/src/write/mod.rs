@@ -42,7 +42,7 @@ mod pvd;
 mod vtu;
 mod xdmf;
 
-pub use atomic::write_whole;
+pub use atomic::{check_target, write_whole, TEMPORARY_PREFIX, TEMPORARY_SUFFIX};
 pub use pvd::write_pvd;
 
 use crate::mesh::Mesh;

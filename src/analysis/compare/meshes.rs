@@ -24,6 +24,9 @@ pub struct MeshChoice {
     pub(super) arg: MeshArg,
 }
 
+/// Most samples a sweep keeps when `--max` stretches it.
+const MAX_SAMPLES: usize = 100_000;
+
 /// A generator that builds meshes (every one but `file`).
 pub(super) fn generated(name: &str) -> Option<Generator> {
     Generator::from_name(name).filter(|g| *g != Generator::File)
@@ -292,9 +295,15 @@ pub(super) fn variant(
                 (&mut base.analysis, old, common.samples)
             {
                 if hi > lo && max > lo {
-                    b.samples = ((b.samples as f64) * (max - lo) / (hi - lo))
-                        .ceil()
-                        .max(1.0) as usize;
+                    let samples = ((b.samples as f64) * (max - lo) / (hi - lo)).ceil();
+                    if samples.is_nan() || samples > MAX_SAMPLES as f64 {
+                        return Err(CompareError::Input(format!(
+                            "--max {}: the sweep would keep its spacing with {samples:e} \
+                             samples, more than {MAX_SAMPLES}; give --samples",
+                            crate::text::num(max)
+                        )));
+                    }
+                    b.samples = samples.max(1.0) as usize;
                 }
             }
         }

@@ -464,7 +464,7 @@ pub fn compare(
                 ));
             }
             let study = Study::build(s).map_err(|e| match e {
-                StudyError::Scene(_) | StudyError::Unsupported(_) => {
+                StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
                     CompareError::Input(one_line(&e.to_string()))
                 }
             })?;

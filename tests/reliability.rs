@@ -1,0 +1,483 @@
+//! What fuzzing and interrupts found, each a test: outputs never replace what is not a
+//! regular file, user input never panics or exhausts memory, and the messages name what is
+//! wrong.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn memstab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn scene(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Exit code 2 and one line on stderr containing every needle.
+fn assert_rejected(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{err:?} lacks {n:?}");
+    }
+}
+
+fn fifo(path: &Path) {
+    let ok = Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(ok.success());
+}
+
+#[cfg(unix)]
+fn is_fifo(path: &Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}
+
+#[cfg(unix)]
+#[test]
+fn outputs_never_replace_a_fifo_a_symlink_or_a_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("precious.txt");
+    std::fs::write(&target, "keep me").unwrap();
+    let link = dir.path().join("link.mtx");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let dangling = dir.path().join("dangling.mtx");
+    std::os::unix::fs::symlink(dir.path().join("nowhere"), &dangling).unwrap();
+    let pipe = dir.path().join("pipe.mtx");
+    fifo(&pipe);
+    let demo = scene("demo.toml");
+    for (out, what) in [
+        (&link, "a symbolic link"),
+        (&dangling, "a symbolic link"),
+        (&pipe, "a FIFO"),
+    ] {
+        let o = memstab(&["export-matrix", &demo, "--out", out.to_str().unwrap()]);
+        assert_rejected(&o, &["--out", what]);
+        let o = memstab(&["mesh", "disc", "--out", &format!("{}.vtu", out.display())]);
+        assert_eq!(o.status.code(), Some(0), "a new file beside it is fine");
+    }
+    // Mesh files: a FIFO with the right extension.
+    let pipe_vtu = dir.path().join("pipe.vtu");
+    fifo(&pipe_vtu);
+    let o = memstab(&["mesh", "disc", "--out", pipe_vtu.to_str().unwrap()]);
+    assert_rejected(&o, &["--out", "a FIFO"]);
+    // Nothing was replaced.
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep me");
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(std::fs::symlink_metadata(&dangling)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(is_fifo(&pipe) && is_fifo(&pipe_vtu));
+    // A run directory whose path.csv is a link: refused before anything runs.
+    let run_dir = dir.path().join("run");
+    std::fs::create_dir(&run_dir).unwrap();
+    std::os::unix::fs::symlink(&target, run_dir.join("path.csv")).unwrap();
+    let o = memstab(&["run", &demo, "--out", run_dir.to_str().unwrap(), "--quiet"]);
+    assert_rejected(&o, &["path.csv", "a symbolic link"]);
+    let left: Vec<PathBuf> = std::fs::read_dir(&run_dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(left, [run_dir.join("path.csv")], "nothing written");
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep me");
+}
+
+/// Every command that prints ends quietly with exit code 0 when its reader has gone.
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let demo = scene("demo.toml");
+    for args in [
+        vec!["group", "Ih"],
+        vec!["spectrum", demo.as_str()],
+        vec!["demo", "--quiet", "--out", out.to_str().unwrap()],
+        vec!["mesh", "icosphere", "--json"],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(&args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
+    }
+}
+
+/// A scene, a group or a mesh over the limits is refused with its estimate before anything
+/// is allocated or written; the limits are configurable.
+#[test]
+fn requests_over_the_limits_are_refused_before_they_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    for samples in ["9223372036854775807", "100000000"] {
+        let path = dir.path().join(format!("s{samples}.toml"));
+        std::fs::write(
+            &path,
+            ponding.replace("samples = 92", &format!("samples = {samples}")),
+        )
+        .unwrap();
+        let o = memstab(&["run", path.to_str().unwrap(), "--out", out]);
+        assert_rejected(&o, &["would need about", "MEMSTAB_MAX_MEMORY"]);
+        assert!(!Path::new(out).exists(), "nothing written");
+    }
+    assert_rejected(
+        &memstab(&["run", "/dev/zero", "--out", out]),
+        &["/dev/zero", "larger than"],
+    );
+    assert_rejected(
+        &memstab(&["group", "C800v"]),
+        &["1600", "MEMSTAB_MAX_GROUP_ORDER"],
+    );
+    assert_rejected(
+        &memstab(&["mesh", "disc", "--sectors", "1000000"]),
+        &["the disc mesh", "MEMSTAB_MAX_MEMORY"],
+    );
+    assert_rejected(
+        &memstab(&["mesh", "icosphere", "--frequency", "1000"]),
+        &["the icosphere mesh", "MEMSTAB_MAX_MEMORY"],
+    );
+    // Configurable: the demo in 1 MB, and a bad value named.
+    let demo = scene("demo.toml");
+    let run = |var: &str, value: &str| {
+        Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(["run", &demo, "--out", out, "--quiet"])
+            .env(var, value)
+            .output()
+            .unwrap()
+    };
+    assert_rejected(
+        &run("MEMSTAB_MAX_MEMORY", "1M"),
+        &["scene 'demo'", "1.0 MB"],
+    );
+    assert_rejected(
+        &run("MEMSTAB_MAX_MEMORY", "lots"),
+        &["MEMSTAB_MAX_MEMORY", "'lots'"],
+    );
+    assert_rejected(
+        &run("MEMSTAB_MAX_SCENE_BYTES", "100"),
+        &["larger than 100 B"],
+    );
+    assert!(!Path::new(out).exists(), "nothing written");
+}
+
+/// Names from a scene reach the SVG as valid XML text; parameter names are identifiers that
+/// do not collide with a column; messages are one bounded line whatever the value.
+#[test]
+fn names_and_messages_stay_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    let named = demo.replacen("name = \"demo\"", r#"name = "a<b&c\u0001d\uFFFE""#, 1);
+    assert_ne!(named, demo);
+    let path = dir.path().join("named.toml");
+    std::fs::write(&path, named).unwrap();
+    let out = dir.path().join("named");
+    let o = memstab(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(out.join("path.svg")).unwrap();
+    let xml_char = |c: char| {
+        matches!(c, '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}')
+            || c >= '\u{10000}'
+    };
+    assert!(svg.chars().all(xml_char), "a character XML does not allow");
+    assert!(svg.contains("a&lt;b&amp;c"), "markup escaped");
+
+    // Parameter names.
+    for (name, needle) in [
+        ("volume", "column of path.csv"),
+        ("step", "column of path.csv"),
+        ("\"a b\"", "not an identifier"),
+        ("\"\"", "not an identifier"),
+        ("\"1p\"", "not an identifier"),
+    ] {
+        let text = demo
+            .replace("[parameters.p]", &format!("[parameters.{name}]"))
+            .replace("pressure = \"p\"", &format!("pressure = {}", quoted(name)))
+            .replace("control = \"p\"", &format!("control = {}", quoted(name)));
+        let path = dir.path().join("p.toml");
+        std::fs::write(&path, text).unwrap();
+        let o = memstab(&["run", path.to_str().unwrap(), "--out", "unused"]);
+        assert_rejected(&o, &["parameters", needle]);
+    }
+    // A negative spin or density parameter.
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    let text = ponding
+        .replace("start = 0.0 ", "start = -1.0 ")
+        .replace("min = 0.0", "min = -2.0");
+    let path = dir.path().join("neg.toml");
+    std::fs::write(&path, text).unwrap();
+    let o = memstab(&["run", path.to_str().unwrap(), "--out", "unused"]);
+    assert_rejected(&o, &["parameters.rho.start", ">= 0", "effect[0].density"]);
+
+    // A value with line breaks, and a huge one: one bounded line.
+    for value in [
+        "\"C7\\nv\"".to_string(),
+        format!("\"{}\"", "C".repeat(100_000)),
+    ] {
+        let text = demo.replacen("frequency = 4", &format!("frequency = {value}"), 1);
+        let path = dir.path().join("v.toml");
+        std::fs::write(&path, text).unwrap();
+        let o = memstab(&["run", path.to_str().unwrap(), "--out", "unused"]);
+        assert_rejected(&o, &["mesh.frequency"]);
+        assert!(stderr(&o).len() < 600, "{} bytes", stderr(&o).len());
+    }
+}
+
+/// `name` as a TOML string (already quoted names stay as they are).
+fn quoted(name: &str) -> String {
+    if name.starts_with('"') {
+        name.to_string()
+    } else {
+        format!("\"{name}\"")
+    }
+}
+
+/// A VTU file (ascii) of the given points and triangles.
+fn vtu(points: &[[f64; 3]], triangles: &[[usize; 3]]) -> String {
+    let p: Vec<String> = points
+        .iter()
+        .map(|x| format!("{} {} {}", x[0], x[1], x[2]))
+        .collect();
+    let c: Vec<String> = triangles
+        .iter()
+        .map(|t| format!("{} {} {}", t[0], t[1], t[2]))
+        .collect();
+    let offsets: Vec<String> = (1..=triangles.len()).map(|i| (3 * i).to_string()).collect();
+    let types = vec!["5"; triangles.len()].join(" ");
+    format!(
+        r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">
+<UnstructuredGrid>
+<Piece NumberOfPoints="{}" NumberOfCells="{}">
+<Points>
+<DataArray type="Float64" Name="Points" NumberOfComponents="3" format="ascii">
+{}
+</DataArray>
+</Points>
+<Cells>
+<DataArray type="Int64" Name="connectivity" format="ascii">
+{}
+</DataArray>
+<DataArray type="Int64" Name="offsets" format="ascii">
+{}
+</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">
+{types}
+</DataArray>
+</Cells>
+</Piece>
+</UnstructuredGrid>
+</VTKFile>
+"#,
+        points.len(),
+        triangles.len(),
+        p.join("\n"),
+        c.join("\n"),
+        offsets.join(" ")
+    )
+}
+
+/// The messages and exit codes of what fuzzing found: each names the key or flag at fault.
+#[test]
+fn messages_name_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    // A mesh file with a repeated node, and one with a degenerate triangle.
+    let s = 0.5 * 3f64.sqrt();
+    let file_scene = |mesh: &str| {
+        format!(
+            "[scene]\nname = \"file\"\n[mesh]\ngenerator = \"file\"\npath = \"{mesh}\"\n\
+             [material]\nmodel = \"mooney-rivlin\"\nmu = 1.0\nk = 0.0\nthickness = 1.0\n\
+             [analysis]\ntype = \"equilibrium\"\n"
+        )
+    };
+    write(
+        "twice.vtu",
+        &vtu(
+            &[
+                [0., 0., 0.],
+                [1., 0., 0.],
+                [-0.5, s, 0.],
+                [-0.5, -s, 0.],
+                [1., 0., 0.],
+            ],
+            &[[0, 1, 2], [0, 2, 3], [0, 3, 4]],
+        ),
+    );
+    let o = memstab(&["spectrum", &write("twice.toml", &file_scene("twice.vtu"))]);
+    assert_rejected(&o, &["mesh.path", "twice.vtu", "nodes 1 and 4 coincide"]);
+    write(
+        "flat.vtu",
+        &vtu(&[[0., 0., 0.], [1., 0., 0.], [2., 0., 0.]], &[[0, 1, 2]]),
+    );
+    let o = memstab(&["spectrum", &write("flat.toml", &file_scene("flat.vtu"))]);
+    assert_rejected(&o, &["mesh.path", "flat.vtu", "triangle 0 is degenerate"]);
+
+    // Newton settings no double precision can meet, and a range of infinite width.
+    let demo = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    let with = |extra: &str| demo.replace("[analysis]\n", &format!("[analysis]\n{extra}\n"));
+    let o = memstab(&["spectrum", &write("t.toml", &with("tolerance = 1e-300"))]);
+    assert_rejected(&o, &["analysis.tolerance", "1e-300"]);
+    let o = memstab(&[
+        "spectrum",
+        &write("m.toml", &with("max-iterations = 9223372036854775807")),
+    ]);
+    assert_rejected(&o, &["analysis.max-iterations", "at most 1000"]);
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    let wide = ponding
+        .replace("min = 0.0\n", "min = -1.7e308\n")
+        .replace("max = 46.0 ", "max = 1.7e308 ");
+    assert_ne!(wide, ponding);
+    let o = memstab(&["spectrum", &write("w.toml", &wide)]);
+    assert_rejected(&o, &["parameters.rho.max", "finite width"]);
+
+    // Flags.
+    let o = memstab(&[
+        "compare",
+        &scene("ponding.toml"),
+        "--meshes",
+        "C8v",
+        "--max",
+        "1e300",
+    ]);
+    assert_rejected(&o, &["--max 1e300", "--samples"]);
+    let o = memstab(&[
+        "bench",
+        "--frequencies",
+        "4,100000",
+        "--out",
+        "unused-bench",
+    ]);
+    assert_rejected(&o, &["--frequencies 100000", "MEMSTAB_MAX_MEMORY"]);
+    assert!(!Path::new("unused-bench").exists());
+    #[cfg(unix)]
+    {
+        let link = dir.path().join("dangling");
+        std::os::unix::fs::symlink(dir.path().join("nowhere"), &link).unwrap();
+        let o = memstab(&["run", &scene("demo.toml"), "--out", link.to_str().unwrap()]);
+        assert_rejected(&o, &["--out", "symbolic link"]);
+    }
+}
+
+/// A spinning body on an icosphere keeps the elements that map the spin axis to itself as a
+/// line: D5d with a vertex down, D2h in the reference orientation (a 2-fold axis along z).
+#[test]
+fn spin_on_an_icosphere_keeps_the_axis_stabiliser() {
+    let dir = tempfile::tempdir().unwrap();
+    for (down, group) in [("down = \"vertex\"\n", "D5d"), ("", "D2h")] {
+        let text = format!(
+            "[scene]\nname = \"spinning balloon\"\n[mesh]\ngenerator = \"icosphere\"\n\
+             frequency = 2\n{down}[material]\nmodel = \"mooney-rivlin\"\nmu = 100.0\nk = 0.1\n\
+             thickness = 0.01\n[[effect]]\ntype = \"gas\"\npressure = 1.2\n[[effect]]\n\
+             type = \"spin\"\ndensity = 1.0\nomega2 = 0.5\n[analysis]\ntype = \"equilibrium\"\n\
+             [start]\nstretch = 1.3\n"
+        );
+        let path = dir.path().join("spin.toml");
+        std::fs::write(&path, text).unwrap();
+        let o = memstab(&["spectrum", path.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(json["group"], group);
+    }
+}
+
+/// SIGINT stops a run at its next point: what the path has is written with the stop reason
+/// "interrupted", exit code 130, a manifest with every file's checksum last, and no temporary
+/// file left (a stale one of an earlier, killed run is swept).
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_writes_what_it_has_and_a_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    std::fs::create_dir(&out).unwrap();
+    let stale = out.join(".memstab-stale.tmp");
+    std::fs::write(&stale, "debris").unwrap();
+    // The ponding disc without its displacement stop: 400 steps, long enough to interrupt.
+    let text = std::fs::read_to_string(scene("disc_fluid_above.toml")).unwrap();
+    let long = text
+        .lines()
+        .filter(|l| !l.starts_with("stop-displacement"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert_ne!(long.len(), text.trim_end().len(), "the stop was removed");
+    let long_scene = dir.path().join("long.toml");
+    std::fs::write(&long_scene, long).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            long_scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+    assert_eq!(report["stop"], "interrupted");
+    let rows = report["rows"].as_array().unwrap().len();
+    assert!((1..400).contains(&rows), "{rows} rows");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["stop"], "interrupted");
+    let files = manifest["files"].as_array().unwrap();
+    assert!(files.len() >= 6);
+    for f in files {
+        let path = out.join(f["file"].as_str().unwrap());
+        assert_eq!(
+            memstab::output::sha256(&path).unwrap(),
+            f["sha256"].as_str().unwrap()
+        );
+    }
+    let left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
