@@ -564,7 +564,16 @@ pub fn step_from<P: Problem + ?Sized>(
     s: f64,
     opts: &PathOptions,
 ) -> Result<PathPoint, StepError> {
-    corrected(problem, from, s, opts, true)
+    step_on_plane(
+        problem,
+        from,
+        &from.tangent,
+        &from.tangent,
+        s,
+        s,
+        opts,
+        true,
+    )
 }
 
 /// The converged point of one predictor–corrector step, without the new tangent and the
@@ -577,12 +586,48 @@ pub fn corrected_from<P: Problem + ?Sized>(
     s: f64,
     opts: &PathOptions,
 ) -> Result<PathPoint, StepError> {
-    corrected(problem, from, s, opts, false)
+    step_on_plane(
+        problem,
+        from,
+        &from.tangent,
+        &from.tangent,
+        s,
+        s,
+        opts,
+        false,
+    )
 }
 
-fn corrected<P: Problem + ?Sized>(
+/// A step off a branch point along `direction` (a unit vector in scaled variables, like a
+/// tangent) whose corrector stays on the plane `planeᵀ (y − y_from) = planeᵀ direction · s`
+/// instead of the plane normal to the direction: with `plane` the kernel direction of a
+/// bifurcation (no control component), every other branch through the point — the path
+/// itself, whose states have no component along the kernel — is off that plane. The
+/// new point's tangent is oriented along `direction`, and the branch-jump guard compares
+/// with it.
+pub fn step_off<P: Problem + ?Sized>(
     problem: &mut P,
     from: &PathPoint,
+    direction: &DVector<f64>,
+    plane: &DVector<f64>,
+    s: f64,
+    opts: &PathOptions,
+) -> Result<PathPoint, StepError> {
+    let value = plane.dot(direction) * s;
+    step_on_plane(problem, from, direction, plane, value, s, opts, true)
+}
+
+/// Predictor y_from + s·direction, corrector on R = 0, g = 0, planeᵀ (y − y_from) = value
+/// (scaled variables; the extended Jacobian's last row is `plane`); when `guarded`, the
+/// tangent oriented along `direction` and the branch-jump guard against the predictor and
+/// `direction`, else the converged point with `direction` as its tangent.
+#[allow(clippy::too_many_arguments)]
+fn step_on_plane<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    direction: &DVector<f64>,
+    plane: &DVector<f64>,
+    value: f64,
     s: f64,
     opts: &PathOptions,
     guarded: bool,
@@ -591,7 +636,7 @@ fn corrected<P: Problem + ?Sized>(
     let nl = from.lambda.len();
     let sq = opts.state_scale;
     let sl = |j: usize| opts.parameter_scale(j);
-    let t = &from.tangent;
+    let t = direction;
     let mut q = &from.q + t.rows(0, m) * (s * sq);
     let mut lambda = from.lambda.clone();
     for j in 0..nl {
@@ -600,13 +645,13 @@ fn corrected<P: Problem + ?Sized>(
     for it in 1..=opts.max_iterations {
         let lin = problem.evaluate(&q, &lambda)?;
         let c = lin.constraints.len();
-        let a = lin.extended(opts, t);
+        let a = lin.extended(opts, plane);
         let mut g = DVector::zeros(m + c + 1);
         g.rows_mut(0, m).copy_from(&lin.residual);
         g.rows_mut(m, c).copy_from(&lin.constraints);
-        let mut arc = t.rows(0, m).dot(&(&q - &from.q)) / sq - s;
+        let mut arc = plane.rows(0, m).dot(&(&q - &from.q)) / sq - value;
         for j in 0..nl {
-            arc += t[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
+            arc += plane[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
         }
         g[m + c] = arc;
         let converged = lin.converged(opts);

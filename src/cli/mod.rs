@@ -15,6 +15,7 @@ macro_rules! out {
 }
 
 mod bench;
+mod branch;
 mod common;
 mod compare;
 mod export;
@@ -42,6 +43,8 @@ enum Command {
     Group(group::GroupArgs),
     /// Run a scene: follow its path and write path.csv, path.json, path.svg, VTUs + path.pvd.
     Run(run::RunArgs),
+    /// Switch branches at a critical point of a finished run: branches.json, branch_NN/, diagram.svg.
+    Branch(branch::BranchArgs),
     /// Run the bundled demo (a k = 0.1 balloon) and compare it with the closed form.
     Demo(run::DemoArgs),
     /// The tangent's spectrum by irrep at the scene's start state (or at --at values).
@@ -130,6 +133,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Mesh(args) => mesh::run(&args),
         Command::Group(args) => group::run(&args),
         Command::Run(args) => run::run(&args),
+        Command::Branch(args) => branch::run(&args),
         Command::Demo(args) => run::demo(&args),
         Command::Spectrum(args) => spectrum::run(&args),
         Command::Compare(args) => compare::run(&args),

@@ -58,7 +58,13 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
         out!("{text}");
     } else {
-        print_summary(&study, &result.report, &args.out, &written);
+        print_summary(
+            &study,
+            &result.report,
+            result.branches.as_ref(),
+            &args.out,
+            &written,
+        );
     }
     interrupted(&result, &args.out)
 }
@@ -78,7 +84,7 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
     let scene = memstab::demo::scene()
         .map_err(|e| CliError::Failure(format!("the bundled demo scene is broken: {e}")))?;
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
-    print_summary(&study, &result.report, &args.out, &written);
+    print_summary(&study, &result.report, None, &args.out, &written);
     print_closed_form(&study, &result.report);
     interrupted(&result, &args.out)?;
     Ok(())
@@ -176,7 +182,13 @@ fn control_index(report: &PathReport) -> Option<usize> {
     report.parameters.iter().position(|p| *p == report.control)
 }
 
-fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Written) {
+fn print_summary(
+    study: &Study,
+    report: &PathReport,
+    branches: Option<&memstab::analysis::branch::Branches>,
+    out: &Path,
+    written: &Written,
+) {
     let m = &report.mesh;
     out!("scene '{}' ({})", report.scene, report.origin);
     out!(
@@ -311,13 +323,18 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
         "  {:<10} ParaView collection of the {in_collection} path states (time = path step); turning and critical points beside it",
         file_name(&written.pvd),
     );
-    out!(
-        "  {:<10} every point's parameters and displacement, binary ([start] from reads it)",
-        file_name(&written.points),
-    );
+    if let Some(points) = &written.points {
+        out!(
+            "  {:<10} every point's parameters and displacement, binary ([start] from reads it)",
+            file_name(points),
+        );
+    }
     for chunk in written.states.chunks(5) {
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
         out!("  {}", names.join(" "));
+    }
+    if let (Some(b), Some(w)) = (branches, &written.branches) {
+        super::branch::print_branches(b, w, &report.control);
     }
 }
 

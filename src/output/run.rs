@@ -39,10 +39,12 @@ pub struct Written {
     pub plotted: String,
     /// `path.pvd`.
     pub pvd: PathBuf,
-    /// `path.states`: every path point's state.
-    pub points: PathBuf,
+    /// `path.states`: every path point's state (none for a branch).
+    pub points: Option<PathBuf>,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// The branches' files, when the run has branches.
+    pub branches: Option<super::BranchesWritten>,
     /// `manifest.json`, written last.
     pub manifest: PathBuf,
 }
@@ -56,9 +58,12 @@ impl Written {
             self.critical.clone(),
             self.svg.clone(),
             self.pvd.clone(),
-            self.points.clone(),
         ];
+        files.extend(self.points.clone());
         files.extend(self.states.iter().cloned());
+        if let Some(b) = &self.branches {
+            files.extend(b.files.iter().cloned());
+        }
         files.push(self.manifest.clone());
         files
     }
@@ -118,17 +123,24 @@ pub fn write_run(
     attempt!(super::remove_manifest(out));
     let csv = attempt!(write_csv(out, &result.report));
     done.push(csv.clone());
-    let (points, info) = attempt!(super::store::write_states(
-        out,
-        &result.points,
-        result.report.parameters.len(),
-        study.basis.unknowns(),
-        |q, u| study
-            .basis
-            .expand(&nalgebra::DVector::from_column_slice(q), u),
-    ));
-    result.report.states = Some(info);
-    done.push(points.clone());
+    // A path solved in the scene's fixed-point space saves every point's state; a branch
+    // (solved in a subgroup's space) saves none, and its path.json names no states file.
+    let points = if result.points.len() == result.report.rows.len() && !result.points.is_empty() {
+        let (points, info) = attempt!(super::store::write_states(
+            out,
+            &result.points,
+            result.report.parameters.len(),
+            study.basis.unknowns(),
+            |q, u| study
+                .basis
+                .expand(&nalgebra::DVector::from_column_slice(q), u),
+        ));
+        result.report.states = Some(info);
+        Some(points)
+    } else {
+        None
+    };
+    done.extend(points.clone());
     let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
     let mut states: Vec<PathBuf> = Vec::new();
     let (mut turning, mut critical) = (0usize, 0usize);
@@ -221,6 +233,25 @@ pub fn write_run(
     };
     let svg = attempt!(svg);
     done.push(svg.clone());
+    let branches = match &result.branches {
+        Some(b) => {
+            let primary = super::PrimaryPath::of(&result.report);
+            match super::write_branches(study, b, &primary, out) {
+                Ok(w) => {
+                    done.extend(w.files.iter().cloned());
+                    Some(w)
+                }
+                Err(mut e) => {
+                    done.append(&mut e.done);
+                    return Err(WriteRunError {
+                        error: e.error,
+                        done,
+                    });
+                }
+            }
+        }
+        None => None,
+    };
     let manifest = attempt!(super::write_manifest(out, &done, &result.report.stop));
     Ok(Written {
         csv,
@@ -231,6 +262,7 @@ pub fn write_run(
         pvd,
         points,
         states,
+        branches,
         manifest,
     })
 }
@@ -353,6 +385,9 @@ pub struct RunSummary {
     pub symmetric_unknowns: usize,
     /// Unknowns of the model.
     pub unknowns: usize,
+    /// The number of branches followed, with `[analysis.branches]` (left out otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches: Option<usize>,
 }
 
 impl RunSummary {
@@ -381,6 +416,7 @@ impl RunSummary {
             group_order: report.group_order,
             symmetric_unknowns: report.symmetric_unknowns,
             unknowns: report.unknowns,
+            branches: written.branches.as_ref().map(|b| b.directories.len()),
         }
     }
 }

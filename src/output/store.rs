@@ -152,7 +152,7 @@ pub fn read_states(json: &Path) -> Result<SavedRun, ReadStatesError> {
     let name = doc["states"]["file"].as_str().ok_or_else(|| {
         invalid(
             json,
-            "no 'states' entry: the run saved no states (written by an older version?)".into(),
+            "no 'states' entry: the run saved no states (a branch's path, or written by an older version)".into(),
         )
     })?;
     let file = json.parent().unwrap_or(Path::new("")).join(name);
