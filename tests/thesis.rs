@@ -822,8 +822,13 @@ fn a_sphere_that_newton_cannot_rest_on_the_plane_starts_by_the_homotopy() {
     let mut plain = study(&without);
     let err = run(&mut plain, |_, _| {}).expect_err("a plain Newton does not reach the rest");
     let message = err.to_string();
+    // The message names the control by its name, the limit the start solve had (50, not the
+    // path's 25) and the residual left.
     assert!(
-        message.contains("at V = 0.5") && message.contains("iterations"),
+        message.contains("at V = 0.5")
+            && message.contains("in 50 iterations")
+            && message.contains("residual")
+            && !message.contains('λ'),
         "{message}"
     );
     let mut held = study(&with);
