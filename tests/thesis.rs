@@ -969,3 +969,104 @@ fn fluid_below_pushes_up_whichever_way_the_mesh_normals_point() {
     assert!(up > 0.01, "the bulge rises to {up}");
     assert!((up - down).abs() < 1e-9 * up, "{up} vs {down}");
 }
+
+#[test]
+fn bad_values_of_the_new_keys_are_one_line_errors_naming_the_key() {
+    // Each a one-line message naming the key (and its value where there is one), exit code 2,
+    // nothing written.
+    let cap = bundled("thesis/paper4_spinning_cap.toml");
+    let sphere = paper2(4, 2.0);
+    let cases: Vec<(String, &str, &[&str])> = vec![
+        (
+            cap.replacen(
+                "set = \"cut\"\nnormal = [0.0, 0.0, 1.0]",
+                "set = \"cut\"\nnormal = [0.0, 0.0, 0.0]",
+                1,
+            ),
+            "run",
+            &["'boundary.slide[0].normal'"],
+        ),
+        (
+            cap.replacen("[boundary]\n", "[boundary]\nfixed = [\"cut\"]\n", 1),
+            "run",
+            &["'boundary.slide[0].set'", "cut"],
+        ),
+        (
+            cap.replacen("side = \"inside\"", "side = \"above\"", 1),
+            "run",
+            &["'effect[0].filled'"],
+        ),
+        (
+            cap.replacen("stop-displacement = 1.2", "stop-displacement = -1.0", 1),
+            "run",
+            &["'analysis.stop-displacement'", "-1"],
+        ),
+        (cap.clone(), "export-matrix", &["'boundary.slide'"]),
+        (
+            sphere.replacen("value = \"V\"", "value = \"W\"", 1),
+            "run",
+            &["'constraint[0].value'", "W"],
+        ),
+        (
+            sphere
+                .replacen("value = \"V\"", "value = \"initial\"", 1)
+                .replacen("amount = 6.5", "amount = \"V\"", 1),
+            "run",
+            &["'effect[1]'", "fluid-volume"],
+        ),
+        (
+            sphere.replacen(
+                "hold-translation = [0.0, 0.0, 1.0]",
+                "hold-translation = [1.0, 0.0, 0.0]",
+                1,
+            ),
+            "run",
+            &["'start.hold-translation'"],
+        ),
+        (
+            sphere.replacen(
+                "hold-translation = [0.0, 0.0, 1.0]",
+                "from = \"first/path.json\"",
+                1,
+            ),
+            "run",
+            &["start.from", "start.point"],
+        ),
+    ];
+    for (k, (text, command, needles)) in cases.iter().enumerate() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("bad.toml");
+        let unchanged = text == &cap || text == &sphere;
+        assert!(
+            !unchanged || *command != "run",
+            "case {k}: the replacement did not happen"
+        );
+        std::fs::write(&scene, text).unwrap();
+        let out_path = dir.path().join("out");
+        let target = if *command == "run" {
+            out_path.clone()
+        } else {
+            dir.path().join("K.mtx")
+        };
+        let out = memstab(
+            dir.path(),
+            &[
+                command,
+                scene.to_str().unwrap(),
+                "--out",
+                target.to_str().unwrap(),
+                "--quiet",
+            ]
+            .into_iter()
+            .filter(|a| *command == "run" || *a != "--quiet")
+            .collect::<Vec<_>>(),
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "case {k}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "case {k}: {err}");
+        for n in *needles {
+            assert!(err.contains(n), "case {k}: no {n} in {err}");
+        }
+        assert!(!target.exists(), "case {k}: {} written", target.display());
+    }
+}
