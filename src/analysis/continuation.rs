@@ -23,7 +23,7 @@
 
 use crate::linalg::bordered::{bordered_solve, solve_dense, sparse_lu_solve, SharedFactorization};
 use crate::linalg::SymmetricPattern;
-use crate::model::ModelError;
+use crate::model::{ModelError, StateDefect};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
@@ -48,6 +48,11 @@ pub trait Problem {
     fn phase_times(&self) -> PhaseTimes {
         PhaseTimes::default()
     }
+    /// Why the converged (q, λ) is not an admissible state (the driver then cuts the step),
+    /// or `None`. Every state is admissible unless the problem says otherwise.
+    fn defect(&self, _q: &DVector<f64>, _lambda: &DVector<f64>) -> Option<StateDefect> {
+        None
+    }
 }
 
 impl<P: Problem + ?Sized> Problem for &mut P {
@@ -66,6 +71,9 @@ impl<P: Problem + ?Sized> Problem for &mut P {
     }
     fn phase_times(&self) -> PhaseTimes {
         (**self).phase_times()
+    }
+    fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<StateDefect> {
+        (**self).defect(q, lambda)
     }
 }
 
@@ -249,6 +257,10 @@ pub enum StepError {
         /// Angle between the tangents, in degrees.
         angle: f64,
     },
+    /// The corrector converged to a state that is not admissible (a membrane collapsed,
+    /// torn or turned inside out).
+    #[error("the corrector converged to an inadmissible state: {0}")]
+    Degenerate(StateDefect),
     /// The iteration budget was used.
     #[error("the corrector did not converge in {iterations} iterations")]
     NotConverged {
@@ -687,6 +699,9 @@ fn step_on_plane<P: Problem + ?Sized>(
                     angle: tangent.dot(t).clamp(-1.0, 1.0).acos().to_degrees(),
                 });
             }
+            if let Some(defect) = problem.defect(&q, &lambda) {
+                return Err(StepError::Degenerate(defect));
+            }
             return Ok(PathPoint {
                 q,
                 lambda,
@@ -703,7 +718,7 @@ fn step_on_plane<P: Problem + ?Sized>(
 
 /// Why the driver could not advance: every step was cut below the minimum.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("step cut below {min_step:e} after point {after} (control = {control}): {why}")]
+#[error("step cut below {min_step:e} after point {after} (control = {}): {why}", crate::text::num(*.control))]
 pub struct Stalled {
     /// The minimum step.
     pub min_step: f64,

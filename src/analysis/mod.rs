@@ -79,6 +79,9 @@ pub enum RunError {
         /// The enclosed volume found.
         volume: f64,
     },
+    /// Newton converged to a state that is no membrane state.
+    #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
+    Degenerate(crate::model::StateDefect),
 }
 
 impl RunError {

@@ -11,6 +11,7 @@ use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
 use crate::report::{StateKind, TurningRow};
 use crate::scene::Analysis;
 use crate::study::{Measure, Study};
+use crate::text::{num, sig_digits};
 use std::time::Instant;
 
 /// The path of any problem in its control from the driver's point: turning points of the
@@ -75,23 +76,26 @@ pub(super) fn run(
         .measures
         .iter()
         .position(|(_, m)| *m == Measure::MaxDisplacement);
-    let (stop_stretch, stop_displacement) = (analysis.stop_stretch, analysis.stop_displacement);
+    // A stop is reached where its measure passes the target from the start's side.
+    let start_measures = study.measure(u_start, params_start);
+    let side = |target: f64, k: usize| (target, k, (start_measures[k] - target).signum());
+    let stop_stretch = analysis.stop_stretch.zip(stretch).map(|(t, k)| side(t, k));
+    let stop_displacement = analysis
+        .stop_displacement
+        .zip(displacement)
+        .map(|(t, k)| side(t, k));
     let stops = |problem: &SymmetricProblem, p: &PathPoint| {
         if stop_stretch.is_none() && stop_displacement.is_none() {
             return None;
         }
         let u = problem.displacement(&p.q);
-        let measures = study.measure(&u, &problem.parameters(&p.lambda));
-        let reached = |target: Option<f64>, k: Option<usize>| match (target, k) {
-            (Some(t), Some(k)) => (measures[k] >= t).then_some(t),
-            _ => None,
+        let now = study.measure(&u, &problem.parameters(&p.lambda));
+        let passed = |stop: Option<(f64, usize, f64)>| {
+            stop.and_then(|(target, k, side)| ((now[k] - target) * side <= 0.0).then_some(target))
         };
-        reached(stop_stretch, stretch)
+        passed(stop_stretch)
             .map(|target| StopReason::Stretch { target })
-            .or_else(|| {
-                reached(stop_displacement, displacement)
-                    .map(|target| StopReason::Displacement { target })
-            })
+            .or_else(|| passed(stop_displacement).map(|target| StopReason::Displacement { target }))
     };
     let mut index = crossings.map(IndexChanges::new);
     let mut count = 0usize;
@@ -138,6 +142,23 @@ pub(super) fn run(
         if let Event::Warning(w) = event {
             record.warnings.push(w.clone());
         }
+    }
+    if let (Some((target, k, _)), false) = (
+        stop_stretch,
+        matches!(branch.stop, StopReason::Stretch { .. }),
+    ) {
+        let (lo, hi) = record
+            .rows
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                (a.min(r.measures[k]), b.max(r.measures[k]))
+            });
+        record.warnings.push(format!(
+            "analysis.stop-stretch = {} was not reached: the stretch ran over [{}, {}]",
+            num(target),
+            sig_digits(lo, 6),
+            sig_digits(hi, 6)
+        ));
     }
     for t in branch.turning_points() {
         let u = problem.displacement(&t.point.q);
