@@ -91,16 +91,12 @@ pub struct Study {
     targets_from_start: Vec<bool>,
 }
 
-/// Where a fluid of the scene is, relative to the mesh normals. `inside` is behind them
-/// (they point out of the enclosure); `below` and `above` refer to z whatever the mesh's
-/// orientation: below is behind when the normals point up (Σ_T N_z > 0, a disc), in front
-/// when they point down.
-fn side(s: scene::FluidSide, normals_up: bool) -> FluidSide {
-    match (s, normals_up) {
-        (scene::FluidSide::Inside, _)
-        | (scene::FluidSide::Below, true)
-        | (scene::FluidSide::Above, false) => FluidSide::Behind,
-        (scene::FluidSide::Above, true) | (scene::FluidSide::Below, false) => FluidSide::Front,
+fn side(s: scene::FluidSide) -> FluidSide {
+    match s {
+        // Open meshes are oriented with their normals up (`orient_up`): fluid below is
+        // behind them.
+        scene::FluidSide::Inside | scene::FluidSide::Below => FluidSide::Behind,
+        scene::FluidSide::Above => FluidSide::Front,
     }
 }
 
@@ -119,8 +115,14 @@ impl Study {
             format!("scene '{}' ({})", scene.info.name, scene.mesh.describe()),
             scene.estimated_bytes(),
         )?;
-        let mesh = scene.build_mesh()?;
-        let warnings = scene.mesh_warnings(&mesh);
+        let mut mesh = scene.build_mesh()?;
+        let mut warnings = scene.mesh_warnings(&mesh);
+        if orient_up(&mut mesh.mesh) {
+            warnings.push(format!(
+                "{}: the triangles' normals pointed down (−z); they were turned to point up, so that fluid 'below' is under the membrane and 'above' on it",
+                mesh_key(&scene)
+            ));
+        }
         let m = &mesh.mesh;
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
         let topology = m
@@ -138,16 +140,6 @@ impl Study {
         } else {
             closing_face(m, &topology.boundary_loops, &fixed, &sliding)?.map(Arc::new)
         };
-        let normals_up = m
-            .triangles
-            .iter()
-            .map(|&[a, b, c]| {
-                (m.nodes[b] - m.nodes[a])
-                    .cross(&(m.nodes[c] - m.nodes[a]))
-                    .z
-            })
-            .sum::<f64>()
-            >= 0.0;
         let index = |name: &str| {
             parameters
                 .iter()
@@ -175,7 +167,7 @@ impl Study {
         );
         let gas_fluid = inside_fluid.and_then(fluid_amount);
         let fluid_of = |f: &scene::FluidEffect| {
-            let side = side(f.side, normals_up);
+            let side = side(f.side);
             Fluid {
                 density: quantity(&f.density),
                 gravity: f.gravity,
@@ -463,6 +455,22 @@ impl Study {
         }
         u
     }
+}
+
+/// Turns an open mesh whose normals point down on the whole (a negative projected area
+/// Σ_T A_T·ẑ, which only its boundary determines) to point up — the orientation in which
+/// fluid "below" and "above" and the closing plate are defined; true if it did. A closed mesh
+/// (outward by construction) and one whose boundary projects to no area are left as they are.
+fn orient_up(m: &mut meshes::Mesh) -> bool {
+    if m.topology().is_ok_and(|t| t.closed) {
+        return false;
+    }
+    let projected: f64 = (0..m.triangles.len()).map(|t| m.area_vector(t).z).sum();
+    if projected < -1e-9 * m.area() {
+        m.reverse_orientation();
+        return true;
+    }
+    false
 }
 
 /// The mesh's action restricted to the elements that map the set of effects onto itself
