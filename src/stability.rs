@@ -6,6 +6,10 @@
 //!   those fields u_i = t + ω × x_i are projected into each block, reported there as zero
 //!   modes (T1u and T1g for a free sphere in Ih) and deflated: the block's spectrum is taken on
 //!   their orthogonal complement, so they never count in the index.
+//! - Held mean motions. The rolling of a spherical reference (its material points rotated
+//!   along an unchanged shape) is neutral in the continuum but only nearly so on a mesh; the
+//!   model's [`crate::model::Model::held_motions`] are deflated like rigid modes (the mean
+//!   rotation Σ (X_i − c) × u_i held) and reported as `held`, never counted.
 //! - Physical constraints. With augmenting equations g = 0 active (their parameters free) the
 //!   trivial block is bordered, K̃ = [[K_A, L], [Lᵀ, C]], each constraint row scaled so that
 //!   the border is symmetric (L = Bᵀ ∂F/∂μ and s·∂g/∂q agree; docs/theory.md §8.3).
@@ -47,6 +51,9 @@ pub struct BlockSpectrum {
     pub size: usize,
     /// Rigid-body zero modes found in this block (deflated).
     pub rigid_modes: usize,
+    /// Mean motions held in this block ([`crate::model::Model::held_motions`]: the rolling of
+    /// a spherical reference), deflated like the rigid modes but not zero modes.
+    pub held: usize,
     /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium).
     pub rigid_residual: f64,
     /// Eigenvalues on the complement of the rigid modes (and of the constraints' border for the
@@ -160,6 +167,8 @@ pub struct Stability<'a> {
     model: &'a dyn Model,
     basis: &'a AdaptedBasis,
     motions: Vec<[f64; 6]>,
+    /// Mean motions held (fields at the reference positions).
+    holds: Vec<[f64; 6]>,
     /// How block eigenvalues are computed.
     method: BlockEigen,
     /// Per block, the sparse factorisation of its bordered matrix and its border size.
@@ -184,6 +193,8 @@ struct BorderedBlock {
     diagonal: Vec<usize>,
     /// Rigid modes found in the block.
     rigid_modes: usize,
+    /// Mean motions held in the block.
+    held: usize,
     /// Largest |B_μᵀ K r| over the rigid modes, relative to ‖K‖.
     rigid_residual: f64,
 }
@@ -421,6 +432,18 @@ fn constraint_border(
     (l, cc)
 }
 
+/// ‖t + ω × X_i‖ over the free nodes at the reference positions X (the norm of a held field).
+fn reference_norms(motion: &[f64; 6], x: &[meshes::Vec3], layout: &crate::model::Layout) -> f64 {
+    let t = nalgebra::Vector3::new(motion[0], motion[1], motion[2]);
+    let w = nalgebra::Vector3::new(motion[3], motion[4], motion[5]);
+    (0..x.len())
+        .filter(|&i| layout.dof(i, 0).is_some())
+        .map(|i| (t + w.cross(&x[i])).norm_squared())
+        .sum::<f64>()
+        .sqrt()
+        .max(1e-300)
+}
+
 /// The pattern of [[K, U], [Uᵀ, E]] for a sparse K and `border` dense columns U and E.
 fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
     let (m, col_ptr, row_idx) = (k.n(), k.col_ptr(), k.row_idx());
@@ -441,6 +464,7 @@ impl<'a> Stability<'a> {
             model,
             basis,
             motions: model.rigid_motions(),
+            holds: model.held_motions(),
             method: BlockEigen::ByCost,
             factorizations: basis.irreps.iter().map(|_| Mutex::new(None)).collect(),
         }
@@ -476,17 +500,18 @@ impl<'a> Stability<'a> {
         b: &crate::adapted::SparseBasis,
         layout: &crate::model::Layout,
         eval: &Evaluation,
-        r: &DMatrix<f64>,
+        (r, rigid_modes): (&DMatrix<f64>, usize),
         border: Option<&(DMatrix<f64>, DMatrix<f64>)>,
         scale: f64,
     ) -> Option<BorderedBlock> {
         let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
         let m = b.dim();
-        // Border columns: zero-E first (rigid span, zero-C constraints), then invertible D.
+        // Border columns: zero-E first (rigid and held span, zero-C constraints), then
+        // invertible D.
         let rigid = Complement::of(r, 1e-12);
-        let rigid_modes = rigid.rank();
+        let deflated = rigid.rank();
         let mut zero_cols: Vec<DVector<f64>> =
-            (0..rigid_modes).map(|k| rigid.span_column(k, m)).collect();
+            (0..deflated).map(|k| rigid.span_column(k, m)).collect();
         let mut d_cols: Vec<DVector<f64>> = Vec::new();
         let mut d_block: Vec<(usize, usize, f64)> = Vec::new();
         let mut d_negative = 0;
@@ -567,7 +592,7 @@ impl<'a> Stability<'a> {
                 .iter()
                 .map(|(c, a)| (*c, b.restrict(a)))
                 .collect();
-            for col in r.column_iter() {
+            for col in r.column_iter().take(self.motions.len()) {
                 pattern.matvec(&values, col.as_slice(), &mut y);
                 let mut ky = DVector::from_vec(y.clone());
                 for (c, ar) in &rank_one {
@@ -586,6 +611,7 @@ impl<'a> Stability<'a> {
             values: mv,
             diagonal,
             rigid_modes,
+            held: deflated - rigid_modes,
             rigid_residual,
         })
     }
@@ -612,6 +638,7 @@ impl<'a> Stability<'a> {
             dim: 0,
             size: m,
             rigid_modes: block.rigid_modes,
+            held: block.held,
             rigid_residual: block.rigid_residual,
             eigenvalues: Vec::new(),
             complete: false,
@@ -766,6 +793,7 @@ impl<'a> Stability<'a> {
                     dim: ib.dim,
                     size: m,
                     rigid_modes: 0,
+                    held: 0,
                     rigid_residual: 0.0,
                     eigenvalues: Vec::new(),
                     complete: false,
@@ -787,6 +815,24 @@ impl<'a> Stability<'a> {
                         .collect::<Vec<DVector<f64>>>(),
                 )
             };
+            let rigid_modes = Complement::of(&r, 1e-12).rank();
+            // Held mean motions, at the reference positions, deflated with them.
+            let r_rigid = r.clone();
+            let r = if self.holds.is_empty() {
+                r
+            } else {
+                let reference = model.reference();
+                let held = self.holds.iter().map(|motion| {
+                    let v = b.restrict_rigid(motion, reference, layout);
+                    &v / reference_norms(motion, reference, layout)
+                });
+                DMatrix::from_columns(
+                    &r.column_iter()
+                        .map(|c| c.into_owned())
+                        .chain(held)
+                        .collect::<Vec<_>>(),
+                )
+            };
             let border = if mu == 0 { border0.clone() } else { None };
             // The sparse bordered block first, unless the dense solve is certain.
             const ALWAYS_DENSE: usize = 64;
@@ -804,9 +850,15 @@ impl<'a> Stability<'a> {
                     BlockEigen::Dense | BlockEigen::DenseUpTo(_) => false,
                 };
             if sparse_first {
-                if let Some(block) =
-                    self.bordered_block(mu, b, layout, eval, &r, border.as_ref(), scale)
-                {
+                if let Some(block) = self.bordered_block(
+                    mu,
+                    b,
+                    layout,
+                    eval,
+                    (&r, rigid_modes),
+                    border.as_ref(),
+                    scale,
+                ) {
                     let lanczos = !inertia_only
                         && match self.method {
                             BlockEigen::Lanczos => true,
@@ -839,9 +891,9 @@ impl<'a> Stability<'a> {
             }
             let k = b.restrict_tangent(layout, eval, &mut Vec::new());
             let rigid = Complement::of(&r, 1e-12);
-            let rigid_modes = rigid.rank();
+            let held = rigid.rank() - rigid_modes;
             let rigid_residual = if rigid_modes > 0 {
-                (&k * &r).amax() / (scale * r.amax().max(1e-300))
+                (&k * &r_rigid).amax() / (scale * r_rigid.amax().max(1e-300))
             } else {
                 0.0
             };
@@ -877,6 +929,7 @@ impl<'a> Stability<'a> {
                 dim: ib.dim,
                 size: m,
                 rigid_modes,
+                held,
                 rigid_residual,
                 eigenvalues: values,
                 complete: true,

@@ -38,6 +38,8 @@ fn model(sym: &SymmetricMesh, fixed: &[usize], fluid: bool) -> FeModel {
     .unwrap();
     let load: Box<dyn Effect> = if fluid {
         Box::new(Fluid {
+            filled: false,
+            closing: None,
             density: Quantity::Value(1.0),
             gravity: 1.0,
             level: Quantity::Value(0.2),
@@ -49,6 +51,7 @@ fn model(sym: &SymmetricMesh, fixed: &[usize], fluid: bool) -> FeModel {
         })
     } else {
         Box::new(GasPressure {
+            closing: None,
             pressure: Quantity::Value(0.3),
         })
     };

@@ -34,3 +34,4 @@ mod sparse_path;
 mod stability;
 mod state_fields;
 mod subgroup_path;
+mod thesis;

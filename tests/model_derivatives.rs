@@ -23,10 +23,12 @@ fn sphere_model(k: f64, with_amount: bool) -> FeModel {
         effects.push(Box::new(GasAmount {
             amount: Quantity::Parameter(0),
             ambient: 1.0,
-            closing_volume: 0.0,
+            closing: None,
+            fluid: None,
         }));
     } else {
         effects.push(Box::new(GasPressure {
+            closing: None,
             pressure: Quantity::Parameter(0),
         }));
     }

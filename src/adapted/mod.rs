@@ -23,7 +23,9 @@
 //! independent of the orbit size — |G| times less than forming B_μᵀ K B_μ column by column.
 //!
 //! The fixed-point space is the trivial irrep's block (d = 1, D = 1). Fixed nodes form whole
-//! orbits and carry no unknowns.
+//! orbits and carry no unknowns; at a node that slides in a plane the candidates are projected
+//! onto the plane, so every column has u·n = 0 there (the group maps the plane's normal to
+//! ±itself, so the projection commutes with the stabiliser).
 
 mod orbit;
 
@@ -441,15 +443,20 @@ impl AdaptedBasis {
         let order = group.order() as f64;
         let orbits = free_orbits(action, layout);
         let frame = Arc::new(OrbitFrame::new(action, layout, &orbits));
-        // χ_T(g) = #{free nodes fixed by g} · tr R_g.
+        // χ_T(g) = Σ over the free nodes fixed by g of tr R_g on the node's displacements:
+        // tr R_g, or tr R_g − n·R_g n for a node sliding in the plane with normal n.
         let chi_t: Vec<f64> = (0..group.order())
             .map(|g| {
-                let fixed = orbits
+                let r = group.element(g);
+                orbits
                     .iter()
                     .flatten()
                     .filter(|&&i| action.node_perm(g)[i] == i)
-                    .count();
-                fixed as f64 * group.element(g).trace()
+                    .map(|&i| match layout.slide_normal(i) {
+                        Some(n) => r.trace() - n.dot(&(r * n)),
+                        None => r.trace(),
+                    })
+                    .sum()
             })
             .collect();
         let mut irreps = Vec::new();

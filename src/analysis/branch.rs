@@ -1257,6 +1257,7 @@ fn branch_run(
         stability_note: b.stability_note.clone(),
         saved: Vec::new(),
         spectra: Default::default(),
+        states: None,
     };
     BranchRun {
         report,

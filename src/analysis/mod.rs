@@ -34,7 +34,7 @@ pub use problem::{SymmetricProblem, SPARSE_TANGENT_FROM};
 
 use crate::adapted::AdaptedBasis;
 use crate::model::Model;
-use crate::report::{MeshInfo, PathReport, PathRow, Spectra, State, TurningRow};
+use crate::report::{MeshInfo, PathReport, PathRow, PointState, Spectra, State, TurningRow};
 use crate::scene::Analysis;
 use crate::stability::Stability;
 use crate::study::Study;
@@ -50,6 +50,8 @@ pub struct RunResult {
     pub report: PathReport,
     /// States to write (every `save-every` steps, the last one, turning and critical points).
     pub states: Vec<State>,
+    /// Every path row's state (parameters and fixed-point coordinates), for `path.states`.
+    pub points: Vec<PointState>,
     /// Where the time went.
     pub times: RunTimes,
     /// The branches of the path's bifurcation points, when the scene asks for them
@@ -61,8 +63,16 @@ pub struct RunResult {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RunError {
     /// Newton did not converge at the start.
-    #[error("the start state did not converge: {0}")]
-    Start(#[from] SolveError),
+    #[error("the start state did not converge: {}", .error.describe(.control.as_deref()))]
+    Start {
+        /// Why.
+        error: SolveError,
+        /// The control parameter's name (none for a single equilibrium).
+        control: Option<String>,
+    },
+    /// `start.from` names a saved state that was not loaded into the study.
+    #[error("the start state: start.from is set but no saved state was loaded (output::store::load_start)")]
+    NotLoaded,
     /// Newton converged to a membrane turned inside out.
     #[error("the start state did not converge: Newton converged to an inside-out membrane (enclosed volume {volume:e}); start closer to the intended state (start.stretch, the start values)")]
     InsideOut {
@@ -72,6 +82,16 @@ pub enum RunError {
     /// Newton converged to a state that is no membrane state.
     #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
     Degenerate(crate::model::StateDefect),
+}
+
+impl RunError {
+    /// A start failure of `study`'s solve, naming its control parameter.
+    pub fn start(study: &Study, error: SolveError) -> Self {
+        Self::Start {
+            error,
+            control: study.control.map(|c| study.parameters[c].clone()),
+        }
+    }
 }
 
 /// Where a run's time went, by phase (what `memstab bench` reports).
@@ -205,6 +225,7 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
 pub(crate) struct Record {
     rows: Vec<PathRow>,
     states: Vec<State>,
+    points: Vec<PointState>,
     turning: Vec<TurningRow>,
     critical: Vec<CriticalPoint>,
     warnings: Vec<String>,
@@ -217,6 +238,7 @@ impl Record {
         Self {
             rows: Vec::new(),
             states: Vec::new(),
+            points: Vec::new(),
             turning: Vec::new(),
             critical: Vec::new(),
             warnings: study.warnings.clone(),
@@ -241,6 +263,10 @@ impl Record {
         iterations: usize,
         index: Option<usize>,
     ) {
+        self.points.push(PointState {
+            parameters: params.clone(),
+            q: study.basis.restrict(u).iter().copied().collect(),
+        });
         self.rows.push(PathRow {
             step,
             arclength,
@@ -315,10 +341,12 @@ impl Record {
             stability_note,
             saved: Vec::new(),
             spectra: self.spectra,
+            states: None,
         };
         RunResult {
             report,
             states: self.states,
+            points: self.points,
             times,
             branches: None,
         }

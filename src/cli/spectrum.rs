@@ -52,6 +52,8 @@ struct IrrepJson {
     zero_modes: usize,
     /// max |B_μᵀ K r| over those modes, relative to `scale` (≈ 0 at an equilibrium).
     zero_mode_residual: f64,
+    /// Mean motions held (and deflated) in the block: the rolling of a spherical reference.
+    held_motions: usize,
 }
 
 /// The `--json` output.
@@ -139,6 +141,7 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
                     negative: b.negative,
                     zero_modes: b.rigid_modes,
                     zero_mode_residual: b.rigid_residual,
+                    held_motions: b.held,
                 })
                 .collect(),
         };
@@ -254,6 +257,19 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
             format!("{zero_total} ({})", zero.join(", "))
         }
     );
+    let held: Vec<String> = spectrum
+        .blocks
+        .iter()
+        .filter(|b| b.held > 0)
+        .map(|b| format!("{} {}x{}", b.irrep, b.held, b.dim))
+        .collect();
+    if !held.is_empty() {
+        out!(
+            "held mean motions (the rolling of a spherical reference, a drift across a spin \
+             axis; deflated like the rigid modes, not in the index): {}",
+            held.join(", ")
+        );
+    }
     out!(
         "instability index {} (sum of d*neg){}",
         spectrum.index,

@@ -456,6 +456,13 @@ pub fn compare(
                     }
                 }
             }
+            if s.start.from.is_some() {
+                return Err(CompareError::Input(
+                    "'start.from': compare runs the scene on other meshes, which a saved state \
+                     does not fit; remove [start] from"
+                        .to_string(),
+                ));
+            }
             let study = Study::build(s).map_err(|e| match e {
                 StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
                     CompareError::Input(one_line(&e.to_string()))
