@@ -212,3 +212,51 @@ fn c2v_and_c1v_discs_split_every_pair() {
         }
     }
 }
+
+/// The chiral C7 disc (a twisted pattern, no mirror): the E_k blocks are Hermitian, so every
+/// E_k rung is one crossing of multiplicity 2 — a double by construction — at the closed
+/// form's m = k; m = 7 ≡ 0 (mod 7) puts both cos 7θ and sin 7θ in A, and the two are two
+/// separate simple crossings of A whose gap is measured and shrinks under refinement (the
+/// twist, like every symmetry-breaking perturbation of the generator, is a fixed fraction of
+/// the node spacing).
+#[test]
+fn chiral_c7_disc_doubles_in_e_k_and_m7_gives_two_simple_points_in_a() {
+    let coarse = ladder(7, 8, Some("C7"), 52.0, 104);
+    let fine = ladder(7, 16, Some("C7"), 48.0, 96);
+    for (m, irrep) in [(1, "E1"), (2, "E2"), (3, "E3")] {
+        let r = of(&fine, m);
+        assert_eq!(
+            (r[0].irrep.as_str(), r[0].multiplicity),
+            (irrep, 2),
+            "m = {m}: {r:?}"
+        );
+        assert!(
+            (r[0].rho / (SCALE * j2(m, 1)) - 1.0).abs() < 0.03,
+            "m = {m}: {r:?}"
+        );
+    }
+    assert!(fine
+        .iter()
+        .all(|r| r.multiplicity == if r.irrep == "A" { 1 } else { 2 }));
+    let gap = |rungs: &[Rung]| {
+        let r = of(rungs, 7);
+        assert_eq!(r.len(), 2, "m = 7: {r:?}");
+        assert!(
+            r.iter().all(|x| x.irrep == "A" && x.multiplicity == 1),
+            "m = 7: {r:?}"
+        );
+        assert!(
+            r.iter()
+                .all(|x| (x.rho / (SCALE * j2(7, 1)) - 1.0).abs() < 0.15),
+            "m = 7: {r:?}"
+        );
+        (r[1].rho - r[0].rho).abs()
+    };
+    let (g1, g2) = (gap(&coarse), gap(&fine));
+    let order = (g1 / g2).log2();
+    eprintln!("C7, m = 7: gaps {g1:e} → {g2:e}, order {order:.2}");
+    assert!(
+        g2 > 0.0 && order > 1.8,
+        "C7, m = 7: gaps {g1:e} → {g2:e}, order {order}"
+    );
+}
