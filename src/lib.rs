@@ -21,6 +21,7 @@ pub use meshes;
 pub use symmetry;
 pub mod adapted;
 pub mod analysis;
+pub mod axisym;
 pub mod bench;
 pub mod demo;
 pub mod effects;
