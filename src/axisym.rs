@@ -1,4 +1,4 @@
-//! The axisymmetric reference (docs/theory.md §14): a membrane of revolution as its meridian,
+//! The axisymmetric reference (docs/theory.md §15): a membrane of revolution as its meridian,
 //! discretised by quadratic elements, and the tangent at an axisymmetric state split by
 //! Fourier mode.
 //!

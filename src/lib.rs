@@ -11,7 +11,8 @@
 //! - [`scene`]: the scene file (parse, validate); [`study`]: a scene made into a model;
 //! - [`effects`]: one potential per file; [`model`]: assembly of Π, F, K on a fixed pattern;
 //! - [`adapted`]: symmetry-adapted bases; [`stability`]: inertia and spectra by irrep;
-//! - [`analysis`]: the path driver, events, and the analyses a scene asks for;
+//! - [`analysis`]: the path driver, events, the analyses a scene asks for, and branch
+//!   switching at their bifurcation points;
 //! - [`report`]: typed results; [`output`]: the writers;
 //! - [`reference`](mod@reference): closed forms; [`demo`]: the bundled demo;
 //!   [`bench`](mod@bench): the studies behind

@@ -1,4 +1,4 @@
-//! The axisymmetric reference (docs/theory.md §14): Fourier-mode blocks of a meridian of
+//! The axisymmetric reference (docs/theory.md §15): Fourier-mode blocks of a meridian of
 //! quadratic elements. The ponding ladder of the flat pre-stretched clamped disc against the
 //! closed form γ_{m,k} = j²_{m,k} T0/(μ H λ0²), to 1e-6 at 64 elements, with the observed
 //! order of the error under refinement (≥ 4 for quadratic elements: the eigenvalue error of

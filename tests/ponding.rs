@@ -261,7 +261,7 @@ fn chiral_c7_disc_doubles_in_e_k_and_m7_gives_two_simple_points_in_a() {
     );
 }
 
-/// The axisymmetric reference (docs/theory.md §14) at 64 quadratic elements against the 3-D
+/// The axisymmetric reference (docs/theory.md §15) at 64 quadratic elements against the 3-D
 /// C7v disc's Richardson values (4 ρ_32 − ρ_16)/3 from 16 and 32 divisions, with the scene's
 /// fluid level a hair (1e-6) above the rim plane on both: the two discretisations of one
 /// continuum problem meet to 1e-5 relative on the rungs (0, 1), (1, 1), (2, 1); on every rung

@@ -414,3 +414,184 @@ fn spin_on_an_icosphere_keeps_the_axis_stabiliser() {
         assert_eq!(json["group"], group);
     }
 }
+
+/// SIGINT stops a run at its next point: what the path has is written with the stop reason
+/// "interrupted", exit code 130, a manifest with every file's checksum last, and no temporary
+/// file left (a stale one of an earlier, killed run is swept).
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_writes_what_it_has_and_a_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    std::fs::create_dir(&out).unwrap();
+    let stale = out.join(".memstab-stale.tmp");
+    std::fs::write(&stale, "debris").unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            &scene("disc_fluid_above.toml"),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+    assert_eq!(report["stop"], "interrupted");
+    let rows = report["rows"].as_array().unwrap().len();
+    assert!((1..400).contains(&rows), "{rows} rows");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["stop"], "interrupted");
+    let files = manifest["files"].as_array().unwrap();
+    assert!(files.len() >= 6);
+    for f in files {
+        let path = out.join(f["file"].as_str().unwrap());
+        assert_eq!(
+            memstab::output::sha256(&path).unwrap(),
+            f["sha256"].as_str().unwrap()
+        );
+    }
+    let left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
+
+/// The bundled balloon with its lines changed by `edit` (a line starting with the key is
+/// replaced), at frequency 4, written into `dir`.
+fn balloon_with(dir: &Path, edit: &[(&str, &str)]) -> PathBuf {
+    let text = std::fs::read_to_string(scene("balloon.toml")).unwrap();
+    let mut lines: Vec<String> = Vec::new();
+    for line in text.lines() {
+        let replaced = edit
+            .iter()
+            .chain([("frequency", "frequency = 4")].iter())
+            .find(|(key, _)| line.starts_with(&format!("{key} =")));
+        lines.push(replaced.map_or(line.to_string(), |(_, new)| new.to_string()));
+    }
+    let path = dir.join("balloon.toml");
+    std::fs::write(&path, lines.join("\n")).unwrap();
+    path
+}
+
+/// A state that Newton or the corrector converges to must be a membrane state: a balloon
+/// whose shear modulus is 1e-100, whose first guess is scaled by 1e-300, or whose radius is
+/// 1e75 collapses to a point; that is an error naming the stretch found, with nothing
+/// written, never a path of collapsed states reported as a result.
+#[test]
+fn collapsed_states_are_errors_not_results() {
+    let dir = tempfile::tempdir().unwrap();
+    for edit in [
+        ("mu", "mu = 1e-100"),
+        ("stretch", "stretch = 1e-300"),
+        ("radius", "radius = 1e75"),
+    ] {
+        let path = balloon_with(dir.path(), &[edit]);
+        let out = dir.path().join("out");
+        let o = memstab(&[
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{edit:?}: {err}");
+        assert!(
+            err.contains("inadmissible state") && err.contains("principal stretch"),
+            "{edit:?}: {err}"
+        );
+        assert!(!out.exists(), "{edit:?}: nothing is written");
+    }
+}
+
+/// A step so long that its corrector lands beyond both pressure extrema — once on a balloon
+/// turned inside out — is cut, not accepted: with steps of 20 the balloon's maximum and
+/// minimum are still found.
+#[test]
+fn huge_steps_do_not_jump_over_the_limit_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = balloon_with(
+        dir.path(),
+        &[("steps", "steps = 60\nmax-step = 20\ninitial-step = 20")],
+    );
+    let out = dir.path().join("out");
+    let o = memstab(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+    let kinds: Vec<&str> = report["turning_points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["maximum", "minimum"], "{report}");
+    let k = report["measures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m == "stretch")
+        .unwrap();
+    let stretches: Vec<f64> = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["measures"][k].as_f64().unwrap())
+        .collect();
+    assert!(stretches.iter().all(|&s| s > 1.0), "{stretches:?}");
+}
+
+/// `stop-stretch` is reached where the stretch passes it from the start's side: a target
+/// below the start is not "reached" at the first step, and a path that never passes it says
+/// so.
+#[test]
+fn a_stop_stretch_behind_the_start_is_not_reached() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = balloon_with(
+        dir.path(),
+        &[
+            ("stop-stretch", "stop-stretch = 1.01"),
+            ("steps", "steps = 8"),
+        ],
+    );
+    let out = dir.path().join("out");
+    let o = memstab(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("stopped: the step budget (8) was used"),
+        "{text}"
+    );
+    assert!(
+        text.contains("analysis.stop-stretch = 1.01 was not reached"),
+        "{text}"
+    );
+}

@@ -33,7 +33,16 @@ pub(super) fn run(
     };
     let mut previous: Option<(Spectrum, f64)> = None;
     let mut sampled: Vec<(usize, f64, Option<Sample>)> = Vec::with_capacity(samples + 1);
+    let mut stop = StopReason::Swept {
+        min: lo,
+        max: hi,
+        samples,
+    };
     for i in 0..=samples {
+        if i > 0 && super::interrupt::requested() {
+            stop = StopReason::Interrupted;
+            break;
+        }
         let value = lo + (hi - lo) * i as f64 / samples as f64;
         observer.progress(i, value);
         let params = at(value);
@@ -73,11 +82,7 @@ pub(super) fn run(
     }
     record.spectra = spectra_of(sampled);
     record.state(0, StateKind::Held, u.to_vec(), &at(lo));
-    StopReason::Swept {
-        min: lo,
-        max: hi,
-        samples,
-    }
+    stop
 }
 
 /// What the report keeps of one sample's spectrum: per block, its irrep, its lowest

@@ -23,7 +23,7 @@
 
 use crate::linalg::bordered::{bordered_solve, solve_dense, sparse_lu_solve, SharedFactorization};
 use crate::linalg::SymmetricPattern;
-use crate::model::ModelError;
+use crate::model::{ModelError, StateDefect};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
@@ -48,6 +48,11 @@ pub trait Problem {
     fn phase_times(&self) -> PhaseTimes {
         PhaseTimes::default()
     }
+    /// Why the converged (q, λ) is not an admissible state (the driver then cuts the step),
+    /// or `None`. Every state is admissible unless the problem says otherwise.
+    fn defect(&self, _q: &DVector<f64>, _lambda: &DVector<f64>) -> Option<StateDefect> {
+        None
+    }
 }
 
 impl<P: Problem + ?Sized> Problem for &mut P {
@@ -66,6 +71,9 @@ impl<P: Problem + ?Sized> Problem for &mut P {
     }
     fn phase_times(&self) -> PhaseTimes {
         (**self).phase_times()
+    }
+    fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<StateDefect> {
+        (**self).defect(q, lambda)
     }
 }
 
@@ -205,6 +213,10 @@ pub enum StepError {
         /// Angle between the tangents, in degrees.
         angle: f64,
     },
+    /// The corrector converged to a state that is not admissible (a membrane collapsed,
+    /// torn or turned inside out).
+    #[error("the corrector converged to an inadmissible state: {0}")]
+    Degenerate(StateDefect),
     /// The iteration budget was used.
     #[error("the corrector did not converge in {iterations} iterations")]
     NotConverged {
@@ -506,11 +518,45 @@ pub fn step_from<P: Problem + ?Sized>(
     s: f64,
     opts: &PathOptions,
 ) -> Result<PathPoint, StepError> {
+    step_on_plane(problem, from, &from.tangent, &from.tangent, s, s, opts)
+}
+
+/// A step off a branch point along `direction` (a unit vector in scaled variables, like a
+/// tangent) whose corrector stays on the plane `planeᵀ (y − y_from) = planeᵀ direction · s`
+/// instead of the plane normal to the direction: with `plane` the kernel direction of a
+/// bifurcation (no control component), every other branch through the point — the path
+/// itself, whose states have no component along the kernel — is off that plane. The
+/// new point's tangent is oriented along `direction`, and the branch-jump guard compares
+/// with it.
+pub fn step_off<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    direction: &DVector<f64>,
+    plane: &DVector<f64>,
+    s: f64,
+    opts: &PathOptions,
+) -> Result<PathPoint, StepError> {
+    let value = plane.dot(direction) * s;
+    step_on_plane(problem, from, direction, plane, value, s, opts)
+}
+
+/// Predictor y_from + s·direction, corrector on R = 0, g = 0, planeᵀ (y − y_from) = value
+/// (scaled variables; the extended Jacobian's last row is `plane`), tangent oriented along
+/// `direction`, and the branch-jump guard against the predictor and `direction`.
+fn step_on_plane<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    direction: &DVector<f64>,
+    plane: &DVector<f64>,
+    value: f64,
+    s: f64,
+    opts: &PathOptions,
+) -> Result<PathPoint, StepError> {
     let m = problem.dim();
     let nl = from.lambda.len();
     let sq = opts.state_scale;
     let sl = |j: usize| opts.parameter_scale(j);
-    let t = &from.tangent;
+    let t = direction;
     let mut q = &from.q + t.rows(0, m) * (s * sq);
     let mut lambda = from.lambda.clone();
     for j in 0..nl {
@@ -519,13 +565,13 @@ pub fn step_from<P: Problem + ?Sized>(
     for it in 1..=opts.max_iterations {
         let lin = problem.evaluate(&q, &lambda)?;
         let c = lin.constraints.len();
-        let a = lin.extended(opts, t);
+        let a = lin.extended(opts, plane);
         let mut g = DVector::zeros(m + c + 1);
         g.rows_mut(0, m).copy_from(&lin.residual);
         g.rows_mut(m, c).copy_from(&lin.constraints);
-        let mut arc = t.rows(0, m).dot(&(&q - &from.q)) / sq - s;
+        let mut arc = plane.rows(0, m).dot(&(&q - &from.q)) / sq - value;
         for j in 0..nl {
-            arc += t[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
+            arc += plane[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
         }
         g[m + c] = arc;
         let converged = lin.converged(opts);
@@ -552,6 +598,9 @@ pub fn step_from<P: Problem + ?Sized>(
                     angle: tangent.dot(t).clamp(-1.0, 1.0).acos().to_degrees(),
                 });
             }
+            if let Some(defect) = problem.defect(&q, &lambda) {
+                return Err(StepError::Degenerate(defect));
+            }
             return Ok(PathPoint {
                 q,
                 lambda,
@@ -568,7 +617,7 @@ pub fn step_from<P: Problem + ?Sized>(
 
 /// Why the driver could not advance: every step was cut below the minimum.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("step cut below {min_step:e} after point {after} (control = {control}): {why}")]
+#[error("step cut below {min_step:e} after point {after} (control = {}): {why}", crate::text::num(*.control))]
 pub struct Stalled {
     /// The minimum step.
     pub min_step: f64,

@@ -80,6 +80,9 @@ fn solve_start_with(
             return Err(RunError::InsideOut { volume });
         }
     }
+    if let Some(defect) = study.model.state_defect(&u) {
+        return Err(RunError::Degenerate(defect));
+    }
     study.set_targets(&u, &params);
     Ok((u, params, iterations, times))
 }

@@ -176,6 +176,8 @@ pub enum StopReason {
     },
     /// A sweep without a control parameter.
     NoControl,
+    /// A stop was requested (SIGINT, SIGTERM): the path ends at its last point.
+    Interrupted,
 }
 
 impl std::fmt::Display for StopReason {
@@ -201,6 +203,7 @@ impl std::fmt::Display for StopReason {
                 )
             }
             Self::NoControl => f.write_str("no control parameter"),
+            Self::Interrupted => f.write_str("interrupted"),
         }
     }
 }

@@ -9,17 +9,22 @@
 //!   every point and the critical points where it changes;
 //! - [`buckling`]: the start state held while the control sweeps its range;
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
-//!   splits measured.
+//!   splits measured;
+//! - [`branch`]: the branches that leave a path's bifurcation points (`[analysis.branches]`),
+//!   by the equivariant branching lemma, each followed in its isotropy subgroup's
+//!   fixed-point space.
 //!
 //! [`run`] dispatches on the scene's analysis and collects a [`RunResult`]: the report, the
 //! states to write and where the time went.
 
+pub mod branch;
 pub mod buckling;
 pub mod compare;
 pub mod continuation;
 pub mod critical;
 pub mod equilibrium;
 pub mod events;
+pub mod interrupt;
 pub mod newton;
 pub mod path;
 mod problem;
@@ -47,6 +52,9 @@ pub struct RunResult {
     pub states: Vec<State>,
     /// Where the time went.
     pub times: RunTimes,
+    /// The branches of the path's bifurcation points, when the scene asks for them
+    /// (`[analysis.branches]`).
+    pub branches: Option<branch::Branches>,
 }
 
 /// Why a run failed before it produced a path.
@@ -61,6 +69,9 @@ pub enum RunError {
         /// The enclosed volume found.
         volume: f64,
     },
+    /// Newton converged to a state that is no membrane state.
+    #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
+    Degenerate(crate::model::StateDefect),
 }
 
 /// Where a run's time went, by phase (what `memstab bench` reports).
@@ -159,7 +170,14 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
             observer,
         ),
     };
-    Ok(record.finish(study, stop, stability_note, times))
+    let mut result = record.finish(study, stop, stability_note, times);
+    if let Analysis::Path(p) = &study.scene.analysis {
+        if let Some(b) = &p.branches {
+            let opts = branch::options(study, Some(b));
+            result.branches = Some(branch::run(study, &result.report.critical, opts));
+        }
+    }
+    Ok(result)
 }
 
 /// What an analysis collects for the report, in the order it finds it.
@@ -279,6 +297,7 @@ impl Record {
             report,
             states: self.states,
             times,
+            branches: None,
         }
     }
 }

@@ -11,6 +11,7 @@ use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
 use crate::report::{StateKind, TurningRow};
 use crate::scene::Analysis;
 use crate::study::{Measure, Study};
+use crate::text::{num, sig_digits};
 use std::time::Instant;
 
 /// The path of any problem in its control from the driver's point: turning points of the
@@ -25,6 +26,9 @@ pub fn trace<P: Problem>(
 ) -> Branch {
     let bounds = driver.options().bounds;
     let mut stops = StopWhen(move |problem: &P, p: &PathPoint| {
+        if super::interrupt::requested() {
+            return Some(StopReason::Interrupted);
+        }
         if p.lambda[0] < bounds.0 || p.lambda[0] > bounds.1 {
             return Some(StopReason::Bounds);
         }
@@ -67,12 +71,16 @@ pub(super) fn run(
         .measures
         .iter()
         .position(|(_, m)| *m == Measure::Stretch);
-    let stop_stretch = analysis.stop_stretch;
+    // `stop-stretch` is reached where the stretch passes it from the start's side.
+    let stop_stretch = analysis.stop_stretch.zip(stretch).map(|(target, k)| {
+        let start = study.measure(u_start, params_start)[k];
+        (target, k, (start - target).signum())
+    });
     let stops = |problem: &SymmetricProblem, p: &PathPoint| {
-        let (target, k) = (stop_stretch?, stretch?);
+        let (target, k, side) = stop_stretch?;
         let u = problem.displacement(&p.q);
-        (study.measure(&u, &problem.parameters(&p.lambda))[k] >= target)
-            .then_some(StopReason::Stretch { target })
+        let now = study.measure(&u, &problem.parameters(&p.lambda))[k];
+        ((now - target) * side <= 0.0).then_some(StopReason::Stretch { target })
     };
     let mut index = crossings.map(IndexChanges::new);
     let mut count = 0usize;
@@ -119,6 +127,23 @@ pub(super) fn run(
         if let Event::Warning(w) = event {
             record.warnings.push(w.clone());
         }
+    }
+    if let (Some((target, k, _)), false) = (
+        stop_stretch,
+        matches!(branch.stop, StopReason::Stretch { .. }),
+    ) {
+        let (lo, hi) = record
+            .rows
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                (a.min(r.measures[k]), b.max(r.measures[k]))
+            });
+        record.warnings.push(format!(
+            "analysis.stop-stretch = {} was not reached: the stretch ran over [{}, {}]",
+            num(target),
+            sig_digits(lo, 6),
+            sig_digits(hi, 6)
+        ));
     }
     for t in branch.turning_points() {
         let u = problem.displacement(&t.point.q);

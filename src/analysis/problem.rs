@@ -262,6 +262,14 @@ impl Problem for SymmetricProblem<'_> {
         self.times.projection += t1.elapsed();
         Ok(lin)
     }
+
+    fn defect(
+        &self,
+        q: &DVector<f64>,
+        _lambda: &DVector<f64>,
+    ) -> Option<crate::model::StateDefect> {
+        self.model.state_defect(&self.displacement(q))
+    }
 }
 
 impl crate::analysis::events::States for SymmetricProblem<'_> {

@@ -10,6 +10,8 @@
 //! - [`ponding`]: the ponding ladder against its closed form;
 //! - [`thesis`]: the thesis-size spinning cap on meshes of five symmetry groups, against the
 //!   same states without symmetry;
+//! - [`branching`]: branch switching, timed — the abstract Hg potential on the icosahedron
+//!   (branches in closed form) and the upward-loaded disc;
 //! - [`report`]: the markdown tables, CSV files and the accuracy plot of those numbers;
 //! - [`run`]: the whole bench (or the scaling study) into an output directory.
 //!
@@ -30,6 +32,7 @@
 //! column. Output writing, which `run` also does, is not part of this study.
 
 pub mod balloon;
+pub mod branching;
 pub mod full_path;
 pub mod payoff;
 pub mod peer;
@@ -52,8 +55,8 @@ pub use payoff::{
 pub use peer::{run_peer, PeerResult};
 pub use ponding::{ponding_level, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML};
 pub use run::{
-    run_accuracy, run_scaling, run_thesis, AccuracyOptions, BenchFiles, ScalingOptions,
-    ThesisOptions,
+    run_accuracy, run_branching, run_scaling, run_thesis, AccuracyOptions, BenchFiles,
+    ScalingOptions, ThesisOptions,
 };
 pub use scaling::{fit_exponent, memory, scaling_level, ScalingFits, ScalingLevel};
 pub use thesis::{spinning_cap_scene, thesis_run, thesis_table, ThesisRun, SPINNING_CAP_TOML};

@@ -169,6 +169,14 @@ pub fn run_accuracy(
         ponding.push(ponding_level(d).map_err(|e| format!("ponding d = {d}: {}", one_line(&e)))?);
     }
     md += &report::ponding_table(&ponding);
+
+    // 5. Branch switching.
+    let branch_divisions = if quick { 8 } else { 16 };
+    progress(&format!(
+        "branch switching: the abstract Hg problem, the upward disc with {branch_divisions} divisions …"
+    ));
+    md += &super::branching::branching_section(branch_divisions)
+        .map_err(|e| format!("branch switching: {}", one_line(&e)))?;
     md += &report::total_time("bench", started.elapsed());
 
     // Outputs.
@@ -180,6 +188,30 @@ pub fn run_accuracy(
     Ok(BenchFiles {
         markdown: md,
         files: vec![md_path, csv_path, payoff_path, svg_path],
+    })
+}
+
+/// The branch-switching study alone (the same table as in the whole bench; the disc on 8 divisions when
+/// `quick`, else 16): writes `branching.md` into `out`.
+pub fn run_branching(
+    out: &Path,
+    quick: bool,
+    progress: &mut dyn FnMut(&str),
+) -> Result<BenchFiles, String> {
+    create_dir(out)?;
+    let started = Instant::now();
+    let divisions = if quick { 8 } else { 16 };
+    progress(&format!(
+        "branch switching: the abstract Hg problem, the upward disc with {divisions} divisions …"
+    ));
+    let mut md = "# memstab bench: branch switching\n".to_string();
+    md += &super::branching::branching_section(divisions)
+        .map_err(|e| format!("branch switching: {}", one_line(&e)))?;
+    md += &report::total_time("study", started.elapsed());
+    let md_path = write_text(out, "branching.md", &md)?;
+    Ok(BenchFiles {
+        markdown: md,
+        files: vec![md_path],
     })
 }
 

@@ -22,6 +22,9 @@
 //!    nearest σ by sparse shift-invert, and (iii) at the small sizes (f ≤ 8; quick f = 4) a
 //!    dense eigen-decomposition of the full K ([`memstab::bench::full_path_stability`]).
 //! 4. The ponding ladder on a C7v disc at two refinements against its closed form.
+//! 5. Branch switching: every branch from the 5-fold Hg point of the abstract invariant
+//!    potential on the icosahedron (against its closed form), and the branches of the
+//!    upward-loaded C7v disc's first E1 point on the thesis mesh (quick: 8 divisions).
 //!
 //! Writes DIR/accuracy.md (every table, also printed), DIR/accuracy.csv (the balloon levels,
 //! with the path comparison of 3.), DIR/payoff.csv (one row per payoff case), DIR/accuracy.svg
@@ -59,6 +62,9 @@ With --thesis (nothing else is run):
   thesis.md      the spinning fluid-filled cap on C8v, C4v, C2v, C1v and C1 meshes of 5408
                  triangles (--quick: 512) and on C2v at 21632: time by phase, the critical
                  points, the same states without symmetry (full-K index per point)
+With --branching (nothing else is run):
+  branching.md   the branch-switching table of the bench alone (the abstract Hg problem; the
+                 upward disc on 16 divisions, quick: 8)
 With --scaling (nothing else is run):
   scaling.md     per frequency: a balloon path of --scaling-points points with the spectrum
                  by irrep at every point, time by phase, resident memory at the start of the
@@ -92,8 +98,12 @@ pub(crate) struct BenchArgs {
     /// The thesis-size study instead of the bench: the spinning fluid-filled cap on C8v, C4v,
     /// C2v, C1v and C1 meshes of 5 408 triangles (with --quick: 512) against the same states
     /// without symmetry, and on C2v at 21 632; writes thesis.md.
-    #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies", "branching"])]
     thesis: bool,
+    /// Only the branch-switching study (quick: the disc on 8 divisions); writes
+    /// branching.md.
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
+    branching: bool,
     /// Points of each scaling path, the start included.
     #[arg(long, default_value_t = 20, requires = "scaling", value_name = "N")]
     scaling_points: usize,
@@ -151,6 +161,13 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
             quick: args.quick,
         };
         let files = run_thesis(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
+        print(&files);
+        return Ok(());
+    }
+    if args.branching {
+        prepare_out(&args.out)?;
+        let files = memstab::bench::run_branching(&args.out, args.quick, &mut |m| progress(m))
+            .map_err(CliError::Failure)?;
         print(&files);
         return Ok(());
     }

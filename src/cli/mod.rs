@@ -15,6 +15,7 @@ macro_rules! out {
 }
 
 mod bench;
+mod branch;
 mod common;
 mod compare;
 mod export;
@@ -42,6 +43,8 @@ enum Command {
     Group(group::GroupArgs),
     /// Run a scene: follow its path and write path.csv, path.json, path.svg, VTUs + path.pvd.
     Run(run::RunArgs),
+    /// Switch branches at a critical point of a finished run: branches.json, branch_NN/, diagram.svg.
+    Branch(branch::BranchArgs),
     /// Run the bundled demo (a k = 0.1 balloon) and compare it with the closed form.
     Demo(run::DemoArgs),
     /// The tangent's spectrum by irrep at the scene's start state (or at --at values).
@@ -78,9 +81,19 @@ pub(crate) enum CliError {
     Input(String),
     /// Something failed that is not the user's input.
     Failure(String),
+    /// A signal stopped the command after it wrote what it had (exit code 130).
+    Interrupted(String),
 }
 
 pub(crate) fn main() -> ExitCode {
+    // SIGINT and SIGTERM: the analyses stop at their next point and their outputs are
+    // written; a second signal ends the process at once.
+    let _ = ctrlc::set_handler(|| {
+        if memstab::analysis::interrupt::requested() {
+            std::process::exit(130);
+        }
+        memstab::analysis::interrupt::request();
+    });
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -120,6 +133,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Mesh(args) => mesh::run(&args),
         Command::Group(args) => group::run(&args),
         Command::Run(args) => run::run(&args),
+        Command::Branch(args) => branch::run(&args),
         Command::Demo(args) => run::demo(&args),
         Command::Spectrum(args) => spectrum::run(&args),
         Command::Compare(args) => compare::run(&args),
@@ -135,6 +149,10 @@ pub(crate) fn main() -> ExitCode {
         Err(CliError::Failure(m)) => {
             eprintln!("error: {}", memstab::text::message(&m));
             ExitCode::from(1)
+        }
+        Err(CliError::Interrupted(m)) => {
+            eprintln!("interrupted: {}", memstab::text::message(&m));
+            ExitCode::from(130)
         }
     }
 }

@@ -15,6 +15,7 @@
 
 use super::CliError;
 use clap::Args;
+use memstab::analysis::events::StopReason;
 use memstab::analysis::{run as run_study, RunResult};
 use memstab::demo::closed_form_check;
 use memstab::output::{file_name, write_run, Progress, RunSummary, Written, RUN_FILES};
@@ -57,7 +58,24 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
         out!("{text}");
     } else {
-        print_summary(&study, &result.report, &args.out, &written);
+        print_summary(
+            &study,
+            &result.report,
+            result.branches.as_ref(),
+            &args.out,
+            &written,
+        );
+    }
+    interrupted(&result, &args.out)
+}
+
+/// Exit code 130 after a run that a signal stopped (its outputs are written).
+fn interrupted(result: &RunResult, out: &Path) -> Result<(), CliError> {
+    if result.report.stop == StopReason::Interrupted {
+        return Err(CliError::Interrupted(format!(
+            "the path so far is written into {}",
+            out.display()
+        )));
     }
     Ok(())
 }
@@ -66,8 +84,9 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
     let scene = memstab::demo::scene()
         .map_err(|e| CliError::Failure(format!("the bundled demo scene is broken: {e}")))?;
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
-    print_summary(&study, &result.report, &args.out, &written);
+    print_summary(&study, &result.report, None, &args.out, &written);
     print_closed_form(&study, &result.report);
+    interrupted(&result, &args.out)?;
     Ok(())
 }
 
@@ -167,7 +186,13 @@ fn control_index(report: &PathReport) -> Option<usize> {
     report.parameters.iter().position(|p| *p == report.control)
 }
 
-fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Written) {
+fn print_summary(
+    study: &Study,
+    report: &PathReport,
+    branches: Option<&memstab::analysis::branch::Branches>,
+    out: &Path,
+    written: &Written,
+) {
     let m = &report.mesh;
     out!("scene '{}' ({})", report.scene, report.origin);
     out!(
@@ -301,6 +326,9 @@ fn print_summary(study: &Study, report: &PathReport, out: &Path, written: &Writt
     for chunk in written.states.chunks(5) {
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
         out!("  {}", names.join(" "));
+    }
+    if let (Some(b), Some(w)) = (branches, &written.branches) {
+        super::branch::print_branches(b, w, &report.control);
     }
 }
 

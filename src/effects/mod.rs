@@ -3,6 +3,7 @@
 
 pub mod gas;
 pub mod hydrostatic;
+pub mod invariant;
 pub mod local;
 pub mod membrane;
 pub mod plane;

@@ -472,6 +472,23 @@ impl<'a> Assembler<'a> {
         v
     }
 
+    /// A vector over the unknowns from one 3-vector per node (fixed nodes dropped): the
+    /// gradient of a global potential that depends on each node's position, for its
+    /// rank-one tangent terms.
+    pub fn node_vector(&self, mut value: impl FnMut(usize) -> [f64; 3]) -> Vec<f64> {
+        let mut v = vec![0.0; self.layout.unknowns];
+        for (i, dofs) in self.layout.dof_of.iter().enumerate() {
+            if dofs[0] == NONE {
+                continue;
+            }
+            let x = value(i);
+            for (k, &d) in dofs.iter().enumerate() {
+                v[d as usize] = x[k];
+            }
+        }
+        v
+    }
+
     /// Adds a constant to Π (the value of a global potential).
     pub fn add_energy(&mut self, value: f64) {
         self.out.energy += value;

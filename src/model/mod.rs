@@ -10,9 +10,11 @@ mod assembly;
 pub mod check;
 pub mod constraint;
 mod local;
+pub mod validity;
 
 pub use assembly::{Assembler, Evaluation, Layout, NodeTerms, Request, Subset, TriangleTerms};
 pub use local::Local;
+pub use validity::StateDefect;
 
 use crate::linalg::SymmetricPattern;
 use nalgebra::Vector3;
@@ -126,6 +128,15 @@ pub trait Model: Sync {
     ) -> Result<(), ModelError>;
     /// A fresh evaluation buffer sized for this model.
     fn new_evaluation(&self) -> Evaluation;
+    /// Why the displacement `u` is not a membrane state (collapsed, torn, inside out or not
+    /// finite; [`validity`]), or `None`.
+    fn state_defect(&self, u: &[f64]) -> Option<StateDefect> {
+        validity::state_defect(
+            self.reference(),
+            self.layout().triangles(),
+            &self.positions(u),
+        )
+    }
 }
 
 /// A finite-element model: reference mesh, fixed nodes, effects, parameters.

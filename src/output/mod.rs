@@ -7,6 +7,9 @@
 //! | `path.svg` | [`write_diagram`], [`write_diagram_with`] | the path in two chosen quantities, turning points marked |
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
 //! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
+//! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
+//! | `branches.json` | [`write_branch_graph`] | the graph of critical points and branches |
+//! | `diagram.svg` | [`write_bifurcation_diagram`] | the path and every branch in one bifurcation diagram |
 //!
 //! [`write_run`] writes all of them for a finished run.
 //!
@@ -22,21 +25,31 @@
 //!
 //! [`PathReport`]: crate::report::PathReport
 
+mod branches;
 mod csv;
+mod diagram;
 mod json;
+mod manifest;
 mod matrix_market;
 mod progress;
+mod reopen;
 mod run;
 mod states;
 mod svg;
 
+pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten, PrimaryPath};
 pub use csv::write_csv;
+pub use diagram::{
+    write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
+};
 pub use json::{write_critical, write_json};
+pub use manifest::{remove_manifest, sha256, sweep_temporaries, write_manifest, MANIFEST};
 pub use matrix_market::{
     rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,
     RANK_ONE_FILE_TAG,
 };
 pub use progress::Progress;
+pub use reopen::{FinishedRun, ReopenError};
 pub use run::{
     file_name, write_run, RunSummary, TurningSummary, WriteRunError, Written, RUN_FILES,
 };

@@ -40,6 +40,10 @@ pub struct Written {
     pub pvd: PathBuf,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// The branches' files, when the run has branches.
+    pub branches: Option<super::BranchesWritten>,
+    /// `manifest.json`, written last.
+    pub manifest: PathBuf,
 }
 
 impl Written {
@@ -53,6 +57,10 @@ impl Written {
             self.pvd.clone(),
         ];
         files.extend(self.states.iter().cloned());
+        if let Some(b) = &self.branches {
+            files.extend(b.files.iter().cloned());
+        }
+        files.push(self.manifest.clone());
         files
     }
 }
@@ -85,7 +93,9 @@ pub fn file_name(p: &Path) -> String {
 }
 
 /// Writes `path.csv`, the states with `path.pvd`, `path.json` (with the saved states, which
-/// it records in the report), `critical.json` and `path.svg` into `out`, in that order.
+/// it records in the report), `critical.json`, `path.svg` and, last, `manifest.json` into
+/// `out`, in that order, after removing the old manifest and the temporary files a killed run
+/// left there.
 ///
 /// Path states go into the collection (PVD time = path step: ParaView orders datasets by
 /// time, and along a path that turns back in the control — a balloon past its pressure
@@ -97,6 +107,7 @@ pub fn write_run(
     out: &Path,
 ) -> Result<Written, WriteRunError> {
     let mut done: Vec<PathBuf> = Vec::new();
+    super::sweep_temporaries(out);
     macro_rules! attempt {
         ($e:expr) => {
             match $e {
@@ -105,6 +116,7 @@ pub fn write_run(
             }
         };
     }
+    attempt!(super::remove_manifest(out));
     let csv = attempt!(write_csv(out, &result.report));
     done.push(csv.clone());
     let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
@@ -198,6 +210,27 @@ pub fn write_run(
         (write_spectrum_diagram(out, report), plotted)
     };
     let svg = attempt!(svg);
+    done.push(svg.clone());
+    let branches = match &result.branches {
+        Some(b) => {
+            let primary = super::PrimaryPath::of(&result.report);
+            match super::write_branches(study, b, &primary, out) {
+                Ok(w) => {
+                    done.extend(w.files.iter().cloned());
+                    Some(w)
+                }
+                Err(mut e) => {
+                    done.append(&mut e.done);
+                    return Err(WriteRunError {
+                        error: e.error,
+                        done,
+                    });
+                }
+            }
+        }
+        None => None,
+    };
+    let manifest = attempt!(super::write_manifest(out, &done, &result.report.stop));
     Ok(Written {
         csv,
         json,
@@ -206,6 +239,8 @@ pub fn write_run(
         plotted,
         pvd,
         states,
+        branches,
+        manifest,
     })
 }
 
@@ -327,6 +362,9 @@ pub struct RunSummary {
     pub symmetric_unknowns: usize,
     /// Unknowns of the model.
     pub unknowns: usize,
+    /// The number of branches followed, with `[analysis.branches]` (left out otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branches: Option<usize>,
 }
 
 impl RunSummary {
@@ -355,6 +393,7 @@ impl RunSummary {
             group_order: report.group_order,
             symmetric_unknowns: report.symmetric_unknowns,
             unknowns: report.unknowns,
+            branches: written.branches.as_ref().map(|b| b.directories.len()),
         }
     }
 }

@@ -363,7 +363,7 @@ fn render(
 }
 
 /// Colours of the irreps' lines, in irrep order; past the last one they repeat, dashed.
-const PALETTE: [RGBColor; 10] = [
+pub(super) const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -799,7 +799,7 @@ fn unknown(report: &PathReport, name: &str) -> String {
 
 /// The range of `values` widened by 5 % on each side (a single value: ±5 % of it, or ±1 at
 /// zero; no values: 0..1).
-fn padded(values: impl Iterator<Item = f64>) -> Range<f64> {
+pub(super) fn padded(values: impl Iterator<Item = f64>) -> Range<f64> {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
         (lo.min(v), hi.max(v))
     });
@@ -818,7 +818,7 @@ fn padded(values: impl Iterator<Item = f64>) -> Range<f64> {
 }
 
 /// `x` with five significant digits (`1.3551`, `0.0012346`, `12346`, `1.2346e7`).
-fn short(x: f64) -> String {
+pub(super) fn short(x: f64) -> String {
     let a = x.abs();
     if a == 0.0 || !a.is_finite() {
         return format!("{x}");

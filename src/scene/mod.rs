@@ -571,6 +571,43 @@ pub struct PathAnalysis {
     /// Newton iterations per step before the step is cut. Default 25.
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
+    /// `[analysis.branches]`: switch at the path's bifurcation points and follow the
+    /// branches that leave them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branches: Option<BranchesAnalysis>,
+}
+
+/// `[analysis.branches]` of a path: at every bifurcation point of the path (or those listed
+/// in `points`), one branch per conjugacy class of axial isotropy subgroups of its irrep
+/// (both halves where they are not conjugate), each followed for `steps` points in its own
+/// fixed-point space; with `depth = 2` also the branches of the branches' bifurcation points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct BranchesAnalysis {
+    /// 1: the branches of the path's critical points; 2: also those of their critical
+    /// points; at most [`MAX_BRANCH_DEPTH`]. Default 1.
+    #[serde(default = "default_depth")]
+    pub depth: usize,
+    /// Points of each branch after the point it leaves (≥ 1). Default 40.
+    #[serde(default = "default_branch_steps")]
+    pub steps: usize,
+    /// Largest arclength step along a branch. Default: the path's `max-step`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_step: Option<f64>,
+    /// The path's critical points to switch at, numbered from 1 in the order of
+    /// `critical.json` (the `NN` of `critical_NN.vtu`). Default: every one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<usize>>,
+}
+
+/// The largest `analysis.branches.depth`.
+pub const MAX_BRANCH_DEPTH: usize = 3;
+
+fn default_depth() -> usize {
+    1
+}
+fn default_branch_steps() -> usize {
+    40
 }
 
 /// `analysis.direction`.

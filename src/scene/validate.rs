@@ -494,6 +494,35 @@ fn check_constraints(scene: &Scene) -> Result<(), Problem> {
     Ok(())
 }
 
+/// `[analysis.branches]`: depth within [1, MAX_BRANCH_DEPTH], steps ≥ 1, a positive
+/// max-step, points numbered from 1 without repeats.
+fn check_branches(b: &super::BranchesAnalysis) -> Result<(), Problem> {
+    if b.depth < 1 || b.depth > super::MAX_BRANCH_DEPTH {
+        return Err(Problem::at(
+            "analysis.branches.depth",
+            format!(
+                "must lie within [1, {}], got {}",
+                super::MAX_BRANCH_DEPTH,
+                b.depth
+            ),
+        ));
+    }
+    at_least("analysis.branches.steps", b.steps, 1)?;
+    if let Some(m) = b.max_step {
+        positive("analysis.branches.max-step", m)?;
+    }
+    if let Some(points) = &b.points {
+        for (i, &p) in points.iter().enumerate() {
+            let key = format!("analysis.branches.points[{i}]");
+            at_least(&key, p, 1)?;
+            if points[..i].contains(&p) {
+                return Err(Problem::at(&key, format!("= {p} is listed twice")));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_analysis(scene: &Scene) -> Result<(), Problem> {
     match &scene.analysis {
         Analysis::Path(a) => {
@@ -541,6 +570,9 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
             at_least("analysis.save-every", a.save_every, 1)?;
             if let Some(s) = a.stop_stretch {
                 positive("analysis.stop-stretch", s)?;
+            }
+            if let Some(b) = &a.branches {
+                check_branches(b)?;
             }
             check_newton(a.tolerance, a.max_iterations)
         }

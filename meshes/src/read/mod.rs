@@ -47,6 +47,31 @@ pub const SUPPORTED: &str = ".msh (Gmsh 4.1 ascii), .vtu (VTK XML unstructured g
 /// Prefix of the point fields that carry node sets (`set_rim` is the node set `rim`).
 pub const NODE_SET_PREFIX: &str = "set_";
 
+/// Reads a `.vtu` file as [`read_mesh`] does, and its 3-component point field `field` (a
+/// state's `displacement`, a critical point's `critical_mode` …), one vector per node.
+///
+/// # Errors
+/// [`MeshError::Io`] if the file cannot be read; [`MeshError::Read`] if it is not a VTU file
+/// our readers accept, or has no such field, or one of another size.
+pub fn read_vtu_field(path: &Path, field: &str) -> Result<(Mesh, Vec<[f64; 3]>), MeshError> {
+    let fail = |message: String| MeshError::Read {
+        path: path.to_path_buf(),
+        message,
+    };
+    let is_vtu = path
+        .extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("vtu"));
+    if !is_vtu {
+        return Err(fail("expected a .vtu file".into()));
+    }
+    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text: {e}")))?;
+    vtu::parse_with_field(&text, field).map_err(fail)
+}
+
 /// Reads a mesh file, choosing the reader by the extension (`.msh`, `.vtu`; see the
 /// [module docs](self)).
 ///

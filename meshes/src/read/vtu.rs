@@ -32,6 +32,42 @@ const MAX_DEPTH: usize = 32;
 
 /// Parses a whole `.vtu` text.
 pub(super) fn parse(text: &str) -> Result<Mesh, String> {
+    let (root, layout) = document(text)?;
+    mesh_of(&root, layout)
+}
+
+/// Parses a whole `.vtu` text: the mesh, and the 3-component point field `field` (as the
+/// state writers store a displacement or a mode).
+pub(super) fn parse_with_field(text: &str, field: &str) -> Result<(Mesh, Vec<[f64; 3]>), String> {
+    let (root, layout) = document(text)?;
+    let mesh = mesh_of(&root, layout)?;
+    let piece = root.only_child("UnstructuredGrid")?.only_child("Piece")?;
+    let points = piece.count_attr("NumberOfPoints")?;
+    let array = piece
+        .children("PointData")
+        .flat_map(|d| d.children("DataArray"))
+        .find(|a| a.attrs.get("Name").is_some_and(|n| n == field))
+        .ok_or_else(|| format!("<PointData> has no DataArray \"{field}\""))?;
+    let components = array.count_attr("NumberOfComponents").unwrap_or(1);
+    if components != 3 {
+        return Err(format!(
+            "{}: {components} components, expected 3",
+            array.label()
+        ));
+    }
+    let values = read_floats(array, layout, 3, points)?;
+    let mut out = Vec::with_capacity(points);
+    for (i, c) in values.chunks_exact(3).enumerate() {
+        if !c.iter().all(|v| v.is_finite()) {
+            return Err(format!("{}: point {i} is not finite", array.label()));
+        }
+        out.push([c[0], c[1], c[2]]);
+    }
+    Ok((mesh, out))
+}
+
+/// The document's root `<VTKFile>` and its binary layout.
+fn document(text: &str) -> Result<(Element, Layout), String> {
     let root = parse_xml(text)?;
     if root.name != "VTKFile" {
         return Err(format!(
@@ -69,6 +105,11 @@ pub(super) fn parse(text: &str) -> Result<Mesh, String> {
             }
         },
     };
+    Ok((root, layout))
+}
+
+/// The mesh of a parsed document.
+fn mesh_of(root: &Element, layout: Layout) -> Result<Mesh, String> {
     let grid = root.only_child("UnstructuredGrid")?;
     let piece = grid.only_child("Piece")?;
     let points = piece.count_attr("NumberOfPoints")?;

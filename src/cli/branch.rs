@@ -1,0 +1,220 @@
+//! `memstab branch RUN_DIR --critical N [--scene FILE] [--depth D] [--steps S]
+//! [--max-step X] [--out DIR] [--json]`: branch switching at critical point N of a finished
+//! run, and the summary of a run's branches (also printed by `memstab run`).
+//!
+//! The run is read back ([`memstab::output::FinishedRun`]: `path.json` and
+//! `critical_NN.vtu`), its scene rebuilt (`--scene`, else the file recorded in `path.json`)
+//! and checked against the run, the start state solved again (it sets the targets of
+//! `"initial"` constraints), and the branches of point N followed
+//! ([`memstab::analysis::branch`]) with the scene's `[analysis.branches]` settings where it
+//! has them, overridden by the flags. Writes `branches.json`, `branch_NN/` and `diagram.svg`
+//! into DIR (default RUN_DIR). Bad input (no run in RUN_DIR, N out of range, a scene that does
+//! not match the run, a bad flag value) is one line and exit 2, with nothing written; a start
+//! state that does not converge is exit 1.
+
+use super::common::{build_study, load_scene, one_line, sig_digits};
+use super::CliError;
+use clap::Args;
+use memstab::analysis::branch::{self, Branches, Node};
+use memstab::analysis::equilibrium::solve_start;
+use memstab::output::{write_branches, BranchesWritten, FinishedRun};
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub(crate) struct BranchArgs {
+    /// The output directory of a finished `memstab run`.
+    run_dir: PathBuf,
+    /// The critical point to switch at: N of critical_NN.vtu (the N-th of critical.json).
+    #[arg(long)]
+    critical: usize,
+    /// The scene file (default: the one recorded in RUN_DIR/path.json).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// 1: the point's branches; 2: also the branches of their critical points (at most 3).
+    #[arg(long)]
+    depth: Option<usize>,
+    /// Points of each branch (default: the scene's [analysis.branches] steps, else 40).
+    #[arg(long)]
+    steps: Option<usize>,
+    /// Largest arclength step along a branch (default: the scene's, else its path's).
+    #[arg(long)]
+    max_step: Option<f64>,
+    /// Output directory (default RUN_DIR; it must exist).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print one JSON object (the files written and the branches) instead of the summary.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
+    let input = |e: memstab::output::ReopenError| CliError::Input(one_line(&e.to_string()));
+    let finished = FinishedRun::read(&args.run_dir).map_err(input)?;
+    let out = args.out.clone().unwrap_or_else(|| args.run_dir.clone());
+    if !out.is_dir() {
+        return Err(CliError::Input(format!(
+            "--out '{}' is not an existing directory",
+            out.display()
+        )));
+    }
+    if let Some(d) = args.depth {
+        if !(1..=memstab::scene::MAX_BRANCH_DEPTH).contains(&d) {
+            return Err(CliError::Input(format!(
+                "--depth {d}: must lie within [1, {}]",
+                memstab::scene::MAX_BRANCH_DEPTH
+            )));
+        }
+    }
+    if args.steps == Some(0) {
+        return Err(CliError::Input("--steps 0: must be >= 1".into()));
+    }
+    if let Some(m) = args.max_step {
+        if !(m.is_finite() && m > 0.0) {
+            return Err(CliError::Input(format!("--max-step {m}: must be > 0")));
+        }
+    }
+    let scene_file = args
+        .scene
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(&finished.origin));
+    let mut study = build_study(load_scene(&scene_file)?)?;
+    finished.check(&study).map_err(input)?;
+    let (state, mode) = finished.state(&study, args.critical).map_err(input)?;
+    let critical = branch::recorded_points(&study, &finished.critical, args.critical, state, mode)
+        .map_err(CliError::Input)?;
+    let start = study.start.clone();
+    solve_start(&mut study, &start).map_err(|e| {
+        CliError::Failure(format!("{}; nothing was written", one_line(&e.to_string())))
+    })?;
+    let scene_branches = match &study.scene.analysis {
+        memstab::scene::Analysis::Path(p) => p.branches.clone(),
+        _ => None,
+    };
+    let mut opts = branch::options(&study, scene_branches.as_ref());
+    opts.points = Some(vec![args.critical]);
+    if let Some(d) = args.depth {
+        opts.depth = d;
+    }
+    if let Some(s) = args.steps {
+        opts.steps = s;
+        opts.path.max_steps = s;
+    }
+    if let Some(m) = args.max_step {
+        opts.path.max_step = m;
+        opts.path.initial_step = opts.path.initial_step.min(m);
+        opts.path.min_step = opts.path.min_step.min(m);
+    }
+    let branches = branch::run(&study, &critical, opts);
+    let written = write_branches(&study, &branches, &finished.path, &out)
+        .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
+    if args.json {
+        let files: Vec<String> = written
+            .files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
+        let json = serde_json::json!({
+            "run": args.run_dir,
+            "critical": args.critical,
+            "out": out,
+            "branches": written.json,
+            "diagram": written.diagram,
+            "count": branches.runs.len(),
+            "files": files,
+        });
+        println!("{json}");
+    } else {
+        print_branches(&branches, &written, &finished.path.control);
+    }
+    Ok(())
+}
+
+/// The branches of a run: per switched critical point its branches (isotropy, half, kind,
+/// points, the control at the end, stability, why it stopped), the points not switched and
+/// why, and what was written.
+pub(crate) fn print_branches(b: &Branches, written: &BranchesWritten, control: &str) {
+    let g = &b.graph;
+    println!(
+        "branches (depth {}): {} in {:.1} s",
+        b.depth,
+        g.branches.len(),
+        b.time.as_secs_f64()
+    );
+    for n in g.graph.node_indices() {
+        let Node::Critical {
+            on,
+            number,
+            point,
+            skipped,
+        } = &g.graph[n]
+        else {
+            continue;
+        };
+        let leaving = g.leaving(n);
+        let on = on.map_or_else(|| "path".to_string(), branch::directory);
+        match skipped {
+            Some(why) if leaving.is_empty() => {
+                if on == "path" {
+                    println!("  {on} #{number} {} in {}: {why}", point.kind, point.irrep);
+                }
+                continue;
+            }
+            _ => {}
+        }
+        let also = skipped
+            .as_ref()
+            .map_or_else(String::new, |why| format!(" (not every direction: {why})"));
+        println!(
+            "  {on} #{number} {} in {}: {} branch{}{also}",
+            point.kind,
+            point.irrep,
+            leaving.len(),
+            if leaving.len() == 1 { "" } else { "es" }
+        );
+        for i in leaving {
+            let br = &g.branches[i];
+            let run = &b.runs[i];
+            let last = br.points.last().map_or(0.0, |p| {
+                run.report
+                    .parameters
+                    .iter()
+                    .position(|x| x == control)
+                    .map_or(0.0, |c| p.parameters[c])
+            });
+            let unstable = run
+                .report
+                .rows
+                .iter()
+                .filter(|r| r.index.is_some_and(|i| i > 0))
+                .count();
+            let known = run.report.rows.iter().filter(|r| r.index.is_some()).count();
+            let stability = match (known, unstable) {
+                (0, _) => "stability not analysed".to_string(),
+                (_, 0) => "stable".to_string(),
+                (k, u) if u == k => "unstable".to_string(),
+                (k, u) => format!("unstable at {u} of {k} points"),
+            };
+            println!(
+                "    {} {}{} ({} halves, {}): {} points to {control} = {}, {stability}, isotropy on the states {}; {}",
+                run.directory,
+                br.isotropy,
+                br.half,
+                br.halves,
+                br.reduced.bifurcation,
+                br.points.len(),
+                sig_digits(last, 6),
+                if br.isotropy_exact() { "exact" } else { "NOT exact" },
+                br.stop
+            );
+            for w in &br.warnings {
+                println!("      warning: {w}");
+            }
+        }
+    }
+    println!(
+        "wrote {} (the graph), {} (every branch), {} branch directories",
+        written.json.display(),
+        written.diagram.display(),
+        written.directories.len()
+    );
+}

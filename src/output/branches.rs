@@ -1,0 +1,410 @@
+//! The outputs of branch switching ([`crate::analysis::branch`]): one directory per branch
+//! with the usual path files (`branch_01/path.csv`, …), `branches.json` — the graph of
+//! critical points and branches — and `diagram.svg`, every branch in one bifurcation diagram.
+
+use super::diagram::{write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark};
+use super::{write_run, write_whole, OutputError, WriteRunError};
+use crate::analysis::branch::{Branches, Node, ASYMMETRY};
+use crate::analysis::critical::CriticalKind;
+use crate::analysis::events::StopReason;
+use crate::analysis::RunResult;
+use crate::report::PathReport;
+use crate::study::Study;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// What the diagram needs of the path the branches leave: the control and the index at
+/// every point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PrimaryPath {
+    /// The scene's name.
+    pub scene: String,
+    /// The scene's group.
+    pub group: String,
+    /// The control's name.
+    pub control: String,
+    /// Parameter names, in order.
+    pub parameters: Vec<String>,
+    /// The control at every point.
+    pub values: Vec<f64>,
+    /// The index at every point.
+    pub index: Vec<Option<usize>>,
+}
+
+impl PrimaryPath {
+    /// The path of a run's report.
+    pub fn of(report: &PathReport) -> Self {
+        let c = report.parameters.iter().position(|p| *p == report.control);
+        Self {
+            scene: report.scene.clone(),
+            group: report.group.clone(),
+            control: report.control.clone(),
+            parameters: report.parameters.clone(),
+            values: report
+                .rows
+                .iter()
+                .map(|r| c.map_or(0.0, |c| r.parameters[c]))
+                .collect(),
+            index: report.rows.iter().map(|r| r.index).collect(),
+        }
+    }
+}
+
+/// What [`write_branches`] wrote.
+#[derive(Debug, Clone)]
+pub struct BranchesWritten {
+    /// `branches.json`.
+    pub json: PathBuf,
+    /// `diagram.svg`.
+    pub diagram: PathBuf,
+    /// The branch directories, in order.
+    pub directories: Vec<PathBuf>,
+    /// Every file, in the order written.
+    pub files: Vec<PathBuf>,
+}
+
+#[derive(Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case")]
+enum NodeJson<'a> {
+    Critical {
+        id: usize,
+        on: String,
+        number: usize,
+        kind: CriticalKind,
+        irrep: &'a str,
+        multiplicity: usize,
+        parameters: BTreeMap<&'a str, f64>,
+        after_step: usize,
+        isotropy: &'a str,
+        branches: Vec<String>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        skipped: Option<String>,
+    },
+    End {
+        id: usize,
+        branch: String,
+        stop: &'a StopReason,
+    },
+}
+
+#[derive(Serialize)]
+struct Stretch {
+    first: usize,
+    last: usize,
+    stable: bool,
+}
+
+#[derive(Serialize)]
+struct BranchJson<'a> {
+    id: String,
+    directory: String,
+    from: usize,
+    to: usize,
+    on: String,
+    irrep: &'a str,
+    isotropy: &'a str,
+    isotropy_order: usize,
+    isotropy_in_parent: &'a str,
+    half: String,
+    halves: String,
+    bifurcation: String,
+    path_slope: f64,
+    mode_slope: f64,
+    points: usize,
+    symmetric_unknowns: usize,
+    isotropy_of_states: String,
+    isotropy_exact: bool,
+    stability: Vec<Stretch>,
+    critical: usize,
+    end: BTreeMap<&'a str, f64>,
+    stop: &'a StopReason,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stability_note: Option<&'a str>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    warnings: Vec<&'a str>,
+}
+
+#[derive(Serialize)]
+struct GraphJson<'a> {
+    scene: &'a str,
+    group: &'a str,
+    control: &'a str,
+    depth: usize,
+    nodes: Vec<NodeJson<'a>>,
+    branches: Vec<BranchJson<'a>>,
+}
+
+/// Where a path lies: `path` or its branch's directory.
+fn on_name(on: Option<usize>) -> String {
+    on.map_or_else(|| "path".to_string(), crate::analysis::branch::directory)
+}
+
+/// The stable (index 0) and unstable stretches of a branch's rows (row 0, the critical
+/// point, has no index and joins the first stretch).
+fn stretches(report: &PathReport) -> Vec<Stretch> {
+    let mut out: Vec<Stretch> = Vec::new();
+    for (k, r) in report.rows.iter().enumerate() {
+        let Some(i) = r.index else { continue };
+        let stable = i == 0;
+        match out.last_mut() {
+            Some(s) if s.stable == stable => s.last = k,
+            _ => out.push(Stretch {
+                first: if out.is_empty() { 0 } else { k },
+                last: k,
+                stable,
+            }),
+        }
+    }
+    out
+}
+
+/// Writes `out/branches.json` from the graph; returns its path.
+///
+/// # Errors
+/// [`OutputError::Invalid`] if a number is not finite (nothing is written), else as
+/// [`write_whole`].
+pub fn write_branch_graph(
+    out: &Path,
+    branches: &Branches,
+    primary: &PrimaryPath,
+) -> Result<PathBuf, OutputError> {
+    let path = out.join("branches.json");
+    let g = &branches.graph;
+    let by_name = |values: &[f64]| -> BTreeMap<&str, f64> {
+        primary
+            .parameters
+            .iter()
+            .map(String::as_str)
+            .zip(values.iter().copied())
+            .collect()
+    };
+    let mut nodes = Vec::new();
+    for n in g.graph.node_indices() {
+        nodes.push(match &g.graph[n] {
+            Node::Critical {
+                on,
+                number,
+                point,
+                skipped,
+            } => NodeJson::Critical {
+                id: n.index(),
+                on: on_name(*on),
+                number: *number,
+                kind: point.kind,
+                irrep: &point.irrep,
+                multiplicity: point.multiplicity,
+                parameters: by_name(&point.parameters),
+                after_step: point.after_step,
+                isotropy: &point.isotropy.name,
+                branches: g
+                    .leaving(n)
+                    .into_iter()
+                    .map(crate::analysis::branch::directory)
+                    .collect(),
+                skipped: skipped.as_ref().map(|s| s.to_string()),
+            },
+            Node::End { branch, stop } => NodeJson::End {
+                id: n.index(),
+                branch: crate::analysis::branch::directory(*branch),
+                stop,
+            },
+        });
+    }
+    let mut list = Vec::new();
+    for e in g.graph.edge_indices() {
+        let (from, to) = g.graph.edge_endpoints(e).expect("an edge of the graph");
+        let i = g.graph[e];
+        let b = &g.branches[i];
+        let run = &branches.runs[i];
+        let last = b.points.last().expect("the critical point at least");
+        let mut end = by_name(&last.parameters);
+        end.insert(ASYMMETRY, last.asymmetry);
+        let classes: Vec<&str> = b.points[1..]
+            .iter()
+            .map(|p| p.stabiliser_class.as_str())
+            .collect();
+        let of_states = match classes.first() {
+            Some(c) if classes.iter().all(|x| x == c) => c.to_string(),
+            Some(_) => "mixed".to_string(),
+            None => "none".to_string(),
+        };
+        list.push(BranchJson {
+            id: run.directory.clone(),
+            directory: run.directory.clone(),
+            from: from.index(),
+            to: to.index(),
+            on: on_name(b.parent),
+            irrep: &b.irrep,
+            isotropy: &b.isotropy,
+            isotropy_order: b.elements.len(),
+            isotropy_in_parent: &b.class_in_parent,
+            half: b.half.to_string(),
+            halves: b.halves.to_string(),
+            bifurcation: b.reduced.bifurcation.to_string(),
+            path_slope: b.reduced.path_slope,
+            mode_slope: b.reduced.mode_slope,
+            points: b.points.len(),
+            symmetric_unknowns: b.symmetric_unknowns,
+            isotropy_of_states: of_states,
+            isotropy_exact: b.isotropy_exact(),
+            stability: stretches(&run.report),
+            critical: b.critical.len(),
+            end,
+            stop: &b.stop,
+            stability_note: b.stability_note.as_deref(),
+            warnings: b.warnings.iter().map(String::as_str).collect(),
+        });
+    }
+    for b in &list {
+        let bad = [("path_slope", b.path_slope), ("mode_slope", b.mode_slope)]
+            .into_iter()
+            .chain(b.end.iter().map(|(k, v)| (*k, *v)))
+            .find(|(_, v)| !v.is_finite());
+        if let Some((name, v)) = bad {
+            return Err(OutputError::invalid(
+                &path,
+                format!("branch {}: {name} is {v} (not finite)", b.id),
+            ));
+        }
+    }
+    let json = GraphJson {
+        scene: &primary.scene,
+        group: &primary.group,
+        control: &primary.control,
+        depth: branches.depth,
+        nodes,
+        branches: list,
+    };
+    write_whole(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &json).map_err(io::Error::other)?;
+        writeln!(w)
+    })?;
+    Ok(path)
+}
+
+/// The bifurcation diagram of the path and its branches.
+pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram {
+    let g = &branches.graph;
+    let c = primary
+        .parameters
+        .iter()
+        .position(|p| *p == primary.control);
+    let control = |p: &[f64]| c.map_or(0.0, |c| p[c]);
+    let mut lines = vec![DiagramLine {
+        class: format!("path ({})", primary.group),
+        path: true,
+        points: primary.values.iter().map(|&x| (x, 0.0)).collect(),
+        stable: primary.index.iter().map(|i| i.map(|i| i == 0)).collect(),
+    }];
+    for (b, run) in g.branches.iter().zip(&branches.runs) {
+        lines.push(DiagramLine {
+            class: b.isotropy.clone(),
+            path: false,
+            points: b
+                .points
+                .iter()
+                .map(|p| (control(&p.parameters), b.sign * p.asymmetry))
+                .collect(),
+            stable: run
+                .report
+                .rows
+                .iter()
+                .map(|r| r.index.map(|i| i == 0))
+                .collect(),
+        });
+    }
+    let mut marks = Vec::new();
+    for n in g.graph.node_weights() {
+        if let Node::Critical { on, point, .. } = n {
+            let y = match on {
+                None => 0.0,
+                Some(b) => {
+                    let sign = g.branches[*b].sign;
+                    let asym = branches.runs[*b]
+                        .report
+                        .critical
+                        .iter()
+                        .find(|c| c.after_step == point.after_step && c.irrep == point.irrep)
+                        .and_then(|c| c.measures.last().copied())
+                        .unwrap_or(0.0);
+                    sign * asym
+                }
+            };
+            marks.push(DiagramMark {
+                x: control(&point.parameters),
+                y,
+                label: format!("{} {}", point.kind.short(), point.irrep),
+            });
+        }
+    }
+    BifurcationDiagram {
+        title: format!(
+            "{} (group {}): path and branches",
+            primary.scene, primary.group
+        ),
+        control: primary.control.clone(),
+        lines,
+        marks,
+    }
+}
+
+/// Writes every branch's directory (the files of [`write_run`]), then `branches.json` and
+/// `diagram.svg`, into `out`.
+///
+/// # Errors
+/// The first error, with the files already written.
+pub fn write_branches(
+    study: &Study,
+    branches: &Branches,
+    primary: &PrimaryPath,
+    out: &Path,
+) -> Result<BranchesWritten, WriteRunError> {
+    let mut done: Vec<PathBuf> = Vec::new();
+    let mut directories = Vec::new();
+    for run in &branches.runs {
+        let dir = out.join(&run.directory);
+        if !dir.is_dir() {
+            if let Err(source) = std::fs::create_dir(&dir) {
+                return Err(WriteRunError {
+                    error: OutputError::Io { path: dir, source },
+                    done,
+                });
+            }
+        }
+        let mut result = RunResult {
+            report: run.report.clone(),
+            states: run.states.clone(),
+            times: Default::default(),
+            branches: None,
+        };
+        match write_run(study, &mut result, &dir) {
+            Ok(w) => done.extend(w.files()),
+            Err(mut e) => {
+                done.append(&mut e.done);
+                return Err(WriteRunError {
+                    error: e.error,
+                    done,
+                });
+            }
+        }
+        directories.push(dir);
+    }
+    let json = match write_branch_graph(out, branches, primary) {
+        Ok(p) => p,
+        Err(error) => return Err(WriteRunError { error, done }),
+    };
+    done.push(json.clone());
+    let diagram = match write_bifurcation_diagram(out, &diagram(branches, primary)) {
+        Ok(p) => p,
+        Err(error) => return Err(WriteRunError { error, done }),
+    };
+    done.push(diagram.clone());
+    Ok(BranchesWritten {
+        json,
+        diagram,
+        directories,
+        files: done,
+    })
+}
