@@ -238,6 +238,15 @@ fn chiral_c7_disc_doubles_in_e_k_and_m7_gives_two_simple_points_in_a() {
     assert!(fine
         .iter()
         .all(|r| r.multiplicity == if r.irrep == "A" { 1 } else { 2 }));
+    // Every rung's irrep is one the Fourier pair of its wave number spans in C7.
+    let c7 = memstab::symmetry::Group::by_name("C7").unwrap();
+    for r in &fine {
+        let spanned = c7.fourier_irreps(r.m).unwrap();
+        assert!(
+            spanned.iter().any(|(n, _)| *n == r.irrep),
+            "{r:?}: {spanned:?}"
+        );
+    }
     let gap = |rungs: &[Rung]| {
         let r = of(rungs, 7);
         assert_eq!(r.len(), 2, "m = 7: {r:?}");
