@@ -85,7 +85,8 @@ pub struct Study {
 
 fn side(s: scene::FluidSide) -> FluidSide {
     match s {
-        // The disc generators orient their normal along +z: fluid below is behind it.
+        // Open meshes are oriented with their normals up (`orient_up`): fluid below is
+        // behind them.
         scene::FluidSide::Inside | scene::FluidSide::Below => FluidSide::Behind,
         scene::FluidSide::Above => FluidSide::Front,
     }
@@ -106,8 +107,14 @@ impl Study {
             format!("scene '{}' ({})", scene.info.name, scene.mesh.describe()),
             scene.estimated_bytes(),
         )?;
-        let mesh = scene.build_mesh()?;
-        let warnings = scene.mesh_warnings(&mesh);
+        let mut mesh = scene.build_mesh()?;
+        let mut warnings = scene.mesh_warnings(&mesh);
+        if orient_up(&mut mesh.mesh) {
+            warnings.push(format!(
+                "{}: the triangles' normals pointed down (−z); they were turned to point up, so that fluid 'below' is under the membrane and 'above' on it",
+                mesh_key(&scene)
+            ));
+        }
         let m = &mesh.mesh;
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
         let topology = m
@@ -356,6 +363,22 @@ impl Study {
         }
         u
     }
+}
+
+/// Turns an open mesh whose normals point down on the whole (a negative projected area
+/// Σ_T A_T·ẑ, which only its boundary determines) to point up — the orientation in which
+/// fluid "below" and "above" and the closing plate are defined; true if it did. A closed mesh
+/// (outward by construction) and one whose boundary projects to no area are left as they are.
+fn orient_up(m: &mut meshes::Mesh) -> bool {
+    if m.topology().is_ok_and(|t| t.closed) {
+        return false;
+    }
+    let projected: f64 = (0..m.triangles.len()).map(|t| m.area_vector(t).z).sum();
+    if projected < -1e-9 * m.area() {
+        m.reverse_orientation();
+        return true;
+    }
+    false
 }
 
 /// The flat plate closing an open membrane: every boundary loop fixed and in one horizontal

@@ -16,6 +16,7 @@ mod cli_spectrum;
 mod effects_model;
 mod export_rank_one;
 mod fluid_volume;
+mod fuzz;
 mod hard_cases;
 mod lanczos_cap;
 mod linalg;

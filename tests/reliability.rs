@@ -595,3 +595,90 @@ fn a_stop_stretch_behind_the_start_is_not_reached() {
         "{text}"
     );
 }
+
+/// A mesh file with every triangle reversed (normals down) is turned to point up, with a
+/// warning: fluid `side = "below"` still pushes the disc up, and the path is the one of the
+/// file as given.
+#[test]
+fn an_inverted_mesh_file_is_oriented_by_the_fluid_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let msh = std::fs::read_to_string(root.join("meshes/disc_c7v.msh")).unwrap();
+    // Swap the last two nodes of every element line between $Elements' headers and its end.
+    let mut inverted = Vec::new();
+    let mut in_elements = 0;
+    for line in msh.lines() {
+        match line {
+            "$Elements" => in_elements = 1,
+            "$EndElements" => in_elements = 0,
+            _ if in_elements > 0 => in_elements += 1,
+            _ => {}
+        }
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if in_elements > 3 && fields.len() == 4 {
+            inverted.push(format!(
+                "{} {} {} {}",
+                fields[0], fields[1], fields[3], fields[2]
+            ));
+        } else {
+            inverted.push(line.to_string());
+        }
+    }
+    assert_ne!(inverted.join("\n"), msh.trim_end());
+    std::fs::write(dir.path().join("inverted.msh"), inverted.join("\n")).unwrap();
+    let text = std::fs::read_to_string(root.join("disc_file.toml")).unwrap();
+    let mut runs = Vec::new();
+    for (name, mesh) in [
+        ("given", root.join("meshes/disc_c7v.msh")),
+        ("inverted", dir.path().join("inverted.msh")),
+    ] {
+        let scene = text
+            .replace("path = \"meshes/disc_c7v.msh\"", &quoted_path(&mesh))
+            .replace("steps = 400", "steps = 12");
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&path, scene).unwrap();
+        let out = dir.path().join(name);
+        let o = memstab(&[
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+        runs.push(report);
+    }
+    let flipped = |r: &serde_json::Value| {
+        r["warnings"].as_array().is_some_and(|w| {
+            w.iter()
+                .any(|w| w.as_str().unwrap().contains("normals pointed down"))
+        })
+    };
+    assert!(!flipped(&runs[0]) && flipped(&runs[1]));
+    let max_z = |r: &serde_json::Value| -> Vec<f64> {
+        let k = r["measures"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|m| m == "max_z")
+            .unwrap();
+        r["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|row| row["measures"][k].as_f64().unwrap())
+            .collect()
+    };
+    let (a, b) = (max_z(&runs[0]), max_z(&runs[1]));
+    assert_eq!(a.len(), b.len());
+    assert!(a.last().unwrap() > &0.05, "the fluid lifts the disc: {a:?}");
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-9 * x.abs().max(1e-3), "{a:?} vs {b:?}");
+    }
+}
+
+fn quoted_path(p: &Path) -> String {
+    format!("path = {}", quoted(p.to_str().unwrap()))
+}

@@ -83,6 +83,13 @@ impl Mesh {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// Reverses every triangle's orientation (its normal), keeping the triangles' numbers.
+    pub fn reverse_orientation(&mut self) {
+        for t in &mut self.triangles {
+            t.swap(1, 2);
+        }
+    }
+
     /// The area vector `½ (x2 − x1) × (x3 − x1)` of triangle `t`.
     pub fn area_vector(&self, t: usize) -> Vec3 {
         let [a, b, c] = self.triangles[t];
