@@ -19,6 +19,9 @@
 //!
 //! The index of the state is Σ_μ d_μ · neg(block μ).
 //!
+//! A complex-type irrep (the E_k of a chiral C_n) has a Hermitian block (docs/theory.md
+//! §10.6), solved dense: its eigenvalues, each d = 2 times in K, its negative count from them.
+//!
 //! How a block is solved (docs/theory.md §8.6–§8.8):
 //! - the negative count, at every path point, from the inertia of one sparse LBLᵀ of the
 //!   block bordered by its rigid modes, constraints and rank-one terms (Haynsworth);
@@ -47,7 +50,8 @@ pub struct BlockSpectrum {
     pub irrep: String,
     /// Irrep dimension d (every eigenvalue below occurs d times in K).
     pub dim: usize,
-    /// Block size m_μ (columns of one partner).
+    /// Block size m_μ (columns of one partner; complex columns for a complex-type irrep,
+    /// whose eigenvectors have the 2m real coordinates of its basis).
     pub size: usize,
     /// Rigid-body zero modes found in this block (deflated).
     pub rigid_modes: usize,
@@ -457,6 +461,57 @@ fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
     SymmetricPattern::from_entries(m + border, entries)
 }
 
+/// The spectrum of a complex-type block (docs/theory.md §10.6) from its real restriction `k`
+/// (2m × 2m in the basis [u, v]) and the real coordinates `r` of the rigid modes: the
+/// eigenvalues of the Hermitian m × m block on the complement of the rigid modes' complex
+/// span, each double in K by construction; eigenvectors back in real coordinates.
+fn complex_block(
+    ib: &crate::adapted::IrrepBasis,
+    k: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    scale: f64,
+    with_vectors: bool,
+) -> BlockSpectrum {
+    use crate::adapted::{hermitian, to_complex, to_real};
+    use crate::linalg::hermitian::{hermitian_eigen, ComplexComplement};
+    let h = hermitian(k);
+    let m = h.nrows();
+    let rc_cols: Vec<Vec<_>> = r.column_iter().map(|c| to_complex(c.as_slice())).collect();
+    let rc = DMatrix::from_fn(m, rc_cols.len(), |i, j| rc_cols[j][i]);
+    // ‖z‖ = ‖[p; q]‖: a rigid column of order one stays of order one.
+    let rigid = ComplexComplement::of(&rc, 1e-12);
+    let rigid_modes = rigid.rank();
+    let rigid_residual = if r.ncols() > 0 {
+        (k * r).amax() / (scale * r.amax().max(1e-300))
+    } else {
+        0.0
+    };
+    let (values, vecs) = hermitian_eigen(&rigid.restrict(h), with_vectors);
+    let keep = values.len().min(8).min(vecs.ncols());
+    let vectors = if keep > 0 {
+        let y = rigid.lift(&vecs.columns(0, keep).into_owned());
+        let cols: Vec<Vec<f64>> = y.column_iter().map(|z| to_real(z.as_slice())).collect();
+        DMatrix::from_fn(2 * m, keep, |i, j| cols[j][i])
+    } else {
+        DMatrix::zeros(2 * m, 0)
+    };
+    let negative = values.iter().filter(|&&v| v < 0.0).count();
+    BlockSpectrum {
+        irrep: ib.name.clone(),
+        dim: ib.dim,
+        size: m,
+        rigid_modes,
+        // Held neutral motions are deflated in the real blocks only; a complex block keeps them.
+        held: 0,
+        rigid_residual,
+        eigenvalues: values,
+        complete: true,
+        eigen_error: None,
+        negative,
+        vectors,
+    }
+}
+
 impl<'a> Stability<'a> {
     /// The analysis of `model` with the adapted `basis` of the scene's group.
     pub fn new(model: &'a dyn Model, basis: &'a AdaptedBasis) -> Self {
@@ -707,15 +762,20 @@ impl<'a> Stability<'a> {
 
     /// An evaluation buffer for [`Stability::analyse`] that assembles only the triangles
     /// around the orbit representatives (all a block restriction reads; ≈ 1/|G| of the
-    /// mesh). Its F and K are exact only there.
+    /// mesh). Its F and K are exact only there. With a block of complex type (built without
+    /// orbit-local form) the whole mesh is assembled.
     pub fn new_evaluation(&self) -> Evaluation {
-        let reps: Vec<usize> = self
+        // A block without orbit-local form (complex type) reads K everywhere.
+        let Some(reps) = self
             .basis
             .irreps
             .iter()
-            .filter_map(|ib| ib.first().representatives())
-            .flatten()
-            .collect();
+            .map(|ib| ib.first().representatives())
+            .collect::<Option<Vec<Vec<usize>>>>()
+        else {
+            return self.model.new_evaluation();
+        };
+        let reps: Vec<usize> = reps.into_iter().flatten().collect();
         self.model
             .new_evaluation()
             .restricted_to(std::sync::Arc::new(crate::model::Subset::around(
@@ -791,7 +851,7 @@ impl<'a> Stability<'a> {
                 return BlockSpectrum {
                     irrep: ib.name.clone(),
                     dim: ib.dim,
-                    size: m,
+                    size: if ib.complex { m / 2 } else { m },
                     rigid_modes: 0,
                     held: 0,
                     rigid_residual: 0.0,
@@ -890,6 +950,9 @@ impl<'a> Stability<'a> {
                 }
             }
             let k = b.restrict_tangent(layout, eval, &mut Vec::new());
+            if ib.complex {
+                return complex_block(ib, &k, &r, scale, with_vectors);
+            }
             let rigid = Complement::of(&r, 1e-12);
             let held = rigid.rank() - rigid_modes;
             let rigid_residual = if rigid_modes > 0 {

@@ -4,6 +4,7 @@
 mod common;
 
 mod adapted;
+mod axisym;
 mod balloon;
 mod bench_smoke;
 mod branch;

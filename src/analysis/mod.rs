@@ -111,27 +111,6 @@ pub struct RunTimes {
     pub index: Duration,
 }
 
-/// Fails, naming `what` and the irrep, when the study's group has an irrep of complex type
-/// (a chiral group `C<n>`, n ≥ 3), whose blocks the symmetry-adapted analysis does not
-/// support yet.
-pub fn check_real_irreps(study: &Study, what: &str) -> Result<(), String> {
-    let group = study.action.group();
-    match group
-        .irreps()
-        .iter()
-        .find(|i| i.kind() != symmetry::IrrepKind::Real)
-    {
-        Some(irrep) => Err(format!(
-            "{what}: the scene's group {} is chiral: its irrep {} is of complex type, whose \
-             block the symmetry-adapted analysis does not support yet; use a group with mirrors \
-             (C<n>v)",
-            group.name(),
-            irrep.name()
-        )),
-        None => Ok(()),
-    }
-}
-
 /// What a caller sees of a run while it goes: the progress, and every accepted state.
 pub trait Observer {
     /// A point converged: its index along the path and the control's value.

@@ -1,6 +1,5 @@
 //! Helpers shared by the commands: loading a scene and building its study with the exit
-//! codes of `memstab run`, the `--at NAME=VALUE` overrides, the chiral-group check, and
-//! number formatting.
+//! codes of `memstab run`, the `--at NAME=VALUE` overrides, and number formatting.
 
 use super::CliError;
 use memstab::scene::Scene;
@@ -26,12 +25,6 @@ pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
     memstab::output::store::load_start(&mut study)
         .map_err(|e| CliError::Input(one_line(&format!("{origin}: {e}"))))?;
     Ok(study)
-}
-
-/// Fails with bad input when the scene's group has an irrep of complex type
-/// ([`memstab::analysis::check_real_irreps`]).
-pub(super) fn check_real_irreps(study: &Study, what: &str) -> Result<(), CliError> {
-    memstab::analysis::check_real_irreps(study, what).map_err(CliError::Input)
 }
 
 /// Parses the `--at` list against the parameter names: (index, value) pairs.

@@ -10,10 +10,10 @@
 //! found and deflated in that block; then the instability index Σ d·neg.
 //!
 //! Bad input — a scene that does not load or build, an `--at` naming no parameter or without a
-//! number, a chiral group — is one line and exit code 2; a start state that does not converge
+//! number — is one line and exit code 2; a start state that does not converge
 //! is exit code 1.
 
-use super::common::{build_study, check_real_irreps, load_scene, one_line, parse_at, sci};
+use super::common::{build_study, load_scene, one_line, parse_at, sci};
 use super::CliError;
 use clap::Args;
 use memstab::adapted::AdaptedBasis;
@@ -83,7 +83,6 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let scene = load_scene(&args.scene)?;
     let mut study = build_study(scene)?;
     let origin = study.scene.origin.clone();
-    check_real_irreps(&study, &format!("scene '{origin}'"))?;
     let at = parse_at(&args.at, &study.parameters)?;
     let held = held(&study);
     let StartState {

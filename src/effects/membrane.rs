@@ -49,6 +49,52 @@ impl MooneyRivlin {
         }
     }
 
+    /// W, its gradient P = (∂W/∂f1, ∂W/∂f2) and its Hessian blocks ∂²W/∂f_i∂f_k (3×3) at the
+    /// in-plane deformation gradient F = [f1 f2] (the columns in an orthonormal stress-free
+    /// frame; see the module docs). `None` where J ≤ 0 (W is not defined).
+    #[allow(clippy::type_complexity, clippy::needless_range_loop)]
+    pub fn energy_in_f(
+        &self,
+        f: &[Vector3<f64>; 2],
+    ) -> Option<(f64, [Vector3<f64>; 2], [[nalgebra::Matrix3<f64>; 2]; 2])> {
+        let (n1, n2, c) = (f[0].norm_squared(), f[1].norm_squared(), f[0].dot(&f[1]));
+        let t = n1 + n2;
+        let j = f[0].cross(&f[1]).norm_squared();
+        if j.is_nan() || j <= 0.0 {
+            return None;
+        }
+        let [w, w_t, w_j, w_tj, w_jj] = self.strain_energy(t, j);
+        // ∇t and ∇J in (f1, f2).
+        let dt = [f[0] * 2.0, f[1] * 2.0];
+        let dj = [(f[0] * n2 - f[1] * c) * 2.0, (f[1] * n1 - f[0] * c) * 2.0];
+        let p = [dt[0] * w_t + dj[0] * w_j, dt[1] * w_t + dj[1] * w_j];
+        // Hessian blocks in (f1, f2): hf[i][k] = ∂²W/∂f_i∂f_k (3×3).
+        let id = nalgebra::Matrix3::<f64>::identity();
+        let d2j = [
+            [
+                id * (2.0 * n2) - outer(&f[1], &f[1]) * 2.0,
+                outer(&f[0], &f[1]) * 4.0 - outer(&f[1], &f[0]) * 2.0 - id * (2.0 * c),
+            ],
+            [
+                outer(&f[1], &f[0]) * 4.0 - outer(&f[0], &f[1]) * 2.0 - id * (2.0 * c),
+                id * (2.0 * n1) - outer(&f[0], &f[0]) * 2.0,
+            ],
+        ];
+        let mut hf = [[nalgebra::Matrix3::<f64>::zeros(); 2]; 2];
+        for i in 0..2 {
+            for k in 0..2 {
+                let mut h = (outer(&dt[i], &dj[k]) + outer(&dj[i], &dt[k])) * w_tj
+                    + outer(&dj[i], &dj[k]) * w_jj
+                    + d2j[i][k] * w_j;
+                if i == k {
+                    h += id * (2.0 * w_t);
+                }
+                hf[i][k] = h;
+            }
+        }
+        Some((w, p, hf))
+    }
+
     /// W and its derivatives in (t, J): (W, W_t, W_J, W_tJ, W_JJ); W_tt = 0.
     fn strain_energy(&self, t: f64, j: f64) -> [f64; 5] {
         let (c1, c2) = (self.c1, self.c2);
@@ -110,42 +156,8 @@ impl ReferenceTriangle {
         let (a, b) = (x[1] - x[0], x[2] - x[0]);
         let [m11, m12, m22] = self.m;
         let f = [a * m11, a * m12 + b * m22];
-        let (n1, n2, c) = (f[0].norm_squared(), f[1].norm_squared(), f[0].dot(&f[1]));
-        let t = n1 + n2;
-        let j = f[0].cross(&f[1]).norm_squared();
-        if j.is_nan() || j <= 0.0 {
-            return None;
-        }
-        let [w, w_t, w_j, w_tj, w_jj] = mat.strain_energy(t, j);
+        let (w, p, hf) = mat.energy_in_f(&f)?;
         let vol = self.volume;
-        // ∇t and ∇J in (f1, f2).
-        let dt = [f[0] * 2.0, f[1] * 2.0];
-        let dj = [(f[0] * n2 - f[1] * c) * 2.0, (f[1] * n1 - f[0] * c) * 2.0];
-        let p = [dt[0] * w_t + dj[0] * w_j, dt[1] * w_t + dj[1] * w_j];
-        // Hessian blocks in (f1, f2): hf[i][k] = ∂²W/∂f_i∂f_k (3×3).
-        let id = nalgebra::Matrix3::<f64>::identity();
-        let d2j = [
-            [
-                id * (2.0 * n2) - outer(&f[1], &f[1]) * 2.0,
-                outer(&f[0], &f[1]) * 4.0 - outer(&f[1], &f[0]) * 2.0 - id * (2.0 * c),
-            ],
-            [
-                outer(&f[1], &f[0]) * 4.0 - outer(&f[0], &f[1]) * 2.0 - id * (2.0 * c),
-                id * (2.0 * n1) - outer(&f[0], &f[0]) * 2.0,
-            ],
-        ];
-        let mut hf = [[nalgebra::Matrix3::<f64>::zeros(); 2]; 2];
-        for i in 0..2 {
-            for k in 0..2 {
-                let mut h = (outer(&dt[i], &dj[k]) + outer(&dj[i], &dt[k])) * w_tj
-                    + outer(&dj[i], &dj[k]) * w_jj
-                    + d2j[i][k] * w_j;
-                if i == k {
-                    h += id * (2.0 * w_t);
-                }
-                hf[i][k] = h;
-            }
-        }
         // f_i = Σ_e C[i][e] edge_e with edges (a, b).
         let cm = [[m11, 0.0], [m12, m22]];
         let mut grad_ab = [Vector3::zeros(); 2];

@@ -41,9 +41,9 @@
 //! 1e-8 of the value (the localisation's precision) — otherwise "not split (gap 0)" / "(gap at
 //! round-off)". With `refine` the observed order of the gap is log2(gap_coarse / gap_fine).
 //!
-//! Bad input (a mesh that is not a subgroup or does not parse, a chiral group, an equilibrium
-//! analysis, a bad `max`) is a [`CompareError::Input`] before anything runs; a start state
-//! that does not converge is a [`CompareError::Failure`].
+//! Bad input (a mesh that is not a subgroup or does not parse, an equilibrium analysis, a bad
+//! `max`) is a [`CompareError::Input`] before anything runs; a start state that does not
+//! converge is a [`CompareError::Failure`].
 
 mod matching;
 mod meshes;
@@ -468,8 +468,6 @@ pub fn compare(
                     CompareError::Input(one_line(&e.to_string()))
                 }
             })?;
-            super::check_real_irreps(&study, &format!("mesh '{}'", t.label))
-                .map_err(CompareError::Input)?;
             jobs.push((k, l, study));
         }
         if k == 0 {
