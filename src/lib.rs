@@ -22,6 +22,7 @@ pub use meshes;
 pub use symmetry;
 pub mod adapted;
 pub mod analysis;
+pub mod axisym;
 pub mod bench;
 pub mod demo;
 pub mod effects;

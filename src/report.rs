@@ -113,6 +113,41 @@ pub struct PathReport {
     /// (empty, and left out of `path.json`, for the other analyses).
     #[serde(skip_serializing_if = "Spectra::is_empty")]
     pub spectra: Spectra,
+    /// The file with every point's state (`path.states`), once written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub states: Option<StatesInfo>,
+}
+
+/// What `path.json` records of the file of every point's state (see `output::store`).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct StatesInfo {
+    /// The file name, relative to the output directory.
+    pub file: String,
+    /// Unknowns N per state.
+    pub unknowns: usize,
+    /// Parameters P per state.
+    pub parameters: usize,
+    /// Points M (point k is the row `step = k`).
+    pub points: usize,
+}
+
+/// One path point's state, compactly: every parameter and the coordinates q of u in the
+/// fixed-point basis the path was solved in (u = B q).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointState {
+    /// Every parameter (scene order).
+    pub parameters: Vec<f64>,
+    /// q.
+    pub q: Vec<f64>,
+}
+
+impl PathReport {
+    /// The smallest and largest instability index of the rows, `None` where no row has one.
+    pub fn index_range(&self) -> Option<(usize, usize)> {
+        let mut indices = self.rows.iter().filter_map(|r| r.index);
+        let first = indices.next()?;
+        Some(indices.fold((first, first), |(lo, hi), i| (lo.min(i), hi.max(i))))
+    }
 }
 
 /// An irrep block as listed in [`Spectra`].
@@ -212,6 +247,8 @@ pub struct State {
     pub control: f64,
     /// Displacement over the unknowns.
     pub u: Vec<f64>,
+    /// Every parameter's value there.
+    pub params: Vec<f64>,
     /// The critical mode over the unknowns, for critical points.
     pub mode: Option<Vec<f64>>,
 }
@@ -312,4 +349,57 @@ pub struct CurveReport {
     pub events: Vec<CurveEvent>,
     /// Why the curve ended.
     pub stop: StopReason,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(step: usize, index: Option<usize>) -> PathRow {
+        PathRow {
+            step,
+            arclength: step as f64,
+            parameters: vec![],
+            measures: vec![],
+            iterations: 1,
+            index,
+        }
+    }
+
+    #[test]
+    fn the_index_range_covers_every_row() {
+        let mut r = PathReport {
+            scene: String::new(),
+            origin: String::new(),
+            version: String::new(),
+            mesh: MeshInfo {
+                generator: String::new(),
+                nodes: 0,
+                elements: 0,
+                group: String::new(),
+                order: 1,
+            },
+            group: String::new(),
+            group_order: 1,
+            unknowns: 0,
+            symmetric_unknowns: 0,
+            control: String::new(),
+            parameters: vec![],
+            measures: vec![],
+            rows: vec![row(0, Some(0)), row(1, Some(1)), row(2, Some(1))],
+            turning_points: vec![],
+            stop: StopReason::Condition,
+            critical: vec![],
+            warnings: vec![],
+            stability_note: None,
+            saved: vec![],
+            spectra: Spectra::default(),
+            states: None,
+        };
+        assert_eq!(r.index_range(), Some((0, 1)));
+        r.rows = vec![row(0, Some(2)), row(1, None), row(2, Some(2))];
+        assert_eq!(r.index_range(), Some((2, 2)));
+        r.rows = vec![row(0, None)];
+        assert_eq!(r.index_range(), None);
+    }
 }

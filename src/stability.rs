@@ -6,6 +6,10 @@
 //!   those fields u_i = t + ω × x_i are projected into each block, reported there as zero
 //!   modes (T1u and T1g for a free sphere in Ih) and deflated: the block's spectrum is taken on
 //!   their orthogonal complement, so they never count in the index.
+//! - Held mean motions. The rolling of a spherical reference (its material points rotated
+//!   along an unchanged shape) is neutral in the continuum but only nearly so on a mesh; the
+//!   model's [`crate::model::Model::held_motions`] are deflated like rigid modes (the mean
+//!   rotation Σ (X_i − c) × u_i held) and reported as `held`, never counted.
 //! - Physical constraints. With augmenting equations g = 0 active (their parameters free) the
 //!   trivial block is bordered, K̃ = [[K_A, L], [Lᵀ, C]], each constraint row scaled so that
 //!   the border is symmetric (L = Bᵀ ∂F/∂μ and s·∂g/∂q agree; docs/theory.md §8.3).
@@ -14,6 +18,9 @@
 //!   reported for the trivial block.
 //!
 //! The index of the state is Σ_μ d_μ · neg(block μ).
+//!
+//! A complex-type irrep (the E_k of a chiral C_n) has a Hermitian block (docs/theory.md
+//! §10.6), solved dense: its eigenvalues, each d = 2 times in K, its negative count from them.
 //!
 //! How a block is solved (docs/theory.md §8.6–§8.8):
 //! - the negative count, at every path point, from the inertia of one sparse LBLᵀ of the
@@ -43,10 +50,14 @@ pub struct BlockSpectrum {
     pub irrep: String,
     /// Irrep dimension d (every eigenvalue below occurs d times in K).
     pub dim: usize,
-    /// Block size m_μ (columns of one partner).
+    /// Block size m_μ (columns of one partner; complex columns for a complex-type irrep,
+    /// whose eigenvectors have the 2m real coordinates of its basis).
     pub size: usize,
     /// Rigid-body zero modes found in this block (deflated).
     pub rigid_modes: usize,
+    /// Mean motions held in this block ([`crate::model::Model::held_motions`]: the rolling of
+    /// a spherical reference), deflated like the rigid modes but not zero modes.
+    pub held: usize,
     /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium).
     pub rigid_residual: f64,
     /// Eigenvalues on the complement of the rigid modes (and of the constraints' border for the
@@ -160,6 +171,8 @@ pub struct Stability<'a> {
     model: &'a dyn Model,
     basis: &'a AdaptedBasis,
     motions: Vec<[f64; 6]>,
+    /// Mean motions held (fields at the reference positions).
+    holds: Vec<[f64; 6]>,
     /// How block eigenvalues are computed.
     method: BlockEigen,
     /// Per block, the sparse factorisation of its bordered matrix and its border size.
@@ -184,6 +197,8 @@ struct BorderedBlock {
     diagonal: Vec<usize>,
     /// Rigid modes found in the block.
     rigid_modes: usize,
+    /// Mean motions held in the block.
+    held: usize,
     /// Largest |B_μᵀ K r| over the rigid modes, relative to ‖K‖.
     rigid_residual: f64,
 }
@@ -421,6 +436,18 @@ fn constraint_border(
     (l, cc)
 }
 
+/// ‖t + ω × X_i‖ over the free nodes at the reference positions X (the norm of a held field).
+fn reference_norms(motion: &[f64; 6], x: &[meshes::Vec3], layout: &crate::model::Layout) -> f64 {
+    let t = nalgebra::Vector3::new(motion[0], motion[1], motion[2]);
+    let w = nalgebra::Vector3::new(motion[3], motion[4], motion[5]);
+    (0..x.len())
+        .filter(|&i| layout.dof(i, 0).is_some())
+        .map(|i| (t + w.cross(&x[i])).norm_squared())
+        .sum::<f64>()
+        .sqrt()
+        .max(1e-300)
+}
+
 /// The pattern of [[K, U], [Uᵀ, E]] for a sparse K and `border` dense columns U and E.
 fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
     let (m, col_ptr, row_idx) = (k.n(), k.col_ptr(), k.row_idx());
@@ -434,6 +461,57 @@ fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
     SymmetricPattern::from_entries(m + border, entries)
 }
 
+/// The spectrum of a complex-type block (docs/theory.md §10.6) from its real restriction `k`
+/// (2m × 2m in the basis [u, v]) and the real coordinates `r` of the rigid modes: the
+/// eigenvalues of the Hermitian m × m block on the complement of the rigid modes' complex
+/// span, each double in K by construction; eigenvectors back in real coordinates.
+fn complex_block(
+    ib: &crate::adapted::IrrepBasis,
+    k: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    scale: f64,
+    with_vectors: bool,
+) -> BlockSpectrum {
+    use crate::adapted::{hermitian, to_complex, to_real};
+    use crate::linalg::hermitian::{hermitian_eigen, ComplexComplement};
+    let h = hermitian(k);
+    let m = h.nrows();
+    let rc_cols: Vec<Vec<_>> = r.column_iter().map(|c| to_complex(c.as_slice())).collect();
+    let rc = DMatrix::from_fn(m, rc_cols.len(), |i, j| rc_cols[j][i]);
+    // ‖z‖ = ‖[p; q]‖: a rigid column of order one stays of order one.
+    let rigid = ComplexComplement::of(&rc, 1e-12);
+    let rigid_modes = rigid.rank();
+    let rigid_residual = if r.ncols() > 0 {
+        (k * r).amax() / (scale * r.amax().max(1e-300))
+    } else {
+        0.0
+    };
+    let (values, vecs) = hermitian_eigen(&rigid.restrict(h), with_vectors);
+    let keep = values.len().min(8).min(vecs.ncols());
+    let vectors = if keep > 0 {
+        let y = rigid.lift(&vecs.columns(0, keep).into_owned());
+        let cols: Vec<Vec<f64>> = y.column_iter().map(|z| to_real(z.as_slice())).collect();
+        DMatrix::from_fn(2 * m, keep, |i, j| cols[j][i])
+    } else {
+        DMatrix::zeros(2 * m, 0)
+    };
+    let negative = values.iter().filter(|&&v| v < 0.0).count();
+    BlockSpectrum {
+        irrep: ib.name.clone(),
+        dim: ib.dim,
+        size: m,
+        rigid_modes,
+        // Held neutral motions are deflated in the real blocks only; a complex block keeps them.
+        held: 0,
+        rigid_residual,
+        eigenvalues: values,
+        complete: true,
+        eigen_error: None,
+        negative,
+        vectors,
+    }
+}
+
 impl<'a> Stability<'a> {
     /// The analysis of `model` with the adapted `basis` of the scene's group.
     pub fn new(model: &'a dyn Model, basis: &'a AdaptedBasis) -> Self {
@@ -441,6 +519,7 @@ impl<'a> Stability<'a> {
             model,
             basis,
             motions: model.rigid_motions(),
+            holds: model.held_motions(),
             method: BlockEigen::ByCost,
             factorizations: basis.irreps.iter().map(|_| Mutex::new(None)).collect(),
         }
@@ -476,17 +555,18 @@ impl<'a> Stability<'a> {
         b: &crate::adapted::SparseBasis,
         layout: &crate::model::Layout,
         eval: &Evaluation,
-        r: &DMatrix<f64>,
+        (r, rigid_modes): (&DMatrix<f64>, usize),
         border: Option<&(DMatrix<f64>, DMatrix<f64>)>,
         scale: f64,
     ) -> Option<BorderedBlock> {
         let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
         let m = b.dim();
-        // Border columns: zero-E first (rigid span, zero-C constraints), then invertible D.
+        // Border columns: zero-E first (rigid and held span, zero-C constraints), then
+        // invertible D.
         let rigid = Complement::of(r, 1e-12);
-        let rigid_modes = rigid.rank();
+        let deflated = rigid.rank();
         let mut zero_cols: Vec<DVector<f64>> =
-            (0..rigid_modes).map(|k| rigid.span_column(k, m)).collect();
+            (0..deflated).map(|k| rigid.span_column(k, m)).collect();
         let mut d_cols: Vec<DVector<f64>> = Vec::new();
         let mut d_block: Vec<(usize, usize, f64)> = Vec::new();
         let mut d_negative = 0;
@@ -567,7 +647,7 @@ impl<'a> Stability<'a> {
                 .iter()
                 .map(|(c, a)| (*c, b.restrict(a)))
                 .collect();
-            for col in r.column_iter() {
+            for col in r.column_iter().take(self.motions.len()) {
                 pattern.matvec(&values, col.as_slice(), &mut y);
                 let mut ky = DVector::from_vec(y.clone());
                 for (c, ar) in &rank_one {
@@ -586,6 +666,7 @@ impl<'a> Stability<'a> {
             values: mv,
             diagonal,
             rigid_modes,
+            held: deflated - rigid_modes,
             rigid_residual,
         })
     }
@@ -612,6 +693,7 @@ impl<'a> Stability<'a> {
             dim: 0,
             size: m,
             rigid_modes: block.rigid_modes,
+            held: block.held,
             rigid_residual: block.rigid_residual,
             eigenvalues: Vec::new(),
             complete: false,
@@ -680,15 +762,20 @@ impl<'a> Stability<'a> {
 
     /// An evaluation buffer for [`Stability::analyse`] that assembles only the triangles
     /// around the orbit representatives (all a block restriction reads; ≈ 1/|G| of the
-    /// mesh). Its F and K are exact only there.
+    /// mesh). Its F and K are exact only there. With a block of complex type (built without
+    /// orbit-local form) the whole mesh is assembled.
     pub fn new_evaluation(&self) -> Evaluation {
-        let reps: Vec<usize> = self
+        // A block without orbit-local form (complex type) reads K everywhere.
+        let Some(reps) = self
             .basis
             .irreps
             .iter()
-            .filter_map(|ib| ib.first().representatives())
-            .flatten()
-            .collect();
+            .map(|ib| ib.first().representatives())
+            .collect::<Option<Vec<Vec<usize>>>>()
+        else {
+            return self.model.new_evaluation();
+        };
+        let reps: Vec<usize> = reps.into_iter().flatten().collect();
         self.model
             .new_evaluation()
             .restricted_to(std::sync::Arc::new(crate::model::Subset::around(
@@ -764,8 +851,9 @@ impl<'a> Stability<'a> {
                 return BlockSpectrum {
                     irrep: ib.name.clone(),
                     dim: ib.dim,
-                    size: m,
+                    size: if ib.complex { m / 2 } else { m },
                     rigid_modes: 0,
+                    held: 0,
                     rigid_residual: 0.0,
                     eigenvalues: Vec::new(),
                     complete: false,
@@ -787,6 +875,24 @@ impl<'a> Stability<'a> {
                         .collect::<Vec<DVector<f64>>>(),
                 )
             };
+            let rigid_modes = Complement::of(&r, 1e-12).rank();
+            // Held mean motions, at the reference positions, deflated with them.
+            let r_rigid = r.clone();
+            let r = if self.holds.is_empty() {
+                r
+            } else {
+                let reference = model.reference();
+                let held = self.holds.iter().map(|motion| {
+                    let v = b.restrict_rigid(motion, reference, layout);
+                    &v / reference_norms(motion, reference, layout)
+                });
+                DMatrix::from_columns(
+                    &r.column_iter()
+                        .map(|c| c.into_owned())
+                        .chain(held)
+                        .collect::<Vec<_>>(),
+                )
+            };
             let border = if mu == 0 { border0.clone() } else { None };
             // The sparse bordered block first, unless the dense solve is certain.
             const ALWAYS_DENSE: usize = 64;
@@ -804,9 +910,15 @@ impl<'a> Stability<'a> {
                     BlockEigen::Dense | BlockEigen::DenseUpTo(_) => false,
                 };
             if sparse_first {
-                if let Some(block) =
-                    self.bordered_block(mu, b, layout, eval, &r, border.as_ref(), scale)
-                {
+                if let Some(block) = self.bordered_block(
+                    mu,
+                    b,
+                    layout,
+                    eval,
+                    (&r, rigid_modes),
+                    border.as_ref(),
+                    scale,
+                ) {
                     let lanczos = !inertia_only
                         && match self.method {
                             BlockEigen::Lanczos => true,
@@ -838,10 +950,13 @@ impl<'a> Stability<'a> {
                 }
             }
             let k = b.restrict_tangent(layout, eval, &mut Vec::new());
+            if ib.complex {
+                return complex_block(ib, &k, &r, scale, with_vectors);
+            }
             let rigid = Complement::of(&r, 1e-12);
-            let rigid_modes = rigid.rank();
+            let held = rigid.rank() - rigid_modes;
             let rigid_residual = if rigid_modes > 0 {
-                (&k * &r).amax() / (scale * r.amax().max(1e-300))
+                (&k * &r_rigid).amax() / (scale * r_rigid.amax().max(1e-300))
             } else {
                 0.0
             };
@@ -877,6 +992,7 @@ impl<'a> Stability<'a> {
                 dim: ib.dim,
                 size: m,
                 rigid_modes,
+                held,
                 rigid_residual,
                 eigenvalues: values,
                 complete: true,

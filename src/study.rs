@@ -17,6 +17,8 @@ use crate::model::constraint::Constraint;
 use crate::model::{Effect, FeModel, Model, Vec3};
 use crate::scene::{self, Scene};
 use meshes::{GroupAction, SymmetricMesh};
+use std::sync::Arc;
+use symmetry::Invariant;
 
 /// Why a scene could not be made into a model (the scene itself was valid).
 #[derive(Debug, thiserror::Error)]
@@ -47,6 +49,8 @@ pub enum Measure {
     Stretch,
     /// Fluid volume of the fluid effect with this index among the fluids.
     FluidVolume(usize),
+    /// Over-pressure C/(V − V*) − P_atm of the gas-amount effect with this index among them.
+    GasPressure(usize),
 }
 
 /// A scene ready to solve.
@@ -76,9 +80,13 @@ pub struct Study {
     /// Warnings about the setup that a run should report, e.g. symmetry of a mesh file beyond
     /// its declared group ([`Scene::mesh_warnings`]).
     pub warnings: Vec<String>,
+    /// The saved state of `[start] from`, once loaded (`output::store::load_start`): the first
+    /// guess of the start solve instead of `start.stretch · X`.
+    pub saved_start: Option<Vec<f64>>,
     fluids: Vec<Fluid>,
+    gases: Vec<GasAmount>,
     closed: bool,
-    closing: Option<ClosingFace>,
+    closing: Option<Arc<ClosingFace>>,
     /// The enclosed volume of the mesh (closed membranes); the stress-free volume is this over
     /// λ0³.
     mesh_volume: f64,
@@ -125,10 +133,15 @@ impl Study {
             .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let closed = topology.closed;
         let fixed = scene.fixed_nodes(&mesh);
+        let sliding: Vec<(usize, Vec3)> = scene
+            .sliding_nodes(&mesh)
+            .into_iter()
+            .map(|(i, n)| (i, Vec3::from(n)))
+            .collect();
         let closing = if closed {
             None
         } else {
-            closing_face(m, &topology.boundary_loops, &fixed)
+            closing_face(m, &topology.boundary_loops, &fixed, &sliding)?.map(Arc::new)
         };
         let index = |name: &str| {
             parameters
@@ -139,6 +152,35 @@ impl Study {
         let quantity = |q: &scene::Quantity| match q {
             scene::Quantity::Value(v) => Quantity::Value(*v),
             scene::Quantity::Parameter(name) => Quantity::Parameter(index(name)),
+        };
+        // The fluid held by a fluid-volume constraint with a known target, by effect index:
+        // what a gas amount in the same enclosure leaves out of its volume.
+        let fluid_amount = |effect: usize| {
+            scene.constraints.iter().find_map(|c| match c {
+                scene::Constraint::FluidVolume(v) if v.effect == effect => match &v.value {
+                    scene::Target::Value(x) => Some(Quantity::Value(*x)),
+                    scene::Target::Parameter(n) => Some(Quantity::Parameter(index(n))),
+                    scene::Target::Initial => None,
+                },
+                _ => None,
+            })
+        };
+        let inside_fluid = scene.effects.iter().position(
+            |e| matches!(e, scene::Effect::Fluid(f) if f.side == scene::FluidSide::Inside),
+        );
+        let gas_fluid = inside_fluid.and_then(fluid_amount);
+        let fluid_of = |f: &scene::FluidEffect| {
+            let side = side(f.side);
+            Fluid {
+                density: quantity(&f.density),
+                gravity: quantity(&f.gravity),
+                level: quantity(&f.level),
+                side,
+                filled: f.filled,
+                closing: closing
+                    .clone()
+                    .filter(|_| f.side == scene::FluidSide::Inside),
+            }
         };
         let mat = &scene.material;
         let membrane = Membrane::parametric(
@@ -154,23 +196,25 @@ impl Study {
         .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
         let mut fluids = Vec::new();
+        let mut gases = Vec::new();
         for e in &scene.effects {
             effects.push(match e {
                 scene::Effect::Gas(g) => Box::new(GasPressure {
                     pressure: quantity(&g.pressure),
+                    closing: closing.clone(),
                 }),
-                scene::Effect::GasAmount(g) => Box::new(GasAmount {
-                    amount: quantity(&g.amount),
-                    ambient: g.ambient_pressure,
-                    closing_volume: closing.map_or(0.0, |c| c.volume()),
-                }),
-                scene::Effect::Fluid(f) => {
-                    let fluid = Fluid {
-                        density: quantity(&f.density),
-                        gravity: quantity(&f.gravity),
-                        level: quantity(&f.level),
-                        side: side(f.side),
+                scene::Effect::GasAmount(g) => {
+                    let gas = GasAmount {
+                        amount: quantity(&g.amount),
+                        ambient: g.ambient_pressure,
+                        closing: closing.clone(),
+                        fluid: gas_fluid,
                     };
+                    gases.push(gas.clone());
+                    Box::new(gas)
+                }
+                scene::Effect::Fluid(f) => {
+                    let fluid = fluid_of(f);
                     fluids.push(fluid.clone());
                     Box::new(fluid)
                 }
@@ -191,11 +235,17 @@ impl Study {
                 }),
             });
         }
-        let keep: Vec<_> = effects.iter().flat_map(|e| e.keeps()).collect();
-        let action = mesh
-            .action
-            .restrict(&keep)
-            .map_err(|e| StudyError::Unsupported(format!("the scene's symmetry group: {e}")))?;
+        let held: Vec<Invariant> =
+            sliding
+                .iter()
+                .map(|(_, n)| Invariant::Axis(*n))
+                .fold(Vec::new(), |mut acc, k| {
+                    if !acc.contains(&k) {
+                        acc.push(k);
+                    }
+                    acc
+                });
+        let action = scene_action(&mesh, &effects, &held)?;
         let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
         let mut targets_from_start = Vec::new();
         for c in &scene.constraints {
@@ -207,33 +257,31 @@ impl Study {
                         ));
                     }
                     let fluid = match &scene.effects[fv.effect] {
-                        scene::Effect::Fluid(f) => Fluid {
-                            density: quantity(&f.density),
-                            gravity: quantity(&f.gravity),
-                            level: quantity(&f.level),
-                            side: side(f.side),
-                        },
+                        scene::Effect::Fluid(f) => fluid_of(f),
                         _ => unreachable!("validated: the constraint names a fluid effect"),
                     };
-                    let (target, initial) = target(&fv.value);
+                    let (target, initial, target_parameter) = target(&fv.value, &index);
                     (
                         Box::new(FluidVolumeConstraint {
                             fluid,
                             level: index(&fv.level),
                             target,
-                            closing,
+                            target_parameter,
+                            closing: closing.clone(),
                         }),
                         initial,
                     )
                 }
                 scene::Constraint::GasAmount(ga) => {
-                    let (target, initial) = target(&ga.value);
+                    let (target, initial, target_parameter) = target(&ga.value, &index);
                     (
                         Box::new(GasAmountConstraint {
                             pressure: index(&ga.pressure),
                             ambient: ga.ambient_pressure,
                             target,
-                            closing_volume: closing.map_or(0.0, |c| c.volume()),
+                            target_parameter,
+                            closing: closing.clone(),
+                            fluid: gas_fluid,
                         }),
                         initial,
                     )
@@ -262,6 +310,15 @@ impl Study {
         if closed {
             measures.push(("volume".into(), Measure::Volume));
             measures.push(("stretch".into(), Measure::Stretch));
+        } else if closing.is_some()
+            && (inside_fluid.is_some()
+                || !gases.is_empty()
+                || scene
+                    .constraints
+                    .iter()
+                    .any(|c| matches!(c, scene::Constraint::GasAmount(_))))
+        {
+            measures.push(("volume".into(), Measure::Volume));
         }
         for i in 0..fluids.len() {
             let name = if fluids.len() == 1 {
@@ -271,14 +328,41 @@ impl Study {
             };
             measures.push((name, Measure::FluidVolume(i)));
         }
+        for i in 0..gases.len() {
+            let name = if gases.len() == 1 {
+                "gas_pressure".to_string()
+            } else {
+                format!("gas_pressure_{i}")
+            };
+            measures.push((name, Measure::GasPressure(i)));
+        }
         let model = FeModel::new(
             m.nodes.clone(),
             m.triangles.clone(),
             &fixed,
             effects,
             parameters.clone(),
-        );
+        )
+        .with_sliding(&sliding);
         let basis = SparseBasis::fixed_point(&action, model.layout());
+        if let Some(d) = scene.start.hold_translation {
+            // The held translation must be a symmetric displacement.
+            let keeps = action.group().elements().iter().all(|r| {
+                let v = Vec3::from(d);
+                (r * v - v).amax() < 1e-9
+            });
+            if !keeps {
+                return Err(StudyError::Unsupported(format!(
+                    "{}: 'start.hold-translation' = [{}, {}, {}]: the scene's group {} moves \
+                     that direction, so its symmetric states cannot translate along it",
+                    scene.origin,
+                    d[0],
+                    d[1],
+                    d[2],
+                    action.group().name()
+                )));
+            }
+        }
         Ok(Self {
             scene,
             mesh,
@@ -292,7 +376,9 @@ impl Study {
             basis,
             measures,
             warnings,
+            saved_start: None,
             fluids,
+            gases,
             closed,
             closing,
             mesh_volume,
@@ -311,6 +397,7 @@ impl Study {
                 .map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c])))
                 .sum::<f64>()
                 / 6.0
+                + self.closing.as_ref().map_or(0.0, |c| c.volume(tris, &x))
         };
         self.measures
             .iter()
@@ -334,11 +421,12 @@ impl Study {
                     } else {
                         -1.0
                     };
-                    let plate = self
-                        .closing
-                        .map_or(0.0, |c| sign * c.fluid_volume(f.level.value(params)).0);
+                    let plate = self.closing.as_ref().map_or(0.0, |c| {
+                        sign * c.fluid_volume(tris, &x, f.level.value(params), f.filled).0
+                    });
                     f.fluid_volume(tris, &x, params) + plate
                 }
+                Measure::GasPressure(i) => self.gases[i].over_pressure(tris, &x, params),
             })
             .collect()
     }
@@ -358,8 +446,12 @@ impl Study {
         }
     }
 
-    /// The start displacement: the reference scaled by `start.stretch` about the origin.
+    /// The start displacement: a loaded saved state ([`Study::saved_start`]), else the
+    /// reference scaled by `start.stretch` about the origin.
     pub fn start_displacement(&self) -> Vec<f64> {
+        if let Some(u) = &self.saved_start {
+            return u.clone();
+        }
         let s = self.scene.start.stretch - 1.0;
         let mut u = vec![0.0; self.model.layout().unknowns()];
         for (i, x) in self.model.reference().iter().enumerate() {
@@ -389,31 +481,90 @@ fn orient_up(m: &mut meshes::Mesh) -> bool {
     false
 }
 
-/// The flat plate closing an open membrane: every boundary loop fixed and in one horizontal
-/// plane. Its area vector is minus that of the loops as they run in the triangles, so that it
-/// is oriented like the membrane (outward for the closed body).
-fn closing_face(m: &meshes::Mesh, loops: &[Vec<usize>], fixed: &[usize]) -> Option<ClosingFace> {
-    let first = *loops.first()?.first()?;
-    let z = m.nodes[first].z;
-    let tol = 1e-12 * m.size().max(1e-300);
-    let mut area_z = 0.0;
-    for lp in loops {
-        for (k, &i) in lp.iter().enumerate() {
-            if fixed.binary_search(&i).is_err() || (m.nodes[i].z - z).abs() > tol {
-                return None;
-            }
-            let j = lp[(k + 1) % lp.len()];
-            let (a, b) = (m.nodes[i], m.nodes[j]);
-            area_z -= 0.5 * (a.x * b.y - a.y * b.x);
-        }
+/// The mesh's action restricted to the elements that map the set of effects onto itself
+/// ([`crate::model::scene_elements`]). When those are exactly the elements keeping every
+/// effect's own invariants, the stabiliser of those invariants names and orders the subgroup
+/// (as it always has); otherwise (two planes a mirror swaps) the subgroup is built from its
+/// elements, its axis oriented along the first invariant of an effect without a placement
+/// (gravity's −z), else with a positive z component.
+fn scene_action(
+    mesh: &SymmetricMesh,
+    effects: &[Box<dyn Effect>],
+    held: &[Invariant],
+) -> Result<GroupAction, StudyError> {
+    let unsupported =
+        |e: String| StudyError::Unsupported(format!("the scene's symmetry group: {e}"));
+    let group = mesh.action.group();
+    let keep: Vec<_> = effects
+        .iter()
+        .flat_map(|e| e.keeps())
+        .chain(held.iter().copied())
+        .collect();
+    let members: Vec<usize> = crate::model::scene_elements(group, effects)
+        .into_iter()
+        .filter(|&g| held.iter().all(|k| k.kept_by(group.element(g))))
+        .collect();
+    let alone: Vec<usize> = (0..group.order())
+        .filter(|&g| keep.iter().all(|k| k.kept_by(group.element(g))))
+        .collect();
+    if members == alone {
+        return mesh
+            .action
+            .restrict(&keep)
+            .map_err(|e| unsupported(e.to_string()));
     }
-    Some(ClosingFace { z, area_z })
+    let hint = effects
+        .iter()
+        .filter(|e| e.placement().is_none())
+        .flat_map(|e| e.keeps())
+        .chain(held.iter().copied())
+        .next();
+    let sub = match hint {
+        Some(k) => group.subgroup_along(&members, k.direction()),
+        None => group.subgroup(&members),
+    }
+    .map_err(|e| unsupported(e.to_string()))?;
+    mesh.action
+        .restrict_to(&sub)
+        .map_err(|e| unsupported(e.to_string()))
 }
 
-fn target(t: &scene::Target) -> (f64, bool) {
-    match *t {
-        scene::Target::Initial => (0.0, true),
-        scene::Target::Value(v) => (v, false),
+/// The flat plate closing an open membrane: every boundary loop in one horizontal plane, its
+/// nodes fixed or sliding in that plane (normal ±z). A sliding rim in another plane cannot be
+/// closed by a horizontal plate: with an enclosure that is an error.
+fn closing_face(
+    m: &meshes::Mesh,
+    loops: &[Vec<usize>],
+    fixed: &[usize],
+    sliding: &[(usize, Vec3)],
+) -> Result<Option<ClosingFace>, StudyError> {
+    let Some(&first) = loops.first().and_then(|l| l.first()) else {
+        return Ok(None);
+    };
+    let z = m.nodes[first].z;
+    let tol = 1e-12 * m.size().max(1e-300);
+    for &i in loops.iter().flatten() {
+        let slides = sliding.iter().find(|(j, _)| *j == i).map(|(_, n)| *n);
+        if let Some(n) = slides {
+            if n.x.abs() > 1e-12 || n.y.abs() > 1e-12 {
+                return Ok(None);
+            }
+        } else if fixed.binary_search(&i).is_err() {
+            return Ok(None);
+        }
+        if (m.nodes[i].z - z).abs() > tol {
+            return Ok(None);
+        }
+    }
+    Ok(Some(ClosingFace::new(z, &m.triangles)))
+}
+
+/// The held value of a constraint: (number, measured at the start, parameter index).
+fn target(t: &scene::Target, index: &dyn Fn(&str) -> usize) -> (f64, bool, Option<usize>) {
+    match t {
+        scene::Target::Initial => (0.0, true, None),
+        scene::Target::Value(v) => (*v, false, None),
+        scene::Target::Parameter(name) => (0.0, false, Some(index(name))),
     }
 }
 

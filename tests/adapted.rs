@@ -2,11 +2,12 @@
 //! completeness, and a tangent at a symmetric state that is block diagonal with identical
 //! partner blocks, its spectrum the union of the blocks' with multiplicity d_μ.
 
-use memstab::adapted::{AdaptedBasis, SparseBasis};
+use memstab::adapted::{hermitian, AdaptedBasis, SparseBasis};
 use memstab::effects::gas::GasPressure;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
+use memstab::linalg::hermitian::hermitian_eigen;
 use memstab::model::{Effect, FeModel, Model, Request};
 use meshes::generators::{
     disc, icosphere, icosphere_oriented, truncated_sphere, DiscOptions, Down, IcosphereOptions,
@@ -38,6 +39,8 @@ fn model(sym: &SymmetricMesh, fixed: &[usize], fluid: bool) -> FeModel {
     .unwrap();
     let load: Box<dyn Effect> = if fluid {
         Box::new(Fluid {
+            filled: false,
+            closing: None,
             density: Quantity::Value(1.0),
             gravity: Quantity::Value(1.0),
             level: Quantity::Value(0.2),
@@ -49,6 +52,7 @@ fn model(sym: &SymmetricMesh, fixed: &[usize], fluid: bool) -> FeModel {
         })
     } else {
         Box::new(GasPressure {
+            closing: None,
             pressure: Quantity::Value(0.3),
         })
     };
@@ -117,9 +121,15 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let mut offset = 0;
     let mut spans = Vec::new();
     for b in &basis.irreps {
-        for _ in 0..b.dim {
-            spans.push((offset, b.multiplicity));
-            offset += b.multiplicity;
+        // A complex-type irrep's one basis spans its whole isotypic component.
+        let (copies, size) = if b.complex {
+            (1, 2 * b.multiplicity)
+        } else {
+            (b.dim, b.multiplicity)
+        };
+        for _ in 0..copies {
+            spans.push((offset, size));
+            offset += size;
         }
     }
     let mut off = kt.clone();
@@ -136,6 +146,28 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let mut work = Vec::new();
     for b in &basis.irreps {
         let k0 = b.first().restrict_tangent(layout, &eval, &mut work);
+        if b.complex {
+            // [[A, C], [−C, A]]: the J structure of a complex-type block.
+            let m = b.multiplicity;
+            let (a, c) = (k0.view((0, 0), (m, m)), k0.view((0, m), (m, m)));
+            assert!(
+                (k0.view((m, m), (m, m)) - a).amax() < 1e-12 * scale,
+                "{name}: {}",
+                b.name
+            );
+            assert!(
+                (k0.view((m, 0), (m, m)) + c).amax() < 1e-12 * scale,
+                "{name}: {}",
+                b.name
+            );
+            assert!(
+                (c + c.transpose()).amax() < 1e-12 * scale,
+                "{name}: {}",
+                b.name
+            );
+            o += 2 * m;
+            continue;
+        }
         for a in 0..b.dim {
             let ka = kt.view(
                 (o + a * b.multiplicity, o + a * b.multiplicity),
@@ -155,13 +187,14 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
         .iter()
         .filter(|b| b.multiplicity > 0)
         .flat_map(|b| {
-            let ev = b
-                .first()
-                .restrict_tangent(layout, &eval, &mut Vec::new())
-                .symmetric_eigenvalues();
-            std::iter::repeat_n(ev.iter().copied().collect::<Vec<_>>(), b.dim)
-                .flatten()
-                .collect::<Vec<_>>()
+            let k0 = b.first().restrict_tangent(layout, &eval, &mut Vec::new());
+            // A complex-type block: the m eigenvalues of the Hermitian block, each d = 2 times.
+            let ev: Vec<f64> = if b.complex {
+                hermitian_eigen(&hermitian(&k0), false).0
+            } else {
+                k0.symmetric_eigenvalues().iter().copied().collect()
+            };
+            std::iter::repeat_n(ev, b.dim).flatten().collect::<Vec<_>>()
         })
         .collect();
     let mut full: Vec<f64> = k.symmetric_eigenvalues().iter().copied().collect();
@@ -247,16 +280,91 @@ fn truncated_spheres() {
     }
 }
 
+/// The chiral discs (C7, and C4 on eight sectors): complex-type E_k blocks that cover the
+/// unknowns with the rest, orthonormal, block diagonal with the J structure, and the spectrum
+/// of K the union of the Hermitian blocks' with multiplicity 2.
 #[test]
-fn chiral_groups_are_refused_clearly() {
+fn chiral_discs_have_hermitian_blocks() {
+    for (sectors, group) in [(7, "C7"), (8, "C4")] {
+        let sym = disc(&DiscOptions {
+            radius: 1.0,
+            sectors,
+            divisions: 3,
+            group: Some(group.into()),
+        })
+        .unwrap();
+        let fixed = sym.mesh.boundaries["rim"].clone();
+        let model = model(&sym, &fixed, true);
+        let basis = AdaptedBasis::new(&sym.action, model.layout()).unwrap();
+        assert!(basis.irreps.iter().any(|b| b.complex), "{group}");
+        check(&format!("chiral disc {group}"), &sym.action, &model);
+    }
+}
+
+/// On a C7v disc viewed as C7, the Hermitian block of E_k has exactly the spectrum of the
+/// C7v E_k block, and C7's A block the union of A1's and A2's.
+#[test]
+fn c7_blocks_of_a_c7v_mesh_are_the_c7v_blocks() {
     let sym = disc(&DiscOptions {
         radius: 1.0,
         sectors: 7,
-        divisions: 3,
-        group: Some("C7".into()),
+        divisions: 4,
+        group: None,
     })
     .unwrap();
-    let model = model(&sym, &sym.mesh.boundaries["rim"].clone(), true);
-    let err = AdaptedBasis::new(&sym.action, model.layout()).unwrap_err();
-    assert!(err.to_string().contains("complex type"), "{err}");
+    let fixed = sym.mesh.boundaries["rim"].clone();
+    let model = model(&sym, &fixed, true);
+    let layout = model.layout();
+    let c7 = GroupAction::compute(&sym.mesh, symmetry::Group::by_name("C7").unwrap()).unwrap();
+    let full = AdaptedBasis::new(&sym.action, layout).unwrap();
+    let sub = AdaptedBasis::new(&c7, layout).unwrap();
+    // A symmetric (C7v) state that is not flat.
+    let fp = full.irreps[0].first();
+    let qa = DVector::from_fn(fp.dim(), |i, _| 0.02 * ((i as f64 * 0.7).sin()));
+    let mut u = vec![0.0; layout.unknowns()];
+    fp.expand(&qa, &mut u);
+    let mut eval = model.new_evaluation();
+    model.evaluate(&u, &[], Request::ALL, &mut eval).unwrap();
+    let scale = eval.tangent.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let spectrum = |b: &memstab::adapted::IrrepBasis| -> Vec<f64> {
+        let k = b.first().restrict_tangent(layout, &eval, &mut Vec::new());
+        let mut v: Vec<f64> = if b.complex {
+            hermitian_eigen(&hermitian(&k), false).0
+        } else {
+            k.symmetric_eigenvalues().iter().copied().collect()
+        };
+        v.sort_by(f64::total_cmp);
+        v
+    };
+    let of = |basis: &AdaptedBasis, names: &[&str]| -> Vec<f64> {
+        let mut v: Vec<f64> = basis
+            .irreps
+            .iter()
+            .filter(|b| names.contains(&b.name.as_str()))
+            .flat_map(spectrum)
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v
+    };
+    let names: Vec<String> = sub.irreps.iter().map(|b| b.name.clone()).collect();
+    assert_eq!(names, ["A", "E1", "E2", "E3"]);
+    for (c7_irrep, c7v_irreps) in [
+        ("A", &["A1", "A2"][..]),
+        ("E1", &["E1"][..]),
+        ("E2", &["E2"][..]),
+        ("E3", &["E3"][..]),
+    ] {
+        let (x, y) = (of(&sub, &[c7_irrep]), of(&full, c7v_irreps));
+        assert_eq!(x.len(), y.len(), "{c7_irrep}");
+        assert!(!x.is_empty());
+        let diff = x
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            diff < 1e-11 * scale,
+            "{c7_irrep}: spectra differ by {diff:e}"
+        );
+    }
 }

@@ -43,6 +43,7 @@ fn balloon(frequency: usize, k: f64, to_stretch: f64) -> Extrema {
     let effects: Vec<Box<dyn Effect>> = vec![
         Box::new(membrane),
         Box::new(GasPressure {
+            closing: None,
             pressure: Quantity::Parameter(0),
         }),
     ];

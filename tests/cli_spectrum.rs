@@ -186,12 +186,38 @@ fn bad_input_is_one_line_and_exit_code_2() {
     assert_rejected(&["spectrum", &demo, "--at", "p"], &["NAME=VALUE"]);
     assert_rejected(&["spectrum", &demo, "--at", "p=nan"], &["'nan'"]);
     assert_rejected(&["spectrum", "/nonexistent/scene.toml"], &["scene.toml"]);
-    // A chiral group: its 2-D irreps are of complex type.
+}
+
+#[test]
+fn a_chiral_disc_has_hermitian_e_k_blocks() {
+    // The C7 disc: its 2-D irreps are of complex type, each block m complex columns whose
+    // every eigenvalue is double in K. Past gamma_{0,1} and gamma_{1,1}: one negative
+    // eigenvalue in A and one in E1 (twice in K), as on the C7v disc.
     let dir = tempfile::tempdir().unwrap();
     let chiral = variant(
         dir.path(),
         "ponding.toml",
-        &[("divisions = 16 ", "group = \"C7\"\ndivisions = 4 ")],
+        &[("divisions = 16 ", "group = \"C7\"\ndivisions = 6 ")],
     );
-    assert_rejected(&["spectrum", &chiral], &["C7", "chiral", "complex type"]);
+    let json = spectrum_json(&[&chiral, "--at", "rho=6"]);
+    assert_eq!(json["group"], "C7");
+    let names: Vec<&str> = json["irreps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["A", "E1", "E2", "E3"]);
+    let total: u64 = json["irreps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["dim"].as_u64().unwrap() * i["size"].as_u64().unwrap())
+        .sum();
+    assert_eq!(total, json["unknowns"].as_u64().unwrap());
+    assert_eq!(irrep(&json, "E1")["dim"], 2);
+    assert_eq!(irrep(&json, "A")["negative"], 1, "{json}");
+    assert_eq!(irrep(&json, "E1")["negative"], 1, "{json}");
+    assert_eq!(irrep(&json, "E2")["negative"], 0, "{json}");
+    assert_eq!(json["index"], 3);
 }

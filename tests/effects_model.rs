@@ -75,7 +75,7 @@ proptest! {
     #[test]
     fn fluid_inside_a_closed_membrane(seed in any::<u64>(), h in -1.2f64..1.2, rho in 0.1f64..3.0) {
         let m = sphere(2);
-        let fluid = Fluid { density: Quantity::Parameter(0), gravity: Quantity::Value(1.0), level: Quantity::Parameter(1), side: FluidSide::Behind };
+        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: Quantity::Value(1.0), level: Quantity::Parameter(1), side: FluidSide::Behind };
         let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![membrane(&m, 1.0), Box::new(fluid)], vec!["rho".into(), "h".into()]);
         assert_small(errors(&model, seed, 1.2, &[rho, h]))?;
     }
@@ -84,7 +84,7 @@ proptest! {
     fn fluid_above_a_clamped_disc(seed in any::<u64>(), h in -0.2f64..0.3, rho in 0.1f64..3.0) {
         let sym = disc(&DiscOptions { radius: 1.0, sectors: 5, divisions: 4, group: None }).unwrap();
         let m = &sym.mesh;
-        let fluid = Fluid { density: Quantity::Parameter(0), gravity: Quantity::Value(1.0), level: Quantity::Parameter(1), side: FluidSide::Front };
+        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: Quantity::Value(1.0), level: Quantity::Parameter(1), side: FluidSide::Front };
         let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &m.boundaries["rim"], vec![membrane(m, 1.1), Box::new(fluid)], vec!["rho".into(), "h".into()]);
         assert_small(errors(&model, seed, 1.0, &[rho, h]))?;
     }
@@ -102,7 +102,7 @@ proptest! {
     fn fluid_with_gravity_as_a_parameter(seed in any::<u64>(), h in -0.2f64..0.3, rho in 0.1f64..3.0, g in 0.5f64..2.0) {
         let sym = disc(&DiscOptions { radius: 1.0, sectors: 5, divisions: 4, group: None }).unwrap();
         let m = &sym.mesh;
-        let fluid = Fluid { density: Quantity::Parameter(0), gravity: Quantity::Parameter(2), level: Quantity::Parameter(1), side: FluidSide::Behind };
+        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: Quantity::Parameter(2), level: Quantity::Parameter(1), side: FluidSide::Behind };
         let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &m.boundaries["rim"], vec![membrane(m, 1.1), Box::new(fluid)], vec!["rho".into(), "h".into(), "g".into()]);
         assert_small(errors(&model, seed, 1.0, &[rho, h, g]))?;
     }
@@ -130,6 +130,8 @@ proptest! {
 /// Net force of the fluid on a closed membrane immersed in a pool, Σ_i (−F_i).
 fn buoyancy(m: &Mesh, level: f64) -> Vector3<f64> {
     let fluid = Fluid {
+        filled: false,
+        closing: None,
         density: Quantity::Value(2.0),
         gravity: Quantity::Value(9.81),
         level: Quantity::Value(level),

@@ -60,6 +60,8 @@ fn plate_closed_fluid_volume_converges_to_the_sphere_segment() {
         let s = study(d);
         let x = s.model.reference().to_vec();
         let fluid = Fluid {
+            filled: false,
+            closing: None,
             density: Quantity::Value(1.0),
             gravity: Quantity::Value(1.0),
             level: Quantity::Parameter(0),
@@ -69,6 +71,7 @@ fn plate_closed_fluid_volume_converges_to_the_sphere_segment() {
             fluid,
             level: 0,
             target: 0.0,
+            target_parameter: None,
             closing: None,
         };
         let mut worst: f64 = 0.0;

@@ -503,9 +503,12 @@ fn fluid_model(
     let effects: Vec<Box<dyn Effect>> = vec![
         Box::new(membrane),
         Box::new(GasPressure {
+            closing: None,
             pressure: Quantity::Value(0.5),
         }),
         Box::new(Fluid {
+            filled: false,
+            closing: None,
             density: Quantity::Value(1.0),
             gravity: Quantity::Value(1.0),
             level: Quantity::Parameter(0),
@@ -864,6 +867,8 @@ fn disc_model(
     let effects: Vec<Box<dyn Effect>> = vec![
         Box::new(membrane),
         Box::new(Fluid {
+            filled: false,
+            closing: None,
             density: Quantity::Value(1.0),
             gravity: Quantity::Value(1.0),
             level: Quantity::Parameter(0),

@@ -4,6 +4,7 @@
 mod common;
 
 mod adapted;
+mod axisym;
 mod balloon;
 mod bench_smoke;
 mod branch;
@@ -33,4 +34,6 @@ mod scene_validation;
 mod scenes_run;
 mod sparse_path;
 mod stability;
+mod state_fields;
 mod subgroup_path;
+mod thesis;

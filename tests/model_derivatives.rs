@@ -23,10 +23,12 @@ fn sphere_model(k: f64, with_amount: bool) -> FeModel {
         effects.push(Box::new(GasAmount {
             amount: Quantity::Parameter(0),
             ambient: 1.0,
-            closing_volume: 0.0,
+            closing: None,
+            fluid: None,
         }));
     } else {
         effects.push(Box::new(GasPressure {
+            closing: None,
             pressure: Quantity::Parameter(0),
         }));
     }
@@ -115,6 +117,7 @@ fn parametric_sphere_model() -> FeModel {
         Box::new(membrane),
         Box::new(GasPressure {
             pressure: Quantity::Parameter(4),
+            closing: None,
         }),
     ];
     let names = ["mu", "k", "thickness", "prestretch", "p"];
@@ -181,6 +184,7 @@ fn parametric_material_matches_fixed_values() {
             ),
             Box::new(GasPressure {
                 pressure: Quantity::Value(p),
+                closing: None,
             }),
         ],
         vec![],

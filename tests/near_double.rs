@@ -78,6 +78,8 @@ fn a_tiny_imperfection_splits_the_double_into_two_simple_points() {
             .unwrap(),
         ),
         Box::new(Fluid {
+            filled: false,
+            closing: None,
             density: Quantity::Parameter(0),
             gravity: Quantity::Value(1.0),
             level: Quantity::Value(1e-6),

@@ -8,6 +8,7 @@ use memstab::analysis::run;
 use memstab::effects::gas::GasAmount;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
+use memstab::effects::volume::ClosingFace;
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel, Model, Request};
 use memstab::scene::Scene;
@@ -83,14 +84,16 @@ fn rank_one_terms_are_solved_by_woodbury() {
         1.05,
     )
     .unwrap();
-    // The membrane with the plate below: closing volume of the cone from the origin to the cut
-    // is part of V only as a constant, so the amount fixes a pressure near C/V − P.
+    // The membrane with the plate below: the plate's part of V is a constant (the rim is
+    // fixed), so the amount fixes a pressure near C/V − P.
+    let plate = ClosingFace::new(m.nodes[fixed[0]].z, &m.triangles);
     let effects: Vec<Box<dyn Effect>> = vec![
         Box::new(membrane),
         Box::new(GasAmount {
             amount: Quantity::Value(6.0),
             ambient: 1.0,
-            closing_volume: 0.5,
+            closing: Some(std::sync::Arc::new(plate)),
+            fluid: None,
         }),
     ];
     let model = FeModel::new(
@@ -146,6 +149,8 @@ fn a_free_body_is_refused_clearly() {
             .unwrap(),
         ),
         Box::new(Fluid {
+            filled: false,
+            closing: None,
             density: Quantity::Value(1.0),
             gravity: Quantity::Value(1.0),
             level: Quantity::Value(0.0),

@@ -89,6 +89,7 @@ fn report() -> PathReport {
         stop: StopReason::Stretch { target: 4.0 },
         saved: Vec::new(),
         spectra: Spectra::default(),
+        states: None,
     }
 }
 

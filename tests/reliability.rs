@@ -426,10 +426,20 @@ fn an_interrupted_run_writes_what_it_has_and_a_manifest() {
     std::fs::create_dir(&out).unwrap();
     let stale = out.join(".memstab-stale.tmp");
     std::fs::write(&stale, "debris").unwrap();
+    // The ponding disc without its displacement stop: 400 steps, long enough to interrupt.
+    let text = std::fs::read_to_string(scene("disc_fluid_above.toml")).unwrap();
+    let long = text
+        .lines()
+        .filter(|l| !l.starts_with("stop-displacement"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert_ne!(long.len(), text.trim_end().len(), "the stop was removed");
+    let long_scene = dir.path().join("long.toml");
+    std::fs::write(&long_scene, long).unwrap();
     let child = Command::new(env!("CARGO_BIN_EXE_memstab"))
         .args([
             "run",
-            &scene("disc_fluid_above.toml"),
+            long_scene.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
             "--quiet",

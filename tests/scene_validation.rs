@@ -413,7 +413,7 @@ fn constraints_are_checked_against_effects_and_parameters() {
     match &scene.constraints[0] {
         Constraint::FluidVolume(c) => {
             assert_eq!(
-                (c.effect, c.level.as_str(), c.value),
+                (c.effect, c.level.as_str(), c.value.clone()),
                 (0, "h", Target::Initial)
             )
         }

@@ -97,6 +97,7 @@ fn sparse_and_dense_tangents_give_the_same_path() {
         vec![
             membrane(m),
             Box::new(GasPressure {
+                closing: None,
                 pressure: Quantity::Parameter(0),
             }),
         ],
@@ -116,7 +117,8 @@ fn sparse_and_dense_tangents_give_the_same_path() {
             Box::new(GasAmount {
                 amount: Quantity::Parameter(0),
                 ambient,
-                closing_volume: 0.0,
+                closing: None,
+                fluid: None,
             }),
         ],
         vec!["C".into()],

@@ -29,6 +29,7 @@ fn balloon(frequency: usize, k: f64) -> (SymmetricMesh, FeModel) {
             Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, k, 1.0), 1.0).unwrap(),
         ),
         Box::new(GasPressure {
+            closing: None,
             pressure: Quantity::Parameter(0),
         }),
     ];
@@ -59,7 +60,8 @@ fn closed_balloon(sym: &SymmetricMesh, c: f64, ambient: f64) -> FeModel {
         Box::new(GasAmount {
             amount: Quantity::Value(c),
             ambient,
-            closing_volume: 0.0,
+            closing: None,
+            fluid: None,
         }),
     ];
     FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec![])
@@ -208,7 +210,9 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
         pressure: 0,
         ambient,
         target: 0.0,
-        closing_volume: 0.0,
+        target_parameter: None,
+        closing: None,
+        fluid: None,
     };
     let c = amount.measure(model.layout(), &x, &[p]);
     amount.set_target(c);
@@ -298,7 +302,9 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
             pressure: 0,
             ambient,
             target: 0.0,
-            closing_volume: 0.0,
+            target_parameter: None,
+            closing: None,
+            fluid: None,
         };
         let c = amount.measure(model.layout(), &x, &[p]);
         amount.set_target(c);
@@ -421,7 +427,9 @@ fn lanczos_block_eigenvalues_agree_with_dense_along_the_path() {
             pressure: 0,
             ambient,
             target: 0.0,
-            closing_volume: 0.0,
+            target_parameter: None,
+            closing: None,
+            fluid: None,
         };
         let c = amount.measure(model.layout(), &x, &[p]);
         amount.set_target(c);

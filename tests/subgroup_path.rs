@@ -54,9 +54,7 @@ fn a_path_in_the_fixed_space_of_a_subgroup_is_the_same_symmetric_path() {
     .unwrap();
     let effects: Vec<Box<dyn Effect>> = vec![
         Box::new(membrane),
-        Box::new(GasPressure {
-            pressure: Quantity::Parameter(0),
-        }),
+        Box::new(GasPressure::new(Quantity::Parameter(0))),
     ];
     let model = FeModel::new(
         m.nodes.clone(),

@@ -23,9 +23,19 @@
 //! independent of the orbit size — |G| times less than forming B_μᵀ K B_μ column by column.
 //!
 //! The fixed-point space is the trivial irrep's block (d = 1, D = 1). Fixed nodes form whole
-//! orbits and carry no unknowns.
+//! orbits and carry no unknowns; at a node that slides in a plane the candidates are projected
+//! onto the plane, so every column has u·n = 0 there (the group maps the plane's normal to
+//! ±itself, so the projection commutes with the stabiliser).
+//!
+//! **Complex type.** The 2-D irreps E_k of a chiral group have commutant ℂ, and the formulas
+//! above (which rest on Schur's P_{ab} P_{cd} = δ_{bc} P_{ad}) do not hold for them; their
+//! isotypic component is built from the complex projector of their 1-D complex character
+//! instead, and their block is Hermitian (see `complex.rs` and docs/theory.md §10.6).
 
+mod complex;
 mod orbit;
+
+pub use complex::{hermitian, to_complex, to_real};
 
 use crate::linalg::SymmetricPattern;
 use crate::model::{Evaluation, Layout};
@@ -373,8 +383,13 @@ pub struct IrrepBasis {
     pub name: String,
     /// Irrep dimension d.
     pub dim: usize,
-    /// The multiplicity predicted by the characters, (1/|G|) Σ χ_T(g) χ_μ(g).
+    /// How often the irrep occurs in T: (1/|G|) Σ χ_T(g) χ_μ(g) divided by the dimension of
+    /// μ's commutant (1 for real type, 2 for complex type).
     pub multiplicity: usize,
+    /// Complex type (docs/theory.md §10.6): `first` holds the whole isotypic component as
+    /// 2m real columns [u, v] and the block is the Hermitian m × m [`hermitian`] of its
+    /// real 2m × 2m restriction; there are no other partners.
+    pub complex: bool,
     /// The first partner's columns: the block's basis. The other partners hold the same
     /// block again (they are built on demand by [`IrrepBasis::partners`]; kept, they would
     /// take d times the memory, ≈ 2 GB at f = 128 for Ih).
@@ -389,8 +404,12 @@ impl IrrepBasis {
 
     /// All d partners (a = 0..d, the first one included), partner a = P_{a0} of the first:
     /// together with the other irreps', an orthonormal basis of the unknowns. For checks;
-    /// the analysis needs only [`IrrepBasis::first`].
+    /// the analysis needs only [`IrrepBasis::first`]. A complex-type irrep has the one
+    /// "partner" `first`, which already spans its isotypic component.
     pub fn partners(&self, action: &GroupAction, layout: &Layout) -> Vec<SparseBasis> {
+        if self.complex {
+            return vec![self.first.clone()];
+        }
         let seeds = self.first.seeds.as_ref().expect("built from seeds");
         std::iter::once(self.first.clone())
             .chain((1..self.dim).map(|a| {
@@ -414,10 +433,9 @@ pub struct AdaptedBasis {
 /// Errors building an adapted basis.
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
 pub enum AdaptedError {
-    /// Complex-type irreps (the E_k of a chiral C_n) need a complex basis, not built yet.
-    #[error(
-        "irrep {0} of {1} is of complex type (a chiral group); its block is not supported yet"
-    )]
+    /// A complex-type irrep that is not 2-D with a complex structure (no point group has
+    /// one; the E_k of C_n and the like are 2-D).
+    #[error("irrep {0} of {1} is of complex type but not 2-D with a complex structure")]
     ComplexType(String, String),
     /// The projected basis does not have the size the characters predict.
     #[error("irrep {irrep}: built {built} columns but the characters predict {predicted}")]
@@ -435,50 +453,70 @@ impl AdaptedBasis {
     /// Builds, orbit by orbit, the sparse orthonormal bases B_{μa} of every irrep μ and
     /// partner a from the operators P^μ_{ab} = (d/|G|) Σ_g D^μ_ab(g) T(g) in orbit-local form
     /// (module docs): the first copy from the seeds of each orbit, partner a as
-    /// P^μ_{a0} of those columns. Fixed orbits are skipped.
+    /// P^μ_{a0} of those columns. A complex-type irrep gets the 2m real columns of its
+    /// whole isotypic component from the complex projector of its character
+    /// (docs/theory.md §10.6), built explicitly (without orbit-local form). Fixed orbits are
+    /// skipped.
     pub fn new(action: &GroupAction, layout: &Layout) -> Result<Self, AdaptedError> {
         let group = action.group();
         let order = group.order() as f64;
         let orbits = free_orbits(action, layout);
         let frame = Arc::new(OrbitFrame::new(action, layout, &orbits));
-        // χ_T(g) = #{free nodes fixed by g} · tr R_g.
+        // χ_T(g) = Σ over the free nodes fixed by g of tr R_g on the node's displacements:
+        // tr R_g, or tr R_g − n·R_g n for a node sliding in the plane with normal n.
         let chi_t: Vec<f64> = (0..group.order())
             .map(|g| {
-                let fixed = orbits
+                let r = group.element(g);
+                orbits
                     .iter()
                     .flatten()
                     .filter(|&&i| action.node_perm(g)[i] == i)
-                    .count();
-                fixed as f64 * group.element(g).trace()
+                    .map(|&i| match layout.slide_normal(i) {
+                        Some(n) => r.trace() - n.dot(&(r * n)),
+                        None => r.trace(),
+                    })
+                    .sum()
             })
             .collect();
         let mut irreps = Vec::new();
         for irrep in group.irreps() {
-            if irrep.kind() != symmetry::IrrepKind::Real {
-                return Err(AdaptedError::ComplexType(
-                    irrep.name().into(),
-                    group.name().into(),
-                ));
-            }
             let d = irrep.dim();
-            // Character formula: the multiplicity of μ in T.
+            // Character formula: (1/|G|) Σ χ_T χ_μ = multiplicity × dim of the commutant.
             let m: f64 = (0..group.order())
                 .map(|g| chi_t[g] * irrep.character(g))
                 .sum::<f64>()
                 / order;
-            let multiplicity = m.round() as usize;
-            let first = orbit_basis(action, layout, &frame, &orbits, irrep.matrices());
-            if first.dim() != multiplicity {
+            let predicted = m.round() as usize;
+            let (first, multiplicity, complex) = match irrep.kind() {
+                symmetry::IrrepKind::Real => (
+                    orbit_basis(action, layout, &frame, &orbits, irrep.matrices()),
+                    predicted,
+                    false,
+                ),
+                symmetry::IrrepKind::Complex => {
+                    let j = irrep
+                        .complex_structure()
+                        .filter(|_| d == 2)
+                        .ok_or_else(|| {
+                            AdaptedError::ComplexType(irrep.name().into(), group.name().into())
+                        })?;
+                    let chi = complex::character(irrep.matrices(), j);
+                    let first = complex::complex_basis(action, layout, &orbits, &chi);
+                    (first, predicted / 2, true)
+                }
+            };
+            if first.dim() != predicted {
                 return Err(AdaptedError::Count {
                     irrep: irrep.name().into(),
                     built: first.dim(),
-                    predicted: multiplicity,
+                    predicted,
                 });
             }
             irreps.push(IrrepBasis {
                 name: irrep.name().into(),
                 dim: d,
                 multiplicity,
+                complex,
                 first,
             });
         }

@@ -306,6 +306,15 @@ pub(super) fn orbit_basis(
                 }
             }
         }
+        // A node sliding in a plane: only candidates within the plane (u·n = 0).
+        if let Some(n) = layout.slide_normal(i0) {
+            let p = Matrix3::identity() - n * n.transpose();
+            let mut lift = DMatrix::<f64>::zeros(3 * d, 3 * d);
+            for b in 0..d {
+                lift.view_mut((3 * b, 3 * b), (3, 3)).copy_from(&p);
+            }
+            gram = &lift * gram * &lift;
+        }
         let eig = SymmetricEigen::new((&gram + gram.transpose()) * 0.5);
         // Genuine directions have eigenvalues of order d|H|/|G|, round-off ones of 1e-16.
         for (k, &lam) in eig.eigenvalues.iter().enumerate() {

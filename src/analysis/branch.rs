@@ -1176,6 +1176,7 @@ fn branch_run(
                 kind: StateKind::Step,
                 control: control(&p.parameters),
                 u: p.u.clone(),
+                params: p.parameters.clone(),
                 mode: None,
             });
         }
@@ -1188,6 +1189,7 @@ fn branch_run(
                 },
                 control: control(&cp.parameters),
                 u: cp.state.clone(),
+                params: cp.parameters.clone(),
                 mode: Some(cp.mode.clone()),
             });
         }
@@ -1210,6 +1212,7 @@ fn branch_run(
             kind: StateKind::Turning(t.kind),
             control: control(&t.parameters),
             u: t.u.clone(),
+            params: t.parameters.clone(),
             mode: None,
         });
         turning.push(TurningRow {
@@ -1254,6 +1257,7 @@ fn branch_run(
         stability_note: b.stability_note.clone(),
         saved: Vec::new(),
         spectra: Default::default(),
+        states: None,
     };
     BranchRun {
         report,

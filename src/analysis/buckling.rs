@@ -67,7 +67,7 @@ pub(super) fn run(
                         params: &params,
                     },
                 );
-                for event in x.localise(ends.0, ends.1, i - 1, value - va, |s| {
+                for event in x.localise(ends.0, ends.1, i - 1, value - va, false, |s| {
                     Some((u.to_vec(), at(va + s)))
                 }) {
                     match event {

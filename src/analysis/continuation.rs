@@ -178,16 +178,60 @@ pub enum SolveError {
         control: f64,
     },
     /// The iteration budget was used.
-    #[error("Newton did not converge at λ = {control} in {iterations} iterations")]
+    #[error("Newton did not converge at λ = {control} in {iterations} iterations (residual {residual:.1e} of the force scale, last correction {correction:.1e} of the state scale, tolerance {tolerance:.0e})")]
     NotConverged {
         /// The control's value.
         control: f64,
-        /// The budget used.
+        /// The budget used (the limit this solve actually had).
         iterations: usize,
+        /// max |R| relative to the force scale at the last iterate.
+        residual: f64,
+        /// The last Newton correction, in the scaled unknowns (state / state scale).
+        correction: f64,
+        /// The tolerance both had to reach.
+        tolerance: f64,
     },
     /// No tangent could be computed at the converged point.
     #[error("singular tangent at the start")]
     SingularTangent,
+    /// The start homotopy's holding force did not vanish along its auxiliary path.
+    #[error("the held translation was not released in {steps} steps (holding force {force:e})")]
+    NotReleased {
+        /// The steps taken.
+        steps: usize,
+        /// The holding force at the last point.
+        force: f64,
+    },
+}
+
+impl SolveError {
+    /// The message with the control parameter named `name` (or, with `None`, the start values)
+    /// in place of λ.
+    pub fn describe(&self, name: Option<&str>) -> String {
+        let at = |v: f64| match name {
+            Some(n) => format!("at {n} = {v}"),
+            None => "at the start values".to_string(),
+        };
+        match self {
+            Self::Model(e) => e.to_string(),
+            Self::Singular { control } => format!("singular tangent {}", at(*control)),
+            Self::Diverged { control } => format!("Newton diverged {}", at(*control)),
+            Self::NotConverged {
+                control,
+                iterations,
+                residual,
+                correction,
+                tolerance,
+            } => format!(
+                "Newton did not converge {} in {iterations} iterations (the limit of this \
+                 solve; residual {residual:.1e} of the force scale, last correction \
+                 {correction:.1e} of the state scale, tolerance {tolerance:.0e})",
+                at(*control)
+            ),
+            Self::SingularTangent => "singular tangent at the start".to_string(),
+            Self::NotReleased { .. } => self.to_string(),
+        }
+    }
 }
 
 /// Why one predictor–corrector step failed (the driver then cuts the step).
@@ -350,6 +394,14 @@ impl Linearization {
         self.residual.amax() <= opts.tolerance * force
             && self.constraints.amax() <= opts.tolerance * gscale
     }
+
+    /// max |R| relative to the force scale of [`Linearization::converged`].
+    fn relative_residual(&self, opts: &PathOptions) -> f64 {
+        let force = (self.loads.amax() * opts.parameter_scale(0))
+            .max(self.tangent.amax() * opts.state_scale)
+            .max(1e-300);
+        self.residual.amax() / force
+    }
 }
 
 /// Settings of the path follower.
@@ -428,8 +480,10 @@ pub fn solve_at<P: Problem + ?Sized>(
     let m = problem.dim();
     let (mut q, mut lambda) = (q0.clone(), lambda0.clone());
     let budget = opts.max_iterations.max(20);
+    let (mut residual, mut correction) = (f64::NAN, f64::NAN);
     for it in 1..=budget {
         let lin = problem.evaluate(&q, &lambda)?;
+        residual = lin.relative_residual(opts);
         let c = lin.constraints.len();
         // The arclength row becomes "control fixed".
         let mut last = DVector::zeros(m + c + 1);
@@ -441,6 +495,7 @@ pub fn solve_at<P: Problem + ?Sized>(
         let d = a
             .solve(&rhs)
             .ok_or(SolveError::Singular { control: lambda[0] })?;
+        correction = d.amax();
         q += d.rows(0, m) * opts.state_scale;
         for j in 1..=c {
             lambda[j] += d[m + j] * opts.parameter_scale(j);
@@ -455,6 +510,9 @@ pub fn solve_at<P: Problem + ?Sized>(
     Err(SolveError::NotConverged {
         control: lambda[0],
         iterations: budget,
+        residual,
+        correction,
+        tolerance: opts.tolerance,
     })
 }
 
@@ -518,7 +576,38 @@ pub fn step_from<P: Problem + ?Sized>(
     s: f64,
     opts: &PathOptions,
 ) -> Result<PathPoint, StepError> {
-    step_on_plane(problem, from, &from.tangent, &from.tangent, s, s, opts)
+    step_on_plane(
+        problem,
+        from,
+        &from.tangent,
+        &from.tangent,
+        s,
+        s,
+        opts,
+        true,
+    )
+}
+
+/// The converged point of one predictor–corrector step, without the new tangent and the
+/// branch-jump guard (its `tangent` is `from`'s): what localising an eigenvalue between two
+/// accepted points needs, also next to a branch point of the path, where the tangent is
+/// ill-defined.
+pub fn corrected_from<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    s: f64,
+    opts: &PathOptions,
+) -> Result<PathPoint, StepError> {
+    step_on_plane(
+        problem,
+        from,
+        &from.tangent,
+        &from.tangent,
+        s,
+        s,
+        opts,
+        false,
+    )
 }
 
 /// A step off a branch point along `direction` (a unit vector in scaled variables, like a
@@ -537,12 +626,14 @@ pub fn step_off<P: Problem + ?Sized>(
     opts: &PathOptions,
 ) -> Result<PathPoint, StepError> {
     let value = plane.dot(direction) * s;
-    step_on_plane(problem, from, direction, plane, value, s, opts)
+    step_on_plane(problem, from, direction, plane, value, s, opts, true)
 }
 
 /// Predictor y_from + s·direction, corrector on R = 0, g = 0, planeᵀ (y − y_from) = value
-/// (scaled variables; the extended Jacobian's last row is `plane`), tangent oriented along
-/// `direction`, and the branch-jump guard against the predictor and `direction`.
+/// (scaled variables; the extended Jacobian's last row is `plane`); when `guarded`, the
+/// tangent oriented along `direction` and the branch-jump guard against the predictor and
+/// `direction`, else the converged point with `direction` as its tangent.
+#[allow(clippy::too_many_arguments)]
 fn step_on_plane<P: Problem + ?Sized>(
     problem: &mut P,
     from: &PathPoint,
@@ -551,6 +642,7 @@ fn step_on_plane<P: Problem + ?Sized>(
     value: f64,
     s: f64,
     opts: &PathOptions,
+    guarded: bool,
 ) -> Result<PathPoint, StepError> {
     let m = problem.dim();
     let nl = from.lambda.len();
@@ -582,6 +674,15 @@ fn step_on_plane<P: Problem + ?Sized>(
         }
         if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
             return Err(StepError::Diverged);
+        }
+        if converged && d.amax() <= opts.tolerance && !guarded {
+            return Ok(PathPoint {
+                q,
+                lambda,
+                arclength: from.arclength + s,
+                iterations: it,
+                tangent: t.clone(),
+            });
         }
         if converged && d.amax() <= opts.tolerance {
             let lin = problem.evaluate(&q, &lambda)?;
@@ -744,5 +845,11 @@ impl<P: Problem> Continuation<P> {
     /// localising an event between two accepted points); the driver's state is unchanged.
     pub fn step_from(&mut self, from: &PathPoint, s: f64) -> Result<PathPoint, StepError> {
         step_from(&mut self.problem, from, s, &self.opts)
+    }
+
+    /// As [`Continuation::step_from`] without the new tangent and the branch-jump guard
+    /// ([`corrected_from`]).
+    pub fn corrected_from(&mut self, from: &PathPoint, s: f64) -> Result<PathPoint, StepError> {
+        corrected_from(&mut self.problem, from, s, &self.opts)
     }
 }

@@ -3,7 +3,8 @@
 //! search on the path parameter until it is at round-off relative to ‖K‖, and the point is
 //! classified by its irrep:
 //!
-//! - trivial irrep → **limit point** (a symmetric fold);
+//! - trivial irrep → **limit point** (a symmetric fold) where the control turns, else a
+//!   **symmetric bifurcation** (a branch point within the symmetric states, or a held state);
 //! - non-trivial 1-D irrep → **simple symmetry-breaking bifurcation**;
 //! - d-dimensional irrep → **d-fold bifurcation** (double, 3-, 4-, 5-fold): the eigenvalue is
 //!   d-fold in K by construction, the d partner blocks being identical.
@@ -32,7 +33,8 @@ pub struct Isotropy {
 pub enum CriticalKind {
     /// The trivial block on a path: a symmetric fold of the path.
     LimitPoint,
-    /// The trivial block on a held state (linear buckling), which cannot fold.
+    /// The trivial block where the path cannot fold: on a held state (linear buckling), or on
+    /// a path where the control does not turn (a branch point within the symmetric states).
     SymmetricBifurcation,
     /// A non-trivial 1-D irrep: a simple symmetry-breaking bifurcation.
     SimpleBifurcation,
@@ -42,7 +44,9 @@ pub enum CriticalKind {
 
 impl CriticalKind {
     /// The kind of a singular block in an irrep of dimension `dim` (`trivial`: the first
-    /// irrep), on a held state when `held`.
+    /// irrep); `held` where the path cannot fold — a held state, or a step of a path in which
+    /// the control does not turn: there a singular trivial block is a bifurcation within the
+    /// symmetric states, not a fold.
     pub fn of(trivial: bool, dim: usize, held: bool) -> Self {
         match (trivial, dim) {
             (true, _) if held => Self::SymmetricBifurcation,

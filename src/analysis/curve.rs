@@ -448,7 +448,8 @@ pub(super) fn run(
     let lambda0 = problem.free_values(params_start);
     let q_start = study.basis.restrict(u_start);
     let max_steps = opts.max_steps;
-    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)?;
+    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)
+        .map_err(|e| RunError::start(study, e))?;
     let mut first = FirstCritical {
         index: IndexChanges::new(crossings),
         from: analysis.from.clone(),

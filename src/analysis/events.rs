@@ -545,13 +545,16 @@ impl<'a> Crossings<'a> {
     /// found by [`locate`] on that eigenvalue, computed at each trial point — densely or by
     /// Lanczos, whatever the block's size ([`Stability::analyse`]). Returns the critical
     /// points sorted by the control, and the crossings that could not be localised as
-    /// warnings.
+    /// warnings. `control_turns` says whether the control turns between `a` and `b`: a zero
+    /// of the trivial block is a limit point only there (docs/theory.md §11.3); elsewhere,
+    /// and on a held state, it is a symmetric bifurcation.
     pub fn localise(
         &mut self,
         a: End<'_>,
         b: End<'_>,
         after_step: usize,
         s1: f64,
+        control_turns: bool,
         mut state: impl FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
     ) -> Vec<Event> {
         let mut found = Vec::new();
@@ -689,7 +692,7 @@ impl<'a> Crossings<'a> {
                 let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
                 mode.iter_mut().for_each(|x| *x /= norm);
                 found.push(CriticalPoint {
-                    kind: CriticalKind::of(mu == 0, ib.dim, self.held),
+                    kind: CriticalKind::of(mu == 0, ib.dim, self.held || !control_turns),
                     irrep: ib.name.clone(),
                     multiplicity: ib.dim,
                     measures: (self.measure)(&u, &p),
@@ -782,6 +785,8 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
         }
         // The index changed: localise in the blocks whose count changed.
         let s1 = point.arclength - step.from.arclength;
+        let m = driver.problem().dim();
+        let turns = step.from.tangent[m].signum() != point.tangent[m].signum();
         let ends = (
             End {
                 spectrum: a,
@@ -794,7 +799,8 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
                 params: p1,
             },
         );
-        // A state inside the step: corrected from the earlier point. Where that fails — near a
+        // A state inside the step: corrected from the earlier point (without the branch-jump
+        // guard, which a step next to a branch point of the path would trip). Where that fails — near a
         // singular point of the path, such as a nearly symmetric (imperfect) bifurcation that
         // the step went over, where the corrector's basin shrinks — from the nearest state
         // found so far on the same side, forwards from the earlier point's side or backwards
@@ -805,42 +811,44 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
         let mut backward: Vec<(f64, PathPoint)> = vec![(s1, back)];
         // The corrector from the earlier point failed at and beyond this s (not tried again).
         let mut fails_from = f64::INFINITY;
-        self.crossings.localise(ends.0, ends.1, after, s1, |s| {
-            let direct = if s < fails_from {
-                driver.step_from(&step.from, s).ok()
-            } else {
-                None
-            };
-            let q = match direct {
-                Some(q) => q,
-                None => {
-                    fails_from = fails_from.min(s);
-                    let near_forward = forward
-                        .iter()
-                        .filter(|(t, _)| *t < s)
-                        .max_by(|x, y| x.0.total_cmp(&y.0));
-                    let chained = near_forward.and_then(|(t, p)| driver.step_from(p, s - t).ok());
-                    match chained {
-                        Some(q) => q,
-                        None => {
-                            let (t, p) = backward
-                                .iter()
-                                .filter(|(t, _)| *t > s)
-                                .min_by(|x, y| x.0.total_cmp(&y.0))?;
-                            let q = driver.step_from(p, t - s).ok()?;
-                            backward.push((s, q.clone()));
-                            let problem = driver.problem();
-                            return Some((
-                                problem.displacement(&q.q),
-                                problem.parameters(&q.lambda),
-                            ));
+        self.crossings
+            .localise(ends.0, ends.1, after, s1, turns, |s| {
+                let direct = if s < fails_from {
+                    driver.corrected_from(&step.from, s).ok()
+                } else {
+                    None
+                };
+                let q = match direct {
+                    Some(q) => q,
+                    None => {
+                        fails_from = fails_from.min(s);
+                        let near_forward = forward
+                            .iter()
+                            .filter(|(t, _)| *t < s)
+                            .max_by(|x, y| x.0.total_cmp(&y.0));
+                        let chained =
+                            near_forward.and_then(|(t, p)| driver.step_from(p, s - t).ok());
+                        match chained {
+                            Some(q) => q,
+                            None => {
+                                let (t, p) = backward
+                                    .iter()
+                                    .filter(|(t, _)| *t > s)
+                                    .min_by(|x, y| x.0.total_cmp(&y.0))?;
+                                let q = driver.step_from(p, t - s).ok()?;
+                                backward.push((s, q.clone()));
+                                let problem = driver.problem();
+                                return Some((
+                                    problem.displacement(&q.q),
+                                    problem.parameters(&q.lambda),
+                                ));
+                            }
                         }
                     }
-                }
-            };
-            forward.push((s, q.clone()));
-            let problem = driver.problem();
-            Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
-        })
+                };
+                forward.push((s, q.clone()));
+                let problem = driver.problem();
+                Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
+            })
     }
 }

@@ -36,7 +36,7 @@ pub use problem::{SymmetricProblem, SPARSE_TANGENT_FROM};
 
 use crate::adapted::AdaptedBasis;
 use crate::model::Model;
-use crate::report::{MeshInfo, PathReport, PathRow, Spectra, State, TurningRow};
+use crate::report::{MeshInfo, PathReport, PathRow, PointState, Spectra, State, TurningRow};
 use crate::scene::Analysis;
 use crate::stability::Stability;
 use crate::study::Study;
@@ -52,6 +52,8 @@ pub struct RunResult {
     pub report: PathReport,
     /// States to write (every `save-every` steps, the last one, turning and critical points).
     pub states: Vec<State>,
+    /// Every path row's state (parameters and fixed-point coordinates), for `path.states`.
+    pub points: Vec<PointState>,
     /// Where the time went.
     pub times: RunTimes,
     /// The critical curve of a `critical-curve` analysis.
@@ -65,8 +67,16 @@ pub struct RunResult {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RunError {
     /// Newton did not converge at the start.
-    #[error("the start state did not converge: {0}")]
-    Start(#[from] SolveError),
+    #[error("the start state did not converge: {}", .error.describe(.control.as_deref()))]
+    Start {
+        /// Why.
+        error: SolveError,
+        /// The control parameter's name (none for a single equilibrium).
+        control: Option<String>,
+    },
+    /// `start.from` names a saved state that was not loaded into the study.
+    #[error("the start state: start.from is set but no saved state was loaded (output::store::load_start)")]
+    NotLoaded,
     /// Newton converged to a membrane turned inside out.
     #[error("the start state did not converge: Newton converged to an inside-out membrane (enclosed volume {volume:e}); start closer to the intended state (start.stretch, the start values)")]
     InsideOut {
@@ -79,6 +89,16 @@ pub enum RunError {
     /// Newton converged to a state that is no membrane state.
     #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
     Degenerate(crate::model::StateDefect),
+}
+
+impl RunError {
+    /// A start failure of `study`'s solve, naming its control parameter.
+    pub fn start(study: &Study, error: SolveError) -> Self {
+        Self::Start {
+            error,
+            control: study.control.map(|c| study.parameters[c].clone()),
+        }
+    }
 }
 
 /// Where a run's time went, by phase (what `memstab bench` reports).
@@ -96,27 +116,6 @@ pub struct RunTimes {
     pub steps: BranchTimes,
     /// Of `path`'s events: the index by irrep blocks at every point.
     pub index: Duration,
-}
-
-/// Fails, naming `what` and the irrep, when the study's group has an irrep of complex type
-/// (a chiral group `C<n>`, n ≥ 3), whose blocks the symmetry-adapted analysis does not
-/// support yet.
-pub fn check_real_irreps(study: &Study, what: &str) -> Result<(), String> {
-    let group = study.action.group();
-    match group
-        .irreps()
-        .iter()
-        .find(|i| i.kind() != symmetry::IrrepKind::Real)
-    {
-        Some(irrep) => Err(format!(
-            "{what}: the scene's group {} is chiral: its irrep {} is of complex type, whose \
-             block the symmetry-adapted analysis does not support yet; use a group with mirrors \
-             (C<n>v)",
-            group.name(),
-            irrep.name()
-        )),
-        None => Ok(()),
-    }
 }
 
 /// What a caller sees of a run while it goes: the progress, and every accepted state.
@@ -225,6 +224,7 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
 pub(crate) struct Record {
     rows: Vec<PathRow>,
     states: Vec<State>,
+    points: Vec<PointState>,
     turning: Vec<TurningRow>,
     critical: Vec<CriticalPoint>,
     warnings: Vec<String>,
@@ -238,6 +238,7 @@ impl Record {
         Self {
             rows: Vec::new(),
             states: Vec::new(),
+            points: Vec::new(),
             turning: Vec::new(),
             critical: Vec::new(),
             warnings: study.warnings.clone(),
@@ -263,6 +264,10 @@ impl Record {
         iterations: usize,
         index: Option<usize>,
     ) {
+        self.points.push(PointState {
+            parameters: params.clone(),
+            q: study.basis.restrict(u).iter().copied().collect(),
+        });
         self.rows.push(PathRow {
             step,
             arclength,
@@ -280,6 +285,7 @@ impl Record {
             kind,
             control: self.control_of(params),
             u,
+            params: params.to_vec(),
             mode: None,
         });
     }
@@ -294,6 +300,7 @@ impl Record {
             },
             control: self.control_of(&cp.parameters),
             u: cp.state.clone(),
+            params: cp.parameters.clone(),
             mode: Some(cp.mode.clone()),
         });
         self.critical.push(cp);
@@ -335,10 +342,12 @@ impl Record {
             stability_note,
             saved: Vec::new(),
             spectra: self.spectra,
+            states: None,
         };
         RunResult {
             report,
             states: self.states,
+            points: self.points,
             times,
             curve: self.curve,
             branches: None,

@@ -66,21 +66,36 @@ pub(super) fn run(
     let lambda0 = problem.free_values(params_start);
     let q_start = study.basis.restrict(u_start);
     let max_steps = opts.max_steps;
-    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)?;
+    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)
+        .map_err(|e| RunError::start(study, e))?;
     let stretch = study
         .measures
         .iter()
         .position(|(_, m)| *m == Measure::Stretch);
-    // `stop-stretch` is reached where the stretch passes it from the start's side.
-    let stop_stretch = analysis.stop_stretch.zip(stretch).map(|(target, k)| {
-        let start = study.measure(u_start, params_start)[k];
-        (target, k, (start - target).signum())
-    });
+    let displacement = study
+        .measures
+        .iter()
+        .position(|(_, m)| *m == Measure::MaxDisplacement);
+    // A stop is reached where its measure passes the target from the start's side.
+    let start_measures = study.measure(u_start, params_start);
+    let side = |target: f64, k: usize| (target, k, (start_measures[k] - target).signum());
+    let stop_stretch = analysis.stop_stretch.zip(stretch).map(|(t, k)| side(t, k));
+    let stop_displacement = analysis
+        .stop_displacement
+        .zip(displacement)
+        .map(|(t, k)| side(t, k));
     let stops = |problem: &SymmetricProblem, p: &PathPoint| {
-        let (target, k, side) = stop_stretch?;
+        if stop_stretch.is_none() && stop_displacement.is_none() {
+            return None;
+        }
         let u = problem.displacement(&p.q);
-        let now = study.measure(&u, &problem.parameters(&p.lambda))[k];
-        ((now - target) * side <= 0.0).then_some(StopReason::Stretch { target })
+        let now = study.measure(&u, &problem.parameters(&p.lambda));
+        let passed = |stop: Option<(f64, usize, f64)>| {
+            stop.and_then(|(target, k, side)| ((now[k] - target) * side <= 0.0).then_some(target))
+        };
+        passed(stop_stretch)
+            .map(|target| StopReason::Stretch { target })
+            .or_else(|| passed(stop_displacement).map(|target| StopReason::Displacement { target }))
     };
     let mut index = crossings.map(IndexChanges::new);
     let mut count = 0usize;

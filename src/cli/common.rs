@@ -1,6 +1,5 @@
 //! Helpers shared by the commands: loading a scene and building its study with the exit
-//! codes of `memstab run`, the `--at NAME=VALUE` overrides, the chiral-group check, and
-//! number formatting.
+//! codes of `memstab run`, the `--at NAME=VALUE` overrides, and number formatting.
 
 use super::CliError;
 use memstab::scene::Scene;
@@ -14,18 +13,18 @@ pub(super) fn load_scene(path: &Path) -> Result<Scene, CliError> {
 
 /// Builds the study (mesh, the scene's group, effects, model); a scene that cannot be built is
 /// bad input (exit 2), as in `memstab run`.
+/// A `[start] from` is loaded here: a saved state that cannot be read or does not fit is bad
+/// input too (the message names the scene file and the key).
 pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
-    Study::build(scene).map_err(|e| match e {
+    let origin = scene.origin.clone();
+    let mut study = Study::build(scene).map_err(|e| match e {
         StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
             CliError::Input(one_line(&e.to_string()))
         }
-    })
-}
-
-/// Fails with bad input when the scene's group has an irrep of complex type
-/// ([`memstab::analysis::check_real_irreps`]).
-pub(super) fn check_real_irreps(study: &Study, what: &str) -> Result<(), CliError> {
-    memstab::analysis::check_real_irreps(study, what).map_err(CliError::Input)
+    })?;
+    memstab::output::store::load_start(&mut study)
+        .map_err(|e| CliError::Input(one_line(&format!("{origin}: {e}"))))?;
+    Ok(study)
 }
 
 /// Parses the `--at` list against the parameter names: (index, value) pairs.

@@ -4,7 +4,7 @@
 //! [`memstab::analysis::compare`]'s; this prints them as a table or one JSON object.
 //!
 //! Bad input (a scene that does not load or build, a mesh that is not a subgroup or does not
-//! parse, a chiral group, an equilibrium analysis, a bad `--max`) is one line and exit code 2,
+//! parse, an equilibrium analysis, a bad `--max`) is one line and exit code 2,
 //! before anything runs; a start state that does not converge is exit code 1.
 
 use super::common::{load_scene, sci, sig_digits};

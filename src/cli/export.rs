@@ -54,6 +54,13 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
     check_out_file("--out", &args.out)?;
     check_out_file("--out (its rank-one file)", &rank_one_path(&args.out))?;
     let scene = load_scene(&args.scene)?;
+    if !scene.boundary.slide.is_empty() {
+        return Err(CliError::Input(format!(
+            "{}: 'boundary.slide': export-matrix writes K over all unknowns, but a sliding node \
+             keeps only its in-plane ones; remove [[boundary.slide]] (or fix the set) to export",
+            scene.origin
+        )));
+    }
     let mut study = build_study(scene)?;
     let at = parse_at(&args.at, &study.parameters)?;
     let StartState { u, params, .. } =

@@ -21,7 +21,7 @@ use memstab::demo::closed_form_check;
 use memstab::output::{file_name, write_run, Progress, RunSummary, Written, RUN_FILES};
 use memstab::report::PathReport;
 use memstab::scene::Scene;
-use memstab::study::{Study, StudyError};
+use memstab::study::Study;
 use memstab::text::{one_line, sig_digits};
 use std::path::{Path, PathBuf};
 
@@ -93,11 +93,7 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
 /// Checks `out`, builds the study, creates `out`, runs and writes every output.
 fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, Written), CliError> {
     check_out(out)?;
-    let mut study = Study::build(scene).map_err(|e| match e {
-        StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
-            CliError::Input(e.to_string())
-        }
-    })?;
+    let mut study = super::common::build_study(scene)?;
     let created = !out.exists();
     if created {
         std::fs::create_dir(out).map_err(|e| {
@@ -271,10 +267,14 @@ fn print_summary(
     if let Some(note) = &report.stability_note {
         out!("{note}");
     } else if report.critical.is_empty() {
-        out!(
-            "critical points: none (the index stays {})",
-            report.rows.first().and_then(|r| r.index).unwrap_or(0)
-        );
+        match report.index_range() {
+            Some((lo, hi)) if lo == hi => out!("critical points: none (the index stays {lo})"),
+            Some((lo, hi)) => out!(
+                "critical points: none localised, although the index ranges from {lo} to {hi} \
+                 along the path (see the warnings)"
+            ),
+            None => out!("critical points: none (no index was computed)"),
+        }
     } else {
         out!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
         for cp in &report.critical {
@@ -323,6 +323,12 @@ fn print_summary(
         "  {:<10} ParaView collection of the {in_collection} path states (time = path step); turning and critical points beside it",
         file_name(&written.pvd),
     );
+    if let Some(points) = &written.points {
+        out!(
+            "  {:<10} every point's parameters and displacement, binary ([start] from reads it)",
+            file_name(points),
+        );
+    }
     for chunk in written.states.chunks(5) {
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
         out!("  {}", names.join(" "));

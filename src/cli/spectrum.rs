@@ -10,10 +10,10 @@
 //! found and deflated in that block; then the instability index Σ d·neg.
 //!
 //! Bad input — a scene that does not load or build, an `--at` naming no parameter or without a
-//! number, a chiral group — is one line and exit code 2; a start state that does not converge
+//! number — is one line and exit code 2; a start state that does not converge
 //! is exit code 1.
 
-use super::common::{build_study, check_real_irreps, load_scene, one_line, parse_at, sci};
+use super::common::{build_study, load_scene, one_line, parse_at, sci};
 use super::CliError;
 use clap::Args;
 use memstab::adapted::AdaptedBasis;
@@ -52,6 +52,8 @@ struct IrrepJson {
     zero_modes: usize,
     /// max |B_μᵀ K r| over those modes, relative to `scale` (≈ 0 at an equilibrium).
     zero_mode_residual: f64,
+    /// Mean motions held (and deflated) in the block: the rolling of a spherical reference.
+    held_motions: usize,
 }
 
 /// The `--json` output.
@@ -81,7 +83,6 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let scene = load_scene(&args.scene)?;
     let mut study = build_study(scene)?;
     let origin = study.scene.origin.clone();
-    check_real_irreps(&study, &format!("scene '{origin}'"))?;
     let at = parse_at(&args.at, &study.parameters)?;
     let held = held(&study);
     let StartState {
@@ -139,6 +140,7 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
                     negative: b.negative,
                     zero_modes: b.rigid_modes,
                     zero_mode_residual: b.rigid_residual,
+                    held_motions: b.held,
                 })
                 .collect(),
         };
@@ -254,6 +256,19 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
             format!("{zero_total} ({})", zero.join(", "))
         }
     );
+    let held: Vec<String> = spectrum
+        .blocks
+        .iter()
+        .filter(|b| b.held > 0)
+        .map(|b| format!("{} {}x{}", b.irrep, b.held, b.dim))
+        .collect();
+    if !held.is_empty() {
+        out!(
+            "held mean motions (the rolling of a spherical reference, a drift across a spin \
+             axis; deflated like the rigid modes, not in the index): {}",
+            held.join(", ")
+        );
+    }
     out!(
         "instability index {} (sum of d*neg){}",
         spectrum.index,

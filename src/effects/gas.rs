@@ -2,19 +2,22 @@
 //!
 //! - Fixed over-pressure p (a parameter): `Π = −p V`, so `F = −p ∇V`, `K = −p ∇²V`,
 //!   `∂F/∂p = −∇V`.
-//! - Fixed amount of gas, isothermal (absolute pressure P = C/V, ambient P_atm):
-//!   `Π = −C ln V + P_atm V`, so `F = −p ∇V` with the over-pressure `p = C/V − P_atm`,
-//!   `K = −p ∇²V + (C/V²) ∇V ∇Vᵀ` (a rank-one term, handed to the solver as such) and
-//!   `∂F/∂C = −∇V / V`.
+//! - Fixed amount of gas, isothermal (absolute pressure P = C/V_g, ambient P_atm) in the gas
+//!   volume V_g = V − V*: `Π = −C ln V_g + P_atm V_g`, so `F = −p ∇V` with the over-pressure
+//!   `p = C/V_g − P_atm`, `K = −p ∇²V + (C/V_g²) ∇V ∇Vᵀ` (a rank-one term, handed to the solver
+//!   as such), `∂F/∂C = −∇V / V_g` and `∂F/∂V* = −(C/V_g²) ∇V`. V* is the volume of fluid in
+//!   the same enclosure (0 without one): the fluid's *amount*, which a fluid-volume constraint
+//!   holds, not V_f(u, h) at a fixed level — the gas pressure acts on the fluid's surface and
+//!   through it on the wet membrane, which `F = −p ∇V` says (docs/theory.md §3.5).
 //!
-//! For an open membrane with a fixed rim the closing surface is fixed: it changes V by a
-//! constant only, which shifts Π by a constant (fixed pressure) or is part of V
-//! (fixed amount: give it as `closing_volume`).
+//! For an open membrane the plate closing it is part of V ([`ClosingFace`]): a constant for a
+//! fixed rim, a function of the rim nodes for a rim sliding in the plate's plane.
 
-use super::volume::volume;
+use super::volume::{volume, ClosingFace};
 use super::Quantity;
 use crate::model::constraint::{gather, Constraint, ConstraintValue};
 use crate::model::{Assembler, Effect, Layout, ModelError, Vec3};
+use std::sync::Arc;
 use symmetry::Invariant;
 
 /// Gas at a fixed over-pressure p (parameter index `pressure`).
@@ -22,6 +25,36 @@ use symmetry::Invariant;
 pub struct GasPressure {
     /// The over-pressure.
     pub pressure: Quantity,
+    /// The plate closing an open membrane whose rim can move (a fixed rim needs none).
+    pub closing: Option<Arc<ClosingFace>>,
+}
+
+impl GasPressure {
+    /// Gas at over-pressure `pressure`, without a closing plate.
+    pub fn new(pressure: Quantity) -> Self {
+        Self {
+            pressure,
+            closing: None,
+        }
+    }
+}
+
+/// V_T of triangle `t`, with the part z_c A_z/3 of the closing face on its rim edges.
+fn enclosed(closing: Option<&ClosingFace>, t: usize, xt: &[Vec3; 3]) -> crate::model::Local {
+    let mut v = volume(xt);
+    if let Some(c) = closing.filter(|c| c.touches(t)) {
+        v.add_scaled(&c.area_local(t, xt), c.z / 3.0);
+    }
+    v
+}
+
+/// The enclosed volume Σ_T V_T plus the closing face's part.
+pub fn enclosed_volume(closing: Option<&ClosingFace>, triangles: &[[usize; 3]], x: &[Vec3]) -> f64 {
+    triangles
+        .iter()
+        .map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value)
+        .sum::<f64>()
+        + closing.map_or(0.0, |c| c.volume(triangles, x))
 }
 
 impl Effect for GasPressure {
@@ -46,8 +79,9 @@ impl Effect for GasPressure {
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError> {
         let p = self.pressure.value(params);
-        out.add_triangles(x, [self.pressure.parameter(), None], |_, xt, terms| {
-            let v = volume(xt);
+        let closing = self.closing.as_deref();
+        out.add_triangles(x, [self.pressure.parameter(), None], |t, xt, terms| {
+            let v = enclosed(closing, t, xt);
             terms.local = v.scaled(-p);
             terms.loads[0] = v.grad.map(|g| -g);
             Ok(())
@@ -55,25 +89,43 @@ impl Effect for GasPressure {
     }
 }
 
-/// A fixed amount of gas at constant temperature: absolute pressure `C/V`.
+/// A fixed amount of gas at constant temperature: absolute pressure `C/V_g`, V_g = V − V*.
 #[derive(Debug, Clone)]
 pub struct GasAmount {
-    /// C = P·V (absolute pressure times volume).
+    /// C = P·V_g (absolute pressure times gas volume).
     pub amount: Quantity,
     /// Ambient (absolute) pressure P_atm.
     pub ambient: f64,
-    /// Volume enclosed between the membrane and fixed walls, added to Σ V_T.
-    pub closing_volume: f64,
+    /// The plate closing an open membrane (its part of V).
+    pub closing: Option<Arc<ClosingFace>>,
+    /// V*: the volume of fluid in the same enclosure, if any (a number or a parameter).
+    pub fluid: Option<Quantity>,
 }
 
 impl GasAmount {
-    /// The enclosed volume at positions `x`.
+    /// C of gas with ambient pressure `ambient`, alone in a closed membrane.
+    pub fn new(amount: Quantity, ambient: f64) -> Self {
+        Self {
+            amount,
+            ambient,
+            closing: None,
+            fluid: None,
+        }
+    }
+
+    /// The enclosed volume V at positions `x` (closing plate included).
     pub fn volume(&self, triangles: &[[usize; 3]], x: &[Vec3]) -> f64 {
-        self.closing_volume
-            + triangles
-                .iter()
-                .map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c])) / 6.0)
-                .sum::<f64>()
+        enclosed_volume(self.closing.as_deref(), triangles, x)
+    }
+
+    /// The gas volume V_g = V − V* at positions `x` and parameters `params`.
+    pub fn gas_volume(&self, triangles: &[[usize; 3]], x: &[Vec3], params: &[f64]) -> f64 {
+        self.volume(triangles, x) - self.fluid.map_or(0.0, |f| f.value(params))
+    }
+
+    /// The over-pressure C/V_g − P_atm.
+    pub fn over_pressure(&self, triangles: &[[usize; 3]], x: &[Vec3], params: &[f64]) -> f64 {
+        self.amount.value(params) / self.gas_volume(triangles, x, params) - self.ambient
     }
 }
 
@@ -97,42 +149,58 @@ impl Effect for GasAmount {
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError> {
         let c = self.amount.value(params);
-        let v = self.volume(out.triangles(), x);
+        let v = self.gas_volume(out.triangles(), x, params);
         if v.is_nan() || v <= 0.0 {
             return Err(ModelError::Global {
                 effect: self.name().into(),
-                what: format!("the enclosed volume {v:e} is not positive"),
+                what: format!("the gas volume {v:e} is not positive"),
             });
         }
         let p = c / v - self.ambient;
+        let closing = self.closing.as_deref();
         out.add_energy(-c * v.ln() + self.ambient * v);
-        out.add_triangles(x, [self.amount.parameter(), None], |_, xt, terms| {
-            let vt = volume(xt);
+        let fluid = self.fluid.and_then(|f| f.parameter());
+        out.add_triangles(x, [self.amount.parameter(), fluid], |t, xt, terms| {
+            let vt = enclosed(closing, t, xt);
             // Energy is added once above; the triangles carry −p ∇V and −p ∇²V.
             terms.local = vt.scaled(-p);
             terms.local.value = 0.0;
             terms.loads[0] = vt.grad.map(|g| -g / v);
+            terms.loads[1] = vt.grad.map(|g| -g * c / (v * v));
             Ok(())
         })?;
         if out.request().tangent {
-            let grad_v = out.gradient_vector(x, |xt| volume(xt).grad);
+            let grad_v = out.gradient_vector(x, |t, xt| enclosed(closing, t, xt).grad);
             out.add_rank_one(c / (v * v), grad_v);
         }
         Ok(())
     }
 }
 
-/// Fixed amount of gas (P_atm + p) V = C* for a fixed-pressure gas effect; frees p.
+/// Fixed amount of gas (P_atm + p)(V − V*) = C* for a fixed-pressure gas effect; frees p.
+/// V includes the closing plate, V* is the fluid in the same enclosure (as in [`GasAmount`]).
 #[derive(Debug, Clone)]
 pub struct GasAmountConstraint {
     /// The pressure's parameter index.
     pub pressure: usize,
     /// Ambient absolute pressure.
     pub ambient: f64,
-    /// C*.
+    /// C* (when `target_parameter` is `None`).
     pub target: f64,
-    /// Volume between the membrane and fixed walls, added to Σ V_T.
-    pub closing_volume: f64,
+    /// The parameter that is C*, if any.
+    pub target_parameter: Option<usize>,
+    /// The plate closing an open membrane (its part of V).
+    pub closing: Option<Arc<ClosingFace>>,
+    /// V*: the volume of fluid in the same enclosure, if any.
+    pub fluid: Option<Quantity>,
+}
+
+impl GasAmountConstraint {
+    /// The gas volume V − V*.
+    fn gas_volume(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> f64 {
+        enclosed_volume(self.closing.as_deref(), layout.triangles(), x)
+            - self.fluid.map_or(0.0, |f| f.value(params))
+    }
 }
 
 impl Constraint for GasAmountConstraint {
@@ -143,12 +211,7 @@ impl Constraint for GasAmountConstraint {
         self.pressure
     }
     fn measure(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> f64 {
-        let v: f64 = layout
-            .triangles()
-            .iter()
-            .map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value)
-            .sum();
-        (params[self.pressure] + self.ambient) * v
+        (params[self.pressure] + self.ambient) * self.gas_volume(layout, x, params)
     }
     fn target(&self) -> f64 {
         self.target
@@ -158,16 +221,25 @@ impl Constraint for GasAmountConstraint {
     }
     fn evaluate(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> ConstraintValue {
         let pa = params[self.pressure] + self.ambient;
-        let v: f64 = layout
-            .triangles()
-            .iter()
-            .map(|&[a, b, c]| volume(&[x[a], x[b], x[c]]).value)
-            .sum();
-        let grad_u = gather(layout, x, |xt| volume(xt).grad.map(|g| pa * g));
+        let v = self.gas_volume(layout, x, params);
+        let closing = self.closing.as_deref();
+        let grad_u = gather(layout, x, |t, xt| {
+            enclosed(closing, t, xt).grad.map(|g| pa * g)
+        });
         let mut grad_params = vec![0.0; params.len()];
         grad_params[self.pressure] = v;
+        if let Some(j) = self.fluid.and_then(|f| f.parameter()) {
+            grad_params[j] -= pa;
+        }
+        let target = match self.target_parameter {
+            Some(j) => {
+                grad_params[j] -= 1.0;
+                params[j]
+            }
+            None => self.target,
+        };
         ConstraintValue {
-            value: pa * v - self.target,
+            value: pa * v - target,
             grad_u,
             grad_params,
         }

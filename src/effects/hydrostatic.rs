@@ -111,11 +111,13 @@
 //! Archimedes' buoyancy (0, 0, +V_f) acting at the centre of buoyancy.
 
 use super::local::{area_vector, area_vector_gradient, area_vector_hessian};
+use super::volume::ClosingFace;
 use super::Quantity;
 use crate::model::constraint::{gather, Constraint, ConstraintValue};
 use crate::model::Local;
 use crate::model::{Assembler, Effect, Layout, ModelError, Vec3};
 use nalgebra::Vector3;
+use std::sync::Arc;
 use symmetry::Invariant;
 
 /// Which side of the membrane the fluid is on.
@@ -131,21 +133,43 @@ pub enum FluidSide {
 
 /// Fluid under gravity (density ρ, gravity g along −z, level h): Π_f = ±ρ g Σ_T φ_T, the sign
 /// plus for fluid [`FluidSide::Behind`] the membrane and minus in [`FluidSide::Front`]. Fixed walls
-/// closing the fluid region add only constants. Loads: ∂F/∂ρ = ±g ∇φ, ∂F/∂h = ±ρ g ∂∇φ/∂h,
-/// ∂F/∂g = ±ρ ∇φ.
+/// closing the fluid region add only constants; the plate closing an open membrane whose rim
+/// slides in its plane is part of the closed surface ([`Fluid::closing`]). Loads:
+/// ∂F/∂ρ = ±g ∇φ, ∂F/∂h = ±ρ g ∂∇φ/∂h, ∂F/∂g = ±ρ ∇φ.
+///
+/// `filled`: the enclosure is completely filled, p = ρ g (h − z) everywhere (h a pressure
+/// head, negative pressures allowed): φ_T = ½ ∫_T (h − z)² n_z dA without clipping, and the
+/// fluid volume is the enclosed volume (docs/theory.md §4.5).
 #[derive(Debug, Clone)]
 pub struct Fluid {
     /// Density ρ.
     pub density: Quantity,
     /// Gravitational acceleration g (> 0, along −z).
     pub gravity: Quantity,
-    /// Level h of the free surface.
+    /// Level h of the free surface (the pressure head when `filled`).
     pub level: Quantity,
     /// Side of the membrane the fluid is on.
     pub side: FluidSide,
+    /// The pressure is not clipped at the level: the enclosure is full.
+    pub filled: bool,
+    /// The plate closing an open membrane, when its rim can move (a fixed rim only adds a
+    /// constant and needs none).
+    pub closing: Option<Arc<ClosingFace>>,
 }
 
 impl Fluid {
+    /// Fluid behind (`Behind`) or in front of the membrane, clipped at the level, no plate.
+    pub fn new(density: Quantity, gravity: Quantity, level: Quantity, side: FluidSide) -> Self {
+        Self {
+            density,
+            gravity,
+            level,
+            side,
+            filled: false,
+            closing: None,
+        }
+    }
+
     fn sign(&self) -> f64 {
         match self.side {
             FluidSide::Behind => 1.0,
@@ -154,13 +178,14 @@ impl Fluid {
     }
 
     /// The fluid volume V_f below the level (sign-corrected for the side), at positions `x`:
-    /// Σ_T v_T over the membrane (fixed walls would add a constant).
+    /// Σ_T v_T over the membrane (fixed walls would add a constant; the closing plate's part is
+    /// [`ClosingFace::fluid_volume`]).
     pub fn fluid_volume(&self, triangles: &[[usize; 3]], x: &[Vec3], params: &[f64]) -> f64 {
         let h = self.level.value(params);
         self.sign()
             * triangles
                 .iter()
-                .map(|&[a, b, c]| fluid_volume(&[x[a], x[b], x[c]], h).value)
+                .map(|&[a, b, c]| fluid_volume_of(&[x[a], x[b], x[c]], h, self.filled).value)
                 .sum::<f64>()
     }
 }
@@ -190,6 +215,10 @@ impl Effect for Fluid {
         let (rho, h) = (self.density.value(params), self.level.value(params));
         let g = self.gravity.value(params);
         let s = self.sign() * g;
+        let face = self
+            .closing
+            .as_deref()
+            .map(|c| (c, c.fluid_coefficients(h, self.filled)));
         out.add_triangles(
             x,
             [
@@ -197,12 +226,21 @@ impl Effect for Fluid {
                 self.level.parameter(),
                 self.gravity.parameter(),
             ],
-            |_, xt, terms| {
-                let f = potential(xt, h);
-                terms.local = f.local.scaled(s * rho);
-                terms.loads[0] = f.local.grad.map(|v| s * v);
-                terms.loads[1] = f.grad_d_dh.map(|v| s * rho * v);
-                terms.loads[2] = f.local.grad.map(|v| self.sign() * rho * v);
+            |t, xt, terms| {
+                let f = potential_of(xt, h, self.filled);
+                let mut local = f.local;
+                let mut d_dh = f.grad_d_dh;
+                if let Some((face, (c, c1, _))) = face.filter(|(f, _)| f.touches(t)) {
+                    let a = face.area_local(t, xt);
+                    local.add_scaled(&a, c);
+                    for (g, ga) in d_dh.iter_mut().zip(a.grad) {
+                        *g += c1 * ga;
+                    }
+                }
+                terms.local = local.scaled(s * rho);
+                terms.loads[0] = local.grad.map(|g| s * g);
+                terms.loads[1] = d_dh.map(|g| s * rho * g);
+                terms.loads[2] = local.grad.map(|v| self.sign() * rho * v);
                 Ok(())
             },
         )
@@ -245,9 +283,15 @@ struct WetIntegrals {
 }
 
 impl WetIntegrals {
-    fn new(x: &[Vector3<f64>; 3], h: f64) -> Self {
+    /// The integrals over the wet part, or over the whole triangle when `filled` (no
+    /// clipping: the same formulas with M = ∫_R λ λᵀ).
+    fn new(x: &[Vector3<f64>; 3], h: f64, filled: bool) -> Self {
         let f = [h - x[0].z, h - x[1].z, h - x[2].z];
-        let m = wet_moments(f);
+        let m = if filled {
+            wet_moments([1.0; 3])
+        } else {
+            wet_moments(f)
+        };
         let mut i1 = [0.0; 3];
         let mut i0 = [0.0; 3];
         for p in 0..3 {
@@ -344,7 +388,12 @@ fn wet_moments(f: [f64; 3]) -> [[f64; 3]; 3] {
 /// φ_T(x; h) = ½ ∫_T (h − z)₊² n_z dA with its gradient, Hessian, ∂/∂h and ∂(∇φ_T)/∂h.
 /// Π_f = ρ g Σ_T φ_T for fluid on the side opposite to the normal (see the module docs).
 pub fn potential(x: &[Vector3<f64>; 3], h: f64) -> FluidPotential {
-    let w = WetIntegrals::new(x, h);
+    potential_of(x, h, false)
+}
+
+/// As [`potential`]; with `filled` the integrand is not clipped: φ_T = ½ ∫_T (h − z)² n_z dA.
+pub fn potential_of(x: &[Vector3<f64>; 3], h: f64, filled: bool) -> FluidPotential {
+    let w = WetIntegrals::new(x, h, filled);
     let nz = area_vector(x).z;
     let gn = area_vector_gradient(x, 2);
     let hn = area_vector_hessian(2);
@@ -377,7 +426,13 @@ pub fn potential(x: &[Vector3<f64>; 3], h: f64) -> FluidPotential {
 
 /// v_T(x; h) = ∫_T min(z, h) n_z dA with its gradient and ∂v_T/∂h (see the module docs).
 pub fn fluid_volume(x: &[Vector3<f64>; 3], h: f64) -> FluidVolume {
-    let w = WetIntegrals::new(x, h);
+    fluid_volume_of(x, h, false)
+}
+
+/// As [`fluid_volume`]; with `filled`, v_T = ∫_T z n_z dA (the enclosed volume's part, by the
+/// field (0, 0, z)) and ∂v_T/∂h = 0.
+pub fn fluid_volume_of(x: &[Vector3<f64>; 3], h: f64, filled: bool) -> FluidVolume {
+    let w = WetIntegrals::new(x, h, filled);
     let nz = area_vector(x).z;
     let gn = area_vector_gradient(x, 2);
     let c = 0.5 * h - w.i1_total();
@@ -393,17 +448,22 @@ pub fn fluid_volume(x: &[Vector3<f64>; 3], h: f64) -> FluidVolume {
     }
 }
 
-/// Fixed fluid volume of a fluid effect; frees its level.
+/// Fixed fluid volume of a fluid effect, V_f(u, h) = V* (docs/theory.md §7.1); frees its
+/// level. V* is a number (or measured at the start) or the parameter `target_parameter`,
+/// which can then be the path's control: the fluid volume as the control, the level an
+/// unknown. For a filled enclosure V_f is the enclosed volume and ∂V_f/∂h = 0.
 #[derive(Debug, Clone)]
 pub struct FluidVolumeConstraint {
     /// The fluid effect (its level must be a parameter).
     pub fluid: Fluid,
     /// The level's parameter index.
     pub level: usize,
-    /// V*.
+    /// V* (when `target_parameter` is `None`).
     pub target: f64,
-    /// The fixed face closing an open membrane, if any.
-    pub closing: Option<super::volume::ClosingFace>,
+    /// The parameter that is V*, if any.
+    pub target_parameter: Option<usize>,
+    /// The face closing an open membrane, if any.
+    pub closing: Option<Arc<ClosingFace>>,
 }
 
 impl FluidVolumeConstraint {
@@ -423,9 +483,11 @@ impl Constraint for FluidVolumeConstraint {
         self.level
     }
     fn measure(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> f64 {
-        let closing = self
-            .closing
-            .map_or(0.0, |c| self.sign() * c.fluid_volume(params[self.level]).0);
+        let closing = self.closing.as_ref().map_or(0.0, |c| {
+            let (v, _) =
+                c.fluid_volume(layout.triangles(), x, params[self.level], self.fluid.filled);
+            self.sign() * v
+        });
         self.fluid.fluid_volume(layout.triangles(), x, params) + closing
     }
     fn target(&self) -> f64 {
@@ -436,24 +498,42 @@ impl Constraint for FluidVolumeConstraint {
     }
     fn evaluate(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> ConstraintValue {
         let h = params[self.level];
-        let s = self.sign();
+        let (s, filled) = (self.sign(), self.fluid.filled);
         let mut value = 0.0;
         let mut d_dh = 0.0;
         for &[a, b, c] in layout.triangles() {
-            let v = fluid_volume(&[x[a], x[b], x[c]], h);
+            let v = fluid_volume_of(&[x[a], x[b], x[c]], h, filled);
             value += s * v.value;
             d_dh += s * v.d_dh;
         }
-        if let Some(c) = self.closing {
-            let (v, dv) = c.fluid_volume(h);
+        let face = self.closing.as_deref();
+        let mut plate_height = 0.0;
+        if let Some(c) = face {
+            let (v, dv) = c.fluid_volume(layout.triangles(), x, h, filled);
             value += s * v;
             d_dh += s * dv;
+            plate_height = if filled { c.z } else { c.z.min(h) };
         }
-        let grad_u = gather(layout, x, |xt| fluid_volume(xt, h).grad.map(|g| s * g));
+        let grad_u = gather(layout, x, |t, xt| {
+            let mut g = fluid_volume_of(xt, h, filled).grad;
+            if let Some(c) = face.filter(|c| c.touches(t)) {
+                for (gi, ai) in g.iter_mut().zip(c.area_local(t, xt).grad) {
+                    *gi += plate_height * ai;
+                }
+            }
+            g.map(|gi| s * gi)
+        });
         let mut grad_params = vec![0.0; params.len()];
         grad_params[self.level] = d_dh;
+        let target = match self.target_parameter {
+            Some(j) => {
+                grad_params[j] -= 1.0;
+                params[j]
+            }
+            None => self.target,
+        };
         ConstraintValue {
-            value: value - self.target,
+            value: value - target,
             grad_u,
             grad_params,
         }
@@ -701,6 +781,81 @@ mod tests {
             let children = subdivided(|y| potential(y, h).local, &x);
             same_local(&children, &parent.local, 1e-12 * (1.0 + scale(&parent.local, 0.0)))
                 .map_err(TestCaseError::fail)?;
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn filled_kernel_matches_finite_differences(
+            p in proptest::array::uniform9(-1.0f64..1.0),
+            dir in proptest::array::uniform9(-1.0f64..1.0),
+            h in -1.2f64..1.2,
+        ) {
+            // No clipping: a polynomial, smooth across the level, so no node is kept away.
+            let x = nodes(&p);
+            check_kernel(|x| potential_of(x, h, true).local, &x, &dir, 1e-6, 1e-6)
+                .map_err(TestCaseError::fail)?;
+            let at = |h: f64| {
+                let p = potential_of(&x, h, true);
+                let mut out = [0.0; 10];
+                out[0] = p.local.value;
+                out[1..].copy_from_slice(&p.local.grad);
+                out
+            };
+            let p0 = potential_of(&x, h, true);
+            let mut exact = [0.0; 10];
+            exact[0] = p0.d_dh;
+            exact[1..].copy_from_slice(&p0.grad_d_dh);
+            let tol = 1e-7 * (1.0 + scale(&p0.local, 0.0));
+            check_parameter(at, &exact, h, 1e-6, tol).map_err(TestCaseError::fail)?;
+            // The filled fluid volume is ∫ z n_z dA, independent of h.
+            let v = fluid_volume_of(&x, h, true);
+            close("filled ∂v/∂h", v.d_dh, 0.0, 1e-15).map_err(TestCaseError::fail)?;
+            let z_nz = area_vector(&x).z * (x[0].z + x[1].z + x[2].z) / 6.0;
+            close("filled v_T", v.value, z_nz, 1e-14).map_err(TestCaseError::fail)?;
+        }
+
+        #[test]
+        fn filled_equals_clipped_where_the_triangle_is_wholly_wet(
+            p in proptest::array::uniform9(-1.0f64..1.0),
+            h in 1.01f64..2.0,
+        ) {
+            let x = nodes(&p);
+            same_local(&potential_of(&x, h, true).local, &potential(&x, h).local, 1e-14)
+                .map_err(TestCaseError::fail)?;
+        }
+    }
+
+    #[test]
+    fn a_filled_box_weighs_its_whole_volume_whatever_the_head() {
+        // p = ρ g (h − z) everywhere: Σ φ = −∫ (h − z) dV, and the net force is the weight of
+        // the whole box even when h is below its top (where a clipped fluid leaves a void).
+        let (lo, hi) = (Vector3::new(-0.5, 0.25, -1.0), Vector3::new(0.7, 1.0, 0.6));
+        let r = rotation(0.3, -0.7, 1.1);
+        let tris = box_surface(lo, hi, 3, |p| r * p);
+        let volume = 1.2 * 0.75 * 1.6;
+        let centroid = r * (0.5 * (lo + hi));
+        for h in [-2.0, -0.5, 0.0, 0.3, 2.5] {
+            let (mut phi, mut force, mut v) = (0.0, Vector3::zeros(), 0.0);
+            for t in &tris {
+                let p = potential_of(t, h, true);
+                phi += p.local.value;
+                v += fluid_volume_of(t, h, true).value;
+                for n in 0..3 {
+                    force -= Vector3::new(
+                        p.local.grad[3 * n],
+                        p.local.grad[3 * n + 1],
+                        p.local.grad[3 * n + 2],
+                    );
+                }
+            }
+            let work = volume * (h - centroid.z);
+            assert!((phi + work).abs() < 1e-12, "h = {h}: Σφ {phi} vs {}", -work);
+            assert!((v - volume).abs() < 1e-12, "h = {h}: volume {v}");
+            assert!(
+                (force - Vector3::new(0.0, 0.0, -volume)).norm() < 1e-12,
+                "h = {h}: {force}"
+            );
         }
     }
 

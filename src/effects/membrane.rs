@@ -24,7 +24,7 @@
 
 use super::Quantity;
 use crate::model::Local;
-use crate::model::{Assembler, Effect, ModelError, Vec3};
+use crate::model::{Assembler, CellField, CellQuantity, Effect, ModelError, Vec3};
 use nalgebra::Vector3;
 use symmetry::Invariant;
 
@@ -58,6 +58,52 @@ impl MooneyRivlin {
     /// The shear modulus μ = 2 (c1 + c2).
     fn mu(&self) -> f64 {
         2.0 * (self.c1 + self.c2)
+    }
+
+    /// W, its gradient P = (∂W/∂f1, ∂W/∂f2) and its Hessian blocks ∂²W/∂f_i∂f_k (3×3) at the
+    /// in-plane deformation gradient F = [f1 f2] (the columns in an orthonormal stress-free
+    /// frame; see the module docs). `None` where J ≤ 0 (W is not defined).
+    #[allow(clippy::type_complexity, clippy::needless_range_loop)]
+    pub fn energy_in_f(
+        &self,
+        f: &[Vector3<f64>; 2],
+    ) -> Option<(f64, [Vector3<f64>; 2], [[nalgebra::Matrix3<f64>; 2]; 2])> {
+        let (n1, n2, c) = (f[0].norm_squared(), f[1].norm_squared(), f[0].dot(&f[1]));
+        let t = n1 + n2;
+        let j = f[0].cross(&f[1]).norm_squared();
+        if j.is_nan() || j <= 0.0 {
+            return None;
+        }
+        let [w, w_t, w_j, w_tj, w_jj] = self.strain_energy(t, j);
+        // ∇t and ∇J in (f1, f2).
+        let dt = [f[0] * 2.0, f[1] * 2.0];
+        let dj = [(f[0] * n2 - f[1] * c) * 2.0, (f[1] * n1 - f[0] * c) * 2.0];
+        let p = [dt[0] * w_t + dj[0] * w_j, dt[1] * w_t + dj[1] * w_j];
+        // Hessian blocks in (f1, f2): hf[i][k] = ∂²W/∂f_i∂f_k (3×3).
+        let id = nalgebra::Matrix3::<f64>::identity();
+        let d2j = [
+            [
+                id * (2.0 * n2) - outer(&f[1], &f[1]) * 2.0,
+                outer(&f[0], &f[1]) * 4.0 - outer(&f[1], &f[0]) * 2.0 - id * (2.0 * c),
+            ],
+            [
+                outer(&f[1], &f[0]) * 4.0 - outer(&f[0], &f[1]) * 2.0 - id * (2.0 * c),
+                id * (2.0 * n1) - outer(&f[0], &f[0]) * 2.0,
+            ],
+        ];
+        let mut hf = [[nalgebra::Matrix3::<f64>::zeros(); 2]; 2];
+        for i in 0..2 {
+            for k in 0..2 {
+                let mut h = (outer(&dt[i], &dj[k]) + outer(&dj[i], &dt[k])) * w_tj
+                    + outer(&dj[i], &dj[k]) * w_jj
+                    + d2j[i][k] * w_j;
+                if i == k {
+                    h += id * (2.0 * w_t);
+                }
+                hf[i][k] = h;
+            }
+        }
+        Some((w, p, hf))
     }
 
     /// W and its derivatives in (t, J): (W, W_t, W_J, W_tJ, W_JJ); W_tt = 0.
@@ -163,42 +209,8 @@ impl ReferenceTriangle {
         let (a, b) = (x[1] - x[0], x[2] - x[0]);
         let [m11, m12, m22] = self.m;
         let f = [a * m11, a * m12 + b * m22];
-        let (n1, n2, c) = (f[0].norm_squared(), f[1].norm_squared(), f[0].dot(&f[1]));
-        let t = n1 + n2;
-        let j = f[0].cross(&f[1]).norm_squared();
-        if j.is_nan() || j <= 0.0 {
-            return None;
-        }
-        let [w, w_t, w_j, w_tj, w_jj] = mat.strain_energy(t, j);
+        let (w, p, hf) = mat.energy_in_f(&f)?;
         let vol = self.volume;
-        // ∇t and ∇J in (f1, f2).
-        let dt = [f[0] * 2.0, f[1] * 2.0];
-        let dj = [(f[0] * n2 - f[1] * c) * 2.0, (f[1] * n1 - f[0] * c) * 2.0];
-        let p = [dt[0] * w_t + dj[0] * w_j, dt[1] * w_t + dj[1] * w_j];
-        // Hessian blocks in (f1, f2): hf[i][k] = ∂²W/∂f_i∂f_k (3×3).
-        let id = nalgebra::Matrix3::<f64>::identity();
-        let d2j = [
-            [
-                id * (2.0 * n2) - outer(&f[1], &f[1]) * 2.0,
-                outer(&f[0], &f[1]) * 4.0 - outer(&f[1], &f[0]) * 2.0 - id * (2.0 * c),
-            ],
-            [
-                outer(&f[1], &f[0]) * 4.0 - outer(&f[0], &f[1]) * 2.0 - id * (2.0 * c),
-                id * (2.0 * n1) - outer(&f[0], &f[0]) * 2.0,
-            ],
-        ];
-        let mut hf = [[nalgebra::Matrix3::<f64>::zeros(); 2]; 2];
-        for i in 0..2 {
-            for k in 0..2 {
-                let mut h = (outer(&dt[i], &dj[k]) + outer(&dj[i], &dt[k])) * w_tj
-                    + outer(&dj[i], &dj[k]) * w_jj
-                    + d2j[i][k] * w_j;
-                if i == k {
-                    h += id * (2.0 * w_t);
-                }
-                hf[i][k] = h;
-            }
-        }
         // f_i = Σ_e C[i][e] edge_e with edges (a, b).
         let cm = [[m11, 0.0], [m12, m22]];
         let mut grad_ab = [Vector3::zeros(); 2];
@@ -264,6 +276,52 @@ pub struct MaterialQuantities {
     pub thickness: Quantity,
     /// Isotropic pre-stretch λ0 > 0 of the mesh over the stress-free state.
     pub prestretch: Quantity,
+}
+
+/// The principal state of one element: stretches from the stress-free state, the current
+/// thickness and the principal Cauchy tensions (force per current length).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PrincipalState {
+    /// λ₁ ≥ λ₂.
+    pub stretches: [f64; 2],
+    /// h = H/(λ₁λ₂).
+    pub thickness: f64,
+    /// T₁ = (H/λ₂) ∂W/∂λ₁ and T₂ = (H/λ₁) ∂W/∂λ₂.
+    pub tensions: [f64; 2],
+}
+
+impl ReferenceTriangle {
+    /// The principal state at `x` (docs/theory.md §2.6): with t = λ₁² + λ₂² and J = λ₁²λ₂²
+    /// from F, λ₁² = (t + √(t² − 4J))/2 and λ₂² = J/λ₁²; with
+    /// W(λ₁, λ₂) = c1 (λ₁² + λ₂² + λ₁⁻²λ₂⁻² − 3) + c2 (λ₁⁻² + λ₂⁻² + λ₁²λ₂² − 3),
+    /// σ_i = λ_i ∂W/∂λ_i and h = H/(λ₁λ₂), T_i = σ_i h.
+    /// `None` where the element is collapsed (J ≤ 0).
+    pub fn principal_state(
+        &self,
+        mat: &MooneyRivlin,
+        x: &[Vector3<f64>; 3],
+    ) -> Option<PrincipalState> {
+        let (a, b) = (x[1] - x[0], x[2] - x[0]);
+        let [m11, m12, m22] = self.m;
+        let f = [a * m11, a * m12 + b * m22];
+        let t = f[0].norm_squared() + f[1].norm_squared();
+        let j = f[0].cross(&f[1]).norm_squared();
+        if j.is_nan() || j <= 0.0 {
+            return None;
+        }
+        let big = 0.5 * (t + (t * t - 4.0 * j).max(0.0).sqrt());
+        let (l1, l2) = (big.sqrt(), (j / big).sqrt());
+        let dw = |p: f64, q: f64| {
+            2.0 * mat.c1 * (p - 1.0 / (p * p * p * q * q))
+                + 2.0 * mat.c2 * (p * q * q - 1.0 / (p * p * p))
+        };
+        let h = mat.thickness;
+        Some(PrincipalState {
+            stretches: [l1, l2],
+            thickness: h / (l1 * l2),
+            tensions: [h * dw(l1, l2) / l2, h * dw(l2, l1) / l1],
+        })
+    }
 }
 
 /// The membrane effect: every triangle's Mooney-Rivlin energy. μ, k, H and λ0 may be
@@ -412,6 +470,43 @@ impl Effect for Membrane {
             Ok(())
         })
     }
+
+    /// Principal stretches, thickness, principal tensions and where the membrane would
+    /// wrinkle (T₂ < 0); a collapsed element (never an accepted state) shows zeros.
+    fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<CellField> {
+        let Ok([mu, k, thickness, prestretch]) = self.values(params) else {
+            return Vec::new();
+        };
+        let mat = MooneyRivlin::new(mu, k, thickness);
+        let states: Vec<PrincipalState> = self
+            .elements
+            .iter()
+            .zip(triangles)
+            .map(|(e, &[a, b, c])| {
+                e.at(prestretch, thickness)
+                    .principal_state(&mat, &[x[a], x[b], x[c]])
+                    .unwrap_or(PrincipalState {
+                        stretches: [0.0; 2],
+                        thickness: 0.0,
+                        tensions: [0.0; 2],
+                    })
+            })
+            .collect();
+        let field = |quantity, value: fn(&PrincipalState) -> f64| CellField {
+            quantity,
+            values: states.iter().map(value).collect(),
+        };
+        vec![
+            field(CellQuantity::Stretch1, |s| s.stretches[0]),
+            field(CellQuantity::Stretch2, |s| s.stretches[1]),
+            field(CellQuantity::Thickness, |s| s.thickness),
+            field(CellQuantity::Tension1, |s| s.tensions[0]),
+            field(CellQuantity::Tension2, |s| s.tensions[1]),
+            field(CellQuantity::Wrinkled, |s| {
+                f64::from(u8::from(s.tensions[1] < 0.0))
+            }),
+        ]
+    }
 }
 
 #[cfg(test)]
@@ -441,6 +536,53 @@ mod tests {
         let w = mat.c1 * (2.0 * l2 + 1.0 / (l2 * l2) - 3.0) + mat.c2 * (l2 * l2 + 2.0 / l2 - 3.0);
         let a0 = 0.5 * (x0[1] - x0[0]).cross(&(x0[2] - x0[0])).norm() / (lambda0 * lambda0);
         assert!((e - mat.thickness * a0 * w).abs() < 1e-13 * e.abs());
+    }
+
+    /// The uniformly inflated sphere's closed forms: T = μH (1 − λ⁻⁶)(1 + kλ²)/(1 + k) and
+    /// h = H/λ²; and the tensions are the derivatives of the energy per stress-free area along
+    /// each principal stretch (a uniaxial perturbation of a biaxial state).
+    #[test]
+    fn principal_tensions_match_the_closed_form_and_the_energy() {
+        let (mu, k, thickness) = (1.0, 0.1, 0.01);
+        let mat = MooneyRivlin::new(mu, k, thickness);
+        let x0 = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+        ];
+        let (lambda0, lambda) = (1.1, 1.7);
+        let elem = ReferenceTriangle::new(&x0, lambda0, mat.thickness).unwrap();
+        let s = elem
+            .principal_state(&mat, &x0.map(|p| p * (lambda / lambda0)))
+            .unwrap();
+        let t = mu * thickness * (1.0 - lambda.powi(-6)) * (1.0 + k * lambda * lambda) / (1.0 + k);
+        assert!((s.tensions[0] / t - 1.0).abs() < 1e-13 && (s.tensions[1] / t - 1.0).abs() < 1e-13);
+        assert!((s.thickness / (thickness / (lambda * lambda)) - 1.0).abs() < 1e-13);
+        // Stretch x by l1 and y by l2 from the stress-free state: the energy per stress-free
+        // area is H W(l1, l2); T1 = ∂(H W)/∂l1 / l2 (force per current length).
+        let (l1, l2) = (1.9, 0.8);
+        let at =
+            |p: f64, q: f64| x0.map(|v| Vector3::new(v.x * p / lambda0, v.y * q / lambda0, 0.0));
+        let energy = |p: f64, q: f64| elem.energy_gradient_hessian(&mat, &at(p, q)).unwrap().value;
+        let a0 = 0.5 / (lambda0 * lambda0);
+        let h = 1e-6;
+        let t1 = (energy(l1 + h, l2) - energy(l1 - h, l2)) / (2.0 * h) / a0 / l2;
+        let t2 = (energy(l1, l2 + h) - energy(l1, l2 - h)) / (2.0 * h) / a0 / l1;
+        let s = elem.principal_state(&mat, &at(l1, l2)).unwrap();
+        assert!((s.stretches[0] - l1).abs() < 1e-13 && (s.stretches[1] - l2).abs() < 1e-13);
+        assert!(
+            (s.tensions[0] / t1 - 1.0).abs() < 1e-8,
+            "{} vs {t1}",
+            s.tensions[0]
+        );
+        assert!(
+            (s.tensions[1] / t2 - 1.0).abs() < 1e-8,
+            "{} vs {t2}",
+            s.tensions[1]
+        );
+        // Compressed below the stress-free state in both directions: both tensions negative.
+        let slack = elem.principal_state(&mat, &at(0.95, 0.9)).unwrap();
+        assert!(slack.tensions[1] < 0.0 && slack.tensions[0] < 0.0);
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //! press an edge through the plane; that is the usual node-to-surface penalty.
 
 use super::Quantity;
-use crate::model::{Assembler, Effect, ModelError, Vec3};
+use crate::model::{Assembler, Effect, ModelError, Placement, Vec3};
 use symmetry::Invariant;
 
 /// The penalty exponent q.
@@ -44,26 +44,36 @@ impl Effect for Plane {
         "plane"
     }
 
-    /// The one-sided plane keeps its normal as a direction.
+    /// The one-sided plane alone keeps its normal as a direction.
     fn keeps(&self) -> Vec<Invariant> {
         vec![Invariant::Direction(self.normal)]
     }
 
+    /// An element R maps the half-space n·x ≥ d onto (R n)·x ≥ d: a plane with the same
+    /// offset, penalty and law, normal R n.
+    fn placement(&self) -> Option<Placement> {
+        let (kind, value) = match self.offset {
+            Quantity::Value(v) => (0.0, v),
+            Quantity::Parameter(i) => (1.0, i as f64),
+        };
+        let (penalty_kind, penalty) = match self.penalty {
+            Quantity::Value(v) => (0.0, v),
+            Quantity::Parameter(i) => (1.0, i as f64),
+        };
+        let law = match self.law {
+            PenaltyLaw::Linear => 1.0,
+            PenaltyLaw::Cubic => 3.0,
+        };
+        Some(Placement {
+            kind: "plane",
+            normal: self.normal,
+            key: vec![kind, value, penalty_kind, penalty, law],
+        })
+    }
+
     /// Translations within the plane and rotation about its normal (through the origin).
     fn rigid_motions(&self) -> Vec<[f64; 6]> {
-        let n = self.normal.normalize();
-        let a = if n.x.abs() < 0.9 {
-            Vec3::x()
-        } else {
-            Vec3::y()
-        };
-        let t1 = n.cross(&a).normalize();
-        let t2 = n.cross(&t1);
-        vec![
-            [t1.x, t1.y, t1.z, 0.0, 0.0, 0.0],
-            [t2.x, t2.y, t2.z, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, n.x, n.y, n.z],
-        ]
+        crate::model::in_plane_motions(self.normal.normalize())
     }
 
     fn assemble(

@@ -74,6 +74,13 @@ impl Effect for Spin {
         vec![m[2], m[5]]
     }
 
+    /// A translation across the axis lowers Π_ω by (ρ ω²/2) V t² (the body drifts outward):
+    /// the trivial instability of the frame's choice of axis, held by the analysis.
+    fn drifts(&self) -> Vec<[f64; 6]> {
+        let m = crate::model::ALL_RIGID_MOTIONS;
+        vec![m[0], m[1]]
+    }
+
     fn assemble(
         &self,
         x: &[Vec3],

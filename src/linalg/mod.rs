@@ -12,6 +12,7 @@
 
 pub mod bordered;
 pub mod eigen;
+pub mod hermitian;
 mod ldlt;
 mod sparse;
 

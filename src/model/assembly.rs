@@ -25,6 +25,8 @@ pub struct Layout {
     tri_dofs: Vec<[u32; 9]>,
     tri_slots: Vec<[u32; 81]>,
     node_slots: Vec<[u32; 9]>,
+    /// For every node that slides in a plane, the plane's unit normal (docs/theory.md §6.2).
+    slide: Vec<Option<Vec3>>,
 }
 
 impl Layout {
@@ -89,7 +91,30 @@ impl Layout {
             tri_dofs,
             tri_slots,
             node_slots,
+            slide: vec![None; nodes],
         }
+    }
+
+    /// Lets each `(node, normal)` slide in the plane through its reference position with that
+    /// normal (a free node; normalised here). The node keeps its three unknowns; the bases the
+    /// solvers work in ([`crate::adapted`]) span only displacements with u·n = 0 there.
+    pub fn with_sliding(mut self, sliding: &[(usize, Vec3)]) -> Self {
+        for &(i, n) in sliding {
+            if self.dof_of[i][0] != NONE {
+                self.slide[i] = Some(n.normalize());
+            }
+        }
+        self
+    }
+
+    /// The unit normal of the plane node `node` slides in, if it slides.
+    pub fn slide_normal(&self, node: usize) -> Option<Vec3> {
+        self.slide[node]
+    }
+
+    /// True if some node slides.
+    pub fn slides(&self) -> bool {
+        self.slide.iter().any(Option::is_some)
     }
 
     /// Number of nodes.
@@ -467,11 +492,11 @@ impl<'a> Assembler<'a> {
     /// potentials φ(Q(u)) whose tangent has the rank-one part φ''(Q) ∇Q ∇Qᵀ.
     pub fn gradient_vector<F>(&self, x: &[Vec3], kernel: F) -> Vec<f64>
     where
-        F: Fn(&[Vec3; 3]) -> [f64; 9],
+        F: Fn(usize, &[Vec3; 3]) -> [f64; 9],
     {
         let mut v = vec![0.0; self.layout.unknowns];
         for (t, [a, b, c]) in self.layout.triangles.iter().enumerate() {
-            let g = kernel(&[x[*a], x[*b], x[*c]]);
+            let g = kernel(t, &[x[*a], x[*b], x[*c]]);
             for (k, &d) in self.layout.tri_dofs[t].iter().enumerate() {
                 if d != NONE {
                     v[d as usize] += g[k];

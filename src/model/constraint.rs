@@ -34,11 +34,15 @@ pub trait Constraint: Send + Sync {
     fn evaluate(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> ConstraintValue;
 }
 
-/// Scatters per-triangle gradients into a vector over the unknowns.
-pub fn gather(layout: &Layout, x: &[Vec3], grad: impl Fn(&[Vec3; 3]) -> [f64; 9]) -> Vec<f64> {
+/// Scatters per-triangle gradients `grad(t, x_t)` into a vector over the unknowns.
+pub fn gather(
+    layout: &Layout,
+    x: &[Vec3],
+    grad: impl Fn(usize, &[Vec3; 3]) -> [f64; 9],
+) -> Vec<f64> {
     let mut v = vec![0.0; layout.unknowns()];
-    for &[a, b, c] in layout.triangles() {
-        let g = grad(&[x[a], x[b], x[c]]);
+    for (t, &[a, b, c]) in layout.triangles().iter().enumerate() {
+        let g = grad(t, &[x[a], x[b], x[c]]);
         for (k, node) in [a, b, c].into_iter().enumerate() {
             for comp in 0..3 {
                 if let Some(d) = layout.dof(node, comp) {

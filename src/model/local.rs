@@ -14,6 +14,20 @@ pub struct Local {
 }
 
 impl Local {
+    /// Adds `s` times `other` (value, gradient and Hessian).
+    pub fn add_scaled(&mut self, other: &Local, s: f64) {
+        self.value += s * other.value;
+        self.grad
+            .iter_mut()
+            .zip(other.grad)
+            .for_each(|(a, b)| *a += s * b);
+        self.hess
+            .iter_mut()
+            .flatten()
+            .zip(other.hess.iter().flatten())
+            .for_each(|(a, b)| *a += s * b);
+    }
+
     /// `s` times value, gradient and Hessian.
     pub fn scaled(&self, s: f64) -> Local {
         let mut out = *self;

@@ -63,14 +63,31 @@ pub trait Effect: Send + Sync {
     /// A short name for reports, e.g. `membrane`, `gas`.
     fn name(&self) -> &str;
 
-    /// What this effect leaves invariant (gravity: the direction −z; a plane: itself). The
-    /// scene's group is the mesh group restricted to what every effect keeps.
+    /// What this effect leaves invariant on its own (gravity: the direction −z; a plane: its
+    /// normal as a direction). Unless the effect has a [`Effect::placement`], the scene's
+    /// group keeps all of it (see [`scene_elements`]).
     fn keeps(&self) -> Vec<Invariant>;
+
+    /// For an effect that a group element may map onto *another* effect of the same scene
+    /// (a rigid plane goes to the plane with normal R n and the same offset and law): its
+    /// placement. Such effects are kept as a set, not one by one (docs/theory.md §9.4).
+    fn placement(&self) -> Option<Placement> {
+        None
+    }
 
     /// The rigid motions that leave Π_e unchanged, as vectors (t_x, t_y, t_z, ω_x, ω_y, ω_z)
     /// of translations and rotations about axes through the origin spanning them. A free body
     /// has a zero tangent eigenvalue for every motion all its effects keep.
     fn rigid_motions(&self) -> Vec<[f64; 6]>;
+
+    /// Rigid motions this effect does not keep but that no physical support resists, which a
+    /// free body's stability analysis holds (docs/theory.md §8.5): spin about z makes every
+    /// translation across the axis unstable — the body would drift off the axis of the
+    /// rotating frame — a trivial instability the analysis leaves out by holding the mean
+    /// position. Empty by default.
+    fn drifts(&self) -> Vec<[f64; 6]> {
+        Vec::new()
+    }
 
     /// Adds Π_e and its derivatives at the current node positions `x` and parameters `params`.
     fn assemble(
@@ -79,6 +96,170 @@ pub trait Effect: Send + Sync {
         params: &[f64],
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError>;
+
+    /// The per-triangle quantities this effect can show at a state (stretches, tensions, a
+    /// pressure), for the state files; none by default.
+    fn cell_fields(
+        &self,
+        _x: &[Vec3],
+        _triangles: &[[usize; 3]],
+        _params: &[f64],
+    ) -> Vec<CellField> {
+        Vec::new()
+    }
+}
+
+/// What a per-triangle field of a state holds (its name in the state files is
+/// [`CellQuantity::name`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CellQuantity {
+    /// The larger principal stretch λ₁ from the stress-free state.
+    Stretch1,
+    /// The smaller principal stretch λ₂.
+    Stretch2,
+    /// The current thickness h = H λ₃ = H/(λ₁λ₂).
+    Thickness,
+    /// The larger principal Cauchy tension (force per current length).
+    Tension1,
+    /// The smaller principal Cauchy tension.
+    Tension2,
+    /// 1 where the smaller principal tension is negative (the membrane would wrinkle), else 0.
+    Wrinkled,
+    /// The fluid pressure at the triangle's centroid.
+    FluidPressure,
+}
+
+impl CellQuantity {
+    /// The field's name in the state files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Stretch1 => "stretch_1",
+            Self::Stretch2 => "stretch_2",
+            Self::Thickness => "thickness",
+            Self::Tension1 => "tension_1",
+            Self::Tension2 => "tension_2",
+            Self::Wrinkled => "wrinkled",
+            Self::FluidPressure => "fluid_pressure",
+        }
+    }
+}
+
+/// One value per triangle of a [`CellQuantity`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellField {
+    /// What it holds.
+    pub quantity: CellQuantity,
+    /// One value per triangle, in the mesh's order.
+    pub values: Vec<f64>,
+}
+
+/// How a group element moves an effect that can be mapped onto another one: the element R
+/// takes it to an effect of the same `kind` and `key` with normal R·`normal`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Placement {
+    /// What the effect is (`plane`): only effects of the same kind map onto each other.
+    pub kind: &'static str,
+    /// The unit direction the element turns (a plane's normal).
+    pub normal: Vec3,
+    /// Everything else that must agree exactly (offset, penalty, law …), as numbers.
+    pub key: Vec<f64>,
+}
+
+/// The elements of `group` that map the set of effects onto itself (docs/theory.md §9.4):
+/// they keep every invariant of the effects without a placement, and they permute the
+/// effects with one — element R maps each onto an effect of the same kind and key whose
+/// normal is R n (to 1e-9). A mirror between two planes x = ±a with one offset swaps them, so
+/// it belongs to the scene's group although it keeps neither plane alone.
+pub fn scene_elements(group: &symmetry::Group, effects: &[Box<dyn Effect>]) -> Vec<usize> {
+    let keep: Vec<Invariant> = effects
+        .iter()
+        .filter(|e| e.placement().is_none())
+        .flat_map(|e| e.keeps())
+        .collect();
+    let placed: Vec<Placement> = effects.iter().filter_map(|e| e.placement()).collect();
+    (0..group.order())
+        .filter(|&g| {
+            let r = group.element(g);
+            keep.iter().all(|k| k.kept_by(r)) && permutes(&placed, r)
+        })
+        .collect()
+}
+
+/// True if `r` maps the multiset of placements onto itself.
+fn permutes(placed: &[Placement], r: &nalgebra::Matrix3<f64>) -> bool {
+    let mut used = vec![false; placed.len()];
+    placed.iter().all(|p| {
+        let image = r * p.normal;
+        let hit = placed.iter().enumerate().position(|(j, q)| {
+            !used[j] && q.kind == p.kind && q.key == p.key && (q.normal - image).amax() < 1e-9
+        });
+        match hit {
+            Some(j) => {
+                used[j] = true;
+                true
+            }
+            None => false,
+        }
+    })
+}
+
+/// The rigid motions that keep every point in its plane with unit normal `n`: the two
+/// translations within it and the rotation about `n`.
+pub fn in_plane_motions(n: Vec3) -> Vec<[f64; 6]> {
+    let a = if n.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    let t1 = n.cross(&a).normalize();
+    let t2 = n.cross(&t1);
+    vec![
+        [t1.x, t1.y, t1.z, 0.0, 0.0, 0.0],
+        [t2.x, t2.y, t2.z, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, n.x, n.y, n.z],
+    ]
+}
+
+/// True if the motion `v` lies in the span of the orthonormal or not `basis` (to 1e-9).
+fn in_span(v: &[f64; 6], basis: &[[f64; 6]]) -> bool {
+    let v = nalgebra::DVector::from_row_slice(v);
+    if basis.is_empty() {
+        return v.norm() <= 1e-9;
+    }
+    let b = nalgebra::DMatrix::from_fn(6, basis.len(), |i, j| basis[j][i]);
+    let svd = b.svd(true, false);
+    let u = svd.u.expect("U requested");
+    let rank = svd.singular_values.iter().filter(|&&x| x > 1e-12).count();
+    let u = u.columns(0, rank);
+    (&v - u * (u.transpose() * &v)).norm() <= 1e-9 * v.norm().max(1.0)
+}
+
+/// The centre and radius of the sphere through the points `x` (least squares, then checked:
+/// every point within 1e-9 of the radius), if they lie on one.
+fn sphere_through(x: &[Vec3]) -> Option<(Vec3, f64)> {
+    // |x|² = 2 x·c + (r² − |c|²): linear in (c, r² − |c|²).
+    let a = nalgebra::DMatrix::from_fn(x.len(), 4, |i, j| if j < 3 { 2.0 * x[i][j] } else { 1.0 });
+    let b = nalgebra::DVector::from_iterator(x.len(), x.iter().map(|p| p.norm_squared()));
+    let sol = a.svd(true, true).solve(&b, 1e-12).ok()?;
+    let c = Vec3::new(sol[0], sol[1], sol[2]);
+    let r = (sol[3] + c.norm_squared()).max(0.0).sqrt();
+    (r > 0.0 && x.iter().all(|p| ((p - c).norm() - r).abs() <= 1e-9 * r)).then_some((c, r))
+}
+
+/// The unit normal of the plane the points lie in (within 1e-9 of `size`), if they do.
+fn plane_normal(points: impl Iterator<Item = Vec3>, size: f64) -> Option<Vec3> {
+    let pts: Vec<Vec3> = points.collect();
+    let mean = pts.iter().sum::<Vec3>() / pts.len().max(1) as f64;
+    let m = pts.iter().fold(nalgebra::Matrix3::zeros(), |acc, p| {
+        let d = p - mean;
+        acc + d * d.transpose()
+    });
+    let eig = nalgebra::SymmetricEigen::new(m);
+    let k = eig.eigenvalues.imin();
+    let a: Vec3 = eig.eigenvectors.column(k).into();
+    pts.iter()
+        .all(|p| (p - mean).dot(&a).abs() <= 1e-9 * size)
+        .then_some(a)
 }
 
 /// All six rigid motions.
@@ -102,6 +283,12 @@ pub trait Model: Sync {
     /// The rigid motions (t, ω) under which Π is invariant, as an orthonormal basis of that
     /// subspace of ℝ⁶ (empty when a node is fixed).
     fn rigid_motions(&self) -> Vec<[f64; 6]>;
+    /// Mean motions the stability analysis holds (docs/theory.md §8.5), as fields
+    /// t + ω × X_i at the *reference* positions: the rolling of a spherical reference about
+    /// the axes its rigid motions leave out. Empty by default.
+    fn held_motions(&self) -> Vec<[f64; 6]> {
+        Vec::new()
+    }
     /// Number of unknowns N.
     fn unknowns(&self) -> usize {
         self.layout().unknowns()
@@ -148,6 +335,28 @@ pub struct FeModel {
 }
 
 impl FeModel {
+    /// Every effect's per-triangle fields at (u, Λ), in effect order (a quantity that two
+    /// effects show, such as two fluids' pressures, is summed).
+    pub fn cell_fields(&self, u: &[f64], params: &[f64]) -> Vec<CellField> {
+        let x = self.positions(u);
+        let mut fields: Vec<CellField> = Vec::new();
+        for f in self
+            .effects
+            .iter()
+            .flat_map(|e| e.cell_fields(&x, self.layout.triangles(), params))
+        {
+            match fields.iter_mut().find(|g| g.quantity == f.quantity) {
+                Some(g) => g
+                    .values
+                    .iter_mut()
+                    .zip(&f.values)
+                    .for_each(|(a, b)| *a += b),
+                None => fields.push(f),
+            }
+        }
+        fields
+    }
+
     /// A model of the mesh (reference positions and triangles) with the nodes in `fixed`
     /// held in place, the given effects, and parameter names.
     pub fn new(
@@ -164,6 +373,62 @@ impl FeModel {
             effects,
             parameters,
         }
+    }
+
+    /// Lets the nodes `sliding` move in the planes through their reference positions with the
+    /// given normals ([`Layout::with_sliding`]).
+    pub fn with_sliding(mut self, sliding: &[(usize, Vec3)]) -> Self {
+        self.layout = self.layout.with_sliding(sliding);
+        self
+    }
+
+    /// The relabellings of a spherical reference (docs/theory.md §8.5), as motions
+    /// (c × ω, ω) at the reference positions: when the reference nodes lie on a sphere about c
+    /// (to 1e-9 of its radius), relabelling the material points by a rotation about c that
+    /// maps the reference surface onto itself keeps Π in the continuum (every effect sees only
+    /// the current shape; the membrane is isotropic with a spherical stress-free state), and
+    /// nearly so on a mesh. A closed sphere is mapped onto itself by every rotation about c, a
+    /// cap whose rim lies in one plane with normal a only by those about a — and a rim that
+    /// slides must slide in planes normal to a. Empty otherwise.
+    pub fn relabellings(&self) -> Vec<[f64; 6]> {
+        let Some((c, r)) = sphere_through(&self.reference) else {
+            return Vec::new();
+        };
+        let directed: std::collections::HashSet<(usize, usize)> = self
+            .layout
+            .triangles()
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+            .collect();
+        let mut rim: Vec<usize> = directed
+            .iter()
+            .filter(|&&(a, b)| !directed.contains(&(b, a)))
+            .map(|&(a, _)| a)
+            .collect();
+        rim.sort_unstable();
+        rim.dedup();
+        let axes: Vec<Vec3> = if rim.is_empty() {
+            (0..3).map(|k| Vec3::ith(k, 1.0)).collect()
+        } else {
+            let Some(a) = plane_normal(rim.iter().map(|&i| self.reference[i]), r) else {
+                return Vec::new();
+            };
+            let slides_across = (0..self.reference.len()).any(|i| {
+                self.layout
+                    .slide_normal(i)
+                    .is_some_and(|m| m.cross(&a).norm() > 1e-9)
+            });
+            if slides_across {
+                return Vec::new();
+            }
+            vec![a]
+        };
+        axes.iter()
+            .map(|w| {
+                let t = c.cross(w);
+                [t.x, t.y, t.z, w.x, w.y, w.z]
+            })
+            .collect()
     }
 
     /// The effects, in assembly order.
@@ -203,14 +468,26 @@ impl Model for FeModel {
 
     /// The rigid motions (t, ω) that every effect keeps, as an orthonormal basis of that
     /// subspace of ℝ⁶: the intersection of the effects' subspaces, computed as the null space
-    /// of Σ_e (I − P_e). Empty when any node is fixed.
+    /// of Σ_e (I − P_e). Empty when any node is fixed; nodes that slide in a plane keep only
+    /// the translations within it and the rotations about its normal.
     fn rigid_motions(&self) -> Vec<[f64; 6]> {
         if self.layout.unknowns() < 3 * self.reference.len() {
             return Vec::new();
         }
+        let mut normals: Vec<Vec3> = Vec::new();
+        for n in (0..self.reference.len()).filter_map(|i| self.layout.slide_normal(i)) {
+            if !normals.iter().any(|m| m.cross(&n).norm() < 1e-9) {
+                normals.push(n);
+            }
+        }
+        let sliding = normals.iter().map(|&n| in_plane_motions(n));
         let mut sum = nalgebra::SMatrix::<f64, 6, 6>::zeros();
-        for e in &self.effects {
-            let kept = e.rigid_motions();
+        for kept in self
+            .effects
+            .iter()
+            .map(|e| e.rigid_motions())
+            .chain(sliding)
+        {
             let basis = nalgebra::DMatrix::from_fn(6, kept.len(), |i, j| kept[j][i]);
             let projector = if kept.is_empty() {
                 nalgebra::DMatrix::zeros(6, 6)
@@ -228,6 +505,54 @@ impl Model for FeModel {
         (0..6)
             .filter(|&k| eig.eigenvalues[k].abs() < 1e-10)
             .map(|k| std::array::from_fn(|i| eig.eigenvectors[(i, k)]))
+            .collect()
+    }
+
+    /// The mean motions a stability analysis holds (docs/theory.md §8.5), for a free body
+    /// (no node fixed): the relabellings of a spherical reference ([`FeModel::relabellings`])
+    /// and the drifts of its effects ([`Effect::drifts`]) that every other effect keeps, less
+    /// the rigid motions, as an orthonormal basis of what is left.
+    fn held_motions(&self) -> Vec<[f64; 6]> {
+        let n = self.reference.len();
+        if n < 4 || self.layout.unknowns() < 3 * n {
+            return Vec::new();
+        }
+        let mut candidates = self.relabellings();
+        for (k, e) in self.effects.iter().enumerate() {
+            for d in e.drifts() {
+                let kept_by_others = self
+                    .effects
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != k)
+                    .all(|(_, o)| in_span(&d, &o.rigid_motions()));
+                let normals = (0..n).filter_map(|i| self.layout.slide_normal(i));
+                let kept_by_slides = normals
+                    .into_iter()
+                    .all(|m| in_span(&d, &in_plane_motions(m)));
+                if kept_by_others && kept_by_slides {
+                    candidates.push(d);
+                }
+            }
+        }
+        let kept = self.rigid_motions();
+        let mut cand = nalgebra::DMatrix::<f64>::zeros(6, candidates.len());
+        for (k, v) in candidates.iter().enumerate() {
+            let mut v = nalgebra::DVector::from_row_slice(v);
+            for m in &kept {
+                let m = nalgebra::DVector::from_row_slice(m);
+                v -= &m * m.dot(&v);
+            }
+            cand.set_column(k, &v);
+        }
+        if candidates.is_empty() {
+            return Vec::new();
+        }
+        let svd = cand.svd(true, false);
+        let u = svd.u.expect("U requested");
+        (0..svd.singular_values.len())
+            .filter(|&k| svd.singular_values[k] > 1e-9)
+            .map(|k| std::array::from_fn(|i| u[(i, k)]))
             .collect()
     }
 

@@ -376,6 +376,7 @@ pub fn write_branches(
         let mut result = RunResult {
             report: run.report.clone(),
             states: run.states.clone(),
+            points: Vec::new(),
             times: Default::default(),
             branches: None,
             curve: None,

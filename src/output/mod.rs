@@ -8,6 +8,7 @@
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
 //! | `curve.csv`, `curve.json`, `curve.svg` | [`write_curve`] | a critical curve: a row per point (both parameters, the measures, the block's eigenvalues, the irrep), its events, the second parameter against the control |
 //! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
+//! | `path.states` | [`store::write_states`] | every path point's parameters and displacement, binary (what `[start] from` reads, [`store::read_states`]) |
 //! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
 //! | `branches.json` | [`write_branch_graph`] | the graph of critical points and branches |
 //! | `diagram.svg` | [`write_bifurcation_diagram`] | the path and every branch in one bifurcation diagram |
@@ -37,6 +38,7 @@ mod progress;
 mod reopen;
 mod run;
 mod states;
+pub mod store;
 mod svg;
 
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten, PrimaryPath};

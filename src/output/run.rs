@@ -15,8 +15,9 @@ use meshes::write::Fields;
 use std::path::{Path, PathBuf};
 
 /// The files every run writes into its directory, besides its states.
-pub const RUN_FILES: [&str; 5] = [
+pub const RUN_FILES: [&str; 6] = [
     "path.csv",
+    "path.states",
     "path.json",
     "critical.json",
     "path.svg",
@@ -38,6 +39,8 @@ pub struct Written {
     pub plotted: String,
     /// `path.pvd`.
     pub pvd: PathBuf,
+    /// `path.states`: every path point's state (none for a branch).
+    pub points: Option<PathBuf>,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
     /// `curve.csv`, `curve.json`, `curve.svg` of a critical curve.
@@ -58,6 +61,7 @@ impl Written {
             self.svg.clone(),
             self.pvd.clone(),
         ];
+        files.extend(self.points.clone());
         files.extend(self.states.iter().cloned());
         files.extend(self.curve.iter().cloned());
         if let Some(b) = &self.branches {
@@ -95,10 +99,10 @@ pub fn file_name(p: &Path) -> String {
     )
 }
 
-/// Writes `path.csv`, the states with `path.pvd`, `path.json` (with the saved states, which
-/// it records in the report), `critical.json`, `path.svg` and, last, `manifest.json` into
-/// `out`, in that order, after removing the old manifest and the temporary files a killed run
-/// left there.
+/// Writes `path.csv`, `path.states` (every point's state), the states with `path.pvd`,
+/// `path.json` (with the saved states, which it records in the report), `critical.json`,
+/// `path.svg` and, last, `manifest.json` into `out`, in that order, after removing the old
+/// manifest and the temporary files a killed run left there.
 ///
 /// Path states go into the collection (PVD time = path step: ParaView orders datasets by
 /// time, and along a path that turns back in the control — a balloon past its pressure
@@ -122,14 +126,33 @@ pub fn write_run(
     attempt!(super::remove_manifest(out));
     let csv = attempt!(write_csv(out, &result.report));
     done.push(csv.clone());
+    // A path solved in the scene's fixed-point space saves every point's state; a branch
+    // (solved in a subgroup's space) saves none, and its path.json names no states file.
+    let points = if result.points.len() == result.report.rows.len() && !result.points.is_empty() {
+        let (points, info) = attempt!(super::store::write_states(
+            out,
+            &result.points,
+            result.report.parameters.len(),
+            study.basis.unknowns(),
+            |q, u| study
+                .basis
+                .expand(&nalgebra::DVector::from_column_slice(q), u),
+        ));
+        result.report.states = Some(info);
+        Some(points)
+    } else {
+        None
+    };
+    done.extend(points.clone());
     let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
     let mut states: Vec<PathBuf> = Vec::new();
     let (mut turning, mut critical) = (0usize, 0usize);
     for s in &result.states {
         let positions = study.model.positions(&s.u);
         let label = s.label();
+        let fields = state_fields(study, s);
         let saved = match (&s.kind, &s.mode) {
-            (StateKind::Step, _) => writer.save(s.step, s.control, &positions, Fields::new()),
+            (StateKind::Step, _) => writer.save(s.step, s.control, &positions, fields),
             (StateKind::Critical { .. }, Some(mode)) => {
                 critical += 1;
                 let field: Vec<[f64; 3]> = study
@@ -146,7 +169,7 @@ pub fn write_run(
                     s.step,
                     s.control,
                     &positions,
-                    Fields::new().point_vector("critical_mode", field),
+                    fields.point_vector("critical_mode", field),
                 )
             }
             (StateKind::Turning(_) | StateKind::Held | StateKind::Critical { .. }, _) => {
@@ -161,15 +184,7 @@ pub fn write_run(
                 } else {
                     stem
                 };
-                writer.save_as(
-                    &name,
-                    &label,
-                    false,
-                    s.step,
-                    s.control,
-                    &positions,
-                    Fields::new(),
-                )
+                writer.save_as(&name, &label, false, s.step, s.control, &positions, fields)
             }
         };
         let saved = attempt!(saved);
@@ -249,11 +264,30 @@ pub fn write_run(
         svg,
         plotted,
         pvd,
+        points,
         states,
         curve,
         branches,
         manifest,
     })
+}
+
+/// The per-triangle fields of a state that the model's effects show (stretches, thickness,
+/// tensions, where the membrane would wrinkle, pressures); a non-finite value (never at an
+/// accepted state) is written as 0 rather than as NaN.
+pub fn state_fields(study: &Study, s: &crate::report::State) -> Fields {
+    study
+        .model
+        .cell_fields(&s.u, &s.params)
+        .into_iter()
+        .fold(Fields::new(), |f, c| {
+            f.cell_scalar(
+                c.quantity.name(),
+                c.values
+                    .iter()
+                    .map(|v| if v.is_finite() { *v } else { 0.0 }),
+            )
+        })
 }
 
 /// The diagram: stable (index 0) and unstable stretches of the path drawn differently, turning

@@ -124,7 +124,7 @@ fn read(doc: &Table) -> Result<Scene, Problem> {
         None => Start::default(),
         Some(v) => de(v, "start")?,
     };
-    let constraints = super::validate::resolve_constraints(&effects, raw_constraints)?;
+    let constraints = super::validate::resolve_constraints(&effects, &parameters, raw_constraints)?;
     Ok(Scene {
         origin: String::new(),
         info,
@@ -559,7 +559,7 @@ impl<'de> Deserialize<'de> for Target {
         impl Visitor<'_> for V {
             type Value = Target;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number or \"initial\"")
+                f.write_str("a number, \"initial\" or a parameter name")
             }
             fn visit_i64<E: de::Error>(self, v: i64) -> Result<Target, E> {
                 Ok(Target::Value(v as f64))
@@ -574,7 +574,7 @@ impl<'de> Deserialize<'de> for Target {
                 if v == "initial" {
                     Ok(Target::Initial)
                 } else {
-                    Err(E::invalid_value(Unexpected::Str(v), &self))
+                    Ok(Target::Parameter(v.to_string()))
                 }
             }
         }
@@ -587,6 +587,7 @@ impl Serialize for Target {
         match self {
             Target::Initial => s.serialize_str("initial"),
             Target::Value(v) => s.serialize_f64(*v),
+            Target::Parameter(name) => s.serialize_str(name),
         }
     }
 }

@@ -368,6 +368,10 @@ pub struct FluidEffect {
     pub level: Quantity,
     /// Where the fluid is.
     pub side: FluidSide,
+    /// The enclosure is completely filled (`side = "inside"` only): the pressure is
+    /// ρ g (h − z) everywhere, not clipped at zero, and h is a pressure head. Default false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub filled: bool,
 }
 
 /// `side` of a fluid effect.
@@ -420,6 +424,20 @@ pub struct Boundary {
     /// Node sets of the mesh whose nodes are held at their reference positions. Default none.
     #[serde(default)]
     pub fixed: Vec<String>,
+    /// `[[boundary.slide]]`: node sets whose nodes move in planes. Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slide: Vec<Slide>,
+}
+
+/// `[[boundary.slide]]`: every node of `set` moves in the plane through its reference
+/// position with normal `normal` (frictionless: an edge resting on a plane).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct Slide {
+    /// The node set.
+    pub set: String,
+    /// The plane's normal (normalised on loading).
+    pub normal: [f64; 3],
 }
 
 /// `[parameters.NAME]`: a load parameter Λ_j.
@@ -471,13 +489,26 @@ impl Constraint {
     }
 }
 
-/// A held value: a number, or `"initial"` — the value at the start state.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A held value: a number, `"initial"` — the value at the start state — or the name of a
+/// declared parameter (which may then be the path's control).
+#[derive(Debug, Clone, PartialEq)]
 pub enum Target {
     /// The value measured at the start state (after the start solve).
     Initial,
     /// A given number.
     Value(f64),
+    /// The value of this parameter.
+    Parameter(String),
+}
+
+impl Target {
+    /// The parameter this target follows, if any.
+    pub fn parameter(&self) -> Option<&str> {
+        match self {
+            Target::Parameter(name) => Some(name),
+            Target::Initial | Target::Value(_) => None,
+        }
+    }
 }
 
 /// `type = "fluid-volume"`.
@@ -611,7 +642,7 @@ pub struct LinearBucklingAnalysis {
 
 /// `type = "path"`: pseudo-arclength continuation from the start state. The path stops at
 /// the first of: the control leaving `[min, max]` of its parameter, the stretch reaching
-/// `stop-stretch`, or `steps` steps.
+/// `stop-stretch`, the largest displacement reaching `stop-displacement`, or `steps` steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct PathAnalysis {
@@ -639,6 +670,9 @@ pub struct PathAnalysis {
     /// only; V_sf = V(mesh)/λ0³ is the stress-free enclosed volume).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stop_stretch: Option<f64>,
+    /// Stop when the largest nodal displacement |u_i| reaches this value (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop_displacement: Option<f64>,
     /// Newton's convergence tolerance on the relative residual. Default 1e-9.
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
@@ -719,11 +753,29 @@ pub struct Start {
     /// Isotropic scale of the first guess about the origin (> 0). Default 1.
     #[serde(default = "one")]
     pub stretch: f64,
+    /// The `path.json` of an earlier run of a scene with the same mesh and parameters: the
+    /// start is its saved path point `point` (state and parameters as saved), refined by
+    /// Newton. A relative path is relative to the scene file's directory.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from: Option<PathBuf>,
+    /// The path point (row `step`) of `from` to start from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point: Option<usize>,
+    /// A start homotopy for a free body resting on a plane: the mean translation along this
+    /// direction is held first (by a uniform force, an extra unknown), then released along an
+    /// auxiliary path in the held position until that force vanishes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_translation: Option<[f64; 3]>,
 }
 
 impl Default for Start {
     fn default() -> Self {
-        Start { stretch: 1.0 }
+        Start {
+            stretch: 1.0,
+            from: None,
+            point: None,
+            hold_translation: None,
+        }
     }
 }
 
@@ -1050,6 +1102,11 @@ impl Scene {
                 f.path = resolved;
             }
         }
+        if let Some(from) = &mut scene.start.from {
+            if from.is_relative() {
+                *from = path.parent().unwrap_or(Path::new("")).join(&*from);
+            }
+        }
         Ok(scene)
     }
 
@@ -1142,6 +1199,22 @@ impl Scene {
             .collect();
         nodes.sort_unstable();
         nodes.dedup();
+        nodes
+    }
+
+    /// The nodes of the `[[boundary.slide]]` sets with their planes' unit normals, sorted by
+    /// node (a node in two sets takes the first set's normal; unknown names contribute
+    /// nothing).
+    pub fn sliding_nodes(&self, mesh: &SymmetricMesh) -> Vec<(usize, [f64; 3])> {
+        let mut nodes: Vec<(usize, [f64; 3])> = Vec::new();
+        for slide in &self.boundary.slide {
+            for &i in mesh.mesh.boundaries.get(&slide.set).into_iter().flatten() {
+                if !nodes.iter().any(|(j, _)| *j == i) {
+                    nodes.push((i, slide.normal));
+                }
+            }
+        }
+        nodes.sort_by_key(|(i, _)| *i);
         nodes
     }
 

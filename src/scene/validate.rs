@@ -79,18 +79,35 @@ fn known_parameter(
 /// Resolves the effect each constraint refers to and the parameter it governs.
 pub(super) fn resolve_constraints(
     effects: &[Effect],
+    parameters: &BTreeMap<String, Parameter>,
     raw: Vec<RawConstraint>,
 ) -> Result<Vec<Constraint>, Problem> {
+    // A target that is neither a number nor "initial" must name a declared parameter.
+    let known_target = |path: &str, t: &Target| match t {
+        Target::Parameter(name) if !parameters.contains_key(name) => {
+            let key = format!("{path}.value");
+            Err(Problem::new(
+                &key,
+                format!(
+                    "'{key}': expected a number or \"initial\", got \"{name}\" (or the name of \
+                     a declared parameter; {})",
+                    declared(parameters)
+                ),
+            ))
+        }
+        _ => Ok(()),
+    };
     raw.into_iter()
         .map(|c| match c {
             RawConstraint::FluidVolume(r, path) => {
+                known_target(&path, &r.value)?;
                 let effect =
                     pick_effect(effects, &path, "fluid-volume", EffectKind::Fluid, r.effect)?;
                 let Effect::Fluid(fluid) = &effects[effect] else {
                     unreachable!("pick_effect returns a fluid effect")
                 };
                 let level = governed(&path, "fluid-volume", effect, "level", &fluid.level)?;
-                check_target(&path, r.value, false)?;
+                check_target(&path, &r.value, false)?;
                 Ok(Constraint::FluidVolume(FluidVolumeConstraint {
                     effect,
                     value: r.value,
@@ -98,12 +115,13 @@ pub(super) fn resolve_constraints(
                 }))
             }
             RawConstraint::GasAmount(r, path) => {
+                known_target(&path, &r.value)?;
                 let effect = pick_effect(effects, &path, "gas-amount", EffectKind::Gas, r.effect)?;
                 let Effect::Gas(gas) = &effects[effect] else {
                     unreachable!("pick_effect returns a gas effect")
                 };
                 let pressure = governed(&path, "gas-amount", effect, "pressure", &gas.pressure)?;
-                check_target(&path, r.value, true)?;
+                check_target(&path, &r.value, true)?;
                 non_negative(&format!("{path}.ambient-pressure"), r.ambient_pressure)?;
                 Ok(Constraint::GasAmount(GasAmountConstraint {
                     effect,
@@ -200,9 +218,9 @@ fn governed(
     }
 }
 
-fn check_target(path: &str, t: Target, must_be_positive: bool) -> Result<(), Problem> {
-    match t {
-        Target::Initial => Ok(()),
+fn check_target(path: &str, t: &Target, must_be_positive: bool) -> Result<(), Problem> {
+    match *t {
+        Target::Initial | Target::Parameter(_) => Ok(()),
         Target::Value(v) if must_be_positive => positive(&format!("{path}.value"), v),
         Target::Value(v) => finite(&format!("{path}.value"), v),
     }
@@ -227,6 +245,8 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
             ));
         }
     }
+    check_slides(&mut scene.boundary)?;
+    check_start(scene)?;
     for (name, p) in &scene.parameters {
         check_parameter_name(name)?;
         check_parameter(&key_path("parameters", name), p)?;
@@ -236,18 +256,171 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     check_analysis(scene)?;
     check_parameter_use(scene)?;
     positive("start.stretch", scene.start.stretch)?;
-    if scene.start.stretch != 1.0 && !scene.boundary.fixed.is_empty() {
+    let held: Vec<&str> = scene
+        .boundary
+        .fixed
+        .iter()
+        .map(String::as_str)
+        .chain(scene.boundary.slide.iter().map(|s| s.set.as_str()))
+        .collect();
+    if scene.start.stretch != 1.0 && !held.is_empty() {
         return Err(Problem::at(
             "start.stretch",
             format!(
-                "= {} would move the fixed nodes ({}); a clamped membrane starts taut from \
-                 material.prestretch and keeps stretch = 1",
+                "= {} would move the fixed or sliding nodes ({}); a clamped membrane starts taut \
+                 from material.prestretch and keeps stretch = 1",
                 num(scene.start.stretch),
-                scene.boundary.fixed.join(", ")
+                held.join(", ")
             ),
         ));
     }
+    check_enclosure(scene)
+}
+
+/// A unit vector from `v` (`key` names it in the message).
+fn unit(key: &str, v: [f64; 3]) -> Result<[f64; 3], Problem> {
+    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if !(len.is_finite() && len > 0.0) {
+        return Err(Problem::at(
+            key,
+            format!(
+                "must be a finite non-zero vector, got [{}, {}, {}]",
+                num(v[0]),
+                num(v[1]),
+                num(v[2])
+            ),
+        ));
+    }
+    Ok([v[0] / len, v[1] / len, v[2] / len])
+}
+
+/// `[[boundary.slide]]`: normals normalised, each set once and not also fixed.
+fn check_slides(boundary: &mut Boundary) -> Result<(), Problem> {
+    let mut seen = BTreeSet::new();
+    for (i, slide) in boundary.slide.iter_mut().enumerate() {
+        let key = format!("boundary.slide[{i}]");
+        slide.normal = unit(&format!("{key}.normal"), slide.normal)?;
+        if boundary.fixed.contains(&slide.set) {
+            return Err(Problem::at(
+                &format!("{key}.set"),
+                format!(
+                    "= \"{}\" is also in boundary.fixed; a node set is fixed or slides",
+                    slide.set
+                ),
+            ));
+        }
+        if !seen.insert(slide.set.clone()) {
+            return Err(Problem::at(
+                &format!("{key}.set"),
+                format!("= \"{}\" slides a second time", slide.set),
+            ));
+        }
+    }
     Ok(())
+}
+
+/// `[start]`: `from` with `point`; `hold-translation` a direction, for a free body only.
+fn check_start(scene: &mut Scene) -> Result<(), Problem> {
+    let start = &mut scene.start;
+    match (&start.from, start.point) {
+        (Some(f), None) => {
+            return Err(Problem::at(
+                "start.from",
+                format!(
+                    "= \"{}\" needs start.point, the path point (row 'step') to start from",
+                    f.display()
+                ),
+            ))
+        }
+        (None, Some(n)) => {
+            return Err(Problem::at(
+                "start.point",
+                format!("= {n} needs start.from, the path.json of the run it belongs to"),
+            ))
+        }
+        _ => {}
+    }
+    if let Some(d) = start.hold_translation {
+        start.hold_translation = Some(unit("start.hold-translation", d)?);
+        let held = !scene.boundary.fixed.is_empty() || !scene.boundary.slide.is_empty();
+        if held {
+            return Err(Problem::at(
+                "start.hold-translation",
+                "is a start for a free body; this scene fixes or slides node sets".to_string(),
+            ));
+        }
+        if start.from.is_some() {
+            return Err(Problem::at(
+                "start.hold-translation",
+                "and start.from exclude each other: a saved state needs no homotopy".to_string(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A gas amount sharing its enclosure with a fluid needs the fluid's amount: a fluid-volume
+/// constraint with a number or a parameter (docs/theory.md §3.5). A filled enclosure has no
+/// room for gas.
+fn check_enclosure(scene: &Scene) -> Result<(), Problem> {
+    let gas = scene
+        .effects
+        .iter()
+        .position(|e| matches!(e, Effect::GasAmount(_)))
+        .map(|i| format!("effect[{i}] (gas-amount)"))
+        .or_else(|| {
+            scene
+                .constraints
+                .iter()
+                .position(|c| matches!(c, Constraint::GasAmount(_)))
+                .map(|i| format!("constraint[{i}] (gas-amount)"))
+        });
+    let inside: Vec<(usize, &FluidEffect)> = scene
+        .effects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, e)| match e {
+            Effect::Fluid(f) if f.side == FluidSide::Inside => Some((i, f)),
+            _ => None,
+        })
+        .collect();
+    let Some(gas) = gas else {
+        return Ok(());
+    };
+    if let Some((i, _)) = inside.iter().find(|(_, f)| f.filled) {
+        return Err(Problem::at(
+            &format!("effect[{i}].filled"),
+            format!("= true leaves no room for the gas of {gas}"),
+        ));
+    }
+    if inside.len() > 1 {
+        return Err(Problem::new(
+            &format!("effect[{}]", inside[1].0),
+            format!(
+                "'effect[{}]': {gas} shares the enclosure with one fluid only, this is a second",
+                inside[1].0
+            ),
+        ));
+    }
+    let Some(&(i, _)) = inside.first() else {
+        return Ok(());
+    };
+    let held = scene.constraints.iter().find_map(|c| match c {
+        Constraint::FluidVolume(v) if v.effect == i => Some(&v.value),
+        _ => None,
+    });
+    match held {
+        Some(Target::Value(_) | Target::Parameter(_)) => Ok(()),
+        Some(Target::Initial) | None => Err(Problem::new(
+            &format!("effect[{i}]"),
+            format!(
+                "'effect[{i}]' (fluid inside) shares the enclosure with {gas}: the gas fills \
+                 V - V_f, so the fluid's volume must be known from the start; hold it with a \
+                 [[constraint]] type = \"fluid-volume\" whose value is a number or a parameter \
+                 (not \"initial\")"
+            ),
+        )),
+    }
 }
 
 fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
@@ -329,6 +502,15 @@ fn check_effect(
         Effect::GasAmount(g) => {
             non_negative(&format!("{path}.ambient-pressure"), g.ambient_pressure)
         }
+        Effect::Fluid(f) => {
+            if f.filled && f.side != FluidSide::Inside {
+                return Err(Problem::at(
+                    &format!("{path}.filled"),
+                    "= true needs side = \"inside\" (a completely filled enclosure)".to_string(),
+                ));
+            }
+            Ok(())
+        }
         Effect::Plane(p) => {
             let key = format!("{path}.normal");
             let n = p.normal;
@@ -353,7 +535,7 @@ fn check_effect(
             }
             Ok(())
         }
-        Effect::Gas(_) | Effect::Spin(_) | Effect::Fluid(_) => Ok(()),
+        Effect::Gas(_) | Effect::Spin(_) => Ok(()),
     }
 }
 
@@ -484,6 +666,20 @@ fn check_constraints(scene: &Scene) -> Result<(), Problem> {
             _ => path.clone(),
         };
         known_parameter(&scene.parameters, &key, name)?;
+        let target = match c {
+            Constraint::FluidVolume(v) => v.value.parameter(),
+            Constraint::GasAmount(g) => g.value.parameter(),
+            Constraint::Fixed(_) => None,
+        };
+        if let Some(t) = target {
+            let key = format!("{path}.value");
+            if t == name {
+                return Err(Problem::at(
+                    &key,
+                    format!("= \"{t}\" is the parameter this constraint governs"),
+                ));
+            }
+        }
         if let Some(j) = governed.insert(name, i) {
             return Err(Problem::new(
                 &key,
@@ -537,6 +733,9 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
             at_least("analysis.save-every", a.save_every, 1)?;
             if let Some(s) = a.stop_stretch {
                 positive("analysis.stop-stretch", s)?;
+            }
+            if let Some(s) = a.stop_displacement {
+                positive("analysis.stop-displacement", s)?;
             }
             if let Some(b) = &a.branches {
                 check_branches(b)?;
@@ -693,6 +892,11 @@ fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
         .quantities()
         .into_iter()
         .filter_map(|(_, q, _)| q.parameter())
+        .chain(scene.constraints.iter().filter_map(|c| match c {
+            Constraint::FluidVolume(v) => v.value.parameter(),
+            Constraint::GasAmount(g) => g.value.parameter(),
+            Constraint::Fixed(_) => None,
+        }))
         .collect();
     for name in scene.parameters.keys() {
         let key = key_path("parameters", name);
@@ -731,9 +935,22 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
     let mesh = &sym.mesh;
     // "the disc mesh", "the mesh in 'disc.msh'".
     let the_mesh = scene.mesh.describe();
-    for (i, name) in scene.boundary.fixed.iter().enumerate() {
+    let sets = scene
+        .boundary
+        .fixed
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (format!("boundary.fixed[{i}]"), n))
+        .chain(
+            scene
+                .boundary
+                .slide
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (format!("boundary.slide[{i}].set"), &s.set)),
+        );
+    for (key, name) in sets {
         if !mesh.boundaries.contains_key(name) {
-            let key = format!("boundary.fixed[{i}]");
             let available: Vec<&str> = mesh.boundaries.keys().map(String::as_str).collect();
             let has = if available.is_empty() {
                 format!("{the_mesh} has no node sets")
@@ -749,7 +966,8 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
     let topology = mesh
         .topology()
         .map_err(|e| Problem::new("mesh", format!("'mesh' ({}): {e}", scene.mesh.generator())))?;
-    let fixed: BTreeSet<usize> = scene.fixed_nodes(sym).into_iter().collect();
+    let mut fixed: BTreeSet<usize> = scene.fixed_nodes(sym).into_iter().collect();
+    fixed.extend(scene.sliding_nodes(sym).into_iter().map(|(i, _)| i));
     let rim: BTreeSet<usize> = topology.boundary_loops.iter().flatten().copied().collect();
     let loose = rim.difference(&fixed).count();
     for (i, effect) in scene.effects.iter().enumerate() {
@@ -762,7 +980,7 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
                 &path,
                 format!(
                     "'{path}' ({}) needs a closed membrane or a fixed rim, but {loose} of the {} \
-                     rim nodes of {the_mesh} are not in boundary.fixed",
+                     rim nodes of {the_mesh} are not in boundary.fixed (or boundary.slide)",
                     effect.kind(),
                     rim.len()
                 ),

@@ -36,6 +36,7 @@
 
 mod axial;
 mod decompose;
+mod fourier;
 mod group;
 mod icosahedral;
 mod irrep;

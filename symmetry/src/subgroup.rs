@@ -30,7 +30,8 @@ pub enum Invariant {
 }
 
 impl Invariant {
-    fn kept_by(&self, r: &Matrix3) -> bool {
+    /// True if the orthogonal matrix `r` keeps this invariant (to 1e-9 relative).
+    pub fn kept_by(&self, r: &Matrix3) -> bool {
         let close = |a: Vector3<f64>, b: Vector3<f64>| (a - b).amax() < 1e-9 * b.amax().max(1.0);
         match *self {
             Invariant::Direction(v) => close(r * v, v),
@@ -42,7 +43,8 @@ impl Invariant {
         }
     }
 
-    fn direction(&self) -> Vector3<f64> {
+    /// The direction it is about (a direction, the axis's, the plane's normal).
+    pub fn direction(&self) -> Vector3<f64> {
         match *self {
             Invariant::Direction(v) | Invariant::Axis(v) => v,
             Invariant::Plane { normal, .. } => normal,

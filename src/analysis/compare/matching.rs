@@ -6,14 +6,23 @@ use crate::text::sci;
 use serde::Serialize;
 
 /// The multiplicity a rung of this point should reach: 2 for a wave number m ≥ 1 (the cos/sin
-/// pair), 1 for m = 0, the point's own without a label.
+/// pair), 1 for m = 0, the point's own without a label. A limit point is a fold of the path,
+/// never one partner of a double: its rung is itself.
 fn expected(p: &Point) -> usize {
+    if fold(p) {
+        return p.multiplicity;
+    }
     match p.m {
         Some(0) => 1,
         Some(_) => 2,
         None => p.multiplicity,
     }
     .max(p.multiplicity)
+}
+
+/// True for a limit point (a fold of the path in the control).
+fn fold(p: &Point) -> bool {
+    p.kind == CriticalKind::LimitPoint
 }
 
 /// Groups the points of one mesh that are not `taken` into rungs (indices, the first point
@@ -33,6 +42,7 @@ fn rungs(points: &[Point], floor: f64, taken: &[bool]) -> Vec<Vec<usize>> {
         while have < target {
             let next = (0..points.len())
                 .filter(|&j| !used[j] && points[j].m == points[i].m && points[i].m.is_some())
+                .filter(|&j| !fold(&points[j]))
                 .filter(|&j| (points[j].value - v).abs() <= PAIR_TOLERANCE * v.abs() + floor)
                 .min_by(|&a, &b| {
                     (points[a].value - v)
@@ -49,11 +59,12 @@ fn rungs(points: &[Point], floor: f64, taken: &[bool]) -> Vec<Vec<usize>> {
     out
 }
 
-/// The images of a rung (label m, value v, multiplicity `target`) among the unused points.
+/// The images of a rung (label m, value v, multiplicity `target`; of limit points when
+/// `folds`) among the unused points: folds are the images of folds only.
 fn images(
     points: &[Point],
     used: &mut [bool],
-    m: Option<usize>,
+    (m, folds): (Option<usize>, bool),
     v: f64,
     target: usize,
     floor: f64,
@@ -62,7 +73,7 @@ fn images(
     let mut have = 0;
     while have < target {
         let next = (0..points.len())
-            .filter(|&j| !used[j] && points[j].m == m)
+            .filter(|&j| !used[j] && points[j].m == m && fold(&points[j]) == folds)
             .filter(|&j| (points[j].value - v).abs() <= MATCH_TOLERANCE * v.abs() + floor)
             .min_by(|&a, &b| {
                 (points[a].value - v)
@@ -357,7 +368,14 @@ fn rung(
                 }
                 sorted.clone()
             } else {
-                images(&level.critical, &mut used[k][l], m, v, target, floor)
+                images(
+                    &level.critical,
+                    &mut used[k][l],
+                    (m, fold(first)),
+                    v,
+                    target,
+                    floor,
+                )
             };
             levels.push(measure(&level.critical, found, target, level.resolution));
         }
@@ -382,5 +400,45 @@ fn rung(
         multiplicity,
         found_at: meshes[0].levels[source].resolution,
         images: all,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(kind: CriticalKind, irrep: &str, value: f64, m: usize) -> Point {
+        Point {
+            kind,
+            irrep: irrep.into(),
+            multiplicity: 1,
+            value,
+            m: Some(m),
+            residual_eigenvalue: 1e-13,
+            precision: None,
+            isotropy: "C1v".into(),
+        }
+    }
+
+    #[test]
+    fn a_fold_pair_is_two_rungs_not_a_split_double() {
+        // A maximum and a minimum of the control close together, both in A1 with the same
+        // wave number: two folds, each its own rung — never the two halves of a double.
+        let folds = [
+            point(CriticalKind::LimitPoint, "A1", 2.000, 1),
+            point(CriticalKind::LimitPoint, "A1", 2.001, 1),
+        ];
+        let groups = rungs(&folds, 0.0, &[false, false]);
+        assert_eq!(groups, vec![vec![0], vec![1]]);
+        // The halves of a split double still pair: A1 + A2 bifurcations of one wave number.
+        let split = [
+            point(CriticalKind::SymmetricBifurcation, "A1", 2.000, 1),
+            point(CriticalKind::SimpleBifurcation, "A2", 2.001, 1),
+        ];
+        assert_eq!(rungs(&split, 0.0, &[false, false]), vec![vec![0, 1]]);
+        // A fold is not the image of a double's half.
+        let mut used = vec![false, false];
+        let found = images(&folds, &mut used, (Some(1), false), 2.0, 2, 0.0);
+        assert!(found.is_empty(), "{found:?}");
     }
 }

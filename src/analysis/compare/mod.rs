@@ -41,9 +41,9 @@
 //! 1e-8 of the value (the localisation's precision) — otherwise "not split (gap 0)" / "(gap at
 //! round-off)". With `refine` the observed order of the gap is log2(gap_coarse / gap_fine).
 //!
-//! Bad input (a mesh that is not a subgroup or does not parse, a chiral group, an equilibrium
-//! analysis, a bad `max`) is a [`CompareError::Input`] before anything runs; a start state
-//! that does not converge is a [`CompareError::Failure`].
+//! Bad input (a mesh that is not a subgroup or does not parse, an equilibrium analysis, a bad
+//! `max`) is a [`CompareError::Input`] before anything runs; a start state that does not
+//! converge is a [`CompareError::Failure`].
 
 mod matching;
 mod meshes;
@@ -456,13 +456,18 @@ pub fn compare(
                     }
                 }
             }
+            if s.start.from.is_some() {
+                return Err(CompareError::Input(
+                    "'start.from': compare runs the scene on other meshes, which a saved state \
+                     does not fit; remove [start] from"
+                        .to_string(),
+                ));
+            }
             let study = Study::build(s).map_err(|e| match e {
                 StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
                     CompareError::Input(one_line(&e.to_string()))
                 }
             })?;
-            super::check_real_irreps(&study, &format!("mesh '{}'", t.label))
-                .map_err(CompareError::Input)?;
             jobs.push((k, l, study));
         }
         if k == 0 {

@@ -1,0 +1,436 @@
+//! The axisymmetric reference (docs/theory.md §15): a membrane of revolution as its meridian,
+//! discretised by quadratic elements, and the tangent at an axisymmetric state split by
+//! Fourier mode.
+//!
+//! A state is the meridian (r, z)(s) rotated about z. A displacement of wave number m is
+//!
+//! ```text
+//!   δx = U(s) cos mθ e_r + V(s) sin mθ e_θ + W(s) cos mθ e_z          (m ≥ 1)
+//!   δx = U(s) e_r + V(s) e_θ + W(s) e_z                              (m = 0)
+//! ```
+//!
+//! with U, V, W interpolated by the elements' shape functions. The second variation of an
+//! axisymmetric energy couples no two wave numbers (∫ cos mθ cos m'θ dθ = 0 for m ≠ m'), and
+//! for m ≥ 1 the partner family (U sin mθ, −V cos mθ, W sin mθ) is the first rotated by
+//! π/(2m) about z: its block is the same matrix, so every eigenvalue of a block m ≥ 1 is double
+//! by construction. Each block is integrated exactly in θ (the trapezoidal rule with more than
+//! 2m points integrates the trigonometric products exactly) and by Gauss–Legendre quadrature
+//! along the meridian.
+//!
+//! Energies: the Mooney–Rivlin membrane of [`crate::effects::membrane`] (the same W(F), F the
+//! in-plane deformation gradient in an orthonormal stress-free frame: f1 = λ0 x_ξ/|X_ξ|,
+//! f2 = λ0 x_θ/R, stress-free area dA0 = |X_ξ| R dξ dθ/λ0²), and a hydrostatic pressure
+//! p = ρ g (h − z) on the side the fluid wets (the potential whose first variation is
+//! ∫ p n·δx dA, n dA = x_ξ × x_θ dξ dθ), whose second variation is the symmetric bilinear form
+//!
+//! ```text
+//!   −ρ g ∫ Δz (n dA·δx) + ∫ p δx·(Δx_ξ × x_θ + x_ξ × Δx_θ) dξ dθ,   symmetrised,
+//! ```
+//!
+//! valid where the boundary terms vanish (a clamped rim, p = 0 on a wetting line).
+//!
+//! Boundary conditions: a clamped end holds U = V = W = 0; a node on the axis (R = 0) holds
+//! the regularity of the field there: U = V = 0 for m = 0, W = 0 and U + V = 0 for m = 1
+//! (the field is then the constant U e_x), everything for m ≥ 2.
+
+use crate::effects::membrane::MooneyRivlin;
+use nalgebra::{DMatrix, Matrix3, Vector3};
+
+/// Gauss–Legendre points and weights on [−1, 1], 4 points (exact to degree 7).
+const GAUSS: [(f64, f64); 4] = [
+    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+    (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+];
+
+/// Quadratic shape functions and their derivatives at ξ ∈ [−1, 1].
+fn shape(xi: f64) -> ([f64; 3], [f64; 3]) {
+    (
+        [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)],
+        [xi - 0.5, -2.0 * xi, xi + 0.5],
+    )
+}
+
+/// Errors of the axisymmetric model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AxisymError {
+    /// Bad construction input.
+    #[error("{0}")]
+    Input(String),
+    /// The membrane is not defined at the state (an element inverted or collapsed).
+    #[error("the membrane is not defined at the state (J <= 0 in element {0})")]
+    Degenerate(usize),
+    /// The membrane's block is not positive definite, so critical loads of a load block are
+    /// not defined by it.
+    #[error("the membrane block of wave number {0} is not positive definite")]
+    Indefinite(usize),
+}
+
+/// A meridian of quadratic elements: the stress-free data of a membrane of revolution.
+#[derive(Debug, Clone)]
+pub struct Meridian {
+    /// Reference nodes (R, Z), 2E + 1 of them; element e has nodes 2e, 2e + 1, 2e + 2.
+    pub nodes: Vec<[f64; 2]>,
+    /// The isotropic pre-stretch λ0 (the stress-free metric is the reference one / λ0²).
+    pub prestretch: f64,
+    /// The material.
+    pub material: MooneyRivlin,
+    /// Which ends are clamped: (first node, last node).
+    pub clamped: (bool, bool),
+}
+
+impl Meridian {
+    /// The flat disc of radius `radius` in z = 0 from the axis to a clamped rim, `elements`
+    /// quadratic elements of equal length.
+    pub fn disc(
+        radius: f64,
+        elements: usize,
+        prestretch: f64,
+        material: MooneyRivlin,
+    ) -> Result<Self, AxisymError> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(AxisymError::Input(format!(
+                "radius: must be finite and > 0, got {radius}"
+            )));
+        }
+        if elements == 0 {
+            return Err(AxisymError::Input(
+                "elements: must be at least 1, got 0".into(),
+            ));
+        }
+        let n = 2 * elements;
+        Ok(Self {
+            nodes: (0..=n)
+                .map(|i| [radius * i as f64 / n as f64, 0.0])
+                .collect(),
+            prestretch,
+            material,
+            clamped: (false, true),
+        })
+    }
+
+    /// Number of elements.
+    pub fn elements(&self) -> usize {
+        (self.nodes.len() - 1) / 2
+    }
+
+    /// The unknowns (U, V, W per node, node-major) that a block of wave number m keeps, as
+    /// the columns of T: full = T · kept (clamped ends and the axis conditions above).
+    fn kept(&self, m: usize) -> DMatrix<f64> {
+        let n = self.nodes.len();
+        let mut cols: Vec<Vec<(usize, f64)>> = Vec::new();
+        for (i, x) in self.nodes.iter().enumerate() {
+            let clamped = (i == 0 && self.clamped.0) || (i == n - 1 && self.clamped.1);
+            if clamped {
+                continue;
+            }
+            if x[0] == 0.0 {
+                match m {
+                    0 => cols.push(vec![(3 * i + 2, 1.0)]),
+                    1 => cols.push(vec![(3 * i, 1.0), (3 * i + 1, -1.0)]),
+                    _ => {}
+                }
+                continue;
+            }
+            for c in 0..3 {
+                cols.push(vec![(3 * i + c, 1.0)]);
+            }
+        }
+        let mut t = DMatrix::zeros(3 * n, cols.len());
+        for (j, col) in cols.iter().enumerate() {
+            for &(r, v) in col {
+                t[(r, j)] = v;
+            }
+        }
+        t
+    }
+}
+
+/// A hydrostatic load per unit density: pressure g (h − z) on the side of n = x_ξ × x_θ (for
+/// a floor whose meridian runs outward from the axis, the fluid above it). The whole meridian
+/// must be wet (z ≤ h at every node); a partly wet meridian is refused.
+#[derive(Debug, Clone, Copy)]
+pub struct Hydrostatic {
+    /// Gravity g.
+    pub gravity: f64,
+    /// The fluid level h.
+    pub level: f64,
+}
+
+/// Per Gauss point of an element: the reference and current geometry the blocks need.
+struct Point {
+    n: [f64; 3],
+    dn: [f64; 3],
+    weight: f64,
+    big_r: f64,
+    dx_ref: f64,
+    r: f64,
+    x_xi: Vector3<f64>,
+}
+
+fn points(meridian: &Meridian, x: &[[f64; 2]], e: usize) -> Vec<Point> {
+    GAUSS
+        .iter()
+        .map(|&(xi, w)| {
+            let (n, dn) = shape(xi);
+            let node = |k: usize| 2 * e + k;
+            let mut rz = [0.0; 2];
+            let mut drz = [0.0; 2];
+            let mut rz0 = [0.0; 2];
+            let mut drz0 = [0.0; 2];
+            for k in 0..3 {
+                for c in 0..2 {
+                    rz[c] += n[k] * x[node(k)][c];
+                    drz[c] += dn[k] * x[node(k)][c];
+                    rz0[c] += n[k] * meridian.nodes[node(k)][c];
+                    drz0[c] += dn[k] * meridian.nodes[node(k)][c];
+                }
+            }
+            Point {
+                n,
+                dn,
+                weight: w,
+                big_r: rz0[0],
+                dx_ref: drz0[0].hypot(drz0[1]),
+                r: rz[0],
+                x_xi: Vector3::new(drz[0], 0.0, drz[1]),
+            }
+        })
+        .collect()
+}
+
+/// The perturbation of family "cos" rotated by `phase` about z, at angle θ in the rotating
+/// frame (e_r, e_θ, e_z), for the element's 9 unknowns (U, V, W per node): δx, δx_ξ and δx_θ
+/// as 3 × 9 matrices. (Rotating the field by α reads its components at θ − α.)
+fn perturbation(p: &Point, m: usize, theta: f64, phase: f64) -> [nalgebra::SMatrix<f64, 3, 9>; 3] {
+    let mf = m as f64;
+    let (c, s) = if m == 0 {
+        (1.0, 1.0)
+    } else {
+        ((mf * (theta - phase)).cos(), (mf * (theta - phase)).sin())
+    };
+    let mut dx = nalgebra::SMatrix::<f64, 3, 9>::zeros();
+    let mut dxi = dx;
+    let mut dth = dx;
+    for k in 0..3 {
+        let (u, v, w) = (3 * k, 3 * k + 1, 3 * k + 2);
+        // δx = U c e_r + V s e_θ + W c e_z (m = 0: c = s = 1).
+        dx[(0, u)] = p.n[k] * c;
+        dx[(1, v)] = p.n[k] * s;
+        dx[(2, w)] = p.n[k] * c;
+        dxi[(0, u)] = p.dn[k] * c;
+        dxi[(1, v)] = p.dn[k] * s;
+        dxi[(2, w)] = p.dn[k] * c;
+        // ∂/∂θ in the rotating frame: ∂e_r/∂θ = e_θ, ∂e_θ/∂θ = −e_r.
+        let (dc, ds) = if m == 0 {
+            (0.0, 0.0)
+        } else {
+            (-mf * s, mf * c)
+        };
+        dth[(0, u)] = p.n[k] * dc;
+        dth[(1, u)] = p.n[k] * c;
+        dth[(1, v)] = p.n[k] * ds;
+        dth[(0, v)] = -p.n[k] * s;
+        dth[(2, w)] = p.n[k] * dc;
+    }
+    [dx, dxi, dth]
+}
+
+/// Angles for the θ integral of a block of wave number m: the trapezoidal rule on this many
+/// equispaced points is exact for the products of two harmonics of order ≤ m.
+fn angles(m: usize) -> usize {
+    2 * m + 4
+}
+
+/// Scatters an element's 9 × 9 matrix into the full 3(2E+1) matrix.
+fn scatter(full: &mut DMatrix<f64>, e: usize, local: &nalgebra::SMatrix<f64, 9, 9>) {
+    let base = 3 * 2 * e;
+    for i in 0..9 {
+        for j in 0..9 {
+            full[(base + i, base + j)] += local[(i, j)];
+        }
+    }
+}
+
+/// The membrane's block of wave number m at the state `x` (all 3(2E+1) unknowns, before the
+/// boundary conditions).
+fn membrane_full(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    m: usize,
+    phase: f64,
+) -> Result<DMatrix<f64>, AxisymError> {
+    let lam = meridian.prestretch;
+    let h = meridian.material.thickness;
+    let nt = angles(m);
+    let mut k = DMatrix::zeros(3 * meridian.nodes.len(), 3 * meridian.nodes.len());
+    for e in 0..meridian.elements() {
+        let mut local = nalgebra::SMatrix::<f64, 9, 9>::zeros();
+        for p in points(meridian, x, e) {
+            let f = [
+                p.x_xi * (lam / p.dx_ref),
+                Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
+            ];
+            let (_, _, hf) = meridian
+                .material
+                .energy_in_f(&f)
+                .ok_or(AxisymError::Degenerate(e))?;
+            let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
+            for t in 0..nt {
+                let theta = 2.0 * std::f64::consts::PI * t as f64 / nt as f64;
+                let [_, dxi, dth] = perturbation(&p, m, theta, phase);
+                let b = [dxi * (lam / p.dx_ref), dth * (lam / p.big_r)];
+                let dtheta = 2.0 * std::f64::consts::PI / nt as f64;
+                for i in 0..2 {
+                    for kk in 0..2 {
+                        let hik: &Matrix3<f64> = &hf[i][kk];
+                        local += b[i].transpose() * hik * b[kk] * (h * da0 * dtheta);
+                    }
+                }
+            }
+        }
+        scatter(&mut k, e, &local);
+    }
+    Ok(k)
+}
+
+/// The hydrostatic block of wave number m per unit density (the tangent is linear in ρ),
+/// fluid on the side of n = x_ξ × x_θ (above a floor whose meridian runs outward).
+fn hydrostatic_full(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    load: &Hydrostatic,
+    m: usize,
+    phase: f64,
+) -> DMatrix<f64> {
+    let nt = angles(m);
+    let mut k = DMatrix::zeros(3 * meridian.nodes.len(), 3 * meridian.nodes.len());
+    for e in 0..meridian.elements() {
+        let mut local = nalgebra::SMatrix::<f64, 9, 9>::zeros();
+        for p in points(meridian, x, e) {
+            let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+            let pressure = load.gravity * (load.level - z);
+            let x_th = Vector3::new(0.0, p.r, 0.0);
+            let nda = p.x_xi.cross(&x_th);
+            let dtheta = 2.0 * std::f64::consts::PI / nt as f64;
+            for t in 0..nt {
+                let theta = 2.0 * std::f64::consts::PI * t as f64 / nt as f64;
+                let [dx, dxi, dth] = perturbation(&p, m, theta, phase);
+                let mut a = nalgebra::SMatrix::<f64, 9, 9>::zeros();
+                for j in 0..9 {
+                    let (dj, dxij, dthj) = (dx.column(j), dxi.column(j), dth.column(j));
+                    // δ(n dA) along unknown j.
+                    let dn = dxij.cross(&x_th) + p.x_xi.cross(&dthj);
+                    for i in 0..9 {
+                        let di = dx.column(i);
+                        a[(i, j)] = -load.gravity * dj[2] * nda.dot(&di) + pressure * di.dot(&dn);
+                    }
+                }
+                local += (a + a.transpose()) * (0.5 * p.weight * dtheta);
+            }
+        }
+        scatter(&mut k, e, &local);
+    }
+    k
+}
+
+/// One Fourier block: its wave number, multiplicity in the 3-D problem and critical loads.
+#[derive(Debug, Clone)]
+pub struct ModeLoads {
+    /// The wave number m.
+    pub m: usize,
+    /// 1 for m = 0, 2 for m ≥ 1 (the cos and sin families share the block).
+    pub multiplicity: usize,
+    /// The lowest densities ρ at which K_membrane + ρ K_fluid is singular, ascending.
+    pub densities: Vec<f64>,
+}
+
+/// The critical densities of a hydrostatic load on the state `x` (the current nodes (r, z),
+/// held: linear buckling) by
+/// wave number m = 0..=`modes`: the positive ρ with det(K_m + ρ K_f,m) = 0, from the
+/// generalised symmetric eigenproblem with K_m positive definite (Cholesky K_m = L Lᵀ, the
+/// eigenvalues μ of −L⁻¹ K_f Lᵀ⁻¹, ρ = 1/μ for μ > 0), the `lowest` of each.
+pub fn critical_densities(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    load: &Hydrostatic,
+    modes: usize,
+    lowest: usize,
+) -> Result<Vec<ModeLoads>, AxisymError> {
+    if x.len() != meridian.nodes.len() {
+        return Err(AxisymError::Input(format!(
+            "state: {} nodes for a meridian of {}",
+            x.len(),
+            meridian.nodes.len()
+        )));
+    }
+    if let Some(i) = x.iter().position(|p| p[1] > load.level) {
+        return Err(AxisymError::Input(format!(
+            "state: node {i} is above the fluid level {}; only a wholly wet meridian is supported",
+            load.level
+        )));
+    }
+    (0..=modes)
+        .map(|m| {
+            let t = meridian.kept(m);
+            let km = t.transpose() * membrane_full(meridian, x, m, 0.0)? * &t;
+            let kf = t.transpose() * hydrostatic_full(meridian, x, load, m, 0.0) * &t;
+            let l = nalgebra::Cholesky::new((&km + km.transpose()) * 0.5)
+                .ok_or(AxisymError::Indefinite(m))?
+                .l();
+            let li = l.clone().try_inverse().ok_or(AxisymError::Indefinite(m))?;
+            let s = -(&li * kf * li.transpose());
+            let s = (&s + s.transpose()) * 0.5;
+            let scale = s.amax().max(1e-300);
+            let mut densities: Vec<f64> = s
+                .symmetric_eigenvalues()
+                .iter()
+                .filter(|&&mu| mu > 1e-12 * scale)
+                .map(|&mu| 1.0 / mu)
+                .collect();
+            densities.sort_by(f64::total_cmp);
+            densities.truncate(lowest);
+            Ok(ModeLoads {
+                m,
+                multiplicity: if m == 0 { 1 } else { 2 },
+                densities,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The partner family of m ≥ 1 (the first rotated by π/(2m)) has the same blocks to
+    /// round-off, on a curved, stretched meridian under a pressure that is not zero: the θ
+    /// integral is exact, so the double is structural. The m-blocks of different m differ.
+    #[test]
+    fn partner_families_share_their_blocks() {
+        let mat = MooneyRivlin::new(1.0, 0.2, 0.1);
+        let mut meridian = Meridian::disc(1.0, 3, 1.05, mat).unwrap();
+        meridian.nodes.iter_mut().for_each(|p| p[0] += 0.3);
+        let x: Vec<[f64; 2]> = meridian
+            .nodes
+            .iter()
+            .map(|p| [1.1 * p[0], -0.2 * (p[0] - 0.3) * (1.3 - p[0])])
+            .collect();
+        let load = Hydrostatic {
+            gravity: 1.0,
+            level: 0.5,
+        };
+        for m in 1..5 {
+            let phase = std::f64::consts::PI / (2.0 * m as f64);
+            let k0 = membrane_full(&meridian, &x, m, 0.0).unwrap();
+            let k1 = membrane_full(&meridian, &x, m, phase).unwrap();
+            assert!((&k0 - &k1).amax() < 1e-12 * k0.amax(), "membrane, m = {m}");
+            let f0 = hydrostatic_full(&meridian, &x, &load, m, 0.0);
+            let f1 = hydrostatic_full(&meridian, &x, &load, m, phase);
+            assert!((&f0 - &f1).amax() < 1e-12 * f0.amax(), "fluid, m = {m}");
+            let k2 = membrane_full(&meridian, &x, m + 1, 0.0).unwrap();
+            assert!((&k0 - &k2).amax() > 1e-3 * k0.amax());
+        }
+    }
+}

@@ -1,0 +1,100 @@
+//! The per-triangle fields of a state: on the uniformly inflated balloon the principal
+//! tensions and thickness follow the closed forms T = μH (1 − λ⁻⁶)(1 + kλ²)/(1 + k) and
+//! h = H/λ², nowhere wrinkled; a slack disc (pre-stretch below 1) is wrinkled everywhere;
+//! and every state file carries the fields.
+
+use memstab::analysis::equilibrium::solve_start;
+use memstab::model::{CellQuantity, Model};
+use memstab::scene::Scene;
+use memstab::study::{Measure, Study};
+use std::path::Path;
+
+fn scene_text(name: &str) -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes")
+            .join(name),
+    )
+    .unwrap()
+}
+
+#[test]
+fn the_balloon_tension_follows_the_closed_form_and_a_slack_disc_wrinkles() {
+    let text = scene_text("balloon.toml").replace("frequency = 8", "frequency = 4");
+    let mut study = Study::build(Scene::from_toml_str(&text, "balloon").unwrap()).unwrap();
+    let start = study.start.clone();
+    let (u, params, _) = solve_start(&mut study, &start).unwrap();
+    let k = study
+        .measures
+        .iter()
+        .position(|(_, m)| *m == Measure::Stretch)
+        .unwrap();
+    let lambda = study.measure(&u, &params)[k];
+    let (mu, kk, h) = (100.0, 0.1, 0.01);
+    let t = mu * h * (1.0 - lambda.powi(-6)) * (1.0 + kk * lambda * lambda) / (1.0 + kk);
+    let fields = study.model.cell_fields(&u, &params);
+    let get = |q: CellQuantity| &fields.iter().find(|f| f.quantity == q).unwrap().values;
+    // A faceted sphere: each triangle's stretch is the sphere's to the mesh's O(h²) error.
+    for v in get(CellQuantity::Tension1)
+        .iter()
+        .chain(get(CellQuantity::Tension2))
+    {
+        assert!((v / t - 1.0).abs() < 0.05, "{v} vs {t}");
+    }
+    let mean = get(CellQuantity::Thickness).iter().sum::<f64>()
+        / get(CellQuantity::Thickness).len() as f64;
+    assert!(
+        (mean / (h / (lambda * lambda)) - 1.0).abs() < 0.02,
+        "{mean}"
+    );
+    assert!(get(CellQuantity::Wrinkled).iter().all(|&w| w == 0.0));
+
+    let slack = scene_text("disc_fluid_below.toml").replace("prestretch = 1.1", "prestretch = 0.9");
+    assert!(slack.contains("prestretch = 0.9"));
+    let study = Study::build(Scene::from_toml_str(&slack, "slack").unwrap()).unwrap();
+    let u = vec![0.0; study.model.layout().unknowns()];
+    let fields = study.model.cell_fields(&u, &study.start);
+    let wrinkled = &fields
+        .iter()
+        .find(|f| f.quantity == CellQuantity::Wrinkled)
+        .unwrap()
+        .values;
+    assert!(wrinkled.iter().all(|&w| w == 1.0));
+}
+
+#[test]
+fn every_state_file_carries_the_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = scene_text("balloon.toml")
+        .replace("frequency = 8", "frequency = 4")
+        .replace("steps = 400", "steps = 3");
+    let path = dir.path().join("b.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let vtu = std::fs::read_to_string(out.join("state_0000.vtu")).unwrap();
+    for q in [
+        CellQuantity::Stretch1,
+        CellQuantity::Stretch2,
+        CellQuantity::Thickness,
+        CellQuantity::Tension1,
+        CellQuantity::Tension2,
+        CellQuantity::Wrinkled,
+    ] {
+        assert!(
+            vtu.contains(&format!("Name=\"{}\"", q.name())),
+            "{}",
+            q.name()
+        );
+    }
+}

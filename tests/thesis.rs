@@ -1,0 +1,1078 @@
+//! The physics of the thesis problems: gas above fluid in one enclosure, completely filled
+//! enclosures, the fluid volume as the control, sliding edges and the moving plate that closes
+//! them, bodies resting on planes (the held rolling and drift), the scene's group from the set
+//! of effects, restarts and the start homotopy, and classification that agrees with the path.
+
+use memstab::adapted::{AdaptedBasis, SparseBasis};
+use memstab::analysis::critical::CriticalKind;
+use memstab::analysis::events::StopReason;
+use memstab::analysis::{run, run_with, Observer};
+use memstab::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
+use memstab::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
+use memstab::effects::membrane::{Membrane, MooneyRivlin};
+use memstab::effects::spin::Spin;
+use memstab::effects::volume::ClosingFace;
+use memstab::effects::Quantity;
+use memstab::model::check::check_derivatives;
+use memstab::model::constraint::Constraint;
+use memstab::model::{Effect, Evaluation, FeModel, Layout, Model, ModelError, Request, Vec3};
+use memstab::report::PathReport;
+use memstab::scene::Scene;
+use memstab::stability::{Detail, Stability};
+use memstab::study::Study;
+use meshes::generators::{truncated_sphere, TruncatedSphereOptions};
+use proptest::prelude::*;
+use std::path::Path;
+use std::process::Command;
+use std::sync::Arc;
+
+fn random_vector(seed: u64, n: usize, amplitude: f64) -> Vec<f64> {
+    let mut s = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            amplitude * (((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0)
+        })
+        .collect()
+}
+
+fn column(r: &PathReport, name: &str) -> usize {
+    r.measures
+        .iter()
+        .position(|m| m == name)
+        .unwrap_or_else(|| panic!("no measure {name}: {:?}", r.measures))
+}
+
+fn parameter(r: &PathReport, name: &str) -> usize {
+    r.parameters.iter().position(|m| m == name).unwrap()
+}
+
+fn study(text: &str) -> Study {
+    Study::build(Scene::from_toml_str(text, "test").expect("the scene loads")).expect("builds")
+}
+
+fn bundled(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+// ---- The moving plate: a truncated sphere whose rim is free, closed by its plate ----
+
+/// A C8v truncated sphere cut at `cut`, its rim nodes free to slide (all nodes free here: the
+/// full-space derivatives include the plate's terms at the rim), with the plate.
+fn cap_mesh(cut: f64) -> (meshes::SymmetricMesh, Arc<ClosingFace>) {
+    let sym = truncated_sphere(&TruncatedSphereOptions {
+        divisions: 3,
+        cut_height: cut,
+        ..TruncatedSphereOptions::for_pattern("C8v")
+    })
+    .unwrap();
+    let face = Arc::new(ClosingFace::new(cut, &sym.mesh.triangles));
+    (sym, face)
+}
+
+fn membrane(m: &meshes::Mesh) -> Box<dyn Effect> {
+    Box::new(
+        Membrane::new(
+            &m.nodes,
+            &m.triangles,
+            MooneyRivlin::new(1.0, 0.1, 0.1),
+            1.05,
+        )
+        .unwrap(),
+    )
+}
+
+/// Parameters: p, ρ, h, C, V*, ω².
+fn enclosure_model(filled: bool) -> FeModel {
+    let (sym, face) = cap_mesh(-0.3);
+    let m = &sym.mesh;
+    let effects: Vec<Box<dyn Effect>> = vec![
+        membrane(m),
+        Box::new(GasPressure {
+            pressure: Quantity::Parameter(0),
+            closing: Some(face.clone()),
+        }),
+        Box::new(Fluid {
+            density: Quantity::Parameter(1),
+            gravity: Quantity::Value(1.3),
+            level: Quantity::Parameter(2),
+            side: FluidSide::Behind,
+            filled,
+            closing: Some(face.clone()),
+        }),
+        Box::new(GasAmount {
+            amount: Quantity::Parameter(3),
+            ambient: 0.7,
+            closing: Some(face.clone()),
+            fluid: Some(Quantity::Parameter(4)),
+        }),
+        Box::new(Spin {
+            density: Quantity::Value(0.6),
+            omega2: Quantity::Parameter(5),
+            side: FluidSide::Behind,
+        }),
+    ];
+    let names = ["p", "rho", "h", "C", "V", "w2"].map(String::from).to_vec();
+    FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, names)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 10, failure_persistence: None, .. ProptestConfig::default() })]
+
+    #[test]
+    fn enclosures_closed_by_a_moving_plate_match_finite_differences(
+        seed in any::<u64>(),
+        filled in any::<bool>(),
+        h in -0.1f64..1.1,
+        w2 in 0.0f64..2.0,
+    ) {
+        let model = enclosure_model(filled);
+        let n = model.unknowns();
+        // A random state around the cap stretched by 1.1 in the plane and lifted a little.
+        let mut u = random_vector(seed, n, 0.02);
+        for (i, x) in model.reference().iter().enumerate() {
+            u[3 * i] += 0.1 * x.x;
+            u[3 * i + 1] += 0.1 * x.y;
+        }
+        let d = random_vector(seed ^ 0x77, n, 1.0);
+        let params = [0.4, 0.8, h, 3.0, 0.2, w2];
+        let e = check_derivatives(&model, &u, &params, &d, 1e-6).unwrap();
+        // The clipped fluid's Hessian is only continuous where the level crosses a node.
+        let tangent_tol = if filled { 1e-6 } else { 1e-4 };
+        prop_assert!(e.residual < 1e-7, "{e:?}");
+        prop_assert!(e.tangent < tangent_tol, "{e:?}");
+        prop_assert!(e.asymmetry < 1e-13, "{e:?}");
+        prop_assert!(e.loads < 1e-5, "{e:?}");
+    }
+
+    #[test]
+    fn constraints_with_a_moving_plate_match_finite_differences(
+        seed in any::<u64>(),
+        filled in any::<bool>(),
+        h in 0.0f64..1.0,
+    ) {
+        let (sym, face) = cap_mesh(-0.3);
+        let m = &sym.mesh;
+        let layout = Layout::new(m.nodes.len(), m.triangles.clone(), &[]);
+        let fluid = Fluid {
+            density: Quantity::Value(1.0),
+            gravity: Quantity::Value(1.0),
+            level: Quantity::Parameter(0),
+            side: FluidSide::Behind,
+            filled,
+            closing: Some(face.clone()),
+        };
+        let volume = FluidVolumeConstraint {
+            fluid,
+            level: 0,
+            target: 0.0,
+            target_parameter: Some(1),
+            closing: Some(face.clone()),
+        };
+        let amount = GasAmountConstraint {
+            pressure: 2,
+            ambient: 1.0,
+            target: 0.0,
+            target_parameter: Some(3),
+            closing: Some(face.clone()),
+            fluid: Some(Quantity::Parameter(1)),
+        };
+        let n = layout.unknowns();
+        let mut u = random_vector(seed, n, 0.02);
+        for (i, x) in m.nodes.iter().enumerate() {
+            u[3 * i] += 0.1 * x.x;
+            u[3 * i + 1] += 0.1 * x.y;
+        }
+        let d = random_vector(seed ^ 0x99, n, 1.0);
+        let params = vec![h, 0.3, 0.5, 2.0];
+        let at = |u: &[f64], p: &[f64], c: &dyn Constraint| {
+            let mut x = m.nodes.clone();
+            layout.add_displacements(u, &mut x);
+            c.evaluate(&layout, &x, p)
+        };
+        for c in [&volume as &dyn Constraint, &amount] {
+            let g = at(&u, &params, c);
+            let step = 1e-6;
+            let plus: Vec<f64> = u.iter().zip(&d).map(|(a, b)| a + step * b).collect();
+            let minus: Vec<f64> = u.iter().zip(&d).map(|(a, b)| a - step * b).collect();
+            let fd = (at(&plus, &params, c).value - at(&minus, &params, c).value) / (2.0 * step);
+            let exact: f64 = g.grad_u.iter().zip(&d).map(|(a, b)| a * b).sum();
+            let scale = g.grad_u.iter().fold(1e-3f64, |s, v| s.max(v.abs())) * n as f64;
+            prop_assert!((fd - exact).abs() < 1e-7 * scale, "{}: {fd} vs {exact}", c.name());
+            for j in 0..params.len() {
+                let mut pp = params.clone();
+                pp[j] += step;
+                let mut pm = params.clone();
+                pm[j] -= step;
+                let fd = (at(&u, &pp, c).value - at(&u, &pm, c).value) / (2.0 * step);
+                prop_assert!(
+                    (fd - g.grad_params[j]).abs() < 1e-6 * (1.0 + fd.abs()),
+                    "{} ∂/∂Λ{j}: {fd} vs {}", c.name(), g.grad_params[j]
+                );
+            }
+        }
+    }
+}
+
+// ---- Item: gas above fluid ----
+
+/// Paper 2 on a coarse icosphere (f = 4): a gas amount above fluid in a closed sphere
+/// resting on a plane, the fluid volume V the control.
+fn paper2(frequency: usize, max_v: f64) -> String {
+    bundled("thesis/paper2_sphere_on_plane.toml")
+        .replace("frequency = 16", &format!("frequency = {frequency}"))
+        .replace("max = 6.0", &format!("max = {max_v}"))
+}
+
+#[test]
+fn gas_above_fluid_fills_what_the_fluid_leaves_and_loads_the_wet_membrane_too() {
+    let mut study = study(&paper2(4, 4.0));
+    let mut states = States::default();
+    let report = run_with(&mut study, &mut states)
+        .expect("the path runs")
+        .report;
+    let (v, vf, p) = (
+        column(&report, "volume"),
+        column(&report, "fluid_volume"),
+        column(&report, "gas_pressure"),
+    );
+    assert!(report.rows.len() > 10, "{} points", report.rows.len());
+    assert_eq!(states.0.len(), report.rows.len());
+    let mut last = f64::NEG_INFINITY;
+    for (row, (u, params)) in report.rows.iter().zip(&states.0) {
+        let m = &row.measures;
+        // Boyle's law on the gas volume, with V and V_f measured on their own.
+        let boyle = 6.5 / (m[v] - m[vf]) - 1.0;
+        assert!(
+            (m[p] - boyle).abs() < 1e-12 * boyle.abs().max(1.0),
+            "step {}: gas pressure {} vs C/(V - V_f) - P_atm = {boyle}",
+            row.step,
+            m[p]
+        );
+        // Filling compresses the gas.
+        assert!(m[p] > last, "step {}: the gas pressure fell", row.step);
+        last = m[p];
+        // The state is the equilibrium of the membrane under that pressure on the whole
+        // membrane (dry and wet) plus the fluid to its level: with a fixed-pressure gas in
+        // place of the amount, the residual vanishes.
+        if row.step % 4 == 0 {
+            let equivalent = equivalent_model(&study, params[parameter(&report, "h")], m[p]);
+            let mut e = equivalent.new_evaluation();
+            equivalent.evaluate(u, &[], Request::ALL, &mut e).unwrap();
+            let force = e.tangent.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            let residual = e.residual.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            assert!(
+                residual < 1e-8 * force,
+                "step {}: residual {residual:e} of the equivalent model (force {force:e})",
+                row.step
+            );
+        }
+    }
+    // The fluid volume rose to 4 of the ~7.9 enclosed: the gas is markedly compressed.
+    assert!(last > 0.9, "gas over-pressure {last} at the end");
+}
+
+/// The study's mesh with the membrane, a gas at the fixed over-pressure `p` on the whole
+/// A material quantity the thesis scenes give as a number.
+fn fixed(q: &memstab::scene::Quantity) -> f64 {
+    q.value(&Default::default())
+        .expect("a fixed material quantity")
+}
+
+/// membrane, the fluid to the fixed level `h` and the plane: no parameters.
+fn equivalent_model(study: &Study, h: f64, p: f64) -> FeModel {
+    let m = &study.mesh.mesh;
+    let mat = &study.scene.material;
+    let effects: Vec<Box<dyn Effect>> = vec![
+        Box::new(
+            Membrane::new(
+                &m.nodes,
+                &m.triangles,
+                MooneyRivlin::new(fixed(&mat.mu), fixed(&mat.k), fixed(&mat.thickness)),
+                fixed(&mat.prestretch),
+            )
+            .unwrap(),
+        ),
+        Box::new(GasPressure::new(Quantity::Value(p))),
+        Box::new(Fluid::new(
+            Quantity::Value(1.0),
+            Quantity::Value(1.0),
+            Quantity::Value(h),
+            FluidSide::Behind,
+        )),
+        Box::new(memstab::effects::plane::Plane {
+            normal: Vec3::z(),
+            offset: Quantity::Value(-1.06),
+            penalty: Quantity::Value(1000.0),
+            law: memstab::effects::plane::PenaltyLaw::Cubic,
+        }),
+    ];
+    FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], effects, vec![])
+}
+
+/// Every accepted state of a run.
+#[derive(Default)]
+struct States(Vec<(Vec<f64>, Vec<f64>)>);
+
+impl Observer for States {
+    fn state(&mut self, u: &[f64], params: &[f64]) {
+        self.0.push((u.to_vec(), params.to_vec()));
+    }
+}
+
+// ---- Item: bodies resting on planes ----
+
+/// The model of `inner` without its held mean motions.
+struct NoHolds<'a>(&'a dyn Model);
+
+impl Model for NoHolds<'_> {
+    fn layout(&self) -> &Layout {
+        self.0.layout()
+    }
+    fn reference(&self) -> &[Vec3] {
+        self.0.reference()
+    }
+    fn rigid_motions(&self) -> Vec<[f64; 6]> {
+        self.0.rigid_motions()
+    }
+    fn parameters(&self) -> &[String] {
+        self.0.parameters()
+    }
+    fn evaluate(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        request: Request,
+        out: &mut Evaluation,
+    ) -> Result<(), ModelError> {
+        self.0.evaluate(u, params, request, out)
+    }
+    fn new_evaluation(&self) -> Evaluation {
+        self.0.new_evaluation()
+    }
+}
+
+#[test]
+fn a_sphere_resting_on_a_plane_has_no_spurious_e1_points_where_it_is_stable() {
+    for (frequency, max_v) in [(8, 3.0), (16, 1.3)] {
+        let mut study = study(&paper2(frequency, max_v));
+        let mut states = States::default();
+        let report = run_with(&mut study, &mut states)
+            .expect("the path runs")
+            .report;
+        // The axisymmetric path is stable, and no critical point is found on it.
+        assert!(
+            report.rows.iter().all(|r| r.index == Some(0)),
+            "f = {frequency}"
+        );
+        assert!(
+            report.critical.is_empty(),
+            "f = {frequency}: {:?}",
+            report.critical
+        );
+        let basis = AdaptedBasis::new(&study.action, study.model.layout()).unwrap();
+        let e1 = basis.irreps.iter().position(|b| b.name == "E1").unwrap();
+        let held = Stability::new(&study.model, &basis);
+        let bare = NoHolds(&study.model);
+        let unheld = Stability::new(&bare, &basis);
+        let mut eval = study.model.new_evaluation();
+        let (mut flips, mut last) = (0, None);
+        for (u, p) in &states.0 {
+            let a = held
+                .analyse(u, p, &study.constraints, &mut eval, None, Detail::Inertia)
+                .unwrap();
+            // The rolling about the two horizontal axes is held in E1 (one pair), nowhere else.
+            let counts: Vec<usize> = a.blocks.iter().map(|b| b.held).collect();
+            let expected: Vec<usize> = a
+                .blocks
+                .iter()
+                .map(|b| usize::from(b.irrep == "E1"))
+                .collect();
+            assert_eq!(counts, expected, "f = {frequency}");
+            assert_eq!(a.blocks[e1].negative, 0, "f = {frequency}");
+            // Without the hold the nearly neutral rolling wanders across zero.
+            let b = unheld
+                .analyse(u, p, &study.constraints, &mut eval, None, Detail::Inertia)
+                .unwrap();
+            let n = b.blocks[e1].negative;
+            if last.is_some_and(|l| l != n) {
+                flips += 1;
+            }
+            last = Some(n);
+        }
+        assert!(
+            flips >= 2,
+            "f = {frequency}: the unheld E1 count changed {flips} times"
+        );
+    }
+}
+
+#[test]
+fn the_spectrum_reports_the_held_rolling() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p2.toml");
+    std::fs::write(&path, paper2(4, 1.0)).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(["spectrum", path.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for irrep in json["irreps"].as_array().unwrap() {
+        let held = usize::from(irrep["name"] == "E1");
+        assert_eq!(irrep["held_motions"], held, "{irrep}");
+    }
+    assert_eq!(json["index"], 0);
+}
+
+// ---- Item: the scene's group from the set of effects ----
+
+#[test]
+fn two_planes_one_offset_keep_c2v_and_unequal_ones_do_not() {
+    let text =
+        bundled("thesis/paper3_squeezed_cap.toml").replace("divisions = 12", "divisions = 4");
+    assert_eq!(study(&text).action.group().name(), "C2v");
+    // One plane alone, or planes with different offsets, keep only the mirror y = 0.
+    let one = text.replacen(
+        "normal = [1.0, 0.0, 0.0]\noffset = \"d\"",
+        "normal = [1.0, 0.0, 0.0]\noffset = -2.0",
+        1,
+    );
+    assert_ne!(one, text);
+    assert_eq!(study(&one).action.group().name(), "C1v");
+    let soft = text.replacen(
+        "offset = \"d\"               # x >= d = -a\npenalty = 1000.0",
+        "offset = \"d\"               # x >= d = -a\npenalty = 999.0",
+        1,
+    );
+    assert_ne!(soft, text);
+    assert_eq!(study(&soft).action.group().name(), "C1v");
+}
+
+#[test]
+fn the_squeezed_cap_is_stable_and_antisymmetric_modes_are_not_folds() {
+    let text = bundled("thesis/paper3_squeezed_cap.toml")
+        .replace("divisions = 12", "divisions = 6")
+        .replace("max = -0.4", "max = -0.7");
+    let mut s = study(&text);
+    let report = run(&mut s, |_, _| {}).unwrap().report;
+    assert!(report.rows.len() > 5);
+    assert!(report.critical.is_empty(), "{:?}", report.critical);
+    assert!(report.rows.iter().all(|r| r.index == Some(0)));
+}
+
+// ---- Item: the fluid volume as the control ----
+
+fn ponding_disc(control_volume: bool) -> String {
+    let volume = if control_volume {
+        "[[constraint]]\ntype = \"fluid-volume\"\nvalue = \"V\"\n\n[parameters.V]\nstart = 0.004\nmax = 30.0\n\n[parameters.h]\nstart = 0.001\n"
+    } else {
+        "[parameters.h]\nstart = 0.001\nmax = 3.0\n"
+    };
+    format!(
+        r#"
+[scene]
+name = "downward-loaded-disc"
+[mesh]
+generator = "disc"
+radius = 1.1
+sectors = 7
+divisions = 6
+[material]
+mu = 100.0
+k = 0.0
+thickness = 0.01
+prestretch = 1.1
+[[effect]]
+type = "fluid"
+side = "above"
+density = 1.0
+gravity = 1.0
+level = "h"
+[boundary]
+fixed = ["rim"]
+{volume}
+[analysis]
+type = "path"
+control = "{}"
+steps = 150
+stop-displacement = 1.5
+"#,
+        if control_volume { "V" } else { "h" }
+    )
+}
+
+#[test]
+fn the_downward_loaded_disc_folds_in_the_level_but_not_in_the_volume() {
+    let level = run(&mut study(&ponding_disc(false)), |_, _| {})
+        .unwrap()
+        .report;
+    let limits: Vec<_> = level
+        .critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::LimitPoint)
+        .collect();
+    assert_eq!(limits.len(), 1, "{:?}", level.critical);
+    assert_eq!(level.turning_points.len(), 1);
+    let h_max = level.turning_points[0].parameters[0];
+    let volume = run(&mut study(&ponding_disc(true)), |_, _| {})
+        .unwrap()
+        .report;
+    assert!(
+        volume.turning_points.is_empty(),
+        "{:?}",
+        volume.turning_points
+    );
+    assert!(volume.critical.is_empty(), "{:?}", volume.critical);
+    assert!(volume.rows.iter().all(|r| r.index == Some(0)));
+    assert!(
+        matches!(volume.stop, StopReason::Displacement { .. }),
+        "{}",
+        volume.stop
+    );
+    // The volume path passes the level's maximum: h rises to it and falls again, and the
+    // fluid volume follows the control to round-off.
+    let (v, h, vf) = (
+        parameter(&volume, "V"),
+        parameter(&volume, "h"),
+        column(&volume, "fluid_volume"),
+    );
+    let top = volume
+        .rows
+        .iter()
+        .map(|r| r.parameters[h])
+        .fold(f64::MIN, f64::max);
+    assert!((top - h_max).abs() < 0.02 * h_max, "{top} vs {h_max}");
+    assert!(volume.rows.last().unwrap().parameters[h] < 0.9 * top);
+    for r in &volume.rows {
+        assert!((r.measures[vf] - r.parameters[v]).abs() < 1e-9 * r.parameters[v].max(1e-3));
+    }
+}
+
+// ---- Item: sliding edges ----
+
+#[test]
+fn a_sliding_edge_moves_in_its_plane_only_and_settles_at_a_right_angle() {
+    // The pre-stretched cap below the equator (cut at z = -0.5) meets the floor at an angle:
+    // with its edge sliding, the gas pushes the edge outward until the membrane meets the floor
+    // at a right angle, the rim reaching about the equator's radius.
+    let text = bundled("thesis/paper3_squeezed_cap.toml")
+        .replace("divisions = 12", "divisions = 6")
+        .replace("cut-height = 0.0", "cut-height = -0.5");
+    let (body, _) = text
+        .split_once("[[effect]]                 # effect[1]")
+        .unwrap();
+    let text = body.to_string()
+        + "[boundary]\n\n[[boundary.slide]]\nset = \"cut\"\nnormal = [0.0, 0.0, 1.0]\n\n[parameters.p]\nstart = 0.5124\n\n[analysis]\ntype = \"equilibrium\"\n";
+    let mut s = study(&text);
+    assert_eq!(s.action.group().name(), "C8v");
+    let result = run(&mut s, |_, _| {}).expect("the equilibrium converges");
+    let u = &result.states[0].u;
+    let x = s.model.positions(u);
+    let rim = &s.mesh.mesh.boundaries["cut"];
+    for &i in rim {
+        assert_eq!(x[i].z, -0.5, "node {i} left the floor");
+        let r = x[i].xy().norm();
+        assert!(r > 0.95 && r < 1.2, "rim radius {r}");
+    }
+    // The bases span only displacements with u_z = 0 at the sliding nodes.
+    let basis = AdaptedBasis::new(&s.action, s.model.layout()).unwrap();
+    let total: usize = basis.irreps.iter().map(|b| b.dim * b.multiplicity).sum();
+    assert_eq!(total, s.model.unknowns() - rim.len());
+    let fixed = SparseBasis::fixed_point(&s.action, s.model.layout());
+    for col in fixed.columns() {
+        for &(d, v) in col {
+            if let Some(&i) = rim.iter().find(|&&i| s.model.layout().dof(i, 2) == Some(d)) {
+                assert!(v.abs() < 1e-14, "column value {v} at node {i} along z");
+            }
+        }
+    }
+}
+
+// ---- Item: completely filled enclosures ----
+
+#[test]
+fn a_filled_cap_is_pulled_where_a_clipped_one_forms_a_void() {
+    // The spinning cap of Paper 4 spun up to w2 = 9, its fluid volume held: spin pushes the
+    // wall out, so the top must be pulled in. The filled fluid does (ρ g (h − z) < 0 there);
+    // a clipped one cannot, its level sinks below the top and leaves a void, where the spin
+    // still acts.
+    let base =
+        bundled("thesis/paper4_spinning_cap.toml").replace("divisions = 12", "divisions = 6");
+    let scene = |filled: bool| {
+        base.replace("filled = true", &format!("filled = {filled}"))
+            .replace("max = 30.0", "max = 9.0")
+    };
+    let solve = |filled: bool| {
+        let mut s = study(&scene(filled));
+        let r = run(&mut s, |_, _| {}).expect("the path runs").report;
+        assert!(matches!(r.stop, StopReason::Bounds), "{}", r.stop);
+        let row = r.rows.last().unwrap().clone();
+        let m = |name: &str| row.measures[column(&r, name)];
+        (
+            m("max_z"),
+            m("volume"),
+            m("fluid_volume"),
+            row.parameters[parameter(&r, "h")],
+        )
+    };
+    let (top_clipped, volume_clipped, fluid_clipped, h_clipped) = solve(false);
+    let (top_filled, volume_filled, fluid_filled, h_filled) = solve(true);
+    // Both hold the fluid volume of the start; the filled one's is the enclosed volume.
+    assert!(
+        (fluid_clipped - fluid_filled).abs() < 1e-9,
+        "{fluid_clipped} vs {fluid_filled}"
+    );
+    assert!(
+        (volume_filled - fluid_filled).abs() < 1e-12,
+        "{volume_filled} vs {fluid_filled}"
+    );
+    // The clipped one: a void above its level.
+    assert!(
+        h_clipped < top_clipped,
+        "level {h_clipped}, top {top_clipped}"
+    );
+    assert!(
+        volume_clipped > fluid_clipped + 1e-3,
+        "void {}",
+        volume_clipped - fluid_clipped
+    );
+    // The filled one: suction at the top (head below it), the top pulled lower.
+    assert!(h_filled < top_filled, "head {h_filled}, top {top_filled}");
+    assert!(
+        top_filled < top_clipped - 1e-3,
+        "top {top_filled} vs {top_clipped}"
+    );
+}
+
+// ---- Item: classification that agrees with the path ----
+
+#[test]
+fn a_trivial_zero_where_the_control_does_not_turn_is_a_symmetric_bifurcation() {
+    // The coarse disc pushed up by fluid (disc_file.toml), analysed in C1v only: the E1
+    // double of C7v on the post-fold branch appears as A1 + A2, and its A1 partner is a branch
+    // point of the symmetric path where the level goes on falling — a symmetric bifurcation;
+    // only the fold of the level is a limit point.
+    let text = bundled("disc_file.toml")
+        .replace("group = \"C7v\"", "group = \"C1v\"")
+        .replace(
+            "path = \"meshes/disc_c7v.msh\"",
+            &format!(
+                "path = \"{}/scenes/meshes/disc_c7v.msh\"",
+                env!("CARGO_MANIFEST_DIR")
+            ),
+        );
+    let report = run(&mut study(&text), |_, _| {}).unwrap().report;
+    assert_eq!(report.group, "C1v");
+    let h = parameter(&report, "h");
+    let turning: Vec<f64> = report
+        .turning_points
+        .iter()
+        .map(|t| t.parameters[h])
+        .collect();
+    assert_eq!(turning.len(), 1);
+    let (mut limits, mut symmetric) = (0, 0);
+    for cp in report.critical.iter().filter(|c| c.irrep == "A1") {
+        let at_turn = (turning[0] - cp.parameters[h]).abs() < 1e-9 * turning[0];
+        match cp.kind {
+            CriticalKind::LimitPoint => {
+                assert!(at_turn, "a limit point at h = {}", cp.parameters[h]);
+                limits += 1;
+            }
+            CriticalKind::SymmetricBifurcation => {
+                assert!(!at_turn);
+                symmetric += 1;
+            }
+            other => panic!("{other} in A1"),
+        }
+    }
+    assert_eq!(
+        limits,
+        1,
+        "{:?}",
+        report.critical.iter().map(|c| c.kind).collect::<Vec<_>>()
+    );
+    // The first E1 point of C7v (h = 2.60897): its A1 and A2 halves.
+    let near = |irrep: &str| {
+        report
+            .critical
+            .iter()
+            .any(|c| c.irrep == irrep && (c.parameters[h] - 2.60897).abs() < 1e-4)
+    };
+    assert!(
+        symmetric >= 1 && near("A1") && near("A2"),
+        "{:?}",
+        report
+            .critical
+            .iter()
+            .map(|c| (c.kind, c.parameters[h]))
+            .collect::<Vec<_>>()
+    );
+}
+
+// ---- Item: stops and starts ----
+
+fn memstab(dir: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_run_restarts_from_a_saved_point_with_its_state_and_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("first.toml"), paper2(4, 2.0)).unwrap();
+    let out = memstab(
+        dir.path(),
+        &["run", "first.toml", "--out", "first", "--quiet", "--json"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let first: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("first/path.json")).unwrap())
+            .unwrap();
+    assert_eq!(first["states"]["file"], "path.states");
+    let points = first["rows"].as_array().unwrap();
+    assert_eq!(first["states"]["points"], points.len());
+    let k = 6;
+    // Continue from point 6 to a larger volume: the first row is the saved one.
+    let second = paper2(4, 3.0).replace(
+        "hold-translation = [0.0, 0.0, 1.0]",
+        &format!("from = \"first/path.json\"\npoint = {k}"),
+    );
+    let second = second.replace("stretch = 1.05\n", "");
+    std::fs::write(dir.path().join("second.toml"), second).unwrap();
+    let out = memstab(
+        dir.path(),
+        &["run", "second.toml", "--out", "second", "--quiet"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let again: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("second/path.json")).unwrap(),
+    )
+    .unwrap();
+    let (a, b) = (&points[k], &again["rows"][0]);
+    for key in ["parameters", "measures"] {
+        for (x, y) in a[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(b[key].as_array().unwrap())
+        {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            assert!((x - y).abs() < 1e-8 * x.abs().max(1.0), "{key}: {x} vs {y}");
+        }
+    }
+    assert!(
+        b["iterations"].as_u64().unwrap() <= 2,
+        "{}",
+        b["iterations"]
+    );
+    let last = again["rows"].as_array().unwrap().last().unwrap()["parameters"][0]
+        .as_f64()
+        .unwrap();
+    assert!(last > 3.0, "the restarted path went on to V = {last}");
+    // Bad saved states: one line naming the key, exit 2, nothing written.
+    for (from, point, key) in [
+        ("missing/path.json", 0, "'start.from'"),
+        ("first/path.json", 999, "'start.point'"),
+    ] {
+        let bad = paper2(4, 3.0).replace(
+            "hold-translation = [0.0, 0.0, 1.0]",
+            &format!("from = \"{from}\"\npoint = {point}"),
+        );
+        std::fs::write(dir.path().join("bad.toml"), bad).unwrap();
+        let out = memstab(dir.path(), &["run", "bad.toml", "--out", "bad", "--quiet"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(key), "{err}");
+        assert!(!dir.path().join("bad").exists());
+    }
+    // Another mesh does not fit the saved states.
+    let other = paper2(8, 3.0).replace(
+        "hold-translation = [0.0, 0.0, 1.0]",
+        "from = \"first/path.json\"\npoint = 0",
+    );
+    std::fs::write(dir.path().join("other.toml"), other).unwrap();
+    let out = memstab(
+        dir.path(),
+        &["run", "other.toml", "--out", "other", "--quiet"],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("unknowns"), "{err}");
+}
+
+#[test]
+fn a_sphere_that_newton_cannot_rest_on_the_plane_starts_by_the_homotopy() {
+    let with = paper2(8, 0.6);
+    let without = with.replace("hold-translation = [0.0, 0.0, 1.0]", "");
+    let mut plain = study(&without);
+    let err = run(&mut plain, |_, _| {}).expect_err("a plain Newton does not reach the rest");
+    let message = err.to_string();
+    // The message names the control by its name, the limit the start solve had (50, not the
+    // path's 25) and the residual left.
+    assert!(
+        message.contains("at V = 0.5")
+            && message.contains("in 50 iterations")
+            && message.contains("residual")
+            && !message.contains('λ'),
+        "{message}"
+    );
+    let mut held = study(&with);
+    let report = run(&mut held, |_, _| {})
+        .expect("the homotopy starts it")
+        .report;
+    // At rest on the plane z = -1.06: the lowest node presses into it (penalty), by a little.
+    let min_z = report.rows[0].measures[column(&report, "min_z")];
+    assert!(min_z < -1.06 && min_z > -1.1, "lowest point {min_z}");
+}
+
+#[test]
+fn the_ponding_path_ends_where_its_scene_says() {
+    let text = bundled("disc_fluid_above.toml").replace("divisions = 16 ", "divisions = 8 ");
+    let report = run(&mut study(&text), |_, _| {}).unwrap().report;
+    assert!(
+        matches!(report.stop, StopReason::Displacement { target } if target == 1.1),
+        "{}",
+        report.stop
+    );
+    let last = report.rows.last().unwrap();
+    assert!(last.measures[column(&report, "max_displacement")] >= 1.1);
+    assert!(report.rows.len() < 60, "{} points", report.rows.len());
+    assert_eq!(report.turning_points.len(), 1, "the fold of the density");
+}
+
+#[test]
+fn the_bundled_thesis_scenes_run_without_the_artefacts() {
+    // Paper 2 on the thesis mesh (f = 16): stable, no critical point (no rolling artefact).
+    let mut s = study(&bundled("thesis/paper2_sphere_on_plane.toml"));
+    let r = run(&mut s, |_, _| {})
+        .expect("starts by the homotopy")
+        .report;
+    assert_eq!((r.group.as_str(), r.mesh.elements), ("C5v", 5120));
+    assert!(r.critical.is_empty(), "{:?}", r.critical);
+    assert!(r.rows.iter().all(|row| row.index == Some(0)));
+    assert!(matches!(r.stop, StopReason::Bounds), "{}", r.stop);
+    // Paper 3: C2v between the two planes, stable.
+    let mut s = study(&bundled("thesis/paper3_squeezed_cap.toml"));
+    let r = run(&mut s, |_, _| {}).unwrap().report;
+    assert_eq!(r.group, "C2v");
+    assert!(r.critical.is_empty(), "{:?}", r.critical);
+    // Paper 4: no drift or relabelling artefact before the first genuine bifurcation, and the
+    // only limit point is the fold of w2.
+    let mut s = study(&bundled("thesis/paper4_spinning_cap.toml"));
+    let r = run(&mut s, |_, _| {}).unwrap().report;
+    let w2 = parameter(&r, "w2");
+    let first = r
+        .critical
+        .iter()
+        .map(|c| c.parameters[w2])
+        .fold(f64::INFINITY, f64::min);
+    assert!(first > 15.0, "a critical point at w2 = {first}");
+    assert_eq!(r.turning_points.len(), 1);
+    let limits: Vec<_> = r
+        .critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::LimitPoint)
+        .collect();
+    assert_eq!(limits.len(), 1);
+    assert!((limits[0].parameters[w2] - r.turning_points[0].parameters[w2]).abs() < 1e-6);
+    assert!(r
+        .critical
+        .iter()
+        .any(|c| c.irrep == "E2" && c.kind == CriticalKind::MultipleBifurcation(2)));
+}
+
+#[test]
+fn a_gas_amount_agrees_as_effect_and_as_constraint_on_a_plate_off_the_origin() {
+    // A cap closed by its plate at z = -0.3 (rim fixed): the plate's z_c A_z / 3 is part of V
+    // for both, so at the effect's pressure C/V - P_atm the constraint (P_atm + p) V = C holds.
+    let (sym, face) = cap_mesh(-0.3);
+    let m = &sym.mesh;
+    let rim = &m.boundaries["cut"];
+    let layout = Layout::new(m.nodes.len(), m.triangles.clone(), rim);
+    let effect = GasAmount {
+        amount: Quantity::Value(4.0),
+        ambient: 1.0,
+        closing: Some(face.clone()),
+        fluid: None,
+    };
+    let constraint = GasAmountConstraint {
+        pressure: 0,
+        ambient: 1.0,
+        target: 4.0,
+        target_parameter: None,
+        closing: Some(face.clone()),
+        fluid: None,
+    };
+    let x = m.nodes.clone();
+    let p = effect.over_pressure(&m.triangles, &x, &[]);
+    let g = constraint.evaluate(&layout, &x, &[p]);
+    assert!(g.value.abs() < 1e-12, "g = {}", g.value);
+    // The plate matters: without it the volume differs by z_c A_z / 3.
+    let plate = face.volume(&m.triangles, &x);
+    assert!(plate.abs() > 0.1, "plate volume {plate}");
+}
+
+#[test]
+fn fluid_below_pushes_up_whichever_way_the_mesh_normals_point() {
+    // The same disc written with its triangles reversed (normals down): `below` still means
+    // below in z, so the equilibrium is the same bulge upwards.
+    let dir = tempfile::tempdir().unwrap();
+    let sym = meshes::generators::disc(&meshes::generators::DiscOptions {
+        radius: 1.1,
+        sectors: 7,
+        divisions: 4,
+        group: None,
+    })
+    .unwrap();
+    let mut flipped = sym.mesh.clone();
+    for t in &mut flipped.triangles {
+        t.swap(1, 2);
+    }
+    for (name, mesh) in [("up.msh", &sym.mesh), ("down.msh", &flipped)] {
+        meshes::write::write_mesh(
+            &dir.path().join(name),
+            mesh,
+            &meshes::write::Fields::new(),
+            meshes::write::Format::Msh41,
+        )
+        .unwrap();
+    }
+    let scene = |file: &str| {
+        format!(
+            "[scene]\nname = \"bulge\"\n[mesh]\ngenerator = \"file\"\npath = \"{}\"\ngroup = \"C7v\"\n\
+             [material]\nmu = 100.0\nk = 0.0\nthickness = 0.01\nprestretch = 1.1\n\
+             [[effect]]\ntype = \"fluid\"\nside = \"below\"\ndensity = 1.0\ngravity = 1.0\nlevel = 0.3\n\
+             [boundary]\nfixed = [\"rim\"]\n[analysis]\ntype = \"equilibrium\"\n",
+            dir.path().join(file).display()
+        )
+    };
+    let top = |file: &str| {
+        let r = run(&mut study(&scene(file)), |_, _| {}).unwrap().report;
+        r.rows[0].measures[column(&r, "max_z")]
+    };
+    let (up, down) = (top("up.msh"), top("down.msh"));
+    assert!(up > 0.01, "the bulge rises to {up}");
+    assert!((up - down).abs() < 1e-9 * up, "{up} vs {down}");
+}
+
+#[test]
+fn bad_values_of_the_new_keys_are_one_line_errors_naming_the_key() {
+    // Each a one-line message naming the key (and its value where there is one), exit code 2,
+    // nothing written.
+    let cap = bundled("thesis/paper4_spinning_cap.toml");
+    let sphere = paper2(4, 2.0);
+    let cases: Vec<(String, &str, &[&str])> = vec![
+        (
+            cap.replacen(
+                "set = \"cut\"\nnormal = [0.0, 0.0, 1.0]",
+                "set = \"cut\"\nnormal = [0.0, 0.0, 0.0]",
+                1,
+            ),
+            "run",
+            &["'boundary.slide[0].normal'"],
+        ),
+        (
+            cap.replacen("[boundary]\n", "[boundary]\nfixed = [\"cut\"]\n", 1),
+            "run",
+            &["'boundary.slide[0].set'", "cut"],
+        ),
+        (
+            cap.replacen("side = \"inside\"", "side = \"above\"", 1),
+            "run",
+            &["'effect[0].filled'"],
+        ),
+        (
+            cap.replacen("stop-displacement = 1.2", "stop-displacement = -1.0", 1),
+            "run",
+            &["'analysis.stop-displacement'", "-1"],
+        ),
+        (cap.clone(), "export-matrix", &["'boundary.slide'"]),
+        (
+            sphere.replacen("value = \"V\"", "value = \"W\"", 1),
+            "run",
+            &["'constraint[0].value'", "W"],
+        ),
+        (
+            sphere
+                .replacen("value = \"V\"", "value = \"initial\"", 1)
+                .replacen("amount = 6.5", "amount = \"V\"", 1),
+            "run",
+            &["'effect[1]'", "fluid-volume"],
+        ),
+        (
+            sphere.replacen(
+                "hold-translation = [0.0, 0.0, 1.0]",
+                "hold-translation = [1.0, 0.0, 0.0]",
+                1,
+            ),
+            "run",
+            &["'start.hold-translation'"],
+        ),
+        (
+            sphere.replacen(
+                "hold-translation = [0.0, 0.0, 1.0]",
+                "from = \"first/path.json\"",
+                1,
+            ),
+            "run",
+            &["start.from", "start.point"],
+        ),
+    ];
+    for (k, (text, command, needles)) in cases.iter().enumerate() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("bad.toml");
+        let unchanged = text == &cap || text == &sphere;
+        assert!(
+            !unchanged || *command != "run",
+            "case {k}: the replacement did not happen"
+        );
+        std::fs::write(&scene, text).unwrap();
+        let out_path = dir.path().join("out");
+        let target = if *command == "run" {
+            out_path.clone()
+        } else {
+            dir.path().join("K.mtx")
+        };
+        let out = memstab(
+            dir.path(),
+            &[
+                command,
+                scene.to_str().unwrap(),
+                "--out",
+                target.to_str().unwrap(),
+                "--quiet",
+            ]
+            .into_iter()
+            .filter(|a| *command == "run" || *a != "--quiet")
+            .collect::<Vec<_>>(),
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "case {k}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "case {k}: {err}");
+        for n in *needles {
+            assert!(err.contains(n), "case {k}: no {n} in {err}");
+        }
+        assert!(!target.exists(), "case {k}: {} written", target.display());
+    }
+}
