@@ -83,9 +83,11 @@ pub fn closed_form_check(study: &Study, report: &PathReport) -> Option<ClosedFor
         return None;
     }
     let mat = &scene.material;
+    let [mu, k, thickness, prestretch] =
+        [&mat.mu, &mat.k, &mat.thickness, &mat.prestretch].map(|q| scene.start_value(q));
     // The stress-free sphere: radius R/λ0, thickness H.
-    let scale = ico.radius / mat.prestretch / (mat.mu * mat.thickness);
-    let extrema = sphere_extrema(mat.k);
+    let scale = ico.radius / prestretch / (mu * thickness);
+    let extrema = sphere_extrema(k);
     // A polyhedron's pressure scale: p = dW/dV, with dW ∝ area and dV ∝ 3·volume, so the
     // discrete balloon's pressure exceeds the sphere's by R·A/(3V) − 1.
     let mesh = &study.mesh.mesh;
@@ -104,13 +106,13 @@ pub fn closed_form_check(study: &Study, report: &PathReport) -> Option<ClosedFor
                 kind: t.kind,
                 pressure: t.parameters[c] * scale,
                 stretch,
-                exact: sphere_pressure(mat.k, stretch),
+                exact: sphere_pressure(k, stretch),
                 stretch_difference: nearest.map(|le| stretch / le - 1.0),
             }
         })
         .collect();
     Some(ClosedFormCheck {
-        k: mat.k,
+        k,
         extrema,
         turning,
         polyhedron,

@@ -722,7 +722,7 @@ impl<'a> Stability<'a> {
     }
 
     /// The basis by irrep.
-    pub fn basis(&self) -> &AdaptedBasis {
+    pub fn basis(&self) -> &'a AdaptedBasis {
         self.basis
     }
 

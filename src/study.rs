@@ -7,7 +7,7 @@
 use crate::adapted::SparseBasis;
 use crate::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
 use crate::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
-use crate::effects::membrane::{Membrane, MooneyRivlin};
+use crate::effects::membrane::{MaterialQuantities, Membrane};
 use crate::effects::plane::{PenaltyLaw, Plane};
 use crate::effects::spin::Spin;
 use crate::effects::volume::ClosingFace;
@@ -87,7 +87,10 @@ pub struct Study {
     gases: Vec<GasAmount>,
     closed: bool,
     closing: Option<Arc<ClosingFace>>,
-    stress_free_volume: f64,
+    /// The enclosed volume of the mesh (closed membranes); the stress-free volume is this over
+    /// λ0³.
+    mesh_volume: f64,
+    prestretch: Quantity,
     targets_from_start: Vec<bool>,
 }
 
@@ -170,7 +173,7 @@ impl Study {
             let side = side(f.side);
             Fluid {
                 density: quantity(&f.density),
-                gravity: f.gravity,
+                gravity: quantity(&f.gravity),
                 level: quantity(&f.level),
                 side,
                 filled: f.filled,
@@ -180,11 +183,15 @@ impl Study {
             }
         };
         let mat = &scene.material;
-        let membrane = Membrane::new(
+        let membrane = Membrane::parametric(
             &m.nodes,
             &m.triangles,
-            MooneyRivlin::new(mat.mu, mat.k, mat.thickness),
-            mat.prestretch,
+            MaterialQuantities {
+                mu: quantity(&mat.mu),
+                k: quantity(&mat.k),
+                thickness: quantity(&mat.thickness),
+                prestretch: quantity(&mat.prestretch),
+            },
         )
         .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
@@ -219,7 +226,7 @@ impl Study {
                 scene::Effect::Plane(p) => Box::new(Plane {
                     normal: Vec3::from(p.normal),
                     offset: quantity(&p.offset),
-                    penalty: p.penalty,
+                    penalty: quantity(&p.penalty),
                     law: if p.exponent == 3 {
                         PenaltyLaw::Cubic
                     } else {
@@ -293,11 +300,8 @@ impl Study {
             .iter()
             .map(|p| scene.parameters[p].start)
             .collect();
-        let stress_free_volume = if closed {
-            m.volume() / mat.prestretch.powi(3)
-        } else {
-            0.0
-        };
+        let mesh_volume = if closed { m.volume() } else { 0.0 };
+        let prestretch = quantity(&mat.prestretch);
         let mut measures = vec![
             ("max_displacement".to_string(), Measure::MaxDisplacement),
             ("min_z".to_string(), Measure::MinZ),
@@ -377,7 +381,8 @@ impl Study {
             gases,
             closed,
             closing,
-            stress_free_volume,
+            mesh_volume,
+            prestretch,
             targets_from_start,
         })
     }
@@ -405,7 +410,10 @@ impl Study {
                 Measure::MinZ => x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min),
                 Measure::MaxZ => x.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max),
                 Measure::Volume => volume(),
-                Measure::Stretch => (volume() / self.stress_free_volume).cbrt(),
+                Measure::Stretch => {
+                    let l0 = self.prestretch.value(params);
+                    (volume() * l0.powi(3) / self.mesh_volume).cbrt()
+                }
                 Measure::FluidVolume(i) => {
                     let f = &self.fluids[i];
                     let sign = if f.side == FluidSide::Behind {

@@ -42,7 +42,7 @@ fn model(sym: &SymmetricMesh, fixed: &[usize], fluid: bool) -> FeModel {
             filled: false,
             closing: None,
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Value(0.2),
             side: if fixed.is_empty() {
                 FluidSide::Behind

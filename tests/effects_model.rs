@@ -75,7 +75,7 @@ proptest! {
     #[test]
     fn fluid_inside_a_closed_membrane(seed in any::<u64>(), h in -1.2f64..1.2, rho in 0.1f64..3.0) {
         let m = sphere(2);
-        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: 1.0, level: Quantity::Parameter(1), side: FluidSide::Behind };
+        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: Quantity::Value(1.0), level: Quantity::Parameter(1), side: FluidSide::Behind };
         let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![membrane(&m, 1.0), Box::new(fluid)], vec!["rho".into(), "h".into()]);
         assert_small(errors(&model, seed, 1.2, &[rho, h]))?;
     }
@@ -84,7 +84,7 @@ proptest! {
     fn fluid_above_a_clamped_disc(seed in any::<u64>(), h in -0.2f64..0.3, rho in 0.1f64..3.0) {
         let sym = disc(&DiscOptions { radius: 1.0, sectors: 5, divisions: 4, group: None }).unwrap();
         let m = &sym.mesh;
-        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: 1.0, level: Quantity::Parameter(1), side: FluidSide::Front };
+        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: Quantity::Value(1.0), level: Quantity::Parameter(1), side: FluidSide::Front };
         let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &m.boundaries["rim"], vec![membrane(m, 1.1), Box::new(fluid)], vec!["rho".into(), "h".into()]);
         assert_small(errors(&model, seed, 1.0, &[rho, h]))?;
     }
@@ -97,11 +97,31 @@ proptest! {
         assert_small(errors(&model, seed, 1.1, &[w2, rho]))?;
     }
 
+    /// Gravity as a parameter: ∂F/∂g = ±ρ ∇φ, with the density and the level also free.
+    #[test]
+    fn fluid_with_gravity_as_a_parameter(seed in any::<u64>(), h in -0.2f64..0.3, rho in 0.1f64..3.0, g in 0.5f64..2.0) {
+        let sym = disc(&DiscOptions { radius: 1.0, sectors: 5, divisions: 4, group: None }).unwrap();
+        let m = &sym.mesh;
+        let fluid = Fluid { filled: false, closing: None, density: Quantity::Parameter(0), gravity: Quantity::Parameter(2), level: Quantity::Parameter(1), side: FluidSide::Behind };
+        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &m.boundaries["rim"], vec![membrane(m, 1.1), Box::new(fluid)], vec!["rho".into(), "h".into(), "g".into()]);
+        assert_small(errors(&model, seed, 1.0, &[rho, h, g]))?;
+    }
+
+    /// The penalty κ of a plane as a parameter, with the offset also free.
+    #[test]
+    fn plane_with_the_penalty_as_a_parameter(seed in any::<u64>(), d in -1.1f64..-0.8, kappa in 10.0f64..100.0, cubic in any::<bool>()) {
+        let m = sphere(2);
+        let law = if cubic { PenaltyLaw::Cubic } else { PenaltyLaw::Linear };
+        let plane = Plane { normal: Vector3::z(), offset: Quantity::Parameter(0), penalty: Quantity::Parameter(1), law };
+        let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![membrane(&m, 1.0), Box::new(plane)], vec!["d".into(), "kappa".into()]);
+        assert_small(errors(&model, seed, 1.05, &[d, kappa]))?;
+    }
+
     #[test]
     fn rigid_planes(seed in any::<u64>(), d in -1.1f64..-0.8, cubic in any::<bool>()) {
         let m = sphere(2);
         let law = if cubic { PenaltyLaw::Cubic } else { PenaltyLaw::Linear };
-        let plane = Plane { normal: Vector3::z(), offset: Quantity::Parameter(0), penalty: 50.0, law };
+        let plane = Plane { normal: Vector3::z(), offset: Quantity::Parameter(0), penalty: Quantity::Value(50.0), law };
         let model = FeModel::new(m.nodes.clone(), m.triangles.clone(), &[], vec![membrane(&m, 1.0), Box::new(plane)], vec!["d".into()]);
         assert_small(errors(&model, seed, 1.05, &[d]))?;
     }
@@ -113,7 +133,7 @@ fn buoyancy(m: &Mesh, level: f64) -> Vector3<f64> {
         filled: false,
         closing: None,
         density: Quantity::Value(2.0),
-        gravity: 9.81,
+        gravity: Quantity::Value(9.81),
         level: Quantity::Value(level),
         side: FluidSide::Front,
     };

@@ -63,7 +63,7 @@ fn plate_closed_fluid_volume_converges_to_the_sphere_segment() {
             filled: false,
             closing: None,
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Parameter(0),
             side: FluidSide::Behind,
         };

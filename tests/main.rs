@@ -13,6 +13,7 @@ mod cli_branch;
 mod cli_compare;
 mod cli_run;
 mod cli_spectrum;
+mod critical_curve;
 mod effects_model;
 mod export_rank_one;
 mod fluid_volume;

@@ -2,7 +2,7 @@
 //! terms) vs residual, symmetry, load vectors vs differences in Λ — at random states.
 
 use memstab::effects::gas::{GasAmount, GasPressure};
-use memstab::effects::membrane::{Membrane, MooneyRivlin};
+use memstab::effects::membrane::{MaterialQuantities, Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::check::check_derivatives;
 use memstab::model::{Effect, FeModel, Model};
@@ -95,6 +95,125 @@ proptest! {
         prop_assert!(e.asymmetry < 1e-13, "{e:?}");
         prop_assert!(e.loads < 1e-7, "{e:?}");
     }
+}
+
+/// A sphere whose membrane has μ, k, H and λ0 as parameters 0…3, under a gas pressure
+/// (parameter 4).
+fn parametric_sphere_model() -> FeModel {
+    let sym = icosphere(&IcosphereOptions {
+        radius: 1.0,
+        frequency: 2,
+    })
+    .unwrap();
+    let m = &sym.mesh;
+    let material = MaterialQuantities {
+        mu: Quantity::Parameter(0),
+        k: Quantity::Parameter(1),
+        thickness: Quantity::Parameter(2),
+        prestretch: Quantity::Parameter(3),
+    };
+    let membrane = Membrane::parametric(&m.nodes, &m.triangles, material).unwrap();
+    let effects: Vec<Box<dyn Effect>> = vec![
+        Box::new(membrane),
+        Box::new(GasPressure {
+            pressure: Quantity::Parameter(4),
+            closing: None,
+        }),
+    ];
+    let names = ["mu", "k", "thickness", "prestretch", "p"];
+    FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        effects,
+        names.iter().map(|s| s.to_string()).collect(),
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, .. ProptestConfig::default() })]
+
+    /// The loads of the material quantities: ∂F/∂μ, ∂F/∂k, ∂F/∂H and ∂F/∂λ0 against central
+    /// differences of F in each (check_derivatives), with the residual and tangent checks.
+    #[test]
+    fn material_quantities_as_parameters(
+        seed in any::<u64>(),
+        mu in 0.5f64..2.0,
+        k in 0.0f64..0.3,
+        thickness in 0.05f64..0.2,
+        prestretch in 1.0f64..1.3,
+        p in -1.0f64..2.0,
+        stretch in 1.0f64..1.6,
+    ) {
+        let model = parametric_sphere_model();
+        let n = model.unknowns();
+        let mut u = random_vector(seed, n, 0.03);
+        for (i, x) in model.reference().iter().enumerate() {
+            for c in 0..3 {
+                u[3 * i + c] += (stretch - 1.0) * x[c];
+            }
+        }
+        let d = random_vector(seed ^ 0x77, n, 1.0);
+        let params = [mu, k, thickness, prestretch, p];
+        let e = check_derivatives(&model, &u, &params, &d, 1e-6).unwrap();
+        prop_assert!(e.residual < 1e-7, "{e:?}");
+        prop_assert!(e.tangent < 1e-6, "{e:?}");
+        prop_assert!(e.asymmetry < 1e-13, "{e:?}");
+        prop_assert!(e.loads < 1e-7, "{e:?}");
+    }
+}
+
+/// The parametric membrane at given parameter values is the membrane with those values fixed.
+#[test]
+fn parametric_material_matches_fixed_values() {
+    let model = parametric_sphere_model();
+    let sym = icosphere(&IcosphereOptions {
+        radius: 1.0,
+        frequency: 2,
+    })
+    .unwrap();
+    let m = &sym.mesh;
+    let (mu, k, h, l0, p) = (1.3, 0.2, 0.1, 1.15, 0.7);
+    let fixed = FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        vec![
+            Box::new(
+                Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(mu, k, h), l0).unwrap(),
+            ),
+            Box::new(GasPressure {
+                pressure: Quantity::Value(p),
+                closing: None,
+            }),
+        ],
+        vec![],
+    );
+    let u: Vec<f64> = random_vector(3, model.unknowns(), 0.03)
+        .iter()
+        .zip(m.nodes.iter().flat_map(|x| [x.x, x.y, x.z]))
+        .map(|(r, x)| r + 0.2 * x)
+        .collect();
+    let (mut a, mut b) = (model.new_evaluation(), fixed.new_evaluation());
+    model
+        .evaluate(&u, &[mu, k, h, l0, p], memstab::model::Request::ALL, &mut a)
+        .unwrap();
+    fixed
+        .evaluate(&u, &[], memstab::model::Request::ALL, &mut b)
+        .unwrap();
+    let scale = b.residual.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let diff = a
+        .residual
+        .iter()
+        .zip(&b.residual)
+        .fold(0.0f64, |s, (x, y)| s.max((x - y).abs()));
+    assert!(diff <= 1e-13 * scale, "{diff:e} of {scale:e}");
+    let kd = a
+        .tangent
+        .iter()
+        .zip(&b.tangent)
+        .fold(0.0f64, |s, (x, y)| s.max((x - y).abs()));
+    assert!(kd <= 1e-12 * b.tangent.iter().fold(0.0f64, |s, v| s.max(v.abs())));
 }
 
 #[test]

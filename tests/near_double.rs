@@ -81,7 +81,7 @@ fn a_tiny_imperfection_splits_the_double_into_two_simple_points() {
             filled: false,
             closing: None,
             density: Quantity::Parameter(0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Value(1e-6),
             side: FluidSide::Front,
         }),

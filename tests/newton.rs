@@ -152,7 +152,7 @@ fn a_free_body_is_refused_clearly() {
             filled: false,
             closing: None,
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Value(0.0),
             side: FluidSide::Behind,
         }),

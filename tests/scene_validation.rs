@@ -194,7 +194,7 @@ fn missing_fields_are_named_with_their_path() {
 fn wrong_types_name_the_expected_type_and_the_value() {
     rejects(
         &edit("mu = 100.0", "mu = \"one\""),
-        &["'material.mu': expected a number, got \"one\""],
+        &["'material.mu': unknown parameter \"one\""],
     );
     rejects(
         &edit("sectors = 6", "sectors = 6.5"),
@@ -253,7 +253,7 @@ fn wrong_types_name_the_expected_type_and_the_value() {
     );
     rejects(
         &edit("mu = 100.0", "mu = 1979-05-27"),
-        &["'material.mu': expected a number, got 1979-05-27"],
+        &["'material.mu': unknown parameter \"1979-05-27\""],
     );
 }
 
@@ -368,7 +368,7 @@ fn unknown_parameter_references_are_named() {
     // A declared parameter no effect uses.
     rejects(
         &format!("{BASE}\n[parameters.q]\nstart = 1.0\n"),
-        &["'parameters.q' is declared but no effect uses it"],
+        &["'parameters.q' is declared but no quantity uses it"],
     );
 }
 
@@ -525,7 +525,7 @@ fn bundled_balloon_reaches_past_the_pressure_minimum() {
     let scene = Scene::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balloon.toml"))
         .expect("balloon loads");
     assert!(matches!(&scene.mesh, MeshSpec::Icosphere(i) if i.frequency == 8));
-    assert_eq!(scene.material.k, 0.1);
+    assert_eq!(scene.material.k, Quantity::Value(0.1));
     assert!(scene.boundary.fixed.is_empty());
     let Analysis::Path(path) = &scene.analysis else {
         panic!("a path")
@@ -535,8 +535,9 @@ fn bundled_balloon_reaches_past_the_pressure_minimum() {
     let p = &scene.parameters["p"];
     assert!(p.max.unwrap() > 1.3551069 && p.min.unwrap() < 1.1487477);
     // The start pressure holds the start stretch (closed form).
-    let (l, k) = (scene.start.stretch, scene.material.k);
-    let mu_h = scene.material.mu * scene.material.thickness;
+    let value = |q: &Quantity| scene.start_value(q);
+    let (l, k) = (scene.start.stretch, value(&scene.material.k));
+    let mu_h = value(&scene.material.mu) * value(&scene.material.thickness);
     let closed = 2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l) * mu_h;
     assert!((p.start - closed).abs() < 1e-6, "{} vs {closed}", p.start);
 }
@@ -641,4 +642,86 @@ fn the_documented_example_loads_and_builds() {
         scene.governing("h").map(Constraint::kind),
         Some(ConstraintKind::FluidVolume)
     );
+}
+
+/// Material quantities, gravity and a plane's penalty may be parameters: a held one loads,
+/// counts as used, and its start and bounds keep the quantity's range.
+#[test]
+fn material_gravity_and_penalty_quantities_may_be_parameters() {
+    let held = |name: &str| {
+        format!("\n[parameters.{name}]\nstart = 0.2\nmin = 0.1\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"{name}\"\n")
+    };
+    for (from, to, name) in [
+        ("k = 0.1", "k = \"kk\"", "kk"),
+        ("mu = 100.0", "mu = \"m\"", "m"),
+        ("thickness = 0.01", "thickness = \"t\"", "t"),
+        ("prestretch = 1.1", "prestretch = \"l0\"", "l0"),
+        ("gravity = 1.0", "gravity = \"g\"", "g"),
+        ("penalty = 1000.0", "penalty = \"kappa\"", "kappa"),
+    ] {
+        let text = format!("{}{}", edit(from, to), held(name));
+        let scene = Scene::from_toml_str(&text, "test").unwrap_or_else(|e| panic!("{to}: {e}"));
+        assert!(scene.parameters.contains_key(name));
+    }
+    // k >= 0, mu > 0: the parameter's start and min keep the range, named by the quantity.
+    let text = format!(
+        "{}\n[parameters.kk]\nstart = -0.1\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"kk\"\n",
+        edit("k = 0.1", "k = \"kk\"")
+    );
+    rejects(
+        &text,
+        &["'parameters.kk.start' must be >= 0 (it is material.k), got -0.1"],
+    );
+    let text = format!("{}{}", edit("mu = 100.0", "mu = \"m\""), held("m"))
+        .replace("min = 0.1", "min = 0.0");
+    rejects(
+        &text,
+        &["'parameters.m.min' must be > 0 (it is material.mu), got 0"],
+    );
+    rejects(
+        &edit("gravity = 1.0", "gravity = \"g\""),
+        &["'effect[0].gravity': unknown parameter \"g\""],
+    );
+}
+
+/// A critical curve names two free parameters and where it starts; bad keys are one line.
+#[test]
+fn critical_curve_keys_are_checked() {
+    let curve = |analysis: &str| {
+        let base = edit("k = 0.1", "k = \"kk\"");
+        let at = base.find("[analysis]").unwrap();
+        format!(
+            "{}[parameters.kk]\nstart = 0.1\nmin = 0.0\nmax = 0.3\n\n[analysis]\ntype = \"critical-curve\"\n{analysis}",
+            &base[..at]
+        )
+    };
+    Scene::from_toml_str(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nfrom = \"E1\"\n"),
+        "t",
+    )
+    .expect("a valid curve");
+    Scene::from_toml_str(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nfrom = 2\n"),
+        "t",
+    )
+    .expect("a valid curve from an index");
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"rho\"\n"),
+        &["'analysis.second' = \"rho\" is the control"],
+    );
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"q\"\n"),
+        &["'analysis.second': unknown parameter \"q\""],
+    );
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nfrom = -1\n"),
+        &["'analysis.from'"],
+    );
+    rejects(
+        &curve("control = \"rho\"\nsecond = \"kk\"\nsteps = 0\n"),
+        &["'analysis.steps' must be >= 1, got 0"],
+    );
+    // Without the second parameter free, kk would be neither free nor governed.
+    let text = edit("k = 0.1", "k = \"kk\"") + "\n[parameters.kk]\nstart = 0.1\n";
+    rejects(&text, &["'parameters.kk' is neither the control"]);
 }

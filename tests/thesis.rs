@@ -98,7 +98,7 @@ fn enclosure_model(filled: bool) -> FeModel {
         }),
         Box::new(Fluid {
             density: Quantity::Parameter(1),
-            gravity: 1.3,
+            gravity: Quantity::Value(1.3),
             level: Quantity::Parameter(2),
             side: FluidSide::Behind,
             filled,
@@ -160,7 +160,7 @@ proptest! {
         let layout = Layout::new(m.nodes.len(), m.triangles.clone(), &[]);
         let fluid = Fluid {
             density: Quantity::Value(1.0),
-            gravity: 1.0,
+            gravity: Quantity::Value(1.0),
             level: Quantity::Parameter(0),
             side: FluidSide::Behind,
             filled,
@@ -277,6 +277,12 @@ fn gas_above_fluid_fills_what_the_fluid_leaves_and_loads_the_wet_membrane_too() 
 }
 
 /// The study's mesh with the membrane, a gas at the fixed over-pressure `p` on the whole
+/// A material quantity the thesis scenes give as a number.
+fn fixed(q: &memstab::scene::Quantity) -> f64 {
+    q.value(&Default::default())
+        .expect("a fixed material quantity")
+}
+
 /// membrane, the fluid to the fixed level `h` and the plane: no parameters.
 fn equivalent_model(study: &Study, h: f64, p: f64) -> FeModel {
     let m = &study.mesh.mesh;
@@ -286,22 +292,22 @@ fn equivalent_model(study: &Study, h: f64, p: f64) -> FeModel {
             Membrane::new(
                 &m.nodes,
                 &m.triangles,
-                MooneyRivlin::new(mat.mu, mat.k, mat.thickness),
-                mat.prestretch,
+                MooneyRivlin::new(fixed(&mat.mu), fixed(&mat.k), fixed(&mat.thickness)),
+                fixed(&mat.prestretch),
             )
             .unwrap(),
         ),
         Box::new(GasPressure::new(Quantity::Value(p))),
         Box::new(Fluid::new(
             Quantity::Value(1.0),
-            1.0,
+            Quantity::Value(1.0),
             Quantity::Value(h),
             FluidSide::Behind,
         )),
         Box::new(memstab::effects::plane::Plane {
             normal: Vec3::z(),
             offset: Quantity::Value(-1.06),
-            penalty: 1000.0,
+            penalty: Quantity::Value(1000.0),
             law: memstab::effects::plane::PenaltyLaw::Cubic,
         }),
     ];

@@ -264,30 +264,42 @@ pub fn held(study: &Study) -> bool {
 /// The path options of a study's analysis (steps, bounds, tolerances, scales).
 pub fn path_options(study: &Study) -> PathOptions {
     let scale = state_scale(study);
+    let bounds = study
+        .control
+        .map(|c| &study.scene.parameters[&study.parameters[c]]);
+    let bounds = (
+        bounds.and_then(|b| b.min).unwrap_or(f64::NEG_INFINITY),
+        bounds.and_then(|b| b.max).unwrap_or(f64::INFINITY),
+    );
     match &study.scene.analysis {
-        Analysis::Path(p) => {
-            let bounds = study
-                .control
-                .map(|c| &study.scene.parameters[&study.parameters[c]]);
-            PathOptions {
-                initial_step: p.initial_step,
-                min_step: p.min_step,
-                max_step: p.max_step,
-                max_steps: p.steps,
-                max_iterations: p.max_iterations,
-                tolerance: p.tolerance,
-                bounds: (
-                    bounds.and_then(|b| b.min).unwrap_or(f64::NEG_INFINITY),
-                    bounds.and_then(|b| b.max).unwrap_or(f64::INFINITY),
-                ),
-                parameter_scales: vec![1.0; study.free.len()],
-                state_scale: scale,
-                direction: match p.direction {
-                    Direction::Decrease => -1.0,
-                    Direction::Increase => 1.0,
-                },
-            }
-        }
+        Analysis::Path(p) => PathOptions {
+            initial_step: p.initial_step,
+            min_step: p.min_step,
+            max_step: p.max_step,
+            max_steps: p.steps,
+            max_iterations: p.max_iterations,
+            tolerance: p.tolerance,
+            bounds,
+            parameter_scales: vec![1.0; study.free.len()],
+            state_scale: scale,
+            direction: match p.direction {
+                Direction::Decrease => -1.0,
+                Direction::Increase => 1.0,
+            },
+        },
+        // The path that finds the curve's first point: the control increasing from the start.
+        Analysis::CriticalCurve(c) => PathOptions {
+            initial_step: c.initial_step,
+            min_step: c.min_step,
+            max_step: c.max_step,
+            max_steps: c.path_steps,
+            max_iterations: c.max_iterations,
+            tolerance: c.tolerance,
+            bounds,
+            parameter_scales: vec![1.0; study.free.len()],
+            state_scale: scale,
+            direction: 1.0,
+        },
         Analysis::Equilibrium(e) => PathOptions {
             tolerance: e.tolerance,
             max_iterations: e.max_iterations,

@@ -161,6 +161,8 @@ pub enum StopReason {
     },
     /// A caller's stop condition held.
     Condition,
+    /// The critical point the analysis looked for was found (a critical curve's start).
+    CriticalPoint,
     /// The step was cut below the minimum.
     Stalled(Stalled),
     /// A single equilibrium was solved.
@@ -192,6 +194,7 @@ impl std::fmt::Display for StopReason {
                 write!(f, "the largest displacement reached {}", num(*target))
             }
             Self::Condition => f.write_str("the stop condition held"),
+            Self::CriticalPoint => f.write_str("the critical point asked for was found"),
             Self::Stalled(s) => write!(f, "{s}"),
             Self::Equilibrium => f.write_str("equilibrium found"),
             Self::Swept { min, max, samples } => {

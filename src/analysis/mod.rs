@@ -8,6 +8,7 @@
 //! - [`path`]: the path in the control through turning points, with the index by irrep at
 //!   every point and the critical points where it changes;
 //! - [`buckling`]: the start state held while the control sweeps its range;
+//! - [`curve`]: a critical point followed in two parameters (cusps of limit-point curves);
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
 //!   splits measured;
 //! - [`branch`]: the branches that leave a path's bifurcation points (`[analysis.branches]`),
@@ -22,6 +23,7 @@ pub mod buckling;
 pub mod compare;
 pub mod continuation;
 pub mod critical;
+pub mod curve;
 pub mod equilibrium;
 pub mod events;
 pub mod interrupt;
@@ -54,6 +56,8 @@ pub struct RunResult {
     pub points: Vec<PointState>,
     /// Where the time went.
     pub times: RunTimes,
+    /// The critical curve of a `critical-curve` analysis.
+    pub curve: Option<crate::report::CurveReport>,
     /// The branches of the path's bifurcation points, when the scene asks for them
     /// (`[analysis.branches]`).
     pub branches: Option<branch::Branches>,
@@ -79,6 +83,9 @@ pub enum RunError {
         /// The enclosed volume found.
         volume: f64,
     },
+    /// A critical curve could not be found or started.
+    #[error("critical curve: {0}")]
+    Curve(String),
     /// Newton converged to a state that is no membrane state.
     #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
     Degenerate(crate::model::StateDefect),
@@ -189,6 +196,19 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
             a.samples,
             observer,
         ),
+        Analysis::CriticalCurve(_) => {
+            let (stop, curve) = curve::run(
+                study,
+                &mut record,
+                crossings,
+                &u_start,
+                &params_start,
+                observer,
+                &mut times,
+            )?;
+            record.curve = Some(curve);
+            stop
+        }
     };
     let mut result = record.finish(study, stop, stability_note, times);
     if let Analysis::Path(p) = &study.scene.analysis {
@@ -210,6 +230,7 @@ pub(crate) struct Record {
     warnings: Vec<String>,
     spectra: Spectra,
     control: Option<usize>,
+    curve: Option<crate::report::CurveReport>,
 }
 
 impl Record {
@@ -223,6 +244,7 @@ impl Record {
             warnings: study.warnings.clone(),
             spectra: Spectra::default(),
             control: study.control,
+            curve: None,
         }
     }
 
@@ -327,6 +349,7 @@ impl Record {
             states: self.states,
             points: self.points,
             times,
+            curve: self.curve,
             branches: None,
         }
     }

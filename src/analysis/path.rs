@@ -119,30 +119,14 @@ pub(super) fn run(
         }
         None => vec![None; branch.points.len()],
     };
-    let save_every = analysis.save_every.max(1);
-    let last = branch.points.len() - 1;
-    let mut critical = branch
-        .critical_points()
-        .cloned()
-        .collect::<Vec<_>>()
-        .into_iter()
-        .peekable();
-    for (i, p) in branch.points.iter().enumerate() {
-        let u = problem.displacement(&p.q);
-        let params = problem.parameters(&p.lambda);
-        if i % save_every == 0 || i == last {
-            record.state(i, StateKind::Step, u.clone(), &params);
-        }
-        record.row(study, i, p.arclength, &u, params, p.iterations, indices[i]);
-        while let Some(cp) = critical.next_if(|cp| cp.after_step + 1 == i) {
-            record.critical(cp);
-        }
-    }
-    for event in &branch.events {
-        if let Event::Warning(w) = event {
-            record.warnings.push(w.clone());
-        }
-    }
+    record_branch(
+        study,
+        record,
+        &problem,
+        &branch,
+        &indices,
+        analysis.save_every,
+    );
     if let (Some((target, k, _)), false) = (
         stop_stretch,
         matches!(branch.stop, StopReason::Stretch { .. }),
@@ -160,6 +144,46 @@ pub(super) fn run(
             sig_digits(hi, 6)
         ));
     }
+    times.path = t0.elapsed();
+    Ok(branch.stop)
+}
+
+/// Records a followed branch of `problem`: a row per point (with its index), every
+/// `save_every`-th state and the last, the critical points after the rows they follow, the
+/// warnings, and the turning points with their states.
+pub(super) fn record_branch(
+    study: &Study,
+    record: &mut Record,
+    problem: &SymmetricProblem,
+    branch: &Branch,
+    indices: &[Option<usize>],
+    save_every: usize,
+) {
+    let save_every = save_every.max(1);
+    let last = branch.points.len() - 1;
+    let mut critical = branch
+        .critical_points()
+        .cloned()
+        .collect::<Vec<_>>()
+        .into_iter()
+        .peekable();
+    for (i, p) in branch.points.iter().enumerate() {
+        let u = problem.displacement(&p.q);
+        let params = problem.parameters(&p.lambda);
+        if i % save_every == 0 || i == last {
+            record.state(i, StateKind::Step, u.clone(), &params);
+        }
+        let index = indices.get(i).copied().flatten();
+        record.row(study, i, p.arclength, &u, params, p.iterations, index);
+        while let Some(cp) = critical.next_if(|cp| cp.after_step + 1 == i) {
+            record.critical(cp);
+        }
+    }
+    for event in &branch.events {
+        if let Event::Warning(w) = event {
+            record.warnings.push(w.clone());
+        }
+    }
     for t in branch.turning_points() {
         let u = problem.displacement(&t.point.q);
         let params = problem.parameters(&t.point.lambda);
@@ -171,6 +195,4 @@ pub(super) fn run(
             parameters: params,
         });
     }
-    times.path = t0.elapsed();
-    Ok(branch.stop)
 }

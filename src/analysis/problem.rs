@@ -95,6 +95,14 @@ impl<'a> SymmetricProblem<'a> {
         }
     }
 
+    /// Frees one more parameter, after the control and the ones the constraints govern (a
+    /// critical curve's second parameter: the problem then has one equation fewer than its
+    /// free parameters need, which the caller's augmenting equation supplies).
+    pub fn with_free_parameter(mut self, parameter: usize) -> Self {
+        self.free.push(Some(parameter));
+        self
+    }
+
     /// Assembles the whole mesh at every evaluation instead of only the triangles around the
     /// orbit representatives (for checks and timing comparisons).
     pub fn with_full_assembly(mut self) -> Self {

@@ -10,6 +10,8 @@
 //! - [`ponding`]: the ponding ladder against its closed form;
 //! - [`thesis`]: the thesis-size spinning cap on meshes of five symmetry groups, against the
 //!   same states without symmetry;
+//! - [`curves`]: critical curves timed — the balloon's fold line through its cusp, a double
+//!   point of the C7v disc followed in its prestretch;
 //! - [`branching`]: branch switching, timed — the abstract Hg potential on the icosahedron
 //!   (branches in closed form) and the upward-loaded disc;
 //! - [`report`]: the markdown tables, CSV files and the accuracy plot of those numbers;
@@ -33,6 +35,7 @@
 
 pub mod balloon;
 pub mod branching;
+pub mod curves;
 pub mod full_path;
 pub mod payoff;
 pub mod peer;
@@ -55,7 +58,7 @@ pub use payoff::{
 pub use peer::{run_peer, PeerResult};
 pub use ponding::{ponding_level, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML};
 pub use run::{
-    run_accuracy, run_branching, run_scaling, run_thesis, AccuracyOptions, BenchFiles,
+    run_accuracy, run_branching, run_curves, run_scaling, run_thesis, AccuracyOptions, BenchFiles,
     ScalingOptions, ThesisOptions,
 };
 pub use scaling::{fit_exponent, memory, scaling_level, ScalingFits, ScalingLevel};

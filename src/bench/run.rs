@@ -307,3 +307,42 @@ pub fn run_thesis(
         files: vec![md_path],
     })
 }
+
+/// The critical-curve study ([`super::curves`]): 200 points of the balloon's fold line at
+/// f = 16 (quick: 8) through its cusp, and the C7v disc's first E1 double point followed in
+/// its prestretch at 16 divisions (quick: 8); writes `curves.md` into `options.out`.
+pub fn run_curves(
+    options: &ThesisOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<BenchFiles, String> {
+    use super::curves::{curve_run, curves_table, double_curve_scene, fold_line_scene};
+    let out = &options.out;
+    create_dir(out)?;
+    let started = Instant::now();
+    let (frequency, divisions) = if options.quick { (8, 8) } else { (16, 16) };
+    progress(&format!("balloon fold line, f = {frequency} …"));
+    let fold = curve_run(
+        &format!("balloon fold line in (p, k), f = {frequency}"),
+        fold_line_scene(frequency, 199, 0.012)?,
+    )
+    .map_err(|e| format!("balloon fold line: {}", one_line(&e)))?;
+    progress(&format!("C7v disc double curve, {divisions} divisions …"));
+    let double = curve_run(
+        &format!("C7v disc E1 double point in (h, prestretch), {divisions} divisions"),
+        double_curve_scene(divisions, 40)?,
+    )
+    .map_err(|e| format!("C7v double curve: {}", one_line(&e)))?;
+    let mut md = format!(
+        "# memstab bench --curves{}\n\nmemstab {}; {} core(s) seen.\n\n",
+        if options.quick { " --quick" } else { "" },
+        env!("CARGO_PKG_VERSION"),
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    );
+    md += &curves_table(&[fold, double]);
+    md += &report::total_time("study", started.elapsed());
+    let md_path = write_text(out, "curves.md", &md)?;
+    Ok(BenchFiles {
+        markdown: md,
+        files: vec![md_path],
+    })
+}

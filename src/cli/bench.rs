@@ -42,7 +42,7 @@
 use super::CliError;
 use clap::Args;
 use memstab::bench::{
-    run_accuracy, run_scaling, run_thesis, AccuracyOptions, BenchFiles, ScalingOptions,
+    run_accuracy, run_curves, run_scaling, run_thesis, AccuracyOptions, BenchFiles, ScalingOptions,
     ThesisOptions,
 };
 use std::path::{Path, PathBuf};
@@ -62,6 +62,11 @@ With --thesis (nothing else is run):
   thesis.md      the spinning fluid-filled cap on C8v, C4v, C2v, C1v and C1 meshes of 5408
                  triangles (--quick: 512) and on C2v at 21632: time by phase, the critical
                  points, the same states without symmetry (full-K index per point)
+With --curves (nothing else is run):
+  curves.md      200 points of the balloon's fold line in (p, k) at f = 16 (--quick: 8)
+                 through its cusp, and the C7v disc's first E1 double point followed in its
+                 prestretch (16 divisions, --quick: 8): points, time of the path to the point
+                 and of the curve, time per point, cusps and folds
 With --branching (nothing else is run):
   branching.md   the branch-switching table of the bench alone (the abstract Hg problem; the
                  upward disc on 16 divisions, quick: 8)
@@ -100,6 +105,11 @@ pub(crate) struct BenchArgs {
     /// without symmetry, and on C2v at 21 632; writes thesis.md.
     #[arg(long, conflicts_with_all = ["scaling", "frequencies", "branching"])]
     thesis: bool,
+    /// The critical-curve study instead of the bench: 200 points of the balloon's fold line
+    /// in (p, k) at f = 16 (--quick: 8) through its cusp, and the C7v disc's E1 double point
+    /// followed in its prestretch; writes curves.md.
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies", "thesis", "branching"])]
+    curves: bool,
     /// Only the branch-switching study (quick: the disc on 8 divisions); writes
     /// branching.md.
     #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
@@ -154,13 +164,14 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
     if let Some(freqs) = &args.scaling {
         return scaling(args, freqs);
     }
-    if args.thesis {
+    if args.thesis || args.curves {
         prepare_out(&args.out)?;
         let options = ThesisOptions {
             out: args.out.clone(),
             quick: args.quick,
         };
-        let files = run_thesis(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
+        let study = if args.curves { run_curves } else { run_thesis };
+        let files = study(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
         print(&files);
         return Ok(());
     }

@@ -135,7 +135,7 @@ pub enum FluidSide {
 /// plus for fluid [`FluidSide::Behind`] the membrane and minus in [`FluidSide::Front`]. Fixed walls
 /// closing the fluid region add only constants; the plate closing an open membrane whose rim
 /// slides in its plane is part of the closed surface ([`Fluid::closing`]). Loads:
-/// ∂F/∂ρ = ±g ∇φ, ∂F/∂h = ±ρ g ∂∇φ/∂h.
+/// ∂F/∂ρ = ±g ∇φ, ∂F/∂h = ±ρ g ∂∇φ/∂h, ∂F/∂g = ±ρ ∇φ.
 ///
 /// `filled`: the enclosure is completely filled, p = ρ g (h − z) everywhere (h a pressure
 /// head, negative pressures allowed): φ_T = ½ ∫_T (h − z)² n_z dA without clipping, and the
@@ -145,7 +145,7 @@ pub struct Fluid {
     /// Density ρ.
     pub density: Quantity,
     /// Gravitational acceleration g (> 0, along −z).
-    pub gravity: f64,
+    pub gravity: Quantity,
     /// Level h of the free surface (the pressure head when `filled`).
     pub level: Quantity,
     /// Side of the membrane the fluid is on.
@@ -159,7 +159,7 @@ pub struct Fluid {
 
 impl Fluid {
     /// Fluid behind (`Behind`) or in front of the membrane, clipped at the level, no plate.
-    pub fn new(density: Quantity, gravity: f64, level: Quantity, side: FluidSide) -> Self {
+    pub fn new(density: Quantity, gravity: Quantity, level: Quantity, side: FluidSide) -> Self {
         Self {
             density,
             gravity,
@@ -213,14 +213,19 @@ impl Effect for Fluid {
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError> {
         let (rho, h) = (self.density.value(params), self.level.value(params));
-        let s = self.sign() * self.gravity;
+        let g = self.gravity.value(params);
+        let s = self.sign() * g;
         let face = self
             .closing
             .as_deref()
             .map(|c| (c, c.fluid_coefficients(h, self.filled)));
         out.add_triangles(
             x,
-            [self.density.parameter(), self.level.parameter()],
+            [
+                self.density.parameter(),
+                self.level.parameter(),
+                self.gravity.parameter(),
+            ],
             |t, xt, terms| {
                 let f = potential_of(xt, h, self.filled);
                 let mut local = f.local;
@@ -235,6 +240,7 @@ impl Effect for Fluid {
                 terms.local = local.scaled(s * rho);
                 terms.loads[0] = local.grad.map(|g| s * g);
                 terms.loads[1] = d_dh.map(|g| s * rho * g);
+                terms.loads[2] = local.grad.map(|v| self.sign() * rho * v);
                 Ok(())
             },
         )

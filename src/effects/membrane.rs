@@ -22,6 +22,7 @@
 //! (∇²t = 2I, ∇²J in closed form), carried to the edges by f1 = m11 a, f2 = m12 a + m22 b
 //! and to the nodes by a = x2 − x1, b = x3 − x1: x1 takes −(∂/∂a + ∂/∂b), x2 ∂/∂a, x3 ∂/∂b.
 
+use super::Quantity;
 use crate::model::Local;
 use crate::model::{Assembler, CellField, CellQuantity, Effect, ModelError, Vec3};
 use nalgebra::Vector3;
@@ -47,6 +48,16 @@ impl MooneyRivlin {
             c2: k * c1,
             thickness,
         }
+    }
+
+    /// The ratio k = c2/c1.
+    fn k(&self) -> f64 {
+        self.c2 / self.c1
+    }
+
+    /// The shear modulus μ = 2 (c1 + c2).
+    fn mu(&self) -> f64 {
+        2.0 * (self.c1 + self.c2)
     }
 
     /// W, its gradient P = (∂W/∂f1, ∂W/∂f2) and its Hessian blocks ∂²W/∂f_i∂f_k (3×3) at the
@@ -143,6 +154,48 @@ impl ReferenceTriangle {
         })
     }
 
+    /// The same triangle with the pre-stretch and thickness of a reference built with
+    /// λ0 = 1 and H = 1 set to `prestretch` and `thickness`: M ∝ λ0 and H A0 ∝ H/λ0².
+    fn at(&self, prestretch: f64, thickness: f64) -> Self {
+        Self {
+            m: self.m.map(|v| v * prestretch),
+            volume: self.volume * thickness / (prestretch * prestretch),
+        }
+    }
+
+    /// H A0 (α ∇t + β ∇J) in the nodes (9, node-major) at `x`, with (α, β) = `weights(t, J)`:
+    /// the gradient of the element's energy has (α, β) = (W_t, W_J), and a derivative of that
+    /// gradient in a material parameter is the same sum with the derivatives of the weights
+    /// (docs/theory.md §2). `None` if the triangle is inverted or collapsed.
+    pub fn weighted_gradient(
+        &self,
+        x: &[Vector3<f64>; 3],
+        weights: impl Fn(f64, f64) -> (f64, f64),
+    ) -> Option<[f64; 9]> {
+        let (a, b) = (x[1] - x[0], x[2] - x[0]);
+        let [m11, m12, m22] = self.m;
+        let f = [a * m11, a * m12 + b * m22];
+        let (n1, n2, c) = (f[0].norm_squared(), f[1].norm_squared(), f[0].dot(&f[1]));
+        let j = f[0].cross(&f[1]).norm_squared();
+        if j.is_nan() || j <= 0.0 {
+            return None;
+        }
+        let (alpha, beta) = weights(n1 + n2, j);
+        let dt = [f[0] * 2.0, f[1] * 2.0];
+        let dj = [(f[0] * n2 - f[1] * c) * 2.0, (f[1] * n1 - f[0] * c) * 2.0];
+        let p = [dt[0] * alpha + dj[0] * beta, dt[1] * alpha + dj[1] * beta];
+        // f1 = m11 a, f2 = m12 a + m22 b; x1 takes −(∂/∂a + ∂/∂b), x2 ∂/∂a, x3 ∂/∂b.
+        let grad_a = p[0] * m11 + p[1] * m12;
+        let grad_b = p[1] * m22;
+        let mut out = [0.0; 9];
+        for k in 0..3 {
+            out[k] = -self.volume * (grad_a[k] + grad_b[k]);
+            out[3 + k] = self.volume * grad_a[k];
+            out[6 + k] = self.volume * grad_b[k];
+        }
+        Some(out)
+    }
+
     /// The element's energy, its gradient (9, node-major) and Hessian (9×9) at `x`.
     /// `None` if the triangle is inverted or collapsed (J ≤ 0), where W is not defined.
     // The loops place 3-vectors and 3×3 blocks into the node-major 9 and 9×9 layout; indices
@@ -212,6 +265,19 @@ impl ReferenceTriangle {
     }
 }
 
+/// The membrane's material quantities, each fixed or a parameter of the model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaterialQuantities {
+    /// Shear modulus μ > 0.
+    pub mu: Quantity,
+    /// Mooney–Rivlin ratio k = c2/c1 ≥ 0.
+    pub k: Quantity,
+    /// Stress-free thickness H > 0.
+    pub thickness: Quantity,
+    /// Isotropic pre-stretch λ0 > 0 of the mesh over the stress-free state.
+    pub prestretch: Quantity,
+}
+
 /// The principal state of one element: stretches from the stress-free state, the current
 /// thickness and the principal Cauchy tensions (force per current length).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -258,10 +324,13 @@ impl ReferenceTriangle {
     }
 }
 
-/// The membrane effect: every triangle's Mooney-Rivlin energy.
+/// The membrane effect: every triangle's Mooney-Rivlin energy. μ, k, H and λ0 may be
+/// parameters; their loads ∂F/∂Λ are the gradients with the weights' derivatives
+/// ([`ReferenceTriangle::weighted_gradient`], docs/theory.md §2).
 #[derive(Debug, Clone)]
 pub struct Membrane {
-    material: MooneyRivlin,
+    material: MaterialQuantities,
+    /// Every triangle's reference data for λ0 = 1 and H = 1 ([`ReferenceTriangle::at`]).
     elements: Vec<ReferenceTriangle>,
 }
 
@@ -273,19 +342,58 @@ impl Membrane {
         material: MooneyRivlin,
         prestretch: f64,
     ) -> Result<Self, String> {
+        Self::parametric(
+            reference,
+            triangles,
+            MaterialQuantities {
+                mu: Quantity::Value(material.mu()),
+                k: Quantity::Value(material.k()),
+                thickness: Quantity::Value(material.thickness),
+                prestretch: Quantity::Value(prestretch),
+            },
+        )
+    }
+
+    /// As [`Membrane::new`], with any material quantity a parameter.
+    pub fn parametric(
+        reference: &[Vec3],
+        triangles: &[[usize; 3]],
+        material: MaterialQuantities,
+    ) -> Result<Self, String> {
         let elements = triangles
             .iter()
             .enumerate()
             .map(|(t, &[a, b, c])| {
-                ReferenceTriangle::new(
-                    &[reference[a], reference[b], reference[c]],
-                    prestretch,
-                    material.thickness,
-                )
-                .ok_or_else(|| format!("triangle {t} is degenerate in the reference state"))
+                ReferenceTriangle::new(&[reference[a], reference[b], reference[c]], 1.0, 1.0)
+                    .ok_or_else(|| format!("triangle {t} is degenerate in the reference state"))
             })
             .collect::<Result<_, _>>()?;
         Ok(Self { material, elements })
+    }
+
+    /// (μ, k, H, λ0) at `params`; an error naming the quantity that left its domain.
+    fn values(&self, params: &[f64]) -> Result<[f64; 4], ModelError> {
+        let m = &self.material;
+        let v = [
+            m.mu.value(params),
+            m.k.value(params),
+            m.thickness.value(params),
+            m.prestretch.value(params),
+        ];
+        let names = ["mu", "k", "thickness", "prestretch"];
+        for (i, (&x, name)) in v.iter().zip(names).enumerate() {
+            let ok = x.is_finite() && if i == 1 { x >= 0.0 } else { x > 0.0 };
+            if !ok {
+                return Err(ModelError::Global {
+                    effect: "membrane".into(),
+                    what: format!(
+                        "the material's {name} = {x} is out of its range ({})",
+                        if i == 1 { ">= 0" } else { "> 0" }
+                    ),
+                });
+            }
+        }
+        Ok(v)
     }
 }
 
@@ -307,26 +415,76 @@ impl Effect for Membrane {
     fn assemble(
         &self,
         x: &[Vec3],
-        _params: &[f64],
+        params: &[f64],
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError> {
-        out.add_triangles(x, [None, None], |t, xt, terms| {
-            terms.local = self.elements[t]
-                .energy_gradient_hessian(&self.material, xt)
+        let [mu, k, thickness, prestretch] = self.values(params)?;
+        let mat = MooneyRivlin::new(mu, k, thickness);
+        let m = &self.material;
+        let slots = [
+            m.mu.parameter(),
+            m.k.parameter(),
+            m.thickness.parameter(),
+            m.prestretch.parameter(),
+        ];
+        let want_loads = out.request().loads && slots.iter().any(Option::is_some);
+        // ∂c1/∂k = −c1/(1 + k), ∂c2/∂k = c1/(1 + k).
+        let (dc1, dc2) = (-mat.c1 / (1.0 + k), mat.c1 / (1.0 + k));
+        out.add_triangles(x, slots, |t, xt, terms| {
+            let elem = self.elements[t].at(prestretch, thickness);
+            terms.local = elem
+                .energy_gradient_hessian(&mat, xt)
                 .ok_or_else(|| "inverted or collapsed element".to_string())?;
+            if !want_loads {
+                return Ok(());
+            }
+            // W is linear in μ (through c1, c2) and H A0 in H: those loads are F_e/μ, F_e/H.
+            let grad = terms.local.grad;
+            if slots[0].is_some() {
+                terms.loads[0] = grad.map(|g| g / mu);
+            }
+            if slots[2].is_some() {
+                terms.loads[2] = grad.map(|g| g / thickness);
+            }
+            let inverted = || "inverted or collapsed element".to_string();
+            if slots[1].is_some() {
+                terms.loads[1] = elem
+                    .weighted_gradient(xt, |t, j| {
+                        (dc1 + dc2 / j, -dc1 / (j * j) + dc2 * (1.0 - t / (j * j)))
+                    })
+                    .ok_or_else(inverted)?;
+            }
+            if slots[3].is_some() {
+                // t ∝ λ0², J ∝ λ0⁴, H A0 ∝ λ0⁻²: d/dλ0 of H A0 (W_t ∇t + W_J ∇J) has
+                // α = 4 J W_tJ / λ0 and β = (2 W_J + 2 t W_tJ + 4 J W_JJ) / λ0.
+                terms.loads[3] = elem
+                    .weighted_gradient(xt, |t, j| {
+                        let [_, _, w_j, w_tj, w_jj] = mat.strain_energy(t, j);
+                        (
+                            4.0 * j * w_tj / prestretch,
+                            (2.0 * w_j + 2.0 * t * w_tj + 4.0 * j * w_jj) / prestretch,
+                        )
+                    })
+                    .ok_or_else(inverted)?;
+            }
             Ok(())
         })
     }
 
     /// Principal stretches, thickness, principal tensions and where the membrane would
     /// wrinkle (T₂ < 0); a collapsed element (never an accepted state) shows zeros.
-    fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], _params: &[f64]) -> Vec<CellField> {
+    fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<CellField> {
+        let Ok([mu, k, thickness, prestretch]) = self.values(params) else {
+            return Vec::new();
+        };
+        let mat = MooneyRivlin::new(mu, k, thickness);
         let states: Vec<PrincipalState> = self
             .elements
             .iter()
             .zip(triangles)
             .map(|(e, &[a, b, c])| {
-                e.principal_state(&self.material, &[x[a], x[b], x[c]])
+                e.at(prestretch, thickness)
+                    .principal_state(&mat, &[x[a], x[b], x[c]])
                     .unwrap_or(PrincipalState {
                         stretches: [0.0; 2],
                         thickness: 0.0,

@@ -5,7 +5,8 @@
 //!
 //! ```text
 //!   Π_c = Σ_i κ/(q+1) ⟨−δ_i⟩^(q+1),    F_i = −κ ⟨−δ_i⟩^q n,
-//!   K_ii = κ q ⟨−δ_i⟩^(q−1) n nᵀ,       ∂F_i/∂d = −κ q ⟨−δ_i⟩^(q−1) n
+//!   K_ii = κ q ⟨−δ_i⟩^(q−1) n nᵀ,       ∂F_i/∂d = −κ q ⟨−δ_i⟩^(q−1) n,
+//!   ∂F_i/∂κ = −⟨−δ_i⟩^q n
 //! ```
 //!
 //! with q = 1 (force linear in the penetration; K jumps at first touch) or q = 3 (cubic:
@@ -32,8 +33,8 @@ pub struct Plane {
     pub normal: Vec3,
     /// Offset d (may be a parameter).
     pub offset: Quantity,
-    /// Penalty stiffness κ > 0.
-    pub penalty: f64,
+    /// Penalty stiffness κ > 0 (may be a parameter).
+    pub penalty: Quantity,
     /// Linear or cubic.
     pub law: PenaltyLaw,
 }
@@ -55,6 +56,10 @@ impl Effect for Plane {
             Quantity::Value(v) => (0.0, v),
             Quantity::Parameter(i) => (1.0, i as f64),
         };
+        let (penalty_kind, penalty) = match self.penalty {
+            Quantity::Value(v) => (0.0, v),
+            Quantity::Parameter(i) => (1.0, i as f64),
+        };
         let law = match self.law {
             PenaltyLaw::Linear => 1.0,
             PenaltyLaw::Cubic => 3.0,
@@ -62,7 +67,7 @@ impl Effect for Plane {
         Some(Placement {
             kind: "plane",
             normal: self.normal,
-            key: vec![kind, value, self.penalty, law],
+            key: vec![kind, value, penalty_kind, penalty, law],
         })
     }
 
@@ -80,29 +85,35 @@ impl Effect for Plane {
         let d = self.offset.value(params);
         let n = self.normal;
         let (kappa, q) = (
-            self.penalty,
+            self.penalty.value(params),
             match self.law {
                 PenaltyLaw::Linear => 1,
                 PenaltyLaw::Cubic => 3,
             },
         );
-        out.add_nodes(x, [self.offset.parameter(), None], |_, xi, terms| {
-            let pen = d - n.dot(xi); // ⟨−δ⟩ before clipping
-            if pen <= 0.0 {
-                return Ok(());
-            }
-            let pq1 = pen.powi(q - 1);
-            let force = kappa * pq1 * pen; // κ ⟨−δ⟩^q
-            let stiff = kappa * q as f64 * pq1; // κ q ⟨−δ⟩^(q−1)
-            terms.value = force * pen / (q + 1) as f64;
-            for a in 0..3 {
-                terms.grad[a] = -force * n[a];
-                terms.loads[0][a] = -stiff * n[a];
-                for b in 0..3 {
-                    terms.hess[a][b] = stiff * n[a] * n[b];
+        out.add_nodes(
+            x,
+            [self.offset.parameter(), self.penalty.parameter()],
+            |_, xi, terms| {
+                let pen = d - n.dot(xi); // ⟨−δ⟩ before clipping
+                if pen <= 0.0 {
+                    return Ok(());
                 }
-            }
-            Ok(())
-        })
+                let pq1 = pen.powi(q - 1);
+                let force = kappa * pq1 * pen; // κ ⟨−δ⟩^q
+                let stiff = kappa * q as f64 * pq1; // κ q ⟨−δ⟩^(q−1)
+                terms.value = force * pen / (q + 1) as f64;
+                for a in 0..3 {
+                    terms.grad[a] = -force * n[a];
+                    terms.loads[0][a] = -stiff * n[a];
+                    // The energy is linear in κ: ∂F/∂κ = F/κ = −⟨−δ⟩^q n.
+                    terms.loads[1][a] = -pq1 * pen * n[a];
+                    for b in 0..3 {
+                        terms.hess[a][b] = stiff * n[a] * n[b];
+                    }
+                }
+                Ok(())
+            },
+        )
     }
 }

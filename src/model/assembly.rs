@@ -177,13 +177,18 @@ impl Request {
     };
 }
 
-/// One triangle's terms: its [`Local`] and up to two parameter derivatives of its gradient.
+/// How many parameter derivatives of its gradient one kernel call can return (the membrane's
+/// μ, k, H and λ0).
+pub const LOAD_SLOTS: usize = 4;
+
+/// One triangle's terms: its [`Local`] and up to [`LOAD_SLOTS`] parameter derivatives of its
+/// gradient.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct TriangleTerms {
     /// Value, gradient and Hessian.
     pub local: Local,
     /// ∂(gradient)/∂Λ for the parameters named in the assembler call.
-    pub loads: [[f64; 9]; 2],
+    pub loads: [[f64; 9]; LOAD_SLOTS],
 }
 
 /// One node's terms.
@@ -196,7 +201,7 @@ pub struct NodeTerms {
     /// Its Hessian.
     pub hess: [[f64; 3]; 3],
     /// ∂(gradient)/∂Λ for the parameters named in the assembler call.
-    pub loads: [[f64; 3]; 2],
+    pub loads: [[f64; 3]; LOAD_SLOTS],
 }
 
 /// The result of an evaluation, with the scratch buffers reused from call to call.
@@ -369,16 +374,18 @@ impl<'a> Assembler<'a> {
     }
 
     /// Runs `kernel` on every triangle (in parallel) and adds the results. `load_params[s]`
-    /// names the parameter whose load vector receives `terms.loads[s]`.
-    pub fn add_triangles<F>(
+    /// names the parameter whose load vector receives `terms.loads[s]` (N ≤ [`LOAD_SLOTS`];
+    /// a parameter named in two slots receives both).
+    pub fn add_triangles<F, const N: usize>(
         &mut self,
         x: &[Vec3],
-        load_params: [Option<usize>; 2],
+        load_params: [Option<usize>; N],
         kernel: F,
     ) -> Result<(), ModelError>
     where
         F: Fn(usize, &[Vec3; 3], &mut TriangleTerms) -> Result<(), String> + Sync,
     {
+        const { assert!(N <= LOAD_SLOTS, "at most LOAD_SLOTS load parameters") };
         let tris = &self.layout.triangles;
         let ids = self.out.subset.clone();
         let id = |k: usize| ids.as_ref().map_or(k, |s| s.triangles[k]);
@@ -389,7 +396,7 @@ impl<'a> Assembler<'a> {
             .try_for_each(|(k, terms)| {
                 let t = id(k);
                 let [a, b, c] = tris[t];
-                terms.loads = [[0.0; 9]; 2];
+                terms.loads = [[0.0; 9]; LOAD_SLOTS];
                 kernel(t, &[x[a], x[b], x[c]], terms).map_err(|what| ModelError::Element {
                     effect: self.effect.to_string(),
                     triangle: t,
@@ -427,16 +434,18 @@ impl<'a> Assembler<'a> {
         Ok(())
     }
 
-    /// Runs `kernel` on every node (in parallel) and adds the results.
-    pub fn add_nodes<F>(
+    /// Runs `kernel` on every node (in parallel) and adds the results (load slots as for
+    /// [`Assembler::add_triangles`]).
+    pub fn add_nodes<F, const N: usize>(
         &mut self,
         x: &[Vec3],
-        load_params: [Option<usize>; 2],
+        load_params: [Option<usize>; N],
         kernel: F,
     ) -> Result<(), ModelError>
     where
         F: Fn(usize, &Vec3, &mut NodeTerms) -> Result<(), String> + Sync,
     {
+        const { assert!(N <= LOAD_SLOTS, "at most LOAD_SLOTS load parameters") };
         let ids = self.out.subset.clone();
         let id = |k: usize| ids.as_ref().map_or(k, |s| s.nodes[k]);
         self.out

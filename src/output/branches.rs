@@ -379,6 +379,7 @@ pub fn write_branches(
             points: Vec::new(),
             times: Default::default(),
             branches: None,
+            curve: None,
         };
         match write_run(study, &mut result, &dir) {
             Ok(w) => done.extend(w.files()),

@@ -45,6 +45,21 @@ struct CriticalJson<'a> {
 /// # Errors
 /// As [`write_json`]; a non-finite value is refused and nothing is written.
 pub fn write_critical(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError> {
+    write_critical_with(dir, report, &[])
+}
+
+/// As [`write_critical`], with the `events` of a critical curve after the path's critical
+/// points: each `{"kind": "start" | "cusp" | "fold" | "end", "curve": true, "extremum",
+/// "parameters", "measures", "step"}` with parameters and measures by name, `step` the
+/// curve step before the event.
+///
+/// # Errors
+/// As [`write_critical`].
+pub fn write_critical_with(
+    dir: &Path,
+    report: &PathReport,
+    events: &[crate::report::CurveEvent],
+) -> Result<PathBuf, OutputError> {
     let path = dir.join("critical.json");
     let list: Vec<CriticalJson> = report
         .critical
@@ -87,8 +102,44 @@ pub fn write_critical(dir: &Path, report: &PathReport) -> Result<PathBuf, Output
             ));
         }
     }
+    let named = |names: &[String], values: &[f64]| -> serde_json::Map<String, serde_json::Value> {
+        names
+            .iter()
+            .zip(values)
+            .map(|(n, v)| (n.clone(), serde_json::json!(v)))
+            .collect()
+    };
+    let mut all: Vec<serde_json::Value> = list
+        .iter()
+        .map(|c| serde_json::to_value(c).map_err(io::Error::other))
+        .collect::<Result<_, _>>()
+        .map_err(|e| OutputError::invalid(&path, e.to_string()))?;
+    for e in events {
+        if let Some(v) = e
+            .parameters
+            .iter()
+            .chain(&e.measures)
+            .find(|v| !v.is_finite())
+        {
+            return Err(OutputError::invalid(
+                &path,
+                format!("curve event {}: a value is {v} (not finite)", e.kind),
+            ));
+        }
+        let mut event = serde_json::json!({
+            "kind": e.kind.to_string(),
+            "curve": true,
+            "parameters": named(&report.parameters, &e.parameters),
+            "measures": named(&report.measures, &e.measures),
+            "step": e.after_step,
+        });
+        if let Some(x) = e.extremum {
+            event["extremum"] = serde_json::json!(x.to_string());
+        }
+        all.push(event);
+    }
     write_whole(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &list).map_err(io::Error::other)?;
+        serde_json::to_writer_pretty(&mut *w, &all).map_err(io::Error::other)?;
         writeln!(w)
     })?;
     Ok(path)

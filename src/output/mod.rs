@@ -6,6 +6,7 @@
 //! | `path.json` | [`write_json`] | the whole [`PathReport`]: metadata, path, turning points, saved states |
 //! | `path.svg` | [`write_diagram`], [`write_diagram_with`] | the path in two chosen quantities, turning points marked |
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
+//! | `curve.csv`, `curve.json`, `curve.svg` | [`write_curve`] | a critical curve: a row per point (both parameters, the measures, the block's eigenvalues, the irrep), its events, the second parameter against the control |
 //! | `state_NNNN.vtu`, `path.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) and their ParaView collection |
 //! | `path.states` | [`store::write_states`] | every path point's parameters and displacement, binary (what `[start] from` reads, [`store::read_states`]) |
 //! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
@@ -28,6 +29,7 @@
 
 mod branches;
 mod csv;
+mod curve;
 mod diagram;
 mod json;
 mod manifest;
@@ -41,10 +43,11 @@ mod svg;
 
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten, PrimaryPath};
 pub use csv::write_csv;
+pub use curve::write_curve;
 pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };
-pub use json::{write_critical, write_json};
+pub use json::{write_critical, write_critical_with, write_json};
 pub use manifest::{remove_manifest, sha256, sweep_temporaries, write_manifest, MANIFEST};
 pub use matrix_market::{
     rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,

@@ -43,6 +43,8 @@ pub struct Written {
     pub points: Option<PathBuf>,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
+    /// `curve.csv`, `curve.json`, `curve.svg` of a critical curve.
+    pub curve: Vec<PathBuf>,
     /// The branches' files, when the run has branches.
     pub branches: Option<super::BranchesWritten>,
     /// `manifest.json`, written last.
@@ -61,6 +63,7 @@ impl Written {
         ];
         files.extend(self.points.clone());
         files.extend(self.states.iter().cloned());
+        files.extend(self.curve.iter().cloned());
         if let Some(b) = &self.branches {
             files.extend(b.files.iter().cloned());
         }
@@ -197,7 +200,10 @@ pub fn write_run(
 
     let json = attempt!(write_json(out, &result.report));
     done.push(json.clone());
-    let critical_json = attempt!(write_critical(out, &result.report));
+    let critical_json = match &result.curve {
+        Some(c) => attempt!(super::write_critical_with(out, &result.report, &c.events)),
+        None => attempt!(write_critical(out, &result.report)),
+    };
     done.push(critical_json.clone());
     let report = &result.report;
     let (svg, plotted) = if report.spectra.is_empty() {
@@ -226,6 +232,11 @@ pub fn write_run(
     };
     let svg = attempt!(svg);
     done.push(svg.clone());
+    let curve = match &result.curve {
+        Some(c) => attempt!(super::write_curve(out, c)),
+        None => Vec::new(),
+    };
+    done.extend(curve.iter().cloned());
     let branches = match &result.branches {
         Some(b) => {
             let primary = super::PrimaryPath::of(&result.report);
@@ -255,6 +266,7 @@ pub fn write_run(
         pvd,
         points,
         states,
+        curve,
         branches,
         manifest,
     })

@@ -835,7 +835,7 @@ pub(super) fn short(x: f64) -> String {
 /// `text` with every character XML 1.0 does not allow (control characters but tab, newline
 /// and carriage return; the surrogates; U+FFFE and U+FFFF) replaced by U+FFFD: names from a
 /// scene file reach the diagram's text, and the plotting library escapes only markup.
-fn xml_chars(text: &str) -> String {
+pub(super) fn xml_chars(text: &str) -> String {
     text.chars()
         .map(|c| match c {
             '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' => c,

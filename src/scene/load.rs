@@ -9,7 +9,7 @@
 
 use super::error::{num, Problem};
 use super::*;
-use serde::de::{self, DeserializeOwned, Deserializer, Visitor};
+use serde::de::{self, DeserializeOwned, Deserializer, Unexpected, Visitor};
 use serde::Serializer;
 use std::fmt;
 use toml::{Table, Value};
@@ -232,6 +232,7 @@ fn read_analysis(v: &Value) -> Result<Analysis, Problem> {
         AnalysisKind::Path => de(&rest, "analysis").map(Analysis::Path),
         AnalysisKind::LinearBuckling => de(&rest, "analysis").map(Analysis::LinearBuckling),
         AnalysisKind::Equilibrium => de(&rest, "analysis").map(Analysis::Equilibrium),
+        AnalysisKind::CriticalCurve => de(&rest, "analysis").map(Analysis::CriticalCurve),
     }
     .map_err(with_tag("type"))
 }
@@ -510,6 +511,45 @@ impl<'de> Deserialize<'de> for Quantity {
             }
         }
         d.deserialize_any(V)
+    }
+}
+
+impl<'de> Deserialize<'de> for CurveStart {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = CurveStart;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("\"limit\", an irrep name or a critical-point index")
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<CurveStart, E> {
+                usize::try_from(v)
+                    .map(CurveStart::Index)
+                    .map_err(|_| E::invalid_value(Unexpected::Signed(v), &self))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<CurveStart, E> {
+                usize::try_from(v)
+                    .map(CurveStart::Index)
+                    .map_err(|_| E::invalid_value(Unexpected::Unsigned(v), &self))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<CurveStart, E> {
+                Ok(match v {
+                    "limit" => CurveStart::Limit,
+                    name => CurveStart::Irrep(name.to_string()),
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl Serialize for CurveStart {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            CurveStart::Limit => s.serialize_str("limit"),
+            CurveStart::Irrep(name) => s.serialize_str(name),
+            CurveStart::Index(i) => s.serialize_u64(*i as u64),
+        }
     }
 }
 

@@ -193,16 +193,28 @@ pub struct Material {
     /// The constitutive model; default and only choice `mooney-rivlin`.
     #[serde(default)]
     pub model: MaterialModel,
-    /// Shear modulus μ > 0.
-    pub mu: f64,
-    /// Mooney–Rivlin ratio k = c2/c1 ≥ 0 (0: neo-Hookean).
-    pub k: f64,
-    /// Thickness H > 0 of the stress-free membrane.
-    pub thickness: f64,
+    /// Shear modulus μ > 0 (a number or a parameter).
+    pub mu: Quantity,
+    /// Mooney–Rivlin ratio k = c2/c1 ≥ 0 (0: neo-Hookean; a number or a parameter).
+    pub k: Quantity,
+    /// Thickness H > 0 of the stress-free membrane (a number or a parameter).
+    pub thickness: Quantity,
     /// Isotropic pre-stretch λ0 > 0 of the mesh relative to the stress-free state (the
-    /// stress-free state is the mesh shrunk by 1/λ0). Default 1.
-    #[serde(default = "one")]
-    pub prestretch: f64,
+    /// stress-free state is the mesh shrunk by 1/λ0; a number or a parameter). Default 1.
+    #[serde(default = "one_quantity")]
+    pub prestretch: Quantity,
+}
+
+impl Material {
+    /// The quantities with their keys and the range a value must lie in.
+    pub fn ruled_quantities(&self) -> Vec<(&'static str, &Quantity, Range)> {
+        vec![
+            ("mu", &self.mu, Range::Positive),
+            ("k", &self.k, Range::NonNegative),
+            ("thickness", &self.thickness, Range::Positive),
+            ("prestretch", &self.prestretch, Range::Positive),
+        ]
+    }
 }
 
 /// `material.model`.
@@ -287,12 +299,16 @@ impl Effect {
             Effect::Fluid(e) => vec![
                 ("density", &e.density, Range::NonNegative),
                 ("level", &e.level, Range::Finite),
+                ("gravity", &e.gravity, Range::Positive),
             ],
             Effect::Spin(e) => vec![
                 ("density", &e.density, Range::NonNegative),
                 ("omega2", &e.omega2, Range::NonNegative),
             ],
-            Effect::Plane(e) => vec![("offset", &e.offset, Range::Finite)],
+            Effect::Plane(e) => vec![
+                ("offset", &e.offset, Range::Finite),
+                ("penalty", &e.penalty, Range::Positive),
+            ],
         }
     }
 
@@ -346,8 +362,8 @@ pub struct GasAmountEffect {
 pub struct FluidEffect {
     /// Density ρ ≥ 0.
     pub density: Quantity,
-    /// Gravitational acceleration g > 0 (gravity acts along −z).
-    pub gravity: f64,
+    /// Gravitational acceleration g > 0 (gravity acts along −z; a number or a parameter).
+    pub gravity: Quantity,
     /// Height h of the free surface; the pressure is ρ g (h − z)₊.
     pub level: Quantity,
     /// Where the fluid is.
@@ -394,8 +410,8 @@ pub struct PlaneEffect {
     pub normal: [f64; 3],
     /// Offset d: the plane is n·x = d.
     pub offset: Quantity,
-    /// Penalty κ > 0.
-    pub penalty: f64,
+    /// Penalty κ > 0 (a number or a parameter).
+    pub penalty: Quantity,
     /// Exponent q: 1 (force linear in penetration) or 3 (cubic). Default 1.
     #[serde(default = "default_exponent")]
     pub exponent: u32,
@@ -542,6 +558,64 @@ pub enum Analysis {
     Equilibrium(EquilibriumAnalysis),
     /// `type = "linear-buckling"`: the start state held while the control sweeps its range.
     LinearBuckling(LinearBucklingAnalysis),
+    /// `type = "critical-curve"`: a critical point of the path in the control, followed in
+    /// the control and a second parameter.
+    CriticalCurve(CriticalCurveAnalysis),
+}
+
+/// `type = "critical-curve"`: the path in `control` from the start state (second parameter
+/// held at its start value) up to the critical point `from`; then that point followed as
+/// `second` varies — the equilibrium in the fixed-point space and a singular block of its
+/// irrep, in (u, control, second), with the constraints active (docs/theory.md §11.7). The
+/// curve stops when `second` or `control` leaves its `[min, max]`, or after `steps` steps.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct CriticalCurveAnalysis {
+    /// The parameter of the path that finds the point.
+    pub control: String,
+    /// The other free parameter of the curve.
+    pub second: String,
+    /// Which critical point of the path: `"limit"` (the first limit point), an irrep name
+    /// (the first critical point in that irrep's block) or an index (0: the first critical
+    /// point of any kind). Default `"limit"`.
+    #[serde(default)]
+    pub from: CurveStart,
+    /// The sense of the curve's first step in `second`. Default `increase`.
+    #[serde(default)]
+    pub direction: Direction,
+    /// Step budget of the curve (≥ 1). Default 200.
+    #[serde(default = "default_steps")]
+    pub steps: usize,
+    /// Step budget of the path that finds the point (≥ 1). Default 200.
+    #[serde(default = "default_steps")]
+    pub path_steps: usize,
+    /// First arclength step (of the path and of the curve). Default 0.02.
+    #[serde(default = "default_initial_step")]
+    pub initial_step: f64,
+    /// Smallest arclength step. Default 1e-6.
+    #[serde(default = "default_min_step")]
+    pub min_step: f64,
+    /// Largest arclength step. Default 0.2.
+    #[serde(default = "default_max_step")]
+    pub max_step: f64,
+    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Newton iterations per step before the step is cut. Default 25.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+}
+
+/// `analysis.from` of a critical curve.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum CurveStart {
+    /// The first limit point (the trivial block).
+    #[default]
+    Limit,
+    /// The first critical point in this irrep's block.
+    Irrep(String),
+    /// The critical point with this index along the path (0 the first).
+    Index(usize),
 }
 
 /// `type = "linear-buckling"`: the critical loads of the start state. The start state is solved
@@ -708,6 +782,9 @@ impl Default for Start {
 fn one() -> f64 {
     1.0
 }
+fn one_quantity() -> Quantity {
+    Quantity::Value(1.0)
+}
 fn default_sectors() -> usize {
     DiscOptions::default().sectors
 }
@@ -758,6 +835,7 @@ impl Analysis {
             Analysis::Path(_) => AnalysisKind::Path,
             Analysis::Equilibrium(_) => AnalysisKind::Equilibrium,
             Analysis::LinearBuckling(_) => AnalysisKind::LinearBuckling,
+            Analysis::CriticalCurve(_) => AnalysisKind::CriticalCurve,
         }
     }
 }
@@ -1049,6 +1127,10 @@ impl Scene {
             }
             Analysis::LinearBuckling(b) => ((b.samples as u64).saturating_add(1), 1),
             Analysis::Equilibrium(_) => (1, 1),
+            Analysis::CriticalCurve(c) => {
+                let points = (c.steps as u64).saturating_add(c.path_steps as u64);
+                (points.saturating_add(2), 2)
+            }
         };
         let row = 256 + 16 * (self.parameters.len() as u64 + 8);
         self.mesh
@@ -1149,7 +1231,32 @@ impl Scene {
         match &self.analysis {
             Analysis::Path(p) => Some(&p.control),
             Analysis::LinearBuckling(b) => Some(&b.control),
+            Analysis::CriticalCurve(c) => Some(&c.control),
             Analysis::Equilibrium(_) => None,
+        }
+    }
+
+    /// Every quantity of the scene that may be a parameter (the material's, then each
+    /// effect's), with its key path (`material.k`, `effect[0].gravity`) and its range.
+    pub fn quantities(&self) -> Vec<(String, &Quantity, Range)> {
+        let material = self
+            .material
+            .ruled_quantities()
+            .into_iter()
+            .map(|(k, q, r)| (format!("material.{k}"), q, r));
+        let effects = self.effects.iter().enumerate().flat_map(|(i, e)| {
+            e.ruled_quantities()
+                .into_iter()
+                .map(move |(k, q, r)| (format!("effect[{i}].{k}"), q, r))
+        });
+        material.chain(effects).collect()
+    }
+
+    /// The value of `q` at the start state (a parameter at its start value).
+    pub fn start_value(&self, q: &Quantity) -> f64 {
+        match q {
+            Quantity::Value(v) => *v,
+            Quantity::Parameter(name) => self.parameters.get(name).map_or(f64::NAN, |p| p.start),
         }
     }
 

@@ -113,5 +113,7 @@ tags! {
         Equilibrium = "equilibrium",
         /// The start state held while the control sweeps.
         LinearBuckling = "linear-buckling",
+        /// A critical point followed in two parameters.
+        CriticalCurve = "critical-curve",
     }
 }

@@ -232,7 +232,7 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
         return Err(Problem::at("scene.name", "must not be empty, got \"\""));
     }
     check_mesh_options(&scene.mesh)?;
-    check_material(&scene.material)?;
+    check_material(&scene.material, &scene.parameters)?;
     for (i, effect) in scene.effects.iter_mut().enumerate() {
         check_effect(i, effect, &scene.parameters)?;
     }
@@ -465,11 +465,28 @@ fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
     Ok(())
 }
 
-fn check_material(m: &Material) -> Result<(), Problem> {
-    positive("material.mu", m.mu)?;
-    non_negative("material.k", m.k)?;
-    positive("material.thickness", m.thickness)?;
-    positive("material.prestretch", m.prestretch)
+fn check_material(m: &Material, parameters: &BTreeMap<String, Parameter>) -> Result<(), Problem> {
+    for (key, q, range) in m.ruled_quantities() {
+        check_quantity(&format!("material.{key}"), q, range, parameters)?;
+    }
+    Ok(())
+}
+
+/// A quantity names a declared parameter, or its value lies in its range.
+fn check_quantity(
+    key_path: &str,
+    q: &Quantity,
+    range: Range,
+    parameters: &BTreeMap<String, Parameter>,
+) -> Result<(), Problem> {
+    match q {
+        Quantity::Parameter(name) => known_parameter(parameters, key_path, name),
+        Quantity::Value(v) => match range {
+            Range::Finite => finite(key_path, *v),
+            Range::NonNegative => non_negative(key_path, *v),
+            Range::Positive => positive(key_path, *v),
+        },
+    }
 }
 
 fn check_effect(
@@ -479,15 +496,7 @@ fn check_effect(
 ) -> Result<(), Problem> {
     let path = format!("effect[{i}]");
     for (key, q, range) in effect.ruled_quantities() {
-        let key_path = format!("{path}.{key}");
-        match q {
-            Quantity::Parameter(name) => known_parameter(parameters, &key_path, name)?,
-            Quantity::Value(v) => match range {
-                Range::Finite => finite(&key_path, *v)?,
-                Range::NonNegative => non_negative(&key_path, *v)?,
-                Range::Positive => positive(&key_path, *v)?,
-            },
-        }
+        check_quantity(&format!("{path}.{key}"), q, range, parameters)?;
     }
     match effect {
         Effect::GasAmount(g) => {
@@ -500,7 +509,7 @@ fn check_effect(
                     "= true needs side = \"inside\" (a completely filled enclosure)".to_string(),
                 ));
             }
-            positive(&format!("{path}.gravity"), f.gravity)
+            Ok(())
         }
         Effect::Plane(p) => {
             let key = format!("{path}.normal");
@@ -518,7 +527,6 @@ fn check_effect(
                 ));
             }
             p.normal = [n[0] / len, n[1] / len, n[2] / len];
-            positive(&format!("{path}.penalty"), p.penalty)?;
             if p.exponent != 1 && p.exponent != 3 {
                 return Err(Problem::at(
                     &format!("{path}.exponent"),
@@ -577,31 +585,29 @@ fn check_parameter_name(name: &str) -> Result<(), Problem> {
 /// A parameter that feeds a quantity with a range (a density ≥ 0, an amount of gas > 0)
 /// keeps its start and bounds in that range.
 fn check_parameter_ranges(scene: &Scene) -> Result<(), Problem> {
-    for (i, effect) in scene.effects.iter().enumerate() {
-        for (key, q, range) in effect.ruled_quantities() {
-            let Some(name) = q.parameter() else { continue };
-            let Some(p) = scene.parameters.get(name) else {
-                continue;
+    for (key, q, range) in scene.quantities() {
+        let Some(name) = q.parameter() else { continue };
+        let Some(p) = scene.parameters.get(name) else {
+            continue;
+        };
+        let pkey = key_path("parameters", name);
+        let check = |field: &str, v: f64| -> Result<(), Problem> {
+            let (ok, what) = match range {
+                Range::Finite => (true, ""),
+                Range::NonNegative => (v >= 0.0, ">= 0"),
+                Range::Positive => (v > 0.0, "> 0"),
             };
-            let pkey = key_path("parameters", name);
-            let check = |field: &str, v: f64| -> Result<(), Problem> {
-                let (ok, what) = match range {
-                    Range::Finite => (true, ""),
-                    Range::NonNegative => (v >= 0.0, ">= 0"),
-                    Range::Positive => (v > 0.0, "> 0"),
-                };
-                if ok {
-                    return Ok(());
-                }
-                Err(Problem::at(
-                    &format!("{pkey}.{field}"),
-                    format!("must be {what} (it is effect[{i}].{key}), got {}", num(v)),
-                ))
-            };
-            check("start", p.start)?;
-            if let Some(min) = p.min {
-                check("min", min)?;
+            if ok {
+                return Ok(());
             }
+            Err(Problem::at(
+                &format!("{pkey}.{field}"),
+                format!("must be {what} (it is {key}), got {}", num(v)),
+            ))
+        };
+        check("start", p.start)?;
+        if let Some(min) = p.min {
+            check("min", min)?;
         }
     }
     Ok(())
@@ -721,47 +727,9 @@ fn check_branches(b: &super::BranchesAnalysis) -> Result<(), Problem> {
 fn check_analysis(scene: &Scene) -> Result<(), Problem> {
     match &scene.analysis {
         Analysis::Path(a) => {
-            known_parameter(&scene.parameters, "analysis.control", &a.control)?;
-            if let Some((i, c)) = scene
-                .constraints
-                .iter()
-                .enumerate()
-                .find(|(_, c)| c.parameter() == a.control)
-            {
-                return Err(Problem::at(
-                    "analysis.control",
-                    format!(
-                        "= \"{}\" is governed by constraint[{i}] ({}); the control must be free",
-                        a.control,
-                        c.kind()
-                    ),
-                ));
-            }
+            free_parameter(scene, "analysis.control", &a.control)?;
             at_least("analysis.steps", a.steps, 1)?;
-            positive("analysis.min-step", a.min_step)?;
-            positive("analysis.max-step", a.max_step)?;
-            positive("analysis.initial-step", a.initial_step)?;
-            if a.min_step > a.max_step {
-                return Err(Problem::at(
-                    "analysis.min-step",
-                    format!(
-                        "must be <= max-step = {}, got {}",
-                        num(a.max_step),
-                        num(a.min_step)
-                    ),
-                ));
-            }
-            if a.initial_step < a.min_step || a.initial_step > a.max_step {
-                return Err(Problem::at(
-                    "analysis.initial-step",
-                    format!(
-                        "must lie within [min-step, max-step] = [{}, {}], got {}",
-                        num(a.min_step),
-                        num(a.max_step),
-                        num(a.initial_step)
-                    ),
-                ));
-            }
+            check_steps(a.initial_step, a.min_step, a.max_step)?;
             at_least("analysis.save-every", a.save_every, 1)?;
             if let Some(s) = a.stop_stretch {
                 positive("analysis.stop-stretch", s)?;
@@ -772,6 +740,48 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
             if let Some(b) = &a.branches {
                 check_branches(b)?;
             }
+            check_newton(a.tolerance, a.max_iterations)
+        }
+        Analysis::CriticalCurve(a) => {
+            free_parameter(scene, "analysis.control", &a.control)?;
+            free_parameter(scene, "analysis.second", &a.second)?;
+            if a.second == a.control {
+                return Err(Problem::at(
+                    "analysis.second",
+                    format!(
+                        "= \"{}\" is the control; the curve needs a second parameter",
+                        a.second
+                    ),
+                ));
+            }
+            if let CurveStart::Irrep(name) = &a.from {
+                if name.trim().is_empty() {
+                    return Err(Problem::at(
+                        "analysis.from",
+                        "must be \"limit\", an irrep name or an index, got \"\"",
+                    ));
+                }
+            }
+            if let (CurveStart::Limit, Some((i, c))) = (
+                &a.from,
+                scene
+                    .constraints
+                    .iter()
+                    .enumerate()
+                    .find(|(_, c)| c.kind() != ConstraintKind::Fixed),
+            ) {
+                return Err(Problem::at(
+                    "analysis.from",
+                    format!(
+                        "= \"limit\" with constraint[{i}] ({}) active: a limit-point curve \
+                         with active constraints is not supported yet",
+                        c.kind()
+                    ),
+                ));
+            }
+            at_least("analysis.steps", a.steps, 1)?;
+            at_least("analysis.path-steps", a.path_steps, 1)?;
+            check_steps(a.initial_step, a.min_step, a.max_step)?;
             check_newton(a.tolerance, a.max_iterations)
         }
         Analysis::Equilibrium(a) => check_newton(a.tolerance, a.max_iterations),
@@ -802,6 +812,55 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
     }
 }
 
+/// A declared parameter that no constraint governs (a path's free parameter).
+fn free_parameter(scene: &Scene, key: &str, name: &str) -> Result<(), Problem> {
+    known_parameter(&scene.parameters, key, name)?;
+    if let Some((i, c)) = scene
+        .constraints
+        .iter()
+        .enumerate()
+        .find(|(_, c)| c.parameter() == name)
+    {
+        return Err(Problem::at(
+            key,
+            format!(
+                "= \"{name}\" is governed by constraint[{i}] ({}); it must be free",
+                c.kind()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The arclength steps: all > 0, min ≤ initial ≤ max.
+fn check_steps(initial_step: f64, min_step: f64, max_step: f64) -> Result<(), Problem> {
+    positive("analysis.min-step", min_step)?;
+    positive("analysis.max-step", max_step)?;
+    positive("analysis.initial-step", initial_step)?;
+    if min_step > max_step {
+        return Err(Problem::at(
+            "analysis.min-step",
+            format!(
+                "must be <= max-step = {}, got {}",
+                num(max_step),
+                num(min_step)
+            ),
+        ));
+    }
+    if initial_step < min_step || initial_step > max_step {
+        return Err(Problem::at(
+            "analysis.initial-step",
+            format!(
+                "must lie within [min-step, max-step] = [{}, {}], got {}",
+                num(min_step),
+                num(max_step),
+                num(initial_step)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Newton's relative tolerance lies in [1e-15, 1): below that no double-precision residual
 /// can meet it, and the corrector would iterate to its budget at every step; the budget is
 /// at most 1000 iterations.
@@ -830,9 +889,9 @@ fn check_newton(tolerance: f64, max_iterations: usize) -> Result<(), Problem> {
 /// is governed by a constraint.
 fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
     let used: BTreeSet<&str> = scene
-        .effects
-        .iter()
-        .flat_map(Effect::parameters)
+        .quantities()
+        .into_iter()
+        .filter_map(|(_, q, _)| q.parameter())
         .chain(scene.constraints.iter().filter_map(|c| match c {
             Constraint::FluidVolume(v) => v.value.parameter(),
             Constraint::GasAmount(g) => g.value.parameter(),
@@ -845,20 +904,27 @@ fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
             return Err(Problem::at(
                 &key,
                 format!(
-                    "is declared but no effect uses it (give an effect's quantity as \"{name}\")"
+                    "is declared but no quantity uses it (give a quantity of the material or an effect as \"{name}\")"
                 ),
             ));
         }
-        if let Analysis::Path(PathAnalysis { control, .. }) = &scene.analysis {
-            if name != control && scene.governing(name).is_none() {
-                return Err(Problem::at(
-                    &key,
-                    format!(
-                        "is neither the control (\"{control}\") nor governed by a constraint; \
-                         hold it with [[constraint]] type = \"fixed\", parameter = \"{name}\""
-                    ),
-                ));
-            }
+        let free: Vec<&str> = match &scene.analysis {
+            Analysis::Path(PathAnalysis { control, .. }) => vec![control],
+            Analysis::CriticalCurve(c) => vec![&c.control, &c.second],
+            Analysis::Equilibrium(_) | Analysis::LinearBuckling(_) => continue,
+        };
+        if !free.contains(&name.as_str()) && scene.governing(name).is_none() {
+            let free = match free.as_slice() {
+                [control] => format!("the control (\"{control}\")"),
+                _ => format!("a free parameter (\"{}\")", free.join("\", \"")),
+            };
+            return Err(Problem::at(
+                &key,
+                format!(
+                    "is neither {free} nor governed by a constraint; \
+                     hold it with [[constraint]] type = \"fixed\", parameter = \"{name}\""
+                ),
+            ));
         }
     }
     Ok(())

@@ -312,6 +312,7 @@ pub(super) fn variant(
         match &mut base.analysis {
             Analysis::LinearBuckling(b) => b.samples = n,
             Analysis::Path(p) => p.steps = n,
+            Analysis::CriticalCurve(c) => c.path_steps = n,
             Analysis::Equilibrium(_) => {}
         }
     }

@@ -513,6 +513,7 @@ pub fn compare(
     let samples = match &reference_scene.analysis {
         Analysis::LinearBuckling(b) => Some(b.samples),
         Analysis::Path(p) => Some(p.steps),
+        Analysis::CriticalCurve(c) => Some(c.path_steps),
         Analysis::Equilibrium(_) => None,
     };
     Ok(Comparison {

@@ -1,0 +1,172 @@
+//! `curve.csv`, `curve.json` and `curve.svg`: a critical curve ([`CurveReport`]).
+
+use super::svg::{padded, xml_chars};
+use super::{write_whole, Num, OutputError};
+use crate::report::{CurveEventKind, CurveReport};
+use plotters::prelude::*;
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Refuses a curve with a non-finite number, naming the row (or event) and the column.
+fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
+    let names = curve.parameters.iter().chain(&curve.measures);
+    for row in &curve.rows {
+        let values = row.parameters.iter().chain(&row.measures);
+        let extra = [
+            ("critical_eigenvalue", row.critical_eigenvalue),
+            ("second_eigenvalue", row.second_eigenvalue),
+            ("arclength", row.arclength),
+        ];
+        let bad = names
+            .clone()
+            .map(String::as_str)
+            .zip(values.copied())
+            .chain(extra)
+            .find(|(_, v)| !v.is_finite());
+        if let Some((name, v)) = bad {
+            return Err(OutputError::invalid(
+                path,
+                format!("curve point {}: {name} is {v} (not finite)", row.step),
+            ));
+        }
+    }
+    for e in &curve.events {
+        if let Some((name, v)) = names
+            .clone()
+            .zip(e.parameters.iter().chain(&e.measures))
+            .find(|(_, v)| !v.is_finite())
+        {
+            return Err(OutputError::invalid(
+                path,
+                format!("curve event {}: {name} is {v} (not finite)", e.kind),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Writes `curve.csv`, `curve.json` and `curve.svg` into `dir`; returns their paths.
+///
+/// `curve.csv` has a row per curve point: `step,arclength,<each parameter>,<each
+/// measure>,critical_eigenvalue,second_eigenvalue,irrep,iterations` (the eigenvalues of the
+/// critical block nearest zero, relative to max|K_ij|). `curve.json` is the whole report,
+/// with the events (start, cusps, folds, end). `curve.svg` plots the second parameter
+/// against the control with the events marked.
+///
+/// # Errors
+/// [`OutputError::Invalid`] for a non-finite value (nothing is written), else as the other
+/// writers.
+pub fn write_curve(dir: &Path, curve: &CurveReport) -> Result<Vec<PathBuf>, OutputError> {
+    let csv = dir.join("curve.csv");
+    check_finite(&csv, curve)?;
+    let json = dir.join("curve.json");
+    let svg_path = dir.join("curve.svg");
+    let column = |name: &str| curve.parameters.iter().position(|p| p == name);
+    let (Some(c), Some(s)) = (column(&curve.control), column(&curve.second)) else {
+        return Err(OutputError::invalid(
+            &svg_path,
+            "the control or the second parameter is not a parameter of the curve".to_string(),
+        ));
+    };
+    if curve.rows.is_empty() {
+        return Err(OutputError::invalid(
+            &csv,
+            "the curve has no points".to_string(),
+        ));
+    }
+    let svg = render(curve, c, s)
+        .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
+    write_whole(&csv, |w| {
+        let header: Vec<&str> = ["step", "arclength"]
+            .into_iter()
+            .chain(curve.parameters.iter().map(String::as_str))
+            .chain(curve.measures.iter().map(String::as_str))
+            .chain([
+                "critical_eigenvalue",
+                "second_eigenvalue",
+                "irrep",
+                "iterations",
+            ])
+            .collect();
+        writeln!(w, "{}", header.join(","))?;
+        for r in &curve.rows {
+            write!(w, "{},{}", r.step, Num(r.arclength))?;
+            for &v in r.parameters.iter().chain(&r.measures) {
+                write!(w, ",{}", Num(v))?;
+            }
+            writeln!(
+                w,
+                ",{},{},{},{}",
+                Num(r.critical_eigenvalue),
+                Num(r.second_eigenvalue),
+                curve.irrep,
+                r.iterations
+            )?;
+        }
+        Ok(())
+    })?;
+    write_whole(&json, |w| {
+        serde_json::to_writer_pretty(&mut *w, curve).map_err(io::Error::other)?;
+        writeln!(w)
+    })?;
+    write_whole(&svg_path, |w| w.write_all(xml_chars(&svg).as_bytes()))?;
+    Ok(vec![csv, json, svg_path])
+}
+
+/// The second parameter (column `s`) against the control (column `c`), events marked.
+fn render(curve: &CurveReport, c: usize, s: usize) -> Result<String, Box<dyn std::error::Error>> {
+    let points: Vec<(f64, f64)> = curve
+        .rows
+        .iter()
+        .map(|r| (r.parameters[c], r.parameters[s]))
+        .collect();
+    let xr = padded(points.iter().map(|p| p.0));
+    let yr = padded(points.iter().map(|p| p.1));
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (800, 600)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let title = format!("{} curve of {} ({})", curve.kind, curve.irrep, curve.second);
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 22))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(70)
+            .build_cartesian_2d(xr, yr)?;
+        chart
+            .configure_mesh()
+            .x_desc(curve.control.as_str())
+            .y_desc(curve.second.as_str())
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()?;
+        let blue = RGBColor(31, 87, 180);
+        chart.draw_series(LineSeries::new(
+            points.iter().copied(),
+            blue.stroke_width(2),
+        ))?;
+        let red = RGBColor(200, 30, 30);
+        for e in &curve.events {
+            let at = (e.parameters[c], e.parameters[s]);
+            let font = ("sans-serif", 15).into_font().color(&BLACK);
+            let label = Text::new(e.kind.to_string(), (8, -22), font);
+            match e.kind {
+                CurveEventKind::Cusp | CurveEventKind::Fold => {
+                    chart.draw_series(std::iter::once(
+                        EmptyElement::at(at) + Circle::new((0, 0), 5, red.filled()) + label,
+                    ))?
+                }
+                CurveEventKind::Start | CurveEventKind::End => {
+                    chart.draw_series(std::iter::once(
+                        EmptyElement::at(at)
+                            + Circle::new((0, 0), 4, BLACK.stroke_width(2))
+                            + label,
+                    ))?
+                }
+            };
+        }
+        root.present()?;
+    }
+    Ok(out)
+}

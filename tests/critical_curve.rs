@@ -1,0 +1,410 @@
+//! Critical curves: the balloon's limit point followed in (p, k) to its cusp against the closed
+//! form, the derivatives of the block test function, and the curve's outputs.
+
+use memstab::analysis::critical::CriticalKind;
+use memstab::analysis::curve::{BlockTest, DIFFERENCE_STEP};
+use memstab::analysis::run;
+use memstab::model::Model;
+use memstab::report::{CurveEventKind, CurveReport};
+use memstab::scene::Scene;
+use memstab::study::Study;
+
+/// The sphere's fold line in closed form (p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²)): ∂p/∂λ = 0
+/// gives k(λ) = (λ⁶ − 7)/(λ⁸ + 5λ²), and p(λ) on it.
+fn fold_k(l: f64) -> f64 {
+    (l.powi(6) - 7.0) / (l.powi(8) + 5.0 * l * l)
+}
+
+fn sphere_p(l: f64, k: f64) -> f64 {
+    2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l)
+}
+
+/// The cusp: the maximum of k(λ) on the fold line, by golden-section search.
+fn cusp() -> (f64, f64, f64) {
+    let (mut a, mut b) = (1.4f64, 3.0f64);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..200 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if fold_k(c) > fold_k(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let l = 0.5 * (a + b);
+    (fold_k(l), l, sphere_p(l, fold_k(l)))
+}
+
+/// The bundled balloon with k = "k" as a parameter and a critical-curve analysis from its
+/// first limit point, at icosphere frequency `f`.
+fn balloon_curve_scene(frequency: usize) -> Scene {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/balloon.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let analysis = text.find("[analysis]").unwrap();
+    let start = text.find("[start]").unwrap();
+    let text = format!(
+        "{}{}{}",
+        &text[..analysis],
+        r#"[parameters.k]
+start = 0.1
+min = 0.05
+max = 0.3
+
+[analysis]
+type = "critical-curve"
+control = "p"
+second = "k"
+from = "limit"
+steps = 120
+path-steps = 400
+max-step = 0.05
+
+"#,
+        &text[start..]
+    )
+    .replacen("k = 0.1\n", "k = \"k\"\n", 1)
+    .replacen("frequency = 8", &format!("frequency = {frequency}"), 1);
+    assert!(text.contains("k = \"k\""), "{text}");
+    Scene::from_toml_str(&text, "balloon-curve").unwrap()
+}
+
+fn curve_of(frequency: usize) -> (CurveReport, memstab::analysis::RunResult) {
+    let mut study = Study::build(balloon_curve_scene(frequency)).unwrap();
+    let result = run(&mut study, |_, _| {}).expect("the curve runs");
+    (result.curve.clone().expect("a curve"), result)
+}
+
+fn col(curve: &CurveReport, name: &str) -> usize {
+    curve
+        .parameters
+        .iter()
+        .position(|p| p == name)
+        .unwrap_or_else(|| panic!("{name}"))
+}
+
+/// The cusp of the balloon's limit-point curve in (p, k), found from the bundled scene with
+/// k = "k": every point of the curve lies on the closed-form fold line to the mesh's error,
+/// the cusp is where the closed form puts it, and the errors fall as h² from f = 4 to f = 8.
+#[test]
+fn balloon_limit_curve_reaches_its_cusp_on_the_closed_form_fold_line() {
+    let (k_c, l_c, p_c) = cusp();
+    // The closed form's own cusp, recomputed here: k = 0.2144584, λ = 1.8407344, p = 1.5050470.
+    assert!((k_c - 0.2144584).abs() < 1e-6 && (l_c - 1.8407344).abs() < 1e-6);
+    assert!((p_c - 1.5050470).abs() < 1e-6);
+    let mut cusp_errors = Vec::new();
+    for frequency in [4, 8] {
+        let (curve, _) = curve_of(frequency);
+        assert_eq!(curve.kind, CriticalKind::LimitPoint);
+        assert_eq!(curve.irrep, "Ag");
+        let (p, k) = (col(&curve, "p"), col(&curve, "k"));
+        let s = curve.measures.iter().position(|m| m == "stretch").unwrap();
+        assert!(curve.rows.len() > 20, "{} points", curve.rows.len());
+        // Every point: on the fold line at its own stretch, to the mesh's error.
+        let mut worst = (0.0f64, 0.0f64);
+        for r in &curve.rows {
+            let l = r.measures[s];
+            worst.0 = worst.0.max((r.parameters[k] - fold_k(l)).abs());
+            worst.1 = worst
+                .1
+                .max((r.parameters[p] / sphere_p(l, fold_k(l)) - 1.0).abs());
+            assert!(r.critical_eigenvalue.abs() < 1e-8, "{r:?}");
+            assert!(r.second_eigenvalue.abs() > 1e-6, "{r:?}");
+        }
+        // One cusp, where k turns from increasing to decreasing.
+        let cusps: Vec<_> = curve
+            .events
+            .iter()
+            .filter(|e| e.kind == CurveEventKind::Cusp)
+            .collect();
+        assert_eq!(cusps.len(), 1, "{:?}", curve.events);
+        let c = cusps[0];
+        let errors = (
+            (c.parameters[k] - k_c).abs(),
+            (c.measures[s] - l_c).abs(),
+            (c.parameters[p] / p_c - 1.0).abs(),
+        );
+        eprintln!(
+            "f = {frequency}: {} points, fold-line errors {worst:?}, cusp (k, λ, p) = ({}, {}, {}), errors {errors:?}",
+            curve.rows.len(),
+            c.parameters[k],
+            c.measures[s],
+            c.parameters[p]
+        );
+        // The discretisation error at f = 8 is below 1 % in the pressure (the path's turning
+        // points err by < 2e-3 at f = 16, about four times that at f = 8); f = 4 is four times
+        // that again. To leading order it is a uniform factor on the pressure, R·A/(3V) − 1
+        // of the polyhedron, which moves neither k nor λ of a fold: those err by far less.
+        let tol = if frequency == 8 { 1e-2 } else { 4e-2 };
+        assert!(worst.1 < tol, "pressure off the fold line by {}", worst.1);
+        assert!(worst.0 < tol / 100.0, "k off the fold line by {}", worst.0);
+        assert!(errors.2 < tol, "cusp pressure error {}", errors.2);
+        assert!(
+            errors.0 < tol / 100.0 && errors.1 < tol / 100.0,
+            "cusp errors {errors:?}"
+        );
+        cusp_errors.push(errors);
+        assert!(matches!(
+            curve.events.last().map(|e| e.kind),
+            Some(CurveEventKind::End)
+        ));
+    }
+    // Second order: halving h divides the cusp's pressure error by about four.
+    let rate = (cusp_errors[0].2 / cusp_errors[1].2).log2();
+    assert!(
+        (1.5..2.5).contains(&rate),
+        "rate {rate}, errors {cusp_errors:?}"
+    );
+}
+
+/// Checks the test function of block `mu` near the critical point `cp` of `study`: ∂σ/∂q
+/// (directional differences of the tangent) and ∂σ/∂Λ (differences of the loads) against
+/// differences of σ itself, and the step's truncation error, estimated by Richardson
+/// extrapolation from ε and 2ε, against 1e-7 of the derivative.
+fn check_test_derivatives(study: &Study, cp: &memstab::analysis::critical::CriticalPoint) {
+    let adapted = memstab::adapted::AdaptedBasis::new(&study.action, study.model.layout()).unwrap();
+    let mu = adapted
+        .irreps
+        .iter()
+        .position(|i| i.name == cp.irrep)
+        .unwrap();
+    let block = adapted.irreps[mu].first();
+    let length = 1.0;
+    let mut border = block.restrict(&cp.mode);
+    // A border off the null vector, so that the test is generic.
+    border[0] += 0.3;
+    let mut test = BlockTest::new(&study.model, block, &study.basis, mu == 0, &border, length);
+    // A state near the critical point.
+    let u: Vec<f64> = cp.state.iter().map(|v| v * 1.01).collect();
+    let params = cp.parameters.clone();
+    let t = test.evaluate(&u, &params).unwrap();
+    // Along a symmetric direction d (the state itself), dσ = ∂σ/∂q · B₀ᵀ d.
+    let d = u.clone();
+    let h = 1e-5;
+    let shifted = |s: f64| -> Vec<f64> { u.iter().zip(&d).map(|(a, b)| a + s * b).collect() };
+    let sp = test.value(&shifted(h), &params).unwrap().0;
+    let sm = test.value(&shifted(-h), &params).unwrap().0;
+    let fd = (sp - sm) / (2.0 * h);
+    let exact = t.grad_q.dot(&study.basis.restrict(&d));
+    assert!(
+        (fd - exact).abs() < 1e-5 * exact.abs(),
+        "{}: dσ/du·d: {exact} vs difference {fd}",
+        cp.irrep
+    );
+    for (j, name) in study.parameters.iter().enumerate() {
+        let mut pp = params.clone();
+        let hj = 1e-6 * params[j].abs().max(1.0);
+        pp[j] += hj;
+        let sp = test.value(&u, &pp).unwrap().0;
+        pp[j] -= 2.0 * hj;
+        let sm = test.value(&u, &pp).unwrap().0;
+        let fd = (sp - sm) / (2.0 * hj);
+        let scale = fd.abs().max(t.grad_params[j].abs());
+        assert!(
+            (fd - t.grad_params[j]).abs() < 1e-5 * scale,
+            "{}: dσ/d{name}: {} vs difference {fd}",
+            cp.irrep,
+            t.grad_params[j]
+        );
+    }
+    let (a, eps) = test.critical_vector(&t.vector);
+    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!((eps * amax - DIFFERENCE_STEP * length).abs() < 1e-12 * eps * amax);
+    let (d1, _) = test.third_derivatives(&u, &params, &a, eps).unwrap();
+    let (d2, _) = test.third_derivatives(&u, &params, &a, 2.0 * eps).unwrap();
+    let norm = d1.amax();
+    let err = (&d2 - &d1).amax() / 3.0;
+    assert!(
+        norm > 0.0 && err < 1e-7 * norm,
+        "{}: error {err:e} of {norm:e}",
+        cp.irrep
+    );
+}
+
+/// The test function's derivatives on the balloon's limit point (the trivial block: every
+/// evaluation around the orbit representatives) and on the C7v disc's E1 double point (the
+/// states u ± εa not symmetric: the whole mesh).
+#[test]
+fn block_test_function_derivatives_match_differences_of_sigma() {
+    let mut study = Study::build(balloon_curve_scene(4)).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
+    check_test_derivatives(
+        &study,
+        result.report.critical.first().expect("a limit point"),
+    );
+    let mut study = Study::build(disc_curve_scene()).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
+    let cp = result.report.critical.last().expect("a critical point");
+    assert_eq!(cp.irrep, "E1");
+    check_test_derivatives(&study, cp);
+}
+
+/// A run writes curve.csv, curve.json and curve.svg; the CSV has a row per point with both
+/// parameters and the block's eigenvalues.
+#[test]
+fn a_critical_curve_run_writes_its_curve() {
+    let mut study = Study::build(balloon_curve_scene(4)).unwrap();
+    let mut result = run(&mut study, |_, _| {}).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let written = memstab::output::write_run(&study, &mut result, dir.path()).unwrap();
+    let curve = result.curve.as_ref().unwrap();
+    // The path stopped at the point the curve starts from.
+    assert_eq!(
+        result.report.stop,
+        memstab::analysis::events::StopReason::CriticalPoint
+    );
+    for name in ["curve.csv", "curve.json", "curve.svg"] {
+        assert!(written.files().contains(&dir.path().join(name)), "{name}");
+    }
+    let csv = std::fs::read_to_string(dir.path().join("curve.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for c in [
+        "k",
+        "p",
+        "stretch",
+        "critical_eigenvalue",
+        "second_eigenvalue",
+        "irrep",
+    ] {
+        assert!(header.contains(&c), "{header:?}");
+    }
+    assert_eq!(lines.count(), curve.rows.len());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("curve.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["second"], "k");
+    assert!(json["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|e| e["kind"] == "cusp"));
+    let svg = std::fs::read_to_string(dir.path().join("curve.svg")).unwrap();
+    assert!(svg.contains("cusp"));
+    // critical.json: the path's limit point, then the curve's events with parameters by name.
+    let critical: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("critical.json")).unwrap())
+            .unwrap();
+    let list = critical.as_array().unwrap();
+    assert_eq!(list[0]["kind"], "limit point");
+    let cusp = list
+        .iter()
+        .find(|e| e["kind"] == "cusp")
+        .expect("the cusp in critical.json");
+    assert_eq!(cusp["curve"], true);
+    assert_eq!(cusp["extremum"], "maximum");
+    assert!(cusp["parameters"]["k"].as_f64().unwrap() > 0.2);
+    assert!(cusp["measures"]["stretch"].as_f64().unwrap() > 1.8);
+}
+
+/// The bundled C7v disc pushed up by fluid from below (8 rings) with prestretch = "l0" and a
+/// critical curve from its first E1 double point, in (h, l0).
+fn disc_curve_scene() -> Scene {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/disc_fluid_below.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let analysis = text.find("[analysis]").unwrap();
+    let text = format!(
+        "{}{}",
+        &text[..analysis],
+        r#"[parameters.l0]
+start = 1.1
+min = 1.05
+max = 1.2
+
+[analysis]
+type = "critical-curve"
+control = "h"
+second = "l0"
+from = "E1"
+steps = 6
+path-steps = 400
+max-step = 0.05
+"#
+    )
+    .replacen("divisions = 16", "divisions = 8", 1)
+    .replacen("prestretch = 1.1", "prestretch = \"l0\"", 1);
+    Scene::from_toml_str(&text, "disc-double-curve").unwrap()
+}
+
+/// Every accepted state of a run.
+#[derive(Default)]
+struct States(Vec<(Vec<f64>, Vec<f64>)>);
+
+impl memstab::analysis::Observer for States {
+    fn state(&mut self, u: &[f64], params: &[f64]) {
+        self.0.push((u.to_vec(), params.to_vec()));
+    }
+}
+
+/// The eigenvalues of the full tangent K (all unknowns, no symmetry used) at a state, by a
+/// dense solve, sorted by modulus and relative to max|K_ij|.
+fn full_spectrum(model: &memstab::model::FeModel, u: &[f64], params: &[f64]) -> Vec<f64> {
+    let mut eval = model.new_evaluation();
+    model
+        .evaluate(u, params, memstab::model::Request::ALL, &mut eval)
+        .unwrap();
+    let n = model.unknowns();
+    let mut k = nalgebra::DMatrix::zeros(n, n);
+    let mut e = vec![0.0; n];
+    for j in 0..n {
+        e[j] = 1.0;
+        let col = memstab::model::check::tangent_times(model, &eval, &e);
+        k.set_column(j, &nalgebra::DVector::from_vec(col));
+        e[j] = 0.0;
+    }
+    let scale = k.amax();
+    let mut values: Vec<f64> = nalgebra::SymmetricEigen::new(k)
+        .eigenvalues
+        .iter()
+        .map(|v| v / scale)
+        .collect();
+    values.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
+    values
+}
+
+/// The first E1 double bifurcation of the bundled C7v disc pushed up by fluid from below (8
+/// rings) is followed in (level h, prestretch): its block's zero is simple, so the curve is
+/// an ordinary one in that block, and at its ends the full tangent — all unknowns, no
+/// symmetry used — has exactly two zero eigenvalues: the point stays double.
+#[test]
+fn a_double_point_of_the_c7v_disc_stays_double_along_its_curve() {
+    let scene = disc_curve_scene();
+    let mut study = Study::build(scene).unwrap();
+    let mut states = States::default();
+    let result = memstab::analysis::run_with(&mut study, &mut states).expect("the curve runs");
+    let curve = result.curve.expect("a curve");
+    assert_eq!(curve.kind, CriticalKind::MultipleBifurcation(2));
+    assert_eq!((curve.irrep.as_str(), curve.multiplicity), ("E1", 2));
+    let l0 = col(&curve, "l0");
+    let first = curve.rows.first().unwrap().parameters[l0];
+    let last = curve.rows.last().unwrap().parameters[l0];
+    assert!(
+        (first - 1.1).abs() < 1e-12 && last > 1.1 + 0.01,
+        "l0 {first} → {last}"
+    );
+    for r in &curve.rows {
+        assert!(r.critical_eigenvalue.abs() < 1e-8, "{r:?}");
+    }
+    // The curve's points are the run's last accepted states.
+    let n = curve.rows.len();
+    let curve_states = &states.0[states.0.len() - n..];
+    for (i, (u, p)) in [(0, &curve_states[0]), (n - 1, &curve_states[n - 1])] {
+        assert_eq!(p, &curve.rows[i].parameters);
+        let values = full_spectrum(&study.model, u, p);
+        eprintln!(
+            "curve point {i}: |eigenvalues| of K nearest zero {:?}",
+            &values[..4]
+        );
+        assert!(
+            values[0].abs() < 1e-8 && values[1].abs() < 1e-8,
+            "{:?}",
+            &values[..4]
+        );
+        assert!(values[2].abs() > 1e-5, "a third zero: {:?}", &values[..4]);
+    }
+}
