@@ -38,6 +38,11 @@ fn cusp() -> (f64, f64, f64) {
 /// The bundled balloon with k = "k" as a parameter and a critical-curve analysis from its
 /// first limit point, at icosphere frequency `f`.
 fn balloon_curve_scene(frequency: usize) -> Scene {
+    Scene::from_toml_str(&balloon_curve_text(frequency), "balloon-curve").unwrap()
+}
+
+/// The text of [`balloon_curve_scene`].
+fn balloon_curve_text(frequency: usize) -> String {
     let text = std::fs::read_to_string(format!(
         "{}/scenes/balloon.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -68,7 +73,7 @@ max-step = 0.05
     .replacen("k = 0.1\n", "k = \"k\"\n", 1)
     .replacen("frequency = 8", &format!("frequency = {frequency}"), 1);
     assert!(text.contains("k = \"k\""), "{text}");
-    Scene::from_toml_str(&text, "balloon-curve").unwrap()
+    text
 }
 
 fn curve_of(frequency: usize) -> (CurveReport, memstab::analysis::RunResult) {
@@ -297,6 +302,42 @@ fn a_critical_curve_run_writes_its_curve() {
     assert_eq!(cusp["extremum"], "maximum");
     assert!(cusp["parameters"]["k"].as_f64().unwrap() > 0.2);
     assert!(cusp["measures"]["stretch"].as_f64().unwrap() > 1.8);
+}
+
+/// `memstab run` of a critical curve prints the curve's events and the curve files it wrote.
+#[test]
+fn memstab_run_prints_the_curve_and_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("curve.toml");
+    std::fs::write(&scene, balloon_curve_text(4)).unwrap();
+    let out = dir.path().join("out");
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("critical curve of the limit point in Ag x1 in (p, k)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.lines().any(|l| l.trim_start().starts_with("cusp")),
+        "{stdout}"
+    );
+    for name in ["curve.csv", "curve.json", "curve.svg"] {
+        assert!(out.join(name).is_file(), "{name}");
+        assert!(
+            stdout.lines().any(|l| l.trim_start().starts_with(name)),
+            "{name} not listed: {stdout}"
+        );
+    }
 }
 
 /// The bundled C7v disc pushed up by fluid from below (8 rings) with prestretch = "l0" and a
