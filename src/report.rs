@@ -269,6 +269,12 @@ pub enum CurveEventKind {
     Cusp,
     /// A bifurcation curve turns in the second parameter.
     Fold,
+    /// A limit-point curve meets a bifurcation curve (Paper 4's branching point): the
+    /// trivial block and another block are singular together.
+    Hilltop,
+    /// Two bifurcation curves of different irreps cross: on one side of the point the path
+    /// in the control meets the curve's irrep first, on the other side the other irrep.
+    IrrepChange,
     /// The last point.
     End,
 }
@@ -279,6 +285,8 @@ impl std::fmt::Display for CurveEventKind {
             Self::Start => "start",
             Self::Cusp => "cusp",
             Self::Fold => "fold",
+            Self::Hilltop => "hilltop",
+            Self::IrrepChange => "irrep change",
             Self::End => "end",
         })
     }
@@ -298,6 +306,13 @@ pub struct CurveEvent {
     /// For a cusp or fold: whether the second parameter has a maximum or a minimum there.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub extremum: Option<Extremum>,
+    /// For a hilltop or an irrep change: the other irrep whose block is singular there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub irrep: Option<String>,
+    /// For a hilltop or an irrep change: the other block's localised eigenvalue relative to
+    /// max|K_ij|.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_eigenvalue: Option<f64>,
     /// The curve step just before the event.
     pub after_step: usize,
     /// Every parameter there (the report's order).

@@ -38,6 +38,11 @@ fn cusp() -> (f64, f64, f64) {
 /// The bundled balloon with k = "k" as a parameter and a critical-curve analysis from its
 /// first limit point, at icosphere frequency `f`.
 fn balloon_curve_scene(frequency: usize) -> Scene {
+    Scene::from_toml_str(&balloon_curve_text(frequency), "balloon-curve").unwrap()
+}
+
+/// The text of [`balloon_curve_scene`].
+fn balloon_curve_text(frequency: usize) -> String {
     let text = std::fs::read_to_string(format!(
         "{}/scenes/balloon.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -68,7 +73,7 @@ max-step = 0.05
     .replacen("k = 0.1\n", "k = \"k\"\n", 1)
     .replacen("frequency = 8", &format!("frequency = {frequency}"), 1);
     assert!(text.contains("k = \"k\""), "{text}");
-    Scene::from_toml_str(&text, "balloon-curve").unwrap()
+    text
 }
 
 fn curve_of(frequency: usize) -> (CurveReport, memstab::analysis::RunResult) {
@@ -299,6 +304,42 @@ fn a_critical_curve_run_writes_its_curve() {
     assert!(cusp["measures"]["stretch"].as_f64().unwrap() > 1.8);
 }
 
+/// `memstab run` of a critical curve prints the curve's events and the curve files it wrote.
+#[test]
+fn memstab_run_prints_the_curve_and_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("curve.toml");
+    std::fs::write(&scene, balloon_curve_text(4)).unwrap();
+    let out = dir.path().join("out");
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("critical curve of the limit point in Ag x1 in (p, k)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.lines().any(|l| l.trim_start().starts_with("cusp")),
+        "{stdout}"
+    );
+    for name in ["curve.csv", "curve.json", "curve.svg"] {
+        assert!(out.join(name).is_file(), "{name}");
+        assert!(
+            stdout.lines().any(|l| l.trim_start().starts_with(name)),
+            "{name} not listed: {stdout}"
+        );
+    }
+}
+
 /// The bundled C7v disc pushed up by fluid from below (8 rings) with prestretch = "l0" and a
 /// critical curve from its first E1 double point, in (h, l0).
 fn disc_curve_scene() -> Scene {
@@ -407,4 +448,104 @@ fn a_double_point_of_the_c7v_disc_stays_double_along_its_curve() {
         );
         assert!(values[2].abs() > 1e-5, "a third zero: {:?}", &values[..4]);
     }
+}
+
+/// The bundled C7v disc pushed up by fluid from below (8 rings) with the given analysis, and
+/// k = "k" (start 0) as a parameter, or the material's k fixed at `k`.
+fn disc_k_scene(analysis: &str, k: Option<f64>) -> Scene {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/disc_fluid_below.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let at = text.find("[analysis]").unwrap();
+    let (value, parameter) = match k {
+        Some(k) => (format!("k = {k}\n"), String::new()),
+        None => (
+            "k = \"k\"\n".to_string(),
+            "[parameters.k]\nstart = 0.0\nmin = 0.0\nmax = 0.5\n\n".to_string(),
+        ),
+    };
+    let text = format!("{}{parameter}{analysis}", &text[..at])
+        .replacen("divisions = 16", "divisions = 8", 1)
+        .replacen("k = 0.0\n", &value, 1);
+    assert!(text.contains(&value), "{text}");
+    Scene::from_toml_str(&text, "disc-k").unwrap()
+}
+
+/// The one hilltop of the disc's curve from `from` in (h, k): its (h, k) and the other irrep.
+fn disc_hilltop(from: &str) -> (f64, f64, String) {
+    let scene = disc_k_scene(&format!(
+        "[analysis]\ntype = \"critical-curve\"\ncontrol = \"h\"\nsecond = \"k\"\nfrom = \"{from}\"\n\
+         steps = 60\npath-steps = 400\nmax-step = 0.05\n"
+    ), None);
+    let mut study = Study::build(scene).unwrap();
+    let result = run(&mut study, |_, _| {}).expect("the curve runs");
+    let curve = result.curve.unwrap();
+    let hilltops: Vec<_> = curve
+        .events
+        .iter()
+        .filter(|e| e.kind == CurveEventKind::Hilltop)
+        .collect();
+    assert_eq!(hilltops.len(), 1, "{:?}", curve.events);
+    assert!(
+        curve
+            .events
+            .windows(2)
+            .all(|w| w[0].after_step <= w[1].after_step),
+        "events out of curve order: {:?}",
+        curve.events
+    );
+    let e = hilltops[0];
+    assert!(e.residual_eigenvalue.unwrap() < 1e-10, "{e:?}");
+    let (h, k) = (col(&curve, "h"), col(&curve, "k"));
+    (e.parameters[h], e.parameters[k], e.irrep.clone().unwrap())
+}
+
+/// The disc pushed up from below, at k = 0, meets its limit point (A1) before its first
+/// double point (E1) as the level rises; as k grows the limit point moves up faster, and
+/// the two curves cross at a hilltop. Followed from either end — the E1 curve watching the
+/// trivial block, the limit curve watching E1 — the hilltop is the same point; and paths in h
+/// at fixed k on either side of it meet the two points in the opposite orders.
+#[test]
+fn the_disc_limit_and_double_point_curves_cross_at_one_hilltop() {
+    let (h1, k1, other1) = disc_hilltop("E1");
+    let (h2, k2, other2) = disc_hilltop("limit");
+    assert_eq!((other1.as_str(), other2.as_str()), ("A1", "E1"));
+    assert!(
+        (h1 - h2).abs() < 1e-6 * h1 && (k1 - k2).abs() < 1e-6 * k1,
+        "the E1 curve's hilltop ({h1}, {k1}) and the limit curve's ({h2}, {k2})"
+    );
+    assert!(k1 > 0.005 && k1 < 0.1, "k = {k1}");
+    // The order of the two points on paths at fixed k on either side.
+    let first_on_path = |k: f64| {
+        let scene = disc_k_scene(
+            "[analysis]\ntype = \"path\"\ncontrol = \"h\"\nsteps = 400\nmax-step = 0.05\n",
+            Some(k),
+        );
+        let mut study = Study::build(scene).unwrap();
+        let result = run(&mut study, |_, _| {}).expect("the path runs");
+        let h = result
+            .report
+            .parameters
+            .iter()
+            .position(|p| p == "h")
+            .unwrap();
+        let mut points: Vec<(usize, f64, String)> = result
+            .report
+            .critical
+            .iter()
+            .filter(|c| c.irrep == "A1" || c.irrep == "E1")
+            .map(|c| (c.after_step, c.parameters[h], c.irrep.clone()))
+            .collect();
+        points.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        assert!(points.len() >= 2, "k = {k}: {points:?}");
+        // Both near the hilltop's level.
+        for p in &points[..2] {
+            assert!((p.1 - h1).abs() < 0.2, "k = {k}: {points:?}");
+        }
+        points[0].2.clone()
+    };
+    assert_eq!(first_on_path(k1 - 0.003), "A1");
+    assert_eq!(first_on_path(k1 + 0.003), "E1");
 }

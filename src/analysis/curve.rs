@@ -16,7 +16,10 @@
 //! σ = 0 in (q, second, the constraints' parameters, control), followed by the ordinary
 //! [`Continuation`] driver with σ as one more augmenting equation ([`CurveProblem`]) and
 //! watched by the ordinary detectors: a turning point of the second parameter on a limit
-//! curve is a cusp (two limit points merge).
+//! curve is a cusp (two limit points merge). The other blocks' negative counts are watched
+//! at every curve point (`OtherBlocks`): where one changes, that block is singular together
+//! with the curve's — a hilltop (one of them trivial) or a change of the critical irrep —
+//! localised on the curve by the path's own routine (docs/theory.md §11.9).
 //!
 //! With a = B_μ v the critical vector in the full space, vᵀ (∂K_μ/∂u · e) v = D³Π[a, a, e]
 //! = eᵀ (d/dε) K(u + εa) a, and vᵀ (∂K_μ/∂Λ_j) v = (d/dε) aᵀ ∂F/∂Λ_j(u + εa): both come
@@ -30,13 +33,14 @@ use super::continuation::{
     Accepted, Continuation, Linearization, PathOptions, PathPoint, PhaseTimes, Problem,
 };
 use super::critical::{CriticalKind, CriticalPoint};
-use super::events::{Crossings, Detector, Event, IndexChanges, States, StopReason};
+use super::events::{Crossings, Detector, End, Event, IndexChanges, States, StopReason};
 use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
 use crate::adapted::SparseBasis;
 use crate::model::check::tangent_times;
 use crate::model::{Evaluation, Model, ModelError, Request, Subset};
 use crate::report::{CurveEvent, CurveEventKind, CurveReport, CurveRow};
 use crate::scene::{Analysis, CurveStart, Direction};
+use crate::stability::Spectrum;
 use crate::study::Study;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
@@ -362,6 +366,80 @@ impl Detector<CurveProblem<'_>> for RefreshBorder {
     }
 }
 
+/// Watches the other irrep blocks along a curve: where the negative count of a block other
+/// than the curve's own changes between two curve points, that block is singular together
+/// with the curve's somewhere in between — a hilltop when one of the two is the trivial block,
+/// a change of the critical irrep otherwise. The crossing is localised on the curve's
+/// arclength by [`Crossings::localise`], the same routine as on a path, with the curve's own
+/// block left out (its eigenvalue is zero all along, its count noise).
+struct OtherBlocks<'a> {
+    crossings: Crossings<'a>,
+    /// The curve's block.
+    own: usize,
+    previous: Option<(Spectrum, Vec<f64>, Vec<f64>)>,
+}
+
+impl OtherBlocks<'_> {
+    /// The index spectrum at `point` with the curve's own block's count zeroed, remembered;
+    /// returns the earlier one.
+    fn observe(
+        &mut self,
+        problem: &CurveProblem<'_>,
+        point: &PathPoint,
+    ) -> Option<(Spectrum, Vec<f64>, Vec<f64>)> {
+        let u = problem.displacement(&point.q);
+        let params = problem.parameters(&point.lambda);
+        let spectrum = self.crossings.index(&u, &params).map(|mut s| {
+            s.blocks[self.own].negative = 0;
+            s
+        });
+        std::mem::replace(&mut self.previous, spectrum.map(|s| (s, u, params)))
+    }
+}
+
+impl<'b> Detector<CurveProblem<'b>> for OtherBlocks<'_> {
+    fn start(&mut self, driver: &mut Continuation<CurveProblem<'b>>) -> Vec<Event> {
+        let point = driver.point().clone();
+        self.observe(driver.problem(), &point);
+        Vec::new()
+    }
+
+    fn check(
+        &mut self,
+        driver: &mut Continuation<CurveProblem<'b>>,
+        step: &Accepted,
+        after: usize,
+    ) -> Vec<Event> {
+        let point = driver.point().clone();
+        let previous = self.observe(driver.problem(), &point);
+        let (Some((a, u0, p0)), Some((b, u1, p1))) = (&previous, &self.previous) else {
+            return Vec::new();
+        };
+        if a.negatives() == b.negatives() {
+            return Vec::new();
+        }
+        let s1 = point.arclength - step.from.arclength;
+        let ends = (
+            End {
+                spectrum: a,
+                u: u0,
+                params: p0,
+            },
+            End {
+                spectrum: b,
+                u: u1,
+                params: p1,
+            },
+        );
+        self.crossings
+            .localise(ends.0, ends.1, after, s1, false, |s| {
+                let q = driver.corrected_from(&step.from, s).ok()?;
+                let problem = driver.problem();
+                Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
+            })
+    }
+}
+
 /// Watches the path for critical points and stops it at the one `from` asks for.
 struct FirstCritical<'a> {
     index: IndexChanges<'a>,
@@ -435,7 +513,6 @@ pub(super) fn run(
                 .into(),
         ));
     };
-    let adapted = crossings.stability().basis();
     // The path in the control up to the point.
     let opts = super::equilibrium::path_options(study);
     let problem = SymmetricProblem::new(
@@ -474,6 +551,7 @@ pub(super) fn run(
     times.steps = branch.times;
     times.index = first.index.index_time;
     let indices = first.index.indices.clone();
+    let crossings = first.index.into_crossings();
     super::path::record_branch(study, record, &path_problem, &branch, &indices, usize::MAX);
     times.path = t0.elapsed();
     let Some(cp) = (match branch.stop {
@@ -488,14 +566,14 @@ pub(super) fn run(
             branch.stop
         )));
     };
-    let curve = follow_curve(study, adapted, &cp, observer)?;
+    let curve = follow_curve(study, crossings, &cp, observer)?;
     Ok((branch.stop, curve))
 }
 
 /// Follows the critical point `cp` in (control, second).
 fn follow_curve(
     study: &Study,
-    adapted: &crate::adapted::AdaptedBasis,
+    crossings: Crossings<'_>,
     cp: &CriticalPoint,
     observer: &mut dyn Observer,
 ) -> Result<CurveReport, RunError> {
@@ -510,6 +588,7 @@ fn follow_curve(
             .expect("validated parameter")
     };
     let (control, second) = (index(&analysis.control), index(&analysis.second));
+    let adapted = crossings.stability().basis();
     let mu = adapted
         .irreps
         .iter()
@@ -592,9 +671,14 @@ fn follow_curve(
     let control_bounds = bounds(control);
     // `trace` watches the turning points of λ_0, the second parameter: cusps and folds.
     let mut refresh = RefreshBorder;
+    let mut others = OtherBlocks {
+        crossings,
+        own: mu,
+        previous: None,
+    };
     let mut count = 0usize;
     let branch = {
-        let mut extra: Vec<&mut dyn Detector<CurveProblem>> = vec![&mut refresh];
+        let mut extra: Vec<&mut dyn Detector<CurveProblem>> = vec![&mut refresh, &mut others];
         super::path::trace(
             &mut driver,
             analysis.steps,
@@ -647,6 +731,8 @@ fn follow_curve(
         CurveEvent {
             kind,
             extremum,
+            irrep: None,
+            residual_eigenvalue: None,
             after_step,
             measures: study.measure(&u, &params),
             parameters: params,
@@ -665,6 +751,25 @@ fn follow_curve(
             .events
             .push(event(kind, Some(t.kind), t.after_step, &t.point));
     }
+    for other in branch.critical_points() {
+        // The other block singular together with the curve's.
+        let kind = if mu == 0 || other.irrep == adapted.irreps[0].name {
+            CurveEventKind::Hilltop
+        } else {
+            CurveEventKind::IrrepChange
+        };
+        report.events.push(CurveEvent {
+            kind,
+            extremum: None,
+            irrep: Some(other.irrep.clone()),
+            residual_eigenvalue: Some(other.residual_eigenvalue),
+            after_step: other.after_step,
+            parameters: other.parameters.clone(),
+            measures: other.measures.clone(),
+        });
+    }
+    // In curve order (stable: a turning point and a crossing in one step keep their order).
+    report.events[1..].sort_by_key(|e| e.after_step);
     let n = branch.points.len() - 1;
     report
         .events

@@ -750,6 +750,11 @@ impl<'a> IndexChanges<'a> {
         }
     }
 
+    /// The stability analysis it watched with, to watch another path.
+    pub fn into_crossings(self) -> Crossings<'a> {
+        self.crossings
+    }
+
     /// The index at `point`, remembered with its state as the previous point's; returns
     /// the earlier previous point.
     fn observe<P: Problem + States>(

@@ -18,6 +18,7 @@ mod bench;
 mod branch;
 mod common;
 mod compare;
+mod demo;
 mod export;
 mod group;
 mod mesh;
@@ -46,7 +47,7 @@ enum Command {
     /// Switch branches at a critical point of a finished run: branches.json, branch_NN/, diagram.svg.
     Branch(branch::BranchArgs),
     /// Run the bundled demo (a k = 0.1 balloon) and compare it with the closed form.
-    Demo(run::DemoArgs),
+    Demo(demo::DemoArgs),
     /// The tangent's spectrum by irrep at the scene's start state (or at --at values).
     Spectrum(spectrum::SpectrumArgs),
     /// The same scene on meshes of different symmetry: critical points matched, splits measured.
@@ -134,7 +135,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Group(args) => group::run(&args),
         Command::Run(args) => run::run(&args),
         Command::Branch(args) => branch::run(&args),
-        Command::Demo(args) => run::demo(&args),
+        Command::Demo(args) => demo::demo(&args),
         Command::Spectrum(args) => spectrum::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Bench(args) => bench::run(&args),

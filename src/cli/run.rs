@@ -1,4 +1,4 @@
-//! `memstab run SCENE --out DIR [--quiet] [--json]` and `memstab demo [--out DIR] [--quiet]`.
+//! `memstab run SCENE --out DIR [--quiet] [--json]` (and the run behind `memstab demo`).
 //!
 //! Loads and validates a scene, builds the study (mesh, the scene's group, effects, model),
 //! follows its path with a progress bar and writes into DIR: `path.csv`, `path.json`,
@@ -17,9 +17,8 @@ use super::CliError;
 use clap::Args;
 use memstab::analysis::events::StopReason;
 use memstab::analysis::{run as run_study, RunResult};
-use memstab::demo::closed_form_check;
 use memstab::output::{file_name, write_run, Progress, RunSummary, Written, RUN_FILES};
-use memstab::report::PathReport;
+use memstab::report::{CurveReport, PathReport};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use memstab::text::{one_line, sig_digits};
@@ -40,16 +39,6 @@ pub(crate) struct RunArgs {
     json: bool,
 }
 
-#[derive(Debug, Args)]
-pub(crate) struct DemoArgs {
-    /// Output directory; created if missing (its parent must exist).
-    #[arg(long, default_value = "memstab-demo")]
-    out: PathBuf,
-    /// No progress bar.
-    #[arg(long)]
-    quiet: bool,
-}
-
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
@@ -58,19 +47,13 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
         out!("{text}");
     } else {
-        print_summary(
-            &study,
-            &result.report,
-            result.branches.as_ref(),
-            &args.out,
-            &written,
-        );
+        print_summary(&study, &result, &args.out, &written);
     }
     interrupted(&result, &args.out)
 }
 
 /// Exit code 130 after a run that a signal stopped (its outputs are written).
-fn interrupted(result: &RunResult, out: &Path) -> Result<(), CliError> {
+pub(super) fn interrupted(result: &RunResult, out: &Path) -> Result<(), CliError> {
     if result.report.stop == StopReason::Interrupted {
         return Err(CliError::Interrupted(format!(
             "the path so far is written into {}",
@@ -80,18 +63,12 @@ fn interrupted(result: &RunResult, out: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
-    let scene = memstab::demo::scene()
-        .map_err(|e| CliError::Failure(format!("the bundled demo scene is broken: {e}")))?;
-    let (study, result, written) = execute(scene, &args.out, args.quiet)?;
-    print_summary(&study, &result.report, None, &args.out, &written);
-    print_closed_form(&study, &result.report);
-    interrupted(&result, &args.out)?;
-    Ok(())
-}
-
 /// Checks `out`, builds the study, creates `out`, runs and writes every output.
-fn execute(scene: Scene, out: &Path, quiet: bool) -> Result<(Study, RunResult, Written), CliError> {
+pub(super) fn execute(
+    scene: Scene,
+    out: &Path,
+    quiet: bool,
+) -> Result<(Study, RunResult, Written), CliError> {
     check_out(out)?;
     let mut study = super::common::build_study(scene)?;
     let created = !out.exists();
@@ -182,13 +159,8 @@ fn control_index(report: &PathReport) -> Option<usize> {
     report.parameters.iter().position(|p| *p == report.control)
 }
 
-fn print_summary(
-    study: &Study,
-    report: &PathReport,
-    branches: Option<&memstab::analysis::branch::Branches>,
-    out: &Path,
-    written: &Written,
-) {
+pub(super) fn print_summary(study: &Study, result: &RunResult, out: &Path, written: &Written) {
+    let report = &result.report;
     let m = &report.mesh;
     out!("scene '{}' ({})", report.scene, report.origin);
     out!(
@@ -291,6 +263,9 @@ fn print_summary(
         }
     }
     out!("stopped: {}", report.stop);
+    if let Some(curve) = &result.curve {
+        print_curve(curve);
+    }
     out!(
         "wrote {} files into {}:",
         written.files().len(),
@@ -312,8 +287,11 @@ fn print_summary(
         "  {:<10} the report: metadata, path, turning points, critical points, saved states",
         file_name(&written.json)
     );
+    let events = result.curve.as_ref().map_or_else(String::new, |c| {
+        format!(" and the curve's {} events", c.events.len())
+    });
     out!(
-        "  {:<10} {} critical points: kind, irrep, multiplicity, parameters, step",
+        "  {:<10} {} critical points{events}: kind, irrep, multiplicity, parameters, step",
         file_name(&written.critical),
         report.critical.len()
     );
@@ -333,69 +311,57 @@ fn print_summary(
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
         out!("  {}", names.join(" "));
     }
-    if let (Some(b), Some(w)) = (branches, &written.branches) {
+    if let Some(curve) = &result.curve {
+        let described = [
+            format!(
+                "{} rows: both parameters, the measures, the block's eigenvalues",
+                curve.rows.len()
+            ),
+            "the curve: its points and events".to_string(),
+            format!("{} against {}, events marked", curve.second, curve.control),
+        ];
+        for (path, what) in written.curve.iter().zip(described) {
+            out!("  {:<10} {what}", file_name(path));
+        }
+    }
+    if let (Some(b), Some(w)) = (&result.branches, &written.branches) {
         super::branch::print_branches(b, w, &report.control);
     }
 }
 
-/// Prints the closed-form check of a balloon under pressure control.
-fn print_closed_form(study: &Study, report: &PathReport) {
-    let Some(check) = closed_form_check(study, report) else {
+/// The critical curve: what was followed, its extent and its events.
+fn print_curve(curve: &CurveReport) {
+    let column = |name: &str| curve.parameters.iter().position(|p| p == name);
+    out!(
+        "critical curve of the {} in {} x{} in ({}, {}): {} points",
+        curve.kind,
+        curve.irrep,
+        curve.multiplicity,
+        curve.control,
+        curve.second,
+        curve.rows.len()
+    );
+    let (Some(c), Some(s)) = (column(&curve.control), column(&curve.second)) else {
         return;
     };
-    out!();
-    out!(
-        "closed form for a Mooney-Rivlin sphere, k = {}: p R/(mu H) = 2/(1+k) (1/l - 1/l^7) (1 + k l^2)",
-        check.k
-    );
-    let list: Vec<String> = check
-        .extrema
-        .iter()
-        .map(|e| {
-            let kind = if e.maximum { "maximum" } else { "minimum" };
-            format!("{kind} {:.7} at l = {:.7}", e.pressure, e.stretch)
-        })
-        .collect();
-    if !list.is_empty() {
-        out!("  its {}", list.join(", its "));
-    }
-    if check.turning.is_empty() {
-        out!("memstab found no turning point to compare");
-        return;
-    }
-    out!(
-        "memstab's turning points, p R/(mu H) against the closed form at the stretch l memstab found:"
-    );
-    for t in &check.turning {
-        let stretch_diff = t.stretch_difference.map_or_else(String::new, |d| {
-            format!(
-                " (l differs by {d:+.1e} relative from the closed-form {}'s)",
-                t.kind
-            )
-        });
+    for e in &curve.events {
+        let extremum = e
+            .extremum
+            .map_or_else(String::new, |x| format!(" ({x} of {})", curve.second));
         out!(
-            "  {:<7} {:.7} at l = {:.7}: closed form {:.7}, difference {:+.3} %{stretch_diff}",
-            t.kind.to_string(),
-            t.pressure,
-            t.stretch,
-            t.exact,
-            100.0 * t.difference()
+            "  {:<9} {} = {}, {} = {}{extremum} (after curve step {})",
+            e.kind.to_string(),
+            curve.control,
+            sig_digits6(e.parameters[c]),
+            curve.second,
+            sig_digits6(e.parameters[s]),
+            e.after_step
         );
     }
-    let what = format!(
-        "the polyhedron's R A/(3V) exceeds the sphere's 1 by {:.3} %, an error that falls as 1/f^2 \
-         with the frequency (f = {} here)",
-        100.0 * check.polyhedron,
-        check.frequency
-    );
-    if check.explained_by_mesh() {
-        out!("most of the difference is the mesh: {what}");
-    } else {
-        out!("for comparison, {what}");
-    }
+    out!("curve stopped: {}", curve.stop);
 }
 
 /// Six significant digits.
-fn sig_digits6(x: f64) -> String {
+pub(super) fn sig_digits6(x: f64) -> String {
     sig_digits(x, 6)
 }

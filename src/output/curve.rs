@@ -51,7 +51,8 @@ fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
 /// measure>,critical_eigenvalue,second_eigenvalue,irrep,iterations` (the eigenvalues of the
 /// critical block nearest zero, relative to max|K_ij|). `curve.json` is the whole report,
 /// with the events (start, cusps, folds, end). `curve.svg` plots the second parameter
-/// against the control with the events marked.
+/// against the control with the events marked (hilltops and irrep changes with the other
+/// irrep).
 ///
 /// # Errors
 /// [`OutputError::Invalid`] for a non-finite value (nothing is written), else as the other
@@ -155,6 +156,19 @@ fn render(curve: &CurveReport, c: usize, s: usize) -> Result<String, Box<dyn std
                 CurveEventKind::Cusp | CurveEventKind::Fold => {
                     chart.draw_series(std::iter::once(
                         EmptyElement::at(at) + Circle::new((0, 0), 5, red.filled()) + label,
+                    ))?
+                }
+                CurveEventKind::Hilltop | CurveEventKind::IrrepChange => {
+                    let text = match &e.irrep {
+                        Some(irrep) => format!("{} ({irrep})", e.kind),
+                        None => e.kind.to_string(),
+                    };
+                    let font = ("sans-serif", 15).into_font().color(&BLACK);
+                    let green = RGBColor(20, 140, 60);
+                    chart.draw_series(std::iter::once(
+                        EmptyElement::at(at)
+                            + Rectangle::new([(-5, -5), (5, 5)], green.filled())
+                            + Text::new(text, (8, 8), font),
                     ))?
                 }
                 CurveEventKind::Start | CurveEventKind::End => {

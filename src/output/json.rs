@@ -49,9 +49,11 @@ pub fn write_critical(dir: &Path, report: &PathReport) -> Result<PathBuf, Output
 }
 
 /// As [`write_critical`], with the `events` of a critical curve after the path's critical
-/// points: each `{"kind": "start" | "cusp" | "fold" | "end", "curve": true, "extremum",
-/// "parameters", "measures", "step"}` with parameters and measures by name, `step` the
-/// curve step before the event.
+/// points: each `{"kind": "start" | "cusp" | "fold" | "hilltop" | "irrep change" | "end",
+/// "curve": true, "extremum", "irrep", "residual_eigenvalue", "parameters", "measures",
+/// "step"}` with parameters and measures by name, `step` the curve step before the event
+/// (`extremum` for a cusp or fold; `irrep`, the other singular block, and its eigenvalue for
+/// a hilltop or irrep change).
 ///
 /// # Errors
 /// As [`write_critical`].
@@ -135,6 +137,12 @@ pub fn write_critical_with(
         });
         if let Some(x) = e.extremum {
             event["extremum"] = serde_json::json!(x.to_string());
+        }
+        if let Some(irrep) = &e.irrep {
+            event["irrep"] = serde_json::json!(irrep);
+        }
+        if let Some(r) = e.residual_eigenvalue.filter(|r| r.is_finite()) {
+            event["residual_eigenvalue"] = serde_json::json!(r);
         }
         all.push(event);
     }
