@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Round-trip check of the mesh writers against meshio: writes every format with the
 # `write_formats` example, then reads each file back with meshio 5.3.5 and compares exactly
-# (scripts/meshio_roundtrip.py).
+# (scripts/meshio_roundtrip.py). Then runs the balloon (scenes/balloon.toml at icosphere
+# frequency 4), reads every state of its two collections back with meshio and checks the
+# fields against the closed-form tension and thickness (scripts/state_fields_check.py), and
+# runs the Python block of docs/python.md on that run.
 #
 # Usage: bash scripts/meshio_roundtrip.sh
 #
@@ -18,7 +21,8 @@ VENV="${MESHIO_VENV:-$ROOT/.venv-meshio}"
 PYTHON="${PYTHON:-python3}"
 # meshio 5.3.5's readers work with numpy 2 (its ascii Gmsh *writer* does not, but we only
 # read). h5py: meshio's XDMF reader imports it for every DataItem, even inline XML ones.
-PACKAGES=(meshio==5.3.5 numpy==2.2.6 h5py==3.13.0)
+# pandas and matplotlib: the block of docs/python.md.
+PACKAGES=(meshio==5.3.5 numpy==2.2.6 h5py==3.13.0 pandas==3.1.1 matplotlib==3.11.2)
 
 fail() {
     echo "meshio_roundtrip: $*" >&2
@@ -35,7 +39,7 @@ VPY="$VENV/bin/python"
 "$VPY" -m pip install --disable-pip-version-check --quiet "${PACKAGES[@]}" \
     || fail "pip could not install ${PACKAGES[*]} into $VENV"
 "$VPY" - <<'EOF' || fail "the installed packages do not import as expected"
-import h5py, meshio, numpy
+import h5py, matplotlib, meshio, numpy, pandas
 assert meshio.__version__ == "5.3.5", meshio.__version__
 EOF
 
@@ -43,8 +47,25 @@ OUT="$(mktemp -d "${TMPDIR:-/tmp}/meshio_roundtrip.XXXXXX")"
 cargo run --release --quiet --manifest-path "$ROOT/Cargo.toml" -p meshes \
     --example write_formats -- "$OUT" \
     || fail "the write_formats example failed (output in $OUT)"
-if "$VPY" "$ROOT/scripts/meshio_roundtrip.py" "$OUT"; then
-    rm -rf "$OUT"
-else
+if ! "$VPY" "$ROOT/scripts/meshio_roundtrip.py" "$OUT"; then
     fail "mismatch; the written files are kept in $OUT"
 fi
+
+# The states of a run, read back: the balloon at frequency 4 (162 nodes) through both
+# turning points.
+sed 's/^frequency = 8 .*/frequency = 4/' "$ROOT/scenes/balloon.toml" >"$OUT/balloon.toml"
+grep -q '^frequency = 4$' "$OUT/balloon.toml" || fail "could not set the balloon's frequency"
+cargo run --release --quiet --manifest-path "$ROOT/Cargo.toml" -- \
+    run "$OUT/balloon.toml" --out "$OUT/balloon-out" --quiet >/dev/null \
+    || fail "memstab run on the balloon failed (output in $OUT)"
+"$VPY" "$ROOT/scripts/state_fields_check.py" "$OUT/balloon-out" \
+    || fail "the balloon's state fields do not match; the run is kept in $OUT/balloon-out"
+
+# docs/python.md's Python block, as a reader would paste it, beside the run.
+awk '/^```python$/{on=1; next} /^```$/{on=0} on' "$ROOT/docs/python.md" >"$OUT/python_md.py"
+[ -s "$OUT/python_md.py" ] || fail "no python block in docs/python.md"
+(cd "$OUT" && MPLBACKEND=Agg "$VPY" python_md.py >/dev/null) \
+    || fail "the block of docs/python.md failed on $OUT/balloon-out"
+[ -s "$OUT/balloon-out/branch.png" ] || fail "docs/python.md's block wrote no branch.png"
+echo "docs/python.md: its block ran on the balloon run and wrote branch.png"
+rm -rf "$OUT"

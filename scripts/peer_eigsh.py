@@ -20,7 +20,9 @@ companion file.
       y = (S - sigma I)^-1 x,  W = (S - sigma I)^-1 U  (r extra solves, once).
 
 Prints one JSON object: {"file", "n", "nnz" (of S), "rank_one_terms", "k", "sigma",
-"eigenvalues" (ascending, of K), "seconds" (eigsh alone, including the factorisation of
+"eigenvalues" (ascending, of K), "scale" (max|K_ij|, with rank-one terms the larger of max|S_ij|
+and max_k |c_k| max_i a_ki^2: the unit of `memstab spectrum`), "units" ("max|K_ij|"),
+"relative" (the eigenvalues in units of "scale", as `memstab spectrum` prints them), "seconds" (eigsh alone, including the factorisation of
 K - sigma I and, with rank-one terms, the Woodbury set-up), "read_seconds"}.
 The default shift is -1e-3 * max|K_ij| (with rank-one terms: the larger of max|S_ij| and
 max_k |c_k| max_i a_ki^2): K of a free body is singular (rigid-body modes), so sigma = 0
@@ -115,12 +117,15 @@ def main():
     s = scipy.sparse.csc_matrix(scipy.io.mmread(args.matrix))
     rank_one = read_rank_one(args.matrix)
     read = time.perf_counter() - t0
+    # max|K_ij| as `memstab spectrum` measures it: of S, and of each rank-one term's largest
+    # entry c_k max_i a_ki^2.
+    scale = float(abs(s).max())
+    if rank_one is not None:
+        u, c = rank_one
+        scale = max(scale, float(np.max(np.abs(c) * np.max(u * u, axis=0))))
+    scale = max(scale, 1e-300)
     sigma = args.sigma
     if sigma is None:
-        scale = float(abs(s).max())
-        if rank_one is not None:
-            u, c = rank_one
-            scale = max(scale, float(np.max(np.abs(c) * np.max(u * u, axis=0))))
         sigma = -1e-3 * scale
     t0 = time.perf_counter()
     if rank_one is None:
@@ -139,6 +144,9 @@ def main():
             "k": args.k,
             "sigma": sigma,
             "eigenvalues": sorted(float(v) for v in np.asarray(values)),
+            "scale": scale,
+            "units": "max|K_ij|",
+            "relative": sorted(float(v) / scale for v in np.asarray(values)),
             "seconds": seconds,
             "read_seconds": read,
         },

@@ -116,6 +116,47 @@ pub struct PathReport {
     /// The file with every point's state (`path.states`), once written.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub states: Option<StatesInfo>,
+    /// Where the membrane would wrinkle along the path (left out when the model shows no
+    /// `wrinkled` field or no point's state was kept).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wrinkling: Option<Wrinkling>,
+    /// The wave number m about z of each critical mode (one per critical point), where the
+    /// mesh has an axis (a disc, a truncated sphere; empty otherwise). Written into
+    /// `critical.json` as each point's `m`.
+    #[serde(skip)]
+    pub wave_numbers: Vec<usize>,
+}
+
+/// Where the membrane model stops being valid along a path: the triangles whose smaller
+/// principal tension is negative (they would wrinkle; the membrane energy does not describe
+/// them).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Wrinkling {
+    /// The mesh's triangles.
+    pub triangles: usize,
+    /// The first path point with any wrinkled triangle (`None`: nowhere on the path).
+    pub first: Option<WrinkledPoint>,
+    /// The critical points that lie in a wrinkled state (numbered from 1, as
+    /// `critical_NN.vtu`).
+    pub critical: Vec<WrinkledCritical>,
+}
+
+/// A path point with wrinkled triangles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct WrinkledPoint {
+    /// The path step (the row `step` of `path.csv`).
+    pub step: usize,
+    /// How many triangles are wrinkled there.
+    pub wrinkled: usize,
+}
+
+/// A critical point in a wrinkled state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct WrinkledCritical {
+    /// The critical point's number (1-based, as `critical_NN.vtu`).
+    pub critical: usize,
+    /// How many triangles are wrinkled there.
+    pub wrinkled: usize,
 }
 
 /// What `path.json` records of the file of every point's state (see `output::store`).
@@ -410,6 +451,8 @@ mod tests {
             saved: vec![],
             spectra: Spectra::default(),
             states: None,
+            wrinkling: None,
+            wave_numbers: Vec::new(),
         };
         assert_eq!(r.index_range(), Some((0, 1)));
         r.rows = vec![row(0, Some(2)), row(1, None), row(2, Some(2))];

@@ -49,6 +49,32 @@ fn a_linear_buckling_run_plots_the_spectrum_by_irrep() {
 
     // The held state is written under its own name, and no file name has a space.
     assert!(dir.join("held_state.vtu").exists());
+    // path.pvd lists the held state (the state of every sample), events.pvd every critical
+    // state, each named with its irrep.
+    let pvd = std::fs::read_to_string(dir.join("path.pvd")).unwrap();
+    assert!(pvd.contains("file=\"held_state.vtu\""), "{pvd}");
+    let events = std::fs::read_to_string(dir.join("events.pvd")).unwrap();
+    let critical_files = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter(|e| {
+            let name = e.as_ref().unwrap().file_name().into_string().unwrap();
+            name.starts_with("critical_") && name.ends_with(".vtu")
+        })
+        .count();
+    assert!(critical_files > 0);
+    assert_eq!(
+        events.matches("<DataSet").count(),
+        critical_files,
+        "{events}"
+    );
+    for k in 1..=critical_files {
+        assert!(
+            events.contains(&format!(
+                "file=\"critical_{k:02}.vtu\" name=\"critical_{k:02}: "
+            )),
+            "{events}"
+        );
+    }
     for entry in std::fs::read_dir(&dir).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
         assert!(!name.contains(' '), "{name}");

@@ -29,6 +29,7 @@ mod one_point;
 mod output;
 mod ponding;
 mod reliability;
+mod saved_point;
 mod scene_mesh_file;
 mod scene_validation;
 mod scenes_run;

@@ -90,6 +90,8 @@ fn report() -> PathReport {
         saved: Vec::new(),
         spectra: Spectra::default(),
         states: None,
+        wrinkling: None,
+        wave_numbers: Vec::new(),
     }
 }
 
@@ -122,15 +124,16 @@ fn csv_has_the_header_and_exact_numbers() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "step,arclength,p,g,volume,stretch,max_displacement,iterations"
+        "step,arclength,p,g,volume,stretch,max_displacement,iterations,index"
     );
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), r.rows.len());
     for (line, row) in rows.iter().zip(&r.rows) {
         let cells: Vec<&str> = line.split(',').collect();
-        assert_eq!(cells.len(), 8, "{line}");
+        assert_eq!(cells.len(), 9, "{line}");
         assert_eq!(cells[0].parse::<usize>().unwrap(), row.step);
         assert_eq!(cells[7].parse::<usize>().unwrap(), row.iterations);
+        assert_eq!(cells[8].parse::<usize>().ok(), row.index, "{line}");
         let numbers: Vec<f64> = cells[1..7].iter().map(|c| c.parse().unwrap()).collect();
         let expected: Vec<f64> = std::iter::once(row.arclength)
             .chain(row.parameters.iter().copied())
@@ -291,6 +294,7 @@ fn states_are_written_and_collected() {
     assert_eq!(
         listing(dir.path()),
         [
+            "events.pvd",
             "path.pvd",
             "state_0000.vtu",
             "state_0010.vtu",
@@ -396,9 +400,9 @@ fn a_missing_directory_is_named() {
 
 #[test]
 fn a_quiet_progress_bar_is_silent() {
-    let bar = Progress::new(10, true);
+    let bar = Progress::new("p", Some((0.0, 2.0)), true);
     assert!(!bar.is_visible());
-    bar.set(3, "p = 1.2");
+    bar.set(3, 1.2);
     bar.finish("done");
 }
 

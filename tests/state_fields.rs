@@ -98,3 +98,104 @@ fn every_state_file_carries_the_fields() {
         );
     }
 }
+
+#[test]
+fn the_node_fields_are_the_normal_and_the_pressure_of_the_loads() {
+    use memstab::model::NodeQuantity;
+    use memstab::report::{State, StateKind};
+    // The balloon: the gas pressure p at every node, normals of unit length out of the sphere.
+    let text = scene_text("balloon.toml").replace("frequency = 8", "frequency = 4");
+    let mut study = Study::build(Scene::from_toml_str(&text, "balloon").unwrap()).unwrap();
+    let start = study.start.clone();
+    let (u, params, _) = solve_start(&mut study, &start).unwrap();
+    let nodes = study.model.node_fields(&u, &params);
+    assert_eq!(nodes.len(), 1);
+    assert_eq!(nodes[0].quantity, NodeQuantity::Pressure);
+    assert!(
+        nodes[0].values.iter().all(|&v| v == params[0]),
+        "{params:?}"
+    );
+    let x = study.model.positions(&u);
+    let normals = memstab::output::node_normals(&x, &study.mesh.mesh.triangles);
+    for (n, xi) in normals.iter().zip(&x) {
+        let n = nalgebra::Vector3::from(*n);
+        assert!((n.norm() - 1.0).abs() < 1e-12);
+        // On a sphere the vertex normal is the radial direction to the mesh's O(h²).
+        assert!(n.dot(&xi.normalize()) > 0.99, "{n} at {xi}");
+    }
+    let fields = memstab::output::state_fields(
+        &study,
+        &State {
+            step: 0,
+            kind: StateKind::Step,
+            control: params[0],
+            u: u.clone(),
+            params: params.clone(),
+            mode: None,
+        },
+    );
+    let names: Vec<&str> = fields.point.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["normal", "pressure"]);
+
+    // Fluid below a flat disc with the level 0.5 above it: ρ g h = 0.5 per triangle, and at
+    // the nodes +0.5 (the fluid pushes along the upward normal).
+    let text = scene_text("disc_fluid_below.toml").replace("start = 0.0 ", "start = 0.5 ");
+    assert!(text.contains("start = 0.5 "));
+    let study = Study::build(Scene::from_toml_str(&text, "disc").unwrap()).unwrap();
+    let u = vec![0.0; study.model.layout().unknowns()];
+    let cells = study.model.cell_fields(&u, &study.start);
+    let fluid = cells
+        .iter()
+        .find(|f| f.quantity == CellQuantity::FluidPressure)
+        .unwrap();
+    assert!(fluid.values.iter().all(|&v| (v - 0.5).abs() < 1e-15));
+    let nodes = study.model.node_fields(&u, &study.start);
+    assert!(nodes[0].values.iter().all(|&v| (v - 0.5).abs() < 1e-15));
+    let x = study.model.positions(&u);
+    let normals = memstab::output::node_normals(&x, &study.mesh.mesh.triangles);
+    assert!(normals.iter().all(|n| (n[2] - 1.0).abs() < 1e-12));
+}
+
+#[test]
+fn a_slack_disc_run_reports_wrinkling_from_its_first_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = scene_text("disc_fluid_below.toml")
+        .replace("prestretch = 1.1", "prestretch = 0.9")
+        .replace("divisions = 16", "divisions = 4")
+        .replace("steps = 400", "steps = 3");
+    assert!(text.contains("prestretch = 0.9") && text.contains("steps = 3"));
+    let path = dir.path().join("slack.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("out");
+    let run = |json: bool| {
+        let mut args = vec![
+            "run".to_string(),
+            path.to_str().unwrap().to_string(),
+            "--out".to_string(),
+            out.to_str().unwrap().to_string(),
+            "--quiet".to_string(),
+        ];
+        if json {
+            args.push("--json".into());
+        }
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let summary = run(false);
+    assert!(
+        summary.contains("wrinkling: first at step 0 (112 of 112 triangles"),
+        "{summary}"
+    );
+    let json: serde_json::Value = serde_json::from_str(run(true).trim()).unwrap();
+    let w = &json["wrinkling"];
+    assert_eq!(w["triangles"], 112, "{json}");
+    assert_eq!(w["first"]["step"], 0);
+    assert_eq!(w["first"]["wrinkled"], 112);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+    assert_eq!(&report["wrinkling"], w);
+}

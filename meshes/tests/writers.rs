@@ -699,3 +699,30 @@ fn the_xml_check_rejects_mismatched_tags() {
 fn the_xml_check_rejects_unclosed_elements() {
     parse_xml("<a><b></b>");
 }
+
+#[test]
+fn a_named_collection_escapes_its_names_and_refuses_control_characters() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("events.pvd");
+    meshes::write::write_pvd_named(
+        &path,
+        &[
+            (0.0, "a.vtu".into(), "critical_01: <E1> & co".to_string()),
+            (1.0, "b.vtu".into(), String::new()),
+        ],
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        text.contains("file=\"a.vtu\" name=\"critical_01: &lt;E1&gt; &amp; co\"/>"),
+        "{text}"
+    );
+    assert!(text.contains("file=\"b.vtu\"/>"), "{text}");
+    let bad = meshes::write::write_pvd_named(&path, &[(0.0, "a.vtu".into(), "x\ny".into())]);
+    assert!(bad.is_err());
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        text,
+        "the old file is kept"
+    );
+}

@@ -1258,6 +1258,8 @@ fn branch_run(
         saved: Vec::new(),
         spectra: Default::default(),
         states: None,
+        wrinkling: None,
+        wave_numbers: Vec::new(),
     };
     BranchRun {
         report,

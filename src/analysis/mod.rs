@@ -343,6 +343,8 @@ impl Record {
             saved: Vec::new(),
             spectra: self.spectra,
             states: None,
+            wrinkling: None,
+            wave_numbers: Vec::new(),
         };
         RunResult {
             report,

@@ -27,6 +27,50 @@ pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
     Ok(study)
 }
 
+/// A saved path point of a finished run, as `spectrum` and `export-matrix` analyse it with
+/// `--point`: the run read back, its scene rebuilt (`scene`, else the file recorded in
+/// `path.json`) and checked against it, and point `n`'s displacement and parameters from
+/// `path.states`. Anything missing or not matching is bad input (exit 2).
+pub(super) struct SavedPoint {
+    pub study: Study,
+    pub run: memstab::output::FinishedRun,
+    pub u: Vec<f64>,
+    pub params: Vec<f64>,
+}
+
+pub(super) fn saved_point(
+    run_dir: &Path,
+    scene: Option<&Path>,
+    n: usize,
+) -> Result<SavedPoint, CliError> {
+    let input = |e: memstab::output::ReopenError| CliError::Input(one_line(&e.to_string()));
+    if !run_dir.is_dir() {
+        return Err(CliError::Input(format!(
+            "--point {n}: '{}' is not a directory; --point takes the output directory of memstab run",
+            run_dir.display()
+        )));
+    }
+    let run = memstab::output::FinishedRun::read(run_dir).map_err(input)?;
+    let file = scene.map_or_else(|| Path::new(&run.origin).to_path_buf(), Path::to_path_buf);
+    if scene.is_none() && !file.is_file() {
+        return Err(CliError::Input(format!(
+            "--point {n}: the run's scene file '{}' (recorded in {}) is not found from here; \
+             give it with --scene FILE",
+            file.display(),
+            run_dir.join("path.json").display()
+        )));
+    }
+    let study = build_study(load_scene(&file)?)?;
+    run.check_model(&study).map_err(input)?;
+    let (u, params) = run.point(&study, n).map_err(input)?;
+    Ok(SavedPoint {
+        study,
+        run,
+        u,
+        params,
+    })
+}
+
 /// Parses the `--at` list against the parameter names: (index, value) pairs.
 pub(super) fn parse_at(at: &[String], names: &[String]) -> Result<Vec<(usize, f64)>, CliError> {
     let mut out = Vec::new();

@@ -1,7 +1,8 @@
 //! `memstab demo [--out DIR] [--quiet]`: the bundled demo scene run as `memstab run` runs
 //! it, then its turning points against the closed form for a sphere.
 
-use super::run::{execute, interrupted, print_summary};
+use super::run::{execute, interrupted};
+use super::summary::print_summary;
 use super::CliError;
 use clap::Args;
 use memstab::demo::closed_form_check;

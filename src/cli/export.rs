@@ -1,6 +1,8 @@
 //! `memstab export-matrix SCENE [--at NAME=VALUE]... --out K.mtx`: the full tangent K at the
 //! scene's start state in Matrix Market format, so that an external solver (scipy `eigsh`,
-//! `scripts/peer_eigsh.py`) works on exactly our matrix.
+//! `scripts/peer_eigsh.py`) works on exactly our matrix; `memstab export-matrix RUN_DIR
+//! --point N [--scene FILE] --out K.mtx`: at path point N of a finished run (from its
+//! `path.states`, no solve).
 //!
 //! The state is the one `memstab spectrum` analyses
 //! ([`memstab::analysis::equilibrium::state_at`]): solved as `memstab run` solves its start,
@@ -11,7 +13,7 @@
 //! `gas-amount` effect: K = S + Σ c_k a_k a_kᵀ, dense) go into a companion file next to it,
 //! `K.rank1.mtx` (see [`memstab::output::write_matrix_market`] and the `--help` text).
 
-use super::common::{build_study, check_out_file, load_scene, one_line, parse_at};
+use super::common::{build_study, check_out_file, load_scene, parse_at, saved_point};
 use super::CliError;
 use clap::Args;
 use memstab::analysis::equilibrium::{state_at, StartState};
@@ -23,11 +25,19 @@ use std::path::PathBuf;
 #[derive(Debug, Args)]
 #[command(after_long_help = EXPORT_HELP)]
 pub(crate) struct ExportArgs {
-    /// The scene file (TOML).
-    scene: PathBuf,
+    /// The scene file (TOML), or with --point the output directory of a finished `memstab run`.
+    #[arg(value_name = "SCENE|RUN_DIR")]
+    input: PathBuf,
     /// Set a parameter instead of its start value (repeatable), e.g. `--at p=1.3`.
     #[arg(long = "at", value_name = "NAME=VALUE")]
     at: Vec<String>,
+    /// Export at path point N of the run in RUN_DIR (the row step = N of its path.csv), read
+    /// from its path.states.
+    #[arg(long, value_name = "N")]
+    point: Option<usize>,
+    /// With --point: the run's scene file (default: the one recorded in RUN_DIR/path.json).
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
     /// The Matrix Market file to write (its directory must exist); rank-one terms of K, if
     /// any, go to a companion file next to it (K.mtx → K.rank1.mtx), see below.
     #[arg(long, value_name = "K.mtx")]
@@ -53,18 +63,33 @@ sparse LU of S - sigma I and the Sherman-Morrison-Woodbury formula.";
 pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
     check_out_file("--out", &args.out)?;
     check_out_file("--out (its rank-one file)", &rank_one_path(&args.out))?;
-    let scene = load_scene(&args.scene)?;
-    if !scene.boundary.slide.is_empty() {
-        return Err(CliError::Input(format!(
-            "{}: 'boundary.slide': export-matrix writes K over all unknowns, but a sliding node \
-             keeps only its in-plane ones; remove [[boundary.slide]] (or fix the set) to export",
-            scene.origin
-        )));
-    }
-    let mut study = build_study(scene)?;
-    let at = parse_at(&args.at, &study.parameters)?;
-    let StartState { u, params, .. } =
-        state_at(&mut study, &at).map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
+    let (study, u, params) = match args.point {
+        Some(n) => {
+            if let Some(a) = args.at.first() {
+                return Err(CliError::Input(format!(
+                    "--at '{a}' with --point {n}: a saved point's parameters are those of the run"
+                )));
+            }
+            let p = saved_point(&args.input, args.scene.as_deref(), n)?;
+            refuse_sliding(&p.study.scene)?;
+            (p.study, p.u, p.params)
+        }
+        None => {
+            if let Some(scene) = &args.scene {
+                return Err(CliError::Input(format!(
+                    "--scene '{}' goes with --point N (the scene of a run directory)",
+                    scene.display()
+                )));
+            }
+            let scene = load_scene(&args.input)?;
+            refuse_sliding(&scene)?;
+            let mut study = build_study(scene)?;
+            let at = parse_at(&args.at, &study.parameters)?;
+            let StartState { u, params, .. } =
+                state_at(&mut study, &at).map_err(|e| super::spectrum::not_converged(&e, &at))?;
+            (study, u, params)
+        }
+    };
     let mut eval = study.model.new_evaluation();
     study
         .model
@@ -100,4 +125,16 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
         ),
     }
     Ok(())
+}
+
+/// K over all unknowns ignores a sliding constraint: such a scene is refused (exit 2).
+fn refuse_sliding(scene: &memstab::scene::Scene) -> Result<(), CliError> {
+    if scene.boundary.slide.is_empty() {
+        return Ok(());
+    }
+    Err(CliError::Input(format!(
+        "{}: 'boundary.slide': export-matrix writes K over all unknowns, but a sliding node \
+         keeps only its in-plane ones; remove [[boundary.slide]] (or fix the set) to export",
+        scene.origin
+    )))
 }

@@ -24,6 +24,7 @@ mod group;
 mod mesh;
 mod run;
 mod spectrum;
+mod summary;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

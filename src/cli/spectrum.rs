@@ -1,5 +1,7 @@
 //! `memstab spectrum SCENE [--at NAME=VALUE]... [--count N] [--json]`: the tangent's spectrum
-//! by irrep at the scene's start state.
+//! by irrep at the scene's start state; `memstab spectrum RUN_DIR --point N [--scene FILE]`:
+//! at path point N of a finished run, read from its `path.states` (no solve: any point of the
+//! path, unstable ones past a turning point included).
 //!
 //! The state is solved as `memstab run` solves its start (every parameter at its start value,
 //! here overridden by `--at`); for a `linear-buckling` scene the start state is held and an
@@ -13,7 +15,7 @@
 //! number — is one line and exit code 2; a start state that does not converge
 //! is exit code 1.
 
-use super::common::{build_study, load_scene, one_line, parse_at, sci};
+use super::common::{build_study, load_scene, one_line, parse_at, saved_point, sci};
 use super::CliError;
 use clap::Args;
 use memstab::adapted::AdaptedBasis;
@@ -25,11 +27,20 @@ use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 pub(crate) struct SpectrumArgs {
-    /// The scene file (TOML; see docs/scenes.md).
-    scene: PathBuf,
+    /// The scene file (TOML; see docs/scenes.md), or with --point the output directory of a
+    /// finished `memstab run`.
+    #[arg(value_name = "SCENE|RUN_DIR")]
+    input: PathBuf,
     /// Set a parameter instead of its start value (repeatable), e.g. `--at p=1.3`.
     #[arg(long = "at", value_name = "NAME=VALUE")]
     at: Vec<String>,
+    /// Analyse path point N of the run in RUN_DIR (the row step = N of its path.csv), read
+    /// from its path.states.
+    #[arg(long, value_name = "N")]
+    point: Option<usize>,
+    /// With --point: the run's scene file (default: the one recorded in RUN_DIR/path.json).
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
     /// How many of each block's lowest eigenvalues to print.
     #[arg(long, default_value_t = 6, value_name = "N")]
     count: usize,
@@ -76,20 +87,18 @@ struct SpectrumJson {
     /// True for a linear-buckling scene: the start state is held and `parameters` enter the
     /// tangent only.
     held: bool,
+    /// With `--point`: the path point analysed, and the index the run recorded there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    point: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    run_index: Option<usize>,
     irreps: Vec<IrrepJson>,
 }
 
 pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
-    let scene = load_scene(&args.scene)?;
-    let mut study = build_study(scene)?;
+    let (study, at, u, params, iterations, point) = state(args)?;
     let origin = study.scene.origin.clone();
-    let at = parse_at(&args.at, &study.parameters)?;
     let held = held(&study);
-    let StartState {
-        u,
-        params,
-        iterations,
-    } = state_at(&mut study, &at).map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     let adapted = AdaptedBasis::new(&study.action, study.model.layout())
         .map_err(|e| CliError::Input(format!("scene '{origin}': {e}")))?;
     let stability = Stability::new(&study.model, &adapted);
@@ -129,6 +138,8 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
             units: "max|K_ij|",
             iterations,
             held,
+            point: point.map(|(n, _)| n),
+            run_index: point.and_then(|(_, i)| i),
             irreps: spectrum
                 .blocks
                 .iter()
@@ -179,7 +190,16 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     } else {
         values.join(", ")
     };
-    if held {
+    if let Some((n, index)) = point {
+        let recorded = index.map_or_else(
+            || "no index recorded there".to_string(),
+            |i| format!("the run recorded index {i} there"),
+        );
+        out!(
+            "state: path point {n} of {} (from path.states, no solve): {values}; {recorded}",
+            args.input.display()
+        );
+    } else if held {
         let c = study
             .control
             .map_or("the control", |c| &study.parameters[c]);
@@ -275,6 +295,66 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
         if spectrum.index == 0 { ": stable" } else { "" }
     );
     Ok(())
+}
+
+/// The state to analyse: with `--point`, path point N of the run in RUN_DIR (its scene
+/// rebuilt and checked, the state read from path.states); else the scene's start state with
+/// the `--at` overrides. Returns the study, the overrides, u, Λ, Newton's iterations and,
+/// with `--point`, the point and the index the run recorded there.
+#[allow(clippy::type_complexity)]
+fn state(
+    args: &SpectrumArgs,
+) -> Result<
+    (
+        memstab::study::Study,
+        Vec<(usize, f64)>,
+        Vec<f64>,
+        Vec<f64>,
+        usize,
+        Option<(usize, Option<usize>)>,
+    ),
+    CliError,
+> {
+    if let Some(n) = args.point {
+        if !args.at.is_empty() {
+            return Err(CliError::Input(format!(
+                "--at '{}' with --point {n}: a saved point's parameters are those of the run",
+                args.at[0]
+            )));
+        }
+        let p = saved_point(&args.input, args.scene.as_deref(), n)?;
+        let index = p.run.index_at(n);
+        return Ok((p.study, Vec::new(), p.u, p.params, 0, Some((n, index))));
+    }
+    if let Some(scene) = &args.scene {
+        return Err(CliError::Input(format!(
+            "--scene '{}' goes with --point N (the scene of a run directory)",
+            scene.display()
+        )));
+    }
+    let mut study = build_study(load_scene(&args.input)?)?;
+    let at = parse_at(&args.at, &study.parameters)?;
+    let StartState {
+        u,
+        params,
+        iterations,
+    } = state_at(&mut study, &at).map_err(|e| not_converged(&e, &at))?;
+    Ok((study, at, u, params, iterations, None))
+}
+
+/// A start solve that failed: with `--at`, the values may lie where no equilibrium near the
+/// start exists (past a turning point of the control), so a saved point is the way there.
+pub(super) fn not_converged(e: &memstab::analysis::RunError, at: &[(usize, f64)]) -> CliError {
+    let message = one_line(&e.to_string());
+    if at.is_empty() || !matches!(e, memstab::analysis::RunError::Start { .. }) {
+        return CliError::Failure(message);
+    }
+    CliError::Failure(format!(
+        "{message}; with --at the state is solved afresh from the start guess, and no \
+         equilibrium may exist there (past a turning point of the control the path does not \
+         return to these values, or only on an unstable branch); to analyse a point of a path, \
+         run the scene and give `memstab spectrum RUN_DIR --point N` (N a step of its path.csv)"
+    ))
 }
 
 /// `1 iteration`, `4 iterations`.

@@ -16,7 +16,7 @@
 use super::volume::{volume, ClosingFace};
 use super::Quantity;
 use crate::model::constraint::{gather, Constraint, ConstraintValue};
-use crate::model::{Assembler, Effect, Layout, ModelError, Vec3};
+use crate::model::{Assembler, Effect, Layout, ModelError, NodeField, NodeQuantity, Vec3};
 use std::sync::Arc;
 use symmetry::Invariant;
 
@@ -86,6 +86,14 @@ impl Effect for GasPressure {
             terms.loads[0] = v.grad.map(|g| -g);
             Ok(())
         })
+    }
+
+    /// The over-pressure p, the same at every node.
+    fn node_fields(&self, x: &[Vec3], _: &[[usize; 3]], params: &[f64]) -> Vec<NodeField> {
+        vec![NodeField {
+            quantity: NodeQuantity::Pressure,
+            values: vec![self.pressure.value(params); x.len()],
+        }]
     }
 }
 
@@ -174,6 +182,14 @@ impl Effect for GasAmount {
             out.add_rank_one(c / (v * v), grad_v);
         }
         Ok(())
+    }
+
+    /// The over-pressure C/V_g − P_atm, the same at every node.
+    fn node_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<NodeField> {
+        vec![NodeField {
+            quantity: NodeQuantity::Pressure,
+            values: vec![self.over_pressure(triangles, x, params); x.len()],
+        }]
     }
 }
 

@@ -115,7 +115,9 @@ use super::volume::ClosingFace;
 use super::Quantity;
 use crate::model::constraint::{gather, Constraint, ConstraintValue};
 use crate::model::Local;
-use crate::model::{Assembler, Effect, Layout, ModelError, Vec3};
+use crate::model::{
+    Assembler, CellField, CellQuantity, Effect, Layout, ModelError, NodeField, NodeQuantity, Vec3,
+};
 use nalgebra::Vector3;
 use std::sync::Arc;
 use symmetry::Invariant;
@@ -175,6 +177,13 @@ impl Fluid {
             FluidSide::Behind => 1.0,
             FluidSide::Front => -1.0,
         }
+    }
+
+    /// The fluid pressure ρ g (h − z)₊ at height z (ρ g (h − z) in a filled enclosure).
+    pub fn pressure_at(&self, z: f64, params: &[f64]) -> f64 {
+        let head = self.level.value(params) - z;
+        let head = if self.filled { head } else { head.max(0.0) };
+        self.density.value(params) * self.gravity.value(params) * head
     }
 
     /// The fluid volume V_f below the level (sign-corrected for the side), at positions `x`:
@@ -244,6 +253,31 @@ impl Effect for Fluid {
                 Ok(())
             },
         )
+    }
+
+    /// The fluid pressure ρ g (h − z)₊ at each triangle's centroid (unclipped when filled).
+    fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<CellField> {
+        let values = triangles
+            .iter()
+            .map(|&[a, b, c]| self.pressure_at((x[a][2] + x[b][2] + x[c][2]) / 3.0, params))
+            .collect();
+        vec![CellField {
+            quantity: CellQuantity::FluidPressure,
+            values,
+        }]
+    }
+
+    /// The fluid pressure at each node, positive when it pushes along the normal (fluid
+    /// behind the membrane), negative for fluid in front.
+    fn node_fields(&self, x: &[Vec3], _: &[[usize; 3]], params: &[f64]) -> Vec<NodeField> {
+        let values = x
+            .iter()
+            .map(|xi| self.sign() * self.pressure_at(xi[2], params))
+            .collect();
+        vec![NodeField {
+            quantity: NodeQuantity::Pressure,
+            values,
+        }]
     }
 }
 
@@ -565,6 +599,42 @@ mod tests {
 
     fn max_diff<'a>(a: impl Iterator<Item = &'a f64>, b: impl Iterator<Item = &'a f64>) -> f64 {
         a.zip(b).fold(0.0f64, |m, (u, v)| m.max((u - v).abs()))
+    }
+
+    #[test]
+    fn the_fluid_pressure_is_the_head_at_the_centroid_and_the_nodes() {
+        let x: Vec<Vector3<f64>> = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.3),
+            Vector3::new(0.0, 1.0, 0.9),
+            Vector3::new(1.0, 1.0, 1.5),
+        ];
+        let t = [[0, 1, 2], [1, 3, 2]];
+        // ρ = 2, g = 3 (a parameter), level h = 1.
+        for (side, sign) in [(FluidSide::Behind, 1.0), (FluidSide::Front, -1.0)] {
+            for filled in [false, true] {
+                let mut fluid = Fluid::new(
+                    Quantity::Value(2.0),
+                    Quantity::Parameter(0),
+                    Quantity::Value(1.0),
+                    side,
+                );
+                fluid.filled = filled;
+                let head = |z: f64| if filled { 1.0 - z } else { (1.0 - z).max(0.0) };
+                let cells = fluid.cell_fields(&x, &t, &[3.0]);
+                assert_eq!(cells[0].quantity, CellQuantity::FluidPressure);
+                let want = [6.0 * head(0.4), 6.0 * head(0.9)];
+                for (got, want) in cells[0].values.iter().zip(want) {
+                    assert!((got - want).abs() < 1e-14, "{got} vs {want}");
+                }
+                let nodes = fluid.node_fields(&x, &t, &[3.0]);
+                assert_eq!(nodes[0].quantity, NodeQuantity::Pressure);
+                for (got, xi) in nodes[0].values.iter().zip(&x) {
+                    let want = sign * 6.0 * head(xi[2]);
+                    assert!((got - want).abs() < 1e-14, "{got} vs {want}");
+                }
+            }
+        }
     }
 
     #[test]

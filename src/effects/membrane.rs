@@ -291,7 +291,7 @@ pub struct PrincipalState {
 }
 
 impl ReferenceTriangle {
-    /// The principal state at `x` (docs/theory.md §2.6): with t = λ₁² + λ₂² and J = λ₁²λ₂²
+    /// The principal state at `x` (docs/theory.md §2.7): with t = λ₁² + λ₂² and J = λ₁²λ₂²
     /// from F, λ₁² = (t + √(t² − 4J))/2 and λ₂² = J/λ₁²; with
     /// W(λ₁, λ₂) = c1 (λ₁² + λ₂² + λ₁⁻²λ₂⁻² − 3) + c2 (λ₁⁻² + λ₂⁻² + λ₁²λ₂² − 3),
     /// σ_i = λ_i ∂W/∂λ_i and h = H/(λ₁λ₂), T_i = σ_i h.

@@ -14,7 +14,7 @@
 //! press an edge through the plane; that is the usual node-to-surface penalty.
 
 use super::Quantity;
-use crate::model::{Assembler, Effect, ModelError, Placement, Vec3};
+use crate::model::{Assembler, CellField, CellQuantity, Effect, ModelError, Placement, Vec3};
 use symmetry::Invariant;
 
 /// The penalty exponent q.
@@ -115,5 +115,103 @@ impl Effect for Plane {
                 Ok(())
             },
         )
+    }
+
+    /// The contact pressure: each node's penalty force κ⟨−δ⟩^q over its tributary area (a
+    /// third of its triangles' current areas), averaged over each triangle's nodes.
+    fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<CellField> {
+        let d = self.offset.value(params);
+        let kappa = self.penalty.value(params);
+        let q = match self.law {
+            PenaltyLaw::Linear => 1,
+            PenaltyLaw::Cubic => 3,
+        };
+        let mut area = vec![0.0; x.len()];
+        for &[a, b, c] in triangles {
+            let t = (x[b] - x[a]).cross(&(x[c] - x[a])).norm() / 6.0;
+            for i in [a, b, c] {
+                area[i] += t;
+            }
+        }
+        let pressure: Vec<f64> = x
+            .iter()
+            .zip(&area)
+            .map(|(xi, &ai)| {
+                let pen = d - self.normal.dot(xi);
+                if pen > 0.0 && ai > 0.0 {
+                    kappa * pen.powi(q) / ai
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let values = triangles
+            .iter()
+            .map(|t| t.iter().map(|&i| pressure[i]).sum::<f64>() / 3.0)
+            .collect();
+        vec![CellField {
+            quantity: CellQuantity::ContactPressure,
+            values,
+        }]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square of two triangles at height z, and a plane z ≥ 0 with penalty κ.
+    fn square(z: [f64; 4]) -> (Vec<Vec3>, Vec<[usize; 3]>) {
+        let x = vec![
+            Vec3::new(0.0, 0.0, z[0]),
+            Vec3::new(1.0, 0.0, z[1]),
+            Vec3::new(1.0, 1.0, z[2]),
+            Vec3::new(0.0, 1.0, z[3]),
+        ];
+        (x, vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    fn plane(law: PenaltyLaw) -> Plane {
+        Plane {
+            normal: Vec3::z(),
+            offset: Quantity::Value(0.0),
+            penalty: Quantity::Value(50.0),
+            law,
+        }
+    }
+
+    #[test]
+    fn the_contact_pressure_carries_the_penalty_forces_and_vanishes_off_contact() {
+        for law in [PenaltyLaw::Linear, PenaltyLaw::Cubic] {
+            let q = if law == PenaltyLaw::Linear { 1 } else { 3 };
+            let p = plane(law);
+            let (x, t) = square([-0.01, -0.02, 0.03, -0.005]);
+            let f = p.cell_fields(&x, &t, &[]);
+            assert_eq!(f.len(), 1);
+            assert_eq!(f[0].quantity, CellQuantity::ContactPressure);
+            // Σ_T A_T · mean of F_i/A_i over its nodes = Σ_i F_i: the pressure carries the
+            // whole contact force.
+            let area = |tri: &[usize; 3]| {
+                let [a, b, c] = *tri;
+                (x[b] - x[a]).cross(&(x[c] - x[a])).norm() / 2.0
+            };
+            let carried: f64 = t
+                .iter()
+                .zip(&f[0].values)
+                .map(|(tri, v)| area(tri) * v)
+                .sum();
+            let force: f64 = x.iter().map(|xi| 50.0 * (-xi[2]).max(0.0).powi(q)).sum();
+            assert!(
+                (carried / force - 1.0).abs() < 1e-12,
+                "{carried} vs {force}"
+            );
+            assert!(f[0].values.iter().all(|v| *v > 0.0));
+            // Nothing touches: no pressure.
+            let (x, t) = square([0.01, 0.02, 0.0, 0.5]);
+            assert!(p.cell_fields(&x, &t, &[])[0]
+                .values
+                .iter()
+                .all(|v| *v == 0.0));
+        }
     }
 }

@@ -107,6 +107,45 @@ pub trait Effect: Send + Sync {
     ) -> Vec<CellField> {
         Vec::new()
     }
+
+    /// The per-node quantities this effect can show at a state (the pressure it applies),
+    /// for the state files; none by default.
+    fn node_fields(
+        &self,
+        _x: &[Vec3],
+        _triangles: &[[usize; 3]],
+        _params: &[f64],
+    ) -> Vec<NodeField> {
+        Vec::new()
+    }
+}
+
+/// What a per-node field of a state holds (its name in the state files is
+/// [`NodeQuantity::name`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeQuantity {
+    /// The pressure across the membrane that the gas and fluid loads apply at the node,
+    /// positive when it pushes along the membrane's normal (out of a closed membrane, up
+    /// on a membrane whose normals point up).
+    Pressure,
+}
+
+impl NodeQuantity {
+    /// The field's name in the state files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pressure => "pressure",
+        }
+    }
+}
+
+/// One value per node of a [`NodeQuantity`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeField {
+    /// What it holds.
+    pub quantity: NodeQuantity,
+    /// One value per node, in the mesh's order.
+    pub values: Vec<f64>,
 }
 
 /// What a per-triangle field of a state holds (its name in the state files is
@@ -125,8 +164,12 @@ pub enum CellQuantity {
     Tension2,
     /// 1 where the smaller principal tension is negative (the membrane would wrinkle), else 0.
     Wrinkled,
-    /// The fluid pressure at the triangle's centroid.
+    /// The fluid pressure ρ g (h − z)₊ at the triangle's centroid (unclipped in a filled
+    /// enclosure), whichever side the fluid is on.
     FluidPressure,
+    /// The contact pressure of a plane: the nodes' penalty forces over their tributary
+    /// areas (a third of the adjacent triangles' areas), averaged over the triangle.
+    ContactPressure,
 }
 
 impl CellQuantity {
@@ -140,6 +183,7 @@ impl CellQuantity {
             Self::Tension2 => "tension_2",
             Self::Wrinkled => "wrinkled",
             Self::FluidPressure => "fluid_pressure",
+            Self::ContactPressure => "contact_pressure",
         }
     }
 }
@@ -344,6 +388,28 @@ impl FeModel {
             .effects
             .iter()
             .flat_map(|e| e.cell_fields(&x, self.layout.triangles(), params))
+        {
+            match fields.iter_mut().find(|g| g.quantity == f.quantity) {
+                Some(g) => g
+                    .values
+                    .iter_mut()
+                    .zip(&f.values)
+                    .for_each(|(a, b)| *a += b),
+                None => fields.push(f),
+            }
+        }
+        fields
+    }
+
+    /// Every effect's per-node fields at (u, Λ), in effect order (a quantity that several
+    /// effects show, such as gas and fluid pressure, is summed).
+    pub fn node_fields(&self, u: &[f64], params: &[f64]) -> Vec<NodeField> {
+        let x = self.positions(u);
+        let mut fields: Vec<NodeField> = Vec::new();
+        for f in self
+            .effects
+            .iter()
+            .flat_map(|e| e.node_fields(&x, self.layout.triangles(), params))
         {
             match fields.iter_mut().find(|g| g.quantity == f.quantity) {
                 Some(g) => g

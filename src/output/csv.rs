@@ -6,9 +6,11 @@ use std::path::{Path, PathBuf};
 
 /// Writes `dir/path.csv` and returns its path.
 ///
-/// The header is `step,arclength,<each parameter>,<each measure>,iterations` (names quoted as
+/// The header is `step,arclength,<each parameter>,<each measure>,iterations,index` (names
+/// quoted as
 /// in RFC 4180 if they contain a comma, a quote or a line break), followed by one row per
-/// [`PathRow`](crate::report::PathRow). Numbers are printed with the fewest digits that parse
+/// [`PathRow`](crate::report::PathRow); `index` is the instability index Σ d·neg at the point,
+/// empty where it was not computed (no stability analysis, a singular block). Numbers are printed with the fewest digits that parse
 /// back to the same `f64` (`1.5`, `-0`, `2.5e-7`), so the table is exact. Lines end in `\n`.
 ///
 /// # Errors
@@ -23,7 +25,7 @@ pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError
             .into_iter()
             .chain(report.parameters.iter().map(String::as_str))
             .chain(report.measures.iter().map(String::as_str))
-            .chain(["iterations"])
+            .chain(["iterations", "index"])
             .map(quote)
             .collect::<Vec<_>>();
         writeln!(w, "{}", names.join(","))?;
@@ -32,7 +34,10 @@ pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError
             for &v in row.parameters.iter().chain(&row.measures) {
                 write!(w, ",{}", Num(v))?;
             }
-            writeln!(w, ",{}", row.iterations)?;
+            match row.index {
+                Some(i) => writeln!(w, ",{},{i}", row.iterations)?,
+                None => writeln!(w, ",{},", row.iterations)?,
+            }
         }
         Ok(())
     })?;

@@ -36,6 +36,9 @@ struct CriticalJson<'a> {
     residual_eigenvalue: f64,
     isotropy: &'a str,
     isotropy_order: usize,
+    /// The mode's wave number about z, where the mesh has an axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    m: Option<usize>,
 }
 
 /// Writes `dir/critical.json`: a list of the critical points (kind, irrep, multiplicity,
@@ -66,7 +69,8 @@ pub fn write_critical_with(
     let list: Vec<CriticalJson> = report
         .critical
         .iter()
-        .map(|c| CriticalJson {
+        .enumerate()
+        .map(|(k, c)| CriticalJson {
             kind: c.kind,
             irrep: &c.irrep,
             multiplicity: c.multiplicity,
@@ -86,6 +90,7 @@ pub fn write_critical_with(
             residual_eigenvalue: c.residual_eigenvalue,
             isotropy: &c.isotropy.name,
             isotropy_order: c.isotropy.order,
+            m: report.wave_numbers.get(k).copied(),
         })
         .collect();
     for c in &list {

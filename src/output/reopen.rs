@@ -171,6 +171,12 @@ impl FinishedRun {
                 study.scene.analysis.kind()
             )));
         }
+        self.check_model(study)
+    }
+
+    /// Fails unless `study` is the model the run solved: the same scene name, group,
+    /// parameters and number of unknowns (any analysis).
+    pub fn check_model(&self, study: &Study) -> Result<(), ReopenError> {
         let mismatch = |what: &str, run: String, now: String| {
             ReopenError(format!(
                 "the scene does not match the run in '{}': {what} is {now}, the run's was {run} (give the run's scene with --scene)",
@@ -206,6 +212,38 @@ impl FinishedRun {
             ));
         }
         Ok(())
+    }
+
+    /// The state of path point `n` (the row `step = n` of `path.csv`) from `path.states`:
+    /// the displacement over the unknowns of `study` and every parameter; `n` out of range is
+    /// an error naming the range.
+    pub fn point(&self, study: &Study, n: usize) -> Result<(Vec<f64>, Vec<f64>), ReopenError> {
+        let run = super::store::read_states(&self.dir.join("path.json"))
+            .map_err(|e| ReopenError(e.to_string()))?;
+        if run.unknowns != study.model.unknowns() {
+            return Err(ReopenError(format!(
+                "{}: states of {} unknowns, the scene's model has {}",
+                run.file.display(),
+                run.unknowns,
+                study.model.unknowns()
+            )));
+        }
+        if n >= run.points {
+            return Err(ReopenError(format!(
+                "--point {n}: the run in '{}' has {} path points (0 to {})",
+                self.dir.display(),
+                run.points,
+                run.points.saturating_sub(1)
+            )));
+        }
+        let saved = run.point(n).map_err(|e| ReopenError(e.to_string()))?;
+        Ok((saved.u, saved.parameters))
+    }
+
+    /// The instability index the run recorded at path point `n` (`None`: not computed there,
+    /// or no such point).
+    pub fn index_at(&self, n: usize) -> Option<usize> {
+        self.path.index.get(n).copied().flatten()
     }
 
     /// The state and the unit mode of critical point `n` (1-based) from `critical_NN.vtu`,

@@ -8,20 +8,22 @@ use super::{
 use crate::analysis::critical::CriticalKind;
 use crate::analysis::events::{Extremum, StopReason};
 use crate::analysis::RunResult;
+use crate::model::CellQuantity;
 use crate::model::Model;
-use crate::report::{PathReport, StateKind};
+use crate::report::{PathReport, StateKind, WrinkledCritical, WrinkledPoint, Wrinkling};
 use crate::study::Study;
 use meshes::write::Fields;
 use std::path::{Path, PathBuf};
 
 /// The files every run writes into its directory, besides its states.
-pub const RUN_FILES: [&str; 6] = [
+pub const RUN_FILES: [&str; 7] = [
     "path.csv",
     "path.states",
     "path.json",
     "critical.json",
     "path.svg",
     "path.pvd",
+    "events.pvd",
 ];
 
 /// What [`write_run`] wrote.
@@ -39,6 +41,8 @@ pub struct Written {
     pub plotted: String,
     /// `path.pvd`.
     pub pvd: PathBuf,
+    /// `events.pvd`: the turning and critical states.
+    pub events: PathBuf,
     /// `path.states`: every path point's state (none for a branch).
     pub points: Option<PathBuf>,
     /// The state files, in the order written.
@@ -60,6 +64,7 @@ impl Written {
             self.critical.clone(),
             self.svg.clone(),
             self.pvd.clone(),
+            self.events.clone(),
         ];
         files.extend(self.points.clone());
         files.extend(self.states.iter().cloned());
@@ -172,7 +177,18 @@ pub fn write_run(
                     fields.point_vector("critical_mode", field),
                 )
             }
-            (StateKind::Turning(_) | StateKind::Held | StateKind::Critical { .. }, _) => {
+            // The held state of a linear-buckling sweep is the state of every sample: the
+            // path collection's one dataset.
+            (StateKind::Held, _) => writer.save_as(
+                "held_state",
+                &label,
+                true,
+                s.step,
+                s.control,
+                &positions,
+                fields,
+            ),
+            (StateKind::Turning(_) | StateKind::Critical { .. }, _) => {
                 // File names without spaces.
                 let stem: String = label
                     .chars()
@@ -195,8 +211,12 @@ pub fn write_run(
         }
     }
     let pvd = writer.pvd_path();
+    let events = writer.events_path();
     result.report.saved = attempt!(writer.finish());
     done.push(pvd.clone());
+    done.push(events.clone());
+    result.report.wrinkling = wrinkling(study, result);
+    result.report.wave_numbers = wave_numbers(study, &result.report);
 
     let json = attempt!(write_json(out, &result.report));
     done.push(json.clone());
@@ -264,6 +284,7 @@ pub fn write_run(
         svg,
         plotted,
         pvd,
+        events,
         points,
         states,
         curve,
@@ -272,22 +293,128 @@ pub fn write_run(
     })
 }
 
-/// The per-triangle fields of a state that the model's effects show (stretches, thickness,
-/// tensions, where the membrane would wrinkle, pressures); a non-finite value (never at an
+/// The fields of a state: per node the unit normal and what the model's effects show (the
+/// pressure), per triangle what they show (stretches, thickness, tensions, where the
+/// membrane would wrinkle, fluid and contact pressure); a non-finite value (never at an
 /// accepted state) is written as 0 rather than as NaN.
 pub fn state_fields(study: &Study, s: &crate::report::State) -> Fields {
+    let finite = |v: &f64| if v.is_finite() { *v } else { 0.0 };
+    let x = study.model.positions(&s.u);
+    let normals = node_normals(&x, &study.mesh.mesh.triangles);
+    let fields = study
+        .model
+        .node_fields(&s.u, &s.params)
+        .into_iter()
+        .fold(Fields::new().point_vector("normal", normals), |f, n| {
+            f.point_scalar(n.quantity.name(), n.values.iter().map(finite))
+        });
     study
         .model
         .cell_fields(&s.u, &s.params)
         .into_iter()
-        .fold(Fields::new(), |f, c| {
-            f.cell_scalar(
-                c.quantity.name(),
-                c.values
-                    .iter()
-                    .map(|v| if v.is_finite() { *v } else { 0.0 }),
-            )
+        .fold(fields, |f, c| {
+            f.cell_scalar(c.quantity.name(), c.values.iter().map(finite))
         })
+}
+
+/// The unit normal at each node of the surface at positions `x`: the sum of its triangles'
+/// area vectors (a × b / 2, the triangles' orientation), normalised; a node of no triangle or
+/// of a degenerate neighbourhood gets 0.
+pub fn node_normals(x: &[meshes::Vec3], triangles: &[[usize; 3]]) -> Vec<[f64; 3]> {
+    let mut n = vec![meshes::Vec3::zeros(); x.len()];
+    for &[a, b, c] in triangles {
+        let area = (x[b] - x[a]).cross(&(x[c] - x[a])) / 2.0;
+        for i in [a, b, c] {
+            n[i] += area;
+        }
+    }
+    n.iter()
+        .map(|v| {
+            let norm = v.norm();
+            if norm > 0.0 && norm.is_finite() {
+                (v / norm).into()
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
+}
+
+/// Largest wave number tried when labelling a critical mode.
+const MAX_WAVE_NUMBER: usize = 24;
+
+/// The wave number m about z of every critical mode, when the mesh has an axis (a disc or a
+/// truncated sphere, as `compare` labels them); empty otherwise.
+pub fn wave_numbers(study: &Study, report: &PathReport) -> Vec<usize> {
+    use crate::scene::MeshSpec;
+    match study.scene.mesh {
+        MeshSpec::Disc(_) | MeshSpec::TruncatedSphere(_) => report
+            .critical
+            .iter()
+            .map(|cp| {
+                crate::analysis::critical::wave_number(
+                    study.model.reference(),
+                    study.model.layout(),
+                    &cp.mode,
+                    MAX_WAVE_NUMBER,
+                )
+            })
+            .collect(),
+        MeshSpec::Icosphere(_) | MeshSpec::File(_) => Vec::new(),
+    }
+}
+
+/// The number of wrinkled triangles of the state (u, Λ), or `None` when the model shows no
+/// `wrinkled` field.
+fn wrinkled(study: &Study, u: &[f64], params: &[f64]) -> Option<usize> {
+    study
+        .model
+        .cell_fields(u, params)
+        .into_iter()
+        .find(|f| f.quantity == CellQuantity::Wrinkled)
+        .map(|f| f.values.iter().filter(|&&w| w > 0.5).count())
+}
+
+/// Where the membrane wrinkles along the path: the first point with wrinkled triangles (from
+/// every point's kept state) and the critical points in a wrinkled state; `None` when the
+/// model shows no `wrinkled` field or no point's state was kept (a branch).
+fn wrinkling(study: &Study, result: &RunResult) -> Option<Wrinkling> {
+    if result.points.len() != result.report.rows.len() || result.points.is_empty() {
+        return None;
+    }
+    let mut u = vec![0.0; study.basis.unknowns()];
+    let mut first = None;
+    for (row, p) in result.report.rows.iter().zip(&result.points) {
+        study
+            .basis
+            .expand(&nalgebra::DVector::from_column_slice(&p.q), &mut u);
+        let n = wrinkled(study, &u, &p.parameters)?;
+        if n > 0 {
+            first = Some(WrinkledPoint {
+                step: row.step,
+                wrinkled: n,
+            });
+            break;
+        }
+    }
+    let critical = result
+        .report
+        .critical
+        .iter()
+        .enumerate()
+        .filter_map(|(k, cp)| {
+            let n = wrinkled(study, &cp.state, &cp.parameters)?;
+            (n > 0).then_some(WrinkledCritical {
+                critical: k + 1,
+                wrinkled: n,
+            })
+        })
+        .collect();
+    Some(Wrinkling {
+        triangles: study.mesh.mesh.triangles.len(),
+        first,
+        critical,
+    })
 }
 
 /// The diagram: stable (index 0) and unstable stretches of the path drawn differently, turning
@@ -383,6 +510,26 @@ pub struct TurningSummary {
     pub stretch: Option<f64>,
 }
 
+/// A critical point in [`RunSummary`].
+#[derive(Debug, serde::Serialize)]
+pub struct CriticalSummary {
+    /// Its kind.
+    pub kind: CriticalKind,
+    /// The irrep of the singular block.
+    pub irrep: String,
+    /// Multiplicity of the zero eigenvalue in K.
+    pub multiplicity: usize,
+    /// The path step before it.
+    pub step: usize,
+    /// The control's value there.
+    pub value: f64,
+    /// The isotropy subgroup of the mode.
+    pub isotropy: String,
+    /// The mode's wave number about z, where the mesh has an axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
+}
+
 /// What `memstab run --json` prints: the run in one object.
 #[derive(Debug, serde::Serialize)]
 pub struct RunSummary {
@@ -408,6 +555,11 @@ pub struct RunSummary {
     pub symmetric_unknowns: usize,
     /// Unknowns of the model.
     pub unknowns: usize,
+    /// The critical points.
+    pub critical: Vec<CriticalSummary>,
+    /// Where the membrane wrinkles (left out when the model shows no `wrinkled` field).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wrinkling: Option<Wrinkling>,
     /// The number of branches followed, with `[analysis.branches]` (left out otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub branches: Option<usize>,
@@ -434,6 +586,21 @@ impl RunSummary {
                     stretch: s.map(|s| t.measures[s]),
                 })
                 .collect(),
+            critical: report
+                .critical
+                .iter()
+                .enumerate()
+                .map(|(k, cp)| CriticalSummary {
+                    kind: cp.kind,
+                    irrep: cp.irrep.clone(),
+                    multiplicity: cp.multiplicity,
+                    step: cp.after_step,
+                    value: c.map_or(f64::NAN, |c| cp.parameters[c]),
+                    isotropy: cp.isotropy.name.clone(),
+                    m: report.wave_numbers.get(k).copied(),
+                })
+                .collect(),
+            wrinkling: report.wrinkling.clone(),
             stop: report.stop.clone(),
             group: report.group.clone(),
             group_order: report.group_order,

@@ -1,10 +1,14 @@
-//! `state_NNNN.vtu` and `path.pvd`: displaced meshes for ParaView, and their collection.
+//! `state_NNNN.vtu`, `path.pvd` and `events.pvd`: displaced meshes for ParaView, and their
+//! collections.
 
 use super::{check_dir, OutputError};
 use crate::report::SavedState;
-use meshes::write::{write_mesh, write_pvd, Field, Fields, Format};
+use meshes::write::{write_mesh, write_pvd, write_pvd_named, Field, Fields, Format};
 use meshes::{Mesh, Vec3};
 use std::path::{Path, PathBuf};
+
+/// The name of the collection of the states written beside the path.
+pub const EVENTS_PVD: &str = "events.pvd";
 
 /// What the PVD collection uses as each state's "time".
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -18,7 +22,10 @@ pub enum PvdTime {
 }
 
 /// Writes saved states as `state_NNNN.vtu` (NNNN = path step, at least four digits) and keeps
-/// `path.pvd` listing them.
+/// `path.pvd` listing them, and `events.pvd` listing the states written beside the path
+/// (turning and critical points: time = their number in path order, 0, 1, …, and each named
+/// `<file stem>: <label>`, e.g. `critical_01: double bifurcation in E1`, which ParaView shows
+/// as the block's name).
 ///
 /// Each VTU holds the *displaced* mesh — node coordinates are the current positions — with the
 /// point vector `displacement` (current minus reference position), any extra fields the caller
@@ -70,6 +77,12 @@ impl StateWriter {
     /// The path of the collection, `dir/path.pvd`.
     pub fn pvd_path(&self) -> PathBuf {
         self.dir.join("path.pvd")
+    }
+
+    /// The path of the second collection, `dir/events.pvd`: the states written beside the
+    /// path (turning and critical points).
+    pub fn events_path(&self) -> PathBuf {
+        self.dir.join(EVENTS_PVD)
     }
 
     /// Writes the state of path step `step` at control value `control` with current node
@@ -193,8 +206,26 @@ impl StateWriter {
         Ok(self.saved)
     }
 
-    /// Rewrites `path.pvd` from the saved states.
+    /// Rewrites `path.pvd` and `events.pvd` from the saved states.
     fn write_collection(&self) -> Result<(), OutputError> {
+        let events = self.events_path();
+        check_dir(&events)?;
+        // In path order (a stable sort by step keeps the order saved within a step).
+        let mut beside: Vec<&SavedState> = self.saved.iter().filter(|s| !s.in_collection).collect();
+        beside.sort_by_key(|s| s.step);
+        let entries: Vec<(f64, PathBuf, String)> = beside
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                let stem = s.file.strip_suffix(".vtu").unwrap_or(&s.file);
+                (
+                    k as f64,
+                    PathBuf::from(&s.file),
+                    format!("{stem}: {}", s.label),
+                )
+            })
+            .collect();
+        write_pvd_named(&events, &entries).map_err(|e| OutputError::from_mesh(&events, e))?;
         let path = self.pvd_path();
         check_dir(&path)?;
         let entries: Vec<(f64, PathBuf)> = self

@@ -43,7 +43,7 @@ mod vtu;
 mod xdmf;
 
 pub use atomic::{check_target, write_whole, TEMPORARY_PREFIX, TEMPORARY_SUFFIX};
-pub use pvd::write_pvd;
+pub use pvd::{write_pvd, write_pvd_named};
 
 use crate::mesh::Mesh;
 use crate::MeshError;

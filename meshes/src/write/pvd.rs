@@ -26,15 +26,35 @@ use std::path::{Component, Path, PathBuf};
 /// [`MeshError::Invalid`] for a non-finite time or a file name that is not UTF-8 or names no
 /// file; [`MeshError::Io`] if `path` cannot be written.
 pub fn write_pvd(path: &Path, entries: &[(f64, PathBuf)]) -> Result<(), MeshError> {
+    let named: Vec<(f64, PathBuf, String)> = entries
+        .iter()
+        .map(|(t, f)| (*t, f.clone(), String::new()))
+        .collect();
+    write_pvd_named(path, &named)
+}
+
+/// As [`write_pvd`], with a name for each entry (`(time, file, name)`), written as the
+/// DataSet's `name` attribute, which ParaView shows as the block's name; an empty name writes
+/// no attribute.
+///
+/// # Errors
+/// As [`write_pvd`]; a name with a control character is [`MeshError::Invalid`].
+pub fn write_pvd_named(path: &Path, entries: &[(f64, PathBuf, String)]) -> Result<(), MeshError> {
     let mut rows = Vec::with_capacity(entries.len());
-    for (k, (time, file)) in entries.iter().enumerate() {
+    for (k, (time, file, name)) in entries.iter().enumerate() {
+        if name.chars().any(char::is_control) {
+            return Err(MeshError::Invalid(format!(
+                "pvd entry {k} ({}): control character in the name {name:?}",
+                file.display()
+            )));
+        }
         if !time.is_finite() {
             return Err(MeshError::Invalid(format!(
                 "pvd entry {k} ({}) has a non-finite time {time}",
                 file.display()
             )));
         }
-        rows.push((*time, portable(file)?));
+        rows.push((*time, portable(file)?, name));
     }
     atomic::stage(path, |w| {
         writeln!(w, "<?xml version=\"1.0\"?>")?;
@@ -43,10 +63,15 @@ pub fn write_pvd(path: &Path, entries: &[(f64, PathBuf)]) -> Result<(), MeshErro
             "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">"
         )?;
         writeln!(w, "<Collection>")?;
-        for (time, file) in &rows {
+        for (time, file, name) in &rows {
+            let name = if name.is_empty() {
+                String::new()
+            } else {
+                format!(" name=\"{}\"", xml_escape(name))
+            };
             writeln!(
                 w,
-                "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>",
+                "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"{name}/>",
                 Num(*time),
                 xml_escape(file)
             )?;

@@ -103,11 +103,9 @@ pub struct Image {
     /// Their multiplicities, summed.
     pub multiplicity: usize,
     /// Spread of the values of two or more points; 0 for one point in a d ≥ 2 irrep (double by
-    /// construction); absent otherwise.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// construction); `null` otherwise (in every entry, so that readers need not test for it).
     pub gap: Option<f64>,
-    /// Gap above round-off, for two or more points.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Gap above round-off, for two or more points; `null` for one point (in every entry).
     pub split: Option<bool>,
     /// What the images say.
     pub verdict: Verdict,

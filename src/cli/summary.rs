@@ -1,0 +1,269 @@
+//! The summary `memstab run` and `memstab demo` print after a run: the mesh and group, the
+//! path, turning and critical points (with each mode's wave number where the mesh has an
+//! axis), where the membrane wrinkles, the files written; and a critical curve's events.
+
+use memstab::analysis::RunResult;
+use memstab::output::{file_name, Written};
+use memstab::report::{CurveReport, PathReport};
+use memstab::study::Study;
+use memstab::text::sig_digits;
+use std::path::Path;
+
+/// The index of the measure `stretch`, if the report has it.
+fn stretch_index(report: &PathReport) -> Option<usize> {
+    report.measures.iter().position(|m| m == "stretch")
+}
+
+/// The index of the control among the parameters.
+fn control_index(report: &PathReport) -> Option<usize> {
+    report.parameters.iter().position(|p| *p == report.control)
+}
+
+pub(super) fn print_summary(study: &Study, result: &RunResult, out: &Path, written: &Written) {
+    let report = &result.report;
+    let m = &report.mesh;
+    out!("scene '{}' ({})", report.scene, report.origin);
+    out!(
+        "mesh: {} with {} nodes, {} triangles, group {} (order {})",
+        m.generator,
+        m.nodes,
+        m.elements,
+        m.group,
+        m.order
+    );
+    out!(
+        "scene group {} (order {}): solved in {} symmetric unknowns of {}",
+        report.group,
+        report.group_order,
+        study.basis.dim(),
+        study.basis.unknowns()
+    );
+    let c = control_index(report);
+    let s = stretch_index(report);
+    let n = report.rows.len();
+    let points = if n == 1 {
+        "1 point".to_string()
+    } else {
+        format!("{n} points")
+    };
+    match (c, report.rows.first(), report.rows.last()) {
+        (Some(c), Some(first), Some(last)) if n > 1 => out!(
+            "path: {points}, {} from {} to {}",
+            report.control,
+            sig_digits6(first.parameters[c]),
+            sig_digits6(last.parameters[c])
+        ),
+        (Some(c), Some(first), _) => {
+            out!(
+                "path: {points}, {} = {}",
+                report.control,
+                sig_digits6(first.parameters[c])
+            )
+        }
+        _ => out!("equilibrium: {points}"),
+    }
+    // A closed membrane with a negative enclosed volume has turned inside out: the numbers
+    // are finite but not physical.
+    if let Some(v) = report.measures.iter().position(|m| m == "volume") {
+        if let Some(r) = report.rows.iter().find(|r| r.measures[v] <= 0.0) {
+            out!(
+                "warning: the enclosed volume is {} at step {}: the membrane is inside out there, \
+                 the path is not physical",
+                sig_digits6(r.measures[v]),
+                r.step
+            );
+        }
+    }
+    if report.turning_points.is_empty() {
+        if c.is_some() {
+            out!("turning points of {}: none", report.control);
+        }
+    } else {
+        out!("turning points of {}:", report.control);
+        for t in &report.turning_points {
+            let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(t.parameters[c]));
+            let stretch = s.map_or_else(String::new, |s| {
+                format!(" at stretch {}", sig_digits6(t.measures[s]))
+            });
+            out!(
+                "  {:<7} {} = {value}{stretch} (after step {})",
+                t.kind,
+                report.control,
+                t.after_step
+            );
+        }
+    }
+    for w in &report.warnings {
+        out!("warning: {w}");
+    }
+    if let Some(note) = &report.stability_note {
+        out!("{note}");
+    } else if report.critical.is_empty() {
+        match report.index_range() {
+            Some((lo, hi)) if lo == hi => out!("critical points: none (the index stays {lo})"),
+            Some((lo, hi)) => out!(
+                "critical points: none localised, although the index ranges from {lo} to {hi} \
+                 along the path (see the warnings)"
+            ),
+            None => out!("critical points: none (no index was computed)"),
+        }
+    } else {
+        out!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
+        for (k, cp) in report.critical.iter().enumerate() {
+            let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(cp.parameters[c]));
+            let m = report
+                .wave_numbers
+                .get(k)
+                .map_or_else(String::new, |m| format!(", m = {m}"));
+            out!(
+                "  {:<20} in {:<4} x{} at {} = {value} (isotropy {}{m}, |eigenvalue|/|K| = {:.0e})",
+                cp.kind,
+                cp.irrep,
+                cp.multiplicity,
+                report.control,
+                cp.isotropy.name,
+                cp.residual_eigenvalue
+            );
+        }
+    }
+    print_wrinkling(report);
+    out!("stopped: {}", report.stop);
+    if let Some(curve) = &result.curve {
+        print_curve(curve);
+    }
+    out!(
+        "wrote {} files into {}:",
+        written.files().len(),
+        out.display()
+    );
+    let header = report
+        .parameters
+        .iter()
+        .chain(&report.measures)
+        .map(String::as_str)
+        .collect::<Vec<_>>()
+        .join(", ");
+    out!(
+        "  {:<10} {} rows: step, arclength, {header}, iterations, index",
+        file_name(&written.csv),
+        report.rows.len()
+    );
+    out!(
+        "  {:<10} the report: metadata, path, turning points, critical points, saved states",
+        file_name(&written.json)
+    );
+    let events = result.curve.as_ref().map_or_else(String::new, |c| {
+        format!(" and the curve's {} events", c.events.len())
+    });
+    out!(
+        "  {:<10} {} critical points{events}: kind, irrep, multiplicity, parameters, step",
+        file_name(&written.critical),
+        report.critical.len()
+    );
+    out!("  {:<10} {}", file_name(&written.svg), written.plotted);
+    let in_collection = report.saved.iter().filter(|s| s.in_collection).count();
+    out!(
+        "  {:<10} ParaView collection of the {in_collection} path state{} (time = path step)",
+        file_name(&written.pvd),
+        if in_collection == 1 { "" } else { "s" }
+    );
+    let events = report.saved.len() - in_collection;
+    out!(
+        "  {:<10} ParaView collection of the {events} turning and critical state{} (time = 0, 1, ... in path order)",
+        file_name(&written.events),
+        if events == 1 { "" } else { "s" }
+    );
+    if let Some(points) = &written.points {
+        out!(
+            "  {:<10} every point's parameters and displacement, binary ([start] from reads it)",
+            file_name(points),
+        );
+    }
+    for chunk in written.states.chunks(5) {
+        let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
+        out!("  {}", names.join(" "));
+    }
+    if let Some(curve) = &result.curve {
+        let described = [
+            format!(
+                "{} rows: both parameters, the measures, the block's eigenvalues",
+                curve.rows.len()
+            ),
+            "the curve: its points and events".to_string(),
+            format!("{} against {}, events marked", curve.second, curve.control),
+        ];
+        for (path, what) in written.curve.iter().zip(described) {
+            out!("  {:<10} {what}", file_name(path));
+        }
+    }
+    if let (Some(b), Some(w)) = (&result.branches, &written.branches) {
+        super::branch::print_branches(b, w, &report.control);
+    }
+}
+
+/// Where the membrane would wrinkle: the first path point with wrinkled triangles, and a
+/// warning for every critical point in a wrinkled state.
+fn print_wrinkling(report: &PathReport) {
+    let Some(w) = &report.wrinkling else {
+        return;
+    };
+    match &w.first {
+        None => out!("wrinkling: none (every triangle is in tension at every path point)"),
+        Some(p) => out!(
+            "wrinkling: first at step {} ({} of {} triangles have a negative principal \
+             tension: a membrane cannot carry compression, the model is not valid there)",
+            p.step,
+            p.wrinkled,
+            w.triangles
+        ),
+    }
+    for c in &w.critical {
+        let cp = &report.critical[c.critical - 1];
+        out!(
+            "warning: critical point {} ({} in {}) lies in a wrinkled state ({} of {} \
+             triangles): the membrane model does not describe it there",
+            c.critical,
+            cp.kind,
+            cp.irrep,
+            c.wrinkled,
+            w.triangles
+        );
+    }
+}
+
+/// The critical curve: what was followed, its extent and its events.
+fn print_curve(curve: &CurveReport) {
+    let column = |name: &str| curve.parameters.iter().position(|p| p == name);
+    out!(
+        "critical curve of the {} in {} x{} in ({}, {}): {} points",
+        curve.kind,
+        curve.irrep,
+        curve.multiplicity,
+        curve.control,
+        curve.second,
+        curve.rows.len()
+    );
+    let (Some(c), Some(s)) = (column(&curve.control), column(&curve.second)) else {
+        return;
+    };
+    for e in &curve.events {
+        let extremum = e
+            .extremum
+            .map_or_else(String::new, |x| format!(" ({x} of {})", curve.second));
+        out!(
+            "  {:<9} {} = {}, {} = {}{extremum} (after curve step {})",
+            e.kind.to_string(),
+            curve.control,
+            sig_digits6(e.parameters[c]),
+            curve.second,
+            sig_digits6(e.parameters[s]),
+            e.after_step
+        );
+    }
+    out!("curve stopped: {}", curve.stop);
+}
+
+/// Six significant digits.
+fn sig_digits6(x: f64) -> String {
+    sig_digits(x, 6)
+}
