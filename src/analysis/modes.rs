@@ -345,7 +345,10 @@ pub fn sweep<P: ModeProblem>(
                 let found = g(0.0)
                     .zip(g(c - c0))
                     .filter(|(g0, g1)| g0.signum() != g1.signum())
-                    .and_then(|(g0, g1)| locate(&mut g, g0, c - c0, g1, ZERO_EIGENVALUE));
+                    // On a held state a block evaluation is cheap and exact in the control:
+                    // localise to round-off (a relative eigenvalue of 1e-10 would leave the
+                    // control uncertain by ~1e-5 where the load block is weak).
+                    .and_then(|(g0, g1)| locate(&mut g, g0, c - c0, g1, 0.0));
                 let (value, eigenvalue, localised) = match found {
                     Some((s, gs)) => (c0 + s, gs, true),
                     None => {
