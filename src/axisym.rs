@@ -33,6 +33,13 @@
 //! the regularity of the field there: U = V = 0 for m = 0, W = 0 and U + V = 0 for m = 1
 //! (the field is then the constant U e_x), everything for m ≥ 2.
 
+mod model;
+mod problem;
+pub mod run;
+
+pub use model::{AxisymModel, Block, Evaluated, Pressure};
+pub use problem::AxisymProblem;
+
 use crate::effects::membrane::MooneyRivlin;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
@@ -65,6 +72,18 @@ pub enum AxisymError {
     /// not defined by it.
     #[error("the membrane block of wave number {0} is not positive definite")]
     Indefinite(usize),
+    /// A node is above a fluid's level: the meridian is partly wet, which the axisymmetric
+    /// model does not handle.
+    #[error("the meridian is partly wet (node {node} is above the fluid level {level}); the axisymmetric model needs a wholly wet membrane")]
+    PartlyWet {
+        /// The first node above the level.
+        node: usize,
+        /// The level.
+        level: f64,
+    },
+    /// A non-finite number appeared in the energy, its derivatives or a block.
+    #[error("a non-finite value in the axisymmetric model")]
+    NonFinite,
 }
 
 /// A meridian of quadratic elements: the stress-free data of a membrane of revolution.
@@ -108,6 +127,92 @@ impl Meridian {
             material,
             clamped: (false, true),
         })
+    }
+
+    /// The sphere of radius `radius` as a meridian from the north pole to the south pole
+    /// (outward normals), `elements` quadratic elements of equal angle; no end clamped.
+    pub fn sphere(
+        radius: f64,
+        elements: usize,
+        prestretch: f64,
+        material: MooneyRivlin,
+    ) -> Result<Self, AxisymError> {
+        Self::arc(
+            radius,
+            std::f64::consts::PI,
+            elements,
+            prestretch,
+            material,
+            false,
+        )
+    }
+
+    /// The cap z ≥ `cut_height` of the sphere of radius `radius`, from the pole to a clamped
+    /// cut (outward normals), `elements` quadratic elements of equal angle.
+    pub fn truncated_sphere(
+        radius: f64,
+        cut_height: f64,
+        elements: usize,
+        prestretch: f64,
+        material: MooneyRivlin,
+    ) -> Result<Self, AxisymError> {
+        if !(cut_height.is_finite() && cut_height.abs() < radius) {
+            return Err(AxisymError::Input(format!(
+                "cut-height: must be finite and inside (-radius, radius), got {cut_height}"
+            )));
+        }
+        let angle = (cut_height / radius).acos();
+        Self::arc(radius, angle, elements, prestretch, material, true)
+    }
+
+    fn arc(
+        radius: f64,
+        angle: f64,
+        elements: usize,
+        prestretch: f64,
+        material: MooneyRivlin,
+        clamped: bool,
+    ) -> Result<Self, AxisymError> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(AxisymError::Input(format!(
+                "radius: must be finite and > 0, got {radius}"
+            )));
+        }
+        if elements == 0 {
+            return Err(AxisymError::Input(
+                "elements: must be at least 1, got 0".into(),
+            ));
+        }
+        let n = 2 * elements;
+        let nodes = (0..=n)
+            .map(|i| {
+                let phi = angle * i as f64 / n as f64;
+                // Exactly on the axis at the poles.
+                let r = if i == 0 || (i == n && !clamped) {
+                    0.0
+                } else {
+                    radius * phi.sin()
+                };
+                [r, radius * phi.cos()]
+            })
+            .collect();
+        Ok(Self {
+            nodes,
+            prestretch,
+            material,
+            clamped: (false, clamped),
+        })
+    }
+
+    /// Whether node `i` is at a clamped end.
+    pub fn is_clamped(&self, i: usize) -> bool {
+        (i == 0 && self.clamped.0) || (i + 1 == self.nodes.len() && self.clamped.1)
+    }
+
+    /// Whether the meridian closes the surface: both ends on the axis, none clamped.
+    pub fn closed(&self) -> bool {
+        let last = self.nodes.len() - 1;
+        self.nodes[0][0] == 0.0 && self.nodes[last][0] == 0.0 && !self.clamped.0 && !self.clamped.1
     }
 
     /// Number of elements.

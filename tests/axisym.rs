@@ -84,3 +84,222 @@ fn bad_input_is_refused() {
     let err = critical_densities(&meridian, &x, &load, 2, 1).unwrap_err();
     assert!(err.to_string().contains("node 3"), "{err}");
 }
+
+mod scenes {
+    //! Axisymmetric scenes (`[mesh] generator = "axisymmetric"`) through the library run and
+    //! the command line.
+
+    use memstab::analysis::critical::CriticalKind;
+    use memstab::analysis::events::{Extremum, StopReason};
+    use memstab::axisym::run::{run, AxisymReport, AxisymStudy};
+    use memstab::reference::{ponding_scale, BESSEL_J2};
+    use memstab::scene::Scene;
+    use std::process::Command;
+
+    fn scene(name: &str) -> Scene {
+        Scene::load(format!(
+            "{}/scenes/axisymmetric/{name}",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap()
+    }
+
+    fn run_scene(s: Scene) -> AxisymReport {
+        let study = AxisymStudy::build(s).unwrap();
+        run(&study, |_, _| {}).unwrap()
+    }
+
+    /// The balloon's pressure maximum and minimum (Mooney–Rivlin k = 0.1, closed form
+    /// p R/(μH) = 2/(1+k)(1/l − 1/l⁷)(1 + k l²)) on 64 meridian elements, by the path's
+    /// turning points, with the stretch l at each; every wave number m ≥ 2 stays stable up to
+    /// the maximum.
+    #[test]
+    fn the_balloon_turns_at_the_closed_form() {
+        let r = run_scene(scene("balloon.toml"));
+        assert_eq!(r.stop, StopReason::Stretch { target: 4.0 });
+        let k = r.measures.iter().position(|m| m == "stretch").unwrap();
+        let turns: Vec<_> = r.turning_points.iter().collect();
+        assert_eq!(turns.len(), 2, "{turns:?}");
+        let cases = [
+            (Extremum::Maximum, 1.355_106_9, 1.476_069_9),
+            (Extremum::Minimum, 1.148_747_7, 3.142_621_3),
+        ];
+        for (t, (kind, p, l)) in turns.iter().zip(cases) {
+            assert_eq!(t.kind, kind);
+            let (ep, el) = ((t.parameters[0] - p) / p, (t.measures[k] - l) / l);
+            eprintln!("{kind}: p error {ep:.1e}, stretch error {el:.1e}");
+            assert!(ep.abs() < 1e-6, "{kind}: p = {} vs {p}", t.parameters[0]);
+            assert!(el.abs() < 1e-5, "{kind}: l = {} vs {l}", t.measures[k]);
+        }
+        // The limit points are the m = 0 crossings of the path.
+        let first = r.critical.first().expect("a critical point at the maximum");
+        assert_eq!((first.m, first.multiplicity), (0, 1));
+        assert_eq!(first.kind, CriticalKind::LimitPoint);
+        assert!((first.parameters[0] - 1.355_106_9).abs() < 1e-5);
+        let index0 = r.rows[0].index.as_ref().unwrap();
+        assert!(
+            index0.iter().all(|&n| n == 0),
+            "stable at the start: {index0:?}"
+        );
+    }
+
+    /// The ponding scene on the meridian: the held flat floor's critical densities by wave
+    /// number, each labelled with its m and multiplicity, against γ = j²_{m,k} T0/(μHλ0²).
+    #[test]
+    fn the_ponding_ladder_by_wave_number() {
+        // The level exactly at the floor (the bundled scene's 1e-6 above it shifts the values
+        // by ~1e-5 through the pre-pressure): the closed form's problem.
+        let text = std::fs::read_to_string(format!(
+            "{}/scenes/axisymmetric/ponding.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap()
+        .replace("level = 1e-6", "level = 0.0");
+        let r = run_scene(Scene::from_toml_str(&text, "ponding").unwrap());
+        let j2 = |m: usize, k: usize| BESSEL_J2.iter().find(|e| e.0 == (m, k)).unwrap().1;
+        let scale = ponding_scale(0.0, 1.1);
+        for (m, k) in [
+            (0, 1),
+            (1, 1),
+            (2, 1),
+            (3, 1),
+            (0, 2),
+            (4, 1),
+            (1, 2),
+            (5, 1),
+        ] {
+            let exact = scale * j2(m, k);
+            let found: Vec<_> = r.critical.iter().filter(|c| c.m == m).collect();
+            let c = found[k - 1];
+            assert_eq!(c.multiplicity, if m == 0 { 1 } else { 2 });
+            assert!(c.localised);
+            let err = (c.parameters[0] - exact).abs() / exact;
+            // j² is tabulated to 6 decimals; the discretisation error at 64 elements is
+            // ≤ 1.3e-7 (the ladder test above).
+            assert!(
+                err < 1e-6,
+                "(m, k) = ({m}, {k}): {} vs {exact}",
+                c.parameters[0]
+            );
+        }
+        let kinds_ok = r.critical.iter().all(|c| match c.m {
+            0 => c.kind == CriticalKind::SymmetricBifurcation,
+            _ => c.kind == CriticalKind::MultipleBifurcation(2),
+        });
+        assert!(kinds_ok);
+    }
+
+    fn memstab(args: &[&str]) -> std::process::Output {
+        Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(args)
+            .output()
+            .unwrap()
+    }
+
+    #[test]
+    fn run_writes_the_path_with_the_index_by_wave_number() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let path = format!(
+            "{}/scenes/axisymmetric/disc_gas.toml",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let o = memstab(&["run", &path, "--out", out.to_str().unwrap(), "--quiet"]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            stdout.contains("stability by wave number m = 0..20"),
+            "{stdout}"
+        );
+        let csv = std::fs::read_to_string(out.join("path.csv")).unwrap();
+        let head = csv.lines().next().unwrap();
+        assert!(head.ends_with("index_m19,index_m20"), "{head}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+        assert_eq!(json["modes"], 20);
+        assert!(json["rows"].as_array().unwrap().len() > 5);
+    }
+
+    #[test]
+    fn effects_it_does_not_implement_are_refused_in_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = std::fs::read_to_string(format!(
+            "{}/scenes/axisymmetric/disc_gas.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap();
+        let cases = [
+            (
+                text.replace(
+                    "type = \"gas\"\npressure = \"p\"",
+                    "type = \"gas\"\npressure = \"p\"\n\n[[effect]]\ntype = \"spin\"\ndensity = 1.0\nomega2 = 1.0",
+                ),
+                "effect[1] (type = \"spin\")",
+            ),
+            (
+                text.replace("fixed = [\"rim\"]", "fixed = [\"cut\"]"),
+                "boundary.fixed[0]",
+            ),
+            (text.replace("elements = 64", "elements = 0"), "mesh.elements"),
+        ];
+        for (k, (scene, key)) in cases.iter().enumerate() {
+            let file = dir.path().join(format!("s{k}.toml"));
+            std::fs::write(&file, scene).unwrap();
+            let out = dir.path().join(format!("out{k}"));
+            let o = memstab(&[
+                "run",
+                file.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{err}");
+            assert!(err.contains(key), "{key}: {err}");
+            assert_eq!(err.trim().lines().count(), 1, "{err}");
+            assert!(!out.exists());
+        }
+    }
+}
+
+/// The Paper 1 upward disc: the 3-D C7v disc's first E1 double (16 divisions, 1 792
+/// triangles) lies within its own O(h²) distance of the axisymmetric m = 1 value. The
+/// distance is estimated from two 3-D refinements (8 and 16 divisions): for a second-order
+/// error e(d) ≈ C/d², e(16) ≈ (h16 − h8)/3; the check allows twice that and also asks the
+/// axisymmetric value to be nearer the 3-D Richardson value than the finer 3-D mesh is.
+#[test]
+fn the_upward_disc_double_is_within_its_mesh_distance_of_m_1() {
+    use memstab::axisym::run::{run, AxisymStudy};
+    use memstab::scene::Scene;
+    let dir = env!("CARGO_MANIFEST_DIR");
+    // The 3-D path up to past the first E1 point, no branches.
+    let text = std::fs::read_to_string(format!("{dir}/scenes/disc_upward.toml")).unwrap();
+    let cut = text.find("\n[analysis.branches]").unwrap();
+    let text = text[..cut].replace("max = 4.9", "max = 4.4");
+    let e1 = |divisions: usize| {
+        let t = text.replace("divisions = 16", &format!("divisions = {divisions}"));
+        let mut study =
+            memstab::study::Study::build(Scene::from_toml_str(&t, "up").unwrap()).unwrap();
+        let r = memstab::analysis::run(&mut study, |_, _| {}).unwrap();
+        let cp = r.report.critical.iter().find(|c| c.irrep == "E1").unwrap();
+        cp.parameters[0]
+    };
+    let (h8, h16) = (e1(8), e1(16));
+    let axi = Scene::load(format!("{dir}/scenes/axisymmetric/disc_upward.toml")).unwrap();
+    let r = run(&AxisymStudy::build(axi).unwrap(), |_, _| {}).unwrap();
+    let m1 = r.critical.iter().find(|c| c.m == 1).unwrap();
+    assert!(m1.localised && m1.multiplicity == 2);
+    let ha = m1.parameters[0];
+    let distance = (h16 - h8).abs() / 3.0;
+    let richardson = h16 + (h16 - h8) / 3.0;
+    eprintln!(
+        "E1: h8 = {h8}, h16 = {h16}, Richardson {richardson}; axisymmetric m = 1: {ha}; \
+         |h16 - axi| = {:.2e}, O(h^2) distance {distance:.2e}",
+        (h16 - ha).abs()
+    );
+    assert!((h16 - ha).abs() <= 2.0 * distance, "{h16} vs {ha}");
+    assert!((richardson - ha).abs() < (h16 - ha).abs());
+}

@@ -27,6 +27,7 @@ pub mod curve;
 pub mod equilibrium;
 pub mod events;
 pub mod interrupt;
+pub mod modes;
 pub mod newton;
 pub mod path;
 mod problem;

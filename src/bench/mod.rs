@@ -33,6 +33,7 @@
 //! `model.evaluate` at the same point (not counted in the totals) and moved to the assembly
 //! column. Output writing, which `run` also does, is not part of this study.
 
+pub mod axisym;
 pub mod balloon;
 pub mod branching;
 pub mod curves;
@@ -58,8 +59,8 @@ pub use payoff::{
 pub use peer::{run_peer, PeerResult};
 pub use ponding::{ponding_level, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML};
 pub use run::{
-    run_accuracy, run_branching, run_curves, run_scaling, run_thesis, AccuracyOptions, BenchFiles,
-    ScalingOptions, ThesisOptions,
+    run_accuracy, run_axisym, run_branching, run_curves, run_scaling, run_thesis, AccuracyOptions,
+    BenchFiles, ScalingOptions, ThesisOptions,
 };
 pub use scaling::{fit_exponent, memory, scaling_level, ScalingFits, ScalingLevel};
 pub use thesis::{spinning_cap_scene, thesis_run, thesis_table, ThesisRun, SPINNING_CAP_TOML};

@@ -215,6 +215,34 @@ pub fn run_branching(
     })
 }
 
+/// The axisymmetric study alone: the balloon on a meridian of 200 elements (quick: 64) with
+/// the index of every wave number m = 0..20 at every point, timed; writes `axisym.md`.
+pub fn run_axisym(
+    out: &Path,
+    quick: bool,
+    progress: &mut dyn FnMut(&str),
+) -> Result<BenchFiles, String> {
+    create_dir(out)?;
+    let started = Instant::now();
+    let levels: &[usize] = if quick { &[64] } else { &[64, 200] };
+    progress(&format!(
+        "axisymmetric balloon with modes 0..20 at every point, {levels:?} elements …"
+    ));
+    let mut md = "# memstab bench: the axisymmetric model
+"
+    .to_string();
+    for &e in levels {
+        md += &super::axisym::axisym_section(e)
+            .map_err(|err| format!("axisymmetric balloon: {}", one_line(&err)))?;
+    }
+    md += &report::total_time("study", started.elapsed());
+    let md_path = write_text(out, "axisym.md", &md)?;
+    Ok(BenchFiles {
+        markdown: md,
+        files: vec![md_path],
+    })
+}
+
 /// The scaling study alone: per frequency a balloon path of [`ScalingOptions::points`]
 /// points with the index by irrep at every point, its time by phase and peak memory, and the
 /// growth exponents; writes `scaling.md` and `scaling.csv` into [`ScalingOptions::out`].

@@ -70,6 +70,10 @@ With --curves (nothing else is run):
 With --branching (nothing else is run):
   branching.md   the branch-switching table of the bench alone (the abstract Hg problem; the
                  upward disc on 16 divisions, quick: 8)
+With --axisym (nothing else is run):
+  axisym.md      the balloon on a meridian of 64 and 200 elements (--quick: 64) with modes
+                 0..20 at every point: points, wall time, time per point, turning pressures
+                 against the closed form
 With --scaling (nothing else is run):
   scaling.md     per frequency: a balloon path of --scaling-points points with the spectrum
                  by irrep at every point, time by phase, resident memory at the start of the
@@ -114,6 +118,10 @@ pub(crate) struct BenchArgs {
     /// branching.md.
     #[arg(long, conflicts_with_all = ["scaling", "frequencies"])]
     branching: bool,
+    /// Only the axisymmetric study: the balloon on a meridian of 64 and 200 elements (quick:
+    /// 64) with modes 0..20 at every point, timed; writes axisym.md.
+    #[arg(long, conflicts_with_all = ["scaling", "frequencies", "thesis", "curves", "branching"])]
+    axisym: bool,
     /// Points of each scaling path, the start included.
     #[arg(long, default_value_t = 20, requires = "scaling", value_name = "N")]
     scaling_points: usize,
@@ -175,10 +183,15 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
         print(&files);
         return Ok(());
     }
-    if args.branching {
+    if args.branching || args.axisym {
         prepare_out(&args.out)?;
-        let files = memstab::bench::run_branching(&args.out, args.quick, &mut |m| progress(m))
-            .map_err(CliError::Failure)?;
+        let study = if args.axisym {
+            memstab::bench::run_axisym
+        } else {
+            memstab::bench::run_branching
+        };
+        let files =
+            study(&args.out, args.quick, &mut |m| progress(m)).map_err(CliError::Failure)?;
         print(&files);
         return Ok(());
     }

@@ -129,3 +129,37 @@ pub(super) fn check_out_file(flag: &str, path: &Path) -> Result<(), CliError> {
 }
 
 pub(super) use memstab::text::{one_line, sci, sig_digits};
+
+/// `--out` must be a directory or not exist yet, and its parent must exist.
+pub(super) fn check_out(out: &Path) -> Result<(), CliError> {
+    if out.exists() {
+        if out.is_dir() {
+            for name in memstab::output::RUN_FILES {
+                check_out_file("--out", &out.join(name))?;
+            }
+            return Ok(());
+        }
+        return Err(CliError::Input(format!(
+            "--out '{}' exists and is not a directory",
+            out.display()
+        )));
+    }
+    if std::fs::symlink_metadata(out).is_ok() {
+        return Err(CliError::Input(format!(
+            "--out '{}' is a symbolic link to nothing; give a directory",
+            out.display()
+        )));
+    }
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(CliError::Input(format!(
+            "--out '{}': the parent directory '{}' does not exist",
+            out.display(),
+            parent.display()
+        )));
+    }
+    Ok(())
+}

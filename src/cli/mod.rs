@@ -14,6 +14,7 @@ macro_rules! out {
     };
 }
 
+mod axisym;
 mod bench;
 mod branch;
 mod common;

@@ -18,7 +18,7 @@ use super::CliError;
 use clap::Args;
 use memstab::analysis::events::StopReason;
 use memstab::analysis::{run as run_study, RunResult};
-use memstab::output::{write_run, Progress, RunSummary, Written, RUN_FILES};
+use memstab::output::{write_run, Progress, RunSummary, Written};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use memstab::text::one_line;
@@ -41,6 +41,9 @@ pub(crate) struct RunArgs {
 
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
+    if let memstab::scene::MeshSpec::Axisymmetric(_) = scene.mesh {
+        return super::axisym::run(scene, &args.out, args.quiet, args.json);
+    }
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
@@ -69,7 +72,7 @@ pub(super) fn execute(
     out: &Path,
     quiet: bool,
 ) -> Result<(Study, RunResult, Written), CliError> {
-    check_out(out)?;
+    super::common::check_out(out)?;
     let mut study = super::common::build_study(scene)?;
     let created = !out.exists();
     if created {
@@ -111,38 +114,4 @@ pub(super) fn execute(
     let written = write_run(&study, &mut result, out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     Ok((study, result, written))
-}
-
-/// `--out` must be a directory or not exist yet, and its parent must exist.
-fn check_out(out: &Path) -> Result<(), CliError> {
-    if out.exists() {
-        if out.is_dir() {
-            for name in RUN_FILES {
-                super::common::check_out_file("--out", &out.join(name))?;
-            }
-            return Ok(());
-        }
-        return Err(CliError::Input(format!(
-            "--out '{}' exists and is not a directory",
-            out.display()
-        )));
-    }
-    if std::fs::symlink_metadata(out).is_ok() {
-        return Err(CliError::Input(format!(
-            "--out '{}' is a symbolic link to nothing; give a directory",
-            out.display()
-        )));
-    }
-    let parent = match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !parent.is_dir() {
-        return Err(CliError::Input(format!(
-            "--out '{}': the parent directory '{}' does not exist",
-            out.display(),
-            parent.display()
-        )));
-    }
-    Ok(())
 }

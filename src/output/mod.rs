@@ -27,6 +27,7 @@
 //!
 //! [`PathReport`]: crate::report::PathReport
 
+mod axisym;
 mod branches;
 mod csv;
 mod curve;
@@ -41,6 +42,7 @@ mod states;
 pub mod store;
 mod svg;
 
+pub use axisym::{write_axisym_run, AXISYM_RUN_FILES};
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten, PrimaryPath};
 pub use csv::write_csv;
 pub use curve::write_curve;

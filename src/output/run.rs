@@ -360,7 +360,8 @@ pub fn wave_numbers(study: &Study, report: &PathReport) -> Vec<usize> {
                 )
             })
             .collect(),
-        MeshSpec::Icosphere(_) | MeshSpec::File(_) => Vec::new(),
+        // An axisymmetric run labels its critical points with m itself.
+        MeshSpec::Icosphere(_) | MeshSpec::File(_) | MeshSpec::Axisymmetric(_) => Vec::new(),
     }
 }
 

@@ -196,6 +196,7 @@ fn read_mesh(v: &Value) -> Result<MeshSpec, Problem> {
         Generator::Icosphere => de(&rest, "mesh").map(MeshSpec::Icosphere),
         Generator::TruncatedSphere => de(&rest, "mesh").map(MeshSpec::TruncatedSphere),
         Generator::File => de(&rest, "mesh").map(MeshSpec::File),
+        Generator::Axisymmetric => de(&rest, "mesh").map(MeshSpec::Axisymmetric),
     }
     .map_err(|p| explain(own, p))
     .map_err(with_tag("generator"))

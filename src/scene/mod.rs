@@ -98,6 +98,45 @@ pub enum MeshSpec {
     /// `generator = "file"`: a mesh file (`.msh`, `.vtu`, as `memstab mesh --out` writes
     /// them) with its node sets, declared to have the symmetry `group`.
     File(FileMesh),
+    /// `generator = "axisymmetric"`: a meridian of quadratic elements, the surface of
+    /// revolution `shape` (disc: node set `rim`; truncated sphere: `cut`; sphere: none), run
+    /// by the axisymmetric model with stability by wave number (docs/theory.md §15).
+    Axisymmetric(AxisymmetricMesh),
+}
+
+/// The surface of revolution of an axisymmetric mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AxisymShape {
+    /// The disc of radius `radius` in z = 0, normal +z, node set `rim` at its edge.
+    Disc,
+    /// The cap z ≥ `cut-height` of the sphere of radius `radius`, outward normal, node set
+    /// `cut`.
+    TruncatedSphere,
+    /// The sphere of radius `radius`, outward normal, no node sets.
+    Sphere,
+}
+
+/// Options of the axisymmetric generator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct AxisymmetricMesh {
+    /// The surface. Default `disc`.
+    #[serde(default = "default_axisym_shape")]
+    pub shape: AxisymShape,
+    /// Radius of the disc or the sphere. Default 1.
+    #[serde(default = "one")]
+    pub radius: f64,
+    /// Height c of a truncated sphere's cut, −R < c < R. Default −0.5.
+    #[serde(default = "default_cut_height")]
+    pub cut_height: f64,
+    /// Quadratic elements along the meridian, 1..=4096. Default 64.
+    #[serde(default = "default_axisym_elements")]
+    pub elements: usize,
+    /// The largest wave number M of the stability analysis (blocks m = 0..=M), ≤ 200.
+    /// Default 20.
+    #[serde(default = "default_axisym_modes")]
+    pub modes: usize,
 }
 
 /// Options of the disc generator.
@@ -800,6 +839,15 @@ fn default_cut_height() -> f64 {
 fn default_pattern() -> String {
     TruncatedSphereOptions::default().pattern
 }
+fn default_axisym_shape() -> AxisymShape {
+    AxisymShape::Disc
+}
+fn default_axisym_elements() -> usize {
+    64
+}
+fn default_axisym_modes() -> usize {
+    20
+}
 fn default_file_group() -> String {
     "C1".to_string()
 }
@@ -840,6 +888,10 @@ impl Analysis {
     }
 }
 
+/// Why a command that needs a 3-D mesh refuses an axisymmetric one.
+pub const AXISYMMETRIC_ONLY: &str =
+    "generator \"axisymmetric\" is a meridian, not a 3-D mesh: only `memstab run` takes it";
+
 impl MeshSpec {
     /// The generator.
     pub fn generator(&self) -> Generator {
@@ -848,6 +900,7 @@ impl MeshSpec {
             MeshSpec::Icosphere(_) => Generator::Icosphere,
             MeshSpec::TruncatedSphere(_) => Generator::TruncatedSphere,
             MeshSpec::File(_) => Generator::File,
+            MeshSpec::Axisymmetric(_) => Generator::Axisymmetric,
         }
     }
 
@@ -875,7 +928,7 @@ impl MeshSpec {
                 let d = t.divisions_or_default();
                 8usize.saturating_mul(d).saturating_mul(d)
             }
-            MeshSpec::File(_) => 0,
+            MeshSpec::File(_) | MeshSpec::Axisymmetric(_) => 0,
         }
     }
 
@@ -925,6 +978,7 @@ impl MeshSpec {
                 generators::truncated_sphere(&opts)
             }
             MeshSpec::File(f) => f.build().map_err(|p| MeshError::Invalid(p.message.clone())),
+            MeshSpec::Axisymmetric(_) => Err(MeshError::Invalid(AXISYMMETRIC_ONLY.into())),
         }
     }
 
@@ -938,6 +992,8 @@ impl MeshSpec {
             MeshSpec::Icosphere(_) => "Ih".into(),
             MeshSpec::TruncatedSphere(t) => t.pattern.clone(),
             MeshSpec::File(f) => f.group.clone(),
+            // A meridian carries no finite group; it builds no group action.
+            MeshSpec::Axisymmetric(_) => "C1".into(),
         }
     }
 

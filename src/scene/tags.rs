@@ -52,6 +52,8 @@ tags! {
         TruncatedSphere = "truncated-sphere",
         /// A mesh file.
         File = "file",
+        /// A meridian of quadratic elements: the axisymmetric model (docs/theory.md §15).
+        Axisymmetric = "axisymmetric",
     }
 }
 
@@ -63,6 +65,7 @@ impl Generator {
             Generator::Icosphere => &["radius", "frequency", "down"],
             Generator::TruncatedSphere => &["radius", "cut-height", "pattern", "divisions"],
             Generator::File => &["path", "group"],
+            Generator::Axisymmetric => &["shape", "radius", "cut-height", "elements", "modes"],
         }
     }
 
@@ -71,6 +74,7 @@ impl Generator {
         match self {
             Generator::Disc | Generator::TruncatedSphere => Some("divisions"),
             Generator::Icosphere => Some("frequency"),
+            Generator::Axisymmetric => Some("elements"),
             Generator::File => None,
         }
     }

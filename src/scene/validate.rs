@@ -453,6 +453,36 @@ fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
                 at_least("mesh.divisions", d, 1)?;
             }
         }
+        MeshSpec::Axisymmetric(a) => {
+            radius_rule(a.radius)?;
+            at_least("mesh.elements", a.elements, 1)?;
+            if a.elements > 4096 {
+                return Err(Problem::at(
+                    "mesh.elements",
+                    format!("must be <= 4096, got {}", a.elements),
+                ));
+            }
+            if a.modes > 200 {
+                return Err(Problem::at(
+                    "mesh.modes",
+                    format!("must be <= 200, got {}", a.modes),
+                ));
+            }
+            let c = a.cut_height;
+            if a.shape == AxisymShape::TruncatedSphere
+                && !(c.is_finite() && c > -a.radius && c < a.radius)
+            {
+                return Err(Problem::at(
+                    "mesh.cut-height",
+                    format!(
+                        "must lie strictly between -radius and radius ({}, {}), got {}",
+                        num(-a.radius),
+                        num(a.radius),
+                        num(c)
+                    ),
+                ));
+            }
+        }
         MeshSpec::File(f) => {
             if f.path.as_os_str().is_empty() {
                 return Err(Problem::at("mesh.path", "must name a mesh file, got \"\""));

@@ -172,6 +172,7 @@ pub(super) fn resolution(spec: &MeshSpec) -> usize {
         MeshSpec::Disc(d) => d.divisions,
         MeshSpec::Icosphere(i) => i.frequency,
         MeshSpec::TruncatedSphere(t) => t.divisions_or_default(),
+        MeshSpec::Axisymmetric(a) => a.elements,
         MeshSpec::File(_) => 0,
     }
 }
@@ -202,6 +203,16 @@ pub(super) fn describe(spec: &MeshSpec) -> String {
             t.cut_height
         ),
         MeshSpec::File(f) => format!("file {} group={}", f.path.display(), f.group),
+        MeshSpec::Axisymmetric(a) => format!(
+            "axisymmetric shape={} elements={} modes={}",
+            match a.shape {
+                crate::scene::AxisymShape::Disc => "disc",
+                crate::scene::AxisymShape::TruncatedSphere => "truncated-sphere",
+                crate::scene::AxisymShape::Sphere => "sphere",
+            },
+            a.elements,
+            a.modes
+        ),
     }
 }
 
@@ -241,6 +252,7 @@ pub(super) fn variant(
             MeshSpec::File(_) => {
                 mesh.insert("group".into(), toml::Value::String(name.clone()));
             }
+            MeshSpec::Axisymmetric(_) => return Err(bad(crate::scene::AXISYMMETRIC_ONLY.into())),
             MeshSpec::Icosphere(_) => {
                 return Err(bad(
                     "an icosphere has no group option; name it by a full override, e.g. \

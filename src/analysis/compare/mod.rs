@@ -448,6 +448,7 @@ pub fn compare(
                     MeshSpec::TruncatedSphere(t) => {
                         t.divisions = Some(t.divisions_or_default() * 2)
                     }
+                    MeshSpec::Axisymmetric(a) => a.elements *= 2,
                     MeshSpec::File(_) => {
                         return Err(CompareError::Input(format!(
                             "mesh '{}': --refine cannot refine a mesh file",

@@ -1,0 +1,733 @@
+//! Equilibria of a membrane of revolution and their Fourier-mode blocks (docs/theory.md §15).
+//!
+//! The unknowns are the displacements (u_r, u_z) of the meridian's nodes that are free: a
+//! clamped end holds both, a node on the axis holds u_r = 0 (regularity), and on a closed
+//! meridian (both ends on the axis, none clamped) the first node's u_z is held too, which
+//! removes the rigid translation along z and costs nothing at an equilibrium of a
+//! self-equilibrated load (a gas in a closed membrane exerts no net force).
+//!
+//! The potential is Π = Π_membrane + Σ Π_pressure, each integrated by Gauss–Legendre
+//! quadrature along the meridian and exactly in θ (a factor 2π):
+//!
+//! ```text
+//!   Π_membrane = 2π H ∫ W(F) |X_ξ| R / λ0² dξ,   f1 = λ0 x_ξ/|X_ξ|,  f2 = λ0 r/R e_θ,
+//!   Π_pressure = −s π ∫ r² p(z) z_ξ dξ,
+//! ```
+//!
+//! where a pressure p(z) pushes along −s n with n dA = x_ξ × x_θ dξ dθ: its first variation
+//! is s ∫ p n·δx dA (integrating by parts, the end terms vanish on the axis, r = 0, and at a
+//! clamped end, δz = 0). A gas of over-pressure P on the side n points away from is s = −1,
+//! p = P (Π = −P V with V = −π ∫ r² z_ξ dξ); a fluid of density ρ under gravity g with its
+//! level at h has p = ρ g (h − z), s = +1 on the side n points to ("above" a floor whose
+//! meridian runs outward from the axis) and s = −1 behind it. Only a wholly wet meridian
+//! (z ≤ h at every node) is accepted.
+//!
+//! The blocks of wave number m are the second variations of the same potentials for the 3-D
+//! displacement δx = U cos mθ e_r + V sin mθ e_θ + W cos mθ e_z (docs/theory.md §15.2): with
+//! δx = C cos mθ + S sin mθ, the θ integrals of the products are π (CᵀHC + SᵀHS) for m ≥ 1
+//! and 2π (C + S)ᵀH(C + S) for m = 0, exactly.
+
+use super::{shape, AxisymError, Meridian, GAUSS};
+use crate::effects::Quantity;
+use crate::linalg::SymmetricPattern;
+use nalgebra::{Matrix3, SMatrix, Vector3};
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+/// A pressure on the meridian (see the module docs for the potential).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Pressure {
+    /// A gas at over-pressure `pressure` on the side n points away from (inside a
+    /// closed meridian that runs from the north pole to the south pole, below a disc).
+    Gas {
+        /// The over-pressure P.
+        pressure: Quantity,
+    },
+    /// A fluid p = ρ g (h − z), on the side n points to (`front`) or behind it.
+    Fluid {
+        /// ρ.
+        density: Quantity,
+        /// g.
+        gravity: Quantity,
+        /// h.
+        level: Quantity,
+        /// True: the fluid is on the side n points to (s = +1).
+        front: bool,
+    },
+}
+
+/// p, p'(z), and the same for the derivative along parameter `j` (when it enters).
+struct PressureAt {
+    sign: f64,
+    p: f64,
+    dp: f64,
+}
+
+impl Pressure {
+    fn sign(&self) -> f64 {
+        match self {
+            Pressure::Gas { .. } => -1.0,
+            Pressure::Fluid { front, .. } => {
+                if *front {
+                    1.0
+                } else {
+                    -1.0
+                }
+            }
+        }
+    }
+
+    /// p(z) and p'(z), or their derivatives along parameter `along` when given.
+    fn at(&self, z: f64, params: &[f64], along: Option<usize>) -> PressureAt {
+        let sign = self.sign();
+        let (p, dp) = match (*self, along) {
+            (Pressure::Gas { pressure }, None) => (pressure.value(params), 0.0),
+            (Pressure::Gas { pressure }, Some(j)) => (
+                if pressure.parameter() == Some(j) {
+                    1.0
+                } else {
+                    0.0
+                },
+                0.0,
+            ),
+            (
+                Pressure::Fluid {
+                    density,
+                    gravity,
+                    level,
+                    ..
+                },
+                along,
+            ) => {
+                let (rho, g, h) = (
+                    density.value(params),
+                    gravity.value(params),
+                    level.value(params),
+                );
+                match along {
+                    None => (rho * g * (h - z), -rho * g),
+                    Some(j) => {
+                        let mut p = 0.0;
+                        let mut dp = 0.0;
+                        if density.parameter() == Some(j) {
+                            p += g * (h - z);
+                            dp -= g;
+                        }
+                        if gravity.parameter() == Some(j) {
+                            p += rho * (h - z);
+                            dp -= rho;
+                        }
+                        if level.parameter() == Some(j) {
+                            p += rho * g;
+                        }
+                        (p, dp)
+                    }
+                }
+            }
+        };
+        PressureAt { sign, p, dp }
+    }
+
+    fn level(&self, params: &[f64]) -> Option<f64> {
+        match self {
+            Pressure::Gas { .. } => None,
+            Pressure::Fluid { level, .. } => Some(level.value(params)),
+        }
+    }
+}
+
+/// The equilibrium problem of a membrane of revolution: a meridian and its pressures.
+#[derive(Debug, Clone)]
+pub struct AxisymModel {
+    /// The meridian (stress-free data, clamped ends).
+    pub meridian: Meridian,
+    /// The pressures.
+    pub pressures: Vec<Pressure>,
+    /// The free unknowns: (node, component 0 = r, 1 = z).
+    free: Vec<(usize, usize)>,
+    /// Per node and component, the index of the unknown (None: held).
+    index: Vec<[Option<usize>; 2]>,
+}
+
+/// Π, its gradient and its Hessian over the free unknowns.
+#[derive(Debug, Clone)]
+pub struct Evaluated {
+    /// Π.
+    pub energy: f64,
+    /// ∂Π/∂q.
+    pub gradient: Vec<f64>,
+    /// ∂²Π/∂q² (dense, symmetric).
+    pub tangent: nalgebra::DMatrix<f64>,
+    /// ∂²Π/∂q∂λ_j for every parameter j (columns).
+    pub loads: nalgebra::DMatrix<f64>,
+}
+
+/// A symmetric Fourier block on its own pattern (both triangles stored).
+#[derive(Debug, Clone)]
+pub struct Block {
+    /// The pattern.
+    pub pattern: Arc<SymmetricPattern>,
+    /// Values aligned with the pattern's row indices.
+    pub values: Vec<f64>,
+}
+
+impl AxisymModel {
+    /// The model of `meridian` under `pressures`.
+    #[allow(clippy::needless_range_loop)]
+    pub fn new(meridian: Meridian, pressures: Vec<Pressure>) -> Self {
+        let n = meridian.nodes.len();
+        let closed = meridian.closed();
+        let mut free = Vec::new();
+        let mut index = vec![[None; 2]; n];
+        for (i, x) in meridian.nodes.iter().enumerate() {
+            if meridian.is_clamped(i) {
+                continue;
+            }
+            for c in 0..2 {
+                let held = (c == 0 && x[0] == 0.0) || (c == 1 && closed && i == 0);
+                if !held {
+                    index[i][c] = Some(free.len());
+                    free.push((i, c));
+                }
+            }
+        }
+        Self {
+            meridian,
+            pressures,
+            free,
+            index,
+        }
+    }
+
+    /// The index of the unknown of node `node`, component `c` (0: r, 1: z), if it is free.
+    pub fn unknown(&self, node: usize, c: usize) -> Option<usize> {
+        self.index[node][c]
+    }
+
+    /// Number of unknowns.
+    pub fn dim(&self) -> usize {
+        self.free.len()
+    }
+
+    /// The nodes (r, z) at the displacement `q`.
+    pub fn positions(&self, q: &[f64]) -> Vec<[f64; 2]> {
+        let mut x = self.meridian.nodes.clone();
+        for (k, &(i, c)) in self.free.iter().enumerate() {
+            x[i][c] += q[k];
+        }
+        x
+    }
+
+    /// The displacement q that puts the nodes at `x` (held components are ignored).
+    pub fn displacement_of(&self, x: &[[f64; 2]]) -> Vec<f64> {
+        self.free
+            .iter()
+            .map(|&(i, c)| x[i][c] - self.meridian.nodes[i][c])
+            .collect()
+    }
+
+    /// The enclosed volume V = −π ∫ r² z_ξ dξ at the nodes `x`.
+    pub fn volume(&self, x: &[[f64; 2]]) -> f64 {
+        let mut v = 0.0;
+        for e in 0..self.meridian.elements() {
+            for &(xi, w) in &GAUSS {
+                let (n, dn) = shape(xi);
+                let (mut r, mut dz) = (0.0, 0.0);
+                for k in 0..3 {
+                    r += n[k] * x[2 * e + k][0];
+                    dz += dn[k] * x[2 * e + k][1];
+                }
+                v -= PI * r * r * dz * w;
+            }
+        }
+        v
+    }
+
+    /// Why the state `x` is outside the model: a node above a fluid's level.
+    pub fn wetting_defect(&self, x: &[[f64; 2]], params: &[f64]) -> Option<AxisymError> {
+        for p in &self.pressures {
+            if let Some(h) = p.level(params) {
+                if let Some(i) = x.iter().position(|n| n[1] > h) {
+                    return Some(AxisymError::PartlyWet { node: i, level: h });
+                }
+            }
+        }
+        None
+    }
+
+    /// Π, gradient, tangent and parameter loads at displacement `q`, parameters `params`.
+    pub fn evaluate(&self, q: &[f64], params: &[f64]) -> Result<Evaluated, AxisymError> {
+        let x = self.positions(q);
+        if let Some(d) = self.wetting_defect(&x, params) {
+            return Err(d);
+        }
+        let nq = self.dim();
+        let mut out = Evaluated {
+            energy: 0.0,
+            gradient: vec![0.0; nq],
+            tangent: nalgebra::DMatrix::zeros(nq, nq),
+            loads: nalgebra::DMatrix::zeros(nq, params.len()),
+        };
+        let lam = self.meridian.prestretch;
+        let h = self.meridian.material.thickness;
+        for e in 0..self.meridian.elements() {
+            // Element gradient and Hessian over its 6 unknowns (r, z per node, node-major).
+            let mut g = [0.0; 6];
+            let mut kk = SMatrix::<f64, 6, 6>::zeros();
+            let mut loads = vec![[0.0; 6]; params.len()];
+            for p in super::points(&self.meridian, &x, e) {
+                let a = lam / p.dx_ref;
+                let b = lam / p.big_r;
+                let f = [p.x_xi * a, Vector3::new(0.0, p.r * b, 0.0)];
+                let (w, pk, hf) = self
+                    .meridian
+                    .material
+                    .energy_in_f(&f)
+                    .ok_or(AxisymError::Degenerate(e))?;
+                let da = 2.0 * PI * h * p.dx_ref * p.big_r / (lam * lam) * p.weight;
+                out.energy += w * da;
+                // ∂f_i/∂(node k, component c).
+                let df = |k: usize, c: usize| -> [Vector3<f64>; 2] {
+                    if c == 0 {
+                        [
+                            Vector3::new(a * p.dn[k], 0.0, 0.0),
+                            Vector3::new(0.0, b * p.n[k], 0.0),
+                        ]
+                    } else {
+                        [Vector3::new(0.0, 0.0, a * p.dn[k]), Vector3::zeros()]
+                    }
+                };
+                for i in 0..6 {
+                    let di = df(i / 2, i % 2);
+                    g[i] += (pk[0].dot(&di[0]) + pk[1].dot(&di[1])) * da;
+                    for j in 0..6 {
+                        let dj = df(j / 2, j % 2);
+                        let mut s = 0.0;
+                        for u in 0..2 {
+                            for v in 0..2 {
+                                s += di[u].dot(&(hf[u][v] * dj[v]));
+                            }
+                        }
+                        kk[(i, j)] += s * da;
+                    }
+                }
+                // Pressures: Π = −s π ∫ r² p(z) z_ξ dξ.
+                let (r, dz) = (p.r, p.x_xi[2]);
+                let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+                for load in &self.pressures {
+                    let pa = load.at(z, params, None);
+                    let c = -pa.sign * PI * p.weight;
+                    out.energy += c * r * r * pa.p * dz;
+                    let grad = |pa: &PressureAt, gr: &mut [f64; 6]| {
+                        for k in 0..3 {
+                            gr[2 * k] += c * 2.0 * r * pa.p * dz * p.n[k];
+                            gr[2 * k + 1] += c * r * r * (pa.dp * dz * p.n[k] + pa.p * p.dn[k]);
+                        }
+                    };
+                    grad(&pa, &mut g);
+                    for (j, l) in loads.iter_mut().enumerate() {
+                        let pj = load.at(z, params, Some(j));
+                        if pj.p != 0.0 || pj.dp != 0.0 {
+                            grad(&pj, l);
+                        }
+                    }
+                    for k in 0..3 {
+                        for l in 0..3 {
+                            let (nk, nl, dk, dl) = (p.n[k], p.n[l], p.dn[k], p.dn[l]);
+                            kk[(2 * k, 2 * l)] += c * 2.0 * pa.p * dz * nk * nl;
+                            let rz =
+                                c * (2.0 * r * pa.dp * dz * nk * nl + 2.0 * r * pa.p * nk * dl);
+                            kk[(2 * k, 2 * l + 1)] += rz;
+                            kk[(2 * l + 1, 2 * k)] += rz;
+                            kk[(2 * k + 1, 2 * l + 1)] += c * r * r * pa.dp * (nk * dl + dk * nl);
+                        }
+                    }
+                }
+            }
+            let idx = |i: usize| self.index[2 * e + i / 2][i % 2];
+            for i in 0..6 {
+                let Some(a) = idx(i) else { continue };
+                out.gradient[a] += g[i];
+                for (j, l) in loads.iter().enumerate() {
+                    out.loads[(a, j)] += l[i];
+                }
+                for j in 0..6 {
+                    if let Some(b) = idx(j) {
+                        out.tangent[(a, b)] += kk[(i, j)];
+                    }
+                }
+            }
+        }
+        if !out.energy.is_finite() || out.gradient.iter().any(|v| !v.is_finite()) {
+            return Err(AxisymError::NonFinite);
+        }
+        Ok(out)
+    }
+
+    /// The kept unknowns of a block of wave number m: for every full unknown (U, V, W per
+    /// node), the kept columns it is made of, and their number. Clamped ends hold everything;
+    /// a node on the axis keeps W for m = 0, U = −V for m = 1 and nothing for m ≥ 2; on a
+    /// closed meridian the rigid motions of the block are removed by holding unknowns that
+    /// meet them (docs/theory.md §15.2): W at the first node for m = 0 (translation along z)
+    /// and V at the widest node (rotation about z); for m = 1 the first node's U = −V
+    /// (translation) and W at the widest node (rotation about a horizontal axis).
+    fn kept_map(&self, m: usize) -> (Vec<Option<(usize, f64)>>, usize) {
+        let nodes = &self.meridian.nodes;
+        let n = nodes.len();
+        let widest = (0..n)
+            .max_by(|&a, &b| nodes[a][0].total_cmp(&nodes[b][0]))
+            .unwrap_or(0);
+        let closed = self.meridian.closed();
+        let mut map = vec![None; 3 * n];
+        let mut cols = 0;
+        for (i, x) in nodes.iter().enumerate() {
+            if self.meridian.is_clamped(i) {
+                continue;
+            }
+            let rigid = |c: usize| {
+                closed
+                    && match (m, c) {
+                        (0, 2) => i == 0,
+                        (0, 1) | (1, 2) => i == widest,
+                        _ => false,
+                    }
+            };
+            if x[0] == 0.0 {
+                match m {
+                    0 if !rigid(2) => {
+                        map[3 * i + 2] = Some((cols, 1.0));
+                        cols += 1;
+                    }
+                    1 if !(closed && i == 0) => {
+                        map[3 * i] = Some((cols, 1.0));
+                        map[3 * i + 1] = Some((cols, -1.0));
+                        cols += 1;
+                    }
+                    _ => {}
+                }
+                continue;
+            }
+            for c in 0..3 {
+                if !rigid(c) {
+                    map[3 * i + c] = Some((cols, 1.0));
+                    cols += 1;
+                }
+            }
+        }
+        (map, cols)
+    }
+
+    /// The block of wave number m at displacement `q` (membrane and pressures), on the kept
+    /// unknowns of [`Self::kept_map`].
+    pub fn block(&self, m: usize, q: &[f64], params: &[f64]) -> Result<Block, AxisymError> {
+        let x = self.positions(q);
+        if let Some(d) = self.wetting_defect(&x, params) {
+            return Err(d);
+        }
+        let (map, cols) = self.kept_map(m);
+        let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+        for e in 0..self.meridian.elements() {
+            let mut local = membrane_local(&self.meridian, &x, e, m)?;
+            for load in &self.pressures {
+                local += pressure_local(&self.meridian, &x, e, m, load, params);
+            }
+            for i in 0..9 {
+                let Some((a, ca)) = map[6 * e + i] else {
+                    continue;
+                };
+                for j in 0..9 {
+                    if let Some((b, cb)) = map[6 * e + j] {
+                        triplets.push((a, b, ca * cb * local[(i, j)]));
+                    }
+                }
+            }
+        }
+        let pattern = SymmetricPattern::from_entries(cols, triplets.iter().map(|t| (t.0, t.1)));
+        let mut values = vec![0.0; pattern.nnz()];
+        for (a, b, v) in triplets {
+            let k = pattern.position(a, b).expect("an entry of the pattern");
+            values[k] += v;
+        }
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(AxisymError::NonFinite);
+        }
+        Ok(Block {
+            pattern: Arc::new(pattern),
+            values,
+        })
+    }
+}
+
+/// The cos and sin parts of δx, δx_ξ, δx_θ at a Gauss point for the 9 unknowns of an
+/// element (U, V, W per node): δ = C cos mθ + S sin mθ (m = 0: C + S is the field).
+fn parts(p: &super::Point, m: usize) -> [[SMatrix<f64, 3, 9>; 2]; 3] {
+    let mf = m as f64;
+    let z = SMatrix::<f64, 3, 9>::zeros();
+    let (mut xc, mut xs, mut gc, mut gs, mut tc, mut ts) = (z, z, z, z, z, z);
+    for k in 0..3 {
+        let (u, v, w) = (3 * k, 3 * k + 1, 3 * k + 2);
+        let (n, dn) = (p.n[k], p.dn[k]);
+        xc[(0, u)] = n;
+        xc[(2, w)] = n;
+        xs[(1, v)] = n;
+        gc[(0, u)] = dn;
+        gc[(2, w)] = dn;
+        gs[(1, v)] = dn;
+        // ∂/∂θ in the rotating frame (∂e_r/∂θ = e_θ, ∂e_θ/∂θ = −e_r).
+        tc[(1, u)] = n;
+        tc[(1, v)] = mf * n;
+        ts[(0, u)] = -mf * n;
+        ts[(0, v)] = -n;
+        ts[(2, w)] = -mf * n;
+    }
+    [[xc, xs], [gc, gs], [tc, ts]]
+}
+
+/// ∫ dθ of a bilinear form of the two families: π Σ (cos, sin) for m ≥ 1, 2π of the sums
+/// for m = 0.
+fn families(m: usize, pr: &[[SMatrix<f64, 3, 9>; 2]; 3]) -> (Vec<[SMatrix<f64, 3, 9>; 3]>, f64) {
+    if m == 0 {
+        (
+            vec![[
+                pr[0][0] + pr[0][1],
+                pr[1][0] + pr[1][1],
+                pr[2][0] + pr[2][1],
+            ]],
+            2.0 * PI,
+        )
+    } else {
+        (
+            vec![
+                [pr[0][0], pr[1][0], pr[2][0]],
+                [pr[0][1], pr[1][1], pr[2][1]],
+            ],
+            PI,
+        )
+    }
+}
+
+/// The membrane's 9 × 9 block of wave number m on element e at the nodes `x`.
+pub(super) fn membrane_local(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    e: usize,
+    m: usize,
+) -> Result<SMatrix<f64, 9, 9>, AxisymError> {
+    let lam = meridian.prestretch;
+    let h = meridian.material.thickness;
+    let mut local = SMatrix::<f64, 9, 9>::zeros();
+    for p in super::points(meridian, x, e) {
+        let f = [
+            p.x_xi * (lam / p.dx_ref),
+            Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
+        ];
+        let (_, _, hf) = meridian
+            .material
+            .energy_in_f(&f)
+            .ok_or(AxisymError::Degenerate(e))?;
+        let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
+        let (fams, theta) = families(m, &parts(&p, m));
+        for fam in fams {
+            let b = [fam[1] * (lam / p.dx_ref), fam[2] * (lam / p.big_r)];
+            for i in 0..2 {
+                for k in 0..2 {
+                    let hik: &Matrix3<f64> = &hf[i][k];
+                    local += b[i].transpose() * hik * b[k] * (h * da0 * theta);
+                }
+            }
+        }
+    }
+    Ok(local)
+}
+
+/// A pressure's 9 × 9 block of wave number m on element e: the symmetrised second variation
+/// s ∫ [p'(z) δz₂ (n dA·δx₁) + p δx₁·(δx₂,ξ × x_θ + x_ξ × δx₂,θ)] dξ dθ of the potential
+/// whose first variation is s ∫ p n·δx dA.
+fn pressure_local(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    e: usize,
+    m: usize,
+    load: &Pressure,
+    params: &[f64],
+) -> SMatrix<f64, 9, 9> {
+    let mut local = SMatrix::<f64, 9, 9>::zeros();
+    for p in super::points(meridian, x, e) {
+        let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+        let pa = load.at(z, params, None);
+        let x_th = Vector3::new(0.0, p.r, 0.0);
+        let nda = p.x_xi.cross(&x_th);
+        let (fams, theta) = families(m, &parts(&p, m));
+        for [dx, dxi, dth] in fams {
+            let mut a = SMatrix::<f64, 9, 9>::zeros();
+            for j in 0..9 {
+                let dn = dxi.column(j).cross(&x_th) + p.x_xi.cross(&dth.column(j));
+                for i in 0..9 {
+                    let di = dx.column(i);
+                    a[(i, j)] = pa.dp * dx[(2, j)] * nda.dot(&di) + pa.p * di.dot(&dn);
+                }
+            }
+            local += (a + a.transpose()) * (0.5 * pa.sign * p.weight * theta);
+        }
+    }
+    local
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effects::membrane::MooneyRivlin;
+
+    /// A clamped cap, stretched and bent away from its reference, under a gas pressure and a
+    /// fluid below it: every potential of the model at a generic state.
+    fn generic() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let mat = MooneyRivlin::new(1.0, 0.2, 0.1);
+        let meridian = Meridian::truncated_sphere(1.0, -0.3, 5, 1.05, mat).unwrap();
+        let pressures = vec![
+            Pressure::Gas {
+                pressure: Quantity::Parameter(0),
+            },
+            Pressure::Fluid {
+                density: Quantity::Parameter(1),
+                gravity: Quantity::Value(1.3),
+                level: Quantity::Parameter(2),
+                front: false,
+            },
+        ];
+        let model = AxisymModel::new(meridian, pressures);
+        let q: Vec<f64> = (0..model.dim())
+            .map(|k| 0.03 * ((k as f64) * 1.7).sin() + 0.02)
+            .collect();
+        (model, q, vec![0.7, 0.4, 2.0])
+    }
+
+    #[test]
+    fn gradient_tangent_and_loads_match_finite_differences() {
+        let (model, q, params) = generic();
+        let e = model.evaluate(&q, &params).unwrap();
+        let h = 1e-6;
+        for k in 0..model.dim() {
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[k] += h;
+            qm[k] -= h;
+            let (ep, em) = (
+                model.evaluate(&qp, &params).unwrap(),
+                model.evaluate(&qm, &params).unwrap(),
+            );
+            let g = (ep.energy - em.energy) / (2.0 * h);
+            assert!(
+                (g - e.gradient[k]).abs() < 1e-7 * (1.0 + g.abs()),
+                "gradient {k}: {g} vs {}",
+                e.gradient[k]
+            );
+            for j in 0..model.dim() {
+                let t = (ep.gradient[j] - em.gradient[j]) / (2.0 * h);
+                assert!(
+                    (t - e.tangent[(j, k)]).abs() < 1e-6 * (1.0 + t.abs()),
+                    "tangent ({j}, {k}): {t} vs {}",
+                    e.tangent[(j, k)]
+                );
+            }
+        }
+        for p in 0..params.len() {
+            let (mut pp, mut pm) = (params.clone(), params.clone());
+            pp[p] += h;
+            pm[p] -= h;
+            let (ep, em) = (
+                model.evaluate(&q, &pp).unwrap(),
+                model.evaluate(&q, &pm).unwrap(),
+            );
+            for j in 0..model.dim() {
+                let l = (ep.gradient[j] - em.gradient[j]) / (2.0 * h);
+                assert!(
+                    (l - e.loads[(j, p)]).abs() < 1e-6 * (1.0 + l.abs()),
+                    "load ({j}, {p}): {l} vs {}",
+                    e.loads[(j, p)]
+                );
+            }
+        }
+        assert!(e.tangent.amax() > 0.1 && e.loads.amax() > 0.01);
+    }
+
+    /// The gradient of the pressure potentials is s ∫ p n·δx dA: for the gas alone, −P δV.
+    #[test]
+    fn the_gas_potential_is_minus_pressure_times_volume() {
+        let (mut model, q, params) = generic();
+        model.pressures.truncate(1);
+        let mut bare = model.clone();
+        bare.pressures.clear();
+        let (e, b) = (
+            model.evaluate(&q, &params).unwrap(),
+            bare.evaluate(&q, &params).unwrap(),
+        );
+        let v = model.volume(&model.positions(&q));
+        assert!((e.energy - b.energy + params[0] * v).abs() < 1e-12 * v.abs());
+    }
+
+    /// The m = 0 block on (U, W) is the tangent of the axisymmetric problem.
+    #[test]
+    fn the_axisymmetric_block_is_the_tangent() {
+        let (model, q, params) = generic();
+        let e = model.evaluate(&q, &params).unwrap();
+        let block = model.block(0, &q, &params).unwrap();
+        let dense = block.pattern.to_dense(&block.values);
+        let (map, _) = model.kept_map(0);
+        for (a, &(i, c)) in model.free.iter().enumerate() {
+            let ka = map[3 * i + 2 * c].unwrap().0;
+            for (b, &(j, d)) in model.free.iter().enumerate() {
+                let kb = map[3 * j + 2 * d].unwrap().0;
+                let t = e.tangent[(a, b)];
+                assert!(
+                    (dense[(ka, kb)] - t).abs() < 1e-10 * e.tangent.amax(),
+                    "({a}, {b}): block {} vs tangent {t}",
+                    dense[(ka, kb)]
+                );
+            }
+        }
+    }
+
+    /// The blocks integrated exactly in θ equal the blocks sampled in θ (the trapezoidal rule
+    /// on 2m + 4 points, exact for these products), membrane and fluid.
+    #[test]
+    fn exact_theta_integrals_equal_the_sampled_blocks() {
+        let (model, q, _) = generic();
+        let x = model.positions(&q);
+        let load = super::super::Hydrostatic {
+            gravity: 1.3,
+            level: 2.0,
+        };
+        let fluid = Pressure::Fluid {
+            density: Quantity::Value(1.0),
+            gravity: Quantity::Value(1.3),
+            level: Quantity::Value(2.0),
+            front: true,
+        };
+        for m in 0..5 {
+            let km = super::super::membrane_full(&model.meridian, &x, m, 0.0).unwrap();
+            let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0);
+            let n = 3 * model.meridian.nodes.len();
+            let (mut am, mut af) = (
+                nalgebra::DMatrix::zeros(n, n),
+                nalgebra::DMatrix::zeros(n, n),
+            );
+            for e in 0..model.meridian.elements() {
+                let a = membrane_local(&model.meridian, &x, e, m).unwrap();
+                let f = pressure_local(&model.meridian, &x, e, m, &fluid, &[]);
+                super::super::scatter(&mut am, e, &a);
+                super::super::scatter(&mut af, e, &f);
+            }
+            assert!((&am - &km).amax() < 1e-11 * km.amax(), "membrane, m = {m}");
+            assert!((&af - &kf).amax() < 1e-11 * kf.amax(), "fluid, m = {m}");
+            assert!(km.amax() > 0.0 && kf.amax() > 0.0);
+        }
+    }
+
+    #[test]
+    fn a_node_above_the_level_is_refused() {
+        let (model, q, mut params) = generic();
+        params[2] = -2.0;
+        let err = model.evaluate(&q, &params).unwrap_err();
+        assert!(matches!(err, AxisymError::PartlyWet { .. }), "{err}");
+        assert!(model.block(1, &q, &params).is_err());
+    }
+}

@@ -1,0 +1,151 @@
+//! The axisymmetric model as a path-following problem with Fourier-mode blocks: the seam
+//! between the meridian and the analysis ([`crate::analysis::modes::ModeProblem`]), which
+//! knows blocks and wave numbers, not membranes.
+
+use super::{AxisymError, AxisymModel};
+use crate::analysis::continuation::{Linearization, PhaseTimes, Problem, Tangent};
+use crate::analysis::modes::ModeProblem;
+use crate::linalg::bordered::SharedFactorization;
+use crate::linalg::SymmetricPattern;
+use crate::model::ModelError;
+use nalgebra::{DMatrix, DVector};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The axisymmetric model at every parameter's value, the control free.
+pub struct AxisymProblem {
+    /// The model.
+    pub model: AxisymModel,
+    /// Every parameter (the control's entry is overwritten by λ_0).
+    pub params: Vec<f64>,
+    /// The control's index among the parameters.
+    pub control: usize,
+    /// The largest wave number analysed.
+    pub modes: usize,
+    pattern: Arc<SymmetricPattern>,
+    solver: SharedFactorization,
+    times: PhaseTimes,
+}
+
+fn model_error(e: AxisymError) -> ModelError {
+    match e {
+        AxisymError::Degenerate(element) => ModelError::Element {
+            effect: "membrane".into(),
+            triangle: element,
+            what: "an element of the meridian inverted or collapsed".into(),
+        },
+        AxisymError::NonFinite => ModelError::NonFinite {
+            effect: "axisymmetric".into(),
+            what: "energy",
+        },
+        other => ModelError::Global {
+            effect: "axisymmetric".into(),
+            what: other.to_string(),
+        },
+    }
+}
+
+impl AxisymProblem {
+    /// The problem of `model` with `params`, the control `control`, blocks m = 0..=`modes`.
+    pub fn new(model: AxisymModel, params: Vec<f64>, control: usize, modes: usize) -> Self {
+        // Unknowns of one element couple: the pattern of the tangent.
+        let dofs: Vec<Vec<usize>> = (0..model.meridian.elements())
+            .map(|e| {
+                (0..6)
+                    .filter_map(|i| model.unknown(2 * e + i / 2, i % 2))
+                    .collect()
+            })
+            .collect();
+        let pattern = SymmetricPattern::from_entries(
+            model.dim(),
+            dofs.iter()
+                .flat_map(|d| d.iter().flat_map(|&a| d.iter().map(move |&b| (a, b)))),
+        );
+        Self {
+            model,
+            params,
+            control,
+            modes,
+            pattern: Arc::new(pattern),
+            solver: SharedFactorization::default(),
+            times: PhaseTimes::default(),
+        }
+    }
+
+    /// Every parameter at the free parameters λ.
+    pub fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
+        let mut p = self.params.clone();
+        p[self.control] = lambda[0];
+        p
+    }
+}
+
+impl Problem for AxisymProblem {
+    fn dim(&self) -> usize {
+        self.model.dim()
+    }
+
+    fn free_parameters(&self) -> usize {
+        1
+    }
+
+    fn evaluate(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Linearization, ModelError> {
+        let t = Instant::now();
+        let params = self.parameters(lambda);
+        let e = self
+            .model
+            .evaluate(q.as_slice(), &params)
+            .map_err(model_error)?;
+        let n = self.dim();
+        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+        let mut values = vec![0.0; self.pattern.nnz()];
+        for c in 0..n {
+            for k in cp[c]..cp[c + 1] {
+                values[k] = e.tangent[(ri[k], c)];
+            }
+        }
+        self.times.assembly += t.elapsed();
+        self.times.evaluations += 1;
+        Ok(Linearization {
+            residual: DVector::from_vec(e.gradient),
+            tangent: Tangent::Sparse {
+                pattern: self.pattern.clone(),
+                values,
+                rank_one: Vec::new(),
+                solver: self.solver.clone(),
+            },
+            loads: DMatrix::from_column_slice(n, 1, e.loads.column(self.control).as_slice()),
+            constraints: DVector::zeros(0),
+            constraint_q: DMatrix::zeros(0, n),
+            constraint_lambda: DMatrix::zeros(0, 1),
+        })
+    }
+
+    fn phase_times(&self) -> PhaseTimes {
+        self.times
+    }
+}
+
+impl ModeProblem for AxisymProblem {
+    fn modes(&self) -> usize {
+        self.modes
+    }
+
+    fn block(
+        &mut self,
+        m: usize,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<(Arc<SymmetricPattern>, Vec<f64>), ModelError> {
+        let params = self.parameters(lambda);
+        let b = self
+            .model
+            .block(m, q.as_slice(), &params)
+            .map_err(model_error)?;
+        Ok((b.pattern, b.values))
+    }
+}

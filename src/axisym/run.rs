@@ -1,0 +1,544 @@
+//! A scene on an axisymmetric mesh (`[mesh] generator = "axisymmetric"`), made into the
+//! axisymmetric model and run: the same scene keys, effects and analyses as on a 3-D mesh, for
+//! the effects the meridian implements (gas at a given over-pressure, fluid wholly wetting
+//! the membrane, fixed edges); every other effect, constraint or key is refused in one line
+//! that names it. Stability is by wave number m = 0..=`mesh.modes` (docs/theory.md §15.3).
+
+use super::{AxisymModel, AxisymProblem, Meridian, Pressure};
+use crate::analysis::continuation::{PathOptions, PathPoint, SolveError};
+use crate::analysis::critical::CriticalKind;
+use crate::analysis::events::{Extremum, StopReason};
+use crate::analysis::modes::{self, ModePath};
+use crate::effects::membrane::MooneyRivlin;
+use crate::effects::Quantity;
+use crate::scene::{self, Analysis, AxisymShape, Direction, Effect, MeshSpec, Scene};
+use nalgebra::DVector;
+use serde::Serialize;
+use std::time::{Duration, Instant};
+
+/// Why an axisymmetric scene cannot be built or run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AxisymRunError {
+    /// The scene asks for something the axisymmetric model does not do (user input).
+    #[error("{0}")]
+    Unsupported(String),
+    /// The start state did not converge.
+    #[error("the start state did not converge: {0}")]
+    Start(String),
+}
+
+/// A scene made into the axisymmetric model.
+pub struct AxisymStudy {
+    /// The scene.
+    pub scene: Scene,
+    /// The model.
+    pub model: AxisymModel,
+    /// Parameter names (scene order).
+    pub parameters: Vec<String>,
+    /// Start values.
+    pub start: Vec<f64>,
+    /// The control's index (path and linear-buckling analyses).
+    pub control: Option<usize>,
+    /// The largest wave number.
+    pub modes: usize,
+    /// The stress-free enclosed volume (closed meridians: the stretch's reference).
+    stress_free_volume: Option<f64>,
+}
+
+fn unsupported(what: String) -> AxisymRunError {
+    AxisymRunError::Unsupported(what)
+}
+
+impl AxisymStudy {
+    /// Builds the model of an axisymmetric scene, refusing what the model does not do.
+    pub fn build(scene: Scene) -> Result<Self, AxisymRunError> {
+        let MeshSpec::Axisymmetric(mesh) = &scene.mesh else {
+            return Err(unsupported(
+                "mesh.generator: the axisymmetric model needs generator = \"axisymmetric\"".into(),
+            ));
+        };
+        let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
+        let start: Vec<f64> = scene.parameters.values().map(|p| p.start).collect();
+        let index = |q: &scene::Quantity| match q {
+            scene::Quantity::Value(v) => Quantity::Value(*v),
+            scene::Quantity::Parameter(n) => Quantity::Parameter(
+                parameters
+                    .iter()
+                    .position(|p| p == n)
+                    .expect("validated parameter"),
+            ),
+        };
+        let fixed_value = |key: &str, q: &scene::Quantity| {
+            match q {
+            scene::Quantity::Value(v) => Ok(*v),
+            scene::Quantity::Parameter(n) => Err(unsupported(format!(
+                "material.{key} = \"{n}\": the axisymmetric model takes the material as numbers, not parameters"
+            ))),
+        }
+        };
+        let m = &scene.material;
+        let material = MooneyRivlin::new(
+            fixed_value("mu", &m.mu)?,
+            fixed_value("k", &m.k)?,
+            fixed_value("thickness", &m.thickness)?,
+        );
+        let prestretch = fixed_value("prestretch", &m.prestretch)?;
+        let input = |e: super::AxisymError| unsupported(format!("mesh: {e}"));
+        let (mut meridian, edge) = match mesh.shape {
+            AxisymShape::Disc => (
+                Meridian::disc(mesh.radius, mesh.elements, prestretch, material).map_err(input)?,
+                Some("rim"),
+            ),
+            AxisymShape::TruncatedSphere => (
+                Meridian::truncated_sphere(
+                    mesh.radius,
+                    mesh.cut_height,
+                    mesh.elements,
+                    prestretch,
+                    material,
+                )
+                .map_err(input)?,
+                Some("cut"),
+            ),
+            AxisymShape::Sphere => (
+                Meridian::sphere(mesh.radius, mesh.elements, prestretch, material)
+                    .map_err(input)?,
+                None,
+            ),
+        };
+        meridian.clamped = (false, false);
+        for (i, name) in scene.boundary.fixed.iter().enumerate() {
+            if Some(name.as_str()) == edge {
+                meridian.clamped.1 = true;
+            } else {
+                return Err(unsupported(format!(
+                    "boundary.fixed[{i}]: unknown node set \"{name}\" (the axisymmetric {} has: {})",
+                    shape_name(mesh.shape),
+                    edge.unwrap_or("no node sets")
+                )));
+            }
+        }
+        if let Some(s) = scene.boundary.slide.first() {
+            return Err(unsupported(format!(
+                "boundary.slide (set \"{}\"): sliding edges are not implemented by the axisymmetric model; use a 3-D mesh",
+                s.set
+            )));
+        }
+        if !scene.constraints.is_empty() {
+            return Err(unsupported(format!(
+                "constraint[0] (type = \"{}\"): constraints are not implemented by the axisymmetric model; use a 3-D mesh",
+                scene.constraints[0].kind()
+            )));
+        }
+        let mut pressures = Vec::new();
+        for (i, e) in scene.effects.iter().enumerate() {
+            match e {
+                Effect::Gas(g) => pressures.push(Pressure::Gas {
+                    pressure: index(&g.pressure),
+                }),
+                Effect::Fluid(f) => {
+                    if f.filled {
+                        return Err(unsupported(format!(
+                            "effect[{i}].filled: a filled enclosure is not implemented by the axisymmetric model; use a 3-D mesh"
+                        )));
+                    }
+                    pressures.push(Pressure::Fluid {
+                        density: index(&f.density),
+                        gravity: index(&f.gravity),
+                        level: index(&f.level),
+                        front: match f.side {
+                            scene::FluidSide::Above => true,
+                            scene::FluidSide::Below | scene::FluidSide::Inside => false,
+                        },
+                    })
+                }
+                Effect::GasAmount(_) | Effect::Spin(_) | Effect::Plane(_) => {
+                    return Err(unsupported(format!(
+                        "effect[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements gas, fluid and fixed edges); use a 3-D mesh",
+                        e.kind()
+                    )))
+                }
+            }
+        }
+        if scene.start.from.is_some() || scene.start.hold_translation.is_some() {
+            return Err(unsupported(
+                "start: start.from and start.hold-translation are not implemented by the axisymmetric model"
+                    .into(),
+            ));
+        }
+        let control_name = match &scene.analysis {
+            Analysis::Path(p) => {
+                if p.branches.is_some() {
+                    return Err(unsupported(
+                        "analysis.branches: branch switching is not implemented by the axisymmetric model; use a 3-D mesh".into(),
+                    ));
+                }
+                Some(p.control.clone())
+            }
+            Analysis::LinearBuckling(b) => Some(b.control.clone()),
+            Analysis::Equilibrium(_) => None,
+            Analysis::CriticalCurve(_) => {
+                return Err(unsupported(
+                    "analysis.type = \"critical-curve\": not implemented by the axisymmetric model; use a 3-D mesh".into(),
+                ))
+            }
+        };
+        let control = control_name.map(|c| {
+            parameters
+                .iter()
+                .position(|p| *p == c)
+                .expect("validated control")
+        });
+        let model = AxisymModel::new(meridian, pressures);
+        let stress_free_volume = model
+            .meridian
+            .closed()
+            .then(|| model.volume(&model.meridian.nodes) / prestretch.powi(3));
+        let modes = mesh.modes;
+        Ok(Self {
+            scene,
+            model,
+            parameters,
+            start,
+            control,
+            modes,
+            stress_free_volume,
+        })
+    }
+
+    /// The names of the measures reported along a path.
+    pub fn measure_names(&self) -> Vec<String> {
+        let mut n = vec![
+            "max-displacement".to_string(),
+            "apex-z".to_string(),
+            "volume".to_string(),
+        ];
+        if self.stress_free_volume.is_some() {
+            n.push("stretch".into());
+        }
+        n
+    }
+
+    /// The measures at displacement q.
+    pub fn measure(&self, q: &[f64]) -> Vec<f64> {
+        let x = self.model.positions(q);
+        let nodes = &self.model.meridian.nodes;
+        let max = x
+            .iter()
+            .zip(nodes)
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+            .fold(0.0, f64::max);
+        let v = self.model.volume(&x);
+        let mut out = vec![max, x[0][1], v];
+        if let Some(v0) = self.stress_free_volume {
+            out.push((v / v0).cbrt());
+        }
+        out
+    }
+
+    fn options(&self) -> PathOptions {
+        let nodes = &self.model.meridian.nodes;
+        let r = nodes
+            .iter()
+            .map(|p| p[0].hypot(p[1]))
+            .fold(0.0, f64::max)
+            .max(1e-300);
+        let scale = r * (nodes.len() as f64).sqrt();
+        let bounds = self
+            .control
+            .map(|c| &self.scene.parameters[&self.parameters[c]])
+            .map_or((f64::NEG_INFINITY, f64::INFINITY), |b| {
+                (
+                    b.min.unwrap_or(f64::NEG_INFINITY),
+                    b.max.unwrap_or(f64::INFINITY),
+                )
+            });
+        match &self.scene.analysis {
+            Analysis::Path(p) => PathOptions {
+                initial_step: p.initial_step,
+                min_step: p.min_step,
+                max_step: p.max_step,
+                max_steps: p.steps,
+                max_iterations: p.max_iterations,
+                tolerance: p.tolerance,
+                bounds,
+                parameter_scales: vec![1.0],
+                state_scale: scale,
+                direction: match p.direction {
+                    Direction::Decrease => -1.0,
+                    Direction::Increase => 1.0,
+                },
+            },
+            Analysis::Equilibrium(e) => PathOptions {
+                tolerance: e.tolerance,
+                max_iterations: e.max_iterations,
+                state_scale: scale,
+                ..PathOptions::default()
+            },
+            Analysis::LinearBuckling(b) => PathOptions {
+                tolerance: b.tolerance,
+                max_iterations: b.max_iterations,
+                state_scale: scale,
+                ..PathOptions::default()
+            },
+            Analysis::CriticalCurve(_) => PathOptions::default(),
+        }
+    }
+}
+
+fn shape_name(s: AxisymShape) -> &'static str {
+    match s {
+        AxisymShape::Disc => "disc",
+        AxisymShape::TruncatedSphere => "truncated-sphere",
+        AxisymShape::Sphere => "sphere",
+    }
+}
+
+/// A row of an axisymmetric path.
+#[derive(Debug, Clone, Serialize)]
+pub struct AxisymRow {
+    /// The point's index.
+    pub step: usize,
+    /// Arclength from the start.
+    pub arclength: f64,
+    /// Every parameter.
+    pub parameters: Vec<f64>,
+    /// The measures.
+    pub measures: Vec<f64>,
+    /// Newton iterations.
+    pub iterations: usize,
+    /// The index of every block m = 0..=M (None where a block could not be evaluated).
+    pub index: Option<Vec<usize>>,
+}
+
+/// A turning point of the control.
+#[derive(Debug, Clone, Serialize)]
+pub struct AxisymTurning {
+    /// Maximum or minimum.
+    pub kind: Extremum,
+    /// After this row.
+    pub after_step: usize,
+    /// Every parameter.
+    pub parameters: Vec<f64>,
+    /// The measures.
+    pub measures: Vec<f64>,
+}
+
+/// A critical point, labelled by its wave number and multiplicity.
+#[derive(Debug, Clone, Serialize)]
+pub struct AxisymCritical {
+    /// The wave number m.
+    pub m: usize,
+    /// 1 for m = 0, 2 for m ≥ 1.
+    pub multiplicity: usize,
+    /// The kind.
+    #[serde(serialize_with = "display")]
+    pub kind: CriticalKind,
+    /// After this row.
+    pub after_step: usize,
+    /// Every parameter.
+    pub parameters: Vec<f64>,
+    /// The measures.
+    pub measures: Vec<f64>,
+    /// Whether the crossing was localised.
+    pub localised: bool,
+}
+
+fn display<S: serde::Serializer>(k: &CriticalKind, s: S) -> Result<S::Ok, S::Error> {
+    s.collect_str(k)
+}
+
+/// A finished axisymmetric run.
+#[derive(Debug, Clone, Serialize)]
+pub struct AxisymReport {
+    /// The scene's name.
+    pub scene: String,
+    /// The mesh: `axisymmetric shape=… elements=… modes=…`.
+    pub mesh: String,
+    /// Unknowns of the axisymmetric problem.
+    pub unknowns: usize,
+    /// The largest wave number analysed.
+    pub modes: usize,
+    /// The control's name (empty without one).
+    pub control: String,
+    /// Parameter names.
+    pub parameters: Vec<String>,
+    /// Measure names.
+    pub measures: Vec<String>,
+    /// The path.
+    pub rows: Vec<AxisymRow>,
+    /// Turning points of the control.
+    pub turning_points: Vec<AxisymTurning>,
+    /// Critical points in path order.
+    pub critical: Vec<AxisymCritical>,
+    /// Why it ended.
+    pub stop: StopReason,
+    /// What could not be settled.
+    pub warnings: Vec<String>,
+    /// Wall time of the run.
+    #[serde(skip)]
+    pub time: Duration,
+    /// Of it, the blocks (assembly, inertia, localisation).
+    #[serde(skip)]
+    pub block_time: Duration,
+}
+
+/// Runs an axisymmetric study's analysis; `progress(point, control)` at every point.
+pub fn run(
+    study: &AxisymStudy,
+    mut progress: impl FnMut(usize, f64),
+) -> Result<AxisymReport, AxisymRunError> {
+    let t0 = Instant::now();
+    let opts = study.options();
+    let control = study.control.unwrap_or(0);
+    let mut params = study.start.clone();
+    if params.is_empty() {
+        // Without parameters the problem still needs a (fixed) control slot.
+        params.push(0.0);
+    }
+    let mut problem = AxisymProblem::new(study.model.clone(), params.clone(), control, study.modes);
+    let stretch = study.scene.start.stretch;
+    let guess: Vec<[f64; 2]> = study
+        .model
+        .meridian
+        .nodes
+        .iter()
+        .map(|p| [p[0] * stretch, p[1] * stretch])
+        .collect();
+    let q0 = DVector::from_vec(study.model.displacement_of(&guess));
+    let lambda0 = DVector::from_vec(vec![params[control]]);
+    let start_opts = PathOptions {
+        max_iterations: opts.max_iterations.max(50),
+        ..opts.clone()
+    };
+    let describe = |e: SolveError| AxisymRunError::Start(e.to_string());
+    let (q, lambda, iterations) =
+        crate::analysis::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
+            .map_err(describe)?;
+    let (stop_stretch, stop_displacement) = match &study.scene.analysis {
+        Analysis::Path(p) => (p.stop_stretch, p.stop_displacement),
+        _ => (None, None),
+    };
+    let names = study.measure_names();
+    let k_stretch = names.iter().position(|n| n == "stretch");
+    let k_displacement = names.iter().position(|n| n == "max-displacement");
+    // A stop is reached where its measure passes the target from the start's side.
+    let start_measures = study.measure(q.as_slice());
+    let side = |k: usize, target: f64| (k, target, (start_measures[k] - target).signum());
+    let stretch_side = k_stretch.zip(stop_stretch).map(|(k, t)| side(k, t));
+    let displacement_side = k_displacement
+        .zip(stop_displacement)
+        .map(|(k, t)| side(k, t));
+    let mut count = 0usize;
+    let path: ModePath = match &study.scene.analysis {
+        Analysis::Path(_) => {
+            let stop = |_: &AxisymProblem, p: &PathPoint| {
+                if stretch_side.is_none() && displacement_side.is_none() {
+                    return None;
+                }
+                let now = study.measure(p.q.as_slice());
+                let passed = |s: Option<(usize, f64, f64)>| {
+                    s.and_then(|(k, t, side)| ((now[k] - t) * side <= 0.0).then_some(t))
+                };
+                passed(stretch_side)
+                    .map(|target| StopReason::Stretch { target })
+                    .or_else(|| {
+                        passed(displacement_side).map(|target| StopReason::Displacement { target })
+                    })
+            };
+            modes::follow(problem, &q, &lambda, opts, stop, |_, p| {
+                progress(count, p.lambda[0]);
+                count += 1;
+            })
+            .map_err(describe)?
+            .0
+        }
+        Analysis::LinearBuckling(b) => {
+            let range = study
+                .control
+                .map(|c| &study.scene.parameters[&study.parameters[c]])
+                .map_or((0.0, 0.0), |p| {
+                    (p.min.unwrap_or(p.start), p.max.unwrap_or(p.start))
+                });
+            progress(0, lambda[0]);
+            modes::sweep(&mut problem, &q, &lambda, range, b.samples)
+        }
+        Analysis::Equilibrium(_) | Analysis::CriticalCurve(_) => {
+            progress(0, lambda[0]);
+            let mut path = modes::sweep(&mut problem, &q, &lambda, (lambda[0], lambda[0]), 1);
+            path.points.truncate(1);
+            path.index.truncate(1);
+            path.stop = StopReason::Equilibrium;
+            path
+        }
+    };
+    let param_at = |l: &[f64]| {
+        let mut p = params.clone();
+        p[control] = l[0];
+        p.truncate(study.parameters.len());
+        p
+    };
+    let rows = path
+        .points
+        .iter()
+        .zip(&path.index)
+        .enumerate()
+        .map(|(i, (p, ix))| AxisymRow {
+            step: i,
+            arclength: p.arclength,
+            parameters: param_at(p.lambda.as_slice()),
+            measures: study.measure(p.q.as_slice()),
+            iterations: if i == 0 { iterations } else { p.iterations },
+            index: ix.clone(),
+        })
+        .collect();
+    let turning_points = path
+        .turning
+        .iter()
+        .map(|t| AxisymTurning {
+            kind: t.kind,
+            after_step: t.after_step,
+            parameters: param_at(&t.lambda),
+            measures: study.measure(&t.q),
+        })
+        .collect();
+    let critical = path
+        .critical
+        .iter()
+        .map(|c| AxisymCritical {
+            m: c.m,
+            multiplicity: c.multiplicity,
+            kind: c.kind,
+            after_step: c.after_step,
+            parameters: param_at(&c.lambda),
+            measures: study.measure(&c.q),
+            localised: c.localised,
+        })
+        .collect();
+    let MeshSpec::Axisymmetric(mesh) = &study.scene.mesh else {
+        unreachable!("built from an axisymmetric mesh")
+    };
+    Ok(AxisymReport {
+        scene: study.scene.info.name.clone(),
+        mesh: format!(
+            "axisymmetric shape={} elements={} modes={}",
+            shape_name(mesh.shape),
+            mesh.elements,
+            mesh.modes
+        ),
+        unknowns: study.model.dim(),
+        modes: study.modes,
+        control: study
+            .control
+            .map_or_else(String::new, |c| study.parameters[c].clone()),
+        parameters: study.parameters.clone(),
+        measures: study.measure_names(),
+        rows,
+        turning_points,
+        critical,
+        stop: path.stop,
+        warnings: path.warnings,
+        time: t0.elapsed(),
+        block_time: path.block_time,
+    })
+}
