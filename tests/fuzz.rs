@@ -253,3 +253,19 @@ fn the_mutations_change_the_text() {
     );
     assert_eq!(m(&[Mutation::Truncate { at: 0.5 }]), "a = 1\nb ");
 }
+
+/// A mesh file declared with a huge group (C3000v, order 6000) is refused by the limits, not
+/// built while the scene is validated (building it took minutes).
+#[test]
+fn a_huge_declared_group_is_refused_by_name() {
+    let dir = workspace();
+    let path = dir.path().join("scene.toml");
+    let text = std::fs::read_to_string(root().join("disc_file.toml")).unwrap();
+    assert!(text.contains("group = \"C7v\""));
+    std::fs::write(&path, text.replace("group = \"C7v\"", "group = \"C3000v\"")).unwrap();
+    let scene = Scene::load(&path).expect("a valid group name");
+    let err = Study::build_within(scene, &limits())
+        .err()
+        .expect("refused by the limits");
+    assert!(err.to_string().contains("C3000v"), "{err}");
+}
