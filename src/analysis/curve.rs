@@ -514,19 +514,7 @@ pub(super) fn run(
         ));
     };
     // The path in the control up to the point.
-    let opts = super::equilibrium::path_options(study);
-    let problem = SymmetricProblem::new(
-        &study.model,
-        &study.basis,
-        &study.constraints,
-        params_start.to_vec(),
-        study.control,
-    );
-    let lambda0 = problem.free_values(params_start);
-    let q_start = study.basis.restrict(u_start);
-    let max_steps = opts.max_steps;
-    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)
-        .map_err(|e| RunError::start(study, e))?;
+    let (mut driver, max_steps) = super::path::start_driver(study, u_start, params_start)?;
     let mut first = FirstCritical {
         index: IndexChanges::new(crossings),
         from: analysis.from.clone(),

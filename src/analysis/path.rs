@@ -41,6 +41,29 @@ pub fn trace<P: Problem>(
     follow(driver, &mut detectors, max_steps, progress)
 }
 
+/// The path driver in the scene group's fixed-point space, started at the converged start
+/// state (u_start, params_start) with the study's path options, and its step budget.
+pub(super) fn start_driver<'a>(
+    study: &'a Study,
+    u_start: &[f64],
+    params_start: &[f64],
+) -> Result<(Continuation<SymmetricProblem<'a>>, usize), RunError> {
+    let opts = super::equilibrium::path_options(study);
+    let problem = SymmetricProblem::new(
+        &study.model,
+        &study.basis,
+        &study.constraints,
+        params_start.to_vec(),
+        study.control,
+    );
+    let lambda0 = problem.free_values(params_start);
+    let q_start = study.basis.restrict(u_start);
+    let max_steps = opts.max_steps;
+    let driver = Continuation::start(problem, &q_start, &lambda0, opts)
+        .map_err(|e| RunError::start(study, e))?;
+    Ok((driver, max_steps))
+}
+
 /// Follows the path from the start state (u_start, params_start); returns why it stopped.
 pub(super) fn run(
     study: &Study,
@@ -55,19 +78,7 @@ pub(super) fn run(
         unreachable!("path::run runs path analyses")
     };
     let t0 = Instant::now();
-    let opts = super::equilibrium::path_options(study);
-    let problem = SymmetricProblem::new(
-        &study.model,
-        &study.basis,
-        &study.constraints,
-        params_start.to_vec(),
-        study.control,
-    );
-    let lambda0 = problem.free_values(params_start);
-    let q_start = study.basis.restrict(u_start);
-    let max_steps = opts.max_steps;
-    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)
-        .map_err(|e| RunError::start(study, e))?;
+    let (mut driver, max_steps) = start_driver(study, u_start, params_start)?;
     let stretch = study
         .measures
         .iter()
