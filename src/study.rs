@@ -336,6 +336,19 @@ impl Study {
             };
             measures.push((name, Measure::GasPressure(i)));
         }
+        if let scene::Analysis::Surface(a) = &scene.analysis {
+            if let Some(name) = &a.measure {
+                if !measures.iter().any(|(n, _)| n == name) {
+                    let names: Vec<&str> = measures.iter().map(|(n, _)| n.as_str()).collect();
+                    return Err(StudyError::Unsupported(format!(
+                        "{}: 'analysis.measure' = \"{name}\": not a measure of this scene \
+                         (it has {})",
+                        scene.origin,
+                        names.join(", ")
+                    )));
+                }
+            }
+        }
         let model = FeModel::new(
             m.nodes.clone(),
             m.triangles.clone(),
