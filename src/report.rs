@@ -405,6 +405,9 @@ pub struct CurveReport {
     pub events: Vec<CurveEvent>,
     /// Why the curve ended.
     pub stop: StopReason,
+    /// What went wrong along the curve without stopping it (an event that could not be
+    /// localised, a border that could not be refreshed).
+    pub warnings: Vec<String>,
 }
 
 /// One vertex of an equilibrium surface: a point of one of its paths.

@@ -285,6 +285,9 @@ fn print_curve(curve: &CurveReport) {
         );
     }
     out!("curve stopped: {}", curve.stop);
+    for w in &curve.warnings {
+        out!("warning: {w}");
+    }
 }
 
 /// The equilibrium surface: its paths, their index ranges and critical lines, its warnings.

@@ -682,9 +682,15 @@ pub struct CriticalCurveAnalysis {
     pub second: String,
     /// Which critical point of the path: `"limit"` (the first limit point), an irrep name
     /// (the first critical point in that irrep's block) or an index (0: the first critical
-    /// point of any kind). Default `"limit"`.
+    /// point of any kind). Default `"limit"`. With `from-run`, the index of a critical point
+    /// of that run.
     #[serde(default)]
     pub from: CurveStart,
+    /// The output directory of a finished run of the same model: the curve starts from its
+    /// critical point `from` (its saved state and mode), without a path. [`Scene::load`]
+    /// resolves a relative directory against the scene file's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from_run: Option<PathBuf>,
     /// The sense of the curve's first step in `second`. Default `increase`.
     #[serde(default)]
     pub direction: Direction,
@@ -709,6 +715,11 @@ pub struct CriticalCurveAnalysis {
     /// Newton iterations per step before the step is cut. Default 25.
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
+    /// Watch the other irrep blocks at every curve point for hilltops and changes of the
+    /// critical irrep (docs/theory.md §11.9). Default true; false saves their index at every
+    /// point.
+    #[serde(default = "default_watch")]
+    pub watch: bool,
 }
 
 /// `analysis.from` of a critical curve.
@@ -922,6 +933,9 @@ fn default_exponent() -> u32 {
 }
 fn default_steps() -> usize {
     200
+}
+fn default_watch() -> bool {
+    true
 }
 fn default_paths() -> usize {
     5
@@ -1231,6 +1245,15 @@ impl Scene {
         if let Some(from) = &mut scene.start.from {
             if from.is_relative() {
                 *from = path.parent().unwrap_or(Path::new("")).join(&*from);
+            }
+        }
+        if let Analysis::CriticalCurve(CriticalCurveAnalysis {
+            from_run: Some(dir),
+            ..
+        }) = &mut scene.analysis
+        {
+            if dir.is_relative() {
+                *dir = path.parent().unwrap_or(Path::new("")).join(&*dir);
             }
         }
         Ok(scene)

@@ -787,6 +787,20 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
                     ),
                 ));
             }
+            if a.from_run.is_some() && !matches!(a.from, CurveStart::Index(_)) {
+                let from = match &a.from {
+                    CurveStart::Limit => "\"limit\"".to_string(),
+                    CurveStart::Irrep(name) => format!("\"{name}\""),
+                    CurveStart::Index(i) => i.to_string(),
+                };
+                return Err(Problem::at(
+                    "analysis.from",
+                    format!(
+                        "= {from}: with analysis.from-run it must be the index of a critical \
+                         point of that run (0 the first, as in its critical.json)"
+                    ),
+                ));
+            }
             if let CurveStart::Irrep(name) = &a.from {
                 if name.trim().is_empty() {
                     return Err(Problem::at(
