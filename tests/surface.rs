@@ -177,7 +177,7 @@ fn surface_run_writes_its_files() {
 fn bad_surface_keys_are_rejected_without_writing() {
     let tmp = tempfile::tempdir().unwrap();
     let never = tmp.path().join("never");
-    let cases: [(&str, &str, &[&str]); 4] = [
+    let cases: [(&str, &str, &[&str]); 5] = [
         (
             "measure = \"height\"",
             "m.toml",
@@ -186,6 +186,11 @@ fn bad_surface_keys_are_rejected_without_writing() {
         ("", "p.toml", &["analysis.paths", "1"]),
         ("", "r.toml", &["analysis.ranges[1]", "[0.2, 0.05]"]),
         ("", "n.toml", &["analysis.parameters", "[\"p\"]"]),
+        (
+            "",
+            "b.toml",
+            &["analysis.ranges[1]", "[0.05, 0.2]", "parameters.k"],
+        ),
     ];
     for (i, (extra, name, needles)) in cases.into_iter().enumerate() {
         let mut text = surface_text(4, extra);
@@ -193,6 +198,7 @@ fn bad_surface_keys_are_rejected_without_writing() {
             1 => text = text.replacen("paths = 3", "paths = 1", 1),
             2 => text = text.replacen("[0.05, 0.2]]", "[0.2, 0.05]]", 1),
             3 => text = text.replacen("parameters = [\"p\", \"k\"]", "parameters = [\"p\"]", 1),
+            4 => text = text.replacen("start = 0.1\n", "start = 0.1\nmax = 0.15\n", 1),
             _ => {}
         }
         let path = tmp.path().join(name);

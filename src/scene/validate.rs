@@ -920,6 +920,22 @@ fn check_surface(scene: &Scene, a: &SurfaceAnalysis) -> Result<(), Problem> {
             ),
         ));
     }
+    // The grid of b inside b's own bounds, where it declares them.
+    let declared = &scene.parameters[second];
+    let (lo, hi) = (a.ranges[1][0], a.ranges[1][1]);
+    let outside = declared.min.is_some_and(|m| lo < m) || declared.max.is_some_and(|m| hi > m);
+    if outside {
+        let bound = |b: Option<f64>| b.map_or_else(|| "none".to_string(), num);
+        return Err(Problem::at(
+            "analysis.ranges[1]",
+            format!(
+                "= {}: outside [min, max] = [{}, {}] of parameters.{second}",
+                show(&a.ranges[1]),
+                bound(declared.min),
+                bound(declared.max)
+            ),
+        ));
+    }
     at_least("analysis.paths", a.paths, 2)?;
     if a.paths > 1000 {
         return Err(Problem::at(
