@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Check that meshio reads back exactly what `meshes::write` wrote.
 
-Usage: meshio_roundtrip.py OUTDIR
+Usage: meshio_roundtrip.py OUTDIR [--surface RUNDIR]
 
 OUTDIR is what `cargo run --release -p meshes --example write_formats -- OUTDIR` produced:
 mesh files in every format, a `.pvd`, and `expected.json` with the exact nodes, triangles and
@@ -11,6 +11,12 @@ name, with vectors as (n, 3) arrays. Readers may add their own bookkeeping array
 `gmsh:dim_tags`, `gmsh:geometrical`, ...); names starting with `gmsh:` are ignored, any other
 extra array is an error. The `.pvd` is parsed as XML and its entries (time, file) compared;
 each listed file must exist and have been read above.
+
+With --surface, RUNDIR is a finished `memstab run` of a `surface` analysis: its
+`surface.vtu` is read with meshio and compared, bit for bit, with its `surface.json`: the
+points (a, b, measure) of every path vertex then of every critical-line point, the triangles
+and the critical lines' segments as the `triangle` and `line` cell blocks, and the point data
+(`index`, `path`, `critical_line` as integers, every measure).
 
 Exits 1 with one line per mismatch, else prints
 "meshio round-trip: N files, M checks passed".
@@ -135,10 +141,76 @@ def check_pvd(c, outdir, pvd, read_files):
             )
 
 
+def check_surface(c, rundir):
+    """surface.vtu of a surface run against its surface.json."""
+    report = json.loads((rundir / "surface.json").read_text())
+    try:
+        mesh = meshio.read(rundir / "surface.vtu")
+    except Exception as e:  # any reader failure is a failed check, with its message
+        c.check(False, f"surface.vtu: meshio.read failed: {type(e).__name__}: {e}")
+        return
+    c.check(True, "surface.vtu: read")
+    a = report["parameters"].index(report["a"])
+    b = report["parameters"].index(report["b"])
+    m = report["measures"].index(report["measure"])
+    vertices = [v for p in report["paths"] for v in p["vertices"]]
+    line_points = [q for line in report["lines"] for q in line["points"]]
+    every = vertices + line_points
+    same_floats(
+        c,
+        "surface.vtu: points",
+        mesh.points,
+        [[v["parameters"][a], v["parameters"][b], v["measures"][m]] for v in every],
+    )
+    segments, first = [], len(vertices)
+    for line in report["lines"]:
+        n = len(line["points"])
+        segments += [[first + i - 1, first + i] for i in range(1, n)]
+        first += n
+    want = [("triangle", report["triangles"])] + ([("line", segments)] if segments else [])
+    got = [(block.type, np.asarray(block.data).tolist()) for block in mesh.cells]
+    c.check(
+        [t for t, _ in got] == [t for t, _ in want],
+        f"surface.vtu: cell blocks {[t for t, _ in got]}, expected {[t for t, _ in want]}",
+    )
+    for (gt, gd), (_, wd) in zip(got, want):
+        c.check(gd == wd, f"surface.vtu: {gt} cells differ from surface.json")
+    n_line = len(line_points)
+    paths = [j for j, p in enumerate(report["paths"]) for _ in p["vertices"]]
+    lines = [k for k, line in enumerate(report["lines"]) for _ in line["points"]]
+    integers = {
+        "index": [-1 if v["index"] is None else v["index"] for v in vertices] + [-1] * n_line,
+        "path": paths + [-1] * n_line,
+        "critical_line": [-1] * len(vertices) + lines,
+    }
+    for name, want in integers.items():
+        got = mesh.point_data.get(name)
+        if not c.check(got is not None, f"surface.vtu: point data {name!r} missing"):
+            continue
+        got = np.asarray(got)
+        c.check(
+            got.dtype.kind == "i" and got.tolist() == want,
+            f"surface.vtu: point data {name!r} differs from surface.json",
+        )
+    for k, name in enumerate(report["measures"]):
+        got = mesh.point_data.get(name)
+        if c.check(got is not None, f"surface.vtu: point data {name!r} missing"):
+            same_floats(
+                c, f"surface.vtu: point data {name!r}", got, [v["measures"][k] for v in every]
+            )
+    extra = sorted(set(mesh.point_data) - set(integers) - set(report["measures"]))
+    c.check(not extra, f"surface.vtu: unexpected point data {extra}")
+
+
 def main():
-    if len(sys.argv) != 2:
-        sys.exit(f"usage: {sys.argv[0]} OUTDIR")
-    outdir = Path(sys.argv[1]).resolve()
+    args = sys.argv[1:]
+    surface = None
+    if len(args) == 3 and args[1] == "--surface":
+        surface = Path(args[2]).resolve()
+        args = args[:1]
+    if len(args) != 1:
+        sys.exit(f"usage: {sys.argv[0]} OUTDIR [--surface RUNDIR]")
+    outdir = Path(args[0]).resolve()
     expected = json.loads((outdir / "expected.json").read_text())
     c = Checker()
     read_files = set()
@@ -156,6 +228,8 @@ def main():
         read_files.add(os.path.normpath(name))
         check_mesh(c, name, mesh, expected)
     check_pvd(c, outdir, expected["pvd"], read_files)
+    if surface is not None:
+        check_surface(c, surface)
 
     if c.failures:
         for f in c.failures:

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Round-trip check of the mesh writers against meshio: writes every format with the
 # `write_formats` example, then reads each file back with meshio 5.3.5 and compares exactly
-# (scripts/meshio_roundtrip.py). Then runs the balloon (scenes/balloon.toml at icosphere
+# (scripts/meshio_roundtrip.py), and the surface.vtu of a balloon surface against its
+# surface.json. Then runs the balloon (scenes/balloon.toml at icosphere
 # frequency 4), reads every state of its two collections back with meshio and checks the
 # fields against the closed-form tension and thickness (scripts/state_fields_check.py), and
 # runs the Python block of docs/python.md on that run.
@@ -47,7 +48,35 @@ OUT="$(mktemp -d "${TMPDIR:-/tmp}/meshio_roundtrip.XXXXXX")"
 cargo run --release --quiet --manifest-path "$ROOT/Cargo.toml" -p meshes \
     --example write_formats -- "$OUT" \
     || fail "the write_formats example failed (output in $OUT)"
-if ! "$VPY" "$ROOT/scripts/meshio_roundtrip.py" "$OUT"; then
+
+# An equilibrium surface: the balloon at frequency 4 with k as a parameter, three paths in p
+# at k = 0.05 ... 0.2; its surface.vtu is checked against its surface.json.
+"$VPY" - "$ROOT/scenes/balloon.toml" "$OUT/surface.toml" <<'EOF' || fail "could not write the surface scene"
+import sys
+text = open(sys.argv[1]).read()
+analysis, start = text.index("[analysis]"), text.index("[start]")
+surface = """[parameters.k]
+start = 0.1
+
+[analysis]
+type = "surface"
+parameters = ["p", "k"]
+ranges = [[0.0, 2.0], [0.05, 0.2]]
+paths = 3
+steps = 60
+max-step = 0.1
+measure = "stretch"
+
+"""
+text = text[:analysis] + surface + text[start:]
+text = text.replace("k = 0.1\n", 'k = "k"\n', 1).replace("frequency = 8", "frequency = 4", 1)
+assert 'k = "k"' in text and "frequency = 4" in text
+open(sys.argv[2], "w").write(text)
+EOF
+cargo run --release --quiet --manifest-path "$ROOT/Cargo.toml" -- \
+    run "$OUT/surface.toml" --out "$OUT/surface-out" --quiet >/dev/null \
+    || fail "memstab run on the balloon surface failed (output in $OUT)"
+if ! "$VPY" "$ROOT/scripts/meshio_roundtrip.py" "$OUT" --surface "$OUT/surface-out"; then
     fail "mismatch; the written files are kept in $OUT"
 fi
 

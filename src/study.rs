@@ -34,6 +34,26 @@ pub enum StudyError {
     Limit(#[from] crate::limits::LimitError),
 }
 
+/// A critical point of a finished run, read back: where a critical curve starts with
+/// `analysis.from-run`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedCritical {
+    /// Its number in the run (1-based: `critical_NN.vtu`).
+    pub number: usize,
+    /// The irrep of its singular block.
+    pub irrep: String,
+    /// Every parameter there.
+    pub parameters: Vec<f64>,
+    /// Every measure there, as the run recorded them.
+    pub measures: Vec<f64>,
+    /// Its localised eigenvalue relative to ‖K‖, as the run recorded it.
+    pub residual_eigenvalue: f64,
+    /// The state over the unknowns.
+    pub state: Vec<f64>,
+    /// The critical mode over the unknowns (unit norm).
+    pub mode: Vec<f64>,
+}
+
 /// Measures reported along a path.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Measure {
@@ -80,6 +100,9 @@ pub struct Study {
     /// Warnings about the setup that a run should report, e.g. symmetry of a mesh file beyond
     /// its declared group ([`Scene::mesh_warnings`]).
     pub warnings: Vec<String>,
+    /// The critical point of a finished run a critical curve starts from (`analysis.from-run`),
+    /// once loaded (`output::reopen::load_curve_start`).
+    pub saved_critical: Option<SavedCritical>,
     /// The saved state of `[start] from`, once loaded (`output::store::load_start`): the first
     /// guess of the start solve instead of `start.stretch · X`.
     pub saved_start: Option<Vec<f64>>,
@@ -336,6 +359,19 @@ impl Study {
             };
             measures.push((name, Measure::GasPressure(i)));
         }
+        if let scene::Analysis::Surface(a) = &scene.analysis {
+            if let Some(name) = &a.measure {
+                if !measures.iter().any(|(n, _)| n == name) {
+                    let names: Vec<&str> = measures.iter().map(|(n, _)| n.as_str()).collect();
+                    return Err(StudyError::Unsupported(format!(
+                        "{}: 'analysis.measure' = \"{name}\": not a measure of this scene \
+                         (it has {})",
+                        scene.origin,
+                        names.join(", ")
+                    )));
+                }
+            }
+        }
         let model = FeModel::new(
             m.nodes.clone(),
             m.triangles.clone(),
@@ -377,6 +413,7 @@ impl Study {
             measures,
             warnings,
             saved_start: None,
+            saved_critical: None,
             fluids,
             gases,
             closed,

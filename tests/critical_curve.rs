@@ -281,6 +281,14 @@ fn a_critical_curve_run_writes_its_curve() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("curve.json")).unwrap())
             .unwrap();
     assert_eq!(json["second"], "k");
+    // The warnings of the curve's events, carried to curve.json (none on this curve).
+    assert_eq!(
+        json["warnings"].as_array().map(Vec::len),
+        Some(curve.warnings.len()),
+        "{}",
+        json["warnings"]
+    );
+    assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
     assert!(json["events"]
         .as_array()
         .unwrap()
@@ -473,15 +481,40 @@ fn disc_k_scene(analysis: &str, k: Option<f64>) -> Scene {
     Scene::from_toml_str(&text, "disc-k").unwrap()
 }
 
-/// The one hilltop of the disc's curve from `from` in (h, k): its (h, k) and the other irrep.
-fn disc_hilltop(from: &str) -> (f64, f64, String) {
+/// The disc's curve from `from` in (h, k), the other blocks watched or not.
+fn disc_curve(from: &str, watch: bool) -> CurveReport {
     let scene = disc_k_scene(&format!(
         "[analysis]\ntype = \"critical-curve\"\ncontrol = \"h\"\nsecond = \"k\"\nfrom = \"{from}\"\n\
-         steps = 60\npath-steps = 400\nmax-step = 0.05\n"
+         steps = 60\npath-steps = 400\nmax-step = 0.05\nwatch = {watch}\n"
     ), None);
     let mut study = Study::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
-    let curve = result.curve.unwrap();
+    result.curve.unwrap()
+}
+
+/// `watch = false`: the same limit curve of the disc, point for point, without the hilltop
+/// that the watch of the E1 block finds on it.
+#[test]
+fn an_unwatched_curve_is_the_same_curve_without_its_hilltop() {
+    let watched = disc_curve("limit", true);
+    let unwatched = disc_curve("limit", false);
+    let hilltops = |c: &CurveReport| {
+        c.events
+            .iter()
+            .filter(|e| e.kind == CurveEventKind::Hilltop)
+            .count()
+    };
+    assert_eq!(hilltops(&watched), 1, "{:?}", watched.events);
+    assert_eq!(hilltops(&unwatched), 0, "{:?}", unwatched.events);
+    assert_eq!(watched.rows.len(), unwatched.rows.len());
+    for (a, b) in watched.rows.iter().zip(&unwatched.rows) {
+        assert_eq!(a.parameters, b.parameters, "step {}", a.step);
+    }
+}
+
+/// The one hilltop of the disc's curve from `from` in (h, k): its (h, k) and the other irrep.
+fn disc_hilltop(from: &str) -> (f64, f64, String) {
+    let curve = disc_curve(from, true);
     let hilltops: Vec<_> = curve
         .events
         .iter()
@@ -548,4 +581,80 @@ fn the_disc_limit_and_double_point_curves_cross_at_one_hilltop() {
     };
     assert_eq!(first_on_path(k1 - 0.003), "A1");
     assert_eq!(first_on_path(k1 + 0.003), "E1");
+}
+
+/// `from-run`: the curve of a finished path run's first critical point (the pressure maximum)
+/// starts at that point — its saved state and mode, without a path — and is the curve that the
+/// scene's own path finds; `from` must then be an index of one of the run's critical points.
+#[test]
+fn a_curve_starts_from_a_finished_runs_critical_point() {
+    let curve_text = balloon_curve_text(4);
+    let at = curve_text.find("[analysis]").unwrap();
+    let end = at + curve_text[at..].find("\n\n").unwrap();
+    let path_text = format!(
+        "{}[[constraint]]\ntype = \"fixed\"\nparameter = \"k\"\n\n[analysis]\ntype = \"path\"\n\
+         control = \"p\"\nsteps = 40\nmax-step = 0.05\n{}",
+        &curve_text[..at],
+        &curve_text[end..]
+    );
+    let mut study =
+        Study::build(Scene::from_toml_str(&path_text, "balloon-path").unwrap()).unwrap();
+    let mut result = run(&mut study, |_, _| {}).unwrap();
+    assert_eq!(result.report.critical[0].kind, CriticalKind::LimitPoint);
+    let dir = tempfile::tempdir().unwrap();
+    memstab::output::write_run(&study, &mut result, dir.path()).unwrap();
+    let from_run = |from: &str| {
+        curve_text.replacen(
+            "from = \"limit\"\n",
+            &format!("from = {from}\nfrom-run = \"{}\"\n", dir.path().display()),
+            1,
+        )
+    };
+    let scene = Scene::from_toml_str(&from_run("0"), "balloon-from-run").unwrap();
+    let mut study = Study::build(scene).unwrap();
+    memstab::output::load_curve_start(&mut study).unwrap();
+    let resumed = run(&mut study, |_, _| {}).expect("the curve runs from the saved point");
+    // No path: the saved point is the run's one row and critical point.
+    assert_eq!(resumed.report.rows.len(), 1);
+    assert_eq!(resumed.report.critical.len(), 1);
+    let resumed = resumed.curve.unwrap();
+    let (own, _) = curve_of(4);
+    assert_eq!(
+        (resumed.kind, resumed.irrep.as_str()),
+        (own.kind, own.irrep.as_str())
+    );
+    let (p, k) = (col(&own, "p"), col(&own, "k"));
+    let (a, b) = (&resumed.rows[0], &own.rows[0]);
+    assert!(
+        (a.parameters[p] / b.parameters[p] - 1.0).abs() < 1e-8,
+        "{a:?} vs {b:?}"
+    );
+    assert_eq!(a.parameters[k], b.parameters[k]);
+    let cusp = |c: &CurveReport| {
+        c.events
+            .iter()
+            .find(|e| e.kind == CurveEventKind::Cusp)
+            .map(|e| (e.parameters[p], e.parameters[k]))
+            .expect("a cusp")
+    };
+    let (x, y) = (cusp(&resumed), cusp(&own));
+    assert!(
+        (x.0 / y.0 - 1.0).abs() < 1e-6 && (x.1 / y.1 - 1.0).abs() < 1e-6,
+        "cusps {x:?} and {y:?}"
+    );
+    // `from` must be an index of the run's critical points.
+    let err = Scene::from_toml_str(&from_run("\"limit\""), "limit")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("analysis.from") && err.contains("from-run"),
+        "{err}"
+    );
+    let scene = Scene::from_toml_str(&from_run("7"), "seven").unwrap();
+    let mut study = Study::build(scene).unwrap();
+    let err = memstab::output::load_curve_start(&mut study).unwrap_err();
+    assert!(
+        err.contains("'analysis.from' = 7") && err.contains("critical point"),
+        "{err}"
+    );
 }

@@ -37,4 +37,5 @@ mod sparse_path;
 mod stability;
 mod state_fields;
 mod subgroup_path;
+mod surface;
 mod thesis;

@@ -16,8 +16,8 @@
 //! σ = 0 in (q, second, the constraints' parameters, control), followed by the ordinary
 //! [`Continuation`] driver with σ as one more augmenting equation ([`CurveProblem`]) and
 //! watched by the ordinary detectors: a turning point of the second parameter on a limit
-//! curve is a cusp (two limit points merge). The other blocks' negative counts are watched
-//! at every curve point (`OtherBlocks`): where one changes, that block is singular together
+//! curve is a cusp (two limit points merge). Unless `watch = false`, the other blocks'
+//! negative counts are watched at every curve point (`OtherBlocks`): where one changes, that block is singular together
 //! with the curve's — a hilltop (one of them trivial) or a change of the critical irrep —
 //! localised on the curve by the path's own routine (docs/theory.md §11.9).
 //!
@@ -366,6 +366,30 @@ impl Detector<CurveProblem<'_>> for RefreshBorder {
     }
 }
 
+/// The blocks other than `own` whose negative count differs between two curve points
+/// (`before`, `after`: the count of every block, the trivial first). The curve's own block is
+/// singular all along the curve, so its count is noise and never an event.
+pub fn changed_blocks(own: usize, before: &[usize], after: &[usize]) -> Vec<usize> {
+    before
+        .iter()
+        .zip(after)
+        .enumerate()
+        .filter(|&(nu, (a, b))| nu != own && a != b)
+        .map(|(nu, _)| nu)
+        .collect()
+}
+
+/// What it is where block `other` becomes singular on the curve of block `own` (block 0 the
+/// trivial one): a hilltop when either is trivial — a limit point meets a bifurcation point —
+/// else a change of the critical irrep, two bifurcation curves crossing.
+pub fn crossing_kind(own: usize, other: usize) -> CurveEventKind {
+    if own == 0 || other == 0 {
+        CurveEventKind::Hilltop
+    } else {
+        CurveEventKind::IrrepChange
+    }
+}
+
 /// Watches the other irrep blocks along a curve: where the negative count of a block other
 /// than the curve's own changes between two curve points, that block is singular together
 /// with the curve's somewhere in between — a hilltop when one of the two is the trivial block,
@@ -415,7 +439,7 @@ impl<'b> Detector<CurveProblem<'b>> for OtherBlocks<'_> {
         let (Some((a, u0, p0)), Some((b, u1, p1))) = (&previous, &self.previous) else {
             return Vec::new();
         };
-        if a.negatives() == b.negatives() {
+        if changed_blocks(self.own, &a.negatives(), &b.negatives()).is_empty() {
             return Vec::new();
         }
         let s1 = point.arclength - step.from.arclength;
@@ -513,6 +537,21 @@ pub(super) fn run(
                 .into(),
         ));
     };
+    if analysis.from_run.is_some() {
+        let cp = saved_point(study)?;
+        // The run's point is this run's one path row and critical point.
+        record.row(study, 0, 0.0, &cp.state, cp.parameters.clone(), 0, None);
+        record.state(
+            0,
+            crate::report::StateKind::Step,
+            cp.state.clone(),
+            &cp.parameters,
+        );
+        record.critical(cp.clone());
+        times.path = t0.elapsed();
+        let curve = follow_curve(study, crossings, &cp, observer)?;
+        return Ok((StopReason::CriticalPoint, curve));
+    }
     // The path in the control up to the point.
     let (mut driver, max_steps) = super::path::start_driver(study, u_start, params_start)?;
     let mut first = FirstCritical {
@@ -556,6 +595,34 @@ pub(super) fn run(
     };
     let curve = follow_curve(study, crossings, &cp, observer)?;
     Ok((branch.stop, curve))
+}
+
+/// The critical point of a finished run that `analysis.from-run` names, as loaded into the
+/// study, with this model's measures.
+fn saved_point(study: &Study) -> Result<CriticalPoint, RunError> {
+    let Some(saved) = &study.saved_critical else {
+        return Err(RunError::Curve(
+            "analysis.from-run is set but its critical point was not loaded \
+             (output::load_curve_start)"
+                .into(),
+        ));
+    };
+    let recorded = super::branch::RecordedPoint {
+        irrep: saved.irrep.clone(),
+        parameters: saved.parameters.clone(),
+        measures: study.measure(&saved.state, &saved.parameters),
+        after_step: 0,
+        residual_eigenvalue: saved.residual_eigenvalue,
+    };
+    let mut points = super::branch::recorded_points(
+        study,
+        &[recorded],
+        1,
+        saved.state.clone(),
+        saved.mode.clone(),
+    )
+    .map_err(|e| RunError::Curve(format!("critical point {}: {e}", saved.number)))?;
+    Ok(points.remove(0))
 }
 
 /// Follows the critical point `cp` in (control, second).
@@ -666,7 +733,10 @@ fn follow_curve(
     };
     let mut count = 0usize;
     let branch = {
-        let mut extra: Vec<&mut dyn Detector<CurveProblem>> = vec![&mut refresh, &mut others];
+        let mut extra: Vec<&mut dyn Detector<CurveProblem>> = vec![&mut refresh];
+        if analysis.watch {
+            extra.push(&mut others);
+        }
         super::path::trace(
             &mut driver,
             analysis.steps,
@@ -694,6 +764,14 @@ fn follow_curve(
         rows: Vec::new(),
         events: Vec::new(),
         stop: branch.stop.clone(),
+        warnings: branch
+            .events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Warning(w) => Some(w.clone()),
+                _ => None,
+            })
+            .collect(),
     };
     for (i, p) in branch.points.iter().enumerate() {
         let u = problem.displacement(&p.q);
@@ -741,11 +819,12 @@ fn follow_curve(
     }
     for other in branch.critical_points() {
         // The other block singular together with the curve's.
-        let kind = if mu == 0 || other.irrep == adapted.irreps[0].name {
-            CurveEventKind::Hilltop
-        } else {
-            CurveEventKind::IrrepChange
-        };
+        let nu = adapted
+            .irreps
+            .iter()
+            .position(|ib| ib.name == other.irrep)
+            .expect("the crossing's irrep is one of the basis");
+        let kind = crossing_kind(mu, nu);
         report.events.push(CurveEvent {
             kind,
             extremum: None,
@@ -776,4 +855,55 @@ fn nearest_eigenvalues(k: &DMatrix<f64>, scale: f64) -> (f64, f64) {
     values.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
     let at = |i: usize| values.get(i).map_or(f64::NAN, |v| v / scale);
     (at(0), at(1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The events a curve's watch reports along a constructed sequence of negative counts
+    /// (blocks A1, A2, E1, E2): on the E1 curve a change of E2 is a change of the critical
+    /// irrep, a change of A1 a hilltop, and E1's own count never an event; on the limit curve
+    /// (A1) every other block's change is a hilltop.
+    #[test]
+    fn the_watch_names_irrep_changes_and_hilltops_along_a_sequence() {
+        let names = ["A1", "A2", "E1", "E2"];
+        let sequence: [[usize; 4]; 5] = [
+            [0, 0, 0, 0],
+            [0, 0, 1, 0], // E1's own count: noise on its own curve
+            [0, 0, 0, 1], // E2 becomes unstable: the E1 and E2 curves cross
+            [1, 0, 1, 1], // A1: the E1 curve meets the limit curve
+            [1, 1, 0, 1], // A2
+        ];
+        let events = |own: usize| -> Vec<(usize, &str, CurveEventKind)> {
+            sequence
+                .windows(2)
+                .enumerate()
+                .flat_map(|(step, w)| {
+                    changed_blocks(own, &w[0], &w[1])
+                        .into_iter()
+                        .map(move |nu| (step, names[nu], crossing_kind(own, nu)))
+                })
+                .collect()
+        };
+        assert_eq!(
+            events(2),
+            vec![
+                (1, "E2", CurveEventKind::IrrepChange),
+                (2, "A1", CurveEventKind::Hilltop),
+                (3, "A2", CurveEventKind::IrrepChange),
+            ]
+        );
+        assert_eq!(
+            events(0),
+            vec![
+                (0, "E1", CurveEventKind::Hilltop),
+                (1, "E1", CurveEventKind::Hilltop),
+                (1, "E2", CurveEventKind::Hilltop),
+                (2, "E1", CurveEventKind::Hilltop),
+                (3, "A2", CurveEventKind::Hilltop),
+                (3, "E1", CurveEventKind::Hilltop),
+            ]
+        );
+    }
 }

@@ -300,6 +300,22 @@ pub fn path_options(study: &Study) -> PathOptions {
             state_scale: scale,
             direction: 1.0,
         },
+        // Every path of the surface: the ranges' first bounds the paths' parameter.
+        Analysis::Surface(a) => PathOptions {
+            initial_step: a.initial_step,
+            min_step: a.min_step,
+            max_step: a.max_step,
+            max_steps: a.steps,
+            max_iterations: a.max_iterations,
+            tolerance: a.tolerance,
+            bounds: (bounds.0.max(a.ranges[0][0]), bounds.1.min(a.ranges[0][1])),
+            parameter_scales: vec![1.0; study.free.len()],
+            state_scale: scale,
+            direction: match a.direction {
+                Direction::Decrease => -1.0,
+                Direction::Increase => 1.0,
+            },
+        },
         Analysis::Equilibrium(e) => PathOptions {
             tolerance: e.tolerance,
             max_iterations: e.max_iterations,

@@ -9,6 +9,8 @@
 //!   every point and the critical points where it changes;
 //! - [`buckling`]: the start state held while the control sweeps its range;
 //! - [`curve`]: a critical point followed in two parameters (cusps of limit-point curves);
+//! - [`surface`]: the equilibrium manifold in two parameters, a family of paths stitched
+//!   into triangles, with its critical lines;
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
 //!   splits measured;
 //! - [`branch`]: the branches that leave a path's bifurcation points (`[analysis.branches]`),
@@ -31,6 +33,7 @@ pub mod modes;
 pub mod newton;
 pub mod path;
 mod problem;
+pub mod surface;
 
 pub use continuation::PhaseTimes;
 pub use problem::{SymmetricProblem, SPARSE_TANGENT_FROM};
@@ -59,6 +62,8 @@ pub struct RunResult {
     pub times: RunTimes,
     /// The critical curve of a `critical-curve` analysis.
     pub curve: Option<crate::report::CurveReport>,
+    /// The equilibrium surface of a `surface` analysis.
+    pub surface: Option<crate::report::SurfaceReport>,
     /// The branches of the path's bifurcation points, when the scene asks for them
     /// (`[analysis.branches]`).
     pub branches: Option<branch::Branches>,
@@ -87,6 +92,9 @@ pub enum RunError {
     /// A critical curve could not be found or started.
     #[error("critical curve: {0}")]
     Curve(String),
+    /// No path of a surface could be started.
+    #[error("surface: {0}")]
+    Surface(String),
     /// Newton converged to a state that is no membrane state.
     #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
     Degenerate(crate::model::StateDefect),
@@ -210,6 +218,19 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
             record.curve = Some(curve);
             stop
         }
+        Analysis::Surface(_) => {
+            let (stop, surface) = surface::run(
+                study,
+                &mut record,
+                crossings,
+                &u_start,
+                &params_start,
+                observer,
+                &mut times,
+            )?;
+            record.surface = Some(surface);
+            stop
+        }
     };
     let mut result = record.finish(study, stop, stability_note, times);
     if let Analysis::Path(p) = &study.scene.analysis {
@@ -232,6 +253,7 @@ pub(crate) struct Record {
     spectra: Spectra,
     control: Option<usize>,
     curve: Option<crate::report::CurveReport>,
+    surface: Option<crate::report::SurfaceReport>,
 }
 
 impl Record {
@@ -246,6 +268,7 @@ impl Record {
             spectra: Spectra::default(),
             control: study.control,
             curve: None,
+            surface: None,
         }
     }
 
@@ -353,6 +376,7 @@ impl Record {
             points: self.points,
             times,
             curve: self.curve,
+            surface: self.surface,
             branches: None,
         }
     }

@@ -182,6 +182,11 @@ impl AxisymStudy {
                     "analysis.type = \"critical-curve\": not implemented by the axisymmetric model; use a 3-D mesh".into(),
                 ))
             }
+            Analysis::Surface(_) => {
+                return Err(unsupported(
+                    "analysis.type = \"surface\": not implemented by the axisymmetric model; use a 3-D mesh".into(),
+                ))
+            }
         };
         let control = control_name.map(|c| {
             parameters
@@ -281,7 +286,7 @@ impl AxisymStudy {
                 state_scale: scale,
                 ..PathOptions::default()
             },
-            Analysis::CriticalCurve(_) => PathOptions::default(),
+            Analysis::CriticalCurve(_) | Analysis::Surface(_) => PathOptions::default(),
         }
     }
 }
@@ -463,7 +468,7 @@ pub fn run(
             progress(0, lambda[0]);
             modes::sweep(&mut problem, &q, &lambda, range, b.samples)
         }
-        Analysis::Equilibrium(_) | Analysis::CriticalCurve(_) => {
+        Analysis::Equilibrium(_) | Analysis::CriticalCurve(_) | Analysis::Surface(_) => {
             progress(0, lambda[0]);
             let mut path = modes::sweep(&mut problem, &q, &lambda, (lambda[0], lambda[0]), 1);
             path.points.truncate(1);

@@ -20,12 +20,18 @@ fn with_analysis(text: &str, analysis: &str) -> String {
 
 /// The bundled balloon with k = "k" (start 0.1, bounds [0.05, 0.3]) and a critical-curve
 /// analysis from its pressure maximum, at frequency `frequency`, `steps` curve steps of at
-/// most `max_step`.
-pub fn fold_line_scene(frequency: usize, steps: usize, max_step: f64) -> Result<Scene, String> {
+/// most `max_step`, the other blocks watched or not (`watch`).
+pub fn fold_line_scene(
+    frequency: usize,
+    steps: usize,
+    max_step: f64,
+    watch: bool,
+) -> Result<Scene, String> {
     let analysis = format!(
         "[parameters.k]\nstart = 0.1\nmin = 0.05\nmax = 0.3\n\n[analysis]\ntype = \
          \"critical-curve\"\ncontrol = \"p\"\nsecond = \"k\"\nfrom = \"limit\"\nsteps = \
-         {steps}\npath-steps = 400\nmax-step = {max_step}\ninitial-step = {max_step}\n"
+         {steps}\npath-steps = 400\nmax-step = {max_step}\ninitial-step = {max_step}\n\
+         watch = {watch}\n"
     );
     let text = with_analysis(super::BALLOON_TOML, &analysis)
         .replacen("k = 0.1\n", "k = \"k\"\n", 1)

@@ -337,7 +337,8 @@ pub fn run_thesis(
 }
 
 /// The critical-curve study ([`super::curves`]): 200 points of the balloon's fold line at
-/// f = 16 (quick: 8) through its cusp, and the C7v disc's first E1 double point followed in
+/// f = 16 (quick: 8) through its cusp, with the other blocks watched and without, and the C7v
+/// disc's first E1 double point followed in
 /// its prestretch at 16 divisions (quick: 8); writes `curves.md` into `options.out`.
 pub fn run_curves(
     options: &ThesisOptions,
@@ -351,9 +352,17 @@ pub fn run_curves(
     progress(&format!("balloon fold line, f = {frequency} …"));
     let fold = curve_run(
         &format!("balloon fold line in (p, k), f = {frequency}"),
-        fold_line_scene(frequency, 199, 0.012)?,
+        fold_line_scene(frequency, 199, 0.012, true)?,
     )
     .map_err(|e| format!("balloon fold line: {}", one_line(&e)))?;
+    progress(&format!(
+        "balloon fold line, f = {frequency}, watch = false …"
+    ));
+    let unwatched = curve_run(
+        &format!("balloon fold line in (p, k), f = {frequency}, watch = false"),
+        fold_line_scene(frequency, 199, 0.012, false)?,
+    )
+    .map_err(|e| format!("balloon fold line (watch = false): {}", one_line(&e)))?;
     progress(&format!("C7v disc double curve, {divisions} divisions …"));
     let double = curve_run(
         &format!("C7v disc E1 double point in (h, prestretch), {divisions} divisions"),
@@ -366,7 +375,7 @@ pub fn run_curves(
         env!("CARGO_PKG_VERSION"),
         std::thread::available_parallelism().map_or(1, |n| n.get())
     );
-    md += &curves_table(&[fold, double]);
+    md += &curves_table(&[fold, unwatched, double]);
     md += &report::total_time("study", started.elapsed());
     let md_path = write_text(out, "curves.md", &md)?;
     Ok(BenchFiles {

@@ -64,7 +64,8 @@ With --thesis (nothing else is run):
                  points, the same states without symmetry (full-K index per point)
 With --curves (nothing else is run):
   curves.md      200 points of the balloon's fold line in (p, k) at f = 16 (--quick: 8)
-                 through its cusp, and the C7v disc's first E1 double point followed in its
+                 through its cusp (with the other blocks watched, and with watch = false),
+                 and the C7v disc's first E1 double point followed in its
                  prestretch (16 divisions, --quick: 8): points, time of the path to the point
                  and of the curve, time per point, cusps and folds
 With --branching (nothing else is run):

@@ -13,7 +13,7 @@ pub(super) fn load_scene(path: &Path) -> Result<Scene, CliError> {
 
 /// Builds the study (mesh, the scene's group, effects, model); a scene that cannot be built is
 /// bad input (exit 2), as in `memstab run`.
-/// A `[start] from` is loaded here: a saved state that cannot be read or does not fit is bad
+/// A `[start] from` and a critical curve's `from-run` are loaded here: a saved state that cannot be read or does not fit is bad
 /// input too (the message names the scene file and the key).
 pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
     let origin = scene.origin.clone();
@@ -23,6 +23,8 @@ pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
         }
     })?;
     memstab::output::store::load_start(&mut study)
+        .map_err(|e| CliError::Input(one_line(&format!("{origin}: {e}"))))?;
+    memstab::output::load_curve_start(&mut study)
         .map_err(|e| CliError::Input(one_line(&format!("{origin}: {e}"))))?;
     Ok(study)
 }

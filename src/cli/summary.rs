@@ -4,7 +4,7 @@
 
 use memstab::analysis::RunResult;
 use memstab::output::{file_name, Written};
-use memstab::report::{CurveReport, PathReport};
+use memstab::report::{CurveReport, PathReport, SurfaceReport};
 use memstab::study::Study;
 use memstab::text::sig_digits;
 use std::path::Path;
@@ -131,6 +131,9 @@ pub(super) fn print_summary(study: &Study, result: &RunResult, out: &Path, writt
     if let Some(curve) = &result.curve {
         print_curve(curve);
     }
+    if let Some(surface) = &result.surface {
+        print_surface(surface);
+    }
     out!(
         "wrote {} files into {}:",
         written.files().len(),
@@ -193,6 +196,27 @@ pub(super) fn print_summary(study: &Study, result: &RunResult, out: &Path, writt
             format!("{} against {}, events marked", curve.second, curve.control),
         ];
         for (path, what) in written.curve.iter().zip(described) {
+            out!("  {:<10} {what}", file_name(path));
+        }
+    }
+    if let Some(s) = &result.surface {
+        let described = [
+            format!(
+                "{} vertices at ({}, {}, {}) with the index, {} triangles, {} critical lines",
+                s.vertex_count(),
+                s.a,
+                s.b,
+                s.measure,
+                s.triangles.len(),
+                s.lines.len()
+            ),
+            "the surface: its paths, critical points and lines".to_string(),
+            format!(
+                "{} against {}, coloured by index, critical lines drawn",
+                s.measure, s.a
+            ),
+        ];
+        for (path, what) in written.surface.iter().zip(described) {
             out!("  {:<10} {what}", file_name(path));
         }
     }
@@ -261,6 +285,62 @@ fn print_curve(curve: &CurveReport) {
         );
     }
     out!("curve stopped: {}", curve.stop);
+    for w in &curve.warnings {
+        out!("warning: {w}");
+    }
+}
+
+/// The equilibrium surface: its paths, their index ranges and critical lines, its warnings.
+fn print_surface(s: &SurfaceReport) {
+    out!(
+        "surface in ({}, {}): {} paths, {} vertices, {} triangles (path.csv is the first path, {} = {})",
+        s.a,
+        s.b,
+        s.paths.len(),
+        s.vertex_count(),
+        s.triangles.len(),
+        s.b,
+        s.paths.first().map_or_else(String::new, |p| sig_digits6(p.b))
+    );
+    let a = s.parameter(&s.a);
+    for p in &s.paths {
+        let indices = p.vertices.iter().filter_map(|v| v.index);
+        let range = indices.clone().min().zip(indices.max()).map_or_else(
+            || "not computed".to_string(),
+            |(lo, hi)| format!("{lo}..{hi}"),
+        );
+        out!(
+            "  {} = {}: {} points, index {range}, {} critical points; stopped: {}",
+            s.b,
+            sig_digits6(p.b),
+            p.vertices.len(),
+            p.critical.len(),
+            p.stop
+        );
+    }
+    for l in &s.lines {
+        let ends = |i: usize| {
+            let p = &l.points[i];
+            let x = a.map_or_else(|| "?".to_string(), |a| sig_digits6(p.parameters[a]));
+            format!("{} = {}", s.a, x)
+        };
+        let (first, last) = (&l.points[0], &l.points[l.points.len() - 1]);
+        out!(
+            "  critical line: {} in {} over {} paths, from {} at {} = {} to {} at {} = {}",
+            l.kind,
+            l.irrep,
+            l.points.len(),
+            ends(0),
+            s.b,
+            sig_digits6(s.paths[first.path].b),
+            ends(l.points.len() - 1),
+            s.b,
+            sig_digits6(s.paths[last.path].b)
+        );
+    }
+    for w in &s.warnings {
+        out!("warning: {w}");
+    }
 }
 
 /// Six significant digits.

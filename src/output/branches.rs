@@ -380,6 +380,7 @@ pub fn write_branches(
             times: Default::default(),
             branches: None,
             curve: None,
+            surface: None,
         };
         match write_run(study, &mut result, &dir) {
             Ok(w) => done.extend(w.files()),

@@ -1,6 +1,6 @@
 //! `curve.csv`, `curve.json` and `curve.svg`: a critical curve ([`CurveReport`]).
 
-use super::svg::{padded, xml_chars};
+use super::svg::{chart, padded, xml_chars};
 use super::{write_whole, Num, OutputError};
 use crate::report::{CurveEventKind, CurveReport};
 use plotters::prelude::*;
@@ -128,20 +128,7 @@ fn render(curve: &CurveReport, c: usize, s: usize) -> Result<String, Box<dyn std
         let root = SVGBackend::with_string(&mut out, (800, 600)).into_drawing_area();
         root.fill(&WHITE)?;
         let title = format!("{} curve of {} ({})", curve.kind, curve.irrep, curve.second);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 22))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(xr, yr)?;
-        chart
-            .configure_mesh()
-            .x_desc(curve.control.as_str())
-            .y_desc(curve.second.as_str())
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 16))
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()?;
+        let mut chart = chart(&root, &title, &curve.control, &curve.second, xr, yr)?;
         let blue = RGBColor(31, 87, 180);
         chart.draw_series(LineSeries::new(
             points.iter().copied(),

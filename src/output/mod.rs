@@ -7,6 +7,7 @@
 //! | `path.svg` | [`write_diagram`], [`write_diagram_with`] | the path in two chosen quantities, turning points marked |
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
 //! | `curve.csv`, `curve.json`, `curve.svg` | [`write_curve`] | a critical curve: a row per point (both parameters, the measures, the block's eigenvalues, the irrep), its events, the second parameter against the control |
+//! | `surface.vtu`, `surface.json`, `surface.svg` | [`write_surface`] | an equilibrium surface: its vertices at (a, b, measure) with the index, its triangles and critical lines; the report; the measure against a by index |
 //! | `state_NNNN.vtu`, `path.pvd`, `events.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) with their fields ([`state_fields`]), the ParaView collection of the path's states and that of the turning and critical states |
 //! | `path.states` | [`store::write_states`] | every path point's parameters and displacement, binary (what `[start] from` reads, [`store::read_states`]) |
 //! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
@@ -40,6 +41,7 @@ mod reopen;
 mod run;
 mod states;
 pub mod store;
+mod surface;
 mod svg;
 
 pub use axisym::{write_axisym_run, AXISYM_RUN_FILES};
@@ -56,12 +58,13 @@ pub use matrix_market::{
     RANK_ONE_FILE_TAG,
 };
 pub use progress::Progress;
-pub use reopen::{FinishedRun, ReopenError};
+pub use reopen::{load_curve_start, FinishedRun, ReopenError};
 pub use run::{
     file_name, node_normals, state_fields, wave_numbers, write_run, CriticalSummary, RunSummary,
     TurningSummary, WriteRunError, Written, RUN_FILES,
 };
 pub use states::{PvdTime, StateWriter, EVENTS_PVD};
+pub use surface::write_surface;
 pub use svg::{
     default_axes, write_diagram, write_diagram_with, write_spectrum_diagram, Diagram, Marker,
     MarkerKind, Segment, SPECTRUM_AXIS, ZERO_LINE,

@@ -291,3 +291,41 @@ impl FinishedRun {
         Ok((u, m))
     }
 }
+
+/// Loads the critical point a critical curve of `study` starts from with
+/// `analysis.from-run` (if any): the run in that directory read back and checked against the
+/// model, and its critical point `analysis.from` (0 the first) with its state and mode from
+/// `critical_NN.vtu`. The message of an error names `analysis.from-run` or `analysis.from`
+/// and the value.
+pub fn load_curve_start(study: &mut Study) -> Result<(), String> {
+    let crate::scene::Analysis::CriticalCurve(a) = &study.scene.analysis else {
+        return Ok(());
+    };
+    let (Some(dir), crate::scene::CurveStart::Index(i)) = (a.from_run.clone(), a.from.clone())
+    else {
+        return Ok(());
+    };
+    let shown = dir.display().to_string();
+    let key = |e: ReopenError| format!("'analysis.from-run' = \"{shown}\": {e}");
+    let run = FinishedRun::read(&dir).map_err(key)?;
+    run.check_model(study).map_err(key)?;
+    let Some(point) = run.critical.get(i) else {
+        return Err(format!(
+            "'analysis.from' = {i}: the run in '{shown}' has {} critical point{} (0 to {})",
+            run.critical.len(),
+            if run.critical.len() == 1 { "" } else { "s" },
+            run.critical.len().saturating_sub(1)
+        ));
+    };
+    let (state, mode) = run.state(study, i + 1).map_err(key)?;
+    study.saved_critical = Some(crate::study::SavedCritical {
+        number: i + 1,
+        irrep: point.irrep.clone(),
+        parameters: point.parameters.clone(),
+        measures: point.measures.clone(),
+        residual_eigenvalue: point.residual_eigenvalue,
+        state,
+        mode,
+    });
+    Ok(())
+}

@@ -49,6 +49,8 @@ pub struct Written {
     pub states: Vec<PathBuf>,
     /// `curve.csv`, `curve.json`, `curve.svg` of a critical curve.
     pub curve: Vec<PathBuf>,
+    /// `surface.vtu`, `surface.json`, `surface.svg` of an equilibrium surface.
+    pub surface: Vec<PathBuf>,
     /// The branches' files, when the run has branches.
     pub branches: Option<super::BranchesWritten>,
     /// `manifest.json`, written last.
@@ -69,6 +71,7 @@ impl Written {
         files.extend(self.points.clone());
         files.extend(self.states.iter().cloned());
         files.extend(self.curve.iter().cloned());
+        files.extend(self.surface.iter().cloned());
         if let Some(b) = &self.branches {
             files.extend(b.files.iter().cloned());
         }
@@ -257,6 +260,11 @@ pub fn write_run(
         None => Vec::new(),
     };
     done.extend(curve.iter().cloned());
+    let surface = match &result.surface {
+        Some(s) => attempt!(super::write_surface(out, s)),
+        None => Vec::new(),
+    };
+    done.extend(surface.iter().cloned());
     let branches = match &result.branches {
         Some(b) => {
             let primary = super::PrimaryPath::of(&result.report);
@@ -288,6 +296,7 @@ pub fn write_run(
         points,
         states,
         curve,
+        surface,
         branches,
         manifest,
     })

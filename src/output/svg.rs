@@ -265,6 +265,43 @@ pub fn write_diagram_with(
     Ok(path)
 }
 
+/// A chart of the diagrams' one style on `root`: the title above, white background already
+/// filled by the caller, the axes over `xr` × `yr` with their titles and light grid lines.
+pub(super) type Chart<'a, 'b> = ChartContext<
+    'a,
+    SVGBackend<'b>,
+    plotters::coord::cartesian::Cartesian2d<
+        plotters::coord::types::RangedCoordf64,
+        plotters::coord::types::RangedCoordf64,
+    >,
+>;
+
+/// Builds the [`Chart`] of the diagrams' style (caption, margins, axis titles, grid).
+pub(super) fn chart<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    x: &str,
+    y: &str,
+    xr: Range<f64>,
+    yr: Range<f64>,
+) -> Result<Chart<'a, 'b>, Box<dyn Error>> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 22))
+        .margin(20)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(xr, yr)?;
+    chart
+        .configure_mesh()
+        .x_desc(x)
+        .y_desc(y)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()?;
+    Ok(chart)
+}
+
 /// Draws the diagram into an SVG string.
 fn render(
     report: &PathReport,
@@ -281,20 +318,7 @@ fn render(
         let root = SVGBackend::with_string(&mut svg, diagram.size).into_drawing_area();
         root.fill(&WHITE)?;
         let title = format!("{} (group {})", report.scene, report.group);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 22))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(xr, yr)?;
-        chart
-            .configure_mesh()
-            .x_desc(diagram.x.as_str())
-            .y_desc(diagram.y.as_str())
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 16))
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()?;
+        let mut chart = chart(&root, &title, &diagram.x, &diagram.y, xr, yr)?;
 
         let blue = RGBColor(31, 87, 180);
         let red = RGBColor(200, 30, 30);

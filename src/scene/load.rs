@@ -234,6 +234,7 @@ fn read_analysis(v: &Value) -> Result<Analysis, Problem> {
         AnalysisKind::LinearBuckling => de(&rest, "analysis").map(Analysis::LinearBuckling),
         AnalysisKind::Equilibrium => de(&rest, "analysis").map(Analysis::Equilibrium),
         AnalysisKind::CriticalCurve => de(&rest, "analysis").map(Analysis::CriticalCurve),
+        AnalysisKind::Surface => de(&rest, "analysis").map(Analysis::Surface),
     }
     .map_err(with_tag("type"))
 }

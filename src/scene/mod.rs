@@ -600,6 +600,72 @@ pub enum Analysis {
     /// `type = "critical-curve"`: a critical point of the path in the control, followed in
     /// the control and a second parameter.
     CriticalCurve(CriticalCurveAnalysis),
+    /// `type = "surface"`: the equilibrium manifold in two parameters, as a family of paths
+    /// in the first at a grid of values of the second.
+    Surface(SurfaceAnalysis),
+}
+
+/// `type = "surface"`: the two-parameter equilibrium manifold in the fixed-point space
+/// (docs/theory.md §11.10). With `parameters = [a, b]`, the start state is carried at fixed
+/// `a` to each of `paths` equally spaced values of `b` over `ranges[1]`; from each, the path
+/// in `a` is followed through its folds until `a` leaves `ranges[0]` or after `steps` steps.
+/// Neighbouring paths are stitched into triangles; every vertex carries the index by irrep
+/// blocks, and the critical points of the paths are joined across `b` into critical lines.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct SurfaceAnalysis {
+    /// `[a, b]`: the parameter of the paths and the parameter of the grid.
+    pub parameters: Vec<String>,
+    /// `[[a_min, a_max], [b_min, b_max]]`: where the paths stop, and the grid's extent.
+    pub ranges: Vec<Vec<f64>>,
+    /// Number of paths, the values of `b` (>= 2). Default 5.
+    #[serde(default = "default_paths")]
+    pub paths: usize,
+    /// The measure of the surface's third coordinate. Default the scene's first measure.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measure: Option<String>,
+    /// The sense of every path's first step in `a`. Default `increase`.
+    #[serde(default)]
+    pub direction: Direction,
+    /// Step budget of every path (>= 1). Default 200.
+    #[serde(default = "default_steps")]
+    pub steps: usize,
+    /// First arclength step. Default 0.02.
+    #[serde(default = "default_initial_step")]
+    pub initial_step: f64,
+    /// Smallest arclength step. Default 1e-6.
+    #[serde(default = "default_min_step")]
+    pub min_step: f64,
+    /// Largest arclength step. Default 0.2.
+    #[serde(default = "default_max_step")]
+    pub max_step: f64,
+    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Newton iterations per step before the step is cut. Default 25.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+}
+
+impl SurfaceAnalysis {
+    /// The parameter of the paths.
+    pub fn a(&self) -> &str {
+        &self.parameters[0]
+    }
+
+    /// The parameter of the grid.
+    pub fn b(&self) -> &str {
+        &self.parameters[1]
+    }
+
+    /// The grid's values of `b`, ascending.
+    pub fn b_values(&self) -> Vec<f64> {
+        let [lo, hi] = [self.ranges[1][0], self.ranges[1][1]];
+        let n = self.paths.max(2);
+        (0..n)
+            .map(|j| lo + (hi - lo) * j as f64 / (n - 1) as f64)
+            .collect()
+    }
 }
 
 /// `type = "critical-curve"`: the path in `control` from the start state (second parameter
@@ -616,9 +682,15 @@ pub struct CriticalCurveAnalysis {
     pub second: String,
     /// Which critical point of the path: `"limit"` (the first limit point), an irrep name
     /// (the first critical point in that irrep's block) or an index (0: the first critical
-    /// point of any kind). Default `"limit"`.
+    /// point of any kind). Default `"limit"`. With `from-run`, the index of a critical point
+    /// of that run.
     #[serde(default)]
     pub from: CurveStart,
+    /// The output directory of a finished run of the same model: the curve starts from its
+    /// critical point `from` (its saved state and mode), without a path. [`Scene::load`]
+    /// resolves a relative directory against the scene file's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from_run: Option<PathBuf>,
     /// The sense of the curve's first step in `second`. Default `increase`.
     #[serde(default)]
     pub direction: Direction,
@@ -643,6 +715,11 @@ pub struct CriticalCurveAnalysis {
     /// Newton iterations per step before the step is cut. Default 25.
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
+    /// Watch the other irrep blocks at every curve point for hilltops and changes of the
+    /// critical irrep (docs/theory.md §11.9). Default true; false saves their index at every
+    /// point.
+    #[serde(default = "default_watch")]
+    pub watch: bool,
 }
 
 /// `analysis.from` of a critical curve.
@@ -857,6 +934,12 @@ fn default_exponent() -> u32 {
 fn default_steps() -> usize {
     200
 }
+fn default_watch() -> bool {
+    true
+}
+fn default_paths() -> usize {
+    5
+}
 fn default_initial_step() -> f64 {
     0.02
 }
@@ -884,6 +967,7 @@ impl Analysis {
             Analysis::Equilibrium(_) => AnalysisKind::Equilibrium,
             Analysis::LinearBuckling(_) => AnalysisKind::LinearBuckling,
             Analysis::CriticalCurve(_) => AnalysisKind::CriticalCurve,
+            Analysis::Surface(_) => AnalysisKind::Surface,
         }
     }
 }
@@ -1163,6 +1247,15 @@ impl Scene {
                 *from = path.parent().unwrap_or(Path::new("")).join(&*from);
             }
         }
+        if let Analysis::CriticalCurve(CriticalCurveAnalysis {
+            from_run: Some(dir),
+            ..
+        }) = &mut scene.analysis
+        {
+            if dir.is_relative() {
+                *dir = path.parent().unwrap_or(Path::new("")).join(&*dir);
+            }
+        }
         Ok(scene)
     }
 
@@ -1186,6 +1279,11 @@ impl Scene {
             Analysis::CriticalCurve(c) => {
                 let points = (c.steps as u64).saturating_add(c.path_steps as u64);
                 (points.saturating_add(2), 2)
+            }
+            Analysis::Surface(a) => {
+                // The paths' points are kept (as rows) but only the first path's states.
+                let points = (a.steps as u64).saturating_add(1);
+                (points, 2)
             }
         };
         let row = 256 + 16 * (self.parameters.len() as u64 + 8);
@@ -1288,6 +1386,7 @@ impl Scene {
             Analysis::Path(p) => Some(&p.control),
             Analysis::LinearBuckling(b) => Some(&b.control),
             Analysis::CriticalCurve(c) => Some(&c.control),
+            Analysis::Surface(a) => a.parameters.first().map(String::as_str),
             Analysis::Equilibrium(_) => None,
         }
     }

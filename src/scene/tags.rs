@@ -119,5 +119,7 @@ tags! {
         LinearBuckling = "linear-buckling",
         /// A critical point followed in two parameters.
         CriticalCurve = "critical-curve",
+        /// The equilibrium manifold in two parameters.
+        Surface = "surface",
     }
 }

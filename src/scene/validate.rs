@@ -787,6 +787,20 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
                     ),
                 ));
             }
+            if a.from_run.is_some() && !matches!(a.from, CurveStart::Index(_)) {
+                let from = match &a.from {
+                    CurveStart::Limit => "\"limit\"".to_string(),
+                    CurveStart::Irrep(name) => format!("\"{name}\""),
+                    CurveStart::Index(i) => i.to_string(),
+                };
+                return Err(Problem::at(
+                    "analysis.from",
+                    format!(
+                        "= {from}: with analysis.from-run it must be the index of a critical \
+                         point of that run (0 the first, as in its critical.json)"
+                    ),
+                ));
+            }
             if let CurveStart::Irrep(name) = &a.from {
                 if name.trim().is_empty() {
                     return Err(Problem::at(
@@ -817,6 +831,7 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
             check_steps(a.initial_step, a.min_step, a.max_step)?;
             check_newton(a.tolerance, a.max_iterations)
         }
+        Analysis::Surface(a) => check_surface(scene, a),
         Analysis::Equilibrium(a) => check_newton(a.tolerance, a.max_iterations),
         Analysis::LinearBuckling(a) => {
             known_parameter(&scene.parameters, "analysis.control", &a.control)?;
@@ -846,6 +861,101 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
 }
 
 /// A declared parameter that no constraint governs (a path's free parameter).
+/// `[analysis] type = "surface"`: two free parameters, a finite range of each (the first
+/// holding its start value), at least two paths.
+fn check_surface(scene: &Scene, a: &SurfaceAnalysis) -> Result<(), Problem> {
+    let names = |v: &[String]| {
+        let quoted: Vec<String> = v.iter().map(|n| format!("\"{n}\"")).collect();
+        format!("[{}]", quoted.join(", "))
+    };
+    let [first, second] = a.parameters.as_slice() else {
+        return Err(Problem::at(
+            "analysis.parameters",
+            format!(
+                "= {}: needs two parameter names [a, b] (the paths' parameter, the grid's)",
+                names(&a.parameters)
+            ),
+        ));
+    };
+    free_parameter(scene, "analysis.parameters[0]", first)?;
+    free_parameter(scene, "analysis.parameters[1]", second)?;
+    if first == second {
+        return Err(Problem::at(
+            "analysis.parameters",
+            format!("= {}: the two parameters must differ", names(&a.parameters)),
+        ));
+    }
+    let show = |r: &[f64]| {
+        let v: Vec<String> = r.iter().map(|x| num(*x)).collect();
+        format!("[{}]", v.join(", "))
+    };
+    if a.ranges.len() != 2 {
+        let all: Vec<String> = a.ranges.iter().map(|r| show(r)).collect();
+        return Err(Problem::at(
+            "analysis.ranges",
+            format!(
+                "= [{}]: needs two ranges [[a_min, a_max], [b_min, b_max]]",
+                all.join(", ")
+            ),
+        ));
+    }
+    for (i, r) in a.ranges.iter().enumerate() {
+        let key = format!("analysis.ranges[{i}]");
+        let ok = r.len() == 2 && r.iter().all(|x| x.is_finite()) && r[0] < r[1];
+        if !ok {
+            return Err(Problem::at(
+                &key,
+                format!("= {}: needs [min, max] with finite min < max", show(r)),
+            ));
+        }
+    }
+    let start = scene.parameters[first].start;
+    if !(a.ranges[0][0]..=a.ranges[0][1]).contains(&start) {
+        return Err(Problem::at(
+            "analysis.ranges[0]",
+            format!(
+                "= {}: the paths start at {first} = {} (parameters.{first}.start), outside it",
+                show(&a.ranges[0]),
+                num(start)
+            ),
+        ));
+    }
+    // The grid of b inside b's own bounds, where it declares them.
+    let declared = &scene.parameters[second];
+    let (lo, hi) = (a.ranges[1][0], a.ranges[1][1]);
+    let outside = declared.min.is_some_and(|m| lo < m) || declared.max.is_some_and(|m| hi > m);
+    if outside {
+        let bound = |b: Option<f64>| b.map_or_else(|| "none".to_string(), num);
+        return Err(Problem::at(
+            "analysis.ranges[1]",
+            format!(
+                "= {}: outside [min, max] = [{}, {}] of parameters.{second}",
+                show(&a.ranges[1]),
+                bound(declared.min),
+                bound(declared.max)
+            ),
+        ));
+    }
+    at_least("analysis.paths", a.paths, 2)?;
+    if a.paths > 1000 {
+        return Err(Problem::at(
+            "analysis.paths",
+            format!("must be <= 1000, got {}", a.paths),
+        ));
+    }
+    if let Some(m) = &a.measure {
+        if m.trim().is_empty() {
+            return Err(Problem::at(
+                "analysis.measure",
+                "= \"\": needs the name of a measure (stretch, volume, max_displacement, ...)",
+            ));
+        }
+    }
+    at_least("analysis.steps", a.steps, 1)?;
+    check_steps(a.initial_step, a.min_step, a.max_step)?;
+    check_newton(a.tolerance, a.max_iterations)
+}
+
 fn free_parameter(scene: &Scene, key: &str, name: &str) -> Result<(), Problem> {
     known_parameter(&scene.parameters, key, name)?;
     if let Some((i, c)) = scene
@@ -944,6 +1054,7 @@ fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
         let free: Vec<&str> = match &scene.analysis {
             Analysis::Path(PathAnalysis { control, .. }) => vec![control],
             Analysis::CriticalCurve(c) => vec![&c.control, &c.second],
+            Analysis::Surface(a) => a.parameters.iter().map(String::as_str).collect(),
             Analysis::Equilibrium(_) | Analysis::LinearBuckling(_) => continue,
         };
         if !free.contains(&name.as_str()) && scene.governing(name).is_none() {

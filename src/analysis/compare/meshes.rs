@@ -325,6 +325,7 @@ pub(super) fn variant(
             Analysis::LinearBuckling(b) => b.samples = n,
             Analysis::Path(p) => p.steps = n,
             Analysis::CriticalCurve(c) => c.path_steps = n,
+            Analysis::Surface(a) => a.steps = n,
             Analysis::Equilibrium(_) => {}
         }
     }

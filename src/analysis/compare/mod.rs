@@ -515,6 +515,7 @@ pub fn compare(
         Analysis::LinearBuckling(b) => Some(b.samples),
         Analysis::Path(p) => Some(p.steps),
         Analysis::CriticalCurve(c) => Some(c.path_steps),
+        Analysis::Surface(a) => Some(a.steps),
         Analysis::Equilibrium(_) => None,
     };
     Ok(Comparison {
