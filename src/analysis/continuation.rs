@@ -841,6 +841,14 @@ impl<P: Problem> Continuation<P> {
         }
     }
 
+    /// Takes back the accepted `step`: the driver is at its earlier point again and tries
+    /// `factor` times the step next.
+    pub fn retreat(&mut self, step: Accepted, factor: f64) {
+        self.next_step = step.step * factor;
+        self.point = step.from;
+        self.accepted -= 1;
+    }
+
     /// The point reached by one predictor–corrector step of arclength `s` from `from` (for
     /// localising an event between two accepted points); the driver's state is unchanged.
     pub fn step_from(&mut self, from: &PathPoint, s: f64) -> Result<PathPoint, StepError> {

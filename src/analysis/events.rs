@@ -26,6 +26,13 @@ const LOCATE_WIDTH: f64 = 1e-10;
 const JUMP_EIGENVALUE: f64 = 1e-8;
 /// The control's component of the unit tangent below which a turning point is localised.
 const TURNING_TOLERANCE: f64 = 1e-12;
+/// The factor a rejected step is shortened by before it is tried again.
+const REJECTED_STEP_FACTOR: f64 = 0.25;
+/// Rejections of steps from one point, each a quarter of the one before, after which a step
+/// that still leaves the path ([`leaves_path`]) is accepted: the count then changes at a
+/// branch point of the fixed-point path itself (a symmetric bifurcation inside the
+/// fixed-point space), or the mesh's imperfection is below what 1/64 of the step resolves.
+const MAX_REJECTIONS: usize = 3;
 
 /// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
 /// by the Illinois variant of regula falsi. Stops when |g| ≤ `tol` or after 60 evaluations;
@@ -230,11 +237,31 @@ pub enum Event {
     Warning(String),
 }
 
+/// A detector's verdict on a step before the step is accepted ([`Detector::admit`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Admission {
+    /// The step stays on the path.
+    Accept,
+    /// The step left the connected path (why): retry from the earlier point with a shorter
+    /// step.
+    Reject(String),
+}
+
 /// What watches a path: called at its first point and after every accepted step.
 pub trait Detector<P: Problem> {
     /// Called once at the first point (`driver.point()`).
     fn start(&mut self, _driver: &mut Continuation<P>) -> Vec<Event> {
         Vec::new()
+    }
+
+    /// Called after every step of the driver, before any detector checks it: `driver.point()`
+    /// is the new point. A detector that sees the step leave the connected path (as over a
+    /// nearly symmetric bifurcation that the mesh breaks, docs/theory.md §7.5.2) rejects it;
+    /// [`follow`] then retries from `step.from` with a quarter of the step, and no detector
+    /// sees the rejected point. A detector must accept once the step is short enough for
+    /// what it tests, so that the path goes on.
+    fn admit(&mut self, _driver: &mut Continuation<P>, _step: &Accepted) -> Admission {
+        Admission::Accept
     }
 
     /// Called after every accepted step: `driver.point()` is the new point, `step` says where
@@ -253,6 +280,8 @@ pub struct Branch {
     pub stop: StopReason,
     /// Where [`follow`]'s time went.
     pub times: BranchTimes,
+    /// Steps a detector rejected as leaving the connected path ([`Detector::admit`]).
+    pub rejected_steps: usize,
 }
 
 /// Where [`follow`]'s time went.
@@ -301,6 +330,7 @@ pub fn follow<P: Problem>(
         events: Vec::new(),
         stop: StopReason::StepBudget { steps: max_steps },
         times: BranchTimes::default(),
+        rejected_steps: 0,
     };
     let t = Instant::now();
     progress(driver.problem(), driver.point());
@@ -322,6 +352,16 @@ pub fn follow<P: Problem>(
                 return branch;
             }
         };
+        let t = Instant::now();
+        let rejected = detectors
+            .iter_mut()
+            .any(|d| d.admit(driver, &step) != Admission::Accept);
+        branch.times.events += t.elapsed();
+        if rejected {
+            branch.rejected_steps += 1;
+            driver.retreat(step, REJECTED_STEP_FACTOR);
+            continue;
+        }
         let after = branch.points.len() - 1;
         let mut stop = None;
         let t = Instant::now();
@@ -737,6 +777,20 @@ pub struct IndexChanges<'a> {
     pub indices: Vec<Option<usize>>,
     /// Time spent on the index at every point (eigenvalues and localisation excepted).
     pub index_time: std::time::Duration,
+    /// The index at the point [`Detector::admit`] last admitted (its arclength and
+    /// parameters, to know it again), for [`Detector::check`].
+    admitted: Option<Observed>,
+    /// The point steps were rejected from (its arclength) and how many.
+    rejections: Option<(f64, usize)>,
+}
+
+/// The index spectrum at a point (where it could be computed) and the point's state.
+struct Observed {
+    arclength: f64,
+    lambda: nalgebra::DVector<f64>,
+    spectrum: Option<Spectrum>,
+    u: Vec<f64>,
+    params: Vec<f64>,
 }
 
 impl<'a> IndexChanges<'a> {
@@ -747,6 +801,8 @@ impl<'a> IndexChanges<'a> {
             previous: None,
             indices: Vec::new(),
             index_time: Default::default(),
+            admitted: None,
+            rejections: None,
         }
     }
 
@@ -755,21 +811,58 @@ impl<'a> IndexChanges<'a> {
         self.crossings
     }
 
-    /// The index at `point`, remembered with its state as the previous point's; returns
-    /// the earlier previous point.
+    /// The index at `point` and its state.
+    fn index_at<P: Problem + States>(&mut self, problem: &P, point: &PathPoint) -> Observed {
+        let t = std::time::Instant::now();
+        let u = problem.displacement(&point.q);
+        let params = problem.parameters(&point.lambda);
+        let spectrum = self.crossings.index(&u, &params);
+        self.index_time += t.elapsed();
+        Observed {
+            arclength: point.arclength,
+            lambda: point.lambda.clone(),
+            spectrum,
+            u,
+            params,
+        }
+    }
+
+    /// The index at `point` (the admitted one's, when it is that point), remembered with its
+    /// state as the previous point's; returns the earlier previous point.
     fn observe<P: Problem + States>(
         &mut self,
         problem: &P,
         point: &PathPoint,
     ) -> Option<(Spectrum, Vec<f64>, Vec<f64>)> {
-        let t = std::time::Instant::now();
-        let u = problem.displacement(&point.q);
-        let params = problem.parameters(&point.lambda);
-        let spectrum = self.crossings.index(&u, &params);
-        self.indices.push(spectrum.as_ref().map(|s| s.index));
-        self.index_time += t.elapsed();
+        let observed = match self.admitted.take() {
+            Some(o) if o.arclength == point.arclength && o.lambda == point.lambda => o,
+            _ => self.index_at(problem, point),
+        };
+        self.indices
+            .push(observed.spectrum.as_ref().map(|s| s.index));
+        let Observed {
+            spectrum,
+            u,
+            params,
+            ..
+        } = observed;
         std::mem::replace(&mut self.previous, spectrum.map(|s| (s, u, params)))
     }
+}
+
+/// Whether the step from a point with fixed-point-block count `a` and control tangent `from`
+/// to one with `b` and `to` leaves the connected path (docs/theory.md §7.5.2). Along a
+/// connected regular path sign(det K₀)·sign(λ̇) is constant (K₀ the tangent in the
+/// fixed-point space, bordered by the constraints; its determinant's sign is (−1)^count), so
+/// the count's parity changes exactly where the control turns; and a step short enough to
+/// resolve the path meets at most one fold, where the count changes by one. Any other change
+/// — the parity without a turn, a turn without it, or a change by two or more (both
+/// components of a broken pair at once) — is a step onto another piece of the path, or over
+/// more than the step resolves.
+fn leaves_path(a: usize, b: usize, from: f64, to: f64) -> bool {
+    let turns = from.signum() != to.signum();
+    let expected = usize::from(turns);
+    a.abs_diff(b) != expected
 }
 
 impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
@@ -777,6 +870,43 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
         let point = driver.point().clone();
         self.observe(driver.problem(), &point);
         Vec::new()
+    }
+
+    /// Rejects a step that leaves the connected path ([`leaves_path`]), up to
+    /// [`MAX_REJECTIONS`] times from one point: a step over a nearly symmetric bifurcation
+    /// inside the fixed-point space lands on another piece of the broken branch, where the
+    /// fixed-point block's count has changed without a fold of the control. Shorter steps stay
+    /// on the connected piece and follow it through its fold.
+    fn admit(&mut self, driver: &mut Continuation<P>, step: &Accepted) -> Admission {
+        let point = driver.point().clone();
+        let observed = self.index_at(driver.problem(), &point);
+        let m = driver.problem().dim();
+        let leaves = match (&self.previous, &observed.spectrum) {
+            (Some((a, _, _)), Some(b)) => leaves_path(
+                a.blocks[0].negative,
+                b.blocks[0].negative,
+                step.from.tangent[m],
+                point.tangent[m],
+            ),
+            _ => false,
+        };
+        let from = step.from.arclength;
+        let earlier = match self.rejections {
+            Some((s, n)) if s == from => n,
+            _ => 0,
+        };
+        if leaves && earlier < MAX_REJECTIONS {
+            self.rejections = Some((from, earlier + 1));
+            self.admitted = None;
+            return Admission::Reject(format!(
+                "the step of {} from arclength {} leaves the connected path",
+                num(step.step),
+                num(from)
+            ));
+        }
+        self.rejections = None;
+        self.admitted = Some(observed);
+        Admission::Accept
     }
 
     fn check(&mut self, driver: &mut Continuation<P>, step: &Accepted, after: usize) -> Vec<Event> {
@@ -855,5 +985,26 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
                 let problem = driver.problem();
                 Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::leaves_path;
+
+    /// At a fold the count changes by one and the control turns; between two regular points
+    /// neither happens. Anything else leaves the path: the parity without a turn, a turn
+    /// without it, or a change by two (both components of a broken pair at once).
+    #[test]
+    fn a_step_stays_on_the_path_only_where_the_count_follows_the_folds() {
+        assert!(!leaves_path(0, 1, 1.0, -1.0));
+        assert!(!leaves_path(2, 1, -1.0, 1.0));
+        assert!(!leaves_path(2, 2, 0.5, 0.4));
+        assert!(leaves_path(0, 1, 1.0, 0.9));
+        assert!(leaves_path(1, 1, 1.0, -0.9));
+        assert!(leaves_path(3, 2, -1.0, -0.2));
+        assert!(leaves_path(1, 3, -0.5, -0.4));
+        assert!(leaves_path(0, 2, 0.5, 0.4));
+        assert!(leaves_path(0, 3, 0.5, -0.4));
     }
 }

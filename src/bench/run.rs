@@ -314,6 +314,15 @@ pub fn run_thesis(
                 .map_err(|e| format!("thesis cap {pattern}: {}", one_line(&e)))?,
         );
     }
+    // On C1v the path turns at the fold of the broken m = 1 pair and meets the mirror-breaking
+    // bifurcations on the way back: three times the points to reach them.
+    progress(&format!(
+        "thesis cap, C1v through its fold, {divisions} divisions …"
+    ));
+    runs.push(
+        thesis_run("C1v", divisions, 3 * steps, true, None)
+            .map_err(|e| format!("thesis cap C1v, {} steps: {}", 3 * steps, one_line(&e)))?,
+    );
     if let Some(d) = finest {
         progress(&format!("thesis cap, C2v, {d} divisions …"));
         runs.push(

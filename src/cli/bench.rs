@@ -60,8 +60,9 @@ Outputs (in DIR):
   K.mtx          the Ih payoff tangent, when a python with scipy runs scripts/peer_eigsh.py
 With --thesis (nothing else is run):
   thesis.md      the spinning fluid-filled cap on C8v, C4v, C2v, C1v and C1 meshes of 5408
-                 triangles (--quick: 512) and on C2v at 21632: time by phase, the critical
-                 points, the same states without symmetry (full-K index per point)
+                 triangles (--quick: 512), on C1v also through its fold (3× the points),
+                 and on C2v at 21632: time by phase, the critical points, the same
+                 states without symmetry (full-K index per point)
 With --curves (nothing else is run):
   curves.md      200 points of the balloon's fold line in (p, k) at f = 16 (--quick: 8)
                  through its cusp (with the other blocks watched, and with watch = false),
