@@ -146,7 +146,7 @@ pub const DEFAULT_LOWEST: usize = 8;
 
 /// Seconds per m³ of faer's dense eigenvalues of an m × m block (tridiagonalisation and QR),
 /// an estimate from the timings of the thesis study on the project's 2-core machine
-/// (BENCHMARKS.md §7; a crossover benchmark in `benches/` is still to be written).
+/// (BENCHMARKS.md §7, where `benches/crossover.rs` checks the choice it leads to).
 const DENSE_EIGEN_SECONDS_PER_M3: f64 = 2.2e-10;
 /// Seconds per estimated flop of a numeric sparse LBLᵀ ([`SymmetricFactorization::flops`]),
 /// estimated as above.
