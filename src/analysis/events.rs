@@ -28,10 +28,12 @@ const JUMP_EIGENVALUE: f64 = 1e-8;
 const TURNING_TOLERANCE: f64 = 1e-12;
 /// The factor a rejected step is shortened by before it is tried again.
 const REJECTED_STEP_FACTOR: f64 = 0.25;
-/// Rejections of steps from one point, each a quarter of the one before, after which a step
-/// that still leaves the path ([`leaves_path`]) is accepted: the count then changes at a
-/// branch point of the fixed-point path itself (a symmetric bifurcation inside the
-/// fixed-point space), or the mesh's imperfection is below what 1/64 of the step resolves.
+/// Rejections in a row, each step a quarter of the one before, after which a step that still
+/// leaves the path ([`leaves_path`]) is accepted: the count then changes at a branch point of
+/// the fixed-point path itself (a symmetric bifurcation inside the fixed-point space, as on a
+/// mesh of more symmetry than the scene's group), or the mesh's imperfection is below what
+/// 1/64 of the step resolves. Shorter steps are not rejected until the path has passed the
+/// place.
 const MAX_REJECTIONS: usize = 3;
 
 /// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
@@ -780,8 +782,17 @@ pub struct IndexChanges<'a> {
     /// The index at the point [`Detector::admit`] last admitted (its arclength and
     /// parameters, to know it again), for [`Detector::check`].
     admitted: Option<Observed>,
-    /// The point steps were rejected from (its arclength) and how many.
-    rejections: Option<(f64, usize)>,
+    /// Where steps are being rejected ([`Detector::admit`]).
+    rejecting: Option<Rejecting>,
+}
+
+/// Steps are being rejected near one place of the path: steps that leave the path and are
+/// longer than `floor` are rejected until the path has passed `until` (an arclength) or a
+/// step no longer than `floor` is accepted across it.
+#[derive(Debug, Clone, Copy)]
+struct Rejecting {
+    floor: f64,
+    until: f64,
 }
 
 /// The index spectrum at a point (where it could be computed) and the point's state.
@@ -802,7 +813,7 @@ impl<'a> IndexChanges<'a> {
             indices: Vec::new(),
             index_time: Default::default(),
             admitted: None,
-            rejections: None,
+            rejecting: None,
         }
     }
 
@@ -872,8 +883,8 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
         Vec::new()
     }
 
-    /// Rejects a step that leaves the connected path ([`leaves_path`]), up to
-    /// [`MAX_REJECTIONS`] times from one point: a step over a nearly symmetric bifurcation
+    /// Rejects a step that leaves the connected path ([`leaves_path`]), down to
+    /// [`MAX_REJECTIONS`] quarterings of the first step rejected there: a step over a nearly symmetric bifurcation
     /// inside the fixed-point space lands on another piece of the broken branch, where the
     /// fixed-point block's count has changed without a fold of the control. Shorter steps stay
     /// on the connected piece and follow it through its fold.
@@ -891,20 +902,29 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
             _ => false,
         };
         let from = step.from.arclength;
-        let earlier = match self.rejections {
-            Some((s, n)) if s == from => n,
-            _ => 0,
-        };
-        if leaves && earlier < MAX_REJECTIONS {
-            self.rejections = Some((from, earlier + 1));
-            self.admitted = None;
-            return Admission::Reject(format!(
-                "the step of {} from arclength {} leaves the connected path",
-                num(step.step),
-                num(from)
-            ));
+        if self.rejecting.is_some_and(|r| from >= r.until) {
+            self.rejecting = None;
         }
-        self.rejections = None;
+        if leaves {
+            // The first rejection here sets the shortest step that is still rejected: that
+            // of MAX_REJECTIONS rejections in a row. The floor holds for every point until
+            // the place is passed, so that shorter steps towards a genuine branch point of
+            // the fixed-point path do not approach it ever closer.
+            let rejecting = self.rejecting.unwrap_or(Rejecting {
+                floor: step.step * REJECTED_STEP_FACTOR.powi(MAX_REJECTIONS as i32) * (1.0 + 1e-9),
+                until: from + step.step,
+            });
+            if step.step > rejecting.floor {
+                self.rejecting = Some(rejecting);
+                self.admitted = None;
+                return Admission::Reject(format!(
+                    "the step of {} from arclength {} leaves the connected path",
+                    num(step.step),
+                    num(from)
+                ));
+            }
+            self.rejecting = None;
+        }
         self.admitted = Some(observed);
         Admission::Accept
     }
