@@ -70,8 +70,6 @@ def main():
     report = json.loads((run / "path.json").read_text())
     with open(run / "path.csv", newline="") as f:
         rows = {int(r["step"]): r for r in csv.DictReader(f)}
-    measures = report["measures"]
-    parameters = report["parameters"]
     c = Checker()
 
     path_entries = collection(c, run / "path.pvd")
@@ -106,8 +104,9 @@ def main():
             l = float(row["stretch"])
             p = float(row["p"])
         else:
-            l = point["measures"][measures.index("stretch")]
-            p = point["parameters"][parameters.index("p")]
+            # path.json holds turning and critical points by name.
+            l = point["measures"]["stretch"]
+            p = point["parameters"]["p"]
         t = tension(l)
         cd = {k: v[0] for k, v in mesh.cell_data.items()}
         pd = mesh.point_data

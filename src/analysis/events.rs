@@ -735,6 +735,11 @@ pub struct IndexChanges<'a> {
     previous: Option<(Spectrum, Vec<f64>, Vec<f64>)>,
     /// The instability index at every point so far (`None` where it could not be computed).
     pub indices: Vec<Option<usize>>,
+    /// The negative count of every block at every point (`None` where it could not be
+    /// computed), in the order of `irreps`.
+    pub negatives: Vec<Option<Vec<usize>>>,
+    /// The blocks' irreps, from the first point with a spectrum.
+    pub irreps: Vec<String>,
     /// Time spent on the index at every point (eigenvalues and localisation excepted).
     pub index_time: std::time::Duration,
 }
@@ -746,6 +751,8 @@ impl<'a> IndexChanges<'a> {
             crossings,
             previous: None,
             indices: Vec::new(),
+            negatives: Vec::new(),
+            irreps: Vec::new(),
             index_time: Default::default(),
         }
     }
@@ -767,6 +774,16 @@ impl<'a> IndexChanges<'a> {
         let params = problem.parameters(&point.lambda);
         let spectrum = self.crossings.index(&u, &params);
         self.indices.push(spectrum.as_ref().map(|s| s.index));
+        if let (Some(s), true) = (&spectrum, self.irreps.is_empty()) {
+            self.irreps = s.blocks.iter().map(|b| b.irrep.clone()).collect();
+        }
+        let n = self.irreps.len();
+        self.negatives.push(
+            spectrum
+                .as_ref()
+                .map(Spectrum::negatives)
+                .filter(|neg| neg.len() == n),
+        );
         self.index_time += t.elapsed();
         std::mem::replace(&mut self.previous, spectrum.map(|s| (s, u, params)))
     }

@@ -230,6 +230,7 @@ pub(crate) struct Record {
     critical: Vec<CriticalPoint>,
     warnings: Vec<String>,
     spectra: Spectra,
+    irreps: Vec<String>,
     control: Option<usize>,
     curve: Option<crate::report::CurveReport>,
 }
@@ -244,6 +245,7 @@ impl Record {
             critical: Vec::new(),
             warnings: study.warnings.clone(),
             spectra: Spectra::default(),
+            irreps: Vec::new(),
             control: study.control,
             curve: None,
         }
@@ -276,6 +278,7 @@ impl Record {
             parameters: params,
             iterations,
             index,
+            negative: None,
         });
     }
 
@@ -346,6 +349,7 @@ impl Record {
             states: None,
             wrinkling: None,
             wave_numbers: Vec::new(),
+            irreps: self.irreps,
         };
         RunResult {
             report,
