@@ -21,13 +21,25 @@ pub fn write_json(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputErro
     check_finite(&path, report)?;
     let mut value =
         serde_json::to_value(report).map_err(|e| OutputError::invalid(&path, e.to_string()))?;
+    named_points(&mut value, &report.parameters, &report.measures);
+    write_whole(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &value).map_err(io::Error::other)?;
+        writeln!(w)
+    })?;
+    Ok(path)
+}
+
+/// The `turning_points` and `critical` of a report's JSON `value` with their `parameters`
+/// and `measures` as objects by name.
+pub(super) fn named_points(
+    value: &mut serde_json::Value,
+    parameters: &[String],
+    measures: &[String],
+) {
     for list in ["turning_points", "critical"] {
         if let Some(points) = value.get_mut(list).and_then(|v| v.as_array_mut()) {
             for p in points {
-                for (key, names) in [
-                    ("parameters", &report.parameters),
-                    ("measures", &report.measures),
-                ] {
+                for (key, names) in [("parameters", parameters), ("measures", measures)] {
                     if let Some(v) = p.get_mut(key) {
                         *v = by_name(names, v);
                     }
@@ -35,11 +47,6 @@ pub fn write_json(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputErro
             }
         }
     }
-    write_whole(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &value).map_err(io::Error::other)?;
-        writeln!(w)
-    })?;
-    Ok(path)
 }
 
 /// A list of values as an object `{name: value}` in the order of `names` (a list that does
