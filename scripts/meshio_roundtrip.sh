@@ -23,7 +23,9 @@ PYTHON="${PYTHON:-python3}"
 # meshio 5.3.5's readers work with numpy 2 (its ascii Gmsh *writer* does not, but we only
 # read). h5py: meshio's XDMF reader imports it for every DataItem, even inline XML ones.
 # pandas and matplotlib: the block of docs/python.md.
-PACKAGES=(meshio==5.3.5 numpy==2.2.6 h5py==3.13.0 pandas==3.1.1 matplotlib==3.11.2)
+# pyvista (with its vtk): state_fields_check.py reads a state with it and tries an off-screen
+# screenshot, which it skips where the machine has no OpenGL library.
+PACKAGES=(meshio==5.3.5 numpy==2.2.6 h5py==3.13.0 pandas==3.1.1 matplotlib==3.11.2 pyvista==0.49.2 vtk==9.7.2)
 
 fail() {
     echo "meshio_roundtrip: $*" >&2
@@ -40,7 +42,7 @@ VPY="$VENV/bin/python"
 "$VPY" -m pip install --disable-pip-version-check --quiet "${PACKAGES[@]}" \
     || fail "pip could not install ${PACKAGES[*]} into $VENV"
 "$VPY" - <<'EOF' || fail "the installed packages do not import as expected"
-import h5py, matplotlib, meshio, numpy, pandas
+import h5py, matplotlib, meshio, numpy, pandas, pyvista
 assert meshio.__version__ == "5.3.5", meshio.__version__
 EOF
 

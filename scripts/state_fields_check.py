@@ -19,6 +19,13 @@ unit length and points out of the sphere, that `pressure` is the state's p, that
 `critical_mode` has unit Euclidean norm; and that both collections parse as ParaView
 collections whose every file exists and was read.
 
+Then it opens the first critical state with pyvista (what a reader plots with) and checks
+that it holds the triangles' `tension_1` and `tension_2` and the nodes' `displacement`, as
+meshio read them. It also tries an off-screen screenshot of the tension field, in a child
+process: rendering needs an OpenGL library of the system (Mesa), which a bare machine with
+Python and pip only may lack, so a screenshot that cannot be made is reported and skipped,
+never a failure; reading the file with pyvista is always checked.
+
 Exits 1 with one line per failure, else prints "state fields: N states, M checks passed".
 """
 
@@ -27,6 +34,8 @@ import json
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
+
+import subprocess
 
 import meshio
 import numpy as np
@@ -70,8 +79,6 @@ def main():
     report = json.loads((run / "path.json").read_text())
     with open(run / "path.csv", newline="") as f:
         rows = {int(r["step"]): r for r in csv.DictReader(f)}
-    measures = report["measures"]
-    parameters = report["parameters"]
     c = Checker()
 
     path_entries = collection(c, run / "path.pvd")
@@ -106,8 +113,9 @@ def main():
             l = float(row["stretch"])
             p = float(row["p"])
         else:
-            l = point["measures"][measures.index("stretch")]
-            p = point["parameters"][parameters.index("p")]
+            # path.json holds turning and critical points by name.
+            l = point["measures"]["stretch"]
+            p = point["parameters"]["p"]
         t = tension(l)
         cd = {k: v[0] for k, v in mesh.cell_data.items()}
         pd = mesh.point_data
@@ -147,12 +155,64 @@ def main():
                 label is not None and point["irrep"] in label,
                 f"events.pvd names {name} {label!r}, its irrep is {point['irrep']}",
             )
+    critical_files = [f for _, f, _ in event_entries if f.startswith("critical_")]
+    if critical_files:
+        pyvista_check(c, run / critical_files[0])
+
     if c.failures:
         for f in c.failures:
             print(f"FAIL {f}", file=sys.stderr)
         print(f"state fields FAILED: {len(c.failures)} failed, {c.passed} passed", file=sys.stderr)
         sys.exit(1)
     print(f"state fields: {len(listed)} states, {c.passed} checks passed")
+
+
+SCREENSHOT = """
+import sys
+import pyvista as pv
+pv.OFF_SCREEN = True
+mesh = pv.read(sys.argv[1])
+plotter = pv.Plotter(off_screen=True, window_size=(400, 300))
+plotter.add_mesh(mesh, scalars="tension_1", preference="cell")
+plotter.screenshot(sys.argv[2])
+"""
+
+
+def pyvista_check(c, vtu):
+    """The state read with pyvista: its tension fields and displacement, as meshio read them."""
+    import pyvista as pv
+
+    mesh = pv.read(vtu)
+    ref = meshio.read(vtu)
+    c.check(mesh.n_points == len(ref.points), f"pyvista: {vtu.name} has {mesh.n_points} points")
+    c.check(mesh.n_cells == len(ref.cells_dict["triangle"]), f"pyvista: {vtu.name}: cells")
+    for field in ("tension_1", "tension_2"):
+        ok = field in mesh.cell_data
+        c.check(ok, f"pyvista: {vtu.name} has no cell field {field}")
+        if ok:
+            same = np.array_equal(np.asarray(mesh.cell_data[field]), ref.cell_data[field][0])
+            c.check(same, f"pyvista: {vtu.name}: {field} differs from meshio's")
+    ok = "displacement" in mesh.point_data
+    c.check(ok, f"pyvista: {vtu.name} has no point field displacement")
+    if ok:
+        same = np.array_equal(np.asarray(mesh.point_data["displacement"]), ref.point_data["displacement"])
+        c.check(same, f"pyvista: {vtu.name}: displacement differs from meshio's")
+    # The screenshot, in a child process: without a system OpenGL the renderer may abort the
+    # interpreter rather than raise.
+    png = vtu.with_suffix(".png")
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", SCREENSHOT, str(vtu), str(png)],
+            capture_output=True,
+            timeout=120,
+        )
+        rendered = done.returncode == 0 and png.is_file() and png.stat().st_size > 0
+    except subprocess.TimeoutExpired:
+        rendered = False
+    if rendered:
+        print(f"pyvista: off-screen screenshot of {vtu.name}'s tension_1 in {png.name}")
+    else:
+        print(f"pyvista: no off-screen rendering on this machine (no system OpenGL); {vtu.name} was read only")
 
 
 if __name__ == "__main__":

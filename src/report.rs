@@ -37,6 +37,10 @@ pub struct PathRow {
     /// Instability index Σ_μ d_μ neg_μ (rigid modes excluded), when stability was analysed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub index: Option<usize>,
+    /// The negative count of every irrep block, in the order of [`PathReport::irreps`]
+    /// (its index part: `index` = Σ_μ d_μ `negative[μ]`), when stability was analysed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub negative: Option<Vec<usize>>,
 }
 
 /// A turning point of the control parameter (a fold of the path in the control).
@@ -44,7 +48,8 @@ pub struct PathRow {
 pub struct TurningRow {
     /// `maximum` or `minimum` of the control.
     pub kind: Extremum,
-    /// The path step just before it.
+    /// The path step just before it (`step` in the outputs).
+    #[serde(rename = "step")]
     pub after_step: usize,
     /// Parameters at the localised point.
     pub parameters: Vec<f64>,
@@ -95,6 +100,10 @@ pub struct PathReport {
     pub measures: Vec<String>,
     /// The path.
     pub rows: Vec<PathRow>,
+    /// The irrep blocks of the rows' `negative` counts (`path.csv`'s `index_<irrep>`
+    /// columns); empty when no row has them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub irreps: Vec<String>,
     /// Turning points of the control.
     pub turning_points: Vec<TurningRow>,
     /// Why the path ended (written in words).
@@ -139,6 +148,25 @@ pub struct Wrinkling {
     /// The critical points that lie in a wrinkled state (numbered from 1, as
     /// `critical_NN.vtu`).
     pub critical: Vec<WrinkledCritical>,
+}
+
+impl Wrinkling {
+    /// A warning for every critical point of `critical` (the report's, numbered from 1) that
+    /// lies in a wrinkled state: `critical point 2 (simple bifurcation in E1) lies in a
+    /// wrinkled state (12 of 320 triangles): the membrane model does not describe it there`.
+    pub fn warnings(&self, critical: &[CriticalPoint]) -> Vec<String> {
+        self.critical
+            .iter()
+            .filter_map(|c| {
+                let cp = critical.get(c.critical.checked_sub(1)?)?;
+                Some(format!(
+                    "critical point {} ({} in {}) lies in a wrinkled state ({} of {} \
+                     triangles): the membrane model does not describe it there",
+                    c.critical, cp.kind, cp.irrep, c.wrinkled, self.triangles
+                ))
+            })
+            .collect()
+    }
 }
 
 /// A path point with wrinkled triangles.
@@ -206,6 +234,9 @@ pub struct SpectrumIrrep {
     pub eigenvalues: bool,
 }
 
+/// The most eigenvalues per block a [`SpectrumRow`] keeps.
+pub const SPECTRUM_EIGENVALUES: usize = 6;
+
 /// The spectra of one sample: per irrep (in the order of [`Spectra::irreps`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpectrumRow {
@@ -218,6 +249,10 @@ pub struct SpectrumRow {
     /// The block's lowest eigenvalue over `scale` (λ/‖K‖, rigid modes excluded), or `None`
     /// where it was not computed (a large block, or no spectrum at this sample).
     pub lowest: Vec<Option<f64>>,
+    /// Per block, its lowest eigenvalues over `scale`, ascending, as many as were computed up
+    /// to [`SPECTRUM_EIGENVALUES`] (empty where none was): the first is `lowest`, the others
+    /// are the higher eigenvalues that cross zero later in the sweep.
+    pub eigenvalues: Vec<Vec<f64>>,
     /// The block's number of negative eigenvalues (`None` where no spectrum was computed).
     pub negative: Vec<Option<usize>>,
 }
@@ -355,6 +390,7 @@ pub struct CurveEvent {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub residual_eigenvalue: Option<f64>,
     /// The curve step just before the event.
+    #[serde(rename = "step")]
     pub after_step: usize,
     /// Every parameter there (the report's order).
     pub parameters: Vec<f64>,
@@ -524,6 +560,7 @@ mod tests {
             measures: vec![],
             iterations: 1,
             index,
+            negative: None,
         }
     }
 
@@ -558,6 +595,7 @@ mod tests {
             states: None,
             wrinkling: None,
             wave_numbers: Vec::new(),
+            irreps: Vec::new(),
         };
         assert_eq!(r.index_range(), Some((0, 1)));
         r.rows = vec![row(0, Some(2)), row(1, None), row(2, Some(2))];

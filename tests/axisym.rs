@@ -222,6 +222,26 @@ mod scenes {
             serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
         assert_eq!(json["modes"], 20);
         assert!(json["rows"].as_array().unwrap().len() > 5);
+        // Turning and critical points by name, with the step before them, as in a 3-D run.
+        let names = |key: &str| -> Vec<String> {
+            json[key]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|n| n.as_str().unwrap().to_string())
+                .collect()
+        };
+        let (parameters, measures) = (names("parameters"), names("measures"));
+        for list in ["turning_points", "critical"] {
+            for point in json[list].as_array().unwrap() {
+                assert!(point["step"].is_u64() && point.get("after_step").is_none());
+                for (key, names) in [("parameters", &parameters), ("measures", &measures)] {
+                    let map = point[key].as_object().expect("values by name");
+                    assert_eq!(map.len(), names.len(), "{point}");
+                    assert!(names.iter().all(|n| map[n].is_f64()), "{point}");
+                }
+            }
+        }
     }
 
     #[test]

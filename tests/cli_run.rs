@@ -197,6 +197,10 @@ fn run_json_lists_the_files() {
     assert_eq!(kinds, ["maximum", "minimum"]);
     let max = &turning[0];
     assert!(
+        max["step"].as_u64().is_some() && max.get("after_step").is_none(),
+        "{max}"
+    );
+    assert!(
         (max["value"].as_f64().unwrap() / P_MAX - 1.0).abs() < 0.03,
         "{max}"
     );

@@ -204,10 +204,29 @@ fn a_linear_buckling_run_plots_the_spectrum_by_irrep() {
         let entry = format!("{name} (×{dim})");
         assert!(texts.contains(&entry), "no {entry:?} in {texts:?}");
     }
+    // Each critical point labelled with its kind, irrep and rung (m, k): the k-th point of
+    // wave number m along the sweep (the Bessel zero j_{m,k} of the ponding ladder).
+    let mut rungs: BTreeMap<u64, u64> = BTreeMap::new();
     for c in &critical {
         let kind = c["kind"].as_str().unwrap().split(' ').next().unwrap();
-        let label = format!("{kind} {}", c["irrep"].as_str().unwrap());
+        let m = c["m"].as_u64().expect("a wave number on the disc");
+        let k = rungs.entry(m).or_insert(0);
+        *k += 1;
+        let label = format!("{kind} {} ({m}, {k})", c["irrep"].as_str().unwrap());
         assert!(texts.contains(&label), "no {label:?} in {texts:?}");
     }
+    assert!(
+        texts.contains(&"symmetric A1 (0, 1)".to_string()),
+        "the first rung, j_0,1: {texts:?}"
+    );
+    assert!(
+        texts.contains(&"critical point (m, k)".to_string()),
+        "{texts:?}"
+    );
+    // The control's axis in the load number of the ponding floor.
+    assert!(
+        texts.iter().any(|t| t.starts_with("ρ g a²/(μH) (")),
+        "{texts:?}"
+    );
     assert!(texts.contains(&"lowest eigenvalue / max|K_ij|".to_string()));
 }

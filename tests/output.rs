@@ -43,6 +43,7 @@ fn report() -> PathReport {
                 measures: measures(l),
                 iterations: 3 + i % 4,
                 index: Some(usize::from(l > 1.476)),
+                negative: Some(vec![usize::from(l > 1.476), 0]),
             }
         })
         .collect();
@@ -92,6 +93,7 @@ fn report() -> PathReport {
         states: None,
         wrinkling: None,
         wave_numbers: Vec::new(),
+        irreps: vec!["Ag".to_string(), "Hg".to_string()],
     }
 }
 
@@ -124,16 +126,18 @@ fn csv_has_the_header_and_exact_numbers() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "step,arclength,p,g,volume,stretch,max_displacement,iterations,index"
+        "step,arclength,p,g,volume,stretch,max_displacement,iterations,index,index_Ag,index_Hg"
     );
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), r.rows.len());
     for (line, row) in rows.iter().zip(&r.rows) {
         let cells: Vec<&str> = line.split(',').collect();
-        assert_eq!(cells.len(), 9, "{line}");
+        assert_eq!(cells.len(), 11, "{line}");
         assert_eq!(cells[0].parse::<usize>().unwrap(), row.step);
         assert_eq!(cells[7].parse::<usize>().unwrap(), row.iterations);
         assert_eq!(cells[8].parse::<usize>().ok(), row.index, "{line}");
+        let negative: Vec<usize> = cells[9..].iter().map(|c| c.parse().unwrap()).collect();
+        assert_eq!(Some(negative), row.negative, "{line}");
         let numbers: Vec<f64> = cells[1..7].iter().map(|c| c.parse().unwrap()).collect();
         let expected: Vec<f64> = std::iter::once(row.arclength)
             .chain(row.parameters.iter().copied())
@@ -175,7 +179,14 @@ fn json_holds_the_whole_report() {
     assert_eq!(v["mesh"]["group"], "Ih");
     assert_eq!(v["rows"].as_array().unwrap().len(), 41);
     assert_eq!(v["turning_points"][0]["kind"], "maximum");
-    assert_eq!(v["turning_points"][1]["parameters"][0], 1.1487477);
+    // Turning points by name, with the step before them, as critical.json has them.
+    assert_eq!(v["turning_points"][1]["parameters"]["p"], 1.1487477);
+    assert_eq!(v["turning_points"][1]["parameters"]["g"], 9.81);
+    assert_eq!(v["turning_points"][1]["measures"]["stretch"], 3.1426213);
+    assert_eq!(v["turning_points"][1]["step"], 28);
+    assert!(v["turning_points"][1].get("after_step").is_none());
+    assert_eq!(v["irreps"], serde_json::json!(["Ag", "Hg"]));
+    assert_eq!(v["rows"][39]["negative"], serde_json::json!([1, 0]));
     assert_eq!(v["rows"][0]["measures"][2].as_f64().unwrap(), 5e-324);
 }
 
@@ -431,6 +442,7 @@ fn sweep() -> PathReport {
             measures: vec![0.0],
             iterations: 0,
             index: Some(usize::from(rho(i) > 2.5) + 2 * usize::from(rho(i) > 20.0 / 3.0)),
+            negative: None,
         })
         .collect();
     let irrep = |name: &str, dim, size, eigenvalues| SpectrumIrrep {
@@ -457,6 +469,7 @@ fn sweep() -> PathReport {
                     control: x,
                     scale: 3.5,
                     lowest: vec![Some(a1), a2, None, Some(e1)],
+                    eigenvalues: vec![vec![a1], a2.into_iter().collect(), vec![], vec![e1]],
                     negative: vec![
                         Some(usize::from(a1 < 0.0)),
                         Some(0),
@@ -598,4 +611,232 @@ fn spectrum_svg_refuses_a_nan_or_a_report_without_spectra() {
         "{err}"
     );
     assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
+}
+
+/// The `<circle>`s of an SVG: (cx, cy, fill, stroke).
+fn circles(svg: &str) -> Vec<(i64, i64, String, String)> {
+    svg.split("<circle")
+        .skip(1)
+        .map(|c| {
+            let attr = |name: &str| {
+                let start = c.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+                c[start..start + c[start..].find('"').unwrap()].to_string()
+            };
+            (
+                attr("cx").parse().unwrap(),
+                attr("cy").parse().unwrap(),
+                attr("fill"),
+                attr("stroke"),
+            )
+        })
+        .collect()
+}
+
+fn scene_file(name: &str) -> memstab::scene::Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    memstab::scene::Scene::from_toml_str(&fs::read_to_string(&path).unwrap(), name).unwrap()
+}
+
+/// Drawn by index: a legend entry per index, each index in its own colour, and the path's
+/// polyline passing through the turning and critical points where the index changes.
+#[test]
+fn svg_by_index_draws_each_index_and_switches_at_the_critical_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut r = report();
+    // Index 0 up to the maximum (after row 6), 1 up to a bifurcation between rows 28 and 29,
+    // 2 after it.
+    for row in &mut r.rows[29..] {
+        row.index = Some(2);
+    }
+    let l = 1.0 + 3.0 * 28.5 / 40.0;
+    let critical = Marker {
+        parameters: vec![pressure(0.1, l), 9.81],
+        measures: measures(l),
+        label: "simple E1".to_string(),
+        kind: MarkerKind::Other,
+        after_step: Some(28),
+        switches: true,
+    };
+    let mut max = Marker::turning(&r, &r.turning_points[0]);
+    max.switches = true;
+    let mut diagram = Diagram::new("stretch", "p")
+        .markers(vec![max, critical])
+        .by_index();
+    diagram.turning_points = false;
+    let path = write_diagram_with(dir.path(), &r, &diagram).unwrap();
+    let svg = fs::read_to_string(path).unwrap();
+    let texts = texts(&svg);
+    for entry in ["index 0 (stable)", "index 1", "index 2"] {
+        assert_eq!(
+            texts.iter().filter(|t| *t == entry).count(),
+            1,
+            "{entry:?} once in {texts:?}"
+        );
+    }
+    assert!(!texts.iter().any(|t| t == "index 3" || t == "stable"));
+    let lines = polylines(&svg);
+    let of = |colour: &str| -> Vec<&Vec<(i64, i64)>> {
+        lines
+            .iter()
+            .filter(|l| l.0 == colour && l.1.len() >= 2)
+            .map(|l| &l.1)
+            .collect()
+    };
+    // Index 0: one solid blue line from the start to the maximum, ending on its marker (the
+    // legend's sample is two short pieces of two points).
+    let blue: Vec<_> = of("#1F57B4").into_iter().filter(|l| l.len() > 2).collect();
+    assert_eq!(blue.len(), 1, "one stable run: {blue:?}");
+    let circles = circles(&svg);
+    let max_at = circles
+        .iter()
+        .find(|c| c.2 == "#C81E1E")
+        .expect("the maximum's red disc");
+    let near = |a: (i64, i64), b: (i64, i64)| (a.0 - b.0).abs() <= 1 && (a.1 - b.1).abs() <= 1;
+    let end = *blue[0].last().unwrap();
+    assert!(near(end, (max_at.0, max_at.1)), "{end:?} vs {max_at:?}");
+    // Index 1 (red, dashed) starts at the maximum; index 2 (orange, dashed) at the
+    // bifurcation's marker.
+    let red = of("#C81E1E");
+    assert!(red.len() > 3, "dashed");
+    assert!(red.iter().any(|l| near(l[0], (max_at.0, max_at.1))));
+    let cp = circles
+        .iter()
+        .find(|c| c.3 == "#000000")
+        .expect("the bifurcation's circle");
+    let orange = of("#E68200");
+    assert!(orange.len() > 3, "dashed");
+    let first = orange
+        .iter()
+        .map(|l| l[0])
+        .min_by_key(|p| (p.0 - cp.0).abs() + (p.1 - cp.1).abs())
+        .unwrap();
+    assert!(
+        near(first, (cp.0, cp.1)),
+        "index 2 starts at {first:?}, the point is {cp:?}"
+    );
+    // The index-1 run reaches the critical point too: its pieces come within a dash of it.
+    let reach = red
+        .iter()
+        .flat_map(|l| l.iter())
+        .map(|p| (p.0 - cp.0).abs() + (p.1 - cp.1).abs())
+        .min()
+        .unwrap();
+    assert!(
+        reach <= 12,
+        "index 1 stops {reach} px before the critical point"
+    );
+}
+
+/// The axes in the scene's dimensionless groups, and the balloon's closed form under it.
+#[test]
+fn svg_axes_are_dimensionless_and_the_balloon_has_its_closed_form() {
+    use memstab::output::{balloon_closed_form, Scales};
+    let r = report();
+    let balloon = scene_file("balloon.toml");
+    let scales = Scales::of(&balloon, &r);
+    let p = scales.get("p").expect("the gas pressure's scale");
+    assert_eq!(p.label, "p R/(μH) (μH = 1, R = 1)");
+    assert!((p.factor - 1.0).abs() < 1e-12);
+    assert_eq!(
+        scales.or_name("g").label,
+        "g",
+        "an unknown role keeps its name"
+    );
+    let v = scales.get("volume").unwrap();
+    assert!(
+        (v.factor * r.rows[0].measures[0] - 1.0).abs() < 1e-12,
+        "V/V0"
+    );
+    assert!(v.label.starts_with("V/V0"));
+    let ponding = scene_file("disc_fluid_above.toml");
+    let rho = Scales::of_scene(&ponding);
+    let rho = rho.get("rho").unwrap();
+    assert_eq!(rho.label, "ρ g a²/(μH) (g = 1, μH = 1, a = 1)");
+    assert!((rho.factor - 1.0).abs() < 1e-12);
+    assert!(balloon_closed_form(&ponding, &r).is_none());
+
+    let curve = balloon_closed_form(&balloon, &r).expect("a balloon");
+    assert!(curve.label.contains("k = 0.1"), "{}", curve.label);
+    for &(l, p) in &curve.points {
+        assert!((p - pressure(0.1, l)).abs() < 1e-12);
+    }
+    assert!((curve.points[0].0 - 1.0).abs() < 1e-12);
+    assert!((curve.points.last().unwrap().0 - 4.0).abs() < 1e-12);
+    let dir = tempfile::tempdir().unwrap();
+    let diagram = Diagram::new("stretch", "p")
+        .scales(scales.or_name("stretch"), scales.or_name("p"))
+        .reference(curve.clone())
+        .by_index();
+    let path = write_diagram_with(dir.path(), &r, &diagram).unwrap();
+    let svg = fs::read_to_string(path).unwrap();
+    let texts = texts(&svg);
+    for text in [
+        "p R/(μH) (μH = 1, R = 1)",
+        "λ = (V/V_sf)^(1/3)",
+        curve.label.as_str(),
+    ] {
+        assert!(texts.iter().any(|t| t == text), "no {text:?} in {texts:?}");
+    }
+    let grey: Vec<_> = polylines(&svg)
+        .into_iter()
+        .filter(|l| l.0 == "#6E6E6E" && l.1.len() == curve.points.len())
+        .collect();
+    assert_eq!(grey.len(), 1, "the closed form, thin and grey");
+}
+
+/// The later critical points of a block sit on its higher eigenvalues' dashed lines.
+#[test]
+fn spectrum_svg_draws_the_higher_eigenvalues_that_cross_zero() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut r = sweep();
+    // A1's second eigenvalue crosses zero at rho = 7.5; its third stays positive.
+    for row in &mut r.spectra.rows {
+        let x = row.control;
+        let a1 = row.lowest[0].unwrap();
+        row.eigenvalues[0] = vec![a1, 0.03 - 0.004 * x, 0.5 + 0.01 * x];
+    }
+    let path = write_spectrum_diagram(dir.path(), &r).unwrap();
+    let svg = fs::read_to_string(path).unwrap();
+    let texts = texts(&svg);
+    assert!(
+        texts
+            .iter()
+            .any(|t| t == "dashed: higher eigenvalues crossing zero"),
+        "{texts:?}"
+    );
+    // A1's colour, thin: the dashes of its second eigenvalue, above zero before the
+    // crossing and below it after.
+    let a1 = "#1F77B4";
+    let dashes: Vec<Vec<i64>> = svg
+        .split("<polyline")
+        .skip(1)
+        .filter(|p| p.contains(&format!("stroke=\"{a1}\"")) && p.contains("stroke-width=\"1\""))
+        .map(|p| {
+            let start = p.find("points=\"").unwrap() + 8;
+            p[start..start + p[start..].find('"').unwrap()]
+                .split_whitespace()
+                .map(|xy| xy.split_once(',').unwrap().1.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert!(
+        dashes.len() > 5,
+        "dashes of the second eigenvalue: {}",
+        dashes.len()
+    );
+    let y0 = polylines(&svg)
+        .iter()
+        .find(|l| l.0 == zero_colour())
+        .unwrap()
+        .1[0]
+        .1;
+    assert!(dashes.iter().flatten().any(|&y| y < y0 - 5));
+    assert!(dashes.iter().flatten().any(|&y| y > y0 + 5));
+    // Without the crossing one, no dashed lines and no legend entry.
+    let r = sweep();
+    write_spectrum_diagram(dir.path(), &r).unwrap();
+    let svg = fs::read_to_string(dir.path().join("path.svg")).unwrap();
+    assert!(!svg.contains("higher eigenvalues"));
 }

@@ -65,9 +65,39 @@ fn a_saved_unstable_point_reports_the_runs_index_and_exports_its_tangent() {
         .iter()
         .position(|h| *h == "index")
         .expect("an index column");
+    // Then a column per irrep block, `index_<irrep>` in the order of path.json's `irreps`,
+    // each row's `negative` counts.
+    let irreps: Vec<&str> = json["irreps"]
+        .as_array()
+        .expect("the blocks of the index")
+        .iter()
+        .map(|i| i.as_str().unwrap())
+        .collect();
+    assert!(irreps.len() > 1, "{irreps:?}");
+    let columns: Vec<String> = irreps.iter().map(|i| format!("index_{i}")).collect();
+    assert_eq!(
+        header[ic + 1..],
+        columns.iter().map(String::as_str).collect::<Vec<_>>()[..]
+    );
     for (line, row) in lines.zip(rows) {
-        let cell = line.split(',').nth(ic).unwrap();
-        assert_eq!(cell.parse::<u64>().ok(), row["index"].as_u64(), "{line}");
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(
+            cells[ic].parse::<u64>().ok(),
+            row["index"].as_u64(),
+            "{line}"
+        );
+        let negative: Vec<u64> = cells[ic + 1..].iter().map(|c| c.parse().unwrap()).collect();
+        let recorded: Vec<u64> = row["negative"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_u64().unwrap())
+            .collect();
+        assert_eq!(negative, recorded, "{line}");
+        assert_eq!(
+            negative.iter().sum::<u64>() > 0,
+            row["index"].as_u64() > Some(0)
+        );
     }
     let unstable: Vec<usize> = (0..rows.len())
         .filter(|&k| rows[k]["index"].as_u64().is_some_and(|i| i > 0))

@@ -199,3 +199,74 @@ fn a_slack_disc_run_reports_wrinkling_from_its_first_point() {
         serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
     assert_eq!(&report["wrinkling"], w);
 }
+
+/// A critical point in a wrinkled state is flagged, with a warning that names it: a slack
+/// disc (pre-stretch 0.9, every triangle wrinkled at rest) against the same disc taut.
+#[test]
+fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
+    use memstab::analysis::critical::{CriticalKind, CriticalPoint, Isotropy};
+    use memstab::output::wrinkled_critical;
+    use memstab::report::Wrinkling;
+    let point = |study: &Study, kind| CriticalPoint {
+        kind,
+        irrep: "E1".to_string(),
+        multiplicity: 2,
+        parameters: study.start.clone(),
+        measures: Vec::new(),
+        after_step: 3,
+        residual_eigenvalue: 1e-12,
+        isotropy: Isotropy {
+            name: "C1v".to_string(),
+            order: 2,
+            elements: vec![0, 1],
+        },
+        mode: Vec::new(),
+        state: vec![0.0; study.model.layout().unknowns()],
+    };
+    let taut = scene_text("disc_fluid_below.toml");
+    let slack = taut.replace("prestretch = 1.1", "prestretch = 0.9");
+    assert_ne!(taut, slack);
+    let taut = Study::build(Scene::from_toml_str(&taut, "taut").unwrap()).unwrap();
+    let slack = Study::build(Scene::from_toml_str(&slack, "slack").unwrap()).unwrap();
+    let triangles = slack.mesh.mesh.triangles.len();
+
+    let taut_points = [point(&taut, CriticalKind::SimpleBifurcation)];
+    assert!(wrinkled_critical(&taut, &taut_points).is_empty());
+    let slack_points = [
+        point(&slack, CriticalKind::SimpleBifurcation),
+        point(&slack, CriticalKind::MultipleBifurcation(2)),
+    ];
+    let flagged = wrinkled_critical(&slack, &slack_points);
+    assert_eq!(
+        flagged
+            .iter()
+            .map(|c| (c.critical, c.wrinkled))
+            .collect::<Vec<_>>(),
+        [(1, triangles), (2, triangles)]
+    );
+    let w = Wrinkling {
+        triangles,
+        first: None,
+        critical: flagged[1..].to_vec(),
+    };
+    let warnings = w.warnings(&slack_points);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_eq!(
+        warnings[0],
+        format!(
+            "critical point 2 ({} in E1) lies in a wrinkled state ({triangles} of {triangles} \
+             triangles): the membrane model does not describe it there",
+            CriticalKind::MultipleBifurcation(2)
+        )
+    );
+    // A number beyond the report's critical points gives no warning (and no panic).
+    let stray = Wrinkling {
+        triangles,
+        first: None,
+        critical: vec![memstab::report::WrinkledCritical {
+            critical: 7,
+            wrinkled: 1,
+        }],
+    };
+    assert!(stray.warnings(&slack_points).is_empty());
+}

@@ -1164,6 +1164,7 @@ fn branch_run(
             measures: measures(&p.u, &p.parameters, p.asymmetry),
             iterations: p.iterations,
             index: p.index,
+            negative: None,
         })
         .collect();
     let last = b.points.len() - 1;
@@ -1260,6 +1261,7 @@ fn branch_run(
         states: None,
         wrinkling: None,
         wave_numbers: Vec::new(),
+        irreps: Vec::new(),
     };
     BranchRun {
         report,

@@ -7,7 +7,7 @@
 
 use super::events::{Crossings, End, Event, StopReason};
 use super::{Observer, Record};
-use crate::report::{Spectra, SpectrumIrrep, SpectrumRow, StateKind};
+use crate::report::{Spectra, SpectrumIrrep, SpectrumRow, StateKind, SPECTRUM_EIGENVALUES};
 use crate::stability::Spectrum;
 use crate::study::Study;
 
@@ -81,15 +81,25 @@ pub(super) fn run(
         previous = spectrum.map(|s| (s, value));
     }
     record.spectra = spectra_of(sampled);
+    record.irreps = record
+        .spectra
+        .irreps
+        .iter()
+        .map(|i| i.name.clone())
+        .collect();
+    for (row, s) in record.rows.iter_mut().zip(&record.spectra.rows) {
+        row.negative = s.negative.iter().copied().collect();
+    }
     record.state(0, StateKind::Held, u.to_vec(), &at(lo));
     stop
 }
 
 /// What the report keeps of one sample's spectrum: per block, its irrep, its lowest
-/// eigenvalue relative to the scale (finite, or none) and its negative count.
+/// eigenvalues relative to the scale (the finite ones, up to [`SPECTRUM_EIGENVALUES`]) and
+/// its negative count.
 struct Sample {
     scale: f64,
-    blocks: Vec<(SpectrumIrrep, Option<f64>, usize)>,
+    blocks: Vec<(SpectrumIrrep, Vec<f64>, usize)>,
 }
 
 impl Sample {
@@ -106,11 +116,13 @@ impl Sample {
                         size: b.size,
                         eigenvalues: !b.eigenvalues.is_empty(),
                     };
-                    let lowest = b
+                    let lowest: Vec<f64> = b
                         .eigenvalues
-                        .first()
+                        .iter()
                         .map(|l| l / s.scale)
-                        .filter(|l| l.is_finite());
+                        .take_while(|l| l.is_finite())
+                        .take(SPECTRUM_EIGENVALUES)
+                        .collect();
                     (irrep, lowest, b.negative)
                 })
                 .collect(),
@@ -134,9 +146,14 @@ fn spectra_of(sampled: Vec<(usize, f64, Option<Sample>)>) -> Spectra {
                 step,
                 control,
                 scale: sample.as_ref().map_or(0.0, |s| s.scale),
-                lowest: sample
-                    .as_ref()
-                    .map_or_else(|| vec![None; n], |s| s.blocks.iter().map(|b| b.1).collect()),
+                lowest: sample.as_ref().map_or_else(
+                    || vec![None; n],
+                    |s| s.blocks.iter().map(|b| b.1.first().copied()).collect(),
+                ),
+                eigenvalues: sample.as_ref().map_or_else(
+                    || vec![Vec::new(); n],
+                    |s| s.blocks.iter().map(|b| b.1.clone()).collect(),
+                ),
                 negative: sample.as_ref().map_or_else(
                     || vec![None; n],
                     |s| s.blocks.iter().map(|b| Some(b.2)).collect(),

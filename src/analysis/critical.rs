@@ -99,7 +99,8 @@ pub struct CriticalPoint {
     pub parameters: Vec<f64>,
     /// Every measure at the point (the report's order).
     pub measures: Vec<f64>,
-    /// The path step (or sample) just before the point.
+    /// The path step (or sample) just before the point (`step` in the outputs).
+    #[serde(rename = "step")]
     pub after_step: usize,
     /// |eigenvalue| / ‖K‖ at the localised point.
     pub residual_eigenvalue: f64,

@@ -777,6 +777,11 @@ pub struct IndexChanges<'a> {
     previous: Option<(Spectrum, Vec<f64>, Vec<f64>)>,
     /// The instability index at every point so far (`None` where it could not be computed).
     pub indices: Vec<Option<usize>>,
+    /// The negative count of every block at every point (`None` where it could not be
+    /// computed), in the order of `irreps`.
+    pub negatives: Vec<Option<Vec<usize>>>,
+    /// The blocks' irreps, from the first point with a spectrum.
+    pub irreps: Vec<String>,
     /// Time spent on the index at every point (eigenvalues and localisation excepted).
     pub index_time: std::time::Duration,
     /// The index at the point [`Detector::admit`] last admitted (its arclength and
@@ -811,6 +816,8 @@ impl<'a> IndexChanges<'a> {
             crossings,
             previous: None,
             indices: Vec::new(),
+            negatives: Vec::new(),
+            irreps: Vec::new(),
             index_time: Default::default(),
             admitted: None,
             rejecting: None,
@@ -857,6 +864,16 @@ impl<'a> IndexChanges<'a> {
             params,
             ..
         } = observed;
+        if let (Some(s), true) = (&spectrum, self.irreps.is_empty()) {
+            self.irreps = s.blocks.iter().map(|b| b.irrep.clone()).collect();
+        }
+        let n = self.irreps.len();
+        self.negatives.push(
+            spectrum
+                .as_ref()
+                .map(Spectrum::negatives)
+                .filter(|neg| neg.len() == n),
+        );
         std::mem::replace(&mut self.previous, spectrum.map(|s| (s, u, params)))
     }
 }

@@ -251,6 +251,7 @@ pub(crate) struct Record {
     critical: Vec<CriticalPoint>,
     warnings: Vec<String>,
     spectra: Spectra,
+    irreps: Vec<String>,
     control: Option<usize>,
     curve: Option<crate::report::CurveReport>,
     surface: Option<crate::report::SurfaceReport>,
@@ -266,6 +267,7 @@ impl Record {
             critical: Vec::new(),
             warnings: study.warnings.clone(),
             spectra: Spectra::default(),
+            irreps: Vec::new(),
             control: study.control,
             curve: None,
             surface: None,
@@ -299,6 +301,7 @@ impl Record {
             parameters: params,
             iterations,
             index,
+            negative: None,
         });
     }
 
@@ -369,6 +372,7 @@ impl Record {
             states: None,
             wrinkling: None,
             wave_numbers: Vec::new(),
+            irreps: self.irreps,
         };
         RunResult {
             report,

@@ -123,12 +123,13 @@ pub(super) fn run(
     };
     let problem = driver.into_problem();
     times.steps = branch.times;
-    let indices = match &index {
+    let (indices, negatives) = match &index {
         Some(ix) => {
             times.index = ix.index_time;
-            ix.indices.clone()
+            record.irreps.clone_from(&ix.irreps);
+            (ix.indices.clone(), ix.negatives.clone())
         }
-        None => vec![None; branch.points.len()],
+        None => (vec![None; branch.points.len()], Vec::new()),
     };
     record_branch(
         study,
@@ -138,6 +139,10 @@ pub(super) fn run(
         &indices,
         analysis.save_every,
     );
+    let first = record.rows.len() - branch.points.len().min(record.rows.len());
+    for (row, negative) in record.rows[first..].iter_mut().zip(negatives) {
+        row.negative = negative;
+    }
     if let (Some((target, k, _)), false) = (
         stop_stretch,
         matches!(branch.stop, StopReason::Stretch { .. }),

@@ -321,7 +321,8 @@ pub struct AxisymRow {
 pub struct AxisymTurning {
     /// Maximum or minimum.
     pub kind: Extremum,
-    /// After this row.
+    /// After this row (`step` in `path.json`).
+    #[serde(rename = "step")]
     pub after_step: usize,
     /// Every parameter.
     pub parameters: Vec<f64>,
@@ -339,7 +340,8 @@ pub struct AxisymCritical {
     /// The kind.
     #[serde(serialize_with = "display")]
     pub kind: CriticalKind,
-    /// After this row.
+    /// After this row (`step` in `path.json`).
+    #[serde(rename = "step")]
     pub after_step: usize,
     /// Every parameter.
     pub parameters: Vec<f64>,

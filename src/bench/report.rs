@@ -804,16 +804,62 @@ pub fn accuracy_svg(levels: &[BalloonLevel]) -> Result<String, Box<dyn std::erro
             .filter_map(|l| Some((secs(l.total).max(1e-6), f(l)?.max(1e-16), l.frequency)))
             .collect()
     };
-    let max = pts(BalloonLevel::err_max);
-    let min = pts(BalloonLevel::err_min);
-    let all: Vec<&(f64, f64, usize)> = max.iter().chain(&min).collect();
-    let range = |v: Vec<f64>| {
-        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        (lo / 2.0)..(hi * 2.0)
+    accuracy_plot(&pts(BalloonLevel::err_max), &pts(BalloonLevel::err_min))
+}
+
+/// The range of `values` widened to whole decades (at least one).
+fn decades(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if lo > hi {
+        return 0.1..10.0;
+    }
+    let (a, mut b) = (lo.log10().floor(), hi.log10().ceil());
+    if b <= a {
+        b = a + 1.0;
+    }
+    10f64.powf(a)..10f64.powf(b)
+}
+
+/// A decade's tick label (`1e-3`, `1`, `10`), empty between decades.
+fn decade_label(v: f64) -> String {
+    let e = v.log10();
+    if (e - e.round()).abs() > 1e-6 {
+        return String::new();
+    }
+    match e.round() as i32 {
+        0 => "1".to_string(),
+        1 => "10".to_string(),
+        2 => "100".to_string(),
+        e => format!("1e{e}"),
+    }
+}
+
+/// The accuracy plot of points (wall time s, relative error, frequency): the maximum's solid
+/// blue with discs, the minimum's dashed red with squares (so that both show where they
+/// overlap), both axes over whole decades with every decade labelled.
+pub fn accuracy_plot(
+    max: &[(f64, f64, usize)],
+    min: &[(f64, f64, usize)],
+) -> Result<String, Box<dyn std::error::Error>> {
+    let all = || max.iter().chain(min);
+    let xr = decades(all().map(|p| p.0));
+    let yr = decades(all().map(|p| p.1));
+    // Every decade a key point (a tick and its label), 2…9 times it a light grid line.
+    let ticks = |r: &std::ops::Range<f64>| -> (Vec<f64>, Vec<f64>) {
+        let (a, b) = (r.start.log10().round() as i32, r.end.log10().round() as i32);
+        let bold: Vec<f64> = (a..=b).map(|e| 10f64.powi(e)).collect();
+        let light = (a..b)
+            .flat_map(|e| (2..10).map(move |k| f64::from(k) * 10f64.powi(e)))
+            .collect();
+        (bold, light)
     };
-    let xr = range(all.iter().map(|p| p.0).collect());
-    let yr = range(all.iter().map(|p| p.1).collect());
+    let ((xb, xl), (yb, yl)) = (ticks(&xr), ticks(&yr));
+    let x_axis = xr.log_scale().with_key_points(xb).with_light_points(xl);
+    let y_axis = yr.log_scale().with_key_points(yb).with_light_points(yl);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
@@ -826,33 +872,55 @@ pub fn accuracy_svg(levels: &[BalloonLevel]) -> Result<String, Box<dyn std::erro
             .margin(20)
             .x_label_area_size(50)
             .y_label_area_size(80)
-            .build_cartesian_2d(xr.log_scale(), yr.log_scale())?;
+            .build_cartesian_2d(x_axis, y_axis)?;
         chart
             .configure_mesh()
             .x_desc("wall time of the level (s)")
             .y_desc("relative error")
             .label_style(("sans-serif", 13))
             .axis_desc_style(("sans-serif", 15))
-            .x_label_formatter(&|v| format!("{v:.2e}"))
-            .y_label_formatter(&|v| format!("{v:.1e}"))
+            .x_label_formatter(&|v| decade_label(*v))
+            .y_label_formatter(&|v| decade_label(*v))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
         let blue = RGBColor(31, 87, 180);
         let red = RGBColor(200, 30, 30);
-        for (series, colour, name) in [(&max, blue, "p_max"), (&min, red, "p_min")] {
-            chart
-                .draw_series(LineSeries::new(
-                    series.iter().map(|p| (p.0, p.1)),
-                    colour.stroke_width(2),
-                ))?
-                .label(name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
-            chart.draw_series(series.iter().map(|p| {
-                EmptyElement::at((p.0, p.1))
-                    + Circle::new((0, 0), 4, colour.filled())
-                    + Text::new(format!("f={}", p.2), (6, -14), ("sans-serif", 12))
-            }))?;
-        }
+        chart
+            .draw_series(LineSeries::new(
+                max.iter().map(|p| (p.0, p.1)),
+                blue.stroke_width(3),
+            ))?
+            .label("p_max")
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(3))
+            });
+        chart
+            .draw_series(DashedLineSeries::new(
+                min.iter().map(|p| (p.0, p.1)),
+                7,
+                4,
+                red.stroke_width(2),
+            ))?
+            .label("p_min")
+            .legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(0, 0), (7, 0)], red.stroke_width(2))
+                    + PathElement::new(vec![(11, 0), (18, 0)], red.stroke_width(2))
+            });
+        chart.draw_series(max.iter().map(|p| {
+            EmptyElement::at((p.0, p.1))
+                + Circle::new((0, 0), 5, blue.filled())
+                + Text::new(format!("f={}", p.2), (6, -16), ("sans-serif", 12))
+        }))?;
+        chart.draw_series(min.iter().map(|p| {
+            EmptyElement::at((p.0, p.1))
+                + Rectangle::new([(-3, -3), (3, 3)], red.filled())
+                + Text::new(
+                    format!("f={}", p.2),
+                    (6, 4),
+                    ("sans-serif", 12).into_font().color(&red),
+                )
+        }))?;
         chart
             .configure_series_labels()
             .background_style(WHITE.mix(0.8))
@@ -898,4 +966,46 @@ pub fn total_time(what: &str, time: Duration) -> String {
 
 fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tick texts of an SVG.
+    fn texts(svg: &str) -> Vec<String> {
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|t| {
+                let body = &t[t.find('>')? + 1..];
+                Some(body[..body.find("</text>")?].trim().to_string())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn accuracy_plot_labels_every_decade_and_draws_both_series() {
+        // Errors over five decades, times over two; the minimum's errors equal the maximum's
+        // at one level (the lines overlap there).
+        let max = [(0.02, 3e-2, 2), (0.2, 8e-4, 4), (3.0, 2e-6, 8)];
+        let min = [(0.02, 3e-2, 2), (0.2, 5e-3, 4), (3.0, 4e-5, 8)];
+        let svg = accuracy_plot(&max, &min).unwrap();
+        let texts = texts(&svg);
+        for decade in ["1e-6", "1e-5", "1e-4", "1e-3", "1e-2", "1e-1", "1", "10"] {
+            assert!(
+                texts.iter().any(|t| t == decade),
+                "no {decade:?} in {texts:?}"
+            );
+        }
+        assert!(texts.iter().any(|t| t == "p_max") && texts.iter().any(|t| t == "p_min"));
+        // Solid blue line of three points; the red one dashed (many short pieces).
+        assert!(svg.contains("stroke=\"#1F57B4\""), "the maximum's line");
+        let red_pieces = svg.matches("stroke=\"#C81E1E\"").count();
+        assert!(
+            red_pieces > 3,
+            "the minimum's dashed line: {red_pieces} pieces"
+        );
+        assert_eq!(decade_label(0.002), "");
+        assert_eq!(decades([0.002, 0.3].into_iter()), 0.001..1.0);
+    }
 }

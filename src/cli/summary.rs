@@ -146,8 +146,17 @@ pub(super) fn print_summary(study: &Study, result: &RunResult, out: &Path, writt
         .map(String::as_str)
         .collect::<Vec<_>>()
         .join(", ");
+    let blocks = if report.irreps.is_empty() {
+        String::new()
+    } else {
+        format!(
+            ", index_{} … index_{}",
+            report.irreps[0],
+            report.irreps[report.irreps.len() - 1]
+        )
+    };
     out!(
-        "  {:<10} {} rows: step, arclength, {header}, iterations, index",
+        "  {:<10} {} rows: step, arclength, {header}, iterations, index{blocks}",
         file_name(&written.csv),
         report.rows.len()
     );
@@ -241,17 +250,8 @@ fn print_wrinkling(report: &PathReport) {
             w.triangles
         ),
     }
-    for c in &w.critical {
-        let cp = &report.critical[c.critical - 1];
-        out!(
-            "warning: critical point {} ({} in {}) lies in a wrinkled state ({} of {} \
-             triangles): the membrane model does not describe it there",
-            c.critical,
-            cp.kind,
-            cp.irrep,
-            c.wrinkled,
-            w.triangles
-        );
+    for warning in w.warnings(&report.critical) {
+        out!("warning: {warning}");
     }
 }
 

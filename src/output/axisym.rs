@@ -82,7 +82,10 @@ pub fn write_axisym_run(report: &AxisymReport, out: &Path) -> Result<Vec<PathBuf
         Ok(())
     })?;
     let json = out.join("path.json");
-    let text = serde_json::to_string_pretty(report)
+    let mut value =
+        serde_json::to_value(report).map_err(|e| OutputError::invalid(&json, e.to_string()))?;
+    super::json::named_points(&mut value, &report.parameters, &report.measures);
+    let text = serde_json::to_string_pretty(&value)
         .map_err(|e| OutputError::invalid(&json, e.to_string()))?;
     write_whole(&json, |w: &mut dyn Write| writeln!(w, "{text}"))?;
     Ok(vec![csv, json])

@@ -76,7 +76,7 @@ enum NodeJson<'a> {
         irrep: &'a str,
         multiplicity: usize,
         parameters: BTreeMap<&'a str, f64>,
-        after_step: usize,
+        step: usize,
         isotropy: &'a str,
         branches: Vec<String>,
         #[serde(skip_serializing_if = "Option::is_none")]
@@ -196,7 +196,7 @@ pub fn write_branch_graph(
                 irrep: &point.irrep,
                 multiplicity: point.multiplicity,
                 parameters: by_name(&point.parameters),
-                after_step: point.after_step,
+                step: point.after_step,
                 isotropy: &point.isotropy.name,
                 branches: g
                     .leaving(n)
@@ -399,7 +399,18 @@ pub fn write_branches(
         Err(error) => return Err(WriteRunError { error, done }),
     };
     done.push(json.clone());
-    let diagram = match write_bifurcation_diagram(out, &diagram(branches, primary)) {
+    let mut picture = diagram(branches, primary);
+    let scale = super::Scales::of_scene(&study.scene).or_name(&primary.control);
+    picture.control = scale.label;
+    for l in &mut picture.lines {
+        for p in &mut l.points {
+            p.0 *= scale.factor;
+        }
+    }
+    for m in &mut picture.marks {
+        m.x *= scale.factor;
+    }
+    let diagram = match write_bifurcation_diagram(out, &picture) {
         Ok(p) => p,
         Err(error) => return Err(WriteRunError { error, done }),
     };

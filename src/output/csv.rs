@@ -6,11 +6,13 @@ use std::path::{Path, PathBuf};
 
 /// Writes `dir/path.csv` and returns its path.
 ///
-/// The header is `step,arclength,<each parameter>,<each measure>,iterations,index` (names
-/// quoted as
-/// in RFC 4180 if they contain a comma, a quote or a line break), followed by one row per
-/// [`PathRow`](crate::report::PathRow); `index` is the instability index Σ d·neg at the point,
-/// empty where it was not computed (no stability analysis, a singular block). Numbers are printed with the fewest digits that parse
+/// The header is `step,arclength,<each parameter>,<each measure>,iterations,index` and, when
+/// the rows have their blocks' negative counts, `index_<irrep>` for every irrep of
+/// [`PathReport::irreps`] (names quoted as in RFC 4180 if they contain a comma, a quote or a
+/// line break), followed by one row per [`PathRow`](crate::report::PathRow); `index` is the
+/// instability index Σ d·neg at the point and `index_<irrep>` the negative count neg of that
+/// irrep's block (each such eigenvalue is d-fold in K), empty where it was not computed (no
+/// stability analysis, a singular block). Numbers are printed with the fewest digits that parse
 /// back to the same `f64` (`1.5`, `-0`, `2.5e-7`), so the table is exact. Lines end in `\n`.
 ///
 /// # Errors
@@ -26,7 +28,9 @@ pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError
             .chain(report.parameters.iter().map(String::as_str))
             .chain(report.measures.iter().map(String::as_str))
             .chain(["iterations", "index"])
-            .map(quote)
+            .map(str::to_string)
+            .chain(report.irreps.iter().map(|i| format!("index_{i}")))
+            .map(|n| quote(&n))
             .collect::<Vec<_>>();
         writeln!(w, "{}", names.join(","))?;
         for row in &report.rows {
@@ -35,9 +39,16 @@ pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError
                 write!(w, ",{}", Num(v))?;
             }
             match row.index {
-                Some(i) => writeln!(w, ",{},{i}", row.iterations)?,
-                None => writeln!(w, ",{},", row.iterations)?,
+                Some(i) => write!(w, ",{},{i}", row.iterations)?,
+                None => write!(w, ",{},", row.iterations)?,
             }
+            for k in 0..report.irreps.len() {
+                match row.negative.as_ref().and_then(|n| n.get(k)) {
+                    Some(n) => write!(w, ",{n}")?,
+                    None => write!(w, ",")?,
+                }
+            }
+            writeln!(w)?;
         }
         Ok(())
     })?;

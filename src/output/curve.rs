@@ -1,6 +1,7 @@
 //! `curve.csv`, `curve.json` and `curve.svg`: a critical curve ([`CurveReport`]).
 
-use super::svg::{chart, padded, xml_chars};
+use super::scales::Scales;
+use super::svg::{chart, padded, xml_chars, AxisScale};
 use super::{write_whole, Num, OutputError};
 use crate::report::{CurveEventKind, CurveReport};
 use plotters::prelude::*;
@@ -58,6 +59,19 @@ fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
 /// [`OutputError::Invalid`] for a non-finite value (nothing is written), else as the other
 /// writers.
 pub fn write_curve(dir: &Path, curve: &CurveReport) -> Result<Vec<PathBuf>, OutputError> {
+    write_curve_with(dir, curve, &Scales::default())
+}
+
+/// As [`write_curve`], `curve.svg`'s axes titled and scaled by `scales` (the control's and
+/// the second parameter's dimensionless groups, where the scene fixes them).
+///
+/// # Errors
+/// As [`write_curve`].
+pub fn write_curve_with(
+    dir: &Path,
+    curve: &CurveReport,
+    scales: &Scales,
+) -> Result<Vec<PathBuf>, OutputError> {
     let csv = dir.join("curve.csv");
     check_finite(&csv, curve)?;
     let json = dir.join("curve.json");
@@ -75,7 +89,11 @@ pub fn write_curve(dir: &Path, curve: &CurveReport) -> Result<Vec<PathBuf>, Outp
             "the curve has no points".to_string(),
         ));
     }
-    let svg = render(curve, c, s)
+    let axes = (
+        scales.or_name(&curve.control),
+        scales.or_name(&curve.second),
+    );
+    let svg = render(curve, c, s, &axes)
         .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
     write_whole(&csv, |w| {
         let header: Vec<&str> = ["step", "arclength"]
@@ -115,12 +133,14 @@ pub fn write_curve(dir: &Path, curve: &CurveReport) -> Result<Vec<PathBuf>, Outp
 }
 
 /// The second parameter (column `s`) against the control (column `c`), events marked.
-fn render(curve: &CurveReport, c: usize, s: usize) -> Result<String, Box<dyn std::error::Error>> {
-    let points: Vec<(f64, f64)> = curve
-        .rows
-        .iter()
-        .map(|r| (r.parameters[c], r.parameters[s]))
-        .collect();
+fn render(
+    curve: &CurveReport,
+    c: usize,
+    s: usize,
+    (xs, ys): &(AxisScale, AxisScale),
+) -> Result<String, Box<dyn std::error::Error>> {
+    let at = |p: &[f64]| (p[c] * xs.factor, p[s] * ys.factor);
+    let points: Vec<(f64, f64)> = curve.rows.iter().map(|r| at(&r.parameters)).collect();
     let xr = padded(points.iter().map(|p| p.0));
     let yr = padded(points.iter().map(|p| p.1));
     let mut out = String::new();
@@ -128,7 +148,7 @@ fn render(curve: &CurveReport, c: usize, s: usize) -> Result<String, Box<dyn std
         let root = SVGBackend::with_string(&mut out, (800, 600)).into_drawing_area();
         root.fill(&WHITE)?;
         let title = format!("{} curve of {} ({})", curve.kind, curve.irrep, curve.second);
-        let mut chart = chart(&root, &title, &curve.control, &curve.second, xr, yr)?;
+        let mut chart = chart(&root, &title, &xs.label, &ys.label, xr, yr)?;
         let blue = RGBColor(31, 87, 180);
         chart.draw_series(LineSeries::new(
             points.iter().copied(),
@@ -136,7 +156,7 @@ fn render(curve: &CurveReport, c: usize, s: usize) -> Result<String, Box<dyn std
         ))?;
         let red = RGBColor(200, 30, 30);
         for e in &curve.events {
-            let at = (e.parameters[c], e.parameters[s]);
+            let at = at(&e.parameters);
             let font = ("sans-serif", 15).into_font().color(&BLACK);
             let label = Text::new(e.kind.to_string(), (8, -22), font);
             match e.kind {

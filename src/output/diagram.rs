@@ -5,7 +5,7 @@
 //! coloured by its isotropy subgroup's class (one legend entry per class); critical points
 //! are crosses labelled with their kind and irrep.
 
-use super::svg::{padded, short, PALETTE};
+use super::svg::{padded, place_marker_labels, short, PALETTE};
 use super::{write_whole, OutputError};
 use plotters::prelude::*;
 use std::error::Error;
@@ -175,13 +175,27 @@ fn render(diagram: &BifurcationDiagram) -> Result<String, Box<dyn Error>> {
                 }
             }
         }
-        for m in &diagram.marks {
+        let labels: Vec<String> = diagram
+            .marks
+            .iter()
+            .map(|m| format!("{} ({})", m.label, short(m.x)))
+            .collect();
+        let wanted: Vec<(f64, f64, usize, bool)> = diagram
+            .marks
+            .iter()
+            .zip(&labels)
+            .map(|(m, l)| {
+                let (x, y) = chart.backend_coord(&(m.x, m.y));
+                (f64::from(x), f64::from(y), l.chars().count(), false)
+            })
+            .collect();
+        let offsets = place_marker_labels(&wanted);
+        for ((m, label), &at) in diagram.marks.iter().zip(labels).zip(&offsets) {
             let font = ("sans-serif", 13).into_font().color(&BLACK);
-            let label = format!("{} ({})", m.label, short(m.x));
             chart.draw_series(std::iter::once(
                 EmptyElement::at((m.x, m.y))
                     + Cross::new((0, 0), 6, BLACK.stroke_width(2))
-                    + Text::new(label, (8, -18), font),
+                    + Text::new(label, at, font),
             ))?;
         }
         // The line styles, as legend entries without a line of their own.

@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 
 /// Writes `dir/path.json` — the whole [`PathReport`] as pretty-printed JSON (scene, origin,
 /// version, mesh, group, unknowns, control, parameter and measure names, rows, turning points,
-/// stop reason, saved states) — and returns its path. Numbers are written with the fewest
+/// stop reason, saved states) — and returns its path. The rows hold their parameters and
+/// measures as lists in the order of the names; the turning and critical points as objects by
+/// name, as `critical.json` does, each with the `step` before it. Numbers are written with the fewest
 /// digits that parse back to the same `f64`.
 ///
 /// # Errors
@@ -17,11 +19,45 @@ use std::path::{Path, PathBuf};
 pub fn write_json(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError> {
     let path = dir.join("path.json");
     check_finite(&path, report)?;
+    let mut value =
+        serde_json::to_value(report).map_err(|e| OutputError::invalid(&path, e.to_string()))?;
+    named_points(&mut value, &report.parameters, &report.measures);
     write_whole(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, report).map_err(io::Error::other)?;
+        serde_json::to_writer_pretty(&mut *w, &value).map_err(io::Error::other)?;
         writeln!(w)
     })?;
     Ok(path)
+}
+
+/// The `turning_points` and `critical` of a report's JSON `value` with their `parameters`
+/// and `measures` as objects by name.
+pub(super) fn named_points(
+    value: &mut serde_json::Value,
+    parameters: &[String],
+    measures: &[String],
+) {
+    for list in ["turning_points", "critical"] {
+        if let Some(points) = value.get_mut(list).and_then(|v| v.as_array_mut()) {
+            for p in points {
+                for (key, names) in [("parameters", parameters), ("measures", measures)] {
+                    if let Some(v) = p.get_mut(key) {
+                        *v = by_name(names, v);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A list of values as an object `{name: value}` in the order of `names` (a list that does
+/// not match the names is kept as it is).
+fn by_name(names: &[String], values: &serde_json::Value) -> serde_json::Value {
+    match values.as_array() {
+        Some(list) if list.len() == names.len() => {
+            serde_json::Value::Object(names.iter().cloned().zip(list.iter().cloned()).collect())
+        }
+        _ => values.clone(),
+    }
 }
 
 /// One critical point as written to `critical.json`.

@@ -39,6 +39,7 @@ mod matrix_market;
 mod progress;
 mod reopen;
 mod run;
+mod scales;
 mod states;
 pub mod store;
 mod surface;
@@ -47,7 +48,7 @@ mod svg;
 pub use axisym::{write_axisym_run, AXISYM_RUN_FILES};
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten, PrimaryPath};
 pub use csv::write_csv;
-pub use curve::write_curve;
+pub use curve::{write_curve, write_curve_with};
 pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };
@@ -60,14 +61,16 @@ pub use matrix_market::{
 pub use progress::Progress;
 pub use reopen::{load_curve_start, FinishedRun, ReopenError};
 pub use run::{
-    file_name, node_normals, state_fields, wave_numbers, write_run, CriticalSummary, RunSummary,
-    TurningSummary, WriteRunError, Written, RUN_FILES,
+    file_name, node_normals, state_fields, wave_numbers, wrinkled_critical, write_run,
+    CriticalSummary, RunSummary, TurningSummary, WriteRunError, Written, RUN_FILES,
 };
+pub use scales::{balloon_closed_form, Scales};
 pub use states::{PvdTime, StateWriter, EVENTS_PVD};
 pub use surface::write_surface;
 pub use svg::{
-    default_axes, write_diagram, write_diagram_with, write_spectrum_diagram, Diagram, Marker,
-    MarkerKind, Segment, SPECTRUM_AXIS, ZERO_LINE,
+    default_axes, write_diagram, write_diagram_with, write_spectrum_diagram,
+    write_spectrum_diagram_with, AxisScale, Diagram, Marker, MarkerKind, ReferenceCurve, Segment,
+    SPECTRUM_AXIS, ZERO_LINE,
 };
 
 use crate::report::PathReport;

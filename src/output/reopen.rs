@@ -116,13 +116,41 @@ impl FinishedRun {
         let list = field(&v, "critical", &file)?
             .as_array()
             .ok_or_else(|| ReopenError(format!("{}: 'critical' is not a list", file.display())))?;
+        let measure_names: Vec<String> = field(&v, "measures", &file)?
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|m| m.as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default();
         for (k, cp) in list.iter().enumerate() {
             let what = |key: &str| format!("critical[{k}].{key}");
+            // By name (as written), or a list in the order of the names (older runs).
+            let values = |key: &str, names: &[String]| match field(cp, key, &file)? {
+                Value::Object(map) => names
+                    .iter()
+                    .map(|n| map.get(n).and_then(Value::as_f64))
+                    .collect::<Option<Vec<f64>>>()
+                    .ok_or_else(|| {
+                        ReopenError(format!(
+                            "{}: {} does not hold a number for every name",
+                            file.display(),
+                            what(key)
+                        ))
+                    }),
+                list => numbers(list, &what(key), &file),
+            };
+            let step_key = if cp.get("step").is_some() {
+                "step"
+            } else {
+                "after_step"
+            };
             critical.push(RecordedPoint {
                 irrep: text(cp, "irrep", &file)?,
-                parameters: numbers(field(cp, "parameters", &file)?, &what("parameters"), &file)?,
-                measures: numbers(field(cp, "measures", &file)?, &what("measures"), &file)?,
-                after_step: count(cp, "after_step", &file)?,
+                parameters: values("parameters", &parameters)?,
+                measures: values("measures", &measure_names)?,
+                after_step: count(cp, step_key, &file)?,
                 residual_eigenvalue: field(cp, "residual_eigenvalue", &file)?
                     .as_f64()
                     .unwrap_or(0.0),

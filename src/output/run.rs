@@ -2,8 +2,8 @@
 
 use super::{
     default_axes, write_critical, write_csv, write_diagram_with, write_json,
-    write_spectrum_diagram, Diagram, Marker, MarkerKind, OutputError, PvdTime, Segment,
-    StateWriter, SPECTRUM_AXIS,
+    write_spectrum_diagram_with, Diagram, Marker, MarkerKind, OutputError, PvdTime, StateWriter,
+    SPECTRUM_AXIS,
 };
 use crate::analysis::critical::CriticalKind;
 use crate::analysis::events::{Extremum, StopReason};
@@ -231,7 +231,7 @@ pub fn write_run(
     let report = &result.report;
     let (svg, plotted) = if report.spectra.is_empty() {
         let axes = axes(report);
-        let svg = write_diagram_with(out, report, &diagram(report, &axes));
+        let svg = write_diagram_with(out, report, &diagram(study, report, &axes));
         let plotted = format!("{} against {}, turning points marked", axes.1, axes.0);
         (svg, plotted)
     } else {
@@ -251,12 +251,21 @@ pub fn write_run(
             "{SPECTRUM_AXIS} per irrep against {}{skipped}, critical points marked",
             report.control
         );
-        (write_spectrum_diagram(out, report), plotted)
+        let scale = super::Scales::of(&study.scene, report).or_name(&report.control);
+        let rungs = ponding_floor(study, report);
+        (
+            write_spectrum_diagram_with(out, report, Some(&scale), rungs),
+            plotted,
+        )
     };
     let svg = attempt!(svg);
     done.push(svg.clone());
     let curve = match &result.curve {
-        Some(c) => attempt!(super::write_curve(out, c)),
+        Some(c) => attempt!(super::write_curve_with(
+            out,
+            c,
+            &super::Scales::of_scene(&study.scene)
+        )),
         None => Vec::new(),
     };
     done.extend(curve.iter().cloned());
@@ -385,6 +394,25 @@ fn wrinkled(study: &Study, u: &[f64], params: &[f64]) -> Option<usize> {
         .map(|f| f.values.iter().filter(|&&w| w > 0.5).count())
 }
 
+/// The critical points (numbered from 1, as `critical_NN.vtu`) whose state has wrinkled
+/// triangles, with how many; empty when the model shows no `wrinkled` field.
+pub fn wrinkled_critical(
+    study: &Study,
+    critical: &[crate::analysis::critical::CriticalPoint],
+) -> Vec<WrinkledCritical> {
+    critical
+        .iter()
+        .enumerate()
+        .filter_map(|(k, cp)| {
+            let n = wrinkled(study, &cp.state, &cp.parameters)?;
+            (n > 0).then_some(WrinkledCritical {
+                critical: k + 1,
+                wrinkled: n,
+            })
+        })
+        .collect()
+}
+
 /// Where the membrane wrinkles along the path: the first point with wrinkled triangles (from
 /// every point's kept state) and the critical points in a wrinkled state; `None` when the
 /// model shows no `wrinkled` field or no point's state was kept (a branch).
@@ -407,19 +435,7 @@ fn wrinkling(study: &Study, result: &RunResult) -> Option<Wrinkling> {
             break;
         }
     }
-    let critical = result
-        .report
-        .critical
-        .iter()
-        .enumerate()
-        .filter_map(|(k, cp)| {
-            let n = wrinkled(study, &cp.state, &cp.parameters)?;
-            (n > 0).then_some(WrinkledCritical {
-                critical: k + 1,
-                wrinkled: n,
-            })
-        })
-        .collect();
+    let critical = wrinkled_critical(study, &result.report.critical);
     Some(Wrinkling {
         triangles: study.mesh.mesh.triangles.len(),
         first,
@@ -427,41 +443,50 @@ fn wrinkling(study: &Study, result: &RunResult) -> Option<Wrinkling> {
     })
 }
 
-/// The diagram: stable (index 0) and unstable stretches of the path drawn differently, turning
-/// points and critical points marked.
-fn diagram(report: &PathReport, axes: &(String, String)) -> Diagram {
-    let mut segments = Vec::new();
-    let mut start = 0;
-    for i in 1..=report.rows.len() {
-        let stable = |k: usize| report.rows[k].index.is_none_or(|x| x == 0);
-        if i == report.rows.len() || stable(i) != stable(start) {
-            // Segments share their end rows so that the line is continuous.
-            segments.push(Segment {
-                first: start,
-                last: i.min(report.rows.len() - 1),
-                stable: stable(start),
-            });
-            start = i;
-        }
-    }
+/// The diagram: the path drawn by instability index (a colour and line style per index, the
+/// change of index at the critical point), turning points and critical points marked (a
+/// critical point's label with its wave number where known: `(m, k)` on a ponding floor,
+/// the k-th rung of wave number m), the axes dimensionless where the scene fixes the scale,
+/// and the closed form of a balloon under it.
+fn diagram(study: &Study, report: &PathReport, axes: &(String, String)) -> Diagram {
     // A critical point at a turning point of the control (a limit point) shares its marker.
     let control = report.parameters.iter().position(|p| *p == report.control);
     let same = |a: &[f64], b: &[f64]| {
         control.is_some_and(|c| (a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1e-12))
     };
+    let ponding = ponding_floor(study, report);
+    let mut rung = std::collections::BTreeMap::<usize, usize>::new();
+    let labels: Vec<String> = report
+        .critical
+        .iter()
+        .enumerate()
+        .map(|(k, cp)| {
+            let base = format!("{} {}", cp.kind.short(), cp.irrep);
+            match report.wave_numbers.get(k) {
+                Some(&m) if ponding => {
+                    let n = rung.entry(m).or_insert(0);
+                    *n += 1;
+                    format!("{base} (m, k) = ({m}, {n})")
+                }
+                Some(&m) => format!("{base} m = {m}"),
+                None => base,
+            }
+        })
+        .collect();
     let mut markers: Vec<Marker> = Vec::new();
     for t in &report.turning_points {
         let mut m = Marker::turning(report, t);
-        if let Some(cp) = report
+        if let Some(k) = report
             .critical
             .iter()
-            .find(|cp| same(&cp.parameters, &t.parameters))
+            .position(|cp| same(&cp.parameters, &t.parameters))
         {
-            m.label = format!("{} ({} {})", m.label, cp.kind.short(), cp.irrep);
+            m.label = format!("{} ({})", m.label, labels[k]);
+            m.switches = true;
         }
         markers.push(m);
     }
-    for cp in &report.critical {
+    for (cp, label) in report.critical.iter().zip(&labels) {
         if report
             .turning_points
             .iter()
@@ -472,22 +497,42 @@ fn diagram(report: &PathReport, axes: &(String, String)) -> Diagram {
         markers.push(Marker {
             parameters: cp.parameters.clone(),
             measures: cp.measures.clone(),
-            label: format!("{} {}", cp.kind.short(), cp.irrep),
+            label: label.clone(),
             kind: match cp.kind {
                 CriticalKind::LimitPoint => MarkerKind::Other,
                 CriticalKind::SymmetricBifurcation
                 | CriticalKind::SimpleBifurcation
                 | CriticalKind::MultipleBifurcation(_) => MarkerKind::Bifurcation,
             },
+            after_step: Some(cp.after_step),
+            switches: true,
         });
     }
-    let mut d = Diagram::new(&axes.0, &axes.1).markers(markers);
+    let scales = super::Scales::of(&study.scene, report);
+    let mut d = Diagram::new(&axes.0, &axes.1)
+        .markers(markers)
+        .scales(scales.or_name(&axes.0), scales.or_name(&axes.1));
     d.turning_points = false;
-    if report.rows.iter().any(|r| r.index.is_some()) && !report.rows.is_empty() {
-        d.segments(segments)
+    if axes.0 == "stretch" && axes.1 == report.control {
+        if let Some(curve) = super::balloon_closed_form(&study.scene, report) {
+            d = d.reference(curve);
+        }
+    }
+    if report.rows.iter().any(|r| r.index.is_some()) {
+        d.by_index()
     } else {
         d
     }
+}
+
+/// True for a ponding floor: a disc under fluid whose density is the control, where the
+/// k-th critical point of wave number m is the rung j_{m,k} of the ladder.
+fn ponding_floor(study: &Study, report: &PathReport) -> bool {
+    use crate::scene::{Effect, MeshSpec};
+    matches!(study.scene.mesh, MeshSpec::Disc(_))
+        && study.scene.effects.iter().any(|e| {
+            matches!(e, Effect::Fluid(f) if f.density.parameter() == Some(report.control.as_str()))
+        })
 }
 
 /// The diagram's axes: [`default_axes`], except that an equilibrium analysis (no control)
@@ -512,7 +557,7 @@ pub struct TurningSummary {
     /// `maximum` or `minimum`.
     pub kind: Extremum,
     /// The path step before it.
-    pub after_step: usize,
+    pub step: usize,
     /// The control's value there.
     pub value: f64,
     /// The stretch there (closed membranes).
@@ -591,7 +636,7 @@ impl RunSummary {
                 .iter()
                 .map(|t| TurningSummary {
                     kind: t.kind,
-                    after_step: t.after_step,
+                    step: t.after_step,
                     value: c.map_or(f64::NAN, |c| t.parameters[c]),
                     stretch: s.map(|s| t.measures[s]),
                 })

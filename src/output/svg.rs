@@ -42,6 +42,12 @@ pub struct Marker {
     pub label: String,
     /// Symbol and colour.
     pub kind: MarkerKind,
+    /// The path step just before the point, where it is inserted into the path's polyline
+    /// when the diagram is drawn by index ([`Diagram::by_index`]); `None`: only marked.
+    pub after_step: Option<usize>,
+    /// True for a critical point: drawn by index, the path takes the next row's index from
+    /// here on (the stable/unstable switch is drawn at the point, not at the next row).
+    pub switches: bool,
 }
 
 impl Marker {
@@ -71,6 +77,8 @@ impl Marker {
             measures: t.measures.clone(),
             label,
             kind,
+            after_step: Some(t.after_step),
+            switches: false,
         }
     }
 
@@ -88,6 +96,8 @@ impl Marker {
             measures: r.measures.clone(),
             label: label.into(),
             kind,
+            after_step: None,
+            switches: false,
         })
     }
 }
@@ -102,6 +112,26 @@ pub struct Segment {
     pub last: usize,
     /// True if the equilibria on it are stable.
     pub stable: bool,
+}
+
+/// What an axis shows: its title and the factor its values are multiplied by (a
+/// dimensionless group such as `p R/(μH)`, see [`Scales`](super::Scales)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisScale {
+    /// The axis title.
+    pub label: String,
+    /// The factor applied to the quantity's values.
+    pub factor: f64,
+}
+
+/// A thin grey curve drawn under the path, such as a closed form, with its legend entry; its
+/// points are in the axes' quantities before scaling.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferenceCurve {
+    /// The legend entry.
+    pub label: String,
+    /// (x, y) points.
+    pub points: Vec<(f64, f64)>,
 }
 
 /// What to draw: axes, extra markers, stability segments, file name and size.
@@ -125,6 +155,16 @@ pub struct Diagram {
     pub file: String,
     /// Width and height in pixels (default 800 × 600).
     pub size: (u32, u32),
+    /// Draw the path by the rows' instability index, one colour and line style per index
+    /// with a legend entry each, the markers with an `after_step` inserted into the polyline
+    /// (default false; `segments` are then not used).
+    pub by_index: bool,
+    /// Title and factor of the horizontal axis (default: the quantity's name, factor 1).
+    pub x_scale: Option<AxisScale>,
+    /// Title and factor of the vertical axis.
+    pub y_scale: Option<AxisScale>,
+    /// A reference curve under the path (default none).
+    pub reference: Option<ReferenceCurve>,
 }
 
 impl Diagram {
@@ -138,6 +178,10 @@ impl Diagram {
             turning_points: true,
             file: "path.svg".to_string(),
             size: (800, 600),
+            by_index: false,
+            x_scale: None,
+            y_scale: None,
+            reference: None,
         }
     }
 
@@ -159,6 +203,28 @@ impl Diagram {
     #[must_use]
     pub fn file(mut self, file: impl Into<String>) -> Self {
         self.file = file.into();
+        self
+    }
+
+    /// Drawn by the rows' instability index (see [`Diagram::by_index`]).
+    #[must_use]
+    pub fn by_index(mut self) -> Self {
+        self.by_index = true;
+        self
+    }
+
+    /// With these axis titles and factors.
+    #[must_use]
+    pub fn scales(mut self, x: AxisScale, y: AxisScale) -> Self {
+        self.x_scale = Some(x);
+        self.y_scale = Some(y);
+        self
+    }
+
+    /// With a reference curve under the path.
+    #[must_use]
+    pub fn reference(mut self, curve: ReferenceCurve) -> Self {
+        self.reference = Some(curve);
         self
     }
 }
@@ -248,18 +314,51 @@ pub fn write_diagram_with(
             }
         }
     }
+    let (fx, fy) = (
+        diagram.x_scale.as_ref().map_or(1.0, |s| s.factor),
+        diagram.y_scale.as_ref().map_or(1.0, |s| s.factor),
+    );
+    let scale = |p: (f64, f64)| (p.0 * fx, p.1 * fy);
+    let points: Vec<(f64, f64)> = points.into_iter().map(scale).collect();
     let path_points: Vec<(f64, f64)> = report
         .rows
         .iter()
         .map(|r| {
             let x = xa.at(&r.parameters, &r.measures).unwrap_or(f64::NAN);
             let y = ya.at(&r.parameters, &r.measures).unwrap_or(f64::NAN);
-            (x, y)
+            scale((x, y))
         })
         .collect();
-
-    let svg = render(report, diagram, &path_points, &markers, &points)
-        .map_err(|e| invalid(format!("plotting failed: {e}")))?;
+    let reference: Vec<(f64, f64)> = diagram
+        .reference
+        .iter()
+        .flat_map(|c| c.points.iter().copied().map(scale))
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect();
+    let runs = if diagram.by_index {
+        let rows: Vec<(usize, Option<usize>)> =
+            report.rows.iter().map(|r| (r.step, r.index)).collect();
+        let events: Vec<(usize, bool, (f64, f64))> = markers
+            .iter()
+            .zip(&points)
+            .filter_map(|(m, &p)| Some((m.after_step?, m.switches, p)))
+            .collect();
+        index_runs(&rows, &path_points, &events)
+    } else {
+        Vec::new()
+    };
+    let svg = render(
+        report,
+        diagram,
+        &Drawn {
+            path: &path_points,
+            runs: &runs,
+            reference: &reference,
+            markers: &markers,
+            marker_points: &points,
+        },
+    )
+    .map_err(|e| invalid(format!("plotting failed: {e}")))?;
     let svg = xml_chars(&svg);
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
     Ok(path)
@@ -302,35 +401,235 @@ pub(super) fn chart<'a, 'b>(
     Ok(chart)
 }
 
-/// Draws the diagram into an SVG string.
-fn render(
-    report: &PathReport,
-    diagram: &Diagram,
+/// A stretch of the path at one instability index: the index and its points.
+pub(crate) type IndexRun = (Option<usize>, Vec<(f64, f64)>);
+
+/// What [`render`] draws, in plot coordinates (scaled).
+struct Drawn<'a> {
+    path: &'a [(f64, f64)],
+    runs: &'a [IndexRun],
+    reference: &'a [(f64, f64)],
+    markers: &'a [Marker],
+    marker_points: &'a [(f64, f64)],
+}
+
+/// The path as runs of one instability index each. `rows` are (step, index) of the path's
+/// points `path`; `events` are (the step before, switches, point): each is inserted after the
+/// row of that step, several in one gap in order of their distance from that row (in
+/// fractions of the data's span). The index of a stretch is the row's before it; a switching
+/// event (a critical point) takes the next row's index from there, so a change of index is
+/// drawn at the critical point; without one it happens at the row. A row without an index
+/// keeps the one before it (the first known index at the start).
+pub(crate) fn index_runs(
+    rows: &[(usize, Option<usize>)],
     path: &[(f64, f64)],
-    markers: &[Marker],
-    marker_points: &[(f64, f64)],
-) -> Result<String, Box<dyn Error>> {
-    let all = || path.iter().chain(marker_points);
+    events: &[(usize, bool, (f64, f64))],
+) -> Vec<IndexRun> {
+    let n = rows.len().min(path.len());
+    if n == 0 {
+        return Vec::new();
+    }
+    let span = |f: fn(&(f64, f64)) -> f64| {
+        let (lo, hi) = path[..n]
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
+        if hi > lo {
+            hi - lo
+        } else {
+            1.0
+        }
+    };
+    let (sx, sy) = (span(|p| p.0), span(|p| p.1));
+    let mut current = rows[..n].iter().find_map(|r| r.1);
+    let mut runs: Vec<IndexRun> = Vec::new();
+    let mut points = vec![path[0]];
+    let mut switch =
+        |to: Option<usize>, current: &mut Option<usize>, points: &mut Vec<(f64, f64)>| {
+            if to.is_some() && to != *current {
+                let last = *points.last().expect("a run has a point");
+                runs.push((*current, std::mem::replace(points, vec![last])));
+                *current = to;
+            }
+        };
+    for i in 0..n {
+        if i > 0 {
+            points.push(path[i]);
+            switch(rows[i].1, &mut current, &mut points);
+        }
+        let mut gap: Vec<&(usize, bool, (f64, f64))> =
+            events.iter().filter(|e| e.0 == rows[i].0).collect();
+        let from = path[i];
+        let d = |p: (f64, f64)| ((p.0 - from.0) / sx).hypot((p.1 - from.1) / sy);
+        gap.sort_by(|a, b| d(a.2).total_cmp(&d(b.2)));
+        for &(_, switches, p) in gap {
+            points.push(p);
+            if switches {
+                let next = rows.get(i + 1).filter(|_| i + 1 < n).and_then(|r| r.1);
+                switch(next, &mut current, &mut points);
+            }
+        }
+    }
+    runs.push((current, points));
+    runs.retain(|r| r.1.len() > 1);
+    runs
+}
+
+/// The colour and dash pattern (dash, gap; none for solid) of instability index `i`.
+fn index_style(i: Option<usize>) -> (RGBColor, Option<(u32, u32)>) {
+    const COLOURS: [RGBColor; 5] = [
+        RGBColor(31, 87, 180),
+        RGBColor(200, 30, 30),
+        RGBColor(230, 130, 0),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+    ];
+    const DASHES: [(u32, u32); 4] = [(8, 5), (3, 4), (14, 4), (6, 3)];
+    match i {
+        None => (RGBColor(150, 150, 150), None),
+        Some(0) => (COLOURS[0], None),
+        Some(i) => (
+            COLOURS[i % COLOURS.len()],
+            Some(DASHES[(i - 1) % DASHES.len()]),
+        ),
+    }
+}
+
+/// The legend entry of instability index `i`.
+pub(crate) fn index_legend(i: Option<usize>) -> String {
+    match i {
+        None => "index not computed".to_string(),
+        Some(0) => "index 0 (stable)".to_string(),
+        Some(i) => format!("index {i}"),
+    }
+}
+
+/// Estimated pixels per character of a 15 px marker label.
+const MARKER_CHAR: f64 = 8.0;
+/// Height of a marker label's box in pixels.
+const MARKER_LINE: f64 = 18.0;
+
+/// Greedy placement of marker labels that do not overlap: each label `(pixel x, pixel y,
+/// characters, prefers below)` in turn takes the first of the vertical offsets (its preferred
+/// side first, then alternating further away) whose box overlaps no label placed before it.
+/// Returns the offset (dx, dy) of each label's top left corner from its point.
+pub(crate) fn place_marker_labels(labels: &[(f64, f64, usize, bool)]) -> Vec<(i32, i32)> {
+    let mut boxes: Vec<(f64, f64, f64, f64)> = Vec::new();
+    let mut order: Vec<usize> = (0..labels.len()).collect();
+    order.sort_by(|&a, &b| labels[a].0.total_cmp(&labels[b].0));
+    let mut placed = vec![(8, -22); labels.len()];
+    for k in order {
+        let (x, y, chars, below) = labels[k];
+        let w = chars as f64 * MARKER_CHAR;
+        let (first, second): (f64, f64) = if below { (6.0, -22.0) } else { (-22.0, 6.0) };
+        let candidates = (0..12).map(|j| {
+            let step = f64::from(j / 2) * MARKER_LINE;
+            if j % 2 == 0 {
+                first + step * first.signum()
+            } else {
+                second + step * second.signum()
+            }
+        });
+        let mut chosen = first;
+        for dy in candidates {
+            let b = (x + 8.0, y + dy, x + 8.0 + w, y + dy + MARKER_LINE);
+            let free = boxes
+                .iter()
+                .all(|o| b.2 <= o.0 || o.2 <= b.0 || b.3 <= o.1 || o.3 <= b.1);
+            if free {
+                chosen = dy;
+                break;
+            }
+        }
+        boxes.push((x + 8.0, y + chosen, x + 8.0 + w, y + chosen + MARKER_LINE));
+        placed[k] = (8, chosen.round() as i32);
+    }
+    placed
+}
+
+/// Draws the diagram into an SVG string.
+fn render(report: &PathReport, diagram: &Diagram, d: &Drawn) -> Result<String, Box<dyn Error>> {
+    let (path, markers, marker_points) = (d.path, d.markers, d.marker_points);
+    let all = || path.iter().chain(marker_points).chain(d.reference);
     let xr = padded(all().map(|p| p.0));
     let yr = padded(all().map(|p| p.1));
+    let x_title = diagram
+        .x_scale
+        .as_ref()
+        .map_or(diagram.x.as_str(), |s| s.label.as_str());
+    let y_title = diagram
+        .y_scale
+        .as_ref()
+        .map_or(diagram.y.as_str(), |s| s.label.as_str());
+    // The legend's entries, to find a corner for it.
+    let mut indices: Vec<Option<usize>> = d.runs.iter().map(|r| r.0).collect();
+    indices.sort();
+    indices.dedup();
+    let mut entries: Vec<String> = indices.iter().map(|&i| index_legend(i)).collect();
+    entries.extend(diagram.reference.as_ref().map(|r| r.label.clone()));
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, diagram.size).into_drawing_area();
         root.fill(&WHITE)?;
         let title = format!("{} (group {})", report.scene, report.group);
-        let mut chart = chart(&root, &title, &diagram.x, &diagram.y, xr, yr)?;
+        let mut chart = chart(&root, &title, x_title, y_title, xr.clone(), yr.clone())?;
 
         let blue = RGBColor(31, 87, 180);
         let red = RGBColor(200, 30, 30);
-        let base = if diagram.segments.is_empty() {
-            blue.stroke_width(2)
+        if let Some(r) = &diagram.reference {
+            let grey = RGBColor(110, 110, 110);
+            chart
+                .draw_series(LineSeries::new(
+                    d.reference.iter().copied(),
+                    grey.stroke_width(1),
+                ))?
+                .label(r.label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 20, y)], grey.stroke_width(1))
+                });
+        }
+        if diagram.by_index {
+            let mut legend_done: Vec<Option<usize>> = Vec::new();
+            for (index, run) in d.runs {
+                let (c, dash) = index_style(*index);
+                let width = if index.is_some() { 3 } else { 1 };
+                let pts = run.iter().copied();
+                let series = match dash {
+                    None => chart.draw_series(LineSeries::new(pts, c.stroke_width(width)))?,
+                    Some((on, off)) => chart.draw_series(DashedLineSeries::new(
+                        pts,
+                        on,
+                        off,
+                        c.stroke_width(width),
+                    ))?,
+                };
+                if !legend_done.contains(index) {
+                    legend_done.push(*index);
+                    let (a, b) = match dash {
+                        None => (10, 10),
+                        Some((on, off)) => (on as i32, (on + off) as i32),
+                    };
+                    let style = c.stroke_width(width);
+                    series.label(index_legend(*index)).legend(move |(x, y)| {
+                        EmptyElement::at((x, y))
+                            + PathElement::new([(0, 0), (a, 0)], style)
+                            + PathElement::new([(b, 0), ((b + a).min(20).max(b), 0)], style)
+                    });
+                }
+            }
         } else {
-            RGBColor(170, 170, 170).stroke_width(1)
-        };
-        chart.draw_series(LineSeries::new(path.iter().copied(), base))?;
+            let base = if diagram.segments.is_empty() {
+                blue.stroke_width(2)
+            } else {
+                RGBColor(170, 170, 170).stroke_width(1)
+            };
+            chart.draw_series(LineSeries::new(path.iter().copied(), base))?;
+        }
 
         let (mut stable_legend, mut unstable_legend) = (false, false);
-        for s in &diagram.segments {
+        for s in diagram.segments.iter().filter(|_| !diagram.by_index) {
             let pts = path[s.first..=s.last].iter().copied();
             if s.stable {
                 let series = chart.draw_series(LineSeries::new(pts, blue.stroke_width(3)))?;
@@ -349,22 +648,45 @@ fn render(
                 }
             }
         }
-        if stable_legend || unstable_legend {
+        if stable_legend || unstable_legend || !entries.is_empty() {
+            let chars = entries.iter().map(|l| l.chars().count()).max().unwrap_or(8);
+            let (w, h) = diagram.size;
+            let plot = (f64::from(w) - 110.0, f64::from(h) - 130.0);
+            let size = (
+                (45.0 + chars as f64 * LEGEND_CHAR) / plot.0,
+                (12.0 + (entries.len().max(2)) as f64 * 18.0) / plot.1,
+            );
+            let occupied: Vec<(f64, f64)> = path
+                .iter()
+                .chain(marker_points)
+                .chain(d.reference)
+                .copied()
+                .collect();
+            let (corner, _) = emptiest_corner(&occupied, &xr, &yr, size);
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
+                .position(corner)
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
                 .label_font(("sans-serif", 14))
                 .draw()?;
         }
 
-        for (m, &(x, y)) in markers.iter().zip(marker_points) {
-            let text_at = if m.kind == MarkerKind::Minimum {
-                (8, 6)
-            } else {
-                (8, -22)
-            };
+        let wanted: Vec<(f64, f64, usize, bool)> = markers
+            .iter()
+            .zip(marker_points)
+            .map(|(m, p)| {
+                let (px, py) = chart.backend_coord(p);
+                (
+                    f64::from(px),
+                    f64::from(py),
+                    m.label.chars().count(),
+                    m.kind == MarkerKind::Minimum,
+                )
+            })
+            .collect();
+        let offsets = place_marker_labels(&wanted);
+        for ((m, &(x, y)), &text_at) in markers.iter().zip(marker_points).zip(&offsets) {
             let font = ("sans-serif", 15).into_font().color(&BLACK);
             let label = Text::new(m.label.clone(), text_at, font);
             match m.kind {
@@ -403,6 +725,9 @@ pub(super) const PALETTE: [RGBColor; 10] = [
 /// The colour of the spectrum diagram's zero line (dark grey, unlike the black axes).
 pub const ZERO_LINE: RGBColor = RGBColor(64, 64, 64);
 
+/// The legend entry of the spectrum diagram's higher eigenvalues.
+pub const HIGHER_LEGEND: &str = "dashed: higher eigenvalues crossing zero";
+
 /// The y-axis title of the spectrum diagram.
 pub const SPECTRUM_AXIS: &str = "lowest eigenvalue / max|K_ij|";
 
@@ -426,7 +751,27 @@ pub const SPECTRUM_AXIS: &str = "lowest eigenvalue / max|K_ij|";
 /// or a critical point's control) is not finite, or plotting fails — nothing is written;
 /// [`OutputError::NoDirectory`] / [`OutputError::Io`] if the file cannot be written.
 pub fn write_spectrum_diagram(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError> {
+    write_spectrum_diagram_with(dir, report, None, false)
+}
+
+/// As [`write_spectrum_diagram`], the control's axis titled and its values scaled by
+/// `control` (none: the control's name, unscaled); the higher eigenvalues of a block that
+/// cross zero in the sweep (the later critical points of its irrep) are drawn dashed in the
+/// block's colour, so that every critical point sits where a line crosses zero. A critical
+/// point whose wave number m is known ([`PathReport::wave_numbers`]) has it in its label,
+/// `m = 2`; with `rungs` (a ponding floor, where the k-th point of wave number m is the rung
+/// j_{m,k}) as `(2, 1)`, and the legend's entry reads `critical point (m, k)`.
+///
+/// # Errors
+/// As [`write_spectrum_diagram`].
+pub fn write_spectrum_diagram_with(
+    dir: &Path,
+    report: &PathReport,
+    control_scale: Option<&AxisScale>,
+    rungs: bool,
+) -> Result<PathBuf, OutputError> {
     let path = dir.join("path.svg");
+    let f = control_scale.map_or(1.0, |s| s.factor);
     let invalid = |m: String| OutputError::invalid(&path, m);
     check_finite(&path, report)?;
     let spectra = &report.spectra;
@@ -437,12 +782,23 @@ pub fn write_spectrum_diagram(dir: &Path, report: &PathReport) -> Result<PathBuf
     }
     let control = report.parameters.iter().position(|p| *p == report.control);
     let mut marks = Vec::with_capacity(report.critical.len());
-    for cp in &report.critical {
+    let mut rung = std::collections::BTreeMap::<usize, usize>::new();
+    for (k, cp) in report.critical.iter().enumerate() {
         let x = control.and_then(|c| cp.parameters.get(c).copied());
+        let base = format!("{} {}", cp.kind.short(), cp.irrep);
+        let label = match report.wave_numbers.get(k) {
+            Some(&m) if rungs => {
+                let n = rung.entry(m).or_insert(0);
+                *n += 1;
+                format!("{base} ({m}, {n})")
+            }
+            Some(&m) => format!("{base} m = {m}"),
+            None => base,
+        };
         match x {
             Some(x) if x.is_finite() => marks.push(CriticalMark {
-                x,
-                label: format!("{} {}", cp.kind.short(), cp.irrep),
+                x: x * f,
+                label,
                 irrep: spectra.irrep(&cp.irrep),
             }),
             _ => {
@@ -466,7 +822,7 @@ pub fn write_spectrum_diagram(dir: &Path, report: &PathReport) -> Result<PathBuf
                             open = true;
                         }
                         if let Some(run) = runs.last_mut() {
-                            run.push((row.control, v));
+                            run.push((row.control * f, v));
                         }
                     }
                     _ => open = false,
@@ -475,7 +831,51 @@ pub fn write_spectrum_diagram(dir: &Path, report: &PathReport) -> Result<PathBuf
             runs
         })
         .collect();
-    let svg = render_spectra(report, &curves, &marks)
+    let higher: Vec<Vec<Vec<(f64, f64)>>> = (0..spectra.irreps.len())
+        .map(|mu| {
+            let mut runs: Vec<Vec<(f64, f64)>> = Vec::new();
+            for j in 1..crate::report::SPECTRUM_EIGENVALUES {
+                let value = |row: &crate::report::SpectrumRow| {
+                    row.eigenvalues
+                        .get(mu)
+                        .and_then(|e| e.get(j).copied())
+                        .filter(|v| v.is_finite())
+                };
+                // Only an eigenvalue that crosses zero somewhere in the sweep is drawn.
+                if !spectra
+                    .rows
+                    .iter()
+                    .any(|r| value(r).is_some_and(|v| v <= 0.0))
+                {
+                    continue;
+                }
+                let mut open = false;
+                for row in &spectra.rows {
+                    match value(row) {
+                        Some(v) => {
+                            if !open {
+                                runs.push(Vec::new());
+                                open = true;
+                            }
+                            if let Some(run) = runs.last_mut() {
+                                run.push((row.control * f, v));
+                            }
+                        }
+                        None => open = false,
+                    }
+                }
+            }
+            runs.retain(|r| r.len() > 1);
+            runs
+        })
+        .collect();
+    let x_title = control_scale.map_or(report.control.as_str(), |s| s.label.as_str());
+    let legend = if rungs && !report.wave_numbers.is_empty() {
+        "critical point (m, k)"
+    } else {
+        "critical point"
+    };
+    let svg = render_spectra(report, &curves, &higher, &marks, (x_title, f, legend))
         .map_err(|e| invalid(format!("plotting failed: {e}")))?;
     let svg = xml_chars(&svg);
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
@@ -495,12 +895,14 @@ struct CriticalMark {
 fn render_spectra(
     report: &PathReport,
     curves: &[Vec<Vec<(f64, f64)>>],
+    higher: &[Vec<Vec<(f64, f64)>>],
     marks: &[CriticalMark],
+    (x_title, f, mark_legend): (&str, f64, &str),
 ) -> Result<String, Box<dyn Error>> {
     let spectra = &report.spectra;
     let size = (800u32, 600u32);
-    let points = || curves.iter().flatten().flatten();
-    let xs = spectra.rows.iter().map(|r| r.control);
+    let points = || curves.iter().chain(higher).flatten().flatten();
+    let xs = spectra.rows.iter().map(|r| r.control * f);
     let xr = padded(xs.chain(marks.iter().map(|m| m.x)));
     let yr = padded(points().map(|p| p.1).chain(std::iter::once(0.0)));
     // Room for the vertical labels of the critical points on either side of the zero line.
@@ -531,7 +933,13 @@ fn render_spectra(
             };
             format!("{name}: not plotted ({why})")
         })
-        .chain((!marks.is_empty()).then(|| "critical point".to_string()))
+        .chain(
+            higher
+                .iter()
+                .any(|r| !r.is_empty())
+                .then(|| HIGHER_LEGEND.to_string()),
+        )
+        .chain((!marks.is_empty()).then(|| mark_legend.to_string()))
         .collect();
     // The legend's estimated size as fractions of the plot, to find a corner it fits in.
     let chars = legend.iter().map(|l| l.chars().count()).max().unwrap_or(0);
@@ -540,7 +948,7 @@ fn render_spectra(
         (12.0 + legend.len() as f64 * 18.0) / plot_h,
     );
     // The lines, sampled between their points, and the critical points on the zero line.
-    let dense = curves.iter().flatten().flat_map(|run| {
+    let dense = curves.iter().chain(higher).flatten().flat_map(|run| {
         run.windows(2).flat_map(|w| {
             (0..8).map(move |k| {
                 let t = f64::from(k) / 8.0;
@@ -576,7 +984,7 @@ fn render_spectra(
         let x_label = |v: &f64| tick(*v, x_span);
         chart
             .configure_mesh()
-            .x_desc(report.control.as_str())
+            .x_desc(x_title)
             .y_desc(SPECTRUM_AXIS)
             .y_label_formatter(&y_label)
             .x_label_formatter(&x_label)
@@ -611,10 +1019,33 @@ fn render_spectra(
                 }
             }
         }
+        for (mu, runs) in higher.iter().enumerate() {
+            let c = colour(mu);
+            for run in runs {
+                chart.draw_series(DashedLineSeries::new(
+                    run.iter().copied(),
+                    5,
+                    4,
+                    c.stroke_width(1),
+                ))?;
+            }
+        }
+        if higher.iter().any(|r| !r.is_empty()) {
+            let grey = RGBColor(90, 90, 90);
+            chart
+                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+                .label(HIGHER_LEGEND)
+                .legend(move |(x, y)| {
+                    EmptyElement::at((x, y))
+                        + PathElement::new([(0, 0), (5, 0)], grey.stroke_width(1))
+                        + PathElement::new([(9, 0), (14, 0)], grey.stroke_width(1))
+                        + PathElement::new([(18, 0), (20, 0)], grey.stroke_width(1))
+                });
+        }
         if !marks.is_empty() {
             chart
                 .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label("critical point")
+                .label(mark_legend)
                 .legend(|(x, y)| Cross::new((x + 10, y), 5, BLACK.stroke_width(2)));
         }
         chart
@@ -914,6 +1345,58 @@ mod tests {
         assert!((r.end / (r.end - r.start) - 0.25).abs() < 1e-12, "{r:?}");
         // Enough room already: unchanged.
         assert_eq!(headroom(-1.0..1.0, 0.2, 0.2), -1.0..1.0);
+    }
+
+    #[test]
+    fn index_runs_switch_at_the_critical_point() {
+        // Rows 0..=3 with index 0, 0, 1, 1; a critical point between rows 1 and 2 and a
+        // turning point (no switch) between rows 2 and 3.
+        let rows = [(0, Some(0)), (1, Some(0)), (2, Some(1)), (3, Some(1))];
+        let path = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 0.0)];
+        let events = [(1, true, (1.5, 0.1)), (2, false, (2.5, 0.2))];
+        let runs = index_runs(&rows, &path, &events);
+        assert_eq!(runs.len(), 2, "{runs:?}");
+        assert_eq!(runs[0], (Some(0), vec![(0.0, 0.0), (1.0, 0.0), (1.5, 0.1)]));
+        assert_eq!(
+            runs[1],
+            (
+                Some(1),
+                vec![(1.5, 0.1), (2.0, 0.0), (2.5, 0.2), (3.0, 0.0)]
+            )
+        );
+        // Without the critical point the index changes at the row.
+        let runs = index_runs(&rows, &path, &events[1..]);
+        assert_eq!(runs[0].1.last(), Some(&(2.0, 0.0)));
+        assert_eq!(runs[1].1.first(), Some(&(2.0, 0.0)));
+        // A row without an index (a branch's first) joins the first known index.
+        let rows = [(0, None), (1, Some(2)), (2, Some(2))];
+        let runs = index_runs(&rows, &path[..3], &[]);
+        assert_eq!(runs, [(Some(2), path[..3].to_vec())]);
+    }
+
+    #[test]
+    fn marker_labels_do_not_pile_up() {
+        // Three labels at one point, one far away: the three take different heights whose
+        // boxes do not overlap; the far one keeps its preferred place.
+        let labels = [
+            (100.0, 100.0, 10, false),
+            (100.0, 100.0, 10, false),
+            (102.0, 101.0, 10, true),
+            (600.0, 100.0, 10, false),
+        ];
+        let at = place_marker_labels(&labels);
+        assert_eq!(at[0], (8, -22));
+        assert_eq!(at[3], (8, -22));
+        let tops: Vec<f64> = at[..3]
+            .iter()
+            .zip(&labels)
+            .map(|(o, l)| l.1 + f64::from(o.1))
+            .collect();
+        for i in 0..3 {
+            for j in 0..i {
+                assert!((tops[i] - tops[j]).abs() >= MARKER_LINE, "{tops:?}");
+            }
+        }
     }
 
     #[test]

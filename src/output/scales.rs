@@ -1,0 +1,252 @@
+//! Dimensionless axes for the diagrams: what each parameter or measure of a scene is divided
+//! by, and the closed form a diagram can draw under the path.
+//!
+//! A membrane's natural scales are μH (a tension), a length a of the mesh (the stress-free
+//! radius: the mesh radius over the prestretch) and, from them, μH/a for a pressure and
+//! μH/a² for a weight per volume. A parameter's role in the scene (the pressure of a gas,
+//! the density or level of a fluid, the ω² of a spin, the offset of a plane) decides its
+//! dimensionless group: `p R/(μH)`, `ρ g a²/(μH)`, `h/a`, `ρ ω² a³/(μH)`, `d/a`. The scale is
+//! used only where the scene fixes it (μ, H, the prestretch and whatever else the group
+//! needs are numbers, not parameters, and the mesh has a radius); otherwise the axis keeps
+//! the parameter's name and its values.
+
+use super::svg::{short, AxisScale, ReferenceCurve};
+use crate::report::PathReport;
+use crate::scene::{Effect, MeshSpec, Quantity, Scene};
+
+/// The scales of a scene's quantities, by name.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Scales {
+    entries: Vec<(String, AxisScale)>,
+}
+
+impl Scales {
+    /// The scale of `name`, if the scene knows one.
+    pub fn get(&self, name: &str) -> Option<&AxisScale> {
+        self.entries.iter().find(|(n, _)| n == name).map(|(_, s)| s)
+    }
+
+    /// The scale of `name`, or the name itself with factor 1.
+    pub fn or_name(&self, name: &str) -> AxisScale {
+        self.get(name).cloned().unwrap_or_else(|| AxisScale {
+            label: name.to_string(),
+            factor: 1.0,
+        })
+    }
+
+    fn add(&mut self, name: &str, label: String, factor: f64) {
+        if factor.is_finite() && factor > 0.0 && self.get(name).is_none() {
+            self.entries
+                .push((name.to_string(), AxisScale { label, factor }));
+        }
+    }
+
+    /// The scales of the quantities of `scene` and of `report`'s measures (`V/V0` with V0
+    /// the first row's volume).
+    pub fn of(scene: &Scene, report: &PathReport) -> Self {
+        let mut s = Self::of_scene(scene);
+        s.measures(scene, report);
+        s
+    }
+
+    /// The scales of the parameters of `scene`.
+    pub fn of_scene(scene: &Scene) -> Self {
+        let mut s = Self::default();
+        let m = &scene.material;
+        let (a, mu_h, l) = natural(scene);
+        let with = with_values;
+        if let Some(k) = m.k.parameter() {
+            s.add(k, "k = c2/c1".into(), 1.0);
+        }
+        if let Some(p) = m.prestretch.parameter() {
+            s.add(p, "λ0 (prestretch)".into(), 1.0);
+        }
+        for e in &scene.effects {
+            match e {
+                Effect::Gas(g) => {
+                    if let (Some(p), Some(mu_h), Some(a)) = (g.pressure.parameter(), mu_h, a) {
+                        let label = with(&format!("p {l}/(μH)"), &[("μH", mu_h), (l, a)]);
+                        s.add(p, label, a / mu_h);
+                    }
+                }
+                Effect::Fluid(f) => {
+                    let (Some(mu_h), Some(a)) = (mu_h, a) else {
+                        continue;
+                    };
+                    if let (Some(rho), Some(g)) = (f.density.parameter(), number(&f.gravity)) {
+                        let label =
+                            with(&format!("ρ g {l}²/(μH)"), &[("g", g), ("μH", mu_h), (l, a)]);
+                        s.add(rho, label, g * a * a / mu_h);
+                    }
+                    if let (Some(g), Some(rho)) = (f.gravity.parameter(), number(&f.density)) {
+                        let label = with(
+                            &format!("ρ g {l}²/(μH)"),
+                            &[("ρ", rho), ("μH", mu_h), (l, a)],
+                        );
+                        s.add(g, label, rho * a * a / mu_h);
+                    }
+                    if let Some(h) = f.level.parameter() {
+                        s.add(h, with(&format!("h/{l}"), &[(l, a)]), 1.0 / a);
+                    }
+                }
+                Effect::Spin(sp) => {
+                    let (Some(mu_h), Some(a)) = (mu_h, a) else {
+                        continue;
+                    };
+                    if let (Some(w2), Some(rho)) = (sp.omega2.parameter(), number(&sp.density)) {
+                        let label = with(
+                            &format!("ρ ω² {l}³/(μH)"),
+                            &[("ρ", rho), ("μH", mu_h), (l, a)],
+                        );
+                        s.add(w2, label, rho * a.powi(3) / mu_h);
+                    }
+                }
+                Effect::Plane(pl) => {
+                    if let (Some(d), Some(a)) = (pl.offset.parameter(), a) {
+                        s.add(d, with(&format!("d/{l}"), &[(l, a)]), 1.0 / a);
+                    }
+                }
+                Effect::GasAmount(_) => {}
+            }
+        }
+        s
+    }
+
+    /// Adds the scales of `report`'s measures.
+    fn measures(&mut self, scene: &Scene, report: &PathReport) {
+        let s = self;
+        let (a, mu_h, l) = natural(scene);
+        let with = with_values;
+        if report.measures.iter().any(|m| m == "stretch") {
+            s.add("stretch", "λ = (V/V_sf)^(1/3)".into(), 1.0);
+        }
+        if let Some(v) = report.measures.iter().position(|m| m == "volume") {
+            if let Some(v0) = report.rows.first().and_then(|r| r.measures.get(v).copied()) {
+                s.add("volume", format!("V/V0 (V0 = {})", short(v0)), 1.0 / v0);
+            }
+        }
+        if let Some(a) = a {
+            for name in ["max_displacement", "min_z", "max_z", "apex_z"] {
+                let what = match name {
+                    "max_displacement" => "max|u|",
+                    "min_z" => "min z",
+                    "max_z" => "max z",
+                    _ => "apex z",
+                };
+                let label = with(&format!("{what}/{l}"), &[(l, a)]);
+                s.add(name, label, 1.0 / a);
+            }
+            if let Some(mu_h) = mu_h {
+                for name in report
+                    .measures
+                    .iter()
+                    .filter(|m| m.starts_with("gas_pressure"))
+                {
+                    let label = with(&format!("{name} {l}/(μH)"), &[("μH", mu_h), (l, a)]);
+                    s.add(name, label, a / mu_h);
+                }
+            }
+        }
+    }
+}
+
+/// The scene's natural length a (the mesh radius over the prestretch), μH, and the length's
+/// symbol (`R` for a sphere, `a` for a disc), where the scene fixes them.
+fn natural(scene: &Scene) -> (Option<f64>, Option<f64>, &'static str) {
+    let m = &scene.material;
+    let mu_h = number(&m.mu).zip(number(&m.thickness)).map(|(a, b)| a * b);
+    let (radius, length) = match &scene.mesh {
+        MeshSpec::Disc(d) => (Some(d.radius), "a"),
+        MeshSpec::Icosphere(i) => (Some(i.radius), "R"),
+        MeshSpec::TruncatedSphere(t) => (Some(t.radius), "R"),
+        MeshSpec::Axisymmetric(a) => (Some(a.radius), "a"),
+        MeshSpec::File(_) => (None, "a"),
+    };
+    let a = radius.zip(number(&m.prestretch)).map(|(r, l)| r / l);
+    (a, mu_h, length)
+}
+
+/// A fixed number of the scene (not a parameter).
+fn number(q: &Quantity) -> Option<f64> {
+    match q {
+        Quantity::Value(v) => Some(*v),
+        Quantity::Parameter(_) => None,
+    }
+}
+
+/// `label (name = value, …)`.
+fn with_values(label: &str, parts: &[(&str, f64)]) -> String {
+    let values: Vec<String> = parts
+        .iter()
+        .map(|(n, v)| format!("{n} = {}", trimmed(*v)))
+        .collect();
+    format!("{label} ({})", values.join(", "))
+}
+
+/// `v` with up to six significant digits and no trailing zeros.
+fn trimmed(v: f64) -> String {
+    let t = format!("{v:.6}");
+    let t = if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    };
+    if t == "0" || t == "-0" {
+        short(v)
+    } else {
+        t
+    }
+}
+
+/// The closed form of a balloon under pressure control, as a curve of (stretch, p) over the
+/// report's range of stretch: a free closed icosphere loaded by one gas whose pressure is
+/// the control, with μ, H, k and the prestretch numbers; `None` for any other scene or a
+/// report without a `stretch`.
+pub fn balloon_closed_form(scene: &Scene, report: &PathReport) -> Option<ReferenceCurve> {
+    let MeshSpec::Icosphere(ico) = &scene.mesh else {
+        return None;
+    };
+    let [Effect::Gas(gas)] = scene.effects.as_slice() else {
+        return None;
+    };
+    if gas.pressure.parameter() != Some(report.control.as_str())
+        || !scene.boundary.fixed.is_empty()
+        || !scene.boundary.slide.is_empty()
+        || !scene.constraints.is_empty()
+    {
+        return None;
+    }
+    let m = &scene.material;
+    let (mu, k, h, l0) = (
+        number(&m.mu)?,
+        number(&m.k)?,
+        number(&m.thickness)?,
+        number(&m.prestretch)?,
+    );
+    let radius = ico.radius / l0;
+    let s = report.measures.iter().position(|m| m == "stretch")?;
+    let (lo, hi) = report
+        .rows
+        .iter()
+        .filter_map(|r| r.measures.get(s).copied())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), l| {
+            (lo.min(l), hi.max(l))
+        });
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
+        return None;
+    }
+    let n = 200;
+    let points = (0..=n)
+        .map(|i| {
+            let l = lo + (hi - lo) * f64::from(i) / f64::from(n);
+            (l, crate::reference::sphere_pressure(k, l) * mu * h / radius)
+        })
+        .collect();
+    Some(ReferenceCurve {
+        label: format!(
+            "closed form, k = {}: 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²)",
+            trimmed(k)
+        ),
+        points,
+    })
+}
