@@ -37,7 +37,7 @@ mod model;
 mod problem;
 pub mod run;
 
-pub use model::{AxisymModel, Block, Evaluated, Pressure};
+pub use model::{AxisymModel, Block, BlockLayout, Evaluated, Pressure};
 pub use problem::AxisymProblem;
 
 use crate::effects::membrane::MooneyRivlin;

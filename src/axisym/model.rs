@@ -257,6 +257,38 @@ impl AxisymModel {
 
     /// Π, gradient, tangent and parameter loads at displacement `q`, parameters `params`.
     pub fn evaluate(&self, q: &[f64], params: &[f64]) -> Result<Evaluated, AxisymError> {
+        let nq = self.dim();
+        let mut tangent = nalgebra::DMatrix::zeros(nq, nq);
+        let mut out = self.evaluate_elements(q, params, |e, kk| {
+            for i in 0..6 {
+                let Some(a) = self.element_unknown(e, i) else {
+                    continue;
+                };
+                for j in 0..6 {
+                    if let Some(b) = self.element_unknown(e, j) {
+                        tangent[(a, b)] += kk[(i, j)];
+                    }
+                }
+            }
+        })?;
+        out.tangent = tangent;
+        Ok(out)
+    }
+
+    /// The unknown of element e's local unknown i (r, z per node, node-major), if free.
+    pub fn element_unknown(&self, e: usize, i: usize) -> Option<usize> {
+        self.index[2 * e + i / 2][i % 2]
+    }
+
+    /// Π, gradient and parameter loads at displacement `q`, each element's 6 × 6 tangent
+    /// (over [`Self::element_unknown`]) handed to `tangent` instead of assembled; the
+    /// returned [`Evaluated::tangent`] is empty.
+    pub fn evaluate_elements(
+        &self,
+        q: &[f64],
+        params: &[f64],
+        mut tangent: impl FnMut(usize, &SMatrix<f64, 6, 6>),
+    ) -> Result<Evaluated, AxisymError> {
         let x = self.positions(q);
         if let Some(d) = self.wetting_defect(&x, params) {
             return Err(d);
@@ -265,7 +297,7 @@ impl AxisymModel {
         let mut out = Evaluated {
             energy: 0.0,
             gradient: vec![0.0; nq],
-            tangent: nalgebra::DMatrix::zeros(nq, nq),
+            tangent: nalgebra::DMatrix::zeros(0, 0),
             loads: nalgebra::DMatrix::zeros(nq, params.len()),
         };
         let lam = self.meridian.prestretch;
@@ -344,19 +376,16 @@ impl AxisymModel {
                     }
                 }
             }
-            let idx = |i: usize| self.index[2 * e + i / 2][i % 2];
             for i in 0..6 {
-                let Some(a) = idx(i) else { continue };
+                let Some(a) = self.element_unknown(e, i) else {
+                    continue;
+                };
                 out.gradient[a] += g[i];
                 for (j, l) in loads.iter().enumerate() {
                     out.loads[(a, j)] += l[i];
                 }
-                for j in 0..6 {
-                    if let Some(b) = idx(j) {
-                        out.tangent[(a, b)] += kk[(i, j)];
-                    }
-                }
             }
+            tangent(e, &kk);
         }
         if !out.energy.is_finite() || out.gradient.iter().any(|v| !v.is_finite()) {
             return Err(AxisymError::NonFinite);
@@ -417,45 +446,99 @@ impl AxisymModel {
         (map, cols)
     }
 
-    /// The block of wave number m at displacement `q` (membrane and pressures), on the kept
-    /// unknowns of [`Self::kept_map`].
-    pub fn block(&self, m: usize, q: &[f64], params: &[f64]) -> Result<Block, AxisymError> {
-        let x = self.positions(q);
-        if let Some(d) = self.wetting_defect(&x, params) {
-            return Err(d);
-        }
+    /// The layout of the block of wave number m: its pattern on the kept unknowns of
+    /// [`Self::kept_map`] and, per element, where each entry of its 9 × 9 matrix goes. It
+    /// depends on m and the meridian only, so a run builds it once per wave number.
+    pub fn block_layout(&self, m: usize) -> BlockLayout {
         let (map, cols) = self.kept_map(m);
-        let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+        let mut entries = Vec::new();
         for e in 0..self.meridian.elements() {
-            let mut local = membrane_local(&self.meridian, &x, e, m)?;
-            for load in &self.pressures {
-                local += pressure_local(&self.meridian, &x, e, m, load, params);
+            for i in 0..9 {
+                let Some((a, _)) = map[6 * e + i] else {
+                    continue;
+                };
+                for j in 0..9 {
+                    if let Some((b, _)) = map[6 * e + j] {
+                        entries.push((a, b));
+                    }
+                }
             }
+        }
+        let pattern = SymmetricPattern::from_entries(cols, entries);
+        let mut slots = Vec::with_capacity(self.meridian.elements());
+        for e in 0..self.meridian.elements() {
+            let mut local = Vec::new();
             for i in 0..9 {
                 let Some((a, ca)) = map[6 * e + i] else {
                     continue;
                 };
                 for j in 0..9 {
                     if let Some((b, cb)) = map[6 * e + j] {
-                        triplets.push((a, b, ca * cb * local[(i, j)]));
+                        let k = pattern.position(a, b).expect("an entry of the pattern");
+                        local.push((9 * i + j, k, ca * cb));
                     }
                 }
             }
+            slots.push(local);
         }
-        let pattern = SymmetricPattern::from_entries(cols, triplets.iter().map(|t| (t.0, t.1)));
-        let mut values = vec![0.0; pattern.nnz()];
-        for (a, b, v) in triplets {
-            let k = pattern.position(a, b).expect("an entry of the pattern");
-            values[k] += v;
+        BlockLayout {
+            m,
+            pattern: Arc::new(pattern),
+            slots,
+        }
+    }
+
+    /// The block of wave number m at displacement `q` (membrane and pressures), on the kept
+    /// unknowns of [`Self::kept_map`] (its layout built afresh; a run reuses one through
+    /// [`Self::block_values`]).
+    pub fn block(&self, m: usize, q: &[f64], params: &[f64]) -> Result<Block, AxisymError> {
+        let layout = self.block_layout(m);
+        let values = self.block_values(&layout, q, params)?;
+        Ok(Block {
+            pattern: layout.pattern,
+            values,
+        })
+    }
+
+    /// The values of the block of `layout`'s wave number at displacement `q`, aligned with
+    /// its pattern.
+    pub fn block_values(
+        &self,
+        layout: &BlockLayout,
+        q: &[f64],
+        params: &[f64],
+    ) -> Result<Vec<f64>, AxisymError> {
+        let x = self.positions(q);
+        if let Some(d) = self.wetting_defect(&x, params) {
+            return Err(d);
+        }
+        let m = layout.m;
+        let mut values = vec![0.0; layout.pattern.nnz()];
+        for (e, slots) in layout.slots.iter().enumerate() {
+            let mut local = membrane_local(&self.meridian, &x, e, m)?;
+            for load in &self.pressures {
+                local += pressure_local(&self.meridian, &x, e, m, load, params);
+            }
+            for &(ij, k, c) in slots {
+                values[k] += c * local[(ij / 9, ij % 9)];
+            }
         }
         if values.iter().any(|v| !v.is_finite()) {
             return Err(AxisymError::NonFinite);
         }
-        Ok(Block {
-            pattern: Arc::new(pattern),
-            values,
-        })
+        Ok(values)
     }
+}
+
+/// Where the entries of a block of one wave number go: its pattern and, per element, the
+/// (local entry 9 i + j, slot in the pattern's values, coefficient) of every kept entry.
+#[derive(Debug, Clone)]
+pub struct BlockLayout {
+    /// The wave number m.
+    pub m: usize,
+    /// The pattern.
+    pub pattern: Arc<SymmetricPattern>,
+    slots: Vec<Vec<(usize, usize, f64)>>,
 }
 
 /// The cos and sin parts of δx, δx_ξ, δx_θ at a Gauss point for the 9 unknowns of an
@@ -527,14 +610,22 @@ pub(super) fn membrane_local(
             .ok_or(AxisymError::Degenerate(e))?;
         let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
         let (fams, theta) = families(m, &parts(&p, m));
-        for fam in fams {
-            let b = [fam[1] * (lam / p.dx_ref), fam[2] * (lam / p.big_r)];
-            for i in 0..2 {
-                for k in 0..2 {
-                    let hik: &Matrix3<f64> = &hf[i][k];
-                    local += b[i].transpose() * hik * b[k] * (h * da0 * theta);
-                }
+        // ∂²W/∂f_i∂f_k as one 6 × 6 matrix, δf = (δf1, δf2) = B δu as one 6 × 9.
+        let mut hh = SMatrix::<f64, 6, 6>::zeros();
+        for (i, row) in hf.iter().enumerate() {
+            for (k, hik) in row.iter().enumerate() {
+                let hik: &Matrix3<f64> = hik;
+                hh.fixed_view_mut::<3, 3>(3 * i, 3 * k).copy_from(hik);
             }
+        }
+        hh *= h * da0 * theta;
+        for fam in fams {
+            let mut b = SMatrix::<f64, 6, 9>::zeros();
+            b.fixed_view_mut::<3, 9>(0, 0)
+                .copy_from(&(fam[1] * (lam / p.dx_ref)));
+            b.fixed_view_mut::<3, 9>(3, 0)
+                .copy_from(&(fam[2] * (lam / p.big_r)));
+            local += b.transpose() * (hh * b);
         }
     }
     Ok(local)
