@@ -342,6 +342,9 @@ pub struct AxisymCritical {
     pub measures: Vec<f64>,
     /// Whether the crossing was localised.
     pub localised: bool,
+    /// The block's eigenvalue nearest zero there, relative to its largest entry (NaN where
+    /// the crossing was not localised).
+    pub eigenvalue: f64,
 }
 
 fn display<S: serde::Serializer>(k: &CriticalKind, s: S) -> Result<S::Ok, S::Error> {
@@ -383,7 +386,8 @@ pub struct AxisymReport {
     pub block_time: Duration,
 }
 
-/// Runs an axisymmetric study's analysis; `progress(point, control)` at every point.
+/// Runs an axisymmetric study's analysis; `progress(point, control)` at every converged point
+/// (the start is point 0, as in [`crate::analysis::run`]).
 pub fn run(
     study: &AxisymStudy,
     mut progress: impl FnMut(usize, f64),
@@ -513,6 +517,7 @@ pub fn run(
             parameters: param_at(&c.lambda),
             measures: study.measure(&c.q),
             localised: c.localised,
+            eigenvalue: c.eigenvalue,
         })
         .collect();
     let MeshSpec::Axisymmetric(mesh) = &study.scene.mesh else {
