@@ -31,6 +31,7 @@ use super::{shape, AxisymError, Meridian, GAUSS};
 use crate::effects::Quantity;
 use crate::linalg::SymmetricPattern;
 use nalgebra::{Matrix3, SMatrix, Vector3};
+use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::sync::Arc;
 
@@ -475,7 +476,7 @@ impl AxisymModel {
                 for j in 0..9 {
                     if let Some((b, cb)) = map[6 * e + j] {
                         let k = pattern.position(a, b).expect("an entry of the pattern");
-                        local.push((9 * i + j, k, ca * cb));
+                        local.push((i + 9 * j, k, ca * cb)); // column-major, as the matrix
                     }
                 }
             }
@@ -508,22 +509,41 @@ impl AxisymModel {
         q: &[f64],
         params: &[f64],
     ) -> Result<Vec<f64>, AxisymError> {
+        let mut all = self.blocks_values(std::slice::from_ref(layout), q, params)?;
+        Ok(all.remove(0))
+    }
+
+    /// The values of the blocks of every layout at displacement `q`, from one pass over the
+    /// Gauss points (the material's Hessian and the pressures evaluated once for all).
+    pub fn blocks_values(
+        &self,
+        layouts: &[BlockLayout],
+        q: &[f64],
+        params: &[f64],
+    ) -> Result<Vec<Vec<f64>>, AxisymError> {
         let x = self.positions(q);
         if let Some(d) = self.wetting_defect(&x, params) {
             return Err(d);
         }
-        let m = layout.m;
-        let mut values = vec![0.0; layout.pattern.nnz()];
-        for (e, slots) in layout.slots.iter().enumerate() {
-            let mut local = membrane_local(&self.meridian, &x, e, m)?;
-            for load in &self.pressures {
-                local += pressure_local(&self.meridian, &x, e, m, load, params);
-            }
-            for &(ij, k, c) in slots {
-                values[k] += c * local[(ij / 9, ij % 9)];
-            }
-        }
-        if values.iter().any(|v| !v.is_finite()) {
+        let lam = self.meridian.prestretch;
+        let points = (0..self.meridian.elements())
+            .map(|e| block_points(&self.meridian, &x, e, true, &self.pressures, params))
+            .collect::<Result<Vec<_>, _>>()?;
+        // The wave numbers are independent: one task each.
+        let values: Vec<Vec<f64>> = layouts
+            .par_iter()
+            .map(|layout| {
+                let mut v = vec![0.0; layout.pattern.nnz()];
+                for (e, points) in points.iter().enumerate() {
+                    let local = block_local(points, layout.m, lam);
+                    for &(ij, k, c) in &layout.slots[e] {
+                        v[k] += c * local.as_slice()[ij];
+                    }
+                }
+                v
+            })
+            .collect();
+        if values.iter().flatten().any(|v| !v.is_finite()) {
             return Err(AxisymError::NonFinite);
         }
         Ok(values)
@@ -531,7 +551,7 @@ impl AxisymModel {
 }
 
 /// Where the entries of a block of one wave number go: its pattern and, per element, the
-/// (local entry 9 i + j, slot in the pattern's values, coefficient) of every kept entry.
+/// (local entry i + 9 j, slot in the pattern's values, coefficient) of every kept entry.
 #[derive(Debug, Clone)]
 pub struct BlockLayout {
     /// The wave number m.
@@ -589,51 +609,154 @@ fn families(m: usize, pr: &[[SMatrix<f64, 3, 9>; 2]; 3]) -> (Vec<[SMatrix<f64, 3
     }
 }
 
+/// What the blocks of every wave number share at one Gauss point of an element.
+struct BlockPoint {
+    p: super::Point,
+    /// The membrane's H ∂²W/∂f_i∂f_k dA0 as one 6 × 6 (the θ factor apart), if included.
+    membrane: Option<SMatrix<f64, 6, 6>>,
+    /// Per pressure: (s × Gauss weight, p, p'(z)).
+    pressures: Vec<(f64, f64, f64)>,
+    /// n dA / (dξ dθ) = x_ξ × x_θ and x_θ = r e_θ.
+    nda: Vector3<f64>,
+    x_th: Vector3<f64>,
+}
+
+/// The Gauss points of element e at the nodes `x` with the membrane (when `membrane`) and
+/// the `pressures` evaluated once for the blocks of every wave number.
+fn block_points(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    e: usize,
+    membrane: bool,
+    pressures: &[Pressure],
+    params: &[f64],
+) -> Result<Vec<BlockPoint>, AxisymError> {
+    let lam = meridian.prestretch;
+    let h = meridian.material.thickness;
+    super::points(meridian, x, e)
+        .into_iter()
+        .map(|p| {
+            let membrane = if membrane {
+                let f = [
+                    p.x_xi * (lam / p.dx_ref),
+                    Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
+                ];
+                let (_, _, hf) = meridian
+                    .material
+                    .energy_in_f(&f)
+                    .ok_or(AxisymError::Degenerate(e))?;
+                let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
+                let mut hh = SMatrix::<f64, 6, 6>::zeros();
+                for (i, row) in hf.iter().enumerate() {
+                    for (k, hik) in row.iter().enumerate() {
+                        let hik: &Matrix3<f64> = hik;
+                        hh.fixed_view_mut::<3, 3>(3 * i, 3 * k).copy_from(hik);
+                    }
+                }
+                Some(hh * (h * da0))
+            } else {
+                None
+            };
+            let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+            let pressures = pressures
+                .iter()
+                .map(|load| {
+                    let pa = load.at(z, params, None);
+                    (pa.sign * p.weight, pa.p, pa.dp)
+                })
+                .collect();
+            let x_th = Vector3::new(0.0, p.r, 0.0);
+            let nda = p.x_xi.cross(&x_th);
+            Ok(BlockPoint {
+                p,
+                membrane,
+                pressures,
+                nda,
+                x_th,
+            })
+        })
+        .collect()
+}
+
+/// The cross product a × · as a matrix.
+fn cross_matrix(a: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0)
+}
+
+/// The 9 × 9 block of wave number m of an element from its [`block_points`]: the membrane
+/// term of §15.2 and, per pressure, the symmetrised second variation
+/// s ∫ [p'(z) δz₂ (n dA·δx₁) + p δx₁·(δx₂,ξ × x_θ + x_ξ × δx₂,θ)] dξ dθ of the potential whose
+/// first variation is s ∫ p n·δx dA.
+fn block_local(points: &[BlockPoint], m: usize, lam: f64) -> SMatrix<f64, 9, 9> {
+    let mut local = SMatrix::<f64, 9, 9>::zeros();
+    for bp in points {
+        let p = &bp.p;
+        let (fams, theta) = families(m, &parts(p, m));
+        let (cx, ct) = (cross_matrix(&p.x_xi), cross_matrix(&bp.x_th));
+        for [dx, dxi, dth] in fams {
+            if let Some(hh) = &bp.membrane {
+                let mut b = SMatrix::<f64, 6, 9>::zeros();
+                b.fixed_view_mut::<3, 9>(0, 0)
+                    .copy_from(&(dxi * (lam / p.dx_ref)));
+                b.fixed_view_mut::<3, 9>(3, 0)
+                    .copy_from(&(dth * (lam / p.big_r)));
+                // For m ≥ 1 each family strains three of the six components (cos: f1_r,
+                // f1_z, f2_θ; sin: the others): the product on those rows alone.
+                let mut rows = [0usize; 6];
+                let mut n = 0;
+                for r in 0..6 {
+                    if b.row(r).iter().any(|v| *v != 0.0) {
+                        rows[n] = r;
+                        n += 1;
+                    }
+                }
+                if n <= 3 {
+                    let mut bc = SMatrix::<f64, 3, 9>::zeros();
+                    let mut hc = Matrix3::<f64>::zeros();
+                    for a in 0..n {
+                        bc.row_mut(a).copy_from(&b.row(rows[a]));
+                        for c in 0..n {
+                            hc[(a, c)] = hh[(rows[a], rows[c])];
+                        }
+                    }
+                    local += bc.transpose() * (hc * bc) * theta;
+                } else {
+                    local += b.transpose() * (hh * b) * theta;
+                }
+            }
+            if bp.pressures.is_empty() {
+                continue;
+            }
+            // δ(n dA) per unknown: δx_ξ × x_θ + x_ξ × δx_θ; (n dA·δx) per unknown.
+            let dn = cx * dth - ct * dxi;
+            let w = dx.transpose() * bp.nda;
+            let dz = dx.row(2);
+            let shape = w * dz;
+            let work = dx.transpose() * dn;
+            let mut a = SMatrix::<f64, 9, 9>::zeros();
+            for &(c, pr, dp) in &bp.pressures {
+                a += (shape * dp + work * pr) * c;
+            }
+            local += (a + a.transpose()) * (0.5 * theta);
+        }
+    }
+    local
+}
+
 /// The membrane's 9 × 9 block of wave number m on element e at the nodes `x`.
-pub(super) fn membrane_local(
+#[cfg(test)]
+fn membrane_local(
     meridian: &Meridian,
     x: &[[f64; 2]],
     e: usize,
     m: usize,
 ) -> Result<SMatrix<f64, 9, 9>, AxisymError> {
-    let lam = meridian.prestretch;
-    let h = meridian.material.thickness;
-    let mut local = SMatrix::<f64, 9, 9>::zeros();
-    for p in super::points(meridian, x, e) {
-        let f = [
-            p.x_xi * (lam / p.dx_ref),
-            Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
-        ];
-        let (_, _, hf) = meridian
-            .material
-            .energy_in_f(&f)
-            .ok_or(AxisymError::Degenerate(e))?;
-        let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
-        let (fams, theta) = families(m, &parts(&p, m));
-        // ∂²W/∂f_i∂f_k as one 6 × 6 matrix, δf = (δf1, δf2) = B δu as one 6 × 9.
-        let mut hh = SMatrix::<f64, 6, 6>::zeros();
-        for (i, row) in hf.iter().enumerate() {
-            for (k, hik) in row.iter().enumerate() {
-                let hik: &Matrix3<f64> = hik;
-                hh.fixed_view_mut::<3, 3>(3 * i, 3 * k).copy_from(hik);
-            }
-        }
-        hh *= h * da0 * theta;
-        for fam in fams {
-            let mut b = SMatrix::<f64, 6, 9>::zeros();
-            b.fixed_view_mut::<3, 9>(0, 0)
-                .copy_from(&(fam[1] * (lam / p.dx_ref)));
-            b.fixed_view_mut::<3, 9>(3, 0)
-                .copy_from(&(fam[2] * (lam / p.big_r)));
-            local += b.transpose() * (hh * b);
-        }
-    }
-    Ok(local)
+    let points = block_points(meridian, x, e, true, &[], &[])?;
+    Ok(block_local(&points, m, meridian.prestretch))
 }
 
-/// A pressure's 9 × 9 block of wave number m on element e: the symmetrised second variation
-/// s ∫ [p'(z) δz₂ (n dA·δx₁) + p δx₁·(δx₂,ξ × x_θ + x_ξ × δx₂,θ)] dξ dθ of the potential
-/// whose first variation is s ∫ p n·δx dA.
+/// A pressure's 9 × 9 block of wave number m on element e (see [`block_local`]).
+#[cfg(test)]
 fn pressure_local(
     meridian: &Meridian,
     x: &[[f64; 2]],
@@ -642,26 +765,8 @@ fn pressure_local(
     load: &Pressure,
     params: &[f64],
 ) -> SMatrix<f64, 9, 9> {
-    let mut local = SMatrix::<f64, 9, 9>::zeros();
-    for p in super::points(meridian, x, e) {
-        let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
-        let pa = load.at(z, params, None);
-        let x_th = Vector3::new(0.0, p.r, 0.0);
-        let nda = p.x_xi.cross(&x_th);
-        let (fams, theta) = families(m, &parts(&p, m));
-        for [dx, dxi, dth] in fams {
-            let mut a = SMatrix::<f64, 9, 9>::zeros();
-            for j in 0..9 {
-                let dn = dxi.column(j).cross(&x_th) + p.x_xi.cross(&dth.column(j));
-                for i in 0..9 {
-                    let di = dx.column(i);
-                    a[(i, j)] = pa.dp * dx[(2, j)] * nda.dot(&di) + pa.p * di.dot(&dn);
-                }
-            }
-            local += (a + a.transpose()) * (0.5 * pa.sign * p.weight * theta);
-        }
-    }
-    local
+    let points = block_points(meridian, x, e, false, &[*load], params).expect("no membrane");
+    block_local(&points, m, meridian.prestretch)
 }
 
 #[cfg(test)]

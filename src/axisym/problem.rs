@@ -4,7 +4,7 @@
 
 use super::{AxisymError, AxisymModel, BlockLayout};
 use crate::analysis::continuation::{Linearization, PhaseTimes, Problem, Tangent};
-use crate::analysis::modes::ModeProblem;
+use crate::analysis::modes::{ModeBlock, ModeProblem};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricPattern;
 use crate::model::ModelError;
@@ -25,8 +25,8 @@ pub struct AxisymProblem {
     pattern: Arc<SymmetricPattern>,
     /// Per element, (local i, local j, slot in the tangent's values).
     slots: Vec<Vec<(usize, usize, usize)>>,
-    /// The layout of every block, built at its first use.
-    layouts: Vec<Option<BlockLayout>>,
+    /// The layout of every block m = 0..=modes, built once.
+    layouts: Vec<BlockLayout>,
     solver: SharedFactorization,
     times: PhaseTimes,
 }
@@ -80,7 +80,7 @@ impl AxisymProblem {
             })
             .collect();
         Self {
-            layouts: (0..=modes).map(|_| None).collect(),
+            layouts: (0..=modes).map(|m| model.block_layout(m)).collect(),
             model,
             params,
             control,
@@ -161,14 +161,36 @@ impl ModeProblem for AxisymProblem {
         lambda: &DVector<f64>,
     ) -> Result<(Arc<SymmetricPattern>, Vec<f64>), ModelError> {
         let params = self.parameters(lambda);
-        if m >= self.layouts.len() {
-            self.layouts.resize(m + 1, None);
-        }
-        let layout = self.layouts[m].get_or_insert_with(|| self.model.block_layout(m));
+        let built;
+        let layout = match self.layouts.get(m) {
+            Some(l) => l,
+            None => {
+                built = self.model.block_layout(m);
+                &built
+            }
+        };
         let values = self
             .model
             .block_values(layout, q.as_slice(), &params)
             .map_err(model_error)?;
         Ok((layout.pattern.clone(), values))
+    }
+
+    fn blocks(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Vec<ModeBlock>, ModelError> {
+        let params = self.parameters(lambda);
+        let values = self
+            .model
+            .blocks_values(&self.layouts, q.as_slice(), &params)
+            .map_err(model_error)?;
+        Ok(self
+            .layouts
+            .iter()
+            .zip(values)
+            .map(|(l, v)| (l.pattern.clone(), v))
+            .collect())
     }
 }
