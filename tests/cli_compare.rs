@@ -323,13 +323,15 @@ fn a_scene_the_meridian_cannot_run_is_refused() {
         &["mesh 'axisymmetric'", "boundary.slide"],
     );
     let mut t = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
-    t.push_str("\n[[effect]]\ntype = \"spin\"\ndensity = 1.0\nomega2 = 0.5\n");
-    let path = dir.path().join("spun.toml");
+    t.push_str(
+        "\n[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -1.0\npenalty = 1.0\n",
+    );
+    let path = dir.path().join("floored.toml");
     std::fs::write(&path, t).unwrap();
     let path = path.display().to_string();
     assert_rejected(
         &["compare", &path, "--meshes", "axisymmetric,C8v"],
-        &["type = \"spin\""],
+        &["type = \"plane\""],
     );
     assert!(std::fs::read_dir(dir.path()).unwrap().count() == 1);
 }

@@ -55,6 +55,14 @@ pub enum Pressure {
         /// True: the fluid is on the side n points to (s = +1).
         front: bool,
     },
+    /// Fluid spinning about z behind the membrane: the centrifugal pressure p = ρ ω² r²/2,
+    /// potential in [`super::spin`].
+    Spin {
+        /// ρ.
+        density: Quantity,
+        /// ω².
+        omega2: Quantity,
+    },
 }
 
 /// p, p'(z), and the same for the derivative along parameter `j` (when it enters).
@@ -67,7 +75,7 @@ struct PressureAt {
 impl Pressure {
     fn sign(&self) -> f64 {
         match self {
-            Pressure::Gas { .. } => -1.0,
+            Pressure::Gas { .. } | Pressure::Spin { .. } => -1.0,
             Pressure::Fluid { front, .. } => {
                 if *front {
                     1.0
@@ -78,10 +86,26 @@ impl Pressure {
         }
     }
 
-    /// p(z) and p'(z), or their derivatives along parameter `along` when given.
-    fn at(&self, z: f64, params: &[f64], along: Option<usize>) -> PressureAt {
+    /// ∂p/∂r at radius r (the spin's; 0 for a pressure of z alone).
+    fn radial(&self, r: f64, params: &[f64]) -> f64 {
+        match self {
+            Pressure::Gas { .. } | Pressure::Fluid { .. } => 0.0,
+            Pressure::Spin { density, omega2 } => density.value(params) * omega2.value(params) * r,
+        }
+    }
+
+    /// p and ∂p/∂z at (r, z), or their derivatives along parameter `along` when given.
+    fn at(&self, r: f64, z: f64, params: &[f64], along: Option<usize>) -> PressureAt {
         let sign = self.sign();
         let (p, dp) = match (*self, along) {
+            (Pressure::Spin { density, omega2 }, along) => {
+                let (rho, w2) = (density.value(params), omega2.value(params));
+                let d = match along {
+                    None => rho * w2,
+                    Some(j) => spin_along(density, omega2, params, j),
+                };
+                (0.5 * d * r * r, 0.0)
+            }
             (Pressure::Gas { pressure }, None) => (pressure.value(params), 0.0),
             (Pressure::Gas { pressure }, Some(j)) => (
                 if pressure.parameter() == Some(j) {
@@ -131,10 +155,22 @@ impl Pressure {
 
     fn level(&self, params: &[f64]) -> Option<f64> {
         match self {
-            Pressure::Gas { .. } => None,
+            Pressure::Gas { .. } | Pressure::Spin { .. } => None,
             Pressure::Fluid { level, .. } => Some(level.value(params)),
         }
     }
+}
+
+/// ∂(ρ ω²)/∂λ_j.
+fn spin_along(density: Quantity, omega2: Quantity, params: &[f64], j: usize) -> f64 {
+    let mut d = 0.0;
+    if density.parameter() == Some(j) {
+        d += omega2.value(params);
+    }
+    if omega2.parameter() == Some(j) {
+        d += density.value(params);
+    }
+    d
 }
 
 /// The equilibrium problem of a membrane of revolution: a meridian and its pressures.
@@ -348,7 +384,11 @@ impl AxisymModel {
                 let (r, dz) = (p.r, p.x_xi[2]);
                 let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
                 for load in &self.pressures {
-                    let pa = load.at(z, params, None);
+                    if let Pressure::Spin { .. } = load {
+                        // On the 5-point rule below.
+                        continue;
+                    }
+                    let pa = load.at(r, z, params, None);
                     let c = -pa.sign * PI * p.weight;
                     out.energy += c * r * r * pa.p * dz;
                     let grad = |pa: &PressureAt, gr: &mut [f64; 6]| {
@@ -359,7 +399,7 @@ impl AxisymModel {
                     };
                     grad(&pa, &mut g);
                     for (j, l) in loads.iter_mut().enumerate() {
-                        let pj = load.at(z, params, Some(j));
+                        let pj = load.at(r, z, params, Some(j));
                         if pj.p != 0.0 || pj.dp != 0.0 {
                             grad(&pj, l);
                         }
@@ -373,6 +413,27 @@ impl AxisymModel {
                             kk[(2 * k, 2 * l + 1)] += rz;
                             kk[(2 * l + 1, 2 * k)] += rz;
                             kk[(2 * k + 1, 2 * l + 1)] += c * r * r * pa.dp * (nk * dl + dk * nl);
+                        }
+                    }
+                }
+            }
+            // The spin: r⁴ z_ξ is of degree 9 on a quadratic element.
+            for load in &self.pressures {
+                let Pressure::Spin { density, omega2 } = *load else {
+                    continue;
+                };
+                for p in super::points_on(&self.meridian, &x, e, &super::GAUSS5) {
+                    let (r, dz) = (p.r, p.x_xi[2]);
+                    let base = PI / 4.0 * p.weight;
+                    let k = base * density.value(params) * omega2.value(params);
+                    let (n, dn) = (&p.n, &p.dn);
+                    let mut energy = 0.0;
+                    super::spin::add_point(k, r, dz, n, dn, &mut energy, &mut g, Some(&mut kk));
+                    out.energy += energy;
+                    for (j, l) in loads.iter_mut().enumerate() {
+                        let d = spin_along(density, omega2, params, j);
+                        if d != 0.0 {
+                            super::spin::add_point(base * d, r, dz, n, dn, &mut 0.0, l, None);
                         }
                     }
                 }
@@ -526,9 +587,21 @@ impl AxisymModel {
             return Err(d);
         }
         let lam = self.meridian.prestretch;
+        // The spin on the 5-point rule (its terms are of degree 9), the rest on 4 points.
+        let (spin, rest): (Vec<Pressure>, Vec<Pressure>) = self
+            .pressures
+            .iter()
+            .partition(|p| matches!(p, Pressure::Spin { .. }));
         let points = (0..self.meridian.elements())
-            .map(|e| block_points(&self.meridian, &x, e, true, &self.pressures, params))
-            .collect::<Result<Vec<_>, _>>()?;
+            .map(|e| {
+                let mut points = block_points(&self.meridian, &x, e, true, &rest, params)?;
+                if !spin.is_empty() {
+                    let rule = &super::GAUSS5;
+                    points.extend(block_points_on(&self.meridian, &x, e, &spin, params, rule));
+                }
+                Ok(points)
+            })
+            .collect::<Result<Vec<_>, AxisymError>>()?;
         // The wave numbers are independent: one task each.
         let values: Vec<Vec<f64>> = layouts
             .par_iter()
@@ -614,8 +687,8 @@ struct BlockPoint {
     p: super::Point,
     /// The membrane's H ∂²W/∂f_i∂f_k dA0 as one 6 × 6 (the θ factor apart), if included.
     membrane: Option<SMatrix<f64, 6, 6>>,
-    /// Per pressure: (s × Gauss weight, p, p'(z)).
-    pressures: Vec<(f64, f64, f64)>,
+    /// Per pressure: (s × Gauss weight, p, ∂p/∂r, ∂p/∂z).
+    pressures: Vec<(f64, f64, f64, f64)>,
     /// n dA / (dξ dθ) = x_ξ × x_θ and x_θ = r e_θ.
     nda: Vector3<f64>,
     x_th: Vector3<f64>,
@@ -661,8 +734,8 @@ fn block_points(
             let pressures = pressures
                 .iter()
                 .map(|load| {
-                    let pa = load.at(z, params, None);
-                    (pa.sign * p.weight, pa.p, pa.dp)
+                    let pa = load.at(p.r, z, params, None);
+                    (pa.sign * p.weight, pa.p, load.radial(p.r, params), pa.dp)
                 })
                 .collect();
             let x_th = Vector3::new(0.0, p.r, 0.0);
@@ -678,6 +751,39 @@ fn block_points(
         .collect()
 }
 
+/// The Gauss points of element e on the rule `rule` with the `pressures` only (no membrane).
+fn block_points_on(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    e: usize,
+    pressures: &[Pressure],
+    params: &[f64],
+    rule: &[(f64, f64)],
+) -> Vec<BlockPoint> {
+    super::points_on(meridian, x, e, rule)
+        .into_iter()
+        .map(|p| {
+            let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+            let pressures = pressures
+                .iter()
+                .map(|load| {
+                    let pa = load.at(p.r, z, params, None);
+                    (pa.sign * p.weight, pa.p, load.radial(p.r, params), pa.dp)
+                })
+                .collect();
+            let x_th = Vector3::new(0.0, p.r, 0.0);
+            let nda = p.x_xi.cross(&x_th);
+            BlockPoint {
+                p,
+                membrane: None,
+                pressures,
+                nda,
+                x_th,
+            }
+        })
+        .collect()
+}
+
 /// The cross product a × · as a matrix.
 fn cross_matrix(a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0)
@@ -685,8 +791,8 @@ fn cross_matrix(a: &Vector3<f64>) -> Matrix3<f64> {
 
 /// The 9 × 9 block of wave number m of an element from its [`block_points`]: the membrane
 /// term of §15.2 and, per pressure, the symmetrised second variation
-/// s ∫ [p'(z) δz₂ (n dA·δx₁) + p δx₁·(δx₂,ξ × x_θ + x_ξ × δx₂,θ)] dξ dθ of the potential whose
-/// first variation is s ∫ p n·δx dA.
+/// s ∫ [∇p·δx₂ (n dA·δx₁) + p δx₁·(δx₂,ξ × x_θ + x_ξ × δx₂,θ)] dξ dθ of the potential whose
+/// first variation is s ∫ p n·δx dA (∇p = p_r e_r + p_z e_z).
 fn block_local(points: &[BlockPoint], m: usize, lam: f64) -> SMatrix<f64, 9, 9> {
     let mut local = SMatrix::<f64, 9, 9>::zeros();
     for bp in points {
@@ -730,12 +836,12 @@ fn block_local(points: &[BlockPoint], m: usize, lam: f64) -> SMatrix<f64, 9, 9> 
             // δ(n dA) per unknown: δx_ξ × x_θ + x_ξ × δx_θ; (n dA·δx) per unknown.
             let dn = cx * dth - ct * dxi;
             let w = dx.transpose() * bp.nda;
-            let dz = dx.row(2);
-            let shape = w * dz;
+            let (dr, dz) = (dx.row(0), dx.row(2));
             let work = dx.transpose() * dn;
             let mut a = SMatrix::<f64, 9, 9>::zeros();
-            for &(c, pr, dp) in &bp.pressures {
-                a += (shape * dp + work * pr) * c;
+            for &(c, pr, dp_r, dp_z) in &bp.pressures {
+                // ∇p·δx₂ (n dA·δx₁) + p δx₁·δ(n dA)₂.
+                a += (w * (dr * dp_r + dz * dp_z) + work * pr) * c;
             }
             local += (a + a.transpose()) * (0.5 * theta);
         }
@@ -789,12 +895,16 @@ mod tests {
                 level: Quantity::Parameter(2),
                 front: false,
             },
+            Pressure::Spin {
+                density: Quantity::Value(0.9),
+                omega2: Quantity::Parameter(3),
+            },
         ];
         let model = AxisymModel::new(meridian, pressures);
         let q: Vec<f64> = (0..model.dim())
             .map(|k| 0.03 * ((k as f64) * 1.7).sin() + 0.02)
             .collect();
-        (model, q, vec![0.7, 0.4, 2.0])
+        (model, q, vec![0.7, 0.4, 2.0, 1.7])
     }
 
     #[test]
@@ -858,6 +968,27 @@ mod tests {
         );
         let v = model.volume(&model.positions(&q));
         assert!((e.energy - b.energy + params[0] * v).abs() < 1e-12 * v.abs());
+    }
+
+    /// The spin potential is −(ρ ω²/2) ∫_V r² dV: on a sphere of radius a, ∫_V r² dV =
+    /// 8π a⁵/15 (to the meridian's O(h⁴) error).
+    #[test]
+    fn the_spin_potential_is_the_centrifugal_energy_of_the_enclosed_fluid() {
+        let mat = MooneyRivlin::new(1.0, 0.2, 0.1);
+        let a = 1.3;
+        let meridian = Meridian::sphere(a, 32, 1.0, mat).unwrap();
+        let spin = Pressure::Spin {
+            density: Quantity::Value(0.8),
+            omega2: Quantity::Parameter(0),
+        };
+        let model = AxisymModel::new(meridian.clone(), vec![spin]);
+        let bare = AxisymModel::new(meridian, Vec::new());
+        let q = vec![0.0; model.dim()];
+        let w2 = 2.5;
+        let pi_spin =
+            model.evaluate(&q, &[w2]).unwrap().energy - bare.evaluate(&q, &[w2]).unwrap().energy;
+        let exact = -0.5 * 0.8 * w2 * 8.0 * PI * a.powi(5) / 15.0;
+        assert!((pi_spin / exact - 1.0).abs() < 1e-6, "{pi_spin} vs {exact}");
     }
 
     /// The m = 0 block on (U, W) is the tangent of the axisymmetric problem.
