@@ -313,6 +313,68 @@ fn the_meridian_gives_every_rung_its_continuum_value_and_distance() {
     assert!(row.contains(&memstab::text::sci(d)), "{row} lacks {d}");
 }
 
+/// The same `type = "spin"` on the meridian and on the C8v disc: the flat pre-stretched
+/// clamped disc over spinning fluid, held while ω² sweeps. The C8v values approach the
+/// meridian's at second order (6 → 12 divisions), so both discretise one continuum spin load.
+#[test]
+fn the_spin_on_the_meridian_is_the_continuum_of_the_3d_spin() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = r#"
+[scene]
+name = "spun-floor"
+
+[mesh]
+generator = "disc"
+radius = 1.1
+sectors = 8
+divisions = 6
+
+[material]
+model = "mooney-rivlin"
+mu = 100.0
+k = 0.0
+thickness = 0.01
+prestretch = 1.1
+
+[[effect]]
+type = "spin"
+density = 1.0
+omega2 = "w2"
+
+[boundary]
+fixed = ["rim"]
+
+[parameters.w2]
+start = 0.0
+min = 0.0
+max = 22.0
+
+[analysis]
+type = "linear-buckling"
+control = "w2"
+samples = 22
+"#;
+    let path = dir.path().join("spun.toml");
+    std::fs::write(&path, scene).unwrap();
+    let path = path.display().to_string();
+    let json = compare_json(&[&path, "--meshes", "axisymmetric,C8v", "--refine"]);
+    for m in [0u64, 1] {
+        let r = rung(&json, m);
+        assert!(r["continuum"].as_f64().unwrap() > 0.0, "{r}");
+        let d: Vec<f64> = on(r, "C8v")["levels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| l["distances"][0].as_f64().unwrap())
+            .collect();
+        let order = r["orders"][0]["order"].as_f64().unwrap();
+        assert!(
+            d[0] > d[1] && d[1] > 0.0 && (order - 2.0).abs() < 0.25,
+            "m = {m}: distances {d:?}, order {order}"
+        );
+    }
+}
+
 /// A scene whose effects the meridian lacks is refused before anything runs.
 #[test]
 fn a_scene_the_meridian_cannot_run_is_refused() {
