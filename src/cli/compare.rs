@@ -23,7 +23,8 @@ pub(crate) struct CompareArgs {
     scene: PathBuf,
     /// The meshes, comma-separated, the first the reference: group names (C8v, C2v, C1v: the
     /// scene's generator with that group or pattern) or full overrides
-    /// GENERATOR:KEY=VALUE,... (e.g. disc:sectors=8,divisions=12,group=C2v).
+    /// GENERATOR:KEY=VALUE,... (e.g. disc:sectors=8,divisions=12,group=C2v); `axisymmetric`
+    /// (or axisymmetric:elements=N) runs the scene on its meridian as the continuum reference.
     #[arg(long, required = true, value_name = "A,B,...")]
     meshes: Vec<String>,
     /// Also run every mesh at twice its divisions and report how the gaps shrink.

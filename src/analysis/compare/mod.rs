@@ -16,6 +16,11 @@
 //!   keys (the scene file's `[mesh]` keys) replaced. Its commas are its own: a `KEY=VALUE`
 //!   item continues the override before it.
 //!
+//! - `axisymmetric` (or `axisymmetric:elements=N,…`): the scene on its meridian
+//!   (docs/theory.md §15.7), the `[mesh]` geometry carried over; its critical points, labelled
+//!   by m, are the continuum values that every rung's images are measured against
+//!   ([`Image::distances`], [`Rung::orders`]).
+//!
 //! The first mesh is the reference. [`CompareOptions::divisions`] sets the divisions of every
 //! disc and truncated sphere (an icosphere's frequency) unless a full override sets them;
 //! `refine` runs every mesh again at twice its divisions (frequency). `max` sets the
