@@ -246,6 +246,158 @@ fn refine_shrinks_the_split_gaps() {
     assert_eq!(fine["multiplicity"], 2);
 }
 
+/// The meridian beside the C8v disc: every rung's continuum value is the axisymmetric
+/// model's (the closed form γ = j²_{m,1} T0/(μHλ0²) to 1e-5 at 64 elements), the C8v
+/// image's distance from it is the C8v mesh's own error against the closed form, and that
+/// error falls as h² under `--refine` (6 → 12 divisions).
+#[test]
+fn the_meridian_gives_every_rung_its_continuum_value_and_distance() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = small_ponding(dir.path());
+    let json = compare_json(&[&path, "--meshes", "axisymmetric,C8v", "--refine"]);
+    assert_eq!(json["reference"], "axisymmetric");
+    assert_eq!(json["label"], "m");
+    let meridian = &json["meshes"][0];
+    assert_eq!(meridian["generator"], "axisymmetric");
+    assert_eq!(meridian["levels"][0]["group"], "O(2)");
+    // The scene's geometry carried over: the disc of radius 1.1.
+    let options = meridian["levels"][0]["mesh"].as_str().unwrap();
+    assert!(
+        options.starts_with("axisymmetric shape=disc elements=64"),
+        "{options}"
+    );
+    for (m, j2) in [(0u64, 5.783186), (1, 14.681971), (2, 26.374616)] {
+        let exact = PONDING_SCALE * j2;
+        let r = rung(&json, m);
+        let continuum = r["continuum"].as_f64().unwrap();
+        assert!(
+            (continuum / exact - 1.0).abs() < 1e-5,
+            "m = {m}: continuum {continuum} vs closed form {exact}"
+        );
+        let image = &on(r, "C8v")["levels"];
+        let mut errors = Vec::new();
+        for level in image.as_array().unwrap() {
+            let v = level["values"][0].as_f64().unwrap();
+            let d = level["distances"][0].as_f64().unwrap();
+            assert!((d - (v - continuum)).abs() <= 1e-12 * v, "m = {m}: {level}");
+            // The distance is the 3-D mesh's error, to the continuum's own error.
+            let error = v - exact;
+            assert!(
+                (d - error).abs() <= 1e-5 * exact && d.abs() > 100.0 * (d - error).abs(),
+                "m = {m}: distance {d} vs the mesh's error {error}"
+            );
+            errors.push(d.abs());
+        }
+        let order = r["orders"][0]["order"].as_f64().unwrap();
+        assert_eq!(r["orders"][0]["group"], "C8v");
+        assert!(
+            (order - 2.0).abs() < 0.25,
+            "m = {m}: distances {errors:?}, order {order}"
+        );
+    }
+    // The table: the continuum row and each C8v row's distance.
+    let out = memstab(&["compare", &path, "--meshes", "axisymmetric,C8v"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let table = text(&out.stdout);
+    assert!(table.contains("distance"), "{table}");
+    let continuum_rows = table.lines().filter(|l| l.contains("continuum")).count();
+    assert_eq!(continuum_rows, 3, "{table}");
+    let m1 = rung(&json, 1);
+    let d = m1["images"][1]["levels"][0]["distances"][0]
+        .as_f64()
+        .unwrap();
+    let row = table
+        .lines()
+        .find(|l| l.contains("E1"))
+        .unwrap_or_else(|| panic!("no E1 row in {table}"));
+    assert!(row.contains(&memstab::text::sci(d)), "{row} lacks {d}");
+}
+
+/// The same `type = "spin"` on the meridian and on the C8v disc: the flat pre-stretched
+/// clamped disc over spinning fluid, held while ω² sweeps. The C8v values approach the
+/// meridian's at second order (6 → 12 divisions), so both discretise one continuum spin load.
+#[test]
+fn the_spin_on_the_meridian_is_the_continuum_of_the_3d_spin() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = r#"
+[scene]
+name = "spun-floor"
+
+[mesh]
+generator = "disc"
+radius = 1.1
+sectors = 8
+divisions = 6
+
+[material]
+model = "mooney-rivlin"
+mu = 100.0
+k = 0.0
+thickness = 0.01
+prestretch = 1.1
+
+[[effect]]
+type = "spin"
+density = 1.0
+omega2 = "w2"
+
+[boundary]
+fixed = ["rim"]
+
+[parameters.w2]
+start = 0.0
+min = 0.0
+max = 22.0
+
+[analysis]
+type = "linear-buckling"
+control = "w2"
+samples = 22
+"#;
+    let path = dir.path().join("spun.toml");
+    std::fs::write(&path, scene).unwrap();
+    let path = path.display().to_string();
+    let json = compare_json(&[&path, "--meshes", "axisymmetric,C8v", "--refine"]);
+    for m in [0u64, 1] {
+        let r = rung(&json, m);
+        assert!(r["continuum"].as_f64().unwrap() > 0.0, "{r}");
+        let d: Vec<f64> = on(r, "C8v")["levels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| l["distances"][0].as_f64().unwrap())
+            .collect();
+        let order = r["orders"][0]["order"].as_f64().unwrap();
+        assert!(
+            d[0] > d[1] && d[1] > 0.0 && (order - 2.0).abs() < 0.25,
+            "m = {m}: distances {d:?}, order {order}"
+        );
+    }
+}
+
+/// A scene whose effects the meridian lacks is refused before anything runs.
+#[test]
+fn a_scene_the_meridian_cannot_run_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let cap = scene("thesis/paper4_spinning_cap.toml");
+    assert_rejected(
+        &["compare", &cap, "--meshes", "axisymmetric,C8v"],
+        &["mesh 'axisymmetric'", "boundary.slide"],
+    );
+    let mut t = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
+    t.push_str(
+        "\n[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -1.0\npenalty = 1.0\n",
+    );
+    let path = dir.path().join("floored.toml");
+    std::fs::write(&path, t).unwrap();
+    let path = path.display().to_string();
+    assert_rejected(
+        &["compare", &path, "--meshes", "axisymmetric,C8v"],
+        &["type = \"plane\""],
+    );
+    assert!(std::fs::read_dir(dir.path()).unwrap().count() == 1);
+}
+
 fn assert_rejected(args: &[&str], needles: &[&str]) {
     let out = memstab(args);
     assert_eq!(

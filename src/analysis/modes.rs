@@ -17,11 +17,15 @@ use crate::linalg::eigen::shift_invert;
 use crate::linalg::{FactorError, SymmetricFactorization, SymmetricPattern};
 use crate::model::ModelError;
 use nalgebra::DVector;
+use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Relative size of the localised eigenvalue below which it counts as zero.
 const ZERO_EIGENVALUE: f64 = 1e-10;
+
+/// A symmetric block: its pattern and its values aligned with the pattern's row indices.
+pub type ModeBlock = (Arc<SymmetricPattern>, Vec<f64>);
 
 /// A [`Problem`] whose second variation splits by wave number.
 pub trait ModeProblem: Problem {
@@ -42,6 +46,17 @@ pub trait ModeProblem: Problem {
         q: &DVector<f64>,
         lambda: &DVector<f64>,
     ) -> Result<(Arc<SymmetricPattern>, Vec<f64>), ModelError>;
+    /// The blocks of every wave number m = 0..=M at (q, λ), in order (by default one
+    /// [`Self::block`] each; a problem that shares work between them says so here).
+    fn blocks(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Vec<ModeBlock>, ModelError> {
+        (0..=self.modes())
+            .map(|m| self.block(m, q, lambda))
+            .collect()
+    }
 }
 
 /// A critical point of a path by wave number.
@@ -143,12 +158,19 @@ impl ModeIndex {
     fn at<P: ModeProblem>(&mut self, problem: &mut P, p: &PathPoint) -> Option<Vec<usize>> {
         let t = Instant::now();
         let mut out = Vec::with_capacity(problem.modes() + 1);
-        for m in 0..=problem.modes() {
-            let Ok((pattern, values)) = problem.block(m, &p.q, &p.lambda) else {
-                self.time += t.elapsed();
-                return None;
-            };
-            let Some(neg) = negatives(&mut self.caches[m], &pattern, &values) else {
+        let Ok(blocks) = problem.blocks(&p.q, &p.lambda) else {
+            self.time += t.elapsed();
+            return None;
+        };
+        // The blocks are independent: their factorisations run side by side.
+        let counts: Vec<Option<usize>> = self
+            .caches
+            .par_iter_mut()
+            .zip(blocks.par_iter())
+            .map(|(cache, (pattern, values))| negatives(cache, pattern, values))
+            .collect();
+        for neg in counts {
+            let Some(neg) = neg else {
                 self.time += t.elapsed();
                 return None;
             };
@@ -326,12 +348,13 @@ pub fn sweep<P: ModeProblem>(
     for i in 0..=samples {
         let c = range.0 + (range.1 - range.0) * i as f64 / samples as f64;
         let l = at(c);
-        let ix: Option<Vec<usize>> = (0..=problem.modes())
-            .map(|m| {
-                let (pattern, values) = problem.block(m, q, &l).ok()?;
-                negatives(&mut caches[m], &pattern, &values)
-            })
-            .collect();
+        let ix: Option<Vec<usize>> = problem.blocks(q, &l).ok().and_then(|blocks| {
+            blocks
+                .iter()
+                .enumerate()
+                .map(|(m, (pattern, values))| negatives(&mut caches[m], pattern, values))
+                .collect()
+        });
         if let (Some(Some(before)), Some(now)) = (index.last(), ix.as_ref()) {
             let c0 = points.last().map_or(c, |p: &PathPoint| p.lambda[0]);
             for m in 0..before.len() {

@@ -31,6 +31,7 @@ use super::{shape, AxisymError, Meridian, GAUSS};
 use crate::effects::Quantity;
 use crate::linalg::SymmetricPattern;
 use nalgebra::{Matrix3, SMatrix, Vector3};
+use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::sync::Arc;
 
@@ -54,6 +55,14 @@ pub enum Pressure {
         /// True: the fluid is on the side n points to (s = +1).
         front: bool,
     },
+    /// Fluid spinning about z behind the membrane: the centrifugal pressure p = ρ ω² r²/2,
+    /// potential in [`super::spin`].
+    Spin {
+        /// ρ.
+        density: Quantity,
+        /// ω².
+        omega2: Quantity,
+    },
 }
 
 /// p, p'(z), and the same for the derivative along parameter `j` (when it enters).
@@ -66,7 +75,7 @@ struct PressureAt {
 impl Pressure {
     fn sign(&self) -> f64 {
         match self {
-            Pressure::Gas { .. } => -1.0,
+            Pressure::Gas { .. } | Pressure::Spin { .. } => -1.0,
             Pressure::Fluid { front, .. } => {
                 if *front {
                     1.0
@@ -77,10 +86,26 @@ impl Pressure {
         }
     }
 
-    /// p(z) and p'(z), or their derivatives along parameter `along` when given.
-    fn at(&self, z: f64, params: &[f64], along: Option<usize>) -> PressureAt {
+    /// ∂p/∂r at radius r (the spin's; 0 for a pressure of z alone).
+    fn radial(&self, r: f64, params: &[f64]) -> f64 {
+        match self {
+            Pressure::Gas { .. } | Pressure::Fluid { .. } => 0.0,
+            Pressure::Spin { density, omega2 } => density.value(params) * omega2.value(params) * r,
+        }
+    }
+
+    /// p and ∂p/∂z at (r, z), or their derivatives along parameter `along` when given.
+    fn at(&self, r: f64, z: f64, params: &[f64], along: Option<usize>) -> PressureAt {
         let sign = self.sign();
         let (p, dp) = match (*self, along) {
+            (Pressure::Spin { density, omega2 }, along) => {
+                let (rho, w2) = (density.value(params), omega2.value(params));
+                let d = match along {
+                    None => rho * w2,
+                    Some(j) => spin_along(density, omega2, params, j),
+                };
+                (0.5 * d * r * r, 0.0)
+            }
             (Pressure::Gas { pressure }, None) => (pressure.value(params), 0.0),
             (Pressure::Gas { pressure }, Some(j)) => (
                 if pressure.parameter() == Some(j) {
@@ -130,10 +155,22 @@ impl Pressure {
 
     fn level(&self, params: &[f64]) -> Option<f64> {
         match self {
-            Pressure::Gas { .. } => None,
+            Pressure::Gas { .. } | Pressure::Spin { .. } => None,
             Pressure::Fluid { level, .. } => Some(level.value(params)),
         }
     }
+}
+
+/// ∂(ρ ω²)/∂λ_j.
+fn spin_along(density: Quantity, omega2: Quantity, params: &[f64], j: usize) -> f64 {
+    let mut d = 0.0;
+    if density.parameter() == Some(j) {
+        d += omega2.value(params);
+    }
+    if omega2.parameter() == Some(j) {
+        d += density.value(params);
+    }
+    d
 }
 
 /// The equilibrium problem of a membrane of revolution: a meridian and its pressures.
@@ -257,6 +294,38 @@ impl AxisymModel {
 
     /// Π, gradient, tangent and parameter loads at displacement `q`, parameters `params`.
     pub fn evaluate(&self, q: &[f64], params: &[f64]) -> Result<Evaluated, AxisymError> {
+        let nq = self.dim();
+        let mut tangent = nalgebra::DMatrix::zeros(nq, nq);
+        let mut out = self.evaluate_elements(q, params, |e, kk| {
+            for i in 0..6 {
+                let Some(a) = self.element_unknown(e, i) else {
+                    continue;
+                };
+                for j in 0..6 {
+                    if let Some(b) = self.element_unknown(e, j) {
+                        tangent[(a, b)] += kk[(i, j)];
+                    }
+                }
+            }
+        })?;
+        out.tangent = tangent;
+        Ok(out)
+    }
+
+    /// The unknown of element e's local unknown i (r, z per node, node-major), if free.
+    pub fn element_unknown(&self, e: usize, i: usize) -> Option<usize> {
+        self.index[2 * e + i / 2][i % 2]
+    }
+
+    /// Π, gradient and parameter loads at displacement `q`, each element's 6 × 6 tangent
+    /// (over [`Self::element_unknown`]) handed to `tangent` instead of assembled; the
+    /// returned [`Evaluated::tangent`] is empty.
+    pub fn evaluate_elements(
+        &self,
+        q: &[f64],
+        params: &[f64],
+        mut tangent: impl FnMut(usize, &SMatrix<f64, 6, 6>),
+    ) -> Result<Evaluated, AxisymError> {
         let x = self.positions(q);
         if let Some(d) = self.wetting_defect(&x, params) {
             return Err(d);
@@ -265,7 +334,7 @@ impl AxisymModel {
         let mut out = Evaluated {
             energy: 0.0,
             gradient: vec![0.0; nq],
-            tangent: nalgebra::DMatrix::zeros(nq, nq),
+            tangent: nalgebra::DMatrix::zeros(0, 0),
             loads: nalgebra::DMatrix::zeros(nq, params.len()),
         };
         let lam = self.meridian.prestretch;
@@ -315,7 +384,11 @@ impl AxisymModel {
                 let (r, dz) = (p.r, p.x_xi[2]);
                 let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
                 for load in &self.pressures {
-                    let pa = load.at(z, params, None);
+                    if let Pressure::Spin { .. } = load {
+                        // On the 5-point rule below.
+                        continue;
+                    }
+                    let pa = load.at(r, z, params, None);
                     let c = -pa.sign * PI * p.weight;
                     out.energy += c * r * r * pa.p * dz;
                     let grad = |pa: &PressureAt, gr: &mut [f64; 6]| {
@@ -326,7 +399,7 @@ impl AxisymModel {
                     };
                     grad(&pa, &mut g);
                     for (j, l) in loads.iter_mut().enumerate() {
-                        let pj = load.at(z, params, Some(j));
+                        let pj = load.at(r, z, params, Some(j));
                         if pj.p != 0.0 || pj.dp != 0.0 {
                             grad(&pj, l);
                         }
@@ -344,19 +417,37 @@ impl AxisymModel {
                     }
                 }
             }
-            let idx = |i: usize| self.index[2 * e + i / 2][i % 2];
+            // The spin: r⁴ z_ξ is of degree 9 on a quadratic element.
+            for load in &self.pressures {
+                let Pressure::Spin { density, omega2 } = *load else {
+                    continue;
+                };
+                for p in super::points_on(&self.meridian, &x, e, &super::GAUSS5) {
+                    let (r, dz) = (p.r, p.x_xi[2]);
+                    let base = PI / 4.0 * p.weight;
+                    let k = base * density.value(params) * omega2.value(params);
+                    let (n, dn) = (&p.n, &p.dn);
+                    let mut energy = 0.0;
+                    super::spin::add_point(k, r, dz, n, dn, &mut energy, &mut g, Some(&mut kk));
+                    out.energy += energy;
+                    for (j, l) in loads.iter_mut().enumerate() {
+                        let d = spin_along(density, omega2, params, j);
+                        if d != 0.0 {
+                            super::spin::add_point(base * d, r, dz, n, dn, &mut 0.0, l, None);
+                        }
+                    }
+                }
+            }
             for i in 0..6 {
-                let Some(a) = idx(i) else { continue };
+                let Some(a) = self.element_unknown(e, i) else {
+                    continue;
+                };
                 out.gradient[a] += g[i];
                 for (j, l) in loads.iter().enumerate() {
                     out.loads[(a, j)] += l[i];
                 }
-                for j in 0..6 {
-                    if let Some(b) = idx(j) {
-                        out.tangent[(a, b)] += kk[(i, j)];
-                    }
-                }
             }
+            tangent(e, &kk);
         }
         if !out.energy.is_finite() || out.gradient.iter().any(|v| !v.is_finite()) {
             return Err(AxisymError::NonFinite);
@@ -417,45 +508,130 @@ impl AxisymModel {
         (map, cols)
     }
 
-    /// The block of wave number m at displacement `q` (membrane and pressures), on the kept
-    /// unknowns of [`Self::kept_map`].
-    pub fn block(&self, m: usize, q: &[f64], params: &[f64]) -> Result<Block, AxisymError> {
-        let x = self.positions(q);
-        if let Some(d) = self.wetting_defect(&x, params) {
-            return Err(d);
-        }
+    /// The layout of the block of wave number m: its pattern on the kept unknowns of
+    /// [`Self::kept_map`] and, per element, where each entry of its 9 × 9 matrix goes. It
+    /// depends on m and the meridian only, so a run builds it once per wave number.
+    pub fn block_layout(&self, m: usize) -> BlockLayout {
         let (map, cols) = self.kept_map(m);
-        let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+        let mut entries = Vec::new();
         for e in 0..self.meridian.elements() {
-            let mut local = membrane_local(&self.meridian, &x, e, m)?;
-            for load in &self.pressures {
-                local += pressure_local(&self.meridian, &x, e, m, load, params);
+            for i in 0..9 {
+                let Some((a, _)) = map[6 * e + i] else {
+                    continue;
+                };
+                for j in 0..9 {
+                    if let Some((b, _)) = map[6 * e + j] {
+                        entries.push((a, b));
+                    }
+                }
             }
+        }
+        let pattern = SymmetricPattern::from_entries(cols, entries);
+        let mut slots = Vec::with_capacity(self.meridian.elements());
+        for e in 0..self.meridian.elements() {
+            let mut local = Vec::new();
             for i in 0..9 {
                 let Some((a, ca)) = map[6 * e + i] else {
                     continue;
                 };
                 for j in 0..9 {
                     if let Some((b, cb)) = map[6 * e + j] {
-                        triplets.push((a, b, ca * cb * local[(i, j)]));
+                        let k = pattern.position(a, b).expect("an entry of the pattern");
+                        local.push((i + 9 * j, k, ca * cb)); // column-major, as the matrix
                     }
                 }
             }
+            slots.push(local);
         }
-        let pattern = SymmetricPattern::from_entries(cols, triplets.iter().map(|t| (t.0, t.1)));
-        let mut values = vec![0.0; pattern.nnz()];
-        for (a, b, v) in triplets {
-            let k = pattern.position(a, b).expect("an entry of the pattern");
-            values[k] += v;
-        }
-        if values.iter().any(|v| !v.is_finite()) {
-            return Err(AxisymError::NonFinite);
-        }
-        Ok(Block {
+        BlockLayout {
+            m,
             pattern: Arc::new(pattern),
+            slots,
+        }
+    }
+
+    /// The block of wave number m at displacement `q` (membrane and pressures), on the kept
+    /// unknowns of [`Self::kept_map`] (its layout built afresh; a run reuses one through
+    /// [`Self::block_values`]).
+    pub fn block(&self, m: usize, q: &[f64], params: &[f64]) -> Result<Block, AxisymError> {
+        let layout = self.block_layout(m);
+        let values = self.block_values(&layout, q, params)?;
+        Ok(Block {
+            pattern: layout.pattern,
             values,
         })
     }
+
+    /// The values of the block of `layout`'s wave number at displacement `q`, aligned with
+    /// its pattern.
+    pub fn block_values(
+        &self,
+        layout: &BlockLayout,
+        q: &[f64],
+        params: &[f64],
+    ) -> Result<Vec<f64>, AxisymError> {
+        let mut all = self.blocks_values(std::slice::from_ref(layout), q, params)?;
+        Ok(all.remove(0))
+    }
+
+    /// The values of the blocks of every layout at displacement `q`, from one pass over the
+    /// Gauss points (the material's Hessian and the pressures evaluated once for all).
+    pub fn blocks_values(
+        &self,
+        layouts: &[BlockLayout],
+        q: &[f64],
+        params: &[f64],
+    ) -> Result<Vec<Vec<f64>>, AxisymError> {
+        let x = self.positions(q);
+        if let Some(d) = self.wetting_defect(&x, params) {
+            return Err(d);
+        }
+        let lam = self.meridian.prestretch;
+        // The spin on the 5-point rule (its terms are of degree 9), the rest on 4 points.
+        let (spin, rest): (Vec<Pressure>, Vec<Pressure>) = self
+            .pressures
+            .iter()
+            .partition(|p| matches!(p, Pressure::Spin { .. }));
+        let points = (0..self.meridian.elements())
+            .map(|e| {
+                let mut points = block_points(&self.meridian, &x, e, true, &rest, params)?;
+                if !spin.is_empty() {
+                    let rule = &super::GAUSS5;
+                    points.extend(block_points_on(&self.meridian, &x, e, &spin, params, rule));
+                }
+                Ok(points)
+            })
+            .collect::<Result<Vec<_>, AxisymError>>()?;
+        // The wave numbers are independent: one task each.
+        let values: Vec<Vec<f64>> = layouts
+            .par_iter()
+            .map(|layout| {
+                let mut v = vec![0.0; layout.pattern.nnz()];
+                for (e, points) in points.iter().enumerate() {
+                    let local = block_local(points, layout.m, lam);
+                    for &(ij, k, c) in &layout.slots[e] {
+                        v[k] += c * local.as_slice()[ij];
+                    }
+                }
+                v
+            })
+            .collect();
+        if values.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(AxisymError::NonFinite);
+        }
+        Ok(values)
+    }
+}
+
+/// Where the entries of a block of one wave number go: its pattern and, per element, the
+/// (local entry i + 9 j, slot in the pattern's values, coefficient) of every kept entry.
+#[derive(Debug, Clone)]
+pub struct BlockLayout {
+    /// The wave number m.
+    pub m: usize,
+    /// The pattern.
+    pub pattern: Arc<SymmetricPattern>,
+    slots: Vec<Vec<(usize, usize, f64)>>,
 }
 
 /// The cos and sin parts of δx, δx_ξ, δx_θ at a Gauss point for the 9 unknowns of an
@@ -506,43 +682,187 @@ fn families(m: usize, pr: &[[SMatrix<f64, 3, 9>; 2]; 3]) -> (Vec<[SMatrix<f64, 3
     }
 }
 
+/// What the blocks of every wave number share at one Gauss point of an element.
+struct BlockPoint {
+    p: super::Point,
+    /// The membrane's H ∂²W/∂f_i∂f_k dA0 as one 6 × 6 (the θ factor apart), if included.
+    membrane: Option<SMatrix<f64, 6, 6>>,
+    /// Per pressure: (s × Gauss weight, p, ∂p/∂r, ∂p/∂z).
+    pressures: Vec<(f64, f64, f64, f64)>,
+    /// n dA / (dξ dθ) = x_ξ × x_θ and x_θ = r e_θ.
+    nda: Vector3<f64>,
+    x_th: Vector3<f64>,
+}
+
+/// The Gauss points of element e at the nodes `x` with the membrane (when `membrane`) and
+/// the `pressures` evaluated once for the blocks of every wave number.
+fn block_points(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    e: usize,
+    membrane: bool,
+    pressures: &[Pressure],
+    params: &[f64],
+) -> Result<Vec<BlockPoint>, AxisymError> {
+    let lam = meridian.prestretch;
+    let h = meridian.material.thickness;
+    super::points(meridian, x, e)
+        .into_iter()
+        .map(|p| {
+            let membrane = if membrane {
+                let f = [
+                    p.x_xi * (lam / p.dx_ref),
+                    Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
+                ];
+                let (_, _, hf) = meridian
+                    .material
+                    .energy_in_f(&f)
+                    .ok_or(AxisymError::Degenerate(e))?;
+                let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
+                let mut hh = SMatrix::<f64, 6, 6>::zeros();
+                for (i, row) in hf.iter().enumerate() {
+                    for (k, hik) in row.iter().enumerate() {
+                        let hik: &Matrix3<f64> = hik;
+                        hh.fixed_view_mut::<3, 3>(3 * i, 3 * k).copy_from(hik);
+                    }
+                }
+                Some(hh * (h * da0))
+            } else {
+                None
+            };
+            let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+            let pressures = pressures
+                .iter()
+                .map(|load| {
+                    let pa = load.at(p.r, z, params, None);
+                    (pa.sign * p.weight, pa.p, load.radial(p.r, params), pa.dp)
+                })
+                .collect();
+            let x_th = Vector3::new(0.0, p.r, 0.0);
+            let nda = p.x_xi.cross(&x_th);
+            Ok(BlockPoint {
+                p,
+                membrane,
+                pressures,
+                nda,
+                x_th,
+            })
+        })
+        .collect()
+}
+
+/// The Gauss points of element e on the rule `rule` with the `pressures` only (no membrane).
+fn block_points_on(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    e: usize,
+    pressures: &[Pressure],
+    params: &[f64],
+    rule: &[(f64, f64)],
+) -> Vec<BlockPoint> {
+    super::points_on(meridian, x, e, rule)
+        .into_iter()
+        .map(|p| {
+            let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+            let pressures = pressures
+                .iter()
+                .map(|load| {
+                    let pa = load.at(p.r, z, params, None);
+                    (pa.sign * p.weight, pa.p, load.radial(p.r, params), pa.dp)
+                })
+                .collect();
+            let x_th = Vector3::new(0.0, p.r, 0.0);
+            let nda = p.x_xi.cross(&x_th);
+            BlockPoint {
+                p,
+                membrane: None,
+                pressures,
+                nda,
+                x_th,
+            }
+        })
+        .collect()
+}
+
+/// The cross product a × · as a matrix.
+fn cross_matrix(a: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0)
+}
+
+/// The 9 × 9 block of wave number m of an element from its [`block_points`]: the membrane
+/// term of §15.2 and, per pressure, the symmetrised second variation
+/// s ∫ [∇p·δx₂ (n dA·δx₁) + p δx₁·(δx₂,ξ × x_θ + x_ξ × δx₂,θ)] dξ dθ of the potential whose
+/// first variation is s ∫ p n·δx dA (∇p = p_r e_r + p_z e_z).
+fn block_local(points: &[BlockPoint], m: usize, lam: f64) -> SMatrix<f64, 9, 9> {
+    let mut local = SMatrix::<f64, 9, 9>::zeros();
+    for bp in points {
+        let p = &bp.p;
+        let (fams, theta) = families(m, &parts(p, m));
+        let (cx, ct) = (cross_matrix(&p.x_xi), cross_matrix(&bp.x_th));
+        for [dx, dxi, dth] in fams {
+            if let Some(hh) = &bp.membrane {
+                let mut b = SMatrix::<f64, 6, 9>::zeros();
+                b.fixed_view_mut::<3, 9>(0, 0)
+                    .copy_from(&(dxi * (lam / p.dx_ref)));
+                b.fixed_view_mut::<3, 9>(3, 0)
+                    .copy_from(&(dth * (lam / p.big_r)));
+                // For m ≥ 1 each family strains three of the six components (cos: f1_r,
+                // f1_z, f2_θ; sin: the others): the product on those rows alone.
+                let mut rows = [0usize; 6];
+                let mut n = 0;
+                for r in 0..6 {
+                    if b.row(r).iter().any(|v| *v != 0.0) {
+                        rows[n] = r;
+                        n += 1;
+                    }
+                }
+                if n <= 3 {
+                    let mut bc = SMatrix::<f64, 3, 9>::zeros();
+                    let mut hc = Matrix3::<f64>::zeros();
+                    for a in 0..n {
+                        bc.row_mut(a).copy_from(&b.row(rows[a]));
+                        for c in 0..n {
+                            hc[(a, c)] = hh[(rows[a], rows[c])];
+                        }
+                    }
+                    local += bc.transpose() * (hc * bc) * theta;
+                } else {
+                    local += b.transpose() * (hh * b) * theta;
+                }
+            }
+            if bp.pressures.is_empty() {
+                continue;
+            }
+            // δ(n dA) per unknown: δx_ξ × x_θ + x_ξ × δx_θ; (n dA·δx) per unknown.
+            let dn = cx * dth - ct * dxi;
+            let w = dx.transpose() * bp.nda;
+            let (dr, dz) = (dx.row(0), dx.row(2));
+            let work = dx.transpose() * dn;
+            let mut a = SMatrix::<f64, 9, 9>::zeros();
+            for &(c, pr, dp_r, dp_z) in &bp.pressures {
+                // ∇p·δx₂ (n dA·δx₁) + p δx₁·δ(n dA)₂.
+                a += (w * (dr * dp_r + dz * dp_z) + work * pr) * c;
+            }
+            local += (a + a.transpose()) * (0.5 * theta);
+        }
+    }
+    local
+}
+
 /// The membrane's 9 × 9 block of wave number m on element e at the nodes `x`.
-pub(super) fn membrane_local(
+#[cfg(test)]
+fn membrane_local(
     meridian: &Meridian,
     x: &[[f64; 2]],
     e: usize,
     m: usize,
 ) -> Result<SMatrix<f64, 9, 9>, AxisymError> {
-    let lam = meridian.prestretch;
-    let h = meridian.material.thickness;
-    let mut local = SMatrix::<f64, 9, 9>::zeros();
-    for p in super::points(meridian, x, e) {
-        let f = [
-            p.x_xi * (lam / p.dx_ref),
-            Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
-        ];
-        let (_, _, hf) = meridian
-            .material
-            .energy_in_f(&f)
-            .ok_or(AxisymError::Degenerate(e))?;
-        let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
-        let (fams, theta) = families(m, &parts(&p, m));
-        for fam in fams {
-            let b = [fam[1] * (lam / p.dx_ref), fam[2] * (lam / p.big_r)];
-            for i in 0..2 {
-                for k in 0..2 {
-                    let hik: &Matrix3<f64> = &hf[i][k];
-                    local += b[i].transpose() * hik * b[k] * (h * da0 * theta);
-                }
-            }
-        }
-    }
-    Ok(local)
+    let points = block_points(meridian, x, e, true, &[], &[])?;
+    Ok(block_local(&points, m, meridian.prestretch))
 }
 
-/// A pressure's 9 × 9 block of wave number m on element e: the symmetrised second variation
-/// s ∫ [p'(z) δz₂ (n dA·δx₁) + p δx₁·(δx₂,ξ × x_θ + x_ξ × δx₂,θ)] dξ dθ of the potential
-/// whose first variation is s ∫ p n·δx dA.
+/// A pressure's 9 × 9 block of wave number m on element e (see [`block_local`]).
+#[cfg(test)]
 fn pressure_local(
     meridian: &Meridian,
     x: &[[f64; 2]],
@@ -551,26 +871,8 @@ fn pressure_local(
     load: &Pressure,
     params: &[f64],
 ) -> SMatrix<f64, 9, 9> {
-    let mut local = SMatrix::<f64, 9, 9>::zeros();
-    for p in super::points(meridian, x, e) {
-        let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
-        let pa = load.at(z, params, None);
-        let x_th = Vector3::new(0.0, p.r, 0.0);
-        let nda = p.x_xi.cross(&x_th);
-        let (fams, theta) = families(m, &parts(&p, m));
-        for [dx, dxi, dth] in fams {
-            let mut a = SMatrix::<f64, 9, 9>::zeros();
-            for j in 0..9 {
-                let dn = dxi.column(j).cross(&x_th) + p.x_xi.cross(&dth.column(j));
-                for i in 0..9 {
-                    let di = dx.column(i);
-                    a[(i, j)] = pa.dp * dx[(2, j)] * nda.dot(&di) + pa.p * di.dot(&dn);
-                }
-            }
-            local += (a + a.transpose()) * (0.5 * pa.sign * p.weight * theta);
-        }
-    }
-    local
+    let points = block_points(meridian, x, e, false, &[*load], params).expect("no membrane");
+    block_local(&points, m, meridian.prestretch)
 }
 
 #[cfg(test)]
@@ -593,12 +895,16 @@ mod tests {
                 level: Quantity::Parameter(2),
                 front: false,
             },
+            Pressure::Spin {
+                density: Quantity::Value(0.9),
+                omega2: Quantity::Parameter(3),
+            },
         ];
         let model = AxisymModel::new(meridian, pressures);
         let q: Vec<f64> = (0..model.dim())
             .map(|k| 0.03 * ((k as f64) * 1.7).sin() + 0.02)
             .collect();
-        (model, q, vec![0.7, 0.4, 2.0])
+        (model, q, vec![0.7, 0.4, 2.0, 1.7])
     }
 
     #[test]
@@ -662,6 +968,27 @@ mod tests {
         );
         let v = model.volume(&model.positions(&q));
         assert!((e.energy - b.energy + params[0] * v).abs() < 1e-12 * v.abs());
+    }
+
+    /// The spin potential is −(ρ ω²/2) ∫_V r² dV: on a sphere of radius a, ∫_V r² dV =
+    /// 8π a⁵/15 (to the meridian's O(h⁴) error).
+    #[test]
+    fn the_spin_potential_is_the_centrifugal_energy_of_the_enclosed_fluid() {
+        let mat = MooneyRivlin::new(1.0, 0.2, 0.1);
+        let a = 1.3;
+        let meridian = Meridian::sphere(a, 32, 1.0, mat).unwrap();
+        let spin = Pressure::Spin {
+            density: Quantity::Value(0.8),
+            omega2: Quantity::Parameter(0),
+        };
+        let model = AxisymModel::new(meridian.clone(), vec![spin]);
+        let bare = AxisymModel::new(meridian, Vec::new());
+        let q = vec![0.0; model.dim()];
+        let w2 = 2.5;
+        let pi_spin =
+            model.evaluate(&q, &[w2]).unwrap().energy - bare.evaluate(&q, &[w2]).unwrap().energy;
+        let exact = -0.5 * 0.8 * w2 * 8.0 * PI * a.powi(5) / 15.0;
+        assert!((pi_spin / exact - 1.0).abs() < 1e-6, "{pi_spin} vs {exact}");
     }
 
     /// The m = 0 block on (U, W) is the tangent of the axisymmetric problem.

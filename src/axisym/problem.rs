@@ -2,9 +2,9 @@
 //! between the meridian and the analysis ([`crate::analysis::modes::ModeProblem`]), which
 //! knows blocks and wave numbers, not membranes.
 
-use super::{AxisymError, AxisymModel};
+use super::{AxisymError, AxisymModel, BlockLayout};
 use crate::analysis::continuation::{Linearization, PhaseTimes, Problem, Tangent};
-use crate::analysis::modes::ModeProblem;
+use crate::analysis::modes::{ModeBlock, ModeProblem};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricPattern;
 use crate::model::ModelError;
@@ -23,6 +23,10 @@ pub struct AxisymProblem {
     /// The largest wave number analysed.
     pub modes: usize,
     pattern: Arc<SymmetricPattern>,
+    /// Per element, (local i, local j, slot in the tangent's values).
+    slots: Vec<Vec<(usize, usize, usize)>>,
+    /// The layout of every block m = 0..=modes, built once.
+    layouts: Vec<BlockLayout>,
     solver: SharedFactorization,
     times: PhaseTimes,
 }
@@ -49,24 +53,40 @@ impl AxisymProblem {
     /// The problem of `model` with `params`, the control `control`, blocks m = 0..=`modes`.
     pub fn new(model: AxisymModel, params: Vec<f64>, control: usize, modes: usize) -> Self {
         // Unknowns of one element couple: the pattern of the tangent.
-        let dofs: Vec<Vec<usize>> = (0..model.meridian.elements())
-            .map(|e| {
-                (0..6)
-                    .filter_map(|i| model.unknown(2 * e + i / 2, i % 2))
-                    .collect()
-            })
+        let elements = model.meridian.elements();
+        let dofs: Vec<Vec<usize>> = (0..elements)
+            .map(|e| (0..6).filter_map(|i| model.element_unknown(e, i)).collect())
             .collect();
         let pattern = SymmetricPattern::from_entries(
             model.dim(),
             dofs.iter()
                 .flat_map(|d| d.iter().flat_map(|&a| d.iter().map(move |&b| (a, b)))),
         );
+        // Where each element's 6 × 6 entries go in the pattern's values.
+        let slots = (0..elements)
+            .map(|e| {
+                let mut s = Vec::new();
+                for i in 0..6 {
+                    let Some(a) = model.element_unknown(e, i) else {
+                        continue;
+                    };
+                    for j in 0..6 {
+                        if let Some(b) = model.element_unknown(e, j) {
+                            s.push((i, j, pattern.position(a, b).expect("an element entry")));
+                        }
+                    }
+                }
+                s
+            })
+            .collect();
         Self {
+            layouts: (0..=modes).map(|m| model.block_layout(m)).collect(),
             model,
             params,
             control,
             modes,
             pattern: Arc::new(pattern),
+            slots,
             solver: SharedFactorization::default(),
             times: PhaseTimes::default(),
         }
@@ -96,18 +116,17 @@ impl Problem for AxisymProblem {
     ) -> Result<Linearization, ModelError> {
         let t = Instant::now();
         let params = self.parameters(lambda);
+        let mut values = vec![0.0; self.pattern.nnz()];
+        let slots = &self.slots;
         let e = self
             .model
-            .evaluate(q.as_slice(), &params)
+            .evaluate_elements(q.as_slice(), &params, |el, kk| {
+                for &(i, j, k) in &slots[el] {
+                    values[k] += kk[(i, j)];
+                }
+            })
             .map_err(model_error)?;
         let n = self.dim();
-        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
-        let mut values = vec![0.0; self.pattern.nnz()];
-        for c in 0..n {
-            for k in cp[c]..cp[c + 1] {
-                values[k] = e.tangent[(ri[k], c)];
-            }
-        }
         self.times.assembly += t.elapsed();
         self.times.evaluations += 1;
         Ok(Linearization {
@@ -142,10 +161,36 @@ impl ModeProblem for AxisymProblem {
         lambda: &DVector<f64>,
     ) -> Result<(Arc<SymmetricPattern>, Vec<f64>), ModelError> {
         let params = self.parameters(lambda);
-        let b = self
+        let built;
+        let layout = match self.layouts.get(m) {
+            Some(l) => l,
+            None => {
+                built = self.model.block_layout(m);
+                &built
+            }
+        };
+        let values = self
             .model
-            .block(m, q.as_slice(), &params)
+            .block_values(layout, q.as_slice(), &params)
             .map_err(model_error)?;
-        Ok((b.pattern, b.values))
+        Ok((layout.pattern.clone(), values))
+    }
+
+    fn blocks(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Vec<ModeBlock>, ModelError> {
+        let params = self.parameters(lambda);
+        let values = self
+            .model
+            .blocks_values(&self.layouts, q.as_slice(), &params)
+            .map_err(model_error)?;
+        Ok(self
+            .layouts
+            .iter()
+            .zip(values)
+            .map(|(l, v)| (l.pattern.clone(), v))
+            .collect())
     }
 }

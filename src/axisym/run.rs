@@ -1,8 +1,9 @@
 //! A scene on an axisymmetric mesh (`[mesh] generator = "axisymmetric"`), made into the
 //! axisymmetric model and run: the same scene keys, effects and analyses as on a 3-D mesh, for
 //! the effects the meridian implements (gas at a given over-pressure, fluid wholly wetting
-//! the membrane, fixed edges); every other effect, constraint or key is refused in one line
-//! that names it. Stability is by wave number m = 0..=`mesh.modes` (docs/theory.md §15.3).
+//! the membrane, fluid spinning about z, fixed edges); every other effect, constraint or key
+//! is refused in one line that names it. Stability is by wave number m = 0..=`mesh.modes`
+//! (docs/theory.md §15.3).
 
 use super::{AxisymModel, AxisymProblem, Meridian, Pressure};
 use crate::analysis::continuation::{PathOptions, PathPoint, SolveError};
@@ -152,9 +153,14 @@ impl AxisymStudy {
                         },
                     })
                 }
-                Effect::GasAmount(_) | Effect::Spin(_) | Effect::Plane(_) => {
+                // The fluid spinning behind the membrane, as the 3-D effect takes it.
+                Effect::Spin(s) => pressures.push(Pressure::Spin {
+                    density: index(&s.density),
+                    omega2: index(&s.omega2),
+                }),
+                Effect::GasAmount(_) | Effect::Plane(_) => {
                     return Err(unsupported(format!(
-                        "effect[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements gas, fluid and fixed edges); use a 3-D mesh",
+                        "effect[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements gas, fluid, spin and fixed edges); use a 3-D mesh",
                         e.kind()
                     )))
                 }
@@ -349,6 +355,9 @@ pub struct AxisymCritical {
     pub measures: Vec<f64>,
     /// Whether the crossing was localised.
     pub localised: bool,
+    /// The block's eigenvalue nearest zero there, relative to its largest entry (NaN where
+    /// the crossing was not localised).
+    pub eigenvalue: f64,
 }
 
 fn display<S: serde::Serializer>(k: &CriticalKind, s: S) -> Result<S::Ok, S::Error> {
@@ -390,7 +399,8 @@ pub struct AxisymReport {
     pub block_time: Duration,
 }
 
-/// Runs an axisymmetric study's analysis; `progress(point, control)` at every point.
+/// Runs an axisymmetric study's analysis; `progress(point, control)` at every converged point
+/// (the start is point 0, as in [`crate::analysis::run`]).
 pub fn run(
     study: &AxisymStudy,
     mut progress: impl FnMut(usize, f64),
@@ -520,6 +530,7 @@ pub fn run(
             parameters: param_at(&c.lambda),
             measures: study.measure(&c.q),
             localised: c.localised,
+            eigenvalue: c.eigenvalue,
         })
         .collect();
     let MeshSpec::Axisymmetric(mesh) = &study.scene.mesh else {

@@ -16,15 +16,7 @@ pub(super) fn run(scene: Scene, out: &Path, quiet: bool, json: bool) -> Result<(
     let origin = scene.origin.clone();
     let study = AxisymStudy::build(scene)
         .map_err(|e| CliError::Input(one_line(&format!("{origin}: {e}"))))?;
-    let created = !out.exists();
-    if created {
-        std::fs::create_dir(out).map_err(|e| {
-            CliError::Failure(format!(
-                "cannot create the output directory '{}': {e}",
-                out.display()
-            ))
-        })?;
-    }
+    let dir = super::common::OutDir::create(out)?;
     let control = study
         .control
         .map_or_else(|| "control".to_string(), |c| study.parameters[c].clone());
@@ -33,17 +25,11 @@ pub(super) fn run(scene: Scene, out: &Path, quiet: bool, json: bool) -> Result<(
         Some((b.min?, b.max?))
     });
     let progress = Progress::new(&control, range, quiet);
-    let report = match run_axisym(&study, |step, value| progress.set(step, value)) {
+    let report = match run_axisym(&study, |point, value| progress.set(point + 1, value)) {
         Ok(r) => r,
         Err(e) => {
             progress.finish("failed");
-            if created {
-                let _ = std::fs::remove_dir(out);
-            }
-            return Err(CliError::Failure(format!(
-                "{}; nothing was written",
-                one_line(&e.to_string())
-            )));
+            return Err(dir.failed(&e.to_string()));
         }
     };
     progress.finish(format!("stopped: {}", report.stop));

@@ -165,3 +165,38 @@ pub(super) fn check_out(out: &Path) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+/// A run's output directory, made by [`OutDir::create`] if it was missing: a run that fails
+/// before writing removes it again with [`OutDir::failed`], so nothing is left behind.
+pub(super) struct OutDir<'a> {
+    path: &'a Path,
+    created: bool,
+}
+
+impl<'a> OutDir<'a> {
+    /// Creates `path` if it does not exist (its parent must: see [`check_out`]).
+    pub(super) fn create(path: &'a Path) -> Result<Self, CliError> {
+        let created = !path.exists();
+        if created {
+            std::fs::create_dir(path).map_err(|e| {
+                CliError::Failure(format!(
+                    "cannot create the output directory '{}': {e}",
+                    path.display()
+                ))
+            })?;
+        }
+        Ok(Self { path, created })
+    }
+
+    /// The failure of a run that wrote nothing: `error` with "; nothing was written", after
+    /// removing the directory if this run made it (it is still empty).
+    pub(super) fn failed(self, error: &str) -> CliError {
+        let removed = self.created && std::fs::remove_dir(self.path).is_ok();
+        let left = if self.created && !removed {
+            format!("; '{}' was created and is left empty", self.path.display())
+        } else {
+            String::new()
+        };
+        CliError::Failure(format!("{}; nothing was written{left}", one_line(error)))
+    }
+}

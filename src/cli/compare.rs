@@ -23,7 +23,8 @@ pub(crate) struct CompareArgs {
     scene: PathBuf,
     /// The meshes, comma-separated, the first the reference: group names (C8v, C2v, C1v: the
     /// scene's generator with that group or pattern) or full overrides
-    /// GENERATOR:KEY=VALUE,... (e.g. disc:sectors=8,divisions=12,group=C2v).
+    /// GENERATOR:KEY=VALUE,... (e.g. disc:sectors=8,divisions=12,group=C2v); `axisymmetric`
+    /// (or axisymmetric:elements=N) runs the scene on its meridian as the continuum reference.
     #[arg(long, required = true, value_name = "A,B,...")]
     meshes: Vec<String>,
     /// Also run every mesh at twice its divisions and report how the gaps shrink.
@@ -89,6 +90,11 @@ fn values(v: &[f64]) -> String {
         .join(", ")
 }
 
+/// Distances from the continuum, joined.
+fn distances(d: &[f64]) -> String {
+    d.iter().map(|d| sci(*d)).collect::<Vec<_>>().join(", ")
+}
+
 fn gap_text(image: &Image) -> String {
     match (image.gap, image.points.len()) {
         (Some(g), n) if n >= 2 => sci(g),
@@ -144,7 +150,11 @@ fn print_table(c: &Comparison) {
                 "  {:<lw$}  {:<mw$}  {:<12} {:>6} {:>8} {:>8} {:>6.1}s",
                 if l == 0 { m.label.as_str() } else { "" },
                 level.mesh,
-                format!("{} ({})", level.group, level.order),
+                if level.order == 0 {
+                    format!("{} (inf)", level.group)
+                } else {
+                    format!("{} ({})", level.group, level.order)
+                },
                 level.nodes,
                 level.unknowns,
                 level.critical.len(),
@@ -204,9 +214,29 @@ fn print_table(c: &Comparison) {
             .max()
             .unwrap_or(5)
             .max(c.control.len());
+        // With a meridian, each value's distance from the continuum's.
+        let continuum = c.rungs.iter().any(|r| r.continuum.is_some());
+        let dw = c
+            .rungs
+            .iter()
+            .flat_map(|r| r.images.iter().flat_map(|i| &i.levels))
+            .map(|l| distances(&l.distances).len())
+            .max()
+            .unwrap_or(0)
+            .max(9);
         let head = format!(
-            "{:>4} {:>3}  {:<lw$}  {:<iw$}  {:<vw$}  {:>10}",
-            "rung", "m", "mesh", "irreps", c.control, "gap"
+            "{:>4} {:>3}  {:<lw$}  {:<iw$}  {:<vw$}  {:>10}{}",
+            "rung",
+            "m",
+            "mesh",
+            "irreps",
+            c.control,
+            "gap",
+            if continuum {
+                format!("  {:<dw$}", "distance")
+            } else {
+                String::new()
+            }
         );
         if refine {
             out!("{head} {:>10} {:>6}  verdict", "gap fine", "order");
@@ -233,8 +263,16 @@ fn print_table(c: &Comparison) {
                 } else {
                     shown.irreps.join(" + ")
                 };
+                let distance = match (continuum, c.meshes[k].generator.as_str()) {
+                    (false, _) => String::new(),
+                    (true, "axisymmetric") if !shown.values.is_empty() => {
+                        format!("  {:<dw$}", "continuum")
+                    }
+                    (true, _) if shown.distances.is_empty() => format!("  {:<dw$}", "-"),
+                    (true, _) => format!("  {:<dw$}", distances(&shown.distances)),
+                };
                 let line = format!(
-                    "{num:>4} {m:>3}  {:<lw$}  {irreps:<iw$}  {:<vw$}  {:>10}",
+                    "{num:>4} {m:>3}  {:<lw$}  {irreps:<iw$}  {:<vw$}  {:>10}{distance}",
                     im.mesh,
                     values(&shown.values),
                     gap_text(coarse)
@@ -259,6 +297,16 @@ fn print_table(c: &Comparison) {
                 } else {
                     out!("{line}  {}", coarse.verdict);
                 }
+            }
+            for o in &r.orders {
+                out!(
+                    "{:>10}observed order of the distance on {}: {} -> {}: {:.2}",
+                    "",
+                    o.group,
+                    o.coarse,
+                    o.fine,
+                    o.order
+                );
             }
         }
     }

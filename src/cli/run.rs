@@ -74,15 +74,7 @@ pub(super) fn execute(
 ) -> Result<(Study, RunResult, Written), CliError> {
     super::common::check_out(out)?;
     let mut study = super::common::build_study(scene)?;
-    let created = !out.exists();
-    if created {
-        std::fs::create_dir(out).map_err(|e| {
-            CliError::Failure(format!(
-                "cannot create the output directory '{}': {e}",
-                out.display()
-            ))
-        })?;
-    }
+    let dir = super::common::OutDir::create(out)?;
     let control = study
         .control
         .map_or_else(|| "control".to_string(), |c| study.parameters[c].clone());
@@ -96,17 +88,7 @@ pub(super) fn execute(
         Ok(r) => r,
         Err(e) => {
             progress.finish("failed");
-            // Leave nothing behind: remove DIR if this run made it (it is still empty).
-            let removed = created && std::fs::remove_dir(out).is_ok();
-            let left = if created && !removed {
-                format!("; '{}' was created and is left empty", out.display())
-            } else {
-                String::new()
-            };
-            return Err(CliError::Failure(format!(
-                "{}; nothing was written{left}",
-                one_line(&e.to_string())
-            )));
+            return Err(dir.failed(&e.to_string()));
         }
     };
     progress.finish(format!("stopped: {}", result.report.stop));

@@ -109,6 +109,9 @@ pub struct Image {
     pub split: Option<bool>,
     /// What the images say.
     pub verdict: Verdict,
+    /// Each value's distance from the continuum's (value − continuum, in the order of
+    /// `values`); empty without an axisymmetric mesh or without its image.
+    pub distances: Vec<f64>,
 }
 
 /// What a rung's images on one mesh say.
@@ -243,6 +246,7 @@ fn measure(points: &[Point], found: Vec<usize>, target: usize, resolution: usize
         gap,
         split,
         verdict: Verdict { kind, missing },
+        distances: Vec::new(),
     }
 }
 
@@ -276,6 +280,28 @@ pub struct Rung {
     pub found_at: usize,
     /// The images on every mesh, the reference first.
     pub images: Vec<MeshImages>,
+    /// The continuum's value: the image on the axisymmetric mesh (its finest run), when one
+    /// is compared.
+    pub continuum: Option<f64>,
+    /// Observed orders of the distance from the continuum between the runs of one group at
+    /// two resolutions.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub orders: Vec<DistanceOrder>,
+}
+
+/// The observed order of a rung's distance from the continuum between two resolutions of one
+/// group: ln(d_coarse / d_fine) / ln(n_fine / n_coarse), d the largest |distance| of the
+/// images, n the resolution (divisions; the mesh size h ∝ 1/n).
+#[derive(Debug, Clone, Serialize)]
+pub struct DistanceOrder {
+    /// The group.
+    pub group: String,
+    /// The coarse resolution.
+    pub coarse: usize,
+    /// The fine resolution.
+    pub fine: usize,
+    /// The order.
+    pub order: f64,
 }
 
 /// The kinds of a rung's points: one kind, or several joined by `+`.
@@ -398,6 +424,47 @@ fn rung(
         multiplicity,
         found_at: meshes[0].levels[source].resolution,
         images: all,
+        continuum: None,
+        orders: Vec::new(),
+    }
+}
+
+/// Sets every rung's continuum value (its image on the mesh `continuum`, the finest run that
+/// has one), each image's distances from it, and the observed orders of the distance between
+/// the resolutions of one group (the axisymmetric mesh itself excluded).
+pub(super) fn measure_distances(meshes: &[MeshRuns], rungs: &mut [Rung], continuum: usize) {
+    for rung in rungs.iter_mut() {
+        let c = rung.images[continuum]
+            .levels
+            .iter()
+            .rev()
+            .find(|l| !l.values.is_empty())
+            .map(|l| l.values.iter().sum::<f64>() / l.values.len() as f64);
+        rung.continuum = c;
+        let Some(c) = c else { continue };
+        // (group, resolution, largest |distance|) of every 3-D run with images.
+        let mut runs: Vec<(String, usize, f64)> = Vec::new();
+        for (k, im) in rung.images.iter_mut().enumerate() {
+            for (l, level) in im.levels.iter_mut().enumerate() {
+                level.distances = level.values.iter().map(|v| v - c).collect();
+                let d = level.distances.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+                if k != continuum && !level.distances.is_empty() {
+                    runs.push((meshes[k].levels[l].group.clone(), level.resolution, d));
+                }
+            }
+        }
+        runs.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)));
+        runs.dedup_by(|a, b| a.0 == b.0 && a.1 == b.1);
+        rung.orders = runs
+            .windows(2)
+            .filter(|w| w[0].0 == w[1].0 && w[0].2 > 0.0 && w[1].2 > 0.0)
+            .map(|w| DistanceOrder {
+                group: w[0].0.clone(),
+                coarse: w[0].1,
+                fine: w[1].1,
+                order: (w[0].2 / w[1].2).ln() / (w[1].1 as f64 / w[0].1 as f64).ln(),
+            })
+            .collect();
     }
 }
 

@@ -216,6 +216,33 @@ pub(super) fn describe(spec: &MeshSpec) -> String {
     }
 }
 
+/// The `[mesh]` table of the meridian of a 3-D mesh: the surface of revolution the generator
+/// builds, its geometry keys carried over (radius, a cut's height); the meridian's own keys
+/// (elements, modes) take their defaults unless the override sets them.
+fn meridian_of(spec: &MeshSpec) -> Result<toml::Table, String> {
+    let (shape, radius, cut) = match spec {
+        MeshSpec::Disc(d) => ("disc", d.radius, None),
+        MeshSpec::TruncatedSphere(t) => ("truncated-sphere", t.radius, Some(t.cut_height)),
+        MeshSpec::Icosphere(i) => ("sphere", i.radius, None),
+        MeshSpec::Axisymmetric(_) => unreachable!("only a 3-D mesh is made a meridian"),
+        MeshSpec::File(f) => {
+            return Err(format!(
+                "the scene's mesh is the file '{}', whose surface of revolution is not known; \
+                 give the meridian's shape, e.g. axisymmetric:shape=disc,radius=1.1",
+                f.path.display()
+            ))
+        }
+    };
+    let mut mesh = toml::Table::new();
+    mesh.insert("generator".into(), "axisymmetric".into());
+    mesh.insert("shape".into(), shape.into());
+    mesh.insert("radius".into(), toml::Value::Float(radius));
+    if let Some(c) = cut {
+        mesh.insert("cut-height".into(), toml::Value::Float(c));
+    }
+    Ok(mesh)
+}
+
 /// The settings shared by every variant.
 pub(super) struct Common {
     pub(super) control: String,
@@ -272,7 +299,10 @@ pub(super) fn variant(
                     known.join(", ")
                 )));
             };
-            if chosen != own {
+            let full = options.iter().any(|(k, _)| k == "shape");
+            if chosen == Generator::Axisymmetric && own != Generator::Axisymmetric && !full {
+                mesh = meridian_of(&scene.mesh).map_err(bad)?;
+            } else if chosen != own {
                 mesh = toml::Table::new();
                 mesh.insert("generator".into(), toml::Value::String(generator.clone()));
             }
@@ -290,9 +320,12 @@ pub(super) fn variant(
         .and_then(|g| g.as_str())
         .and_then(Generator::from_name)
         .unwrap_or(own);
-    if let (Some(d), false, Some(key)) = (
+    // `--divisions` is the 3-D meshes' resolution; a meridian keeps its elements.
+    let three_d = generator != Generator::Axisymmetric;
+    if let (Some(d), false, true, Some(key)) = (
         common.divisions,
         explicit_resolution,
+        three_d,
         generator.resolution_key(),
     ) {
         mesh.insert(key.into(), toml::Value::Integer(d as i64));

@@ -16,6 +16,11 @@
 //!   keys (the scene file's `[mesh]` keys) replaced. Its commas are its own: a `KEY=VALUE`
 //!   item continues the override before it.
 //!
+//! - `axisymmetric` (or `axisymmetric:elements=N,…`): the scene on its meridian
+//!   (docs/theory.md §15.7), the `[mesh]` geometry carried over; its critical points, labelled
+//!   by m, are the continuum values that every rung's images are measured against
+//!   ([`Image::distances`], [`Rung::orders`]).
+//!
 //! The first mesh is the reference. [`CompareOptions::divisions`] sets the divisions of every
 //! disc and truncated sphere (an icosphere's frequency) unless a full override sets them;
 //! `refine` runs every mesh again at twice its divisions (frequency). `max` sets the
@@ -48,19 +53,22 @@
 mod matching;
 mod meshes;
 
-pub use matching::{Image, MeshImages, Missing, Rung, RungKind, Verdict, VerdictKind};
+pub use matching::{
+    DistanceOrder, Image, MeshImages, Missing, Rung, RungKind, Verdict, VerdictKind,
+};
 pub use meshes::{parse_meshes, MeshChoice};
 
 use super::critical::{CriticalKind, CriticalPoint};
 use super::events::StopReason;
 use crate::adapted::AdaptedBasis;
+use crate::axisym::run::{AxisymRunError, AxisymStudy};
 use crate::model::Model;
 use crate::report::PathReport;
 use crate::scene::{Analysis, MeshSpec, Scene};
 use crate::stability::Stability;
 use crate::study::{Study, StudyError};
 use crate::text::{one_line, sig_digits};
-use matching::match_rungs;
+use matching::{match_rungs, measure_distances};
 use meshes::{common_sectors, describe, resolution, variant, Common};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -233,7 +241,99 @@ fn wave_number(study: &Study, mode: &[f64]) -> usize {
 
 /// Whether modes are labelled by their wave number about z.
 fn labelled(scene: &Scene) -> bool {
-    matches!(scene.mesh, MeshSpec::Disc(_) | MeshSpec::TruncatedSphere(_))
+    matches!(
+        scene.mesh,
+        MeshSpec::Disc(_) | MeshSpec::TruncatedSphere(_) | MeshSpec::Axisymmetric(_)
+    )
+}
+
+/// One run of a comparison: a 3-D study or a meridian.
+enum Job {
+    Solid(Box<Study>),
+    Meridian(Box<AxisymStudy>),
+}
+
+impl Job {
+    fn unknowns(&self) -> usize {
+        match self {
+            Job::Solid(s) => s.basis.unknowns(),
+            Job::Meridian(s) => s.model.dim(),
+        }
+    }
+
+    fn execute(
+        self,
+        label: &str,
+        label_modes: bool,
+        progress: &(dyn Fn(&str) + Sync),
+    ) -> Result<Level, CompareError> {
+        match self {
+            Job::Solid(s) => execute(label, *s, progress),
+            Job::Meridian(s) => execute_meridian(label, &s, label_modes, progress),
+        }
+    }
+}
+
+/// The group a meridian stands for: rotations and reflections about z.
+const MERIDIAN_GROUP: &str = "O(2)";
+
+/// Runs a meridian (docs/theory.md §15) and collects its critical points: each labelled by
+/// its wave number m (unless `label_modes` is false: a comparison with unlabelled 3-D
+/// modes), irrep `m=M`, multiplicity 1 for m = 0 and 2 for m ≥ 1.
+fn execute_meridian(
+    label: &str,
+    study: &AxisymStudy,
+    label_modes: bool,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Level, CompareError> {
+    let start = Instant::now();
+    let mesh = describe(&study.scene.mesh);
+    let report = crate::axisym::run::run(study, |_, _| {}).map_err(|e| {
+        let text = format!("mesh '{label}' ({mesh}): {}", one_line(&e.to_string()));
+        match e {
+            AxisymRunError::Unsupported(_) => CompareError::Input(text),
+            AxisymRunError::Start(_) => CompareError::Failure(text),
+        }
+    })?;
+    let control = study.control;
+    let critical: Vec<Point> = report
+        .critical
+        .iter()
+        .map(|c| Point {
+            kind: c.kind,
+            irrep: format!("m={}", c.m),
+            multiplicity: c.multiplicity,
+            value: control.map_or(f64::NAN, |k| c.parameters[k]),
+            m: label_modes.then_some(c.m),
+            residual_eigenvalue: c.eigenvalue.abs(),
+            precision: None,
+            isotropy: if c.m == 0 {
+                MERIDIAN_GROUP.to_string()
+            } else {
+                format!("C{}v", c.m)
+            },
+        })
+        .collect();
+    let seconds = start.elapsed().as_secs_f64();
+    progress(&format!(
+        "{label} ({mesh}): {} critical points in {seconds:.1} s",
+        critical.len()
+    ));
+    Ok(Level {
+        mesh,
+        resolution: resolution(&study.scene.mesh),
+        nodes: study.model.meridian.nodes.len(),
+        triangles: 0,
+        group: MERIDIAN_GROUP.into(),
+        order: 0,
+        unknowns: report.unknowns,
+        symmetric_unknowns: report.unknowns,
+        stop: report.stop.clone(),
+        note: None,
+        warnings: report.warnings.clone(),
+        seconds,
+        critical,
+    })
 }
 
 /// Runs one variant and collects its critical points.
@@ -435,8 +535,9 @@ pub fn compare(
     };
     // Every variant is built (and checked) before anything runs.
     let levels = if options.refine { 2 } else { 1 };
-    let mut jobs: Vec<(usize, usize, Study)> = Vec::new();
+    let mut jobs: Vec<(usize, usize, Job)> = Vec::new();
     let mut first_scene: Option<Scene> = None;
+    let mut label_modes = true;
     for (k, t) in typed.iter().enumerate() {
         let coarse = variant(scene, t, &common)?;
         for l in 0..levels {
@@ -464,12 +565,21 @@ pub fn compare(
                         .to_string(),
                 ));
             }
-            let study = Study::build(s).map_err(|e| match e {
-                StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
-                    CompareError::Input(one_line(&e.to_string()))
-                }
-            })?;
-            jobs.push((k, l, study));
+            label_modes &= labelled(&s);
+            let job = if let MeshSpec::Axisymmetric(_) = s.mesh {
+                let study = AxisymStudy::build(s).map_err(|e| {
+                    CompareError::Input(one_line(&format!("mesh '{}': {e}", t.label)))
+                })?;
+                Job::Meridian(Box::new(study))
+            } else {
+                let study = Study::build(s).map_err(|e| match e {
+                    StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
+                        CompareError::Input(one_line(&e.to_string()))
+                    }
+                })?;
+                Job::Solid(Box::new(study))
+            };
+            jobs.push((k, l, job));
         }
         if k == 0 {
             first_scene = Some(coarse);
@@ -477,10 +587,13 @@ pub fn compare(
     }
     let reference_scene = first_scene.expect("at least one mesh");
     // The largest meshes first, so that the parallel runs end together.
-    jobs.sort_by_key(|(_, _, s)| std::cmp::Reverse(s.basis.unknowns()));
+    jobs.sort_by_key(|(_, _, s)| std::cmp::Reverse(s.unknowns()));
     let results: Vec<Result<(usize, usize, Level), CompareError>> = jobs
         .into_par_iter()
-        .map(|(k, l, study)| execute(&typed[k].label, study, progress).map(|r| (k, l, r)))
+        .map(|(k, l, job)| {
+            job.execute(&typed[k].label, label_modes, progress)
+                .map(|r| (k, l, r))
+        })
         .collect();
     let mut meshes: Vec<MeshRuns> = typed
         .iter()
@@ -510,7 +623,10 @@ pub fn compare(
         _ => None,
     };
     let floor = range.map_or(1e-12, |[lo, hi]| 1e-3 * (hi - lo).abs());
-    let (rung_list, unmatched) = match_rungs(&meshes, floor);
+    let (mut rung_list, unmatched) = match_rungs(&meshes, floor);
+    if let Some(c) = meshes.iter().position(|m| m.generator == "axisymmetric") {
+        measure_distances(&meshes, &mut rung_list, c);
+    }
     let samples = match &reference_scene.analysis {
         Analysis::LinearBuckling(b) => Some(b.samples),
         Analysis::Path(p) => Some(p.steps),
@@ -525,7 +641,7 @@ pub fn compare(
         control,
         range,
         samples,
-        label: labelled(&reference_scene).then_some("m"),
+        label: label_modes.then_some("m"),
         refine: options.refine,
         reference: typed[0].label.clone(),
         meshes,
