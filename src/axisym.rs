@@ -100,6 +100,21 @@ pub struct Meridian {
     pub clamped: (bool, bool),
 }
 
+/// A meridian's radius must be finite and positive, and it needs at least one element.
+fn check_size(radius: f64, elements: usize) -> Result<(), AxisymError> {
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(AxisymError::Input(format!(
+            "radius: must be finite and > 0, got {radius}"
+        )));
+    }
+    if elements == 0 {
+        return Err(AxisymError::Input(
+            "elements: must be at least 1, got 0".into(),
+        ));
+    }
+    Ok(())
+}
+
 impl Meridian {
     /// The flat disc of radius `radius` in z = 0 from the axis to a clamped rim, `elements`
     /// quadratic elements of equal length.
@@ -109,16 +124,7 @@ impl Meridian {
         prestretch: f64,
         material: MooneyRivlin,
     ) -> Result<Self, AxisymError> {
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(AxisymError::Input(format!(
-                "radius: must be finite and > 0, got {radius}"
-            )));
-        }
-        if elements == 0 {
-            return Err(AxisymError::Input(
-                "elements: must be at least 1, got 0".into(),
-            ));
-        }
+        check_size(radius, elements)?;
         let n = 2 * elements;
         Ok(Self {
             nodes: (0..=n)
@@ -174,16 +180,7 @@ impl Meridian {
         material: MooneyRivlin,
         clamped: bool,
     ) -> Result<Self, AxisymError> {
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(AxisymError::Input(format!(
-                "radius: must be finite and > 0, got {radius}"
-            )));
-        }
-        if elements == 0 {
-            return Err(AxisymError::Input(
-                "elements: must be at least 1, got 0".into(),
-            ));
-        }
+        check_size(radius, elements)?;
         let n = 2 * elements;
         let nodes = (0..=n)
             .map(|i| {

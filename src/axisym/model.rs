@@ -730,25 +730,38 @@ fn block_points(
             } else {
                 None
             };
-            let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
-            let pressures = pressures
-                .iter()
-                .map(|load| {
-                    let pa = load.at(p.r, z, params, None);
-                    (pa.sign * p.weight, pa.p, load.radial(p.r, params), pa.dp)
-                })
-                .collect();
-            let x_th = Vector3::new(0.0, p.r, 0.0);
-            let nda = p.x_xi.cross(&x_th);
-            Ok(BlockPoint {
-                p,
-                membrane,
-                pressures,
-                nda,
-                x_th,
-            })
+            Ok(block_point(p, membrane, x, e, pressures, params))
         })
         .collect()
+}
+
+/// The Gauss point `p` of element e at the nodes `x`, with `membrane` and the `pressures`
+/// evaluated there.
+fn block_point(
+    p: super::Point,
+    membrane: Option<SMatrix<f64, 6, 6>>,
+    x: &[[f64; 2]],
+    e: usize,
+    pressures: &[Pressure],
+    params: &[f64],
+) -> BlockPoint {
+    let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
+    let pressures = pressures
+        .iter()
+        .map(|load| {
+            let pa = load.at(p.r, z, params, None);
+            (pa.sign * p.weight, pa.p, load.radial(p.r, params), pa.dp)
+        })
+        .collect();
+    let x_th = Vector3::new(0.0, p.r, 0.0);
+    let nda = p.x_xi.cross(&x_th);
+    BlockPoint {
+        p,
+        membrane,
+        pressures,
+        nda,
+        x_th,
+    }
 }
 
 /// The Gauss points of element e on the rule `rule` with the `pressures` only (no membrane).
@@ -762,25 +775,7 @@ fn block_points_on(
 ) -> Vec<BlockPoint> {
     super::points_on(meridian, x, e, rule)
         .into_iter()
-        .map(|p| {
-            let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
-            let pressures = pressures
-                .iter()
-                .map(|load| {
-                    let pa = load.at(p.r, z, params, None);
-                    (pa.sign * p.weight, pa.p, load.radial(p.r, params), pa.dp)
-                })
-                .collect();
-            let x_th = Vector3::new(0.0, p.r, 0.0);
-            let nda = p.x_xi.cross(&x_th);
-            BlockPoint {
-                p,
-                membrane: None,
-                pressures,
-                nda,
-                x_th,
-            }
-        })
+        .map(|p| block_point(p, None, x, e, pressures, params))
         .collect()
 }
 

@@ -8,10 +8,11 @@
 use super::{AxisymModel, AxisymProblem, Meridian, Pressure};
 use crate::analysis::continuation::{PathOptions, PathPoint, SolveError};
 use crate::analysis::critical::CriticalKind;
-use crate::analysis::events::{Extremum, StopReason};
+use crate::analysis::events::StopReason;
 use crate::analysis::modes::{self, ModePath};
 use crate::effects::membrane::MooneyRivlin;
 use crate::effects::Quantity;
+use crate::report::TurningRow;
 use crate::scene::{self, Analysis, AxisymShape, Direction, Effect, MeshSpec, Scene};
 use nalgebra::DVector;
 use serde::Serialize;
@@ -322,20 +323,6 @@ pub struct AxisymRow {
     pub index: Option<Vec<usize>>,
 }
 
-/// A turning point of the control.
-#[derive(Debug, Clone, Serialize)]
-pub struct AxisymTurning {
-    /// Maximum or minimum.
-    pub kind: Extremum,
-    /// After this row (`step` in `path.json`).
-    #[serde(rename = "step")]
-    pub after_step: usize,
-    /// Every parameter.
-    pub parameters: Vec<f64>,
-    /// The measures.
-    pub measures: Vec<f64>,
-}
-
 /// A critical point, labelled by its wave number and multiplicity.
 #[derive(Debug, Clone, Serialize)]
 pub struct AxisymCritical {
@@ -384,7 +371,7 @@ pub struct AxisymReport {
     /// The path.
     pub rows: Vec<AxisymRow>,
     /// Turning points of the control.
-    pub turning_points: Vec<AxisymTurning>,
+    pub turning_points: Vec<TurningRow>,
     /// Critical points in path order.
     pub critical: Vec<AxisymCritical>,
     /// Why it ended.
@@ -512,7 +499,7 @@ pub fn run(
     let turning_points = path
         .turning
         .iter()
-        .map(|t| AxisymTurning {
+        .map(|t| TurningRow {
             kind: t.kind,
             after_step: t.after_step,
             parameters: param_at(&t.lambda),
