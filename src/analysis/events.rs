@@ -244,9 +244,8 @@ pub enum Event {
 pub enum Admission {
     /// The step stays on the path.
     Accept,
-    /// The step left the connected path (why): retry from the earlier point with a shorter
-    /// step.
-    Reject(String),
+    /// The step left the connected path: retry from the earlier point with a shorter step.
+    Reject,
 }
 
 /// What watches a path: called at its first point and after every accepted step.
@@ -282,8 +281,6 @@ pub struct Branch {
     pub stop: StopReason,
     /// Where [`follow`]'s time went.
     pub times: BranchTimes,
-    /// Steps a detector rejected as leaving the connected path ([`Detector::admit`]).
-    pub rejected_steps: usize,
 }
 
 /// Where [`follow`]'s time went.
@@ -332,7 +329,6 @@ pub fn follow<P: Problem>(
         events: Vec::new(),
         stop: StopReason::StepBudget { steps: max_steps },
         times: BranchTimes::default(),
-        rejected_steps: 0,
     };
     let t = Instant::now();
     progress(driver.problem(), driver.point());
@@ -360,7 +356,6 @@ pub fn follow<P: Problem>(
             .any(|d| d.admit(driver, &step) != Admission::Accept);
         branch.times.events += t.elapsed();
         if rejected {
-            branch.rejected_steps += 1;
             driver.retreat(step, REJECTED_STEP_FACTOR);
             continue;
         }
@@ -934,11 +929,7 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
             if step.step > rejecting.floor {
                 self.rejecting = Some(rejecting);
                 self.admitted = None;
-                return Admission::Reject(format!(
-                    "the step of {} from arclength {} leaves the connected path",
-                    num(step.step),
-                    num(from)
-                ));
+                return Admission::Reject;
             }
             self.rejecting = None;
         }
