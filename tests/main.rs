@@ -27,6 +27,7 @@ mod near_double;
 mod newton;
 mod one_point;
 mod output;
+mod paper1;
 mod ponding;
 mod reliability;
 mod saved_point;

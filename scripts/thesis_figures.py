@@ -1,0 +1,201 @@
+"""Renders the figures of docs/thesis.md from memstab's own outputs.
+
+Every figure is drawn from a run's files, never from numbers typed in here:
+
+- a bifurcation diagram from path.csv (the control against a measure; solid where the index
+  is 0, dashed where the state is unstable) with the critical points of critical.json;
+- the critical modes from the critical_NN.vtu states (the mode's normal component at the
+  deformed state, drawn on the reference membrane seen from above, one panel per point, labelled from path.json);
+- a critical curve from curve.csv with the events of critical.json.
+
+Usage: python scripts/thesis_figures.py MEMSTAB OUT_DIR FIGURE_DIR
+  MEMSTAB     the memstab binary
+  OUT_DIR     where the runs are written (one directory per scene)
+  FIGURE_DIR  where the PNG figures are written (docs/figures in the repository)
+
+scripts/thesis_figures.sh sets up the Python packages and calls this with the defaults.
+"""
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import meshio  # noqa: E402
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run(memstab, scene, out, *extra):
+    """Runs `memstab run SCENE --out OUT` (quietly) and returns OUT."""
+    subprocess.run(
+        [memstab, "run", str(ROOT / scene), "--out", str(out), "--quiet", *extra],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
+    return out
+
+
+def read_csv(path):
+    """The columns of a CSV file as a dict of name -> list of strings."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    return {k: [r[k] for r in rows] for k in rows[0]}
+
+
+def numbers(column):
+    return np.array([float(v) for v in column])
+
+
+def path_figure(run_dir, x, y, title, file, xlabel=None, ylabel=None):
+    """The path in the (x, y) plane, dashed where the index is positive, with its critical
+    points labelled by irrep (and wave number m where the scene has one)."""
+    cols = read_csv(run_dir / "path.csv")
+    xs, ys = numbers(cols[x]), numbers(cols[y])
+    index = numbers(cols["index"]).astype(int)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    start = 0
+    for i in range(1, len(xs) + 1):
+        if i == len(xs) or index[i] != index[start]:
+            style = "-" if index[start] == 0 else "--"
+            # Each run of one index, joined to the next point so the line has no gaps.
+            stop = min(i + 1, len(xs))
+            ax.plot(xs[start:stop], ys[start:stop], style, color="C0", lw=1.6)
+            start = i
+    ax.plot([], [], "-", color="C0", label="stable (index 0)")
+    ax.plot([], [], "--", color="C0", label="unstable (index > 0)")
+    critical = json.loads((run_dir / "critical.json").read_text())
+    for k, c in enumerate(p for p in critical if not p.get("curve")):
+        if x not in c["parameters"] and x not in c["measures"]:
+            continue
+        px = c["parameters"].get(x, c["measures"].get(x))
+        py = c["parameters"].get(y, c["measures"].get(y))
+        marker = "s" if c["kind"] == "limit point" else "o"
+        ax.plot(px, py, marker, color="C3", ms=5)
+        m = f", m = {c['m']}" if c.get("m") is not None else ""
+        ax.annotate(
+            f"{c['irrep']}{m}",
+            (px, py),
+            textcoords="offset points",
+            xytext=(6, -4 - 9 * (k % 3)),
+            fontsize=8,
+        )
+    ax.set_xlabel(xlabel or x)
+    ax.set_ylabel(ylabel or y)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="best")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(file, dpi=130)
+    plt.close(fig)
+
+
+def mode_figure(run_dir, title, file, limit=6):
+    """The critical modes of a run: the normal component of each mode at the deformed state,
+    drawn on the reference membrane seen from above (red and blue: outward and inward)."""
+    report = json.loads((run_dir / "path.json").read_text())
+    saved = [s for s in report["saved"] if s["file"].startswith("critical_")][:limit]
+    # critical_NN.vtu is the NN-th critical point of critical.json.
+    points = [c for c in json.loads((run_dir / "critical.json").read_text()) if not c.get("curve")]
+    control = report["control"]
+    cols = min(len(saved), 3)
+    rows = (len(saved) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 3.0 * rows), squeeze=False)
+    for ax in axes.flat:
+        ax.set_axis_off()
+    for ax, s in zip(axes.flat, saved):
+        mesh = meshio.read(run_dir / s["file"])
+        tri = mesh.cells_dict["triangle"]
+        mode = mesh.point_data["critical_mode"]
+        normal = mesh.point_data["normal"]
+        w = np.einsum("ij,ij->i", mode, normal)
+        scale = np.abs(w).max() or 1.0
+        # The reference membrane: a bulge that overhangs its rim would hide itself from above.
+        p = mesh.points - mesh.point_data["displacement"]
+        ax.tripcolor(
+            p[:, 0], p[:, 1], tri, w / scale, cmap="RdBu_r", vmin=-1, vmax=1,
+            shading="gouraud",
+        )
+        ax.set_aspect("equal")
+        c = points[int(s["file"][len("critical_"):-len(".vtu")]) - 1]
+        m = f", m = {c['m']}" if c.get("m") is not None else ""
+        ax.set_title(f"{s['label']}{m}\n{control} = {s['control']:.4f}", fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(file, dpi=130)
+    plt.close(fig)
+
+
+def curve_figure(runs, x, y, title, file):
+    """Critical curves in (x, y), one per run directory, with their events (hilltops, cusps,
+    irrep changes)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for n, run_dir in enumerate(runs):
+        cols = read_csv(run_dir / "curve.csv")
+        ax.plot(numbers(cols[x]), numbers(cols[y]), "-", color=f"C{n}", lw=1.6,
+                label=f"critical curve of the {cols['irrep'][0]} block")
+        critical = json.loads((run_dir / "critical.json").read_text())
+        events = (c for c in critical if c.get("curve") and c["kind"] not in ("start", "end"))
+        for e in events:
+            px, py = e["parameters"][x], e["parameters"][y]
+            ax.plot(px, py, "o", color="C3", ms=5)
+            ax.annotate(f"{e['kind']} with {e['irrep']}", (px, py),
+                        textcoords="offset points", xytext=(8, -12 - 10 * n), fontsize=8)
+    ax.set_xlabel(x)
+    ax.set_ylabel(y)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="best")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(file, dpi=130)
+    plt.close(fig)
+
+
+def variant(scene, out, old, new):
+    """A copy of a bundled scene with one line replaced, written beside the runs."""
+    text = (ROOT / scene).read_text()
+    if old not in text:
+        sys.exit(f"{scene}: no line {old!r} to replace")
+    path = out / Path(scene).name.replace(".toml", "_variant.toml")
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def main(memstab, out, figures):
+    out.mkdir(parents=True, exist_ok=True)
+    figures.mkdir(parents=True, exist_ok=True)
+
+    below = run(memstab, "scenes/disc_fluid_below.toml", out / "disc_fluid_below")
+    path_figure(below, "max_displacement", "h",
+                "Paper 1: the C7v disc pushed up by fluid from below (k = 0)",
+                figures / "paper1_disc_below_path.png",
+                xlabel="largest displacement / a", ylabel="level h / a")
+    mode_figure(below, "Paper 1: critical modes of the disc from below (normal component)",
+                figures / "paper1_disc_below_modes.png")
+
+    scene = "scenes/thesis/paper1_disc_limit_curve_k.toml"
+    limit = run(memstab, scene, out / "disc_curve_k_limit")
+    double = run(memstab, variant(scene, out, 'from = "limit"', 'from = "E1"'),
+                 out / "disc_curve_k_e1")
+    curve_figure([limit, double], "k", "h",
+                 "Paper 1: the disc's limit point and first double point followed in k",
+                 figures / "paper1_disc_limit_curve_k.png")
+
+    cap = run(memstab, "scenes/thesis/paper4_spinning_cap.toml", out / "paper4_c8v")
+    path_figure(cap, "max_displacement", "w2",
+                "Paper 4: the filled cap spinning on the floor (C8v mesh)",
+                figures / "paper4_spinning_cap_path.png",
+                xlabel="largest displacement / R", ylabel="w2 (angular speed squared)")
+    mode_figure(cap, "Paper 4: critical modes of the spinning cap (normal component)", figures / "paper4_spinning_cap_modes.png")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 4:
+        sys.exit(__doc__)
+    main(sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3]))
