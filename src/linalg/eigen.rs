@@ -482,9 +482,15 @@ pub fn lowest_eigenpairs(
         let pairs = nearest_eigenpairs(&*family, sigma, want, vectors, attempt as u64)?;
         let below = pairs.values.iter().filter(|&&v| v < sigma).count();
         if below < nu {
-            // The lowest eigenvalues lie below the ones found: move the shift beneath them.
-            let lowest = pairs.values.first().copied().unwrap_or(sigma);
-            sigma = lowest - (sigma - lowest).max(step);
+            // The ν − below missing eigenvalues lie below σ and farther from it than every
+            // value found (those are the nearest): move the shift beyond that reach. (Moving
+            // it only below the lowest value found would move it up when all of them lie
+            // above σ, as a cluster of small positive values next to one negative does.)
+            let reach = pairs
+                .values
+                .iter()
+                .fold(step, |r, &v| r.max((v - sigma).abs()));
+            sigma -= 2.0 * reach;
             last = Some((nu, below));
             continue;
         }
@@ -1101,6 +1107,35 @@ mod tests {
         // The check above the 7th value includes the whole cluster it belongs to.
         let top = found.checked_at.unwrap();
         assert_eq!(dense.iter().filter(|&&v| v < top).count(), 9);
+    }
+
+    /// The lowest eigenvalue far below a cluster of small positive ones (a wrinkled membrane's
+    /// soft in-plane modes next to one unstable mode): Lanczos at a shift just below zero finds
+    /// the cluster first, none of it below the shift, and the search must move the shift
+    /// down, beyond everything it found, until the inertia's count is reproduced.
+    #[test]
+    fn the_lowest_eigenvalue_is_found_beyond_a_cluster_nearer_the_shift() {
+        let n = 160;
+        let entries: Vec<(usize, usize)> = (1..n).map(|i| (i, i - 1)).collect();
+        let a = matrix(n, &entries, |i, j| match (i == j, i) {
+            (true, 0) => -0.5,
+            (true, i) if i <= 60 => 1e-4 * i as f64,
+            (true, i) => 1.0 + i as f64,
+            (false, _) => 1e-7,
+        });
+        let (mut family, s) = Family::new(a, 0, 0.0);
+        let dense = sorted_dense(&s);
+        assert!(
+            dense[0] < -0.4 && dense[1] > 0.0 && dense[1] < 1e-3,
+            "{:?}",
+            &dense[..3]
+        );
+        let found = lowest_eigenpairs(&mut family, 1, -1e-6, 1e-6, false).unwrap();
+        assert_close(&found.values, &dense[..1], 1.0, 1e-9);
+        assert_eq!(
+            found.below_shift, 0,
+            "the shift ends below the lowest value"
+        );
     }
 
     #[test]
