@@ -1,0 +1,130 @@
+//! The thesis's findings that critical curves show, on the bundled scenes: the clamped disc
+//! pushed up by fluid from below, its limit point followed in the material's k (Paper 1,
+//! `scenes/thesis/paper1_disc_limit_curve_k.toml`), and the spinning filled cap's hilltop
+//! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
+
+use memstab::analysis::run;
+use memstab::report::{CurveEvent, CurveEventKind, CurveReport};
+use memstab::scene::Scene;
+use memstab::study::Study;
+
+fn bundled(name: &str) -> Scene {
+    Scene::load(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).expect("the scene loads")
+}
+
+/// The curve starts at the limit point of the k = 0 path of `scenes/disc_fluid_below.toml`
+/// (the same mesh, found independently as that path's turning point). Along k ∈ [0, 0.2]
+/// the limit level rises with k and never turns back (no cusp: the fold does not vanish in
+/// this range), and the curve meets the E1 double point's curve once, at a hilltop near
+/// k = 0.02: for larger k the disc bifurcates into m = 1 before its level reaches the fold.
+#[test]
+fn the_disc_limit_point_rises_with_k_and_meets_the_first_double_point_at_one_hilltop() {
+    let mut path = Study::build(bundled("disc_fluid_below.toml")).unwrap();
+    let path = run(&mut path, |_, _| {}).expect("the path runs").report;
+    let h_path = path.parameters.iter().position(|p| p == "h").unwrap();
+    let fold = path.turning_points.first().expect("the k = 0 path folds");
+
+    let mut study = Study::build(bundled("thesis/paper1_disc_limit_curve_k.toml")).unwrap();
+    let curve = run(&mut study, |_, _| {})
+        .expect("the curve runs")
+        .curve
+        .unwrap();
+    assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
+    let index = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
+    let (h, k) = (index("h"), index("k"));
+    let start = &curve.rows[0];
+    assert!(
+        (start.parameters[h] - fold.parameters[h_path]).abs() < 1e-7 * fold.parameters[h_path],
+        "the curve starts at h = {}, the path folds at {}",
+        start.parameters[h],
+        fold.parameters[h_path]
+    );
+    assert_eq!(start.parameters[k], 0.0);
+    let last = curve.rows.last().unwrap();
+    assert!(
+        last.parameters[k] >= 0.2,
+        "the curve stops at k = {}",
+        last.parameters[k]
+    );
+    for w in curve.rows.windows(2) {
+        assert!(
+            w[1].parameters[k] > w[0].parameters[k] && w[1].parameters[h] > w[0].parameters[h],
+            "the curve turns between steps {} and {}",
+            w[0].step,
+            w[1].step
+        );
+    }
+    assert!(!curve.events.iter().any(|e| e.kind == CurveEventKind::Cusp));
+    let hilltop = one_hilltop(&curve);
+    assert_eq!(hilltop.irrep.as_deref(), Some("E1"));
+    assert!(
+        hilltop.parameters[k] > 0.01 && hilltop.parameters[k] < 0.04,
+        "the hilltop is at k = {}",
+        hilltop.parameters[k]
+    );
+}
+
+/// The curve's one hilltop, localised to a singular other block.
+fn one_hilltop(curve: &CurveReport) -> &CurveEvent {
+    let hilltops: Vec<_> = curve
+        .events
+        .iter()
+        .filter(|e| e.kind == CurveEventKind::Hilltop)
+        .collect();
+    assert_eq!(hilltops.len(), 1, "{:?}", curve.events);
+    let e = hilltops[0];
+    assert!(e.residual_eigenvalue.unwrap() < 1e-9, "{e:?}");
+    e
+}
+
+/// The (w2, k) of the hilltop of the spinning cap's m = 4 bifurcation curve from `from`.
+fn cap_hilltop(from: &str) -> (f64, f64) {
+    let mut scene = bundled("thesis/paper4_hilltop_k.toml");
+    let memstab::scene::Analysis::CriticalCurve(analysis) = &mut scene.analysis else {
+        panic!("the hilltop scene is a critical curve")
+    };
+    analysis.from = memstab::scene::CurveStart::Irrep(from.to_string());
+    let mut study = Study::build(scene).unwrap();
+    let curve = run(&mut study, |_, _| {})
+        .expect("the curve runs")
+        .curve
+        .unwrap();
+    assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
+    let e = one_hilltop(&curve);
+    assert_eq!(e.irrep.as_deref(), Some("A1"), "{e:?}");
+    let index = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
+    (e.parameters[index("w2")], e.parameters[index("k")])
+}
+
+/// Paper 4's hilltop: followed to smaller k, each of the two simple bifurcations into which
+/// the C8v mesh splits the m = 4 pair meets the limit curve (the trivial block singular too),
+/// at two close points. On paths in w2 at fixed k either side, the order of the fold and the
+/// B2 bifurcation is reversed: above the hilltop the path meets B2 before it folds, below it
+/// folds first.
+#[test]
+fn the_spinning_caps_m4_bifurcations_meet_the_limit_curve_at_two_close_hilltops() {
+    let (w2, k) = cap_hilltop("B2");
+    let (w2_b1, k_b1) = cap_hilltop("B1");
+    assert!(k > 0.03 && k < 0.09, "the B2 hilltop is at k = {k}");
+    assert!(
+        (k - k_b1).abs() < 0.01 && (w2 - w2_b1).abs() < 0.1,
+        "the B2 hilltop ({w2}, {k}) and the B1 one ({w2_b1}, {k_b1}) are not close"
+    );
+    assert_ne!((w2, k), (w2_b1, k_b1), "the mesh splits the pair's hilltop");
+    let first = |k: f64| {
+        let mut scene = bundled("thesis/paper4_spinning_cap.toml");
+        scene.material.k = memstab::scene::Quantity::Value(k);
+        let mut study = Study::build(scene).unwrap();
+        let report = run(&mut study, |_, _| {}).expect("the path runs").report;
+        let mut points: Vec<_> = report
+            .critical
+            .iter()
+            .filter(|c| c.irrep == "A1" || c.irrep == "B2")
+            .map(|c| (c.after_step, c.irrep.clone()))
+            .collect();
+        points.sort();
+        points.first().expect("a fold or a B2 point").1.clone()
+    };
+    assert_eq!(first(k - 0.015), "A1");
+    assert_eq!(first(0.1), "B2");
+}
