@@ -1,7 +1,8 @@
-//! The thesis's findings that critical curves show, on the bundled scenes: the clamped disc
-//! pushed up by fluid from below, its limit point followed in the material's k (Paper 1,
-//! `scenes/thesis/paper1_disc_limit_curve_k.toml`), and the spinning filled cap's hilltop
-//! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
+//! The thesis's findings that critical curves and mesh comparisons show, on the bundled
+//! scenes: the clamped disc pushed up by fluid from below, its limit point followed in the
+//! material's k (Paper 1, `scenes/thesis/paper1_disc_limit_curve_k.toml`) and on a mesh
+//! without symmetry (`scenes/thesis/paper1_disc_irregular.toml`), and the spinning filled
+//! cap's hilltop (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
 
 use memstab::analysis::run;
 use memstab::report::{CurveEvent, CurveEventKind, CurveReport};
@@ -127,4 +128,56 @@ fn the_spinning_caps_m4_bifurcations_meet_the_limit_curve_at_two_close_hilltops(
     };
     assert_eq!(first(k - 0.015), "A1");
     assert_eq!(first(0.1), "B2");
+}
+
+/// The disc from below on 448 triangles, C7v or perturbed to have no symmetry (`group =
+/// "C1"`), to a largest displacement of 1.9: the fold's level and the critical points after it
+/// above the level `down_to`, as (kind, irrep, h).
+fn disc_below(group: &str, down_to: f64) -> (f64, Vec<(String, String, f64)>) {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/disc_fluid_below.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replacen(
+        "divisions = 16",
+        &format!("divisions = 8\ngroup = \"{group}\""),
+        1,
+    )
+    .replacen("steps = 400", "steps = 400\nstop-displacement = 1.9", 1);
+    let mut study = Study::build(Scene::from_toml_str(&text, "disc").unwrap()).unwrap();
+    let report = run(&mut study, |_, _| {}).expect("the path runs").report;
+    let h = report.parameters.iter().position(|p| p == "h").unwrap();
+    let fold = report.turning_points.first().expect("the path folds");
+    let after: Vec<_> = report
+        .critical
+        .iter()
+        .filter(|c| c.after_step > fold.after_step && c.parameters[h] > down_to)
+        .map(|c| (c.kind.to_string(), c.irrep.clone(), c.parameters[h]))
+        .collect();
+    (fold.parameters[h], after)
+}
+
+/// Paper 1's irregular mesh: a mesh without symmetry keeps the fold of the level where the
+/// symmetric mesh has it, but not the double bifurcation points after it. On the C7v disc the
+/// path meets the E1 and E2 doubles between the fold and h = 2; the same disc perturbed to
+/// have no symmetry passes those levels with no critical point at all: its mesh breaks the
+/// symmetry that made them bifurcations. The bundled irregular mesh's scene builds with the
+/// group it declares.
+#[test]
+fn a_mesh_without_symmetry_keeps_the_fold_and_loses_the_double_points() {
+    let (fold_c7v, after_c7v) = disc_below("C7v", 2.0);
+    let (fold_c1, after_c1) = disc_below("C1", 2.0);
+    assert!(
+        (fold_c1 - fold_c7v).abs() < 1e-3 * fold_c7v,
+        "the folds: {fold_c7v} (C7v), {fold_c1} (C1)"
+    );
+    let irreps: Vec<&str> = after_c7v.iter().map(|c| c.1.as_str()).collect();
+    assert!(
+        irreps.starts_with(&["E1", "E2"]) && after_c7v.iter().all(|c| c.0 == "double bifurcation"),
+        "{after_c7v:?}"
+    );
+    assert!(after_c1.is_empty(), "{after_c1:?}");
+    let study = Study::build(bundled("thesis/paper1_disc_irregular.toml")).expect("builds");
+    assert_eq!(study.action.group().order(), 1);
 }
