@@ -53,39 +53,40 @@ def numbers(column):
     return np.array([float(v) for v in column])
 
 
-def path_figure(run_dir, x, y, title, file, xlabel=None, ylabel=None):
-    """The path in the (x, y) plane, dashed where the index is positive, with its critical
-    points labelled by irrep (and wave number m where the scene has one)."""
-    cols = read_csv(run_dir / "path.csv")
-    xs, ys = numbers(cols[x]), numbers(cols[y])
-    index = numbers(cols["index"]).astype(int)
+def path_figure(runs, x, y, title, file, xlabel=None, ylabel=None):
+    """Paths in the (x, y) plane, one colour per (run directory, label), dashed where the
+    index is positive, with their critical points labelled by irrep (and wave number m where
+    the scene has one)."""
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    start = 0
-    for i in range(1, len(xs) + 1):
-        if i == len(xs) or index[i] != index[start]:
-            style = "-" if index[start] == 0 else "--"
-            # Each run of one index, joined to the next point so the line has no gaps.
-            stop = min(i + 1, len(xs))
-            ax.plot(xs[start:stop], ys[start:stop], style, color="C0", lw=1.6)
-            start = i
-    ax.plot([], [], "-", color="C0", label="stable (index 0)")
-    ax.plot([], [], "--", color="C0", label="unstable (index > 0)")
-    critical = json.loads((run_dir / "critical.json").read_text())
-    for k, c in enumerate(p for p in critical if not p.get("curve")):
-        if x not in c["parameters"] and x not in c["measures"]:
-            continue
-        px = c["parameters"].get(x, c["measures"].get(x))
-        py = c["parameters"].get(y, c["measures"].get(y))
-        marker = "s" if c["kind"] == "limit point" else "o"
-        ax.plot(px, py, marker, color="C3", ms=5)
-        m = f", m = {c['m']}" if c.get("m") is not None else ""
-        ax.annotate(
-            f"{c['irrep']}{m}",
-            (px, py),
-            textcoords="offset points",
-            xytext=(6, -4 - 9 * (k % 3)),
-            fontsize=8,
-        )
+    for n, (run_dir, label) in enumerate(runs):
+        colour = f"C{n}"
+        cols = read_csv(run_dir / "path.csv")
+        xs, ys = numbers(cols[x]), numbers(cols[y])
+        index = numbers(cols["index"]).astype(int)
+        start = 0
+        for i in range(1, len(xs) + 1):
+            if i == len(xs) or index[i] != index[start]:
+                style = "-" if index[start] == 0 else "--"
+                # Each run of one index, joined to the next point so the line has no gaps.
+                stop = min(i + 1, len(xs))
+                ax.plot(xs[start:stop], ys[start:stop], style, color=colour, lw=1.6)
+                start = i
+        ax.plot([], [], "-", color=colour, label=f"{label}: stable (index 0)")
+        ax.plot([], [], "--", color=colour, label=f"{label}: unstable (index > 0)")
+        critical = json.loads((run_dir / "critical.json").read_text())
+        for k, c in enumerate(p for p in critical if not p.get("curve")):
+            px = c["parameters"].get(x, c["measures"].get(x))
+            py = c["parameters"].get(y, c["measures"].get(y))
+            marker = "s" if c["kind"] == "limit point" else "o"
+            ax.plot(px, py, marker, color="C3", ms=5)
+            m = f", m = {c['m']}" if c.get("m") is not None else ""
+            ax.annotate(
+                f"{c['irrep']}{m}",
+                (px, py),
+                textcoords="offset points",
+                xytext=(6, -4 - 9 * (k % 3)),
+                fontsize=8,
+            )
     ax.set_xlabel(xlabel or x)
     ax.set_ylabel(ylabel or y)
     ax.set_title(title, fontsize=10)
@@ -172,12 +173,19 @@ def main(memstab, out, figures):
     figures.mkdir(parents=True, exist_ok=True)
 
     below = run(memstab, "scenes/disc_fluid_below.toml", out / "disc_fluid_below")
-    path_figure(below, "max_displacement", "h",
+    path_figure([(below, "C7v")], "max_displacement", "h",
                 "Paper 1: the C7v disc pushed up by fluid from below (k = 0)",
                 figures / "paper1_disc_below_path.png",
                 xlabel="largest displacement / a", ylabel="level h / a")
     mode_figure(below, "Paper 1: critical modes of the disc from below (normal component)",
                 figures / "paper1_disc_below_modes.png")
+
+    irregular = run(memstab, "scenes/thesis/paper1_disc_irregular.toml", out / "disc_irregular")
+    path_figure([(below, "C7v, 1 792 triangles"), (irregular, "irregular, 1 800 triangles")],
+                "max_displacement", "h",
+                "Paper 1: the disc from below on a symmetric and an irregular mesh",
+                figures / "paper1_disc_irregular_path.png",
+                xlabel="largest displacement / a", ylabel="level h / a")
 
     scene = "scenes/thesis/paper1_disc_limit_curve_k.toml"
     limit = run(memstab, scene, out / "disc_curve_k_limit")
@@ -188,11 +196,19 @@ def main(memstab, out, figures):
                  figures / "paper1_disc_limit_curve_k.png")
 
     cap = run(memstab, "scenes/thesis/paper4_spinning_cap.toml", out / "paper4_c8v")
-    path_figure(cap, "max_displacement", "w2",
+    path_figure([(cap, "C8v")], "max_displacement", "w2",
                 "Paper 4: the filled cap spinning on the floor (C8v mesh)",
                 figures / "paper4_spinning_cap_path.png",
                 xlabel="largest displacement / R", ylabel="w2 (angular speed squared)")
-    mode_figure(cap, "Paper 4: critical modes of the spinning cap (normal component)", figures / "paper4_spinning_cap_modes.png")
+    mode_figure(cap, "Paper 4: critical modes of the spinning cap (normal component)",
+                figures / "paper4_spinning_cap_modes.png")
+
+    scene = "scenes/thesis/paper4_hilltop_k.toml"
+    b2 = run(memstab, scene, out / "paper4_hilltop_b2")
+    b1 = run(memstab, variant(scene, out, 'from = "B2"', 'from = "B1"'), out / "paper4_hilltop_b1")
+    curve_figure([b2, b1], "k", "w2",
+                 "Paper 4: the m = 4 pair's bifurcation curves meet the limit curve",
+                 figures / "paper4_hilltop_k.png")
 
 
 if __name__ == "__main__":
