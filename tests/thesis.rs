@@ -1076,3 +1076,127 @@ fn bad_values_of_the_new_keys_are_one_line_errors_naming_the_key() {
         assert!(!target.exists(), "case {k}: {} written", target.display());
     }
 }
+
+// ---- Item: neutral motions held in the fixed-point space ----
+
+/// The spinning cap of Paper 4 on a C1v mesh of 6 divisions, the spin starting at `start`.
+fn paper4_c1v(start: &str) -> String {
+    let text = bundled("thesis/paper4_spinning_cap.toml");
+    for key in ["pattern = \"C8v\"", "divisions = 12 ", "start = 0.0\n"] {
+        assert!(
+            text.contains(key),
+            "paper4_spinning_cap.toml contains {key:?}"
+        );
+    }
+    text.replace("pattern = \"C8v\"", "pattern = \"C1v\"")
+        .replace("divisions = 12 ", "divisions = 6 ")
+        .replace("start = 0.0\n", &format!("start = {start}\n"))
+}
+
+#[test]
+fn a_free_cap_on_a_c1v_mesh_starts_at_rest_with_its_drift_held() {
+    // At w2 = 0 the drift in x lies in Fix(C1v) and is neutral: held in the start solve and
+    // the start's tangent, the path starts there and finds the broken m = 2 pair (two simple
+    // bifurcations in A2) before the A1 fold of the path.
+    let mut s = study(&paper4_c1v("0.0"));
+    assert_eq!(s.action.group().name(), "C1v");
+    let r = run(&mut s, |_, _| {}).expect("starts at w2 = 0").report;
+    let w2 = parameter(&r, "w2");
+    assert_eq!(r.rows[0].parameters[w2], 0.0);
+    let values = |r: &PathReport, irrep: &str, kind: CriticalKind| -> Vec<f64> {
+        let mut v: Vec<f64> = r
+            .critical
+            .iter()
+            .filter(|c| c.irrep == irrep && c.kind == kind)
+            .map(|c| c.parameters[w2])
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v
+    };
+    let a2 = values(&r, "A2", CriticalKind::SimpleBifurcation);
+    let fold = values(&r, "A1", CriticalKind::LimitPoint);
+    assert_eq!((a2.len(), fold.len()), (2, 1), "{:?}", r.critical);
+    assert!(a2[1] < fold[0], "A2 {a2:?} before the fold {fold:?}");
+    // The same points as a start off the neutral value (w2 = 0.01, where the drift has a
+    // stiffness of its own); the start's fixed volume differs slightly, by 5e-4 here.
+    let mut s = study(&paper4_c1v("0.01"));
+    let off = run(&mut s, |_, _| {}).unwrap().report;
+    let (a2_off, fold_off) = (
+        values(&off, "A2", CriticalKind::SimpleBifurcation),
+        values(&off, "A1", CriticalKind::LimitPoint),
+    );
+    assert_eq!((a2_off.len(), fold_off.len()), (2, 1));
+    for (a, b) in a2.iter().chain(&fold).zip(a2_off.iter().chain(&fold_off)) {
+        assert!((a - b).abs() < 0.01, "{a} against {b}");
+    }
+    // C8v moves the drift (E1): nothing is held in its fixed-point space.
+    let c8v = study(
+        &bundled("thesis/paper4_spinning_cap.toml").replace("divisions = 12 ", "divisions = 6 "),
+    );
+    assert_eq!(
+        memstab::analysis::held_gauge(&c8v.model, &c8v.basis, true).ncols(),
+        0
+    );
+}
+
+#[test]
+fn the_held_tangent_is_the_derivative_of_the_held_residual() {
+    // The gauge of §7.9: R → P R with P = I − W Wᵀ; on the complement of W the held tangent
+    // is the derivative of the held residual, dense and sparse, and W is its eigenvector.
+    use memstab::analysis::continuation::{Problem, Tangent};
+    use memstab::analysis::SymmetricProblem;
+    let s = study(&paper4_c1v("0.5"));
+    let w = memstab::analysis::held_gauge(&s.model, &s.basis, true);
+    assert_eq!(w.ncols(), 1, "the x drift");
+    let m = s.basis.dim();
+    let u0 = random_vector(7, s.model.unknowns(), 1e-3);
+    let q0 = s.basis.restrict(&u0);
+    let mut v = nalgebra::DVector::from_vec(random_vector(11, m, 1.0));
+    v -= &w * (w.transpose() * &v);
+    for sparse_from in [usize::MAX, 0] {
+        let mut p = SymmetricProblem::new(&s.model, &s.basis, &[], s.start.clone(), s.control)
+            .holding_neutral()
+            .with_sparse_tangent_from(sparse_from);
+        let lambda = p.free_values(&s.start);
+        let lin = p.evaluate(&q0, &lambda).unwrap();
+        let apply = |t: &Tangent, x: &nalgebra::DVector<f64>| match t {
+            Tangent::Dense(k) => k * x,
+            Tangent::Sparse {
+                pattern,
+                values,
+                rank_one,
+                ..
+            } => {
+                let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+                let mut y = nalgebra::DVector::zeros(x.len());
+                for j in 0..x.len() {
+                    for k in cp[j]..cp[j + 1] {
+                        y[ri[k]] += values[k] * x[j];
+                    }
+                }
+                for (c, a) in rank_one {
+                    y += a * (*c * a.dot(x));
+                }
+                y
+            }
+        };
+        assert_eq!(
+            matches!(lin.tangent, Tangent::Sparse { .. }),
+            sparse_from == 0
+        );
+        assert!(w.column(0).dot(&lin.residual).abs() < 1e-12 * lin.residual.amax().max(1e-300));
+        let kv = apply(&lin.tangent, &v);
+        let eps = 1e-6;
+        let plus = p.evaluate(&(&q0 + &v * eps), &lambda).unwrap().residual;
+        let minus = p.evaluate(&(&q0 - &v * eps), &lambda).unwrap().residual;
+        let fd = (plus - minus) / (2.0 * eps);
+        let err = (&fd - &kv).amax() / kv.amax();
+        assert!(
+            err < 1e-5,
+            "sparse_from {sparse_from}: relative error {err:e}"
+        );
+        let kw = apply(&lin.tangent, &w.column(0).into_owned());
+        let rayleigh = w.column(0).dot(&kw);
+        assert!((&kw - w.column(0) * rayleigh).amax() < 1e-9 * rayleigh.abs());
+    }
+}

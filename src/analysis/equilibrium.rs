@@ -64,7 +64,8 @@ fn solve_start_with(
         &[],
         params.to_vec(),
         study.control,
-    );
+    )
+    .holding_neutral();
     let lambda = problem.free_values(params);
     let start_opts = PathOptions {
         max_iterations: opts.max_iterations.max(50),

@@ -36,7 +36,7 @@ mod problem;
 pub mod surface;
 
 pub use continuation::PhaseTimes;
-pub use problem::{SymmetricProblem, SPARSE_TANGENT_FROM};
+pub use problem::{held_gauge, SymmetricProblem, SPARSE_TANGENT_FROM};
 
 use crate::adapted::AdaptedBasis;
 use crate::model::Model;

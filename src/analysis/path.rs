@@ -55,12 +55,15 @@ pub(super) fn start_driver<'a>(
         &study.constraints,
         params_start.to_vec(),
         study.control,
-    );
+    )
+    .holding_neutral();
     let lambda0 = problem.free_values(params_start);
     let q_start = study.basis.restrict(u_start);
     let max_steps = opts.max_steps;
-    let driver = Continuation::start(problem, &q_start, &lambda0, opts)
+    let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)
         .map_err(|e| RunError::start(study, e))?;
+    // The start's tangent is taken with the neutral motions held; beyond it the path is free.
+    driver.problem_mut().release_held();
     Ok((driver, max_steps))
 }
 
@@ -121,8 +124,11 @@ pub(super) fn run(
             count += 1;
         })
     };
-    let problem = driver.into_problem();
+    let mut problem = driver.into_problem();
     times.steps = branch.times;
+    if let Some(w) = held_force_warning(study, &mut problem, &branch) {
+        record.warnings.push(w);
+    }
     let (indices, negatives) = match &index {
         Some(ix) => {
             times.index = ix.index_time;
@@ -162,6 +168,51 @@ pub(super) fn run(
     }
     times.path = t0.elapsed();
     Ok(branch.stop)
+}
+
+/// Largest force, relative to the residual's scale, that may hold the neutral motions at a
+/// point of a path (docs/theory.md §7.9): at a free equilibrium it is zero, up to the solve.
+pub const HELD_FORCE_TOLERANCE: f64 = 1e-6;
+
+/// The largest force that holds the neutral motions along `branch` (docs/theory.md §7.9),
+/// relative to the residual's scale, and the control where it is taken; `None` when the
+/// fixed-point space holds none.
+pub fn held_force(
+    study: &Study,
+    problem: &mut SymmetricProblem,
+    branch: &Branch,
+) -> Option<(f64, f64)> {
+    let opts = super::equilibrium::path_options(study);
+    let sigma = opts.parameter_scales.first().copied().unwrap_or(1.0);
+    let mut worst: Option<(f64, f64)> = None;
+    for p in &branch.points {
+        let f = problem.held_force(&p.q, &p.lambda, opts.state_scale, sigma)?;
+        let f = f.unwrap_or(f64::INFINITY);
+        if worst.is_none_or(|(w, _)| f > w) {
+            worst = Some((f, p.lambda[0]));
+        }
+    }
+    worst
+}
+
+/// A warning when the neutral motions held along `branch` need a force above
+/// [`HELD_FORCE_TOLERANCE`]: the path is then an equilibrium of the held body, not of the
+/// free one.
+fn held_force_warning(
+    study: &Study,
+    problem: &mut SymmetricProblem,
+    branch: &Branch,
+) -> Option<String> {
+    let (force, at) = held_force(study, problem, branch)?;
+    (force > HELD_FORCE_TOLERANCE).then(|| {
+        format!(
+            "the neutral motions held in the fixed-point space need a force of {} of the \
+             residual's scale at {} = {}: the path is held there, not free",
+            sig_digits(force, 3),
+            study.parameters[study.control.unwrap_or(0)],
+            sig_digits(at, 6)
+        )
+    })
 }
 
 /// Records a followed branch of `problem`: a row per point (with its index), every

@@ -32,6 +32,66 @@ pub struct SymmetricProblem<'a> {
     solver: SharedFactorization,
     /// Where the evaluations' time went (for `memstab bench`).
     pub times: PhaseTimes,
+    /// The neutral motions held in the fixed-point space (docs/theory.md §7.9): an
+    /// orthonormal basis W (m × k) of the restricted fields of the model's rigid motions (and,
+    /// at the start, of its held motions) that the fixed-point space contains; empty for most
+    /// groups.
+    gauge: DMatrix<f64>,
+    /// The rigid motions' part of the gauge, held everywhere.
+    rigid: DMatrix<f64>,
+    /// Wᵀ R at the last evaluation: the multipliers, the forces that hold the gauge.
+    held: DVector<f64>,
+}
+
+/// A restricted motion field counts as lying in the fixed-point space when its norm is at
+/// least this fraction of the whole field's.
+const IN_FIXED_POINT_SPACE: f64 = 1e-8;
+
+/// The orthonormal basis W of the fields t + ω × X_i (at the reference positions) of the
+/// model's rigid motions (and its held motions, with `held`) that the fixed-point space of
+/// `basis` contains (docs/theory.md §7.9): none for a group that moves each of them.
+pub fn held_gauge(
+    model: &dyn crate::model::Model,
+    basis: &SparseBasis,
+    held: bool,
+) -> DMatrix<f64> {
+    let reference = model.reference();
+    let layout = model.layout();
+    let mut motions = model.rigid_motions();
+    if held {
+        motions.extend(model.held_motions());
+    }
+    let columns: Vec<DVector<f64>> = motions
+        .iter()
+        .filter_map(|motion| {
+            let t = nalgebra::Vector3::new(motion[0], motion[1], motion[2]);
+            let w = nalgebra::Vector3::new(motion[3], motion[4], motion[5]);
+            let whole = (0..reference.len())
+                .filter(|&i| layout.dof(i, 0).is_some())
+                .map(|i| (t + w.cross(&reference[i])).norm_squared())
+                .sum::<f64>()
+                .sqrt();
+            let v = basis.restrict_rigid(motion, reference, layout);
+            (whole > 0.0 && v.norm() > IN_FIXED_POINT_SPACE * whole).then_some(v)
+        })
+        .collect();
+    let m = basis.dim();
+    if columns.is_empty() || m == 0 {
+        return DMatrix::zeros(m, 0);
+    }
+    let a = DMatrix::from_columns(&columns);
+    let scale = a.column_iter().map(|c| c.norm()).fold(0.0, f64::max);
+    let svd = a.svd(true, false);
+    let u = svd.u.expect("U requested");
+    let kept: Vec<DVector<f64>> = (0..svd.singular_values.len())
+        .filter(|&k| svd.singular_values[k] > IN_FIXED_POINT_SPACE * scale)
+        .map(|k| u.column(k).into_owned())
+        .collect();
+    if kept.is_empty() {
+        DMatrix::zeros(m, 0)
+    } else {
+        DMatrix::from_columns(&kept)
+    }
 }
 
 /// Below this size the fixed-point system is always solved dense (its LU takes microseconds);
@@ -92,6 +152,135 @@ impl<'a> SymmetricProblem<'a> {
             params,
             free,
             times: PhaseTimes::default(),
+            gauge: DMatrix::zeros(basis.dim(), 0),
+            rigid: DMatrix::zeros(basis.dim(), 0),
+            held: DVector::zeros(0),
+        }
+        .with_rigid_gauge()
+    }
+
+    fn with_rigid_gauge(mut self) -> Self {
+        self.rigid = held_gauge(self.model, self.basis, false);
+        self.gauge = self.rigid.clone();
+        self
+    }
+
+    /// Holds the model's held motions that lie in the fixed-point space too, besides its
+    /// rigid motions (docs/theory.md §7.9): for the start solve and the start of a path,
+    /// where a drift may be exactly neutral.
+    pub fn holding_neutral(mut self) -> Self {
+        self.gauge = held_gauge(self.model, self.basis, true);
+        self
+    }
+
+    /// Releases the held motions, keeping the rigid motions held: the path beyond its start,
+    /// where a drift has a stiffness of its own and the free equilibrium is regular.
+    pub fn release_held(&mut self) {
+        self.gauge = self.rigid.clone();
+    }
+
+    /// The number of neutral motions held in the fixed-point space (docs/theory.md §7.9).
+    pub fn held_motions(&self) -> usize {
+        self.gauge.ncols()
+    }
+
+    /// The forces that hold them at (q, λ), |Wᵀ R|, relative to the scale of the residual
+    /// (max |R| tolerated at convergence is the tolerance times that scale): zero at a free
+    /// equilibrium. `None` when nothing is held.
+    pub fn held_force(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+        state_scale: f64,
+        parameter_scale: f64,
+    ) -> Option<Result<f64, crate::model::ModelError>> {
+        if self.gauge.ncols() == 0 {
+            return None;
+        }
+        Some(self.evaluate(q, lambda).map(|lin| {
+            let scale = (lin.loads.column(0).amax() * parameter_scale)
+                .max(lin.tangent.amax() * state_scale)
+                .max(1e-300);
+            self.held.amax() / scale
+        }))
+    }
+
+    /// Holds the gauge: R → P R, K → P K P + s W Wᵀ, L → P L, G_q → G_q P with
+    /// P = I − W Wᵀ, so that every Newton step keeps Wᵀ q, and keeps Wᵀ R (the multipliers).
+    fn hold(&mut self, lin: &mut Linearization) {
+        let w = &self.gauge;
+        let project = |v: &mut DVector<f64>| {
+            let c = w.transpose() * &*v;
+            *v -= w * c;
+        };
+        self.held = w.transpose() * &lin.residual;
+        project(&mut lin.residual);
+        for mut col in lin.loads.column_iter_mut() {
+            let mut v = col.clone_owned();
+            project(&mut v);
+            col.copy_from(&v);
+        }
+        for mut row in lin.constraint_q.row_iter_mut() {
+            let mut v = row.transpose();
+            project(&mut v);
+            row.copy_from(&v.transpose());
+        }
+        let s = lin.tangent.amax().max(1e-300);
+        match &mut lin.tangent {
+            Tangent::Dense(k) => {
+                let kw = &*k * w;
+                let wkw = w.transpose() * &kw;
+                let mut pkp = &*k - w * kw.transpose() - &kw * w.transpose()
+                    + w * (wkw + DMatrix::identity(w.ncols(), w.ncols()) * s) * w.transpose();
+                pkp = (&pkp + pkp.transpose()) * 0.5;
+                *k = pkp;
+            }
+            Tangent::Sparse {
+                pattern,
+                values,
+                rank_one,
+                ..
+            } => {
+                // K W of the whole tangent, sparse part and rank-one terms.
+                let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+                let mut kw = DMatrix::zeros(w.nrows(), w.ncols());
+                for j in 0..w.nrows() {
+                    for p in cp[j]..cp[j + 1] {
+                        let i = ri[p];
+                        for c in 0..w.ncols() {
+                            kw[(i, c)] += values[p] * w[(j, c)];
+                        }
+                    }
+                }
+                for (c, a) in rank_one.iter() {
+                    let aw = w.transpose() * a;
+                    kw += a * (aw.transpose() * *c);
+                }
+                // The old rank-one terms projected, then − W (KW)ᵀ − (KW) Wᵀ + W M Wᵀ with
+                // M = Wᵀ K W + s I, written as Z C Zᵀ (Z = [W, KW]) and C diagonalised.
+                for (_, a) in rank_one.iter_mut() {
+                    project(a);
+                }
+                let k = w.ncols();
+                let m = w.transpose() * &kw + DMatrix::identity(k, k) * s;
+                let mut c = DMatrix::zeros(2 * k, 2 * k);
+                c.view_mut((0, 0), (k, k))
+                    .copy_from(&((&m + m.transpose()) * 0.5));
+                for i in 0..k {
+                    c[(i, k + i)] = -1.0;
+                    c[(k + i, i)] = -1.0;
+                }
+                let mut z = DMatrix::zeros(w.nrows(), 2 * k);
+                z.view_mut((0, 0), (w.nrows(), k)).copy_from(w);
+                z.view_mut((0, k), (w.nrows(), k)).copy_from(&kw);
+                let eig = nalgebra::SymmetricEigen::new(c);
+                let top = eig.eigenvalues.amax().max(1e-300);
+                for (i, &ci) in eig.eigenvalues.iter().enumerate() {
+                    if ci.abs() > 1e-14 * top {
+                        rank_one.push((ci, &z * eig.eigenvectors.column(i)));
+                    }
+                }
+            }
         }
     }
 
@@ -259,7 +448,7 @@ impl Problem for SymmetricProblem<'_> {
                 }
             }
         }
-        let lin = Linearization {
+        let mut lin = Linearization {
             residual: self.basis.restrict_invariant(&self.eval.residual),
             tangent: self.restricted_tangent(),
             loads,
@@ -267,6 +456,9 @@ impl Problem for SymmetricProblem<'_> {
             constraint_q,
             constraint_lambda,
         };
+        if self.gauge.ncols() > 0 {
+            self.hold(&mut lin);
+        }
         self.times.projection += t1.elapsed();
         Ok(lin)
     }
