@@ -33,13 +33,17 @@
 //! the regularity of the field there: U = V = 0 for m = 0, W = 0 and U + V = 0 for m = 1
 //! (the field is then the constant U e_x), everything for m ≥ 2.
 
+mod held;
 mod model;
+mod plane;
 mod problem;
 pub mod run;
 mod spin;
+mod volume;
 
 pub use model::{AxisymModel, Block, BlockLayout, Evaluated, Pressure};
-pub use problem::AxisymProblem;
+pub use plane::FloorPlane;
+pub use problem::{AxisymProblem, VolumeTarget};
 
 use crate::effects::membrane::MooneyRivlin;
 use nalgebra::{DMatrix, Matrix3, Vector3};
@@ -98,6 +102,9 @@ pub struct Meridian {
     pub material: MooneyRivlin,
     /// Which ends are clamped: (first node, last node).
     pub clamped: (bool, bool),
+    /// Which ends slide on a plane z = const (docs/theory.md §15.9): the end node keeps its
+    /// height (W = 0 for every wave number) and moves freely in r and θ.
+    pub sliding: (bool, bool),
 }
 
 /// A meridian's radius must be finite and positive, and it needs at least one element.
@@ -133,6 +140,7 @@ impl Meridian {
             prestretch,
             material,
             clamped: (false, true),
+            sliding: (false, false),
         })
     }
 
@@ -199,12 +207,18 @@ impl Meridian {
             prestretch,
             material,
             clamped: (false, clamped),
+            sliding: (false, false),
         })
     }
 
     /// Whether node `i` is at a clamped end.
     pub fn is_clamped(&self, i: usize) -> bool {
         (i == 0 && self.clamped.0) || (i + 1 == self.nodes.len() && self.clamped.1)
+    }
+
+    /// Whether node `i` is at a sliding end.
+    pub fn is_sliding(&self, i: usize) -> bool {
+        (i == 0 && self.sliding.0) || (i + 1 == self.nodes.len() && self.sliding.1)
     }
 
     /// Whether the meridian closes the surface: both ends on the axis, none clamped.
@@ -236,8 +250,11 @@ impl Meridian {
                 }
                 continue;
             }
+            let slides = self.is_sliding(i);
             for c in 0..3 {
-                cols.push(vec![(3 * i + c, 1.0)]);
+                if !(slides && c == 2) {
+                    cols.push(vec![(3 * i + c, 1.0)]);
+                }
             }
         }
         let mut t = DMatrix::zeros(3 * n, cols.len());

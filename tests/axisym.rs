@@ -256,9 +256,9 @@ mod scenes {
             (
                 text.replace(
                     "type = \"gas\"\npressure = \"p\"",
-                    "type = \"gas\"\npressure = \"p\"\n\n[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -1.0\npenalty = 1.0",
+                    "type = \"gas\"\npressure = \"p\"\n\n[[effect]]\ntype = \"plane\"\nnormal = [1.0, 0.0, 0.0]\noffset = -1.0\npenalty = 1.0",
                 ),
-                "effect[1] (type = \"plane\")",
+                "effect[1].normal",
             ),
             (
                 text.replace("fixed = [\"rim\"]", "fixed = [\"cut\"]"),

@@ -39,6 +39,12 @@ pub trait ModeProblem: Problem {
             2
         }
     }
+    /// How many border columns (held motions, constraints) the block of wave number m
+    /// carries after the block proper: its index is the bordered matrix's negative count
+    /// less this (Haynsworth, docs/theory.md §8.3 and §15.12). None by default.
+    fn border(&self, _m: usize) -> usize {
+        0
+    }
     /// The symmetric block of wave number m at (q, λ).
     fn block(
         &mut self,
@@ -158,6 +164,7 @@ impl ModeIndex {
     fn at<P: ModeProblem>(&mut self, problem: &mut P, p: &PathPoint) -> Option<Vec<usize>> {
         let t = Instant::now();
         let mut out = Vec::with_capacity(problem.modes() + 1);
+        let borders: Vec<usize> = (0..=problem.modes()).map(|m| problem.border(m)).collect();
         let Ok(blocks) = problem.blocks(&p.q, &p.lambda) else {
             self.time += t.elapsed();
             return None;
@@ -169,12 +176,12 @@ impl ModeIndex {
             .zip(blocks.par_iter())
             .map(|(cache, (pattern, values))| negatives(cache, pattern, values))
             .collect();
-        for neg in counts {
+        for (neg, border) in counts.into_iter().zip(borders) {
             let Some(neg) = neg else {
                 self.time += t.elapsed();
                 return None;
             };
-            out.push(neg);
+            out.push(neg.saturating_sub(border));
         }
         self.time += t.elapsed();
         Some(out)
@@ -352,7 +359,10 @@ pub fn sweep<P: ModeProblem>(
             blocks
                 .iter()
                 .enumerate()
-                .map(|(m, (pattern, values))| negatives(&mut caches[m], pattern, values))
+                .map(|(m, (pattern, values))| {
+                    negatives(&mut caches[m], pattern, values)
+                        .map(|n| n.saturating_sub(problem.border(m)))
+                })
                 .collect()
         });
         if let (Some(Some(before)), Some(now)) = (index.last(), ix.as_ref()) {

@@ -27,7 +27,7 @@
 //! δx = C cos mθ + S sin mθ, the θ integrals of the products are π (CᵀHC + SᵀHS) for m ≥ 1
 //! and 2π (C + S)ᵀH(C + S) for m = 0, exactly.
 
-use super::{shape, AxisymError, Meridian, GAUSS};
+use super::{shape, AxisymError, FloorPlane, Meridian, GAUSS};
 use crate::effects::Quantity;
 use crate::linalg::SymmetricPattern;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -54,6 +54,10 @@ pub enum Pressure {
         level: Quantity,
         /// True: the fluid is on the side n points to (s = +1).
         front: bool,
+        /// The enclosure is completely filled (docs/theory.md §15.10): the pressure is
+        /// ρ g (h − z) on the whole meridian, also where it is negative, and no node is above
+        /// a wetting line.
+        filled: bool,
     },
     /// Fluid spinning about z behind the membrane: the centrifugal pressure p = ρ ω² r²/2,
     /// potential in [`super::spin`].
@@ -156,6 +160,7 @@ impl Pressure {
     fn level(&self, params: &[f64]) -> Option<f64> {
         match self {
             Pressure::Gas { .. } | Pressure::Spin { .. } => None,
+            Pressure::Fluid { filled: true, .. } => None,
             Pressure::Fluid { level, .. } => Some(level.value(params)),
         }
     }
@@ -180,6 +185,11 @@ pub struct AxisymModel {
     pub meridian: Meridian,
     /// The pressures.
     pub pressures: Vec<Pressure>,
+    /// Rigid planes normal to the axis ([`super::plane`]).
+    pub planes: Vec<FloorPlane>,
+    /// The parameter index of a fluid level governed by the fluid-volume constraint
+    /// ([`super::volume`]): the block m = 0 is then bordered by the volume's gradient.
+    pub volume_level: Option<usize>,
     /// The free unknowns: (node, component 0 = r, 1 = z).
     free: Vec<(usize, usize)>,
     /// Per node and component, the index of the unknown (None: held).
@@ -221,7 +231,9 @@ impl AxisymModel {
                 continue;
             }
             for c in 0..2 {
-                let held = (c == 0 && x[0] == 0.0) || (c == 1 && closed && i == 0);
+                let held = (c == 0 && x[0] == 0.0)
+                    || (c == 1 && closed && i == 0)
+                    || (c == 1 && meridian.is_sliding(i));
                 if !held {
                     index[i][c] = Some(free.len());
                     free.push((i, c));
@@ -231,6 +243,8 @@ impl AxisymModel {
         Self {
             meridian,
             pressures,
+            planes: Vec::new(),
+            volume_level: None,
             free,
             index,
         }
@@ -239,6 +253,11 @@ impl AxisymModel {
     /// The index of the unknown of node `node`, component `c` (0: r, 1: z), if it is free.
     pub fn unknown(&self, node: usize, c: usize) -> Option<usize> {
         self.index[node][c]
+    }
+
+    /// The (node, component) of unknown k.
+    pub fn free_unknown(&self, k: usize) -> (usize, usize) {
+        self.free[k]
     }
 
     /// Number of unknowns.
@@ -438,6 +457,19 @@ impl AxisymModel {
                     }
                 }
             }
+            // The planes, on the nodes this element owns.
+            for k in self.owned_nodes(e) {
+                let z = x[2 * e + k][1];
+                for plane in &self.planes {
+                    let c = plane.at(z, params);
+                    out.energy += c.energy;
+                    g[2 * k + 1] += c.gradient;
+                    kk[(2 * k + 1, 2 * k + 1)] += c.stiffness;
+                    for (j, l) in loads.iter_mut().enumerate() {
+                        l[2 * k + 1] += c.loads[j];
+                    }
+                }
+            }
             for i in 0..6 {
                 let Some(a) = self.element_unknown(e, i) else {
                     continue;
@@ -455,6 +487,16 @@ impl AxisymModel {
         Ok(out)
     }
 
+    /// The local nodes (0, 1, 2) of element e that it owns for node-wise terms: 0 and 1, and
+    /// 2 on the last element.
+    fn owned_nodes(&self, e: usize) -> std::ops::Range<usize> {
+        if e + 1 == self.meridian.elements() {
+            0..3
+        } else {
+            0..2
+        }
+    }
+
     /// The kept unknowns of a block of wave number m: for every full unknown (U, V, W per
     /// node), the kept columns it is made of, and their number. Clamped ends hold everything;
     /// a node on the axis keeps W for m = 0, U = −V for m = 1 and nothing for m ≥ 2; on a
@@ -462,7 +504,7 @@ impl AxisymModel {
     /// meet them (docs/theory.md §15.2): W at the first node for m = 0 (translation along z)
     /// and V at the widest node (rotation about z); for m = 1 the first node's U = −V
     /// (translation) and W at the widest node (rotation about a horizontal axis).
-    fn kept_map(&self, m: usize) -> (Vec<Option<(usize, f64)>>, usize) {
+    pub(super) fn kept_map(&self, m: usize) -> (Vec<Option<(usize, f64)>>, usize) {
         let nodes = &self.meridian.nodes;
         let n = nodes.len();
         let widest = (0..n)
@@ -498,8 +540,11 @@ impl AxisymModel {
                 }
                 continue;
             }
+            // A sliding end keeps its height: W = 0 for every wave number.
+            let slides = self.meridian.is_sliding(i);
             for c in 0..3 {
-                if !rigid(c) {
+                let held = rigid(c) || (slides && c == 2);
+                if !held {
                     map[3 * i + c] = Some((cols, 1.0));
                     cols += 1;
                 }
@@ -513,7 +558,10 @@ impl AxisymModel {
     /// depends on m and the meridian only, so a run builds it once per wave number.
     pub fn block_layout(&self, m: usize) -> BlockLayout {
         let (map, cols) = self.kept_map(m);
-        let mut entries = Vec::new();
+        let border = self.border_count(m);
+        let mut entries: Vec<(usize, usize)> = (cols..cols + border)
+            .flat_map(|j| (0..cols + border).map(move |i| (i, j)))
+            .collect();
         for e in 0..self.meridian.elements() {
             for i in 0..9 {
                 let Some((a, _)) = map[6 * e + i] else {
@@ -526,7 +574,7 @@ impl AxisymModel {
                 }
             }
         }
-        let pattern = SymmetricPattern::from_entries(cols, entries);
+        let pattern = SymmetricPattern::from_entries(cols + border, entries);
         let mut slots = Vec::with_capacity(self.meridian.elements());
         for e in 0..self.meridian.elements() {
             let mut local = Vec::new();
@@ -547,6 +595,8 @@ impl AxisymModel {
             m,
             pattern: Arc::new(pattern),
             slots,
+            kept: cols,
+            border,
         }
     }
 
@@ -607,12 +657,20 @@ impl AxisymModel {
             .par_iter()
             .map(|layout| {
                 let mut v = vec![0.0; layout.pattern.nnz()];
+                let factor = FloorPlane::block_factor(layout.m);
                 for (e, points) in points.iter().enumerate() {
-                    let local = block_local(points, layout.m, lam);
+                    let mut local = block_local(points, layout.m, lam);
+                    for k in self.owned_nodes(e) {
+                        for plane in &self.planes {
+                            let c = plane.at(x[2 * e + k][1], params);
+                            local[(3 * k + 2, 3 * k + 2)] += factor * c.stiffness;
+                        }
+                    }
                     for &(ij, k, c) in &layout.slots[e] {
                         v[k] += c * local.as_slice()[ij];
                     }
                 }
+                self.set_border(layout, &x, &mut v);
                 v
             })
             .collect();
@@ -632,6 +690,11 @@ pub struct BlockLayout {
     /// The pattern.
     pub pattern: Arc<SymmetricPattern>,
     slots: Vec<Vec<(usize, usize, f64)>>,
+    /// The kept unknowns (the block proper comes first in the pattern).
+    pub kept: usize,
+    /// The border columns after them: held motions and the volume constraint
+    /// ([`super::held`]); the block's index is the bordered matrix's less this.
+    pub border: usize,
 }
 
 /// The cos and sin parts of δx, δx_ξ, δx_θ at a Gauss point for the 9 unknowns of an
@@ -871,7 +934,7 @@ fn pressure_local(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::effects::membrane::MooneyRivlin;
 
@@ -889,6 +952,7 @@ mod tests {
                 gravity: Quantity::Value(1.3),
                 level: Quantity::Parameter(2),
                 front: false,
+                filled: false,
             },
             Pressure::Spin {
                 density: Quantity::Value(0.9),
@@ -902,9 +966,47 @@ mod tests {
         (model, q, vec![0.7, 0.4, 2.0, 1.7])
     }
 
-    #[test]
-    fn gradient_tangent_and_loads_match_finite_differences() {
-        let (model, q, params) = generic();
+    /// A cap cut at the equator whose edge slides on the floor z = 0 (the plane a parameter
+    /// pushed up through the lowest nodes), completely filled with fluid whose head is below
+    /// the top (negative pressure there), spinning: the Paper 4 potentials at a generic state.
+    pub(crate) fn generic_filled() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let mat = MooneyRivlin::new(1.0, 0.2, 0.1);
+        let mut meridian = Meridian::truncated_sphere(1.0, 0.0, 5, 1.05, mat).unwrap();
+        meridian.clamped = (false, false);
+        meridian.sliding = (false, true);
+        let pressures = vec![
+            Pressure::Fluid {
+                density: Quantity::Parameter(0),
+                gravity: Quantity::Value(1.3),
+                level: Quantity::Parameter(1),
+                front: false,
+                filled: true,
+            },
+            Pressure::Spin {
+                density: Quantity::Value(0.9),
+                omega2: Quantity::Parameter(2),
+            },
+        ];
+        let mut model = AxisymModel::new(meridian, pressures);
+        for exponent in [1, 3] {
+            model.planes.push(FloorPlane {
+                normal_z: 1.0,
+                offset: Quantity::Parameter(3),
+                penalty: Quantity::Parameter(4),
+                exponent,
+            });
+        }
+        model.volume_level = Some(1);
+        let q: Vec<f64> = (0..model.dim())
+            .map(|k| 0.03 * ((k as f64) * 1.7).sin() + 0.02)
+            .collect();
+        (model, q, vec![0.7, 0.6, 1.7, 0.2, 50.0])
+    }
+
+    /// Central differences of the energy and the gradient against the gradient, the tangent
+    /// and the loads.
+    fn check_derivatives(model: &AxisymModel, q: &[f64], params: &[f64]) {
+        let (q, params) = (q.to_vec(), params.to_vec());
         let e = model.evaluate(&q, &params).unwrap();
         let h = 1e-6;
         for k in 0..model.dim() {
@@ -950,6 +1052,79 @@ mod tests {
         assert!(e.tangent.amax() > 0.1 && e.loads.amax() > 0.01);
     }
 
+    #[test]
+    fn gradient_tangent_and_loads_match_finite_differences() {
+        let (model, q, params) = generic();
+        check_derivatives(&model, &q, &params);
+    }
+
+    /// The filled fluid (negative pressure above the head), the planes (linear and cubic,
+    /// some nodes through them) and the sliding edge.
+    #[test]
+    fn filled_fluid_plane_and_slide_match_finite_differences() {
+        let (model, q, params) = generic_filled();
+        let x = model.positions(&q);
+        assert!(
+            x.iter().any(|p| p[1] > params[1]),
+            "some node above the head"
+        );
+        let through = x.iter().filter(|p| p[1] < params[3]).count();
+        assert!(through >= 2, "{through} nodes through the plane");
+        let last = x.len() - 1;
+        assert_eq!(
+            x[last][1], model.meridian.nodes[last][1],
+            "the edge keeps its height"
+        );
+        assert!(model.unknown(last, 0).is_some() && model.unknown(last, 1).is_none());
+        check_derivatives(&model, &q, &params);
+    }
+
+    /// The plane's block entry is the θ-sampled second variation of the ring's mean penalty
+    /// (1/2π) ∫ κ/(q+1) ⟨−δ(θ)⟩^(q+1) dθ along W cos mθ: κ q ⟨−δ⟩^(q−1) times the mean of
+    /// cos² mθ.
+    #[test]
+    fn the_plane_blocks_are_the_sampled_ring_penalty() {
+        let (model, q, params) = generic_filled();
+        let mut bare = model.clone();
+        bare.planes.clear();
+        bare.volume_level = None;
+        let mut with = model.clone();
+        with.volume_level = None;
+        let x = model.positions(&q);
+        for m in 0..4 {
+            let b = with.block(m, &q, &params).unwrap();
+            let b0 = bare.block(m, &q, &params).unwrap();
+            let (d, d0) = (
+                b.pattern.to_dense(&b.values),
+                b0.pattern.to_dense(&b0.values),
+            );
+            let (map, _) = model.kept_map(m);
+            let nt = 2 * m + 4;
+            let mean = (0..nt)
+                .map(|t| (m as f64 * 2.0 * PI * t as f64 / nt as f64).cos().powi(2))
+                .sum::<f64>()
+                / nt as f64;
+            let mut seen = 0;
+            for (i, p) in x.iter().enumerate() {
+                let Some((k, _)) = map[3 * i + 2] else {
+                    continue;
+                };
+                let expect: f64 = model
+                    .planes
+                    .iter()
+                    .map(|pl| pl.at(p[1], &params).stiffness * mean)
+                    .sum();
+                let got = d[(k, k)] - d0[(k, k)];
+                assert!(
+                    (got - expect).abs() < 1e-9 * (1.0 + expect),
+                    "m = {m}, node {i}"
+                );
+                seen += usize::from(expect > 0.0);
+            }
+            assert!(seen >= 1, "m = {m}: a node in contact");
+        }
+    }
+
     /// The gradient of the pressure potentials is s ∫ p n·δx dA: for the gas alone, −P δV.
     #[test]
     fn the_gas_potential_is_minus_pressure_times_volume() {
@@ -990,8 +1165,14 @@ mod tests {
     #[test]
     fn the_axisymmetric_block_is_the_tangent() {
         let (model, q, params) = generic();
-        let e = model.evaluate(&q, &params).unwrap();
-        let block = model.block(0, &q, &params).unwrap();
+        block_is_tangent(&model, &q, &params);
+        let (model, q, params) = generic_filled();
+        block_is_tangent(&model, &q, &params);
+    }
+
+    fn block_is_tangent(model: &AxisymModel, q: &[f64], params: &[f64]) {
+        let e = model.evaluate(q, params).unwrap();
+        let block = model.block(0, q, params).unwrap();
         let dense = block.pattern.to_dense(&block.values);
         let (map, _) = model.kept_map(0);
         for (a, &(i, c)) in model.free.iter().enumerate() {
@@ -1023,6 +1204,7 @@ mod tests {
             gravity: Quantity::Value(1.3),
             level: Quantity::Value(2.0),
             front: true,
+            filled: false,
         };
         for m in 0..5 {
             let km = super::super::membrane_full(&model.meridian, &x, m, 0.0).unwrap();
@@ -1042,6 +1224,44 @@ mod tests {
             assert!((&af - &kf).amax() < 1e-11 * kf.amax(), "fluid, m = {m}");
             assert!(km.amax() > 0.0 && kf.amax() > 0.0);
         }
+    }
+
+    /// The filled fluid's blocks equal the θ-sampled second variation of ρ g (h − z) also
+    /// where it is negative (a head below the top of the cap), and a filled fluid is not
+    /// refused above its head.
+    #[test]
+    fn filled_fluid_blocks_equal_the_sampled_blocks_above_the_head() {
+        let (model, q, params) = generic_filled();
+        let x = model.positions(&q);
+        let level = 0.5;
+        assert!(x.iter().any(|p| p[1] > level));
+        let load = super::super::Hydrostatic {
+            gravity: 1.3,
+            level,
+        };
+        let fluid = Pressure::Fluid {
+            density: Quantity::Value(1.0),
+            gravity: Quantity::Value(1.3),
+            level: Quantity::Value(level),
+            front: true,
+            filled: true,
+        };
+        for m in 0..5 {
+            let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0);
+            let n = 3 * model.meridian.nodes.len();
+            let mut af = nalgebra::DMatrix::zeros(n, n);
+            for e in 0..model.meridian.elements() {
+                let f = pressure_local(&model.meridian, &x, e, m, &fluid, &[]);
+                super::super::scatter(&mut af, e, &f);
+            }
+            assert!(
+                (&af - &kf).amax() < 1e-11 * kf.amax(),
+                "filled fluid, m = {m}"
+            );
+        }
+        let mut p = params.clone();
+        p[1] = level;
+        assert!(model.evaluate(&q, &p).is_ok());
     }
 
     #[test]

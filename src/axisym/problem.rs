@@ -22,6 +22,8 @@ pub struct AxisymProblem {
     pub control: usize,
     /// The largest wave number analysed.
     pub modes: usize,
+    /// The fluid-volume constraint, when its level is free (the second free parameter).
+    pub volume: Option<VolumeTarget>,
     pattern: Arc<SymmetricPattern>,
     /// Per element, (local i, local j, slot in the tangent's values).
     slots: Vec<Vec<(usize, usize, usize)>>,
@@ -29,6 +31,18 @@ pub struct AxisymProblem {
     layouts: Vec<BlockLayout>,
     solver: SharedFactorization,
     times: PhaseTimes,
+}
+
+/// The fluid-volume constraint on the path (`super::volume`): the row
+/// g = scale · (V(q) − V*), scale = −ρ g, frees the level parameter `level`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumeTarget {
+    /// The level's parameter index.
+    pub level: usize,
+    /// V*.
+    pub target: f64,
+    /// −ρ g (the row's scale, so that ∂g/∂q is the level's load).
+    pub scale: f64,
 }
 
 fn model_error(e: AxisymError) -> ModelError {
@@ -85,6 +99,7 @@ impl AxisymProblem {
             params,
             control,
             modes,
+            volume: None,
             pattern: Arc::new(pattern),
             slots,
             solver: SharedFactorization::default(),
@@ -96,7 +111,20 @@ impl AxisymProblem {
     pub fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
         let mut p = self.params.clone();
         p[self.control] = lambda[0];
+        if let (Some(v), Some(h)) = (self.volume, lambda.get(1)) {
+            p[v.level] = *h;
+        }
         p
+    }
+
+    /// The free parameters at every parameter's value `params` (the control, then the level
+    /// the volume constraint frees).
+    pub fn free_values(&self, params: &[f64]) -> DVector<f64> {
+        let mut l = vec![params[self.control]];
+        if let Some(v) = self.volume {
+            l.push(params[v.level]);
+        }
+        DVector::from_vec(l)
     }
 }
 
@@ -106,7 +134,7 @@ impl Problem for AxisymProblem {
     }
 
     fn free_parameters(&self) -> usize {
-        1
+        1 + usize::from(self.volume.is_some())
     }
 
     fn evaluate(
@@ -129,6 +157,21 @@ impl Problem for AxisymProblem {
         let n = self.dim();
         self.times.assembly += t.elapsed();
         self.times.evaluations += 1;
+        let free = self.free_parameters();
+        let mut loads = DMatrix::zeros(n, free);
+        loads.set_column(0, &e.loads.column(self.control));
+        let (constraints, constraint_q) = match self.volume {
+            Some(v) => {
+                loads.set_column(1, &e.loads.column(v.level));
+                let x = self.model.positions(q.as_slice());
+                let dv = self.model.volume_gradient(q.as_slice());
+                (
+                    DVector::from_element(1, v.scale * (self.model.volume(&x) - v.target)),
+                    DMatrix::from_row_slice(1, n, &dv) * v.scale,
+                )
+            }
+            None => (DVector::zeros(0), DMatrix::zeros(0, n)),
+        };
         Ok(Linearization {
             residual: DVector::from_vec(e.gradient),
             tangent: Tangent::Sparse {
@@ -137,10 +180,10 @@ impl Problem for AxisymProblem {
                 rank_one: Vec::new(),
                 solver: self.solver.clone(),
             },
-            loads: DMatrix::from_column_slice(n, 1, e.loads.column(self.control).as_slice()),
-            constraints: DVector::zeros(0),
-            constraint_q: DMatrix::zeros(0, n),
-            constraint_lambda: DMatrix::zeros(0, 1),
+            loads,
+            constraint_lambda: DMatrix::zeros(constraints.len(), free),
+            constraints,
+            constraint_q,
         })
     }
 
@@ -152,6 +195,12 @@ impl Problem for AxisymProblem {
 impl ModeProblem for AxisymProblem {
     fn modes(&self) -> usize {
         self.modes
+    }
+
+    fn border(&self, m: usize) -> usize {
+        self.layouts
+            .get(m)
+            .map_or_else(|| self.model.block_layout(m).border, |l| l.border)
     }
 
     fn block(

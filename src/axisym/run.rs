@@ -45,6 +45,8 @@ pub struct AxisymStudy {
     pub modes: usize,
     /// The stress-free enclosed volume (closed meridians: the stretch's reference).
     stress_free_volume: Option<f64>,
+    /// The fluid-volume constraint: (fluid effect, level parameter, target).
+    volume: Option<(usize, usize, scene::Target)>,
 }
 
 fn unsupported(what: String) -> AxisymRunError {
@@ -120,31 +122,67 @@ impl AxisymStudy {
                 )));
             }
         }
-        if let Some(s) = scene.boundary.slide.first() {
-            return Err(unsupported(format!(
-                "boundary.slide (set \"{}\"): sliding edges are not implemented by the axisymmetric model; use a 3-D mesh",
-                s.set
-            )));
+        for (i, s) in scene.boundary.slide.iter().enumerate() {
+            if Some(s.set.as_str()) != edge {
+                return Err(unsupported(format!(
+                    "boundary.slide[{i}].set: unknown node set \"{}\" (the axisymmetric {} has: {})",
+                    s.set,
+                    shape_name(mesh.shape),
+                    edge.unwrap_or("no node sets")
+                )));
+            }
+            if s.normal[0].hypot(s.normal[1]) > 1e-12 {
+                return Err(unsupported(format!(
+                    "boundary.slide[{i}].normal = {:?}: the axisymmetric model slides an edge on a plane normal to the axis only (normal = [0, 0, ±1])",
+                    s.normal
+                )));
+            }
+            if meridian.clamped.1 {
+                return Err(unsupported(format!(
+                    "boundary.slide[{i}]: the set \"{}\" is also fixed",
+                    s.set
+                )));
+            }
+            meridian.sliding.1 = true;
         }
-        if !scene.constraints.is_empty() {
-            return Err(unsupported(format!(
-                "constraint[0] (type = \"{}\"): constraints are not implemented by the axisymmetric model; use a 3-D mesh",
-                scene.constraints[0].kind()
-            )));
+        let mut volume = None;
+        for (i, c) in scene.constraints.iter().enumerate() {
+            let scene::Constraint::FluidVolume(v) = c else {
+                return Err(unsupported(format!(
+                    "constraint[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements fluid-volume); use a 3-D mesh",
+                    c.kind()
+                )));
+            };
+            match scene.effects.get(v.effect) {
+                Some(Effect::Fluid(f)) if f.side == scene::FluidSide::Inside => {}
+                _ => {
+                    return Err(unsupported(format!(
+                        "constraint[{i}].effect = {}: the axisymmetric model holds the volume of a fluid inside the membrane only",
+                        v.effect
+                    )))
+                }
+            }
+            if let scene::Target::Parameter(n) = &v.value {
+                return Err(unsupported(format!(
+                    "constraint[{i}].value = \"{n}\": the axisymmetric model holds a number or \"initial\""
+                )));
+            }
+            let level = parameters
+                .iter()
+                .position(|p| *p == v.level)
+                .expect("validated level");
+            volume = Some((v.effect, level, v.value.clone()));
         }
         let mut pressures = Vec::new();
+        let mut planes = Vec::new();
         for (i, e) in scene.effects.iter().enumerate() {
             match e {
                 Effect::Gas(g) => pressures.push(Pressure::Gas {
                     pressure: index(&g.pressure),
                 }),
                 Effect::Fluid(f) => {
-                    if f.filled {
-                        return Err(unsupported(format!(
-                            "effect[{i}].filled: a filled enclosure is not implemented by the axisymmetric model; use a 3-D mesh"
-                        )));
-                    }
                     pressures.push(Pressure::Fluid {
+                        filled: f.filled,
                         density: index(&f.density),
                         gravity: index(&f.gravity),
                         level: index(&f.level),
@@ -159,9 +197,23 @@ impl AxisymStudy {
                     density: index(&s.density),
                     omega2: index(&s.omega2),
                 }),
-                Effect::GasAmount(_) | Effect::Plane(_) => {
+                Effect::Plane(p) => {
+                    if p.normal[0].hypot(p.normal[1]) > 1e-12 {
+                        return Err(unsupported(format!(
+                            "effect[{i}].normal = {:?}: the axisymmetric model takes a plane normal to the axis only (normal = [0, 0, ±1])",
+                            p.normal
+                        )));
+                    }
+                    planes.push(super::FloorPlane {
+                        normal_z: p.normal[2].signum(),
+                        offset: index(&p.offset),
+                        penalty: index(&p.penalty),
+                        exponent: p.exponent,
+                    });
+                }
+                Effect::GasAmount(_) => {
                     return Err(unsupported(format!(
-                        "effect[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements gas, fluid, spin and fixed edges); use a 3-D mesh",
+                        "effect[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements gas, fluid, spin, plane, fixed and sliding edges); use a 3-D mesh",
                         e.kind()
                     )))
                 }
@@ -201,7 +253,9 @@ impl AxisymStudy {
                 .position(|p| *p == c)
                 .expect("validated control")
         });
-        let model = AxisymModel::new(meridian, pressures);
+        let mut model = AxisymModel::new(meridian, pressures);
+        model.planes = planes;
+        model.volume_level = volume.as_ref().map(|v| v.1);
         let stress_free_volume = model
             .meridian
             .closed()
@@ -215,6 +269,7 @@ impl AxisymStudy {
             control,
             modes,
             stress_free_volume,
+            volume,
         })
     }
 
@@ -416,9 +471,46 @@ pub fn run(
         ..opts.clone()
     };
     let describe = |e: SolveError| AxisymRunError::Start(e.to_string());
-    let (q, lambda, iterations) =
+    let (mut q, mut lambda, mut iterations) =
         crate::analysis::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
             .map_err(describe)?;
+    // The fluid-volume constraint: its target measured at the start, or given; its level
+    // free from here on.
+    if let Some((effect, level, target)) = &study.volume {
+        let v0 = study.model.volume(&study.model.positions(q.as_slice()));
+        let Some(Effect::Fluid(f)) = study.scene.effects.get(*effect) else {
+            unreachable!("a validated fluid-volume constraint")
+        };
+        let value = |x: &scene::Quantity| match x {
+            scene::Quantity::Value(v) => *v,
+            scene::Quantity::Parameter(n) => {
+                params[study
+                    .parameters
+                    .iter()
+                    .position(|p| p == n)
+                    .expect("validated parameter")]
+            }
+        };
+        let scale = -value(&f.density) * value(&f.gravity);
+        let target = match target {
+            scene::Target::Value(v) => *v,
+            scene::Target::Initial | scene::Target::Parameter(_) => v0,
+        };
+        problem.volume = Some(super::VolumeTarget {
+            level: *level,
+            target,
+            scale: if scale == 0.0 { -1.0 } else { scale },
+        });
+        let l0 = problem.free_values(&params);
+        if target != v0 {
+            let (q1, l1, it) =
+                crate::analysis::continuation::solve_at(&mut problem, &q, &l0, &start_opts)
+                    .map_err(describe)?;
+            (q, lambda, iterations) = (q1, l1, iterations + it);
+        } else {
+            lambda = l0;
+        }
+    }
     let (stop_stretch, stop_displacement) = match &study.scene.analysis {
         Analysis::Path(p) => (p.stop_stretch, p.stop_displacement),
         _ => (None, None),
@@ -476,9 +568,13 @@ pub fn run(
             path
         }
     };
+    let level = study.volume.as_ref().map(|v| v.1);
     let param_at = |l: &[f64]| {
         let mut p = params.clone();
         p[control] = l[0];
+        if let (Some(k), Some(h)) = (level, l.get(1)) {
+            p[k] = *h;
+        }
         p.truncate(study.parameters.len());
         p
     };

@@ -2,7 +2,9 @@
 //! meridian of 200 quadratic elements (quick: 64) followed from stretch 1.05 to 4 through its
 //! pressure maximum and minimum with the index of every wave number m = 0..20 at every point,
 //! as `memstab run` runs it: points, wall time, time per point, of it the blocks, and the
-//! turning pressures against the closed form.
+//! turning pressures against the closed form; and the Paper 4 cap of
+//! `scenes/axisymmetric/paper4_spinning_cap.toml` (filled fluid, spin, floor, sliding edge,
+//! fluid volume held) with its critical points by wave number.
 
 use crate::axisym::run::{run, AxisymStudy};
 use crate::scene::Scene;
@@ -50,5 +52,46 @@ pub fn axisym_section(elements: usize) -> Result<String, String> {
         err(1),
         critical.join(", ")
     );
+    Ok(md)
+}
+
+/// The bundled axisymmetric Paper 4 scene text (128 elements, modes 0..8).
+pub const AXISYM_PAPER4_TOML: &str =
+    include_str!("../../scenes/axisymmetric/paper4_spinning_cap.toml");
+
+/// The Paper 4 cap on meridians of `levels` elements, timed: the markdown section.
+pub fn paper4_section(levels: &[usize]) -> Result<String, String> {
+    let mut md = "\n## Axisymmetric Paper 4 cap: modes 0..8 at every point\n\n\
+         | elements | unknowns | points | wall (s) | per point (ms) | of it blocks (s) | critical points (m at w2) |\n\
+         |---|---|---|---|---|---|---|\n"
+        .to_string();
+    for &elements in levels {
+        let text =
+            AXISYM_PAPER4_TOML.replacen("elements = 128", &format!("elements = {elements}"), 1);
+        let scene = Scene::from_toml_str(&text, &format!("axisymmetric Paper 4 cap, {elements}"))
+            .map_err(|e| e.to_string())?;
+        let t = Instant::now();
+        let study = AxisymStudy::build(scene).map_err(|e| e.to_string())?;
+        let report = run(&study, |_, _| {}).map_err(|e| e.to_string())?;
+        let wall = t.elapsed().as_secs_f64();
+        let points = report.rows.len();
+        let w2 = report
+            .parameters
+            .iter()
+            .position(|p| p == "w2")
+            .unwrap_or(0);
+        let critical: Vec<String> = report
+            .critical
+            .iter()
+            .map(|c| format!("m = {} at {}", c.m, sig_digits(c.parameters[w2], 7)))
+            .collect();
+        md += &format!(
+            "| {elements} | {} | {points} | {wall:.3} | {:.2} | {:.3} | {} |\n",
+            report.unknowns,
+            1e3 * wall / points.max(1) as f64,
+            report.block_time.as_secs_f64(),
+            critical.join(", ")
+        );
+    }
     Ok(md)
 }

@@ -235,6 +235,12 @@ pub fn run_axisym(
         md += &super::axisym::axisym_section(e)
             .map_err(|err| format!("axisymmetric balloon: {}", one_line(&err)))?;
     }
+    let caps: &[usize] = if quick { &[128] } else { &[128, 256] };
+    progress(&format!(
+        "axisymmetric Paper 4 cap with modes 0..8 at every point, {caps:?} elements …"
+    ));
+    md += &super::axisym::paper4_section(caps)
+        .map_err(|err| format!("axisymmetric Paper 4 cap: {}", one_line(&err)))?;
     md += &report::total_time("study", started.elapsed());
     let md_path = write_text(out, "axisym.md", &md)?;
     Ok(BenchFiles {

@@ -1,0 +1,128 @@
+//! The fluid-volume constraint on the meridian (docs/theory.md §15.10), the 3-D constraint
+//! of docs/theory.md §4.4 and §8.3 for a completely filled membrane of revolution.
+//!
+//! The fluid fills the region behind the membrane, whose volume is V = −π ∫ r² z_ξ dξ (closed
+//! at an open meridian's rim by the plane of the rim, as for the gas); holding it at V* frees
+//! the head h. The augmented potential and the augmenting equation are
+//!
+//! ```text
+//!   Π̂(q, h) = Π(q, h) + ρ g V* h,     ∂Π̂/∂h = −ρ g (V(q) − V*) = 0,
+//! ```
+//!
+//! since ∂Π/∂h = π ρ g ∫ r² z_ξ dξ = −ρ g V for the filled fluid behind the membrane
+//! (Π = π ∫ r² ρ g (h − z) z_ξ dξ). The row g = −ρ g (V − V*) then has ∂g/∂q = −ρ g ∇V, the
+//! load ∂R/∂h: the border is symmetric, and ∂g/∂h = 0 (V of the filled region does not
+//! depend on h), the hard constraint of §8.3 whose index is neg(K̃) − 1. On a Gauss point,
+//!
+//! ```text
+//!   ∂V/∂r_k = −2π r z_ξ N_k,    ∂V/∂z_k = −π r² N_k′.
+//! ```
+//!
+//! The volume's first variation along a field of wave number m ≥ 1 is ∫ n·δx dA with
+//! n·δx ∝ cos mθ, whose θ integral vanishes: the constraint borders the block m = 0 only.
+
+use super::{shape, AxisymModel, GAUSS};
+use std::f64::consts::PI;
+
+impl AxisymModel {
+    /// ∂V/∂(r_i, z_i) at every node of the nodes `x`.
+    pub fn volume_gradient_nodes(&self, x: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let mut g = vec![[0.0; 2]; x.len()];
+        for e in 0..self.meridian.elements() {
+            for &(xi, w) in &GAUSS {
+                let (n, dn) = shape(xi);
+                let (mut r, mut dz) = (0.0, 0.0);
+                for k in 0..3 {
+                    r += n[k] * x[2 * e + k][0];
+                    dz += dn[k] * x[2 * e + k][1];
+                }
+                for k in 0..3 {
+                    g[2 * e + k][0] -= 2.0 * PI * r * dz * n[k] * w;
+                    g[2 * e + k][1] -= PI * r * r * dn[k] * w;
+                }
+            }
+        }
+        g
+    }
+
+    /// ∂V/∂q over the free unknowns at displacement `q`.
+    pub fn volume_gradient(&self, q: &[f64]) -> Vec<f64> {
+        let g = self.volume_gradient_nodes(&self.positions(q));
+        (0..self.dim())
+            .map(|k| {
+                let (i, c) = self.free_unknown(k);
+                g[i][c]
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::model::tests::generic_filled;
+    use super::super::perturbation;
+    use super::*;
+
+    /// ∇V against central differences of V.
+    #[test]
+    fn the_volume_gradient_matches_finite_differences() {
+        let (model, q, _) = generic_filled();
+        let g = model.volume_gradient(&q);
+        let h = 1e-6;
+        for k in 0..model.dim() {
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[k] += h;
+            qm[k] -= h;
+            let d = (model.volume(&model.positions(&qp)) - model.volume(&model.positions(&qm)))
+                / (2.0 * h);
+            assert!(
+                (d - g[k]).abs() < 1e-8 * (1.0 + d.abs()),
+                "{k}: {d} vs {}",
+                g[k]
+            );
+        }
+        assert!(g.iter().any(|v| v.abs() > 0.1));
+    }
+
+    /// The volume's first variation ∫ n·δx dA, sampled in θ, is ∇V·(U, W) for m = 0 and
+    /// vanishes for m ≥ 1: the constraint borders the block m = 0 only.
+    #[test]
+    fn the_volume_varies_with_the_axisymmetric_block_only() {
+        let (model, q, _) = generic_filled();
+        let x = model.positions(&q);
+        let grad = model.volume_gradient_nodes(&x);
+        // A generic field (U, V, W) per node.
+        let n = x.len();
+        // W = 0 at the sliding edge, where the end term −π [r² δz] of the integration by
+        // parts would remain.
+        let mut field: Vec<f64> = (0..3 * n).map(|k| ((k as f64) * 0.37).cos()).collect();
+        field[3 * n - 1] = 0.0;
+        for m in 0..4 {
+            let nt = 2 * m + 4;
+            let mut dv = 0.0;
+            for e in 0..model.meridian.elements() {
+                for p in super::super::points(&model.meridian, &x, e) {
+                    let nda = p.x_xi.cross(&nalgebra::Vector3::new(0.0, p.r, 0.0));
+                    for t in 0..nt {
+                        let theta = 2.0 * PI * t as f64 / nt as f64;
+                        let [dx, _, _] = perturbation(&p, m, theta, 0.0);
+                        let local = nalgebra::SVector::<f64, 9>::from_fn(|i, _| field[6 * e + i]);
+                        dv += nda.dot(&(dx * local)) * p.weight * 2.0 * PI / nt as f64;
+                    }
+                }
+            }
+            // δV = ∫ n·δx dA, n = x_ξ × x_θ pointing away from the enclosed region.
+            let axisym: f64 = (0..n)
+                .map(|i| grad[i][0] * field[3 * i] + grad[i][1] * field[3 * i + 2])
+                .sum();
+            if m == 0 {
+                assert!(
+                    (dv - axisym).abs() < 1e-10 * axisym.abs(),
+                    "{dv} vs {axisym}"
+                );
+            } else {
+                assert!(dv.abs() < 1e-12 * axisym.abs(), "m = {m}: {dv}");
+            }
+        }
+    }
+}
