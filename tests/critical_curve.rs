@@ -180,7 +180,9 @@ fn check_test_derivatives(study: &Study, cp: &memstab::analysis::critical::Criti
     let mut border = block.restrict(&cp.mode);
     // A border off the null vector, so that the test is generic.
     border[0] += 0.3;
-    let mut test = BlockTest::new(&study.model, block, &study.basis, mu == 0, &border, length);
+    let mut test = BlockTest::new(&study.model, block, &study.basis, mu == 0, &border, length)
+        .with_constraints(&study.constraints, &cp.state, &cp.parameters)
+        .unwrap();
     // A state near the critical point.
     let u: Vec<f64> = cp.state.iter().map(|v| v * 1.01).collect();
     let params = cp.parameters.clone();
@@ -208,7 +210,7 @@ fn check_test_derivatives(study: &Study, cp: &memstab::analysis::critical::Criti
         let fd = (sp - sm) / (2.0 * hj);
         let scale = fd.abs().max(t.grad_params[j].abs());
         assert!(
-            (fd - t.grad_params[j]).abs() < 1e-5 * scale,
+            (fd - t.grad_params[j]).abs() <= 1e-5 * scale,
             "{}: dσ/d{name}: {} vs difference {fd}",
             cp.irrep,
             t.grad_params[j]
@@ -657,4 +659,152 @@ fn a_curve_starts_from_a_finished_runs_critical_point() {
         err.contains("'analysis.from' = 7") && err.contains("critical point"),
         "{err}"
     );
+}
+
+/// A Mooney–Rivlin balloon (k = 0.1, f = `frequency`) under two pressures on the same volume:
+/// the control p, and the over-pressure q of a fixed amount of gas, (P + q)·V = n with
+/// P = 0.1 (a `gas-amount` constraint governing q, its amount the parameter n). Under p the
+/// balloon folds where dp/dV = 0 with p = p_s(V) − n/V + P (p_s the sphere's pressure): a
+/// limit point of the constrained path, whose bordered trivial block is singular there.
+/// `analysis` is the scene's `[analysis]` table and any constraint it needs.
+fn reservoir_balloon_text(frequency: usize, analysis: &str) -> String {
+    format!(
+        r#"[scene]
+name = "reservoir-balloon"
+
+[mesh]
+generator = "icosphere"
+radius = 1.0
+frequency = {frequency}
+
+[material]
+model = "mooney-rivlin"
+mu = 100.0
+k = 0.1
+thickness = 0.01
+
+[[effect]]
+type = "gas"
+pressure = "p"
+
+[[effect]]
+type = "gas"
+pressure = "q"
+
+[parameters.p]
+start = 0.19
+min = 0.0
+max = 3.0
+
+[parameters.q]
+start = 0.3
+
+[parameters.n]
+start = 1.94
+min = 0.5
+max = 3.0
+
+[[constraint]]
+type = "gas-amount"
+effect = 1
+value = "n"
+ambient-pressure = 0.1
+
+{analysis}
+
+[start]
+stretch = 1.05
+"#
+    )
+}
+
+const RESERVOIR_CURVE: &str = r#"[analysis]
+type = "critical-curve"
+control = "p"
+second = "n"
+from = "limit"
+steps = 6
+path-steps = 400
+max-step = 0.1
+"#;
+
+/// The reservoir balloon's limit pressure at amount n in closed form: the maximum over the
+/// stretch λ of p_s(λ) − n/(V₀λ³) + P after the sphere's own maximum (V₀ = 4π/3).
+fn reservoir_limit_p(n: f64) -> f64 {
+    let p = |l: f64| sphere_p(l, 0.1) - n / (4.0 * std::f64::consts::PI / 3.0 * l.powi(3)) + 0.1;
+    let (mut a, mut b) = (1.2f64, 3.0f64);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..200 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if p(c) > p(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    p(0.5 * (a + b))
+}
+
+/// The test function bordered by the gas-amount constraint: its derivatives in q and in every
+/// parameter (n, q, p) against differences of σ, near the constrained limit point.
+#[test]
+fn constrained_block_test_function_derivatives_match_differences_of_sigma() {
+    let scene =
+        Scene::from_toml_str(&reservoir_balloon_text(3, RESERVOIR_CURVE), "reservoir").unwrap();
+    let mut study = Study::build(scene).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
+    let cp = result.report.critical.first().expect("a limit point");
+    assert_eq!(cp.kind, CriticalKind::LimitPoint);
+    check_test_derivatives(&study, cp);
+}
+
+/// The constrained limit point followed in (p, n): at three points of the curve its pressure
+/// is the limit point that an ordinary constrained path in p at that fixed n localises, and
+/// every point lies on the closed-form fold line to the mesh's error.
+#[test]
+fn constrained_limit_curve_agrees_with_paths_at_fixed_amounts_and_the_closed_form() {
+    let scene =
+        Scene::from_toml_str(&reservoir_balloon_text(3, RESERVOIR_CURVE), "reservoir").unwrap();
+    let mut study = Study::build(scene).unwrap();
+    let result = run(&mut study, |_, _| {}).expect("the constrained curve runs");
+    let curve = result.curve.clone().expect("a curve");
+    assert_eq!(curve.kind, CriticalKind::LimitPoint);
+    let (p, q, n) = (col(&curve, "p"), col(&curve, "q"), col(&curve, "n"));
+    assert!(curve.rows.len() >= 4, "{} points", curve.rows.len());
+    for r in &curve.rows {
+        let closed = reservoir_limit_p(r.parameters[n]);
+        eprintln!(
+            "n = {}: p = {}, q = {}, closed form p = {closed}",
+            r.parameters[n], r.parameters[p], r.parameters[q]
+        );
+        assert!(r.critical_eigenvalue.abs() < 1e-8, "{r:?}");
+        assert!((r.parameters[p] / closed - 1.0).abs() < 8e-2, "{r:?}");
+    }
+    for r in curve.rows.iter().skip(1).take(3) {
+        let amount = r.parameters[n];
+        let path = "[[constraint]]\ntype = \"fixed\"\nparameter = \"n\"\n\n[analysis]\n\
+                    type = \"path\"\ncontrol = \"p\"\nsteps = 400\nmax-step = 0.1\n\
+                    stop-stretch = 2.6\n";
+        let text = reservoir_balloon_text(3, path).replacen(
+            "start = 1.94",
+            &format!("start = {amount:.17e}"),
+            1,
+        );
+        let mut study =
+            Study::build(Scene::from_toml_str(&text, "reservoir-path").unwrap()).unwrap();
+        let result = run(&mut study, |_, _| {}).expect("the path runs");
+        let limit = result
+            .report
+            .critical
+            .iter()
+            .find(|c| c.kind == CriticalKind::LimitPoint)
+            .expect("a limit point on the path");
+        let pi = study.parameters.iter().position(|x| x == "p").unwrap();
+        let rel = (limit.parameters[pi] / r.parameters[p] - 1.0).abs();
+        eprintln!(
+            "n = {amount}: curve p = {}, path limit p = {}, relative {rel:e}",
+            r.parameters[p], limit.parameters[pi]
+        );
+        assert!(rel < 1e-6, "n = {amount}: {rel:e}");
+    }
 }

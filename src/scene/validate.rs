@@ -809,23 +809,6 @@ fn check_analysis(scene: &Scene) -> Result<(), Problem> {
                     ));
                 }
             }
-            if let (CurveStart::Limit, Some((i, c))) = (
-                &a.from,
-                scene
-                    .constraints
-                    .iter()
-                    .enumerate()
-                    .find(|(_, c)| c.kind() != ConstraintKind::Fixed),
-            ) {
-                return Err(Problem::at(
-                    "analysis.from",
-                    format!(
-                        "= \"limit\" with constraint[{i}] ({}) active: a limit-point curve \
-                         with active constraints is not supported yet",
-                        c.kind()
-                    ),
-                ));
-            }
             at_least("analysis.steps", a.steps, 1)?;
             at_least("analysis.path-steps", a.path_steps, 1)?;
             check_steps(a.initial_step, a.min_step, a.max_step)?;
