@@ -135,7 +135,7 @@ def mode_figure(run_dir, title, file, limit=6):
 
 def curve_figure(runs, x, y, title, file):
     """Critical curves in (x, y), one per run directory, with their events (hilltops, cusps,
-    irrep changes)."""
+    irrep changes) marked, and labelled on the first curve."""
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for n, run_dir in enumerate(runs):
         cols = read_csv(run_dir / "curve.csv")
@@ -146,7 +146,10 @@ def curve_figure(runs, x, y, title, file):
         for e in events:
             px, py = e["parameters"][x], e["parameters"][y]
             ax.plot(px, py, "o", color="C3", ms=5)
-            ax.annotate(f"{e['kind']} with {e['irrep']}", (px, py),
+            if n > 0:
+                continue  # the same points as the first curve's: labelled once
+            what = f"{e['kind']} with {e['irrep']}" if e.get("irrep") else e["kind"]
+            ax.annotate(what, (px, py),
                         textcoords="offset points", xytext=(8, -12 - 10 * n), fontsize=8)
     ax.set_xlabel(x)
     ax.set_ylabel(y)
@@ -158,13 +161,16 @@ def curve_figure(runs, x, y, title, file):
     plt.close(fig)
 
 
-def variant(scene, out, old, new):
-    """A copy of a bundled scene with one line replaced, written beside the runs."""
+def variant(scene, out, name, *replacements):
+    """A copy of a bundled scene with lines replaced ((old, new) pairs), written beside the
+    runs as NAME.toml."""
     text = (ROOT / scene).read_text()
-    if old not in text:
-        sys.exit(f"{scene}: no line {old!r} to replace")
-    path = out / Path(scene).name.replace(".toml", "_variant.toml")
-    path.write_text(text.replace(old, new, 1))
+    for old, new in replacements:
+        if old not in text:
+            sys.exit(f"{scene}: no line {old!r} to replace")
+        text = text.replace(old, new, 1)
+    path = out / f"{name}.toml"
+    path.write_text(text)
     return path
 
 
@@ -189,7 +195,7 @@ def main(memstab, out, figures):
 
     scene = "scenes/thesis/paper1_disc_limit_curve_k.toml"
     limit = run(memstab, scene, out / "disc_curve_k_limit")
-    double = run(memstab, variant(scene, out, 'from = "limit"', 'from = "E1"'),
+    double = run(memstab, variant(scene, out, "disc_curve_k_e1", ('from = "limit"', 'from = "E1"')),
                  out / "disc_curve_k_e1")
     curve_figure([limit, double], "k", "h",
                  "Paper 1: the disc's limit point and first double point followed in k",
@@ -205,9 +211,13 @@ def main(memstab, out, figures):
 
     scene = "scenes/thesis/paper4_hilltop_k.toml"
     b2 = run(memstab, scene, out / "paper4_hilltop_b2")
-    b1 = run(memstab, variant(scene, out, 'from = "B2"', 'from = "B1"'), out / "paper4_hilltop_b1")
-    curve_figure([b2, b1], "k", "w2",
-                 "Paper 4: the m = 4 pair's bifurcation curves meet the limit curve",
+    b1 = run(memstab, variant(scene, out, "paper4_hilltop_b1", ('from = "B2"', 'from = "B1"')),
+             out / "paper4_hilltop_b1")
+    limit = run(memstab, variant(scene, out, "paper4_limit_k",
+                                 ('from = "B2"', 'from = "limit"'), ("steps = 60", "steps = 80")),
+                out / "paper4_limit_k")
+    curve_figure([limit, b2, b1], "k", "w2",
+                 "Paper 4: the limit curve's cusp, and the m = 4 pair's curves meeting it",
                  figures / "paper4_hilltop_k.png")
 
 

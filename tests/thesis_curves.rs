@@ -99,7 +99,8 @@ fn cap_hilltop(from: &str) -> (f64, f64) {
 
 /// Paper 4's hilltop: followed to smaller k, each of the two simple bifurcations into which
 /// the C8v mesh splits the m = 4 pair meets the limit curve (the trivial block singular too),
-/// at two close points. On paths in w2 at fixed k either side, the order of the fold and the
+/// at two close points; the limit curve, followed with its constraint active, has a cusp and
+/// finds the same two points. On paths in w2 at fixed k either side, the order of the fold and the
 /// B2 bifurcation is reversed: above the hilltop the path meets B2 before it folds, below it
 /// folds first.
 #[test]
@@ -112,6 +113,40 @@ fn the_spinning_caps_m4_bifurcations_meet_the_limit_curve_at_two_close_hilltops(
         "the B2 hilltop ({w2}, {k}) and the B1 one ({w2_b1}, {k_b1}) are not close"
     );
     assert_ne!((w2, k), (w2_b1, k_b1), "the mesh splits the pair's hilltop");
+    // The limit curve from the fold at k = 0.1, the fluid volume held along it: it turns in k
+    // at a cusp, and on its way back meets both bifurcation curves at the same two hilltops.
+    let mut scene = bundled("thesis/paper4_hilltop_k.toml");
+    let memstab::scene::Analysis::CriticalCurve(analysis) = &mut scene.analysis else {
+        panic!("the hilltop scene is a critical curve")
+    };
+    analysis.from = memstab::scene::CurveStart::Limit;
+    analysis.steps = 80;
+    let mut study = Study::build(scene).unwrap();
+    let limit = run(&mut study, |_, _| {})
+        .expect("the limit curve runs")
+        .curve
+        .unwrap();
+    let ik = limit.parameters.iter().position(|p| p == "k").unwrap();
+    let iw = limit.parameters.iter().position(|p| p == "w2").unwrap();
+    let cusps: Vec<_> = limit
+        .events
+        .iter()
+        .filter(|e| e.kind == CurveEventKind::Cusp)
+        .collect();
+    assert_eq!(cusps.len(), 1, "{:?}", limit.events);
+    assert!(cusps[0].parameters[ik] < k_b1.min(k), "{:?}", cusps[0]);
+    for (irrep, w2, k) in [("B2", w2, k), ("B1", w2_b1, k_b1)] {
+        let e = limit
+            .events
+            .iter()
+            .find(|e| e.kind == CurveEventKind::Hilltop && e.irrep.as_deref() == Some(irrep))
+            .unwrap_or_else(|| panic!("no hilltop with {irrep}: {:?}", limit.events));
+        assert!(
+            (e.parameters[ik] - k).abs() < 1e-6 * k && (e.parameters[iw] - w2).abs() < 1e-6 * w2,
+            "{irrep}: the limit curve's hilltop {:?}, the bifurcation curve's ({w2}, {k})",
+            e.parameters
+        );
+    }
     let first = |k: f64| {
         let mut scene = bundled("thesis/paper4_spinning_cap.toml");
         scene.material.k = memstab::scene::Quantity::Value(k);
