@@ -27,7 +27,7 @@
 //! δx = C cos mθ + S sin mθ, the θ integrals of the products are π (CᵀHC + SᵀHS) for m ≥ 1
 //! and 2π (C + S)ᵀH(C + S) for m = 0, exactly.
 
-use super::{shape, AxisymError, FloorPlane, Meridian, GAUSS};
+use super::{AxisymError, FloorPlane, Meridian};
 use crate::effects::Quantity;
 use crate::linalg::SymmetricPattern;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -284,19 +284,10 @@ impl AxisymModel {
 
     /// The enclosed volume V = −π ∫ r² z_ξ dξ at the nodes `x`.
     pub fn volume(&self, x: &[[f64; 2]]) -> f64 {
-        let mut v = 0.0;
-        for e in 0..self.meridian.elements() {
-            for &(xi, w) in &GAUSS {
-                let (n, dn) = shape(xi);
-                let (mut r, mut dz) = (0.0, 0.0);
-                for k in 0..3 {
-                    r += n[k] * x[2 * e + k][0];
-                    dz += dn[k] * x[2 * e + k][1];
-                }
-                v -= PI * r * r * dz * w;
-            }
-        }
-        v
+        (0..self.meridian.elements())
+            .flat_map(|e| super::volume::volume_points(x, e))
+            .map(|p| -PI * p.r * p.r * p.dz * p.w)
+            .sum()
     }
 
     /// Why the state `x` is outside the model: a node above a fluid's level.

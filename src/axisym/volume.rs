@@ -29,16 +29,10 @@ impl AxisymModel {
     pub fn volume_gradient_nodes(&self, x: &[[f64; 2]]) -> Vec<[f64; 2]> {
         let mut g = vec![[0.0; 2]; x.len()];
         for e in 0..self.meridian.elements() {
-            for &(xi, w) in &GAUSS {
-                let (n, dn) = shape(xi);
-                let (mut r, mut dz) = (0.0, 0.0);
+            for p in volume_points(x, e) {
                 for k in 0..3 {
-                    r += n[k] * x[2 * e + k][0];
-                    dz += dn[k] * x[2 * e + k][1];
-                }
-                for k in 0..3 {
-                    g[2 * e + k][0] -= 2.0 * PI * r * dz * n[k] * w;
-                    g[2 * e + k][1] -= PI * r * r * dn[k] * w;
+                    g[2 * e + k][0] -= 2.0 * PI * p.r * p.dz * p.n[k] * p.w;
+                    g[2 * e + k][1] -= PI * p.r * p.r * p.dn[k] * p.w;
                 }
             }
         }
@@ -55,6 +49,29 @@ impl AxisymModel {
             })
             .collect()
     }
+}
+
+/// A Gauss point of element `e` of the nodes `x`: its weight, the shape functions and their
+/// derivatives, the radius r and z_ξ there (what V = −π ∫ r² z_ξ dξ and its gradient need).
+pub(super) struct VolumePoint {
+    pub w: f64,
+    pub n: [f64; 3],
+    pub dn: [f64; 3],
+    pub r: f64,
+    pub dz: f64,
+}
+
+/// The Gauss points of element `e` of the nodes `x`.
+pub(super) fn volume_points(x: &[[f64; 2]], e: usize) -> impl Iterator<Item = VolumePoint> + '_ {
+    GAUSS.iter().map(move |&(xi, w)| {
+        let (n, dn) = shape(xi);
+        let (mut r, mut dz) = (0.0, 0.0);
+        for k in 0..3 {
+            r += n[k] * x[2 * e + k][0];
+            dz += dn[k] * x[2 * e + k][1];
+        }
+        VolumePoint { w, n, dn, r, dz }
+    })
 }
 
 #[cfg(test)]
