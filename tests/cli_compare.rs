@@ -462,7 +462,9 @@ fn bad_meshes_are_one_line_and_exit_code_2() {
 
 /// The spinning cap of Paper 4 (6 divisions) on C8v, C2v and C1v, from w2 = 0: on C1v the
 /// free drift in x lies in the fixed-point space and is held at the start, so the run starts
-/// there and finds its points.
+/// there and finds its points. cos 2θ lies in the trivial irrep of C2v and C1v, so there the
+/// m = 2 double of C8v is imperfect: each path folds near it, and that fold is the rung's
+/// image; the points met after the turn are the image of nothing on the C8v path.
 #[test]
 fn the_spinning_cap_compares_on_c1v_from_rest() {
     let dir = tempfile::tempdir().unwrap();
@@ -478,6 +480,37 @@ fn the_spinning_cap_compares_on_c1v_from_rest() {
         table.lines().any(|l| l.contains("C1v") && l.contains("A2")),
         "{table}"
     );
+    let json = compare_json(&[&path, "--meshes", "C8v,C2v,C1v", "--quiet"]);
+    let m2 = rung(&json, 2);
+    let double = on(m2, "C8v")["levels"][0]["values"][0].as_f64().unwrap();
+    for mesh in ["C2v", "C1v"] {
+        let image = &on(m2, mesh)["levels"][0];
+        let verdict = image["verdict"].as_str().unwrap();
+        assert!(
+            verdict.starts_with("imperfect: a limit point in A1"),
+            "{mesh}: {image}"
+        );
+        let fold = image["values"][0].as_f64().unwrap();
+        assert!(
+            (fold - double).abs() < 0.05 * double,
+            "{mesh}: {fold} vs {double}"
+        );
+        // Every point left over on the broken meshes is met after the turn, below the fold.
+        let left: Vec<&Value> = json["unmatched"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|u| u["mesh"] == mesh)
+            .collect();
+        assert!(
+            !left.is_empty(),
+            "{mesh}: the path meets points on its way back"
+        );
+        for u in left {
+            assert_eq!(u["rising"], false, "{mesh}: {u}");
+            assert!(u["value"].as_f64().unwrap() < fold, "{mesh}: {u}");
+        }
+    }
 }
 
 /// The critical points (m, value) of a compare run's mesh `label`, in path order.

@@ -174,14 +174,15 @@ fn print_table(c: &Comparison) {
     if c.label.is_some() {
         out!(
             "images are matched by the wave number m of the critical mode about z and the \
-             nearest {}; a gap is measured between the images on a mesh, never inferred from \
-             its group",
+             nearest {} on the same piece of the path; a gap is measured between the images on \
+             a mesh, never inferred from its group",
             c.control
         );
     } else {
         out!(
-            "images are matched by the nearest {} (no wave number for this generator); a gap is \
-             measured between the images on a mesh, never inferred from its group",
+            "images are matched by the nearest {} on the same piece of the path (no wave number \
+             for this generator); a gap is measured between the images on a mesh, never \
+             inferred from its group",
             c.control
         );
     }
@@ -314,7 +315,7 @@ fn print_table(c: &Comparison) {
         out!("points without a counterpart on the reference mesh:");
         for u in &c.unmatched {
             out!(
-                "  {} ({} {}): {} at {} = {}{}",
+                "  {} ({} {}): {} at {} = {}{}{}",
                 u.mesh,
                 c.meshes
                     .iter()
@@ -326,7 +327,12 @@ fn print_table(c: &Comparison) {
                 u.irrep,
                 c.control,
                 sig_digits(u.value, 7),
-                u.m.map_or_else(String::new, |m| format!(" (m = {m})"))
+                u.m.map_or_else(String::new, |m| format!(" (m = {m})")),
+                if u.rising {
+                    String::new()
+                } else {
+                    format!(", met as {} falls", c.control)
+                }
             );
         }
     }

@@ -42,6 +42,7 @@ fn rungs(points: &[Point], floor: f64, taken: &[bool]) -> Vec<Vec<usize>> {
         while have < target {
             let next = (0..points.len())
                 .filter(|&j| !used[j] && points[j].m == points[i].m && points[i].m.is_some())
+                .filter(|&j| points[j].rising == points[i].rising)
                 .filter(|&j| !fold(&points[j]))
                 .filter(|&j| (points[j].value - v).abs() <= PAIR_TOLERANCE * v.abs() + floor)
                 .min_by(|&a, &b| {
@@ -59,12 +60,44 @@ fn rungs(points: &[Point], floor: f64, taken: &[bool]) -> Vec<Vec<usize>> {
     out
 }
 
-/// The images of a rung (label m, value v, multiplicity `target`; of limit points when
-/// `folds`) among the unused points: folds are the images of folds only.
+/// What a rung's images must share with it: the wave number, whether it is a fold (folds are
+/// the images of folds only), and the direction of the control where the path meets it (a
+/// point met after a turn of the path lies on another piece of it).
+#[derive(Debug, Clone, Copy)]
+struct Likeness {
+    m: Option<usize>,
+    fold: bool,
+    rising: bool,
+}
+
+impl Likeness {
+    fn of(p: &Point) -> Self {
+        Likeness {
+            m: p.m,
+            fold: fold(p),
+            rising: p.rising,
+        }
+    }
+
+    fn admits(&self, p: &Point) -> bool {
+        p.m == self.m
+            && p.rising == self.rising
+            && match (self.fold, fold(p)) {
+                (true, true) | (false, false) => true,
+                (true, false) => false,
+                // A mode of the pair that the mesh put in its trivial irrep: there the
+                // bifurcation is not protected by the symmetry and the path folds instead.
+                (false, true) => self.m.is_some_and(|m| m >= 1),
+            }
+    }
+}
+
+/// The images of a rung (like the rung's first point, value v, multiplicity `target`) among
+/// the unused points.
 fn images(
     points: &[Point],
     used: &mut [bool],
-    (m, folds): (Option<usize>, bool),
+    like: Likeness,
     v: f64,
     target: usize,
     floor: f64,
@@ -73,7 +106,7 @@ fn images(
     let mut have = 0;
     while have < target {
         let next = (0..points.len())
-            .filter(|&j| !used[j] && points[j].m == m && fold(&points[j]) == folds)
+            .filter(|&j| !used[j] && like.admits(&points[j]))
             .filter(|&j| (points[j].value - v).abs() <= MATCH_TOLERANCE * v.abs() + floor)
             .min_by(|&a, &b| {
                 (points[a].value - v)
@@ -84,6 +117,10 @@ fn images(
         used[j] = true;
         have += points[j].multiplicity;
         found.push(j);
+        if !like.fold && fold(&points[j]) {
+            // The path turns there: the rest of the pair, if any, lies before it.
+            break;
+        }
     }
     found.sort_by(|&a, &b| points[a].value.total_cmp(&points[b].value));
     found
@@ -137,6 +174,12 @@ pub enum VerdictKind {
     },
     /// One simple point.
     Single(CriticalKind),
+    /// One limit point as the image of a bifurcation: the mesh put a mode of the pair in its
+    /// trivial irrep, where the bifurcation is imperfect.
+    Imperfect {
+        /// The point's irrep.
+        irrep: String,
+    },
     /// Two or more points at exactly the same value.
     NotSplitZero,
     /// Two or more points whose gap is within the localisation's uncertainty.
@@ -163,6 +206,9 @@ impl std::fmt::Display for Verdict {
             VerdictKind::NotFound => f.write_str("not found")?,
             VerdictKind::Multiple { kind, irrep } => write!(f, "not split: {kind} in {irrep}")?,
             VerdictKind::Single(kind) => write!(f, "{kind}")?,
+            VerdictKind::Imperfect { irrep } => {
+                write!(f, "imperfect: a limit point in {irrep}, the path turns")?
+            }
             VerdictKind::NotSplitZero => f.write_str("not split (gap 0)")?,
             VerdictKind::NotSplitRoundOff { precision } => {
                 write!(f, "not split (gap at round-off, +-{})", sci(*precision))?
@@ -183,7 +229,12 @@ impl Serialize for Verdict {
     }
 }
 
-fn measure(points: &[Point], found: Vec<usize>, target: usize, resolution: usize) -> Image {
+fn measure(
+    points: &[Point],
+    found: Vec<usize>,
+    (target, folds): (usize, bool),
+    resolution: usize,
+) -> Image {
     let values: Vec<f64> = found.iter().map(|&j| points[j].value).collect();
     let irreps: Vec<String> = found.iter().map(|&j| points[j].irrep.clone()).collect();
     let multiplicity: usize = found.iter().map(|&j| points[j].multiplicity).sum();
@@ -194,6 +245,13 @@ fn measure(points: &[Point], found: Vec<usize>, target: usize, resolution: usize
             None,
             VerdictKind::Multiple {
                 kind: points[*j].kind,
+                irrep: points[*j].irrep.clone(),
+            },
+        ),
+        [j] if fold(&points[*j]) && !folds => (
+            None,
+            None,
+            VerdictKind::Imperfect {
                 irrep: points[*j].irrep.clone(),
             },
         ),
@@ -358,6 +416,7 @@ pub(super) fn match_rungs(meshes: &[MeshRuns], floor: f64) -> (Vec<Rung>, Vec<Un
                         irrep: p.irrep.clone(),
                         value: p.value,
                         m: p.m,
+                        rising: p.rising,
                     });
                 }
             }
@@ -395,13 +454,18 @@ fn rung(
                 images(
                     &level.critical,
                     &mut used[k][l],
-                    (m, fold(first)),
+                    Likeness::of(first),
                     v,
                     target,
                     floor,
                 )
             };
-            levels.push(measure(&level.critical, found, target, level.resolution));
+            levels.push(measure(
+                &level.critical,
+                found,
+                (target, fold(first)),
+                level.resolution,
+            ));
         }
         let order = match levels.as_slice() {
             [a, b] => match (a.split, b.split, a.gap, b.gap) {
@@ -482,6 +546,7 @@ mod tests {
             residual_eigenvalue: 1e-13,
             precision: None,
             isotropy: "C1v".into(),
+            rising: true,
         }
     }
 
@@ -501,9 +566,56 @@ mod tests {
             point(CriticalKind::SimpleBifurcation, "A2", 2.001, 1),
         ];
         assert_eq!(rungs(&split, 0.0, &[false, false]), vec![vec![0, 1]]);
-        // A fold is not the image of a double's half.
+        // Nor is a bifurcation the image of a fold.
         let mut used = vec![false, false];
-        let found = images(&folds, &mut used, (Some(1), false), 2.0, 2, 0.0);
+        let found = images(&split, &mut used, Likeness::of(&folds[0]), 2.0, 1, 0.0);
         assert!(found.is_empty(), "{found:?}");
+    }
+
+    #[test]
+    fn a_fold_of_a_mode_with_a_wave_number_is_the_imperfect_image_of_its_bifurcation() {
+        // On a mesh that puts the cos mode of an m = 2 pair in its trivial irrep the
+        // bifurcation is imperfect: the path folds near it (arriving while the control rises)
+        // and turns back; the fold's partner, a minimum met on the way back, is on another
+        // piece of the path.
+        let double = point(CriticalKind::SimpleBifurcation, "A2", 16.76, 2);
+        let mut min = point(CriticalKind::LimitPoint, "A1", 16.70, 2);
+        min.rising = false;
+        let other = [point(CriticalKind::LimitPoint, "A1", 16.70, 2), min];
+        let mut used = vec![false, false];
+        let found = images(&other, &mut used, Likeness::of(&double), 16.76, 2, 0.0);
+        assert_eq!(found, vec![0]);
+        let image = measure(&other, found, (2, false), 12);
+        assert_eq!(
+            image.verdict.to_string(),
+            "imperfect: a limit point in A1, the path turns; partner not found in range"
+        );
+        // A fold of the axisymmetric states (m = 0) is never the image of a bifurcation.
+        let mut used = vec![false];
+        let m0 = point(CriticalKind::SymmetricBifurcation, "A1", 16.76, 0);
+        let fold0 = [point(CriticalKind::LimitPoint, "A1", 16.70, 0)];
+        assert!(images(&fold0, &mut used, Likeness::of(&m0), 16.76, 1, 0.0).is_empty());
+    }
+
+    #[test]
+    fn a_point_met_after_a_turn_is_not_the_image_of_one_met_before() {
+        // A rung met while the control rises; on the other mesh the path turns at a fold
+        // before it and meets a point of the same m, nearer the rung's value than the
+        // tolerance, on its way back.
+        let rung = point(CriticalKind::SimpleBifurcation, "A2", 16.76, 2);
+        let mut back = point(CriticalKind::SimpleBifurcation, "A2", 16.60, 2);
+        back.rising = false;
+        let ahead = point(CriticalKind::SimpleBifurcation, "A1", 16.90, 2);
+        let other = [back.clone(), ahead];
+        let mut used = vec![false, false];
+        let found = images(&other, &mut used, Likeness::of(&rung), 16.76, 2, 0.0);
+        assert_eq!(
+            found,
+            vec![1],
+            "only the point on the rising piece is an image"
+        );
+        // Nor do such two points of one mesh form a rung together.
+        let mesh = [rung, back];
+        assert_eq!(rungs(&mesh, 0.0, &[false, false]), vec![vec![0], vec![1]]);
     }
 }

@@ -39,6 +39,13 @@
 //! reach the rung's. An icosphere's modes get no label: images are then matched by value
 //! alone, up to the reference point's multiplicity.
 //!
+//! Images lie on the same piece of the path as their rung: a point met while the control
+//! falls (after a turn) is never the image of one met while it rises, nor paired with it into
+//! a rung. Folds are the images of folds, with one exception: a mesh whose trivial irrep
+//! holds one mode of an m ≥ 1 pair (cos 2θ on C2v and C1v) does not protect that bifurcation,
+//! and its path folds near it instead. Such a fold with the rung's m is its image, reported as
+//! "imperfect"; the path turns there, so no further image is sought beyond it.
+//!
 //! A rung's *gap* on a mesh is measured: the spread of the values of its images there. One
 //! point in a 2-D irrep is a double by construction ("not split: double … in E1"); two points
 //! are "split" when their gap exceeds twice the summed uncertainties of the two ends — on a
@@ -132,6 +139,17 @@ pub struct Point {
     pub precision: Option<f64>,
     /// The name of the mode's isotropy subgroup.
     pub isotropy: String,
+    /// Whether the control rises as the path meets the point (for a limit point: as the path
+    /// arrives at it). Images lie on the same piece of the path as their rung: a point met
+    /// after a turn is not the image of one met before it.
+    pub rising: bool,
+}
+
+/// Whether the control rises as a path meets the point at `value` localised after the step
+/// whose control was `before` (`None` without a control or without that step: taken as
+/// rising, the direction a path starts in).
+fn rising(before: Option<f64>, value: f64) -> bool {
+    before.is_none_or(|b| value >= b)
 }
 
 /// One run of one mesh at one resolution.
@@ -195,6 +213,8 @@ pub struct Unmatched {
     /// Its wave number about z.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub m: Option<usize>,
+    /// Whether the control rises as the path meets it.
+    pub rising: bool,
 }
 
 /// A finished comparison.
@@ -312,6 +332,13 @@ fn execute_meridian(
             } else {
                 format!("C{}v", c.m)
             },
+            rising: rising(
+                control.and_then(|k| {
+                    let row = report.rows.iter().find(|r| r.step == c.after_step)?;
+                    Some(row.parameters[k])
+                }),
+                control.map_or(f64::NAN, |k| c.parameters[k]),
+            ),
         })
         .collect();
     let seconds = start.elapsed().as_secs_f64();
@@ -368,6 +395,13 @@ fn execute(
             residual_eigenvalue: cp.residual_eigenvalue,
             precision,
             isotropy: cp.isotropy.name.clone(),
+            rising: rising(
+                control.and_then(|c| {
+                    let row = report.rows.iter().find(|r| r.step == cp.after_step)?;
+                    Some(row.parameters[c])
+                }),
+                control.map_or(f64::NAN, |c| cp.parameters[c]),
+            ),
         })
         .collect();
     let warnings = unaccounted(report);
@@ -664,6 +698,7 @@ mod tests {
             residual_eigenvalue: 0.0,
             precision: None,
             isotropy: String::new(),
+            rising: true,
         }
     }
 
