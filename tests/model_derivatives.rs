@@ -434,3 +434,22 @@ fn a_scaled_reference_is_the_mesh_generated_at_that_radius() {
         );
     }
 }
+
+/// A reference radius at or below 0 is an evaluation error naming it, never a NaN.
+#[test]
+fn a_radius_at_or_below_zero_is_refused() {
+    let model = radius_sphere_model(1.0);
+    let u = vec![0.0; model.unknowns()];
+    let mut eval = model.new_evaluation();
+    for r in [0.0, -0.5, f64::NAN] {
+        let err = model
+            .evaluate(
+                &u,
+                &[1.0, 0.1, 0.1, 1.0, 0.5, r],
+                memstab::model::Request::ALL,
+                &mut eval,
+            )
+            .expect_err("no energy at R <= 0");
+        assert!(err.to_string().contains("R/R0"), "{err}");
+    }
+}

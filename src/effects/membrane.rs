@@ -408,11 +408,11 @@ impl Membrane {
             self.scale(params),
         ];
         let names = [
-            "mu",
-            "k",
-            "thickness",
-            "prestretch",
-            "reference radius ratio",
+            "the material's mu",
+            "the material's k",
+            "the material's thickness",
+            "the material's prestretch",
+            "the reference radius over its start, R/R0,",
         ];
         for (i, (&x, name)) in v.iter().zip(names).enumerate() {
             let ok = x.is_finite() && if i == 1 { x >= 0.0 } else { x > 0.0 };
@@ -420,7 +420,7 @@ impl Membrane {
                 return Err(ModelError::Global {
                     effect: "membrane".into(),
                     what: format!(
-                        "the material's {name} = {x} is out of its range ({})",
+                        "{name} = {x} is out of its range ({})",
                         if i == 1 { ">= 0" } else { "> 0" }
                     ),
                 });
