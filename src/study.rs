@@ -114,6 +114,8 @@ pub struct Study {
     /// λ0³.
     mesh_volume: f64,
     prestretch: Quantity,
+    /// The reference radius R as a parameter and the radius R0 the mesh was generated at.
+    radius: Option<(Quantity, f64)>,
     targets_from_start: Vec<bool>,
 }
 
@@ -217,6 +219,15 @@ impl Study {
             },
         )
         .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
+        // The mesh was generated at the radius parameter's start value R0.
+        let radius = scene
+            .mesh_radius
+            .as_ref()
+            .map(|q| (quantity(q), scene.start_value(q)));
+        let membrane = match radius {
+            Some((r, r0)) => membrane.with_reference_radius(r, r0),
+            None => membrane,
+        };
         let mut effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
         let mut fluids = Vec::new();
         let mut gases = Vec::new();
@@ -420,6 +431,7 @@ impl Study {
             closing,
             mesh_volume,
             prestretch,
+            radius,
             targets_from_start,
         })
     }
@@ -429,6 +441,11 @@ impl Study {
     pub fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64> {
         let x = self.model.positions(u);
         let tris = self.model.layout().triangles();
+        // The reference is the mesh scaled by R/R0 when the radius is a parameter.
+        let scale = self
+            .radius
+            .as_ref()
+            .map_or(1.0, |(r, r0)| r.value(params) / r0);
         let volume = || {
             tris.iter()
                 .map(|&[a, b, c]| x[a].dot(&x[b].cross(&x[c])))
@@ -442,14 +459,14 @@ impl Study {
                 Measure::MaxDisplacement => x
                     .iter()
                     .zip(self.model.reference())
-                    .map(|(a, b)| (a - b).norm())
+                    .map(|(a, b)| (a - b * scale).norm())
                     .fold(0.0, f64::max),
                 Measure::MinZ => x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min),
                 Measure::MaxZ => x.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max),
                 Measure::Volume => volume(),
                 Measure::Stretch => {
                     let l0 = self.prestretch.value(params);
-                    (volume() * l0.powi(3) / self.mesh_volume).cbrt()
+                    (volume() * l0.powi(3) / (self.mesh_volume * scale.powi(3))).cbrt()
                 }
                 Measure::FluidVolume(i) => {
                     let f = &self.fluids[i];

@@ -1,6 +1,7 @@
 //! Critical curves: the balloon's limit point followed in (p, k) to its cusp against the closed
 //! form, the derivatives of the block test function, and the curve's outputs.
 
+use crate::common::{balloon_with_k, fold_k};
 use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::curve::{BlockTest, DIFFERENCE_STEP};
 use memstab::analysis::run;
@@ -9,12 +10,8 @@ use memstab::report::{CurveEventKind, CurveReport};
 use memstab::scene::Scene;
 use memstab::study::Study;
 
-/// The sphere's fold line in closed form (p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²)): ∂p/∂λ = 0
-/// gives k(λ) = (λ⁶ − 7)/(λ⁸ + 5λ²), and p(λ) on it.
-fn fold_k(l: f64) -> f64 {
-    (l.powi(6) - 7.0) / (l.powi(8) + 5.0 * l * l)
-}
-
+/// The sphere's pressure in closed form, p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²); its fold
+/// line is [`fold_k`].
 fn sphere_p(l: f64, k: f64) -> f64 {
     2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l)
 }
@@ -43,16 +40,8 @@ fn balloon_curve_scene(frequency: usize) -> Scene {
 
 /// The text of [`balloon_curve_scene`].
 fn balloon_curve_text(frequency: usize) -> String {
-    let text = std::fs::read_to_string(format!(
-        "{}/scenes/balloon.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let analysis = text.find("[analysis]").unwrap();
-    let start = text.find("[start]").unwrap();
-    let text = format!(
-        "{}{}{}",
-        &text[..analysis],
+    balloon_with_k(
+        frequency,
         r#"[parameters.k]
 start = 0.1
 min = 0.05
@@ -68,12 +57,7 @@ path-steps = 400
 max-step = 0.05
 
 "#,
-        &text[start..]
     )
-    .replacen("k = 0.1\n", "k = \"k\"\n", 1)
-    .replacen("frequency = 8", &format!("frequency = {frequency}"), 1);
-    assert!(text.contains("k = \"k\""), "{text}");
-    text
 }
 
 fn curve_of(frequency: usize) -> (CurveReport, memstab::analysis::RunResult) {

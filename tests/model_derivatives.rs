@@ -304,3 +304,152 @@ fn a_uniformly_prestretched_flat_disc_is_in_equilibrium_without_load() {
     );
     assert!(kmax > 0.0);
 }
+
+/// A sphere generated at radius `built_at` whose membrane has μ, k, H and λ0 as parameters
+/// 0…3 and its reference radius as parameter 5, under a gas pressure (parameter 4).
+fn radius_sphere_model(built_at: f64) -> FeModel {
+    let sym = icosphere(&IcosphereOptions {
+        radius: built_at,
+        frequency: 2,
+    })
+    .unwrap();
+    let m = &sym.mesh;
+    let material = MaterialQuantities {
+        mu: Quantity::Parameter(0),
+        k: Quantity::Parameter(1),
+        thickness: Quantity::Parameter(2),
+        prestretch: Quantity::Parameter(3),
+    };
+    let membrane = Membrane::parametric(&m.nodes, &m.triangles, material)
+        .unwrap()
+        .with_reference_radius(Quantity::Parameter(5), built_at);
+    let effects: Vec<Box<dyn Effect>> = vec![
+        Box::new(membrane),
+        Box::new(GasPressure {
+            pressure: Quantity::Parameter(4),
+            closing: None,
+        }),
+    ];
+    let names = ["mu", "k", "thickness", "prestretch", "p", "R"];
+    FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        effects,
+        names.iter().map(|s| s.to_string()).collect(),
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, .. ProptestConfig::default() })]
+
+    /// The load of the reference radius, ∂F/∂R, with those of the material quantities,
+    /// against central differences of F in each, on a mesh generated at another radius.
+    #[test]
+    fn reference_radius_as_a_parameter(
+        seed in any::<u64>(),
+        built_at in 0.5f64..2.0,
+        ratio in 0.7f64..1.4,
+        k in 0.0f64..0.3,
+        prestretch in 1.0f64..1.3,
+        p in -1.0f64..2.0,
+        stretch in 1.0f64..1.6,
+    ) {
+        let model = radius_sphere_model(built_at);
+        let n = model.unknowns();
+        let mut u = random_vector(seed, n, 0.03 * built_at);
+        // Around the reference at R = ratio · R0, uniformly stretched.
+        for (i, x) in model.reference().iter().enumerate() {
+            for c in 0..3 {
+                u[3 * i + c] += (ratio * stretch - 1.0) * x[c];
+            }
+        }
+        let d = random_vector(seed ^ 0x55, n, 1.0);
+        let params = [1.0, k, 0.1, prestretch, p, ratio * built_at];
+        let e = check_derivatives(&model, &u, &params, &d, 1e-6).unwrap();
+        prop_assert!(e.residual < 1e-7, "{e:?}");
+        prop_assert!(e.tangent < 1e-6, "{e:?}");
+        prop_assert!(e.asymmetry < 1e-13, "{e:?}");
+        prop_assert!(e.loads < 1e-7, "{e:?}");
+    }
+}
+
+/// A membrane generated at R0 = 1 with its reference radius at R = 1.3 is the membrane
+/// generated at 1.3: the same energy, residual and tangent at the same positions.
+#[test]
+fn a_scaled_reference_is_the_mesh_generated_at_that_radius() {
+    let scaled = radius_sphere_model(1.0);
+    let generated = radius_sphere_model(1.3);
+    let (r, mu, k, h, l0, p) = (1.3, 1.2, 0.15, 0.1, 1.1, 0.4);
+    // Positions 1.5 X(1.3) plus a perturbation, as displacements of each model's nodes.
+    let wobble = random_vector(11, scaled.unknowns(), 0.02);
+    let x: Vec<f64> = generated
+        .reference()
+        .iter()
+        .flat_map(|x| [1.5 * x.x, 1.5 * x.y, 1.5 * x.z])
+        .zip(&wobble)
+        .map(|(a, b)| a + b)
+        .collect();
+    let displacement = |m: &FeModel| -> Vec<f64> {
+        let reference = m.reference().iter().flat_map(|x| [x.x, x.y, x.z]);
+        x.iter().zip(reference).map(|(a, b)| a - b).collect()
+    };
+    let (mut a, mut b) = (scaled.new_evaluation(), generated.new_evaluation());
+    let params = [mu, k, h, l0, p, r];
+    scaled
+        .evaluate(
+            &displacement(&scaled),
+            &params,
+            memstab::model::Request::ALL,
+            &mut a,
+        )
+        .unwrap();
+    generated
+        .evaluate(
+            &displacement(&generated),
+            &params,
+            memstab::model::Request::ALL,
+            &mut b,
+        )
+        .unwrap();
+    let max = |v: &[f64]| v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+    let gap = |u: &[f64], v: &[f64]| {
+        u.iter()
+            .zip(v)
+            .fold(0.0f64, |s, (x, y)| s.max((x - y).abs()))
+    };
+    assert!(
+        (a.energy - b.energy).abs() <= 1e-13 * b.energy.abs(),
+        "{} vs {}",
+        a.energy,
+        b.energy
+    );
+    assert!(gap(&a.residual, &b.residual) <= 1e-12 * max(&b.residual));
+    assert!(gap(&a.tangent, &b.tangent) <= 1e-12 * max(&b.tangent));
+    // Every load agrees, that of R too: ∂F/∂R does not depend on where the mesh was built.
+    for j in 0..6 {
+        assert!(
+            gap(&a.loads[j], &b.loads[j]) <= 1e-11 * max(&b.loads[j]).max(1e-300),
+            "load {j}"
+        );
+    }
+}
+
+/// A reference radius at or below 0 is an evaluation error naming it, never a NaN.
+#[test]
+fn a_radius_at_or_below_zero_is_refused() {
+    let model = radius_sphere_model(1.0);
+    let u = vec![0.0; model.unknowns()];
+    let mut eval = model.new_evaluation();
+    for r in [0.0, -0.5, f64::NAN] {
+        let err = model
+            .evaluate(
+                &u,
+                &[1.0, 0.1, 0.1, 1.0, 0.5, r],
+                memstab::model::Request::ALL,
+                &mut eval,
+            )
+            .expect_err("no energy at R <= 0");
+        assert!(err.to_string().contains("R/R0"), "{err}");
+    }
+}

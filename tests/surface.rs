@@ -1,6 +1,7 @@
 //! The equilibrium surface of the balloon in (p, k): its limit points on the closed-form fold
 //! line, the index across it, its triangles and critical lines, its files, and bad keys.
 
+use crate::common::{balloon_with_k, fold_k};
 use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
 use memstab::report::SurfaceReport;
@@ -9,33 +10,17 @@ use memstab::study::Study;
 use std::path::Path;
 use std::process::Command;
 
-/// The sphere's fold line in closed form (as in `critical_curve.rs`): ∂p/∂λ = 0 of
-/// p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²) gives k(λ) = (λ⁶ − 7)/(λ⁸ + 5λ²).
-fn fold_k(l: f64) -> f64 {
-    (l.powi(6) - 7.0) / (l.powi(8) + 5.0 * l * l)
-}
-
 /// The bundled balloon with k = "k" and a surface analysis in (p, k) at icosphere frequency
 /// `f`, with `extra` lines appended to `[analysis]`.
 fn surface_text(frequency: usize, extra: &str) -> String {
-    let text = std::fs::read_to_string(format!(
-        "{}/scenes/balloon.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let analysis = text.find("[analysis]").unwrap();
-    let start = text.find("[start]").unwrap();
-    let text = format!(
-        "{}[parameters.k]\nstart = 0.1\n\n[analysis]\ntype = \"surface\"\n\
-         parameters = [\"p\", \"k\"]\nranges = [[0.0, 2.0], [0.05, 0.2]]\npaths = 3\n\
-         steps = 60\nmax-step = 0.1\n{extra}\n{}",
-        &text[..analysis],
-        &text[start..]
+    balloon_with_k(
+        frequency,
+        &format!(
+            "[parameters.k]\nstart = 0.1\n\n[analysis]\ntype = \"surface\"\n\
+             parameters = [\"p\", \"k\"]\nranges = [[0.0, 2.0], [0.05, 0.2]]\npaths = 3\n\
+             steps = 60\nmax-step = 0.1\n{extra}\n"
+        ),
     )
-    .replacen("k = 0.1\n", "k = \"k\"\n", 1)
-    .replacen("frequency = 8", &format!("frequency = {frequency}"), 1);
-    assert!(text.contains("k = \"k\""), "{text}");
-    text
 }
 
 fn surface_of(frequency: usize) -> SurfaceReport {

@@ -21,6 +21,12 @@
 //! P = W_t ∇t + W_J ∇J and the Hessian W_tJ(∇t∇Jᵀ + ∇J∇tᵀ) + W_JJ ∇J∇Jᵀ + W_t ∇²t + W_J ∇²J
 //! (∇²t = 2I, ∇²J in closed form), carried to the edges by f1 = m11 a, f2 = m12 a + m22 b
 //! and to the nodes by a = x2 − x1, b = x3 − x1: x1 takes −(∂/∂a + ∂/∂b), x2 ∂/∂a, x3 ∂/∂b.
+//!
+//! The reference radius may be a parameter R ([`Membrane::with_reference_radius`]): the
+//! reference is then X = (R/R0) X̂, with X̂ the nodes the membrane was built on (generated at
+//! R0). The stress-free state X/λ0 = X̂ / (λ0 R0/R) is that of X̂ with the pre-stretch
+//! λ0 R0/R, so Π_el(x; R) is the energy above at that effective pre-stretch and
+//! ∂F/∂R = −(λ0/R) ∂F/∂λ0 (docs/theory.md §2.8). The unknowns stay the current positions.
 
 use super::Quantity;
 use crate::model::Local;
@@ -330,6 +336,8 @@ impl ReferenceTriangle {
 #[derive(Debug, Clone)]
 pub struct Membrane {
     material: MaterialQuantities,
+    /// The reference radius R as a parameter and the radius R0 the nodes were built at.
+    radius: Option<(Quantity, f64)>,
     /// Every triangle's reference data for λ0 = 1 and H = 1 ([`ReferenceTriangle::at`]).
     elements: Vec<ReferenceTriangle>,
 }
@@ -368,26 +376,51 @@ impl Membrane {
                     .ok_or_else(|| format!("triangle {t} is degenerate in the reference state"))
             })
             .collect::<Result<_, _>>()?;
-        Ok(Self { material, elements })
+        Ok(Self {
+            material,
+            radius: None,
+            elements,
+        })
     }
 
-    /// (μ, k, H, λ0) at `params`; an error naming the quantity that left its domain.
-    fn values(&self, params: &[f64]) -> Result<[f64; 4], ModelError> {
+    /// The same membrane with its reference scaled by R/R0: `radius` is R, `built_at` the
+    /// radius R0 > 0 the nodes were built at (docs/theory.md §2.8).
+    pub fn with_reference_radius(mut self, radius: Quantity, built_at: f64) -> Self {
+        self.radius = Some((radius, built_at));
+        self
+    }
+
+    /// The reference radius over the one the nodes were built at, R/R0 (1 without one).
+    fn scale(&self, params: &[f64]) -> f64 {
+        self.radius
+            .as_ref()
+            .map_or(1.0, |(r, r0)| r.value(params) / r0)
+    }
+
+    /// (μ, k, H, λ0, R/R0) at `params`; an error naming the quantity that left its domain.
+    fn values(&self, params: &[f64]) -> Result<[f64; 5], ModelError> {
         let m = &self.material;
         let v = [
             m.mu.value(params),
             m.k.value(params),
             m.thickness.value(params),
             m.prestretch.value(params),
+            self.scale(params),
         ];
-        let names = ["mu", "k", "thickness", "prestretch"];
+        let names = [
+            "the material's mu",
+            "the material's k",
+            "the material's thickness",
+            "the material's prestretch",
+            "the reference radius over its start, R/R0,",
+        ];
         for (i, (&x, name)) in v.iter().zip(names).enumerate() {
             let ok = x.is_finite() && if i == 1 { x >= 0.0 } else { x > 0.0 };
             if !ok {
                 return Err(ModelError::Global {
                     effect: "membrane".into(),
                     what: format!(
-                        "the material's {name} = {x} is out of its range ({})",
+                        "{name} = {x} is out of its range ({})",
                         if i == 1 { ">= 0" } else { "> 0" }
                     ),
                 });
@@ -418,7 +451,9 @@ impl Effect for Membrane {
         params: &[f64],
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError> {
-        let [mu, k, thickness, prestretch] = self.values(params)?;
+        let [mu, k, thickness, prestretch, scale] = self.values(params)?;
+        // The stress-free state of X = (R/R0) X̂ is that of X̂ with the pre-stretch λ0 R0/R.
+        let effective = prestretch / scale;
         let mat = MooneyRivlin::new(mu, k, thickness);
         let m = &self.material;
         let slots = [
@@ -426,12 +461,14 @@ impl Effect for Membrane {
             m.k.parameter(),
             m.thickness.parameter(),
             m.prestretch.parameter(),
+            self.radius.as_ref().and_then(|(r, _)| r.parameter()),
         ];
+        let radius = scale * self.radius.as_ref().map_or(1.0, |(_, r0)| *r0);
         let want_loads = out.request().loads && slots.iter().any(Option::is_some);
         // ∂c1/∂k = −c1/(1 + k), ∂c2/∂k = c1/(1 + k).
         let (dc1, dc2) = (-mat.c1 / (1.0 + k), mat.c1 / (1.0 + k));
         out.add_triangles(x, slots, |t, xt, terms| {
-            let elem = self.elements[t].at(prestretch, thickness);
+            let elem = self.elements[t].at(effective, thickness);
             terms.local = elem
                 .energy_gradient_hessian(&mat, xt)
                 .ok_or_else(|| "inverted or collapsed element".to_string())?;
@@ -454,18 +491,23 @@ impl Effect for Membrane {
                     })
                     .ok_or_else(inverted)?;
             }
-            if slots[3].is_some() {
-                // t ∝ λ0², J ∝ λ0⁴, H A0 ∝ λ0⁻²: d/dλ0 of H A0 (W_t ∇t + W_J ∇J) has
-                // α = 4 J W_tJ / λ0 and β = (2 W_J + 2 t W_tJ + 4 J W_JJ) / λ0.
-                terms.loads[3] = elem
+            if slots[3].is_some() || slots[4].is_some() {
+                // t ∝ λ², J ∝ λ⁴, H A0 ∝ λ⁻² in the effective pre-stretch λ = λ0 R0/R:
+                // λ d/dλ of H A0 (W_t ∇t + W_J ∇J) has α = 4 J W_tJ and
+                // β = 2 W_J + 2 t W_tJ + 4 J W_JJ. With λ ∂/∂λ = λ0 ∂/∂λ0 = −R ∂/∂R, the load
+                // of λ0 is that over λ0 and the load of R minus that over R.
+                let g = elem
                     .weighted_gradient(xt, |t, j| {
                         let [_, _, w_j, w_tj, w_jj] = mat.strain_energy(t, j);
-                        (
-                            4.0 * j * w_tj / prestretch,
-                            (2.0 * w_j + 2.0 * t * w_tj + 4.0 * j * w_jj) / prestretch,
-                        )
+                        (4.0 * j * w_tj, 2.0 * w_j + 2.0 * t * w_tj + 4.0 * j * w_jj)
                     })
                     .ok_or_else(inverted)?;
+                if slots[3].is_some() {
+                    terms.loads[3] = g.map(|v| v / prestretch);
+                }
+                if slots[4].is_some() {
+                    terms.loads[4] = g.map(|v| -v / radius);
+                }
             }
             Ok(())
         })
@@ -474,9 +516,10 @@ impl Effect for Membrane {
     /// Principal stretches, thickness, principal tensions and where the membrane would
     /// wrinkle (T₂ < 0); a collapsed element (never an accepted state) shows zeros.
     fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<CellField> {
-        let Ok([mu, k, thickness, prestretch]) = self.values(params) else {
+        let Ok([mu, k, thickness, prestretch, scale]) = self.values(params) else {
             return Vec::new();
         };
+        let prestretch = prestretch / scale;
         let mat = MooneyRivlin::new(mu, k, thickness);
         let states: Vec<PrincipalState> = self
             .elements

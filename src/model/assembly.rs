@@ -178,8 +178,8 @@ impl Request {
 }
 
 /// How many parameter derivatives of its gradient one kernel call can return (the membrane's
-/// μ, k, H and λ0).
-pub const LOAD_SLOTS: usize = 4;
+/// μ, k, H, λ0 and reference radius).
+pub const LOAD_SLOTS: usize = 5;
 
 /// One triangle's terms: its [`Local`] and up to [`LOAD_SLOTS`] parameter derivatives of its
 /// gradient.

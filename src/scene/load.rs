@@ -84,7 +84,8 @@ fn read(doc: &Table) -> Result<Scene, Problem> {
             .ok_or_else(|| Problem::new(name, format!("missing section '{name}' ([{name}])")))
     };
     let info: SceneInfo = de(section("scene")?, "scene")?;
-    let mesh = read_mesh(section("mesh")?)?;
+    let (mesh_value, mesh_radius) = radius_parameter(section("mesh")?, doc.get("parameters"))?;
+    let mesh = read_mesh(&mesh_value)?;
     let material: Material = de(section("material")?, "material")?;
     let effects = match doc.get("effect") {
         None => Vec::new(),
@@ -129,6 +130,7 @@ fn read(doc: &Table) -> Result<Scene, Problem> {
         origin: String::new(),
         info,
         mesh,
+        mesh_radius,
         material,
         effects,
         boundary,
@@ -162,6 +164,39 @@ pub(super) struct RawGasAmount {
     pub effect: Option<usize>,
     pub value: Target,
     pub ambient_pressure: f64,
+}
+
+/// `[mesh] radius = "R"`: the mesh table with the radius set to R's start value (where the
+/// mesh is generated; 1 if R declares no usable start, which the checks then report) and the
+/// parameter. Only the generated surfaces scale; the axisymmetric generator refuses it.
+fn radius_parameter(
+    mesh: &Value,
+    parameters: Option<&Value>,
+) -> Result<(Value, Option<Quantity>), Problem> {
+    let Some(name) = mesh.get("radius").and_then(Value::as_str) else {
+        return Ok((mesh.clone(), None));
+    };
+    let generator = mesh.get("generator").and_then(Value::as_str).unwrap_or("");
+    if !matches!(generator, "disc" | "icosphere" | "truncated-sphere") {
+        return Err(Problem::at(
+            "mesh.radius",
+            format!(
+                "= \"{name}\": a parameter radius needs a generated surface (disc, icosphere, \
+                 truncated-sphere), not generator \"{generator}\"; give a number"
+            ),
+        ));
+    }
+    let start = parameters
+        .and_then(|p| p.get(name))
+        .and_then(|p| p.get("start"))
+        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .unwrap_or(1.0);
+    let mut table = mesh.as_table().cloned().unwrap_or_default();
+    table.insert("radius".into(), Value::Float(start));
+    Ok((
+        Value::Table(table),
+        Some(Quantity::Parameter(name.to_string())),
+    ))
 }
 
 fn read_mesh(v: &Value) -> Result<MeshSpec, Problem> {

@@ -53,6 +53,11 @@ pub struct Scene {
     pub info: SceneInfo,
     /// `[mesh]`: the generator and its options.
     pub mesh: MeshSpec,
+    /// `[mesh] radius = "R"`: the parameter the reference radius follows, if it is one. The
+    /// mesh is generated once at the parameter's start value R0 (which `mesh`'s radius then
+    /// holds) and the model scales the reference by R/R0 (docs/theory.md §2.8).
+    #[serde(skip)]
+    pub mesh_radius: Option<Quantity>,
     /// `[material]`: the membrane (always present; it is the first effect).
     pub material: Material,
     /// `[[effect]]`: the loads, in file order (indices count from 0).
@@ -1391,9 +1396,14 @@ impl Scene {
         }
     }
 
-    /// Every quantity of the scene that may be a parameter (the material's, then each
-    /// effect's), with its key path (`material.k`, `effect[0].gravity`) and its range.
+    /// Every quantity of the scene that may be a parameter (the mesh's radius, the
+    /// material's, then each effect's), with its key path (`material.k`, `effect[0].gravity`)
+    /// and its range.
     pub fn quantities(&self) -> Vec<(String, &Quantity, Range)> {
+        let radius = self
+            .mesh_radius
+            .iter()
+            .map(|q| ("mesh.radius".to_string(), q, Range::Positive));
         let material = self
             .material
             .ruled_quantities()
@@ -1404,7 +1414,7 @@ impl Scene {
                 .into_iter()
                 .map(move |(k, q, r)| (format!("effect[{i}].{k}"), q, r))
         });
-        material.chain(effects).collect()
+        radius.chain(material).chain(effects).collect()
     }
 
     /// The value of `q` at the start state (a parameter at its start value).
@@ -1422,6 +1432,15 @@ impl Scene {
 
     /// The scene as TOML (loading it again gives an equal scene).
     pub fn to_toml(&self) -> String {
-        toml::to_string(self).expect("a scene serialises to TOML")
+        let text = toml::to_string(self).expect("a scene serialises to TOML");
+        let Some(Quantity::Parameter(name)) = &self.mesh_radius else {
+            return text;
+        };
+        // The radius parameter is kept beside the mesh options: put its name back in [mesh].
+        let mut doc: toml::Table = text.parse().expect("the scene's own TOML parses");
+        if let Some(toml::Value::Table(mesh)) = doc.get_mut("mesh") {
+            mesh.insert("radius".into(), toml::Value::String(name.clone()));
+        }
+        toml::to_string(&doc).expect("a scene serialises to TOML")
     }
 }

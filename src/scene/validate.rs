@@ -232,6 +232,7 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
         return Err(Problem::at("scene.name", "must not be empty, got \"\""));
     }
     check_mesh_options(&scene.mesh)?;
+    check_mesh_radius(scene)?;
     check_material(&scene.material, &scene.parameters)?;
     for (i, effect) in scene.effects.iter_mut().enumerate() {
         check_effect(i, effect, &scene.parameters)?;
@@ -421,6 +422,34 @@ fn check_enclosure(scene: &Scene) -> Result<(), Problem> {
             ),
         )),
     }
+}
+
+/// `[mesh] radius = "R"`: a declared parameter, on a membrane no node of which is held at its
+/// reference position (the model scales the reference, not the held positions).
+fn check_mesh_radius(scene: &Scene) -> Result<(), Problem> {
+    let Some(q) = &scene.mesh_radius else {
+        return Ok(());
+    };
+    check_quantity("mesh.radius", q, Range::Positive, &scene.parameters)?;
+    let held: Vec<&str> = scene
+        .boundary
+        .fixed
+        .iter()
+        .map(String::as_str)
+        .chain(scene.boundary.slide.iter().map(|s| s.set.as_str()))
+        .collect();
+    if !held.is_empty() {
+        return Err(Problem::at(
+            "mesh.radius",
+            format!(
+                "= \"{}\": a parameter radius needs a membrane without fixed or sliding nodes \
+                 (the boundary holds {}); give a number",
+                q.parameter().unwrap_or_default(),
+                held.join(", ")
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {

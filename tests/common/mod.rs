@@ -1,4 +1,5 @@
-//! Helpers shared by integration tests that read our SVG output.
+//! Helpers shared by integration tests: reading our SVG output, following a path, and the
+//! bundled balloon's variants with their closed form.
 
 /// The `<polyline>`s of an SVG: stroke colour and points.
 #[allow(dead_code)]
@@ -56,4 +57,30 @@ pub fn follow<P: memstab::analysis::continuation::Problem>(
         &mut [],
         |_, _| {},
     ))
+}
+
+/// The sphere's fold line in closed form: ∂p/∂λ = 0 of
+/// p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²) gives k(λ) = (λ⁶ − 7)/(λ⁸ + 5λ²).
+#[allow(dead_code)]
+pub fn fold_k(l: f64) -> f64 {
+    (l.powi(6) - 7.0) / (l.powi(8) + 5.0 * l * l)
+}
+
+/// The bundled balloon (scenes/balloon.toml) at icosphere frequency `frequency` with its
+/// material's k = "k" and the text from `[analysis]` up to `[start]` replaced by `middle`
+/// (which declares `[parameters.k]` and the analysis).
+#[allow(dead_code)]
+pub fn balloon_with_k(frequency: usize, middle: &str) -> String {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/balloon.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let analysis = text.find("[analysis]").unwrap();
+    let start = text.find("[start]").unwrap();
+    let text = format!("{}{middle}{}", &text[..analysis], &text[start..])
+        .replacen("k = 0.1\n", "k = \"k\"\n", 1)
+        .replacen("frequency = 8", &format!("frequency = {frequency}"), 1);
+    assert!(text.contains("k = \"k\""), "{text}");
+    text
 }
