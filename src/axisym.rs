@@ -56,7 +56,7 @@ const GAUSS: [(f64, f64); 4] = [
     (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
 ];
 
-/// The part of an element below a fluid level h: z(ξ) = Σ N_k z_k < h (docs/theory.md
+/// The part of an element below a fluid level h: z(ξ) = Σ N_k z_k ≤ h (docs/theory.md
 /// §15.14).
 #[derive(Debug, Clone)]
 struct WetPart {
@@ -99,7 +99,9 @@ fn roots_inside(a: f64, b: f64, c: f64) -> Vec<f64> {
 }
 
 /// The wet part of an element with node heights `z` under the level `h`: the sub-intervals
-/// between the roots of the quadratic z(ξ) − h on which z < h, each with the 4-point rule.
+/// between the roots of the quadratic z(ξ) − h on which z ≤ h, each with the 4-point rule (an
+/// element lying on the level, z ≡ h, is wet: the one-sided tangent of a floor that the
+/// fluid wets as soon as it sags, as for the ponding floor with its level at the rim).
 fn wet_part(z: [f64; 3], h: f64) -> WetPart {
     // z(ξ) = z1 + ξ (z2 − z0)/2 + ξ² ((z0 + z2)/2 − z1).
     let (a, b, c) = (0.5 * (z[0] + z[2]) - z[1], 0.5 * (z[2] - z[0]), z[1] - h);
@@ -111,7 +113,7 @@ fn wet_part(z: [f64; 3], h: f64) -> WetPart {
     for s in cuts.windows(2) {
         let (lo, hi) = (s[0], s[1]);
         let mid = 0.5 * (lo + hi);
-        if (a * mid + b) * mid + c < 0.0 {
+        if (a * mid + b) * mid + c <= 0.0 {
             let half = 0.5 * (hi - lo);
             rule.extend(GAUSS.iter().map(|&(t, w)| (mid + half * t, half * w)));
         }
