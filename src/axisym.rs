@@ -56,6 +56,80 @@ const GAUSS: [(f64, f64); 4] = [
     (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
 ];
 
+/// The part of an element below a fluid level h: z(ξ) = Σ N_k z_k ≤ h (docs/theory.md
+/// §15.14).
+#[derive(Debug, Clone)]
+struct WetPart {
+    /// The 4-point Gauss rule mapped onto each wet sub-interval of [−1, 1] (empty: dry).
+    rule: Vec<(f64, f64)>,
+    /// The wetting lines inside the element: (ξ*, z_ξ(ξ*)), z(ξ*) = h.
+    crossings: Vec<(f64, f64)>,
+    /// The level h.
+    level: f64,
+}
+
+/// The roots in (−1, 1) of a ξ² + b ξ + c, ascending, a double root once.
+fn roots_inside(a: f64, b: f64, c: f64) -> Vec<f64> {
+    let mut roots = Vec::new();
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 {
+        return roots;
+    }
+    if a.abs() <= 1e-14 * scale {
+        if b != 0.0 {
+            roots.push(-c / b);
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            // The stable pair: q = −(b + sgn b √disc)/2, roots q/a and c/q.
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            if q == 0.0 {
+                roots.push(0.0);
+            } else {
+                roots.push(q / a);
+                roots.push(c / q);
+            }
+        }
+    }
+    roots.retain(|r| r.is_finite() && *r > -1.0 && *r < 1.0);
+    roots.sort_by(f64::total_cmp);
+    roots.dedup();
+    roots
+}
+
+/// The wet part of an element with node heights `z` under the level `h`: the sub-intervals
+/// between the roots of the quadratic z(ξ) − h on which z ≤ h, each with the 4-point rule (an
+/// element lying on the level, z ≡ h, is wet: the one-sided tangent of a floor that the
+/// fluid wets as soon as it sags, as for the ponding floor with its level at the rim).
+fn wet_part(z: [f64; 3], h: f64) -> WetPart {
+    // z(ξ) = z1 + ξ (z2 − z0)/2 + ξ² ((z0 + z2)/2 − z1).
+    let (a, b, c) = (0.5 * (z[0] + z[2]) - z[1], 0.5 * (z[2] - z[0]), z[1] - h);
+    let roots = roots_inside(a, b, c);
+    let mut cuts = vec![-1.0];
+    cuts.extend(&roots);
+    cuts.push(1.0);
+    let mut rule = Vec::new();
+    for s in cuts.windows(2) {
+        let (lo, hi) = (s[0], s[1]);
+        let mid = 0.5 * (lo + hi);
+        if (a * mid + b) * mid + c <= 0.0 {
+            let half = 0.5 * (hi - lo);
+            rule.extend(GAUSS.iter().map(|&(t, w)| (mid + half * t, half * w)));
+        }
+    }
+    let crossings = roots
+        .iter()
+        .map(|&r| (r, 2.0 * a * r + b))
+        .filter(|&(_, slope)| slope != 0.0)
+        .collect();
+    WetPart {
+        rule,
+        crossings,
+        level: h,
+    }
+}
+
 /// Quadratic shape functions and their derivatives at ξ ∈ [−1, 1].
 fn shape(xi: f64) -> ([f64; 3], [f64; 3]) {
     (
@@ -77,15 +151,6 @@ pub enum AxisymError {
     /// not defined by it.
     #[error("the membrane block of wave number {0} is not positive definite")]
     Indefinite(usize),
-    /// A node is above a fluid's level: the meridian is partly wet, which the axisymmetric
-    /// model does not handle.
-    #[error("the meridian is partly wet (node {node} is above the fluid level {level}); the axisymmetric model needs a wholly wet membrane")]
-    PartlyWet {
-        /// The first node above the level.
-        node: usize,
-        /// The level.
-        level: f64,
-    },
     /// A non-finite number appeared in the energy, its derivatives or a block.
     #[error("a non-finite value in the axisymmetric model")]
     NonFinite,
@@ -268,8 +333,8 @@ impl Meridian {
 }
 
 /// A hydrostatic load per unit density: pressure g (h − z) on the side of n = x_ξ × x_θ (for
-/// a floor whose meridian runs outward from the axis, the fluid above it). The whole meridian
-/// must be wet (z ≤ h at every node); a partly wet meridian is refused.
+/// a floor whose meridian runs outward from the axis, the fluid above it), where z < h: a
+/// partly wet element is integrated over its wet part (docs/theory.md §15.14).
 #[derive(Debug, Clone, Copy)]
 pub struct Hydrostatic {
     /// Gravity g.
@@ -438,12 +503,19 @@ fn hydrostatic_full(
     load: &Hydrostatic,
     m: usize,
     phase: f64,
+    wet_only: bool,
 ) -> DMatrix<f64> {
     let nt = angles(m);
     let mut k = DMatrix::zeros(3 * meridian.nodes.len(), 3 * meridian.nodes.len());
     for e in 0..meridian.elements() {
         let mut local = nalgebra::SMatrix::<f64, 9, 9>::zeros();
-        for p in points(meridian, x, e) {
+        let rule = if wet_only {
+            let zs = [x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]];
+            wet_part(zs, load.level).rule
+        } else {
+            GAUSS.to_vec()
+        };
+        for p in points_on(meridian, x, e, &rule) {
             let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
             let pressure = load.gravity * (load.level - z);
             let x_th = Vector3::new(0.0, p.r, 0.0);
@@ -500,17 +572,11 @@ pub fn critical_densities(
             meridian.nodes.len()
         )));
     }
-    if let Some(i) = x.iter().position(|p| p[1] > load.level) {
-        return Err(AxisymError::Input(format!(
-            "state: node {i} is above the fluid level {}; only a wholly wet meridian is supported",
-            load.level
-        )));
-    }
     (0..=modes)
         .map(|m| {
             let t = meridian.kept(m);
             let km = t.transpose() * membrane_full(meridian, x, m, 0.0)? * &t;
-            let kf = t.transpose() * hydrostatic_full(meridian, x, load, m, 0.0) * &t;
+            let kf = t.transpose() * hydrostatic_full(meridian, x, load, m, 0.0, true) * &t;
             let l = nalgebra::Cholesky::new((&km + km.transpose()) * 0.5)
                 .ok_or(AxisymError::Indefinite(m))?
                 .l();
@@ -561,8 +627,8 @@ mod tests {
             let k0 = membrane_full(&meridian, &x, m, 0.0).unwrap();
             let k1 = membrane_full(&meridian, &x, m, phase).unwrap();
             assert!((&k0 - &k1).amax() < 1e-12 * k0.amax(), "membrane, m = {m}");
-            let f0 = hydrostatic_full(&meridian, &x, &load, m, 0.0);
-            let f1 = hydrostatic_full(&meridian, &x, &load, m, phase);
+            let f0 = hydrostatic_full(&meridian, &x, &load, m, 0.0, true);
+            let f1 = hydrostatic_full(&meridian, &x, &load, m, phase, true);
             assert!((&f0 - &f1).amax() < 1e-12 * f0.amax(), "fluid, m = {m}");
             let k2 = membrane_full(&meridian, &x, m + 1, 0.0).unwrap();
             assert!((&k0 - &k2).amax() > 1e-3 * k0.amax());

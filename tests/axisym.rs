@@ -81,8 +81,13 @@ fn bad_input_is_refused() {
         gravity: 1.0,
         level: 0.0,
     };
-    let err = critical_densities(&meridian, &x, &load, 2, 1).unwrap_err();
-    assert!(err.to_string().contains("node 3"), "{err}");
+    let err = critical_densities(&meridian, &x[1..], &load, 2, 1).unwrap_err();
+    assert!(err.to_string().contains("state"), "{err}");
+    // A node above the level is a partly wet state, integrated over its wet part.
+    let partly = critical_densities(&meridian, &x, &load, 2, 1).unwrap();
+    assert!(partly
+        .iter()
+        .all(|b| b.densities.iter().all(|d| d.is_finite())));
 }
 
 mod scenes {
@@ -244,6 +249,37 @@ mod scenes {
         }
     }
 
+    /// `memstab compare` of the partly wet pond on the meridian and a C7v disc: one m = 0
+    /// limit point on each, the C7v image at its mesh distance from the continuum.
+    #[test]
+    fn compare_runs_the_partly_wet_pond_on_the_meridian() {
+        let path = format!("{}/scenes/disc_gas_pond.toml", env!("CARGO_MANIFEST_DIR"));
+        let o = memstab(&[
+            "compare",
+            &path,
+            "--meshes",
+            "axisymmetric:elements=16,C7v",
+            "--divisions",
+            "8",
+            "--json",
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(json["reference"], "axisymmetric:elements=16");
+        let first = |mesh: usize| {
+            let c = &json["meshes"][mesh]["levels"][0]["critical"];
+            assert_eq!(c.as_array().unwrap().len(), 1, "{c}");
+            (c[0]["irrep"].clone(), c[0]["value"].as_f64().unwrap())
+        };
+        let ((m0, axi), (a1, c7)) = (first(0), first(1));
+        assert_eq!((m0.as_str(), a1.as_str()), (Some("m=0"), Some("A1")));
+        // The meridian's limit point to 2e-6 at 16 elements (the 64-element value 1.748217),
+        // the C7v disc's 0.024 above it at 8 divisions.
+        assert!((axi - 1.748_217).abs() < 1e-5, "{axi}");
+        assert!(c7 - axi > 0.02 && c7 - axi < 0.03, "{c7} vs {axi}");
+    }
+
     #[test]
     fn effects_it_does_not_implement_are_refused_in_one_line() {
         let dir = tempfile::tempdir().unwrap();
@@ -322,4 +358,66 @@ fn the_upward_disc_double_is_within_its_mesh_distance_of_m_1() {
     );
     assert!((h16 - ha).abs() <= 2.0 * distance, "{h16} vs {ha}");
     assert!((richardson - ha).abs() < (h16 - ha).abs());
+}
+
+/// The pond inflated from below (`scenes/disc_gas_pond.toml`): at its pressure maximum the
+/// bulge stands far above the pond's level, the meridian wet on an outer ring only. The
+/// limit point converges under element refinement (8, 16, 32, 64 elements) at the order of
+/// quadratic elements (≥ 3.5 on three refinements), and the 3-D C7v disc at 8, 16 and 32
+/// divisions approaches the meridian's value at order about 2.
+#[test]
+fn the_partly_wet_pond_inflated_from_below_converges_on_the_meridian_and_in_3d() {
+    use memstab::axisym::run::{run, AxisymStudy};
+    use memstab::scene::Scene;
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{dir}/scenes/disc_gas_pond.toml")).unwrap();
+    let level = 0.05;
+    assert!(text.contains(&format!("level = {level} ")));
+    let meridian = |elements: usize| -> f64 {
+        let t = text.replace(
+            "generator = \"disc\"\nradius = 1.1\nsectors = 7\ndivisions = 16",
+            &format!(
+                "generator = \"axisymmetric\"\nshape = \"disc\"\nradius = 1.1\nelements = {elements}\nmodes = 4"
+            ),
+        );
+        let study = AxisymStudy::build(Scene::from_toml_str(&t, "pond").unwrap()).unwrap();
+        let apex = study
+            .measure_names()
+            .iter()
+            .position(|n| n == "apex-z")
+            .unwrap();
+        let r = run(&study, |_, _| {}).unwrap();
+        assert_eq!(r.critical.len(), 1, "{:?}", r.critical);
+        let c = &r.critical[0];
+        assert!(c.localised && c.m == 0 && c.multiplicity == 1);
+        assert!(
+            c.measures[apex] > 10.0 * level,
+            "partly wet: apex {}",
+            c.measures[apex]
+        );
+        c.parameters[0]
+    };
+    let v: Vec<f64> = [8, 16, 32, 64].iter().map(|&e| meridian(e)).collect();
+    let orders: Vec<f64> = (0..2)
+        .map(|k| ((v[k] - v[k + 1]) / (v[k + 1] - v[k + 2])).log2())
+        .collect();
+    eprintln!("meridian p_max at 8, 16, 32, 64 elements: {v:?}; orders {orders:?}");
+    assert!(orders.iter().all(|&o| o >= 3.5), "{v:?}: orders {orders:?}");
+    let three_d = |divisions: usize| -> f64 {
+        let t = text.replace("divisions = 16", &format!("divisions = {divisions}"));
+        let mut study =
+            memstab::study::Study::build(Scene::from_toml_str(&t, "pond").unwrap()).unwrap();
+        let r = memstab::analysis::run(&mut study, |_, _| {}).unwrap();
+        let c = r.report.critical.iter().find(|c| c.irrep == "A1").unwrap();
+        c.parameters[0]
+    };
+    let d: Vec<f64> = [8, 16, 32].iter().map(|&n| three_d(n) - v[3]).collect();
+    let order3 = [(d[0] / d[1]).log2(), (d[1] / d[2]).log2()];
+    eprintln!("C7v p_max - meridian at 8, 16, 32 divisions: {d:?}; orders {order3:?}");
+    assert!(
+        order3.iter().all(|o| (o - 2.0).abs() < 0.3),
+        "{d:?}: orders {order3:?}"
+    );
+    // The meridian's own error at 64 elements is far below the finest 3-D distance.
+    assert!((v[2] - v[3]).abs() < 1e-3 * d[2].abs());
 }

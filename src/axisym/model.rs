@@ -19,8 +19,9 @@
 //! clamped end, δz = 0). A gas of over-pressure P on the side n points away from is s = −1,
 //! p = P (Π = −P V with V = −π ∫ r² z_ξ dξ); a fluid of density ρ under gravity g with its
 //! level at h has p = ρ g (h − z), s = +1 on the side n points to ("above" a floor whose
-//! meridian runs outward from the axis) and s = −1 behind it. Only a wholly wet meridian
-//! (z ≤ h at every node) is accepted.
+//! meridian runs outward from the axis) and s = −1 behind it, integrated over the part of
+//! each element below the level (z(ξ) < h, between the roots of a quadratic), where a moving
+//! wetting line adds a term to the tangent (docs/theory.md §15.14).
 //!
 //! The blocks of wave number m are the second variations of the same potentials for the 3-D
 //! displacement δx = U cos mθ e_r + V sin mθ e_θ + W cos mθ e_z (docs/theory.md §15.2): with
@@ -157,6 +158,15 @@ impl Pressure {
         PressureAt { sign, p, dp }
     }
 
+    /// The parameter index of the level of a fluid with a wetting line.
+    fn level_parameter(&self) -> Option<usize> {
+        match self {
+            Pressure::Gas { .. } | Pressure::Spin { .. } => None,
+            Pressure::Fluid { filled: true, .. } => None,
+            Pressure::Fluid { level, .. } => level.parameter(),
+        }
+    }
+
     fn level(&self, params: &[f64]) -> Option<f64> {
         match self {
             Pressure::Gas { .. } | Pressure::Spin { .. } => None,
@@ -290,18 +300,6 @@ impl AxisymModel {
             .sum()
     }
 
-    /// Why the state `x` is outside the model: a node above a fluid's level.
-    pub fn wetting_defect(&self, x: &[[f64; 2]], params: &[f64]) -> Option<AxisymError> {
-        for p in &self.pressures {
-            if let Some(h) = p.level(params) {
-                if let Some(i) = x.iter().position(|n| n[1] > h) {
-                    return Some(AxisymError::PartlyWet { node: i, level: h });
-                }
-            }
-        }
-        None
-    }
-
     /// Π, gradient, tangent and parameter loads at displacement `q`, parameters `params`.
     pub fn evaluate(&self, q: &[f64], params: &[f64]) -> Result<Evaluated, AxisymError> {
         let nq = self.dim();
@@ -337,9 +335,6 @@ impl AxisymModel {
         mut tangent: impl FnMut(usize, &SMatrix<f64, 6, 6>),
     ) -> Result<Evaluated, AxisymError> {
         let x = self.positions(q);
-        if let Some(d) = self.wetting_defect(&x, params) {
-            return Err(d);
-        }
         let nq = self.dim();
         let mut out = Evaluated {
             energy: 0.0,
@@ -390,14 +385,20 @@ impl AxisymModel {
                         kk[(i, j)] += s * da;
                     }
                 }
-                // Pressures: Π = −s π ∫ r² p(z) z_ξ dξ.
-                let (r, dz) = (p.r, p.x_xi[2]);
-                let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
-                for load in &self.pressures {
-                    if let Pressure::Spin { .. } = load {
-                        // On the 5-point rule below.
-                        continue;
-                    }
+            }
+            // Pressures: Π = −s π ∫ r² p(z) z_ξ dξ, a fluid with a wetting line over the
+            // element's wet part only (docs/theory.md §15.14).
+            let zs = [x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]];
+            for load in &self.pressures {
+                if let Pressure::Spin { .. } = load {
+                    // On the 5-point rule below.
+                    continue;
+                }
+                let wet = load.level(params).map(|lv| super::wet_part(zs, lv));
+                let rule = wet.as_ref().map_or(&super::GAUSS[..], |w| &w.rule[..]);
+                for p in super::points_on(&self.meridian, &x, e, rule) {
+                    let (r, dz) = (p.r, p.x_xi[2]);
+                    let z: f64 = (0..3).map(|k| p.n[k] * x[2 * e + k][1]).sum();
                     let pa = load.at(r, z, params, None);
                     let c = -pa.sign * PI * p.weight;
                     out.energy += c * r * r * pa.p * dz;
@@ -423,6 +424,28 @@ impl AxisymModel {
                             kk[(2 * k, 2 * l + 1)] += rz;
                             kk[(2 * l + 1, 2 * k)] += rz;
                             kk[(2 * k + 1, 2 * l + 1)] += c * r * r * pa.dp * (nk * dl + dk * nl);
+                        }
+                    }
+                }
+                // The moving wetting line: the gradient's integrand there is −s π r² p' z_ξ N_k
+                // on the z unknowns (p = 0), and the limit moves by ∂ξ*/∂z_l = −N_l/z_ξ and
+                // ∂ξ*/∂h = 1/z_ξ, with the sign of the limit (+ at an upper one, z_ξ > 0).
+                for (w, &(xi, slope)) in wet
+                    .iter()
+                    .flat_map(|w| w.crossings.iter().map(move |c| (w, c)))
+                {
+                    let (n, _) = super::shape(xi);
+                    let r: f64 = (0..3).map(|k| n[k] * x[2 * e + k][0]).sum();
+                    let pa = load.at(r, w.level, params, None);
+                    let c = -pa.sign * PI * r * r * pa.dp * slope.signum();
+                    for k in 0..3 {
+                        for l in 0..3 {
+                            kk[(2 * k + 1, 2 * l + 1)] -= c * n[k] * n[l];
+                        }
+                        for (j, lj) in loads.iter_mut().enumerate() {
+                            if load.level_parameter() == Some(j) {
+                                lj[2 * k + 1] += c * n[k];
+                            }
                         }
                     }
                 }
@@ -624,21 +647,28 @@ impl AxisymModel {
         params: &[f64],
     ) -> Result<Vec<Vec<f64>>, AxisymError> {
         let x = self.positions(q);
-        if let Some(d) = self.wetting_defect(&x, params) {
-            return Err(d);
-        }
         let lam = self.meridian.prestretch;
-        // The spin on the 5-point rule (its terms are of degree 9), the rest on 4 points.
+        // The spin on the 5-point rule (its terms are of degree 9), a fluid with a wetting
+        // line on its element's wet part (docs/theory.md §15.14), the rest on 4 points.
         let (spin, rest): (Vec<Pressure>, Vec<Pressure>) = self
             .pressures
             .iter()
             .partition(|p| matches!(p, Pressure::Spin { .. }));
+        let (wetting, rest): (Vec<Pressure>, Vec<Pressure>) =
+            rest.into_iter().partition(|p| p.level(params).is_some());
         let points = (0..self.meridian.elements())
             .map(|e| {
                 let mut points = block_points(&self.meridian, &x, e, true, &rest, params)?;
                 if !spin.is_empty() {
                     let rule = &super::GAUSS5;
                     points.extend(block_points_on(&self.meridian, &x, e, &spin, params, rule));
+                }
+                let zs = [x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]];
+                for load in &wetting {
+                    let level = load.level(params).expect("a fluid with a level");
+                    let rule = super::wet_part(zs, level).rule;
+                    let one = std::slice::from_ref(load);
+                    points.extend(block_points_on(&self.meridian, &x, e, one, params, &rule));
                 }
                 Ok(points)
             })
@@ -1199,7 +1229,7 @@ pub(super) mod tests {
         };
         for m in 0..5 {
             let km = super::super::membrane_full(&model.meridian, &x, m, 0.0).unwrap();
-            let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0);
+            let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0, true);
             let n = 3 * model.meridian.nodes.len();
             let (mut am, mut af) = (
                 nalgebra::DMatrix::zeros(n, n),
@@ -1238,7 +1268,7 @@ pub(super) mod tests {
             filled: true,
         };
         for m in 0..5 {
-            let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0);
+            let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0, false);
             let n = 3 * model.meridian.nodes.len();
             let mut af = nalgebra::DMatrix::zeros(n, n);
             for e in 0..model.meridian.elements() {
@@ -1255,12 +1285,105 @@ pub(super) mod tests {
         assert!(model.evaluate(&q, &p).is_ok());
     }
 
-    #[test]
-    fn a_node_above_the_level_is_refused() {
+    /// The generic cap with the fluid's level at `level`: (model, q, params).
+    fn partly_wet(level: f64) -> (AxisymModel, Vec<f64>, Vec<f64>) {
         let (model, q, mut params) = generic();
-        params[2] = -2.0;
-        let err = model.evaluate(&q, &params).unwrap_err();
-        assert!(matches!(err, AxisymError::PartlyWet { .. }), "{err}");
-        assert!(model.block(1, &q, &params).is_err());
+        params[2] = level;
+        (model, q, params)
+    }
+
+    /// The elements a level crosses inside, with the wet fraction of each.
+    fn crossed(model: &AxisymModel, q: &[f64], level: f64) -> Vec<(usize, f64)> {
+        let x = model.positions(q);
+        (0..model.meridian.elements())
+            .filter_map(|e| {
+                let w =
+                    super::super::wet_part([x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]], level);
+                let wet: f64 = w.rule.iter().map(|r| r.1).sum::<f64>() / 2.0;
+                (!w.crossings.is_empty()).then_some((e, wet))
+            })
+            .collect()
+    }
+
+    /// A level across the cap, inside an element and a hair above a node: the wet part of
+    /// each element is integrated exactly and the moving wetting line's terms make the
+    /// tangent and the level's load the differences of the gradient.
+    #[test]
+    fn partly_wet_gradient_tangent_and_loads_match_finite_differences() {
+        let (model, q, _) = generic();
+        let x = model.positions(&q);
+        let node = 5;
+        for level in [0.35, x[node][1] + 1e-4, x[node][1] - 1e-4] {
+            let (model, q, params) = partly_wet(level);
+            let cut = crossed(&model, &q, level);
+            assert_eq!(cut.len(), 1, "level {level}: {cut:?}");
+            assert!(cut[0].1 > 0.0 && cut[0].1 < 1.0);
+            assert!(x.iter().any(|p| p[1] > level) && x.iter().any(|p| p[1] < level));
+            check_derivatives(&model, &q, &params);
+            block_is_tangent(&model, &q, &params);
+        }
+    }
+
+    /// Wholly wet and wholly dry elements are the plain rule and nothing: a level above the
+    /// cap gives the old potential, one below it no fluid at all.
+    #[test]
+    fn a_level_above_or_below_the_meridian_wets_all_or_nothing() {
+        let (model, q, params) = generic();
+        let mut dry = model.clone();
+        dry.pressures.remove(1);
+        let (_, _, low) = partly_wet(-5.0);
+        let (a, b) = (
+            model.evaluate(&q, &low).unwrap(),
+            dry.evaluate(&q, &low).unwrap(),
+        );
+        assert_eq!(a.energy, b.energy);
+        assert!(crossed(&model, &q, params[2]).is_empty());
+        let wet = model.evaluate(&q, &params).unwrap();
+        assert!((wet.energy - b.energy).abs() > 1e-3);
+    }
+
+    /// The blocks m ≥ 1 of a partly wet fluid equal the θ-sampled second variation of
+    /// ρ g (h − z) over the wet part (no term on the wetting circle: p = 0 there).
+    #[test]
+    fn partly_wet_blocks_equal_the_sampled_blocks() {
+        let level = 0.35;
+        let (model, q, params) = partly_wet(level);
+        let mut fluid = model.clone();
+        fluid.pressures = vec![model.pressures[1]];
+        let mut bare = model.clone();
+        bare.pressures.clear();
+        let x = model.positions(&q);
+        let load = super::super::Hydrostatic {
+            gravity: 1.3,
+            level,
+        };
+        for m in 0..5 {
+            let (map, cols) = model.kept_map(m);
+            let mut t = nalgebra::DMatrix::zeros(map.len(), cols);
+            for (row, c) in map.iter().enumerate() {
+                if let Some((col, v)) = c {
+                    t[(row, *col)] = *v;
+                }
+            }
+            // Fluid behind the membrane: s = −1, density params[1].
+            let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0, true);
+            let expect = t.transpose() * kf * &t * (-params[1]);
+            let (b, b0) = (
+                fluid.block(m, &q, &params).unwrap(),
+                bare.block(m, &q, &params).unwrap(),
+            );
+            let (d, d0) = (
+                b.pattern.to_dense(&b.values),
+                b0.pattern.to_dense(&b0.values),
+            );
+            let mut err = 0.0_f64;
+            for a in 0..cols {
+                for c in 0..cols {
+                    err = err.max((d[(a, c)] - d0[(a, c)] - expect[(a, c)]).abs());
+                }
+            }
+            assert!(err < 1e-11 * expect.amax(), "m = {m}: {err}");
+            assert!(expect.amax() > 1e-3);
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! A scene on an axisymmetric mesh (`[mesh] generator = "axisymmetric"`), made into the
 //! axisymmetric model and run: the same scene keys, effects and analyses as on a 3-D mesh, for
-//! the effects the meridian implements (gas at a given over-pressure, fluid wholly wetting
-//! the membrane, fluid spinning about z, fixed edges); every other effect, constraint or key
+//! the effects the meridian implements (gas at a given over-pressure, fluid wetting the
+//! membrane wholly or in part, fluid spinning about z, fixed edges); every other effect, constraint or key
 //! is refused in one line that names it. Stability is by wave number m = 0..=`mesh.modes`
 //! (docs/theory.md §15.3).
 
