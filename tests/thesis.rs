@@ -1257,10 +1257,11 @@ fn squeezed_gas_and_fluid_the_two_penalty_laws_differ_by_the_cubic_penetration()
     // Loading (b): fluid volume and gas amount held, the planes closing in from a = 0.99 to
     // a = 0.5. Stable and without critical points for both laws and both stiffnesses.
     let name = "thesis/paper3_gas_fluid_squeeze.toml";
-    let lin3 = paper3_gas_fluid(name, 1, 1e3, &[]);
-    let cub3 = paper3_gas_fluid(name, 3, 1e3, &[]);
-    let lin4 = paper3_gas_fluid(name, 1, 1e4, &[]);
-    let cub4 = paper3_gas_fluid(name, 3, 1e4, &[]);
+    let edits = [("max = -0.1 ", "max = -0.5 ")];
+    let lin3 = paper3_gas_fluid(name, 1, 1e3, &edits);
+    let cub3 = paper3_gas_fluid(name, 3, 1e3, &edits);
+    let lin4 = paper3_gas_fluid(name, 1, 1e4, &edits);
+    let cub4 = paper3_gas_fluid(name, 3, 1e4, &edits);
     for r in [&lin3, &cub3, &lin4, &cub4] {
         assert!(r.critical.is_empty(), "{:?}", r.critical);
         assert!(r.rows.iter().all(|row| row.index == Some(0)));
@@ -1325,4 +1326,38 @@ fn gas_and_fluid_between_planes_lose_stability_only_once_wrinkled_and_where_the_
         assert!(f.2 < firsts[0].2 - 5e-3, "{firsts:?}");
     }
     assert!((firsts[2].2 - firsts[3].2).abs() > 1e-4, "{firsts:?}");
+}
+
+#[test]
+fn squeezed_closer_the_linear_penalty_bifurcates_where_the_cubic_one_does_not_yet() {
+    // Loading (b) to a = 0.08: the linear law meets a simple bifurcation in B1 (m = 1) at
+    // a = 0.1348 (κ = 1e3) and 0.1388 (κ = 1e4) on this mesh, in a state the membrane model
+    // still describes; the cubic law is stable to a = 0.08 at κ = 1e3 and has its first B1
+    // point at a = 0.0900 only at κ = 1e5.
+    let name = "thesis/paper3_gas_fluid_squeeze.toml";
+    let edits = [("max = -0.1 ", "max = -0.08 ")];
+    let first_b1 = |r: &PathReport| {
+        let d = parameter(r, "d");
+        let c = r.critical.first().expect("a critical point");
+        assert_eq!(
+            (c.kind, c.irrep.as_str()),
+            (CriticalKind::SimpleBifurcation, "B1")
+        );
+        assert!(r.rows[..=c.after_step]
+            .iter()
+            .all(|row| row.index == Some(0)));
+        let w = r.wrinkling.as_ref().expect("the run was written");
+        assert!(w.critical.iter().all(|w| w.critical != 1), "{w:?}");
+        -c.parameters[d]
+    };
+    let lin3 = first_b1(&paper3_gas_fluid(name, 1, 1e3, &edits));
+    let lin4 = first_b1(&paper3_gas_fluid(name, 1, 1e4, &edits));
+    assert!((lin3 - 0.1348).abs() < 1e-3, "{lin3}");
+    assert!((lin4 - 0.1388).abs() < 1e-3, "{lin4}");
+    let cub3 = paper3_gas_fluid(name, 3, 1e3, &edits);
+    assert!(cub3.critical.is_empty(), "{:?}", cub3.critical);
+    assert!(cub3.rows.iter().all(|row| row.index == Some(0)));
+    assert!(matches!(cub3.stop, StopReason::Bounds), "{}", cub3.stop);
+    let cub5 = first_b1(&paper3_gas_fluid(name, 3, 1e5, &edits));
+    assert!((cub5 - 0.0900).abs() < 1e-3, "{cub5}");
 }
