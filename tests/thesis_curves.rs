@@ -1,8 +1,10 @@
 //! The thesis's findings that critical curves and mesh comparisons show, on the bundled
 //! scenes: the clamped disc pushed up by fluid from below, its limit point followed in the
 //! material's k (Paper 1, `scenes/thesis/paper1_disc_limit_curve_k.toml`) and on a mesh
-//! without symmetry (`scenes/thesis/paper1_disc_irregular.toml`), and the spinning filled
-//! cap's hilltop (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
+//! without symmetry (`scenes/thesis/paper1_disc_irregular.toml`), the gas-pressure fold of
+//! the sphere on a plane followed in the fluid volume (Paper 2,
+//! `scenes/thesis/paper2_gas_pressure_fold_f8.toml`), and the spinning filled cap's hilltop
+//! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
 
 use memstab::analysis::run;
 use memstab::report::{CurveEvent, CurveEventKind, CurveReport};
