@@ -281,7 +281,33 @@ fn thesis_quick_runs_every_group() {
     }
     let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| C")).collect();
     assert_eq!(rows.len(), 6, "{md}");
+    // The bundled scenes are timed by the full study only.
+    assert!(!md.contains("bundled thesis scenes"), "{md}");
     for row in rows {
         assert!(row.ends_with("| 0 |"), "{row}");
     }
+}
+
+/// A bundled thesis scene timed for `memstab bench --thesis`: its row counts what the run
+/// found (the squeezed gas cap: C2v, no critical point) and its wall time.
+#[test]
+fn a_bundled_thesis_scene_is_timed_with_its_points_and_critical_points() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes/thesis/paper3_squeezed_cap.toml");
+    let r = memstab::bench::thesis::scene_run(&path).unwrap();
+    assert_eq!(
+        (r.file.as_str(), r.group.as_str()),
+        ("paper3_squeezed_cap.toml", "C2v")
+    );
+    assert_eq!((r.elements, r.critical, r.curve_points), (1152, 0, None));
+    assert!(r.points > 10, "{r:?}");
+    let md = memstab::bench::thesis::scenes_table(std::slice::from_ref(&r));
+    let row = md.lines().find(|l| l.starts_with("| `paper3")).unwrap();
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    assert_eq!(
+        cells[2..7],
+        ["C2v", "1152", &r.points.to_string(), "0", "–"]
+    );
+    let wall: f64 = cells[7].parse().unwrap();
+    assert!((wall - r.wall.as_secs_f64()).abs() < 0.01, "{row}");
 }

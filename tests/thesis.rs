@@ -1200,3 +1200,165 @@ fn the_held_tangent_is_the_derivative_of_the_held_residual() {
         assert!((&kw - w.column(0) * rayleigh).amax() < 1e-9 * rayleigh.abs());
     }
 }
+
+// ---- Paper 3: gas above fluid between two planes, linear against cubic penalty ----
+
+/// A bundled Paper 3 gas-and-fluid scene on the 512-triangle mesh with the penalty law
+/// `exponent` and stiffness `kappa` on both planes, after the textual `edits`.
+fn paper3_gas_fluid(name: &str, exponent: u32, kappa: f64, edits: &[(&str, &str)]) -> PathReport {
+    let mut text = bundled(name);
+    for (from, to) in edits {
+        assert!(text.contains(from), "{from}");
+        text = text.replace(from, to);
+    }
+    let text = text
+        .replace("divisions = 12", "divisions = 8")
+        .replace("\nexponent = 3", &format!("\nexponent = {exponent}"))
+        .replace("\npenalty = 1000.0", &format!("\npenalty = {kappa:?}"));
+    assert_eq!(text.matches(&format!("\nexponent = {exponent}")).count(), 2);
+    assert_eq!(text.matches(&format!("\npenalty = {kappa:?}")).count(), 2);
+    let mut s = study(&text);
+    assert_eq!(s.action.group().name(), "C2v");
+    let mut result = run(&mut s, |_, _| {}).unwrap();
+    // Writing the run finds where the membrane wrinkles (from every point's state).
+    let dir = tempfile::tempdir().unwrap();
+    memstab::output::write_run(&s, &mut result, dir.path()).unwrap();
+    result.report
+}
+
+/// The measure `name` of path `r` at the control value `x`, linear between the two path
+/// points around it (`None` where the path does not reach `x`).
+fn measure_at(r: &PathReport, name: &str, x: f64) -> Option<f64> {
+    let (c, m) = (parameter(r, &r.control), column(r, name));
+    r.rows.windows(2).find_map(|w| {
+        let (a, b) = (w[0].parameters[c], w[1].parameters[c]);
+        ((a - x) * (b - x) <= 0.0 && a != b).then(|| {
+            let t = (x - a) / (b - a);
+            w[0].measures[m] + t * (w[1].measures[m] - w[0].measures[m])
+        })
+    })
+}
+
+/// The largest difference of the measure `name` between two paths over 101 control values
+/// evenly spread in [lo, hi].
+fn largest_difference(a: &PathReport, b: &PathReport, name: &str, lo: f64, hi: f64) -> f64 {
+    (0..=100)
+        .map(|i| lo + (hi - lo) * i as f64 / 100.0)
+        .map(|x| {
+            let (u, v) = (measure_at(a, name, x), measure_at(b, name, x));
+            let (u, v) = (u.expect("path a reaches x"), v.expect("path b reaches x"));
+            (u - v).abs()
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn squeezed_gas_and_fluid_the_two_penalty_laws_differ_by_the_cubic_penetration() {
+    // Loading (b): fluid volume and gas amount held, the planes closing in from a = 0.99 to
+    // a = 0.5. Stable and without critical points for both laws and both stiffnesses.
+    let name = "thesis/paper3_gas_fluid_squeeze.toml";
+    let edits = [("max = -0.1 ", "max = -0.5 ")];
+    let lin3 = paper3_gas_fluid(name, 1, 1e3, &edits);
+    let cub3 = paper3_gas_fluid(name, 3, 1e3, &edits);
+    let lin4 = paper3_gas_fluid(name, 1, 1e4, &edits);
+    let cub4 = paper3_gas_fluid(name, 3, 1e4, &edits);
+    for r in [&lin3, &cub3, &lin4, &cub4] {
+        assert!(r.critical.is_empty(), "{:?}", r.critical);
+        assert!(r.rows.iter().all(|row| row.index == Some(0)));
+        assert!(matches!(r.stop, StopReason::Bounds), "{}", r.stop);
+    }
+    let (lo, hi) = (-0.99, -0.5);
+    let d3 = largest_difference(&lin3, &cub3, "volume", lo, hi);
+    let d4 = largest_difference(&lin4, &cub4, "volume", lo, hi);
+    // Measured 0.0318 and 0.0155 (volume about 2.1): a ratio of 2.05 per decade, the
+    // cubic law's κ^(-1/3) (2.15), not the linear law's κ^(-1) (10).
+    assert!(d3 > 0.02 && d3 < 0.05, "{d3}");
+    let rate = d3 / d4;
+    assert!(rate > 1.8 && rate < 2.4, "{d3} / {d4} = {rate}");
+    // The linear law is already close to rigid: a decade of κ moves its volume by 2.1e-5,
+    // about a tenth per decade (the next decade, 1e4 to 1e5, moves it by 2.1e-6).
+    let lin = largest_difference(&lin3, &lin4, "volume", lo, hi);
+    assert!(lin > 1e-6 && lin < 1e-4, "{lin}");
+    assert!(lin < 1e-2 * d4, "{lin} against {d4}");
+}
+
+#[test]
+fn gas_and_fluid_between_planes_lose_stability_only_once_wrinkled_and_where_the_law_says() {
+    // Loading (a): the planes fixed at x = ±0.9, the fluid volume held, the gas pressure
+    // lowered towards zero. Both laws are stable down to p = 0.015, wrinkle from p ≈ 0.1
+    // first, and their first critical points lie in wrinkled states, at values and in
+    // irreps that depend on the law: linear, a B1 bifurcation at p = 0.0130 for every κ on
+    // this mesh; cubic, first points at p < 0.013 that move with κ.
+    let name = "thesis/paper3_gas_fluid_pressure.toml";
+    let mut firsts = Vec::new();
+    for (exponent, kappa) in [(1, 1e3), (1, 1e4), (3, 1e3), (3, 1e4)] {
+        // Past the bundled bound p = 0.005 to reach the cubic law's first points, and only
+        // as far as them.
+        let edits = [
+            ("min = 0.005", "min = -0.005"),
+            ("steps = 200", "steps = 40"),
+        ];
+        let r = paper3_gas_fluid(name, exponent, kappa, &edits);
+        let p = parameter(&r, "p");
+        assert!(r
+            .rows
+            .iter()
+            .filter(|row| row.parameters[p] > 0.015)
+            .all(|row| row.index == Some(0)));
+        let w = r.wrinkling.as_ref().expect("the run was written");
+        let first_wrinkled = w.first.expect("the cap wrinkles").step;
+        let pw = r.rows[first_wrinkled].parameters[p];
+        assert!(pw > 0.05 && pw < 0.15, "wrinkled from p = {pw}");
+        let first = r.critical.first().expect("a critical point").clone();
+        assert!(first.after_step >= first_wrinkled);
+        assert!(w.critical.iter().any(|c| c.critical == 1));
+        firsts.push((first.kind, first.irrep.clone(), first.parameters[p]));
+    }
+    // The linear law: the same B1 bifurcation at either κ (to 2e-4 in p).
+    for f in &firsts[..2] {
+        assert_eq!((f.0, f.1.as_str()), (CriticalKind::SimpleBifurcation, "B1"));
+        assert!((f.2 - 0.0130).abs() < 5e-4, "{f:?}");
+    }
+    assert!((firsts[0].2 - firsts[1].2).abs() < 2e-4, "{firsts:?}");
+    // The cubic law: its first point comes later (smaller p) than the linear law's and moves
+    // with κ (measured -0.00167 in A1 and -0.00147 in B1).
+    for f in &firsts[2..] {
+        assert!(f.2 < firsts[0].2 - 5e-3, "{firsts:?}");
+    }
+    assert!((firsts[2].2 - firsts[3].2).abs() > 1e-4, "{firsts:?}");
+}
+
+#[test]
+fn squeezed_closer_the_linear_penalty_bifurcates_where_the_cubic_one_does_not_yet() {
+    // Loading (b) to a = 0.08: the linear law meets a simple bifurcation in B1 (m = 1) at
+    // a = 0.1462 (κ = 1e3) and 0.1463 (κ = 1e4) on this mesh, in a state the membrane model
+    // still describes; the cubic law is stable to a = 0.08 at κ = 1e3 and has its first B1
+    // point at a = 0.0900 only at κ = 1e5.
+    let name = "thesis/paper3_gas_fluid_squeeze.toml";
+    let edits = [("max = -0.1 ", "max = -0.08 ")];
+    assert!(bundled(name).contains("max-step = 0.05"));
+    let first_b1 = |r: &PathReport| {
+        let d = parameter(r, "d");
+        let c = r.critical.first().expect("a critical point");
+        assert_eq!(
+            (c.kind, c.irrep.as_str()),
+            (CriticalKind::SimpleBifurcation, "B1")
+        );
+        assert!(r.rows[..=c.after_step]
+            .iter()
+            .all(|row| row.index == Some(0)));
+        let w = r.wrinkling.as_ref().expect("the run was written");
+        assert!(w.critical.iter().all(|w| w.critical != 1), "{w:?}");
+        -c.parameters[d]
+    };
+    let lin3 = first_b1(&paper3_gas_fluid(name, 1, 1e3, &edits));
+    let lin4 = first_b1(&paper3_gas_fluid(name, 1, 1e4, &edits));
+    assert!((lin3 - 0.1462).abs() < 5e-4, "{lin3}");
+    assert!((lin4 - 0.1463).abs() < 5e-4, "{lin4}");
+    let cub3 = paper3_gas_fluid(name, 3, 1e3, &edits);
+    assert!(cub3.critical.is_empty(), "{:?}", cub3.critical);
+    assert!(cub3.rows.iter().all(|row| row.index == Some(0)));
+    assert!(matches!(cub3.stop, StopReason::Bounds), "{}", cub3.stop);
+    let cub5 = first_b1(&paper3_gas_fluid(name, 3, 1e5, &edits));
+    assert!((cub5 - 0.0900).abs() < 1e-3, "{cub5}");
+}

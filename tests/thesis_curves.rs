@@ -1,8 +1,10 @@
 //! The thesis's findings that critical curves and mesh comparisons show, on the bundled
 //! scenes: the clamped disc pushed up by fluid from below, its limit point followed in the
 //! material's k (Paper 1, `scenes/thesis/paper1_disc_limit_curve_k.toml`) and on a mesh
-//! without symmetry (`scenes/thesis/paper1_disc_irregular.toml`), and the spinning filled
-//! cap's hilltop (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
+//! without symmetry (`scenes/thesis/paper1_disc_irregular.toml`), the gas-pressure fold of
+//! the sphere on a plane followed in the fluid volume (Paper 2,
+//! `scenes/thesis/paper2_gas_pressure_fold_f8.toml`), and the spinning filled cap's hilltop
+//! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
 
 use memstab::analysis::run;
 use memstab::report::{CurveEvent, CurveEventKind, CurveReport};
@@ -215,4 +217,85 @@ fn a_mesh_without_symmetry_keeps_the_fold_and_loses_the_double_points() {
     assert!(after_c1.is_empty(), "{after_c1:?}");
     let study = Study::build(bundled("thesis/paper1_disc_irregular.toml")).expect("builds");
     assert_eq!(study.action.group().order(), 1);
+}
+
+/// Paper 2's other loading: gas above a fixed fluid volume in a sphere on a plane, the gas
+/// pressure raised. The path folds at a maximum of p (an A1 limit point), and the fold line
+/// in (p, V), the fluid-volume constraint active along it, falls steadily as the fluid
+/// fills the sphere, with no cusp and no hilltop. Where it crosses V = 4 it agrees with the
+/// turning point of an independent path in p at the fixed fluid volume 4.
+#[test]
+fn the_gas_pressure_fold_of_the_sphere_on_a_plane_falls_as_the_fluid_volume_grows() {
+    let name = "thesis/paper2_gas_pressure_fold_f8.toml";
+    let mut study = Study::build(bundled(name)).unwrap();
+    let curve = run(&mut study, |_, _| {})
+        .expect("the curve runs")
+        .curve
+        .expect("a critical curve");
+    assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
+    let index = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
+    let (p, v) = (index("p"), index("V"));
+    let start = &curve.rows[0];
+    assert!((start.parameters[v] - 0.5).abs() < 1e-12);
+    assert!(
+        (start.parameters[p] - 1.35903).abs() < 1e-5,
+        "{:?}",
+        start.parameters
+    );
+    for w in curve.rows.windows(2) {
+        assert!(
+            w[1].parameters[v] > w[0].parameters[v],
+            "the curve turns in V"
+        );
+        assert!(
+            w[1].parameters[p] < w[0].parameters[p],
+            "the fold rises in V"
+        );
+    }
+    let last = curve.rows.last().unwrap();
+    assert!(
+        last.parameters[v] > 7.0 && last.parameters[p] < 1.29,
+        "{:?}",
+        last.parameters
+    );
+    assert!(curve
+        .events
+        .iter()
+        .all(|e| matches!(e.kind, CurveEventKind::Start | CurveEventKind::End)));
+    // The curve at V = 4, linear between its two points around it.
+    let at4 = curve
+        .rows
+        .windows(2)
+        .find(|w| w[0].parameters[v] <= 4.0 && w[1].parameters[v] > 4.0)
+        .map(|w| {
+            let t = (4.0 - w[0].parameters[v]) / (w[1].parameters[v] - w[0].parameters[v]);
+            w[0].parameters[p] + t * (w[1].parameters[p] - w[0].parameters[p])
+        })
+        .unwrap();
+    // The path in p at the fluid volume held at 4.
+    let text =
+        std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let analysis = text.find("[analysis]").unwrap();
+    let start_table = text.find("[start]").unwrap();
+    let mut text = format!(
+        "{}[analysis]\ntype = \"path\"\ncontrol = \"p\"\nsteps = 60\nstop-stretch = 2.0\n\n{}",
+        &text[..analysis],
+        &text[start_table..]
+    );
+    let block = text.find("[parameters.V]").unwrap();
+    let end = block + text[block..].find("\n\n").unwrap() + 2;
+    text.replace_range(block..end, "");
+    let text = text.replace("value = \"V\"", "value = 4.0");
+    let mut path = Study::build(Scene::from_toml_str(&text, "test").unwrap()).unwrap();
+    let report = run(&mut path, |_, _| {}).unwrap().report;
+    assert_eq!(
+        report.turning_points.len(),
+        1,
+        "{:?}",
+        report.turning_points
+    );
+    let pp = report.parameters.iter().position(|n| n == "p").unwrap();
+    let fold = report.turning_points[0].parameters[pp];
+    assert!((fold - 1.32820).abs() < 1e-4, "{fold}");
+    assert!((at4 - fold).abs() < 1e-4, "curve {at4} against path {fold}");
 }

@@ -343,12 +343,40 @@ pub fn run_thesis(
         std::thread::available_parallelism().map_or(1, |n| n.get())
     );
     md += &thesis_table(&runs);
+    if !options.quick {
+        md += &thesis_scenes(progress)?;
+    }
     md += &report::total_time("study", started.elapsed());
     let md_path = write_text(out, "thesis.md", &md)?;
     Ok(BenchFiles {
         markdown: md,
         files: vec![md_path],
     })
+}
+
+/// The bundled thesis scenes (`scenes/thesis/*.toml` of the source tree, or of the working
+/// directory), each run and timed: the section of `thesis.md` that lists them.
+fn thesis_scenes(progress: &mut dyn FnMut(&str)) -> Result<String, String> {
+    use super::thesis::{scene_run, scenes_table};
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/thesis");
+    let dir = [built, PathBuf::from("scenes/thesis")]
+        .into_iter()
+        .find(|d| d.is_dir());
+    let Some(dir) = dir else {
+        return Ok("## The bundled thesis scenes\n\nNot run: no scenes/thesis directory.\n".into());
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    let mut runs = Vec::new();
+    for f in &files {
+        progress(&format!("thesis scene {} …", f.display()));
+        runs.push(scene_run(f).map_err(|e| format!("{}: {}", f.display(), one_line(&e)))?);
+    }
+    Ok(scenes_table(&runs))
 }
 
 /// The critical-curve study ([`super::curves`]): 200 points of the balloon's fold line at

@@ -245,3 +245,68 @@ pub fn thesis_table(runs: &[ThesisRun]) -> String {
     md.push('\n');
     md
 }
+
+/// One bundled thesis scene run as `memstab run` runs it, outputs not written.
+#[derive(Debug, Clone)]
+pub struct SceneRun {
+    /// The scene file's name.
+    pub file: String,
+    /// The scene's group.
+    pub group: String,
+    /// Triangles of its mesh.
+    pub elements: usize,
+    /// Path points.
+    pub points: usize,
+    /// Critical points of the path.
+    pub critical: usize,
+    /// Points of the critical curve, for a critical-curve scene.
+    pub curve_points: Option<usize>,
+    /// Wall time of the whole run: load, build, start, path (and curve).
+    pub wall: Duration,
+}
+
+/// Runs the scene file `path` and times it.
+pub fn scene_run(path: &Path) -> Result<SceneRun, String> {
+    let wall = Instant::now();
+    let scene = Scene::load(path).map_err(|e| e.to_string())?;
+    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
+    let result = crate::analysis::run(&mut study, |_, _| {}).map_err(|e| e.to_string())?;
+    let wall = wall.elapsed();
+    let report = &result.report;
+    Ok(SceneRun {
+        file: path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        group: report.group.clone(),
+        elements: report.mesh.elements,
+        points: report.rows.len(),
+        critical: report.critical.len(),
+        curve_points: result.curve.as_ref().map(|c| c.rows.len()),
+        wall,
+    })
+}
+
+/// The markdown table of the bundled scenes' runs.
+pub fn scenes_table(runs: &[SceneRun]) -> String {
+    let mut md = String::from(
+        "## The bundled thesis scenes\n\n\
+         Each of `scenes/thesis/*.toml` as bundled, run as `memstab run` runs it (the index \
+         by irrep at every point, every crossing localised), outputs not written; wall time \
+         in s.\n\n\
+         | scene | group | triangles | path points | critical points | curve points | wall |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for r in runs {
+        md += &format!(
+            "| `{}` | {} | {} | {} | {} | {} | {:.2} |\n",
+            r.file,
+            r.group,
+            r.elements,
+            r.points,
+            r.critical,
+            r.curve_points.map_or("–".to_string(), |n| n.to_string()),
+            r.wall.as_secs_f64()
+        );
+    }
+    md
+}

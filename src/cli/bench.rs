@@ -62,7 +62,8 @@ With --thesis (nothing else is run):
   thesis.md      the spinning fluid-filled cap on C8v, C4v, C2v, C1v and C1 meshes of 5408
                  triangles (--quick: 512), on C1v also through its fold (3× the points),
                  and on C2v at 21632: time by phase, the critical points, the same
-                 states without symmetry (full-K index per point)
+                 states without symmetry (full-K index per point); without --quick also
+                 every scenes/thesis/*.toml as bundled: points, critical points, wall time
 With --curves (nothing else is run):
   curves.md      200 points of the balloon's fold line in (p, k) at f = 16 (--quick: 8)
                  through its cusp (with the other blocks watched, and with watch = false),
@@ -108,7 +109,8 @@ pub(crate) struct BenchArgs {
     scaling: Option<Vec<usize>>,
     /// The thesis-size study instead of the bench: the spinning fluid-filled cap on C8v, C4v,
     /// C2v, C1v and C1 meshes of 5 408 triangles (with --quick: 512) against the same states
-    /// without symmetry, and on C2v at 21 632; writes thesis.md.
+    /// without symmetry, and on C2v at 21 632; without --quick also every bundled
+    /// scenes/thesis scene, timed; writes thesis.md.
     #[arg(long, conflicts_with_all = ["scaling", "frequencies", "branching"])]
     thesis: bool,
     /// The critical-curve study instead of the bench: 200 points of the balloon's fold line
