@@ -201,6 +201,20 @@ def main(memstab, out, figures):
                  "Paper 1: the disc's limit point and first double point followed in k",
                  figures / "paper1_disc_limit_curve_k.png")
 
+    fold = run(memstab, "scenes/thesis/paper2_gas_pressure_fold_f8.toml", out / "paper2_fold")
+    curve_figure([fold], "V", "p",
+                 "Paper 2: the gas pressure's maximum followed in the fluid volume",
+                 figures / "paper2_gas_pressure_fold.png")
+
+    cubic = run(memstab, "scenes/thesis/paper3_gas_fluid_squeeze.toml", out / "paper3_cubic")
+    linear = run(memstab, "scenes/thesis/paper3_gas_fluid_squeeze_linear.toml",
+                 out / "paper3_linear")
+    path_figure([(cubic, "cubic penalty, κ = 1e3"), (linear, "linear penalty, κ = 1e3")],
+                "volume", "d",
+                "Paper 3: gas above fluid squeezed between two planes x = ±a",
+                figures / "paper3_penalty_laws.png",
+                xlabel="enclosed volume / R³", ylabel="plane offset d = −a")
+
     cap = run(memstab, "scenes/thesis/paper4_spinning_cap.toml", out / "paper4_c8v")
     path_figure([(cap, "C8v")], "max_displacement", "w2",
                 "Paper 4: the filled cap spinning on the floor (C8v mesh)",
