@@ -98,10 +98,11 @@ proptest! {
 }
 
 /// A sphere whose membrane has μ, k, H and λ0 as parameters 0…3, under a gas pressure
-/// (parameter 4).
-fn parametric_sphere_model() -> FeModel {
+/// (parameter 4); with `built_at`, generated at that radius and with its reference radius as
+/// parameter 5.
+fn parametric_sphere_model(built_at: Option<f64>) -> FeModel {
     let sym = icosphere(&IcosphereOptions {
-        radius: 1.0,
+        radius: built_at.unwrap_or(1.0),
         frequency: 2,
     })
     .unwrap();
@@ -112,7 +113,12 @@ fn parametric_sphere_model() -> FeModel {
         thickness: Quantity::Parameter(2),
         prestretch: Quantity::Parameter(3),
     };
-    let membrane = Membrane::parametric(&m.nodes, &m.triangles, material).unwrap();
+    let mut membrane = Membrane::parametric(&m.nodes, &m.triangles, material).unwrap();
+    let mut names = vec!["mu", "k", "thickness", "prestretch", "p"];
+    if let Some(r0) = built_at {
+        membrane = membrane.with_reference_radius(Quantity::Parameter(5), r0);
+        names.push("R");
+    }
     let effects: Vec<Box<dyn Effect>> = vec![
         Box::new(membrane),
         Box::new(GasPressure {
@@ -120,7 +126,6 @@ fn parametric_sphere_model() -> FeModel {
             closing: None,
         }),
     ];
-    let names = ["mu", "k", "thickness", "prestretch", "p"];
     FeModel::new(
         m.nodes.clone(),
         m.triangles.clone(),
@@ -145,7 +150,7 @@ proptest! {
         p in -1.0f64..2.0,
         stretch in 1.0f64..1.6,
     ) {
-        let model = parametric_sphere_model();
+        let model = parametric_sphere_model(None);
         let n = model.unknowns();
         let mut u = random_vector(seed, n, 0.03);
         for (i, x) in model.reference().iter().enumerate() {
@@ -166,7 +171,7 @@ proptest! {
 /// The parametric membrane at given parameter values is the membrane with those values fixed.
 #[test]
 fn parametric_material_matches_fixed_values() {
-    let model = parametric_sphere_model();
+    let model = parametric_sphere_model(None);
     let sym = icosphere(&IcosphereOptions {
         radius: 1.0,
         frequency: 2,
@@ -305,41 +310,6 @@ fn a_uniformly_prestretched_flat_disc_is_in_equilibrium_without_load() {
     assert!(kmax > 0.0);
 }
 
-/// A sphere generated at radius `built_at` whose membrane has μ, k, H and λ0 as parameters
-/// 0…3 and its reference radius as parameter 5, under a gas pressure (parameter 4).
-fn radius_sphere_model(built_at: f64) -> FeModel {
-    let sym = icosphere(&IcosphereOptions {
-        radius: built_at,
-        frequency: 2,
-    })
-    .unwrap();
-    let m = &sym.mesh;
-    let material = MaterialQuantities {
-        mu: Quantity::Parameter(0),
-        k: Quantity::Parameter(1),
-        thickness: Quantity::Parameter(2),
-        prestretch: Quantity::Parameter(3),
-    };
-    let membrane = Membrane::parametric(&m.nodes, &m.triangles, material)
-        .unwrap()
-        .with_reference_radius(Quantity::Parameter(5), built_at);
-    let effects: Vec<Box<dyn Effect>> = vec![
-        Box::new(membrane),
-        Box::new(GasPressure {
-            pressure: Quantity::Parameter(4),
-            closing: None,
-        }),
-    ];
-    let names = ["mu", "k", "thickness", "prestretch", "p", "R"];
-    FeModel::new(
-        m.nodes.clone(),
-        m.triangles.clone(),
-        &[],
-        effects,
-        names.iter().map(|s| s.to_string()).collect(),
-    )
-}
-
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, .. ProptestConfig::default() })]
 
@@ -355,7 +325,7 @@ proptest! {
         p in -1.0f64..2.0,
         stretch in 1.0f64..1.6,
     ) {
-        let model = radius_sphere_model(built_at);
+        let model = parametric_sphere_model(Some(built_at));
         let n = model.unknowns();
         let mut u = random_vector(seed, n, 0.03 * built_at);
         // Around the reference at R = ratio · R0, uniformly stretched.
@@ -378,8 +348,8 @@ proptest! {
 /// generated at 1.3: the same energy, residual and tangent at the same positions.
 #[test]
 fn a_scaled_reference_is_the_mesh_generated_at_that_radius() {
-    let scaled = radius_sphere_model(1.0);
-    let generated = radius_sphere_model(1.3);
+    let scaled = parametric_sphere_model(Some(1.0));
+    let generated = parametric_sphere_model(Some(1.3));
     let (r, mu, k, h, l0, p) = (1.3, 1.2, 0.15, 0.1, 1.1, 0.4);
     // Positions 1.5 X(1.3) plus a perturbation, as displacements of each model's nodes.
     let wobble = random_vector(11, scaled.unknowns(), 0.02);
@@ -438,7 +408,7 @@ fn a_scaled_reference_is_the_mesh_generated_at_that_radius() {
 /// A reference radius at or below 0 is an evaluation error naming it, never a NaN.
 #[test]
 fn a_radius_at_or_below_zero_is_refused() {
-    let model = radius_sphere_model(1.0);
+    let model = parametric_sphere_model(Some(1.0));
     let u = vec![0.0; model.unknowns()];
     let mut eval = model.new_evaluation();
     for r in [0.0, -0.5, f64::NAN] {

@@ -257,13 +257,7 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     check_analysis(scene)?;
     check_parameter_use(scene)?;
     positive("start.stretch", scene.start.stretch)?;
-    let held: Vec<&str> = scene
-        .boundary
-        .fixed
-        .iter()
-        .map(String::as_str)
-        .chain(scene.boundary.slide.iter().map(|s| s.set.as_str()))
-        .collect();
+    let held = held_sets(scene);
     if scene.start.stretch != 1.0 && !held.is_empty() {
         return Err(Problem::at(
             "start.stretch",
@@ -424,6 +418,17 @@ fn check_enclosure(scene: &Scene) -> Result<(), Problem> {
     }
 }
 
+/// The node sets the boundary holds: the fixed ones and the sliding ones.
+fn held_sets(scene: &Scene) -> Vec<&str> {
+    scene
+        .boundary
+        .fixed
+        .iter()
+        .map(String::as_str)
+        .chain(scene.boundary.slide.iter().map(|s| s.set.as_str()))
+        .collect()
+}
+
 /// `[mesh] radius = "R"`: a declared parameter, on a membrane no node of which is held at its
 /// reference position (the model scales the reference, not the held positions).
 fn check_mesh_radius(scene: &Scene) -> Result<(), Problem> {
@@ -431,13 +436,7 @@ fn check_mesh_radius(scene: &Scene) -> Result<(), Problem> {
         return Ok(());
     };
     check_quantity("mesh.radius", q, Range::Positive, &scene.parameters)?;
-    let held: Vec<&str> = scene
-        .boundary
-        .fixed
-        .iter()
-        .map(String::as_str)
-        .chain(scene.boundary.slide.iter().map(|s| s.set.as_str()))
-        .collect();
+    let held = held_sets(scene);
     if !held.is_empty() {
         return Err(Problem::at(
             "mesh.radius",
