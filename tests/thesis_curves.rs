@@ -3,9 +3,11 @@
 //! material's k (Paper 1, `scenes/thesis/paper1_disc_limit_curve_k.toml`) and on a mesh
 //! without symmetry (`scenes/thesis/paper1_disc_irregular.toml`), the gas-pressure fold of
 //! the sphere on a plane followed in the fluid volume (Paper 2,
-//! `scenes/thesis/paper2_gas_pressure_fold_f8.toml`), and the spinning filled cap's hilltop
+//! `scenes/thesis/paper2_gas_pressure_fold_f8.toml`) and its solution surface in (p, V)
+//! (`scenes/thesis/paper2_solution_surface_f8.toml`), and the spinning filled cap's hilltop
 //! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
 
+use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
 use memstab::report::{CurveEvent, CurveEventKind, CurveReport};
 use memstab::scene::Scene;
@@ -298,4 +300,114 @@ fn the_gas_pressure_fold_of_the_sphere_on_a_plane_falls_as_the_fluid_volume_grow
     let fold = report.turning_points[0].parameters[pp];
     assert!((fold - 1.32820).abs() < 1e-4, "{fold}");
     assert!((at4 - fold).abs() < 1e-4, "curve {at4} against path {fold}");
+}
+
+/// Paper 2's solution surface in (p, V): on every path in p at a fixed fluid volume, two A1
+/// limit points (the maximum of p, then the minimum) and nothing else; the index 0 up to the
+/// maximum, 1 between the two, 0 past the minimum, so the surface folds over the (p, V) plane
+/// on both lines. The maximum's line is the fold line that the critical curve of
+/// `paper2_gas_pressure_fold_f8.toml` follows: the same discrete model, the limit points of
+/// the paths localised until the block's eigenvalue is at 1e-10 of ‖K‖ (p stationary there,
+/// so its error is of second order) and the curve's rows on the fold to Newton's tolerance;
+/// what separates the two is the quadratic interpolation between the curve's rows, 0.2
+/// apart in V (measured: at most 4e-7 in p).
+#[test]
+fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_line() {
+    let mut study =
+        Study::build(bundled("thesis/paper2_solution_surface_f8.toml")).expect("builds");
+    let surface = run(&mut study, |_, _| {})
+        .expect("the surface runs")
+        .surface
+        .expect("a surface");
+    assert!(surface.warnings.is_empty(), "{:?}", surface.warnings);
+    assert_eq!(surface.paths.len(), 7);
+    let p = surface.parameter("p").unwrap();
+    let v = surface.parameter("V").unwrap();
+    let mut curve_study =
+        Study::build(bundled("thesis/paper2_gas_pressure_fold_f8.toml")).expect("builds");
+    let curve = run(&mut curve_study, |_, _| {})
+        .expect("the curve runs")
+        .curve
+        .expect("a critical curve");
+    let (cp, cv) = (
+        curve.parameters.iter().position(|n| n == "p").unwrap(),
+        curve.parameters.iter().position(|n| n == "V").unwrap(),
+    );
+    // The curve's p at fluid volume x: the quadratic through its three rows nearest x.
+    let on_curve = |x: f64| {
+        let rows = &curve.rows;
+        let nearest = (0..rows.len())
+            .min_by(|&i, &j| {
+                let d = |k: usize| (rows[k].parameters[cv] - x).abs();
+                d(i).total_cmp(&d(j))
+            })
+            .unwrap();
+        let mid = nearest.clamp(1, rows.len() - 2);
+        let pts: Vec<(f64, f64)> = rows[mid - 1..=mid + 1]
+            .iter()
+            .map(|r| (r.parameters[cv], r.parameters[cp]))
+            .collect();
+        (0..3)
+            .map(|j| {
+                let weight: f64 = (0..3)
+                    .filter(|&k| k != j)
+                    .map(|k| (x - pts[k].0) / (pts[j].0 - pts[k].0))
+                    .product();
+                pts[j].1 * weight
+            })
+            .sum::<f64>()
+    };
+    let mut worst = 0.0f64;
+    let mut maxima = Vec::new();
+    for path in &surface.paths {
+        assert_eq!(
+            path.critical.len(),
+            2,
+            "V = {}: {:?}",
+            path.b,
+            path.critical
+        );
+        assert!(
+            path.critical
+                .iter()
+                .all(|c| c.kind == CriticalKind::LimitPoint && c.irrep == "A1"),
+            "V = {}: {:?}",
+            path.b,
+            path.critical
+        );
+        let (max, min) = (&path.critical[0], &path.critical[1]);
+        assert_eq!(max.parameters[v], path.b);
+        assert!(
+            max.parameters[p] > min.parameters[p] + 0.1,
+            "V = {}",
+            path.b
+        );
+        // The path turns at the maximum: no vertex goes beyond it in p.
+        assert!(path
+            .vertices
+            .iter()
+            .all(|x| x.parameters[p] <= max.parameters[p] + 1e-12));
+        for x in &path.vertices {
+            let expected = usize::from(x.step > max.after_step && x.step <= min.after_step);
+            assert_eq!(x.index, Some(expected), "V = {}, step {}", path.b, x.step);
+        }
+        // Both sides of both folds are on the path.
+        assert!(max.after_step > 0 && min.after_step + 1 < path.vertices.len() - 1);
+        worst = worst.max((max.parameters[p] - on_curve(path.b)).abs());
+        maxima.push(max.parameters[p]);
+    }
+    eprintln!("surface fold against the fold line: {worst:e} in p");
+    assert!(
+        worst < 1e-6,
+        "the surface's fold is off the fold line by {worst}"
+    );
+    // The fold falls as the fluid fills the sphere.
+    assert!(maxima.windows(2).all(|w| w[1] < w[0]), "{maxima:?}");
+    let limit_lines: Vec<_> = surface
+        .lines
+        .iter()
+        .filter(|l| l.kind == CriticalKind::LimitPoint)
+        .collect();
+    assert_eq!(limit_lines.len(), 2);
+    assert!(limit_lines.iter().all(|l| l.points.len() == 7));
 }
