@@ -6,7 +6,8 @@ Every figure is drawn from a run's files, never from numbers typed in here:
   is 0, dashed where the state is unstable) with the critical points of critical.json;
 - the critical modes from the critical_NN.vtu states (the mode's normal component at the
   deformed state, drawn on the reference membrane seen from above, one panel per point, labelled from path.json);
-- a critical curve from curve.csv with the events of critical.json.
+- a critical curve from curve.csv with the events of critical.json;
+- a solution surface from surface.vtu, coloured by the index, with its fold lines.
 
 Usage: python scripts/thesis_figures.py MEMSTAB OUT_DIR FIGURE_DIR
   MEMSTAB     the memstab binary
@@ -161,6 +162,40 @@ def curve_figure(runs, x, y, title, file):
     plt.close(fig)
 
 
+def surface_figure(run_dir, xlabel, ylabel, zlabel, title, file):
+    """A solution surface from surface.vtu: its triangles in (a, b, measure), coloured by
+    the index (blue where stable, orange where unstable), with its critical lines in black."""
+    import meshio
+
+    surface = meshio.read(run_dir / "surface.vtu")
+    x, y, z = surface.points.T
+    index = surface.point_data["index"]
+    fig = plt.figure(figsize=(6.4, 5.0))
+    ax = fig.add_subplot(projection="3d")
+    for block in surface.cells:
+        if block.type == "triangle":
+            tri = block.data
+            stable = index[tri].max(axis=1) == 0
+            for mask, colour, label in ((stable, "C0", "stable (index 0)"),
+                                        (~stable, "C1", "unstable (index > 0)")):
+                if mask.any():
+                    ax.plot_trisurf(x, y, z, triangles=tri[mask], color=colour, alpha=0.55,
+                                    linewidth=0.1, edgecolor="k", label=label)
+        elif block.type == "line":
+            for a, b in block.data:
+                ax.plot([x[a], x[b]], [y[a], y[b]], [z[a], z[b]], "-", color="k", lw=1.8)
+    ax.plot([], [], "-", color="k", lw=1.8, label="fold lines")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_zlabel(zlabel)
+    ax.view_init(elev=22, azim=-58)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(file, dpi=130)
+    plt.close(fig)
+
+
 def variant(scene, out, name, *replacements):
     """A copy of a bundled scene with lines replaced ((old, new) pairs), written beside the
     runs as NAME.toml."""
@@ -205,6 +240,11 @@ def main(memstab, out, figures):
     curve_figure([fold], "V", "p",
                  "Paper 2: the gas pressure's maximum followed in the fluid volume",
                  figures / "paper2_gas_pressure_fold.png")
+
+    surface = run(memstab, "scenes/thesis/paper2_solution_surface_f8.toml", out / "paper2_surface")
+    surface_figure(surface, "gas over-pressure p", "fluid volume V", "stretch",
+                   "Paper 2: the solution surface of the sphere on a plane",
+                   figures / "paper2_solution_surface.png")
 
     cubic = run(memstab, "scenes/thesis/paper3_gas_fluid_squeeze.toml", out / "paper3_cubic")
     linear = run(memstab, "scenes/thesis/paper3_gas_fluid_squeeze_linear.toml",
