@@ -280,6 +280,136 @@ mod scenes {
         assert!(c7 - axi > 0.02 && c7 - axi < 0.03, "{c7} vs {axi}");
     }
 
+    /// The reservoir balloon of the 3-D critical-curve tests on the meridian: a gas at the
+    /// control p and a second gas at q whose amount (P_atm + q) V = n the gas-amount
+    /// constraint holds (P_atm = 0.1).
+    fn reservoir_text(elements: usize, modes: usize) -> String {
+        format!(
+            r#"[scene]
+name = "reservoir-balloon-axisymmetric"
+
+[mesh]
+generator = "axisymmetric"
+shape = "sphere"
+radius = 1.0
+elements = {elements}
+modes = {modes}
+
+[material]
+model = "mooney-rivlin"
+mu = 100.0
+k = 0.1
+thickness = 0.01
+
+[[effect]]
+type = "gas"
+pressure = "p"
+
+[[effect]]
+type = "gas"
+pressure = "q"
+
+[parameters.p]
+start = 0.19
+min = 0.0
+max = 3.0
+
+[parameters.q]
+start = 0.3
+
+[parameters.n]
+start = 1.94
+
+[[constraint]]
+type = "gas-amount"
+effect = 1
+value = "n"
+ambient-pressure = 0.1
+
+[[constraint]]
+type = "fixed"
+parameter = "n"
+
+[analysis]
+type = "path"
+control = "p"
+steps = 400
+max-step = 0.1
+stop-stretch = 2.6
+
+[start]
+stretch = 1.05
+"#
+        )
+    }
+
+    /// The reservoir balloon's limit pressure at amount n in closed form: the maximum over
+    /// the stretch λ > 1.2 of p_s(λ) − n/(V₀λ³) + P_atm (V₀ = 4π/3), by golden section.
+    fn reservoir_limit(n: f64) -> (f64, f64) {
+        let v0 = 4.0 * std::f64::consts::PI / 3.0;
+        let p = |l: f64| memstab::reference::sphere_pressure(0.1, l) - n / (v0 * l.powi(3)) + 0.1;
+        let (mut a, mut b) = (1.2f64, 3.0f64);
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        for _ in 0..200 {
+            let (c, d) = (b - g * (b - a), a + g * (b - a));
+            if p(c) > p(d) {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        let l = 0.5 * (a + b);
+        (p(l), l)
+    }
+
+    /// The held gas amount on the meridian: along the whole path (P_atm + q) V = n, the
+    /// path's pressure maximum is the closed-form limit point and the block m = 0 bordered by
+    /// the constraint turns singular there (an m = 0 limit point, every other wave number
+    /// stable); the error falls with the fourth power of the element size.
+    #[test]
+    fn the_reservoir_balloon_holds_its_gas_to_the_closed_form_limit() {
+        let (exact, l_exact) = reservoir_limit(1.94);
+        let mut errors = Vec::new();
+        for elements in [8, 16, 32, 64] {
+            let scene = Scene::from_toml_str(&reservoir_text(elements, 4), "reservoir").unwrap();
+            let r = run_scene(scene);
+            assert_eq!(r.stop, StopReason::Stretch { target: 2.6 });
+            let at = |n: &str| r.parameters.iter().position(|p| p == n).unwrap();
+            let (kp, kq, kn) = (at("p"), at("q"), at("n"));
+            let kv = r.measures.iter().position(|m| m == "volume").unwrap();
+            let kl = r.measures.iter().position(|m| m == "stretch").unwrap();
+            for row in &r.rows {
+                let amount = (0.1 + row.parameters[kq]) * row.measures[kv];
+                assert!((amount / row.parameters[kn] - 1.0).abs() < 1e-9, "{row:?}");
+            }
+            let turn = r.turning_points.first().expect("a pressure maximum");
+            assert_eq!(turn.kind, Extremum::Maximum);
+            let critical = r.critical.first().expect("a critical point");
+            assert_eq!((critical.m, critical.kind), (0, CriticalKind::LimitPoint));
+            assert!(critical.localised);
+            let (ep, el) = (
+                turn.parameters[kp] / exact - 1.0,
+                turn.measures[kl] / l_exact - 1.0,
+            );
+            let ec = critical.parameters[kp] / exact - 1.0;
+            eprintln!(
+                "{elements} elements: limit p = {} (error {ep:.2e}), stretch {} (error {el:.2e}), m = 0 crossing p error {ec:.2e}; closed form p = {exact}, stretch {l_exact}",
+                turn.parameters[kp], turn.measures[kl]
+            );
+            let index0 = r.rows[0].index.as_ref().unwrap();
+            assert!(index0.iter().all(|&n| n == 0), "{index0:?}");
+            errors.push((elements, ep.abs(), ec.abs()));
+        }
+        let &(_, e64, c64) = errors.last().unwrap();
+        assert!(e64 < 1e-8, "{e64:e}");
+        assert!(c64 < 1e-8, "{c64:e}");
+        for w in errors.windows(2) {
+            let order = (w[0].1 / w[1].1).log2();
+            eprintln!("{} → {} elements: order {order:.2}", w[0].0, w[1].0);
+            assert!(order > 3.5, "{} → {}: order {order}", w[0].0, w[1].0);
+        }
+    }
+
     #[test]
     fn effects_it_does_not_implement_are_refused_in_one_line() {
         let dir = tempfile::tempdir().unwrap();
