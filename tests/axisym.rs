@@ -283,17 +283,14 @@ mod scenes {
     /// The reservoir balloon of the 3-D critical-curve tests on the meridian: a gas at the
     /// control p and a second gas at q whose amount (P_atm + q) V = n the gas-amount
     /// constraint holds (P_atm = 0.1).
-    fn reservoir_text(elements: usize, modes: usize) -> String {
+    /// `mesh` is the body of its `[mesh]` table.
+    fn reservoir_text(mesh: &str) -> String {
         format!(
             r#"[scene]
 name = "reservoir-balloon-axisymmetric"
 
 [mesh]
-generator = "axisymmetric"
-shape = "sphere"
-radius = 1.0
-elements = {elements}
-modes = {modes}
+{mesh}
 
 [material]
 model = "mooney-rivlin"
@@ -371,7 +368,10 @@ stretch = 1.05
         let (exact, l_exact) = reservoir_limit(1.94);
         let mut errors = Vec::new();
         for elements in [8, 16, 32, 64] {
-            let scene = Scene::from_toml_str(&reservoir_text(elements, 4), "reservoir").unwrap();
+            let mesh = format!(
+                "generator = \"axisymmetric\"\nshape = \"sphere\"\nelements = {elements}\nmodes = 4"
+            );
+            let scene = Scene::from_toml_str(&reservoir_text(&mesh), "reservoir").unwrap();
             let r = run_scene(scene);
             assert_eq!(r.stop, StopReason::Stretch { target: 2.6 });
             let at = |n: &str| r.parameters.iter().position(|p| p == n).unwrap();
@@ -408,6 +408,37 @@ stretch = 1.05
             eprintln!("{} → {} elements: order {order:.2}", w[0].0, w[1].0);
             assert!(order > 3.5, "{} → {}: order {order}", w[0].0, w[1].0);
         }
+    }
+
+    /// `memstab compare` of the reservoir balloon on the meridian and an icosphere (matched
+    /// by value): the meridian's m = 0 limit point at its 16-element distance from the closed
+    /// form, the frequency-3 icosphere's Ag limit point above it.
+    #[test]
+    fn compare_runs_the_reservoir_balloon_on_the_meridian() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("reservoir.toml");
+        let mesh = "generator = \"icosphere\"\nradius = 1.0\nfrequency = 3";
+        std::fs::write(&file, reservoir_text(mesh)).unwrap();
+        let o = memstab(&[
+            "compare",
+            file.to_str().unwrap(),
+            "--meshes",
+            "axisymmetric:elements=16,modes=4,icosphere",
+            "--json",
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let first = |mesh: usize| {
+            let c = &json["meshes"][mesh]["levels"][0]["critical"];
+            assert_eq!(c.as_array().unwrap().len(), 1, "{c}");
+            (c[0]["irrep"].clone(), c[0]["value"].as_f64().unwrap())
+        };
+        let ((m0, axi), (ag, ico)) = (first(0), first(1));
+        assert_eq!((m0.as_str(), ag.as_str()), (Some("m=0"), Some("Ag")));
+        let (exact, _) = reservoir_limit(1.94);
+        assert!((axi / exact - 1.0).abs() < 2e-6, "{axi} vs {exact}");
+        assert!(ico - axi > 0.01 && ico - axi < 0.05, "{ico} vs {axi}");
     }
 
     #[test]
