@@ -1,4 +1,4 @@
-//! The gas-amount constraint on the meridian (docs/theory.md §15.16), the 3-D constraint of
+//! The gas-amount constraint on the meridian (docs/theory.md §15.15), the 3-D constraint of
 //! docs/theory.md §3.3 for a gas alone in a membrane of revolution.
 //!
 //! A gas effect at the over-pressure p (a parameter) fills the enclosed volume
