@@ -441,6 +441,35 @@ stretch = 1.05
         assert!(ico - axi > 0.01 && ico - axi < 0.05, "{ico} vs {axi}");
     }
 
+    /// A held gas amount beside a fluid (whose volume the gas would share) is refused on the
+    /// meridian in one line naming the constraint's effect, exit 2, nothing written.
+    #[test]
+    fn a_gas_amount_beside_a_fluid_is_refused_in_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let mesh = "generator = \"axisymmetric\"\nshape = \"sphere\"\nelements = 8\nmodes = 2";
+        let text = reservoir_text(mesh).replacen(
+            "[parameters.p]",
+            "[[effect]]\ntype = \"fluid\"\ndensity = 0.1\ngravity = 1.0\nlevel = \"h\"\n\
+             side = \"inside\"\n\n[parameters.h]\nstart = -0.5\n\n[[constraint]]\n\
+             type = \"fluid-volume\"\neffect = 2\nvalue = 0.5\n\n[parameters.p]",
+            1,
+        );
+        let file = dir.path().join("s.toml");
+        std::fs::write(&file, text).unwrap();
+        let out = dir.path().join("out");
+        let o = memstab(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("constraint[1].effect = 1"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+
     #[test]
     fn effects_it_does_not_implement_are_refused_in_one_line() {
         let dir = tempfile::tempdir().unwrap();
