@@ -33,6 +33,7 @@
 //! the regularity of the field there: U = V = 0 for m = 0, W = 0 and U + V = 0 for m = 1
 //! (the field is then the constant U e_x), everything for m ≥ 2.
 
+mod gas;
 mod held;
 mod model;
 mod plane;
@@ -41,9 +42,10 @@ pub mod run;
 mod spin;
 mod volume;
 
+pub use gas::{GasAmountBorder, GasAmountRow};
 pub use model::{AxisymModel, Block, BlockLayout, Evaluated, Pressure};
 pub use plane::FloorPlane;
-pub use problem::{AxisymProblem, VolumeTarget};
+pub use problem::{AxisymProblem, GasTarget, VolumeTarget};
 
 use crate::effects::membrane::MooneyRivlin;
 use nalgebra::{DMatrix, Matrix3, Vector3};

@@ -280,6 +280,196 @@ mod scenes {
         assert!(c7 - axi > 0.02 && c7 - axi < 0.03, "{c7} vs {axi}");
     }
 
+    /// The reservoir balloon of the 3-D critical-curve tests on the meridian: a gas at the
+    /// control p and a second gas at q whose amount (P_atm + q) V = n the gas-amount
+    /// constraint holds (P_atm = 0.1).
+    /// `mesh` is the body of its `[mesh]` table.
+    fn reservoir_text(mesh: &str) -> String {
+        format!(
+            r#"[scene]
+name = "reservoir-balloon-axisymmetric"
+
+[mesh]
+{mesh}
+
+[material]
+model = "mooney-rivlin"
+mu = 100.0
+k = 0.1
+thickness = 0.01
+
+[[effect]]
+type = "gas"
+pressure = "p"
+
+[[effect]]
+type = "gas"
+pressure = "q"
+
+[parameters.p]
+start = 0.19
+min = 0.0
+max = 3.0
+
+[parameters.q]
+start = 0.3
+
+[parameters.n]
+start = 1.94
+
+[[constraint]]
+type = "gas-amount"
+effect = 1
+value = "n"
+ambient-pressure = 0.1
+
+[[constraint]]
+type = "fixed"
+parameter = "n"
+
+[analysis]
+type = "path"
+control = "p"
+steps = 400
+max-step = 0.1
+stop-stretch = 2.6
+
+[start]
+stretch = 1.05
+"#
+        )
+    }
+
+    /// The reservoir balloon's limit pressure at amount n in closed form: the maximum over
+    /// the stretch λ > 1.2 of p_s(λ) − n/(V₀λ³) + P_atm (V₀ = 4π/3), by golden section.
+    fn reservoir_limit(n: f64) -> (f64, f64) {
+        let v0 = 4.0 * std::f64::consts::PI / 3.0;
+        let p = |l: f64| memstab::reference::sphere_pressure(0.1, l) - n / (v0 * l.powi(3)) + 0.1;
+        let (mut a, mut b) = (1.2f64, 3.0f64);
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        for _ in 0..200 {
+            let (c, d) = (b - g * (b - a), a + g * (b - a));
+            if p(c) > p(d) {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        let l = 0.5 * (a + b);
+        (p(l), l)
+    }
+
+    /// The held gas amount on the meridian: along the whole path (P_atm + q) V = n, the
+    /// path's pressure maximum is the closed-form limit point and the block m = 0 bordered by
+    /// the constraint turns singular there (an m = 0 limit point, every other wave number
+    /// stable); the error falls with the fourth power of the element size.
+    #[test]
+    fn the_reservoir_balloon_holds_its_gas_to_the_closed_form_limit() {
+        let (exact, l_exact) = reservoir_limit(1.94);
+        let mut errors = Vec::new();
+        for elements in [8, 16, 32, 64] {
+            let mesh = format!(
+                "generator = \"axisymmetric\"\nshape = \"sphere\"\nelements = {elements}\nmodes = 4"
+            );
+            let scene = Scene::from_toml_str(&reservoir_text(&mesh), "reservoir").unwrap();
+            let r = run_scene(scene);
+            assert_eq!(r.stop, StopReason::Stretch { target: 2.6 });
+            let at = |n: &str| r.parameters.iter().position(|p| p == n).unwrap();
+            let (kp, kq, kn) = (at("p"), at("q"), at("n"));
+            let kv = r.measures.iter().position(|m| m == "volume").unwrap();
+            let kl = r.measures.iter().position(|m| m == "stretch").unwrap();
+            for row in &r.rows {
+                let amount = (0.1 + row.parameters[kq]) * row.measures[kv];
+                assert!((amount / row.parameters[kn] - 1.0).abs() < 1e-9, "{row:?}");
+            }
+            let turn = r.turning_points.first().expect("a pressure maximum");
+            assert_eq!(turn.kind, Extremum::Maximum);
+            let critical = r.critical.first().expect("a critical point");
+            assert_eq!((critical.m, critical.kind), (0, CriticalKind::LimitPoint));
+            assert!(critical.localised);
+            let (ep, el) = (
+                turn.parameters[kp] / exact - 1.0,
+                turn.measures[kl] / l_exact - 1.0,
+            );
+            let ec = critical.parameters[kp] / exact - 1.0;
+            eprintln!(
+                "{elements} elements: limit p = {} (error {ep:.2e}), stretch {} (error {el:.2e}), m = 0 crossing p error {ec:.2e}; closed form p = {exact}, stretch {l_exact}",
+                turn.parameters[kp], turn.measures[kl]
+            );
+            let index0 = r.rows[0].index.as_ref().unwrap();
+            assert!(index0.iter().all(|&n| n == 0), "{index0:?}");
+            errors.push((elements, ep.abs(), ec.abs()));
+        }
+        let &(_, e64, c64) = errors.last().unwrap();
+        assert!(e64 < 1e-8, "{e64:e}");
+        assert!(c64 < 1e-8, "{c64:e}");
+        for w in errors.windows(2) {
+            let order = (w[0].1 / w[1].1).log2();
+            eprintln!("{} → {} elements: order {order:.2}", w[0].0, w[1].0);
+            assert!(order > 3.5, "{} → {}: order {order}", w[0].0, w[1].0);
+        }
+    }
+
+    /// `memstab compare` of the reservoir balloon on the meridian and an icosphere (matched
+    /// by value): the meridian's m = 0 limit point at its 16-element distance from the closed
+    /// form, the frequency-3 icosphere's Ag limit point above it.
+    #[test]
+    fn compare_runs_the_reservoir_balloon_on_the_meridian() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("reservoir.toml");
+        let mesh = "generator = \"icosphere\"\nradius = 1.0\nfrequency = 3";
+        std::fs::write(&file, reservoir_text(mesh)).unwrap();
+        let o = memstab(&[
+            "compare",
+            file.to_str().unwrap(),
+            "--meshes",
+            "axisymmetric:elements=16,modes=4,icosphere",
+            "--json",
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let first = |mesh: usize| {
+            let c = &json["meshes"][mesh]["levels"][0]["critical"];
+            assert_eq!(c.as_array().unwrap().len(), 1, "{c}");
+            (c[0]["irrep"].clone(), c[0]["value"].as_f64().unwrap())
+        };
+        let ((m0, axi), (ag, ico)) = (first(0), first(1));
+        assert_eq!((m0.as_str(), ag.as_str()), (Some("m=0"), Some("Ag")));
+        let (exact, _) = reservoir_limit(1.94);
+        assert!((axi / exact - 1.0).abs() < 2e-6, "{axi} vs {exact}");
+        assert!(ico - axi > 0.01 && ico - axi < 0.05, "{ico} vs {axi}");
+    }
+
+    /// A held gas amount beside a fluid (whose volume the gas would share) is refused on the
+    /// meridian in one line naming the constraint's effect, exit 2, nothing written.
+    #[test]
+    fn a_gas_amount_beside_a_fluid_is_refused_in_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let mesh = "generator = \"axisymmetric\"\nshape = \"sphere\"\nelements = 8\nmodes = 2";
+        let text = reservoir_text(mesh).replacen(
+            "[parameters.p]",
+            "[[effect]]\ntype = \"fluid\"\ndensity = 0.1\ngravity = 1.0\nlevel = \"h\"\n\
+             side = \"inside\"\n\n[parameters.h]\nstart = -0.5\n\n[[constraint]]\n\
+             type = \"fluid-volume\"\neffect = 2\nvalue = 0.5\n\n[parameters.p]",
+            1,
+        );
+        let file = dir.path().join("s.toml");
+        std::fs::write(&file, text).unwrap();
+        let out = dir.path().join("out");
+        let o = memstab(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("constraint[1].effect = 1"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+
     #[test]
     fn effects_it_does_not_implement_are_refused_in_one_line() {
         let dir = tempfile::tempdir().unwrap();

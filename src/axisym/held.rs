@@ -20,7 +20,8 @@
 //!
 //! The fluid-volume constraint borders the block m = 0 with the volume's gradient
 //! ([`super::volume`]); its first variation vanishes for m ≥ 1 (∫ cos mθ dθ = 0), so it
-//! borders no other block.
+//! borders no other block. The gas-amount constraint borders it with the same column and the
+//! negative corner of [`super::gas`].
 
 use super::model::BlockLayout;
 use super::{shape, AxisymModel, GAUSS};
@@ -36,7 +37,8 @@ impl AxisymModel {
     /// Border columns of the block of wave number m.
     pub(super) fn border_count(&self, m: usize) -> usize {
         let held = usize::from(self.free_body() && m <= 1);
-        let volume = usize::from(m == 0 && self.volume_level.is_some());
+        let volume =
+            usize::from(m == 0 && (self.volume_level.is_some() || self.gas_amount.is_some()));
         held + volume
     }
 
@@ -63,7 +65,8 @@ impl AxisymModel {
 
     /// The border columns of the block of wave number m at the nodes `x`, on its kept
     /// unknowns (each of unit length).
-    pub(super) fn border_vectors(&self, m: usize, x: &[[f64; 2]]) -> Vec<Vec<f64>> {
+    /// Each with its length before it was made of unit length.
+    fn border_vectors(&self, m: usize, x: &[[f64; 2]]) -> Vec<(Vec<f64>, f64)> {
         let (map, cols) = self.kept_map(m);
         let from_full = |full: &dyn Fn(usize, usize) -> f64| {
             let mut b = vec![0.0; cols];
@@ -74,7 +77,7 @@ impl AxisymModel {
             }
             let norm = b.iter().map(|v| v * v).sum::<f64>().sqrt().max(1e-300);
             b.iter_mut().for_each(|v| *v /= norm);
-            b
+            (b, norm)
         };
         let mut out = Vec::new();
         if self.free_body() && m <= 1 {
@@ -91,7 +94,7 @@ impl AxisymModel {
                 })
             });
         }
-        if m == 0 && self.volume_level.is_some() {
+        if m == 0 && (self.volume_level.is_some() || self.gas_amount.is_some()) {
             let g = self.volume_gradient_nodes(x);
             out.push(from_full(&|i, c| match c {
                 0 => g[i][0],
@@ -104,18 +107,33 @@ impl AxisymModel {
 
     /// Writes the border of `layout` at the nodes `x` into the block values `v`, each column
     /// scaled to the block's largest entry.
-    pub(super) fn set_border(&self, layout: &BlockLayout, x: &[[f64; 2]], v: &mut [f64]) {
+    pub(super) fn set_border(
+        &self,
+        layout: &BlockLayout,
+        x: &[[f64; 2]],
+        params: &[f64],
+        v: &mut [f64],
+    ) {
         if layout.border == 0 {
             return;
         }
         let scale = v.iter().fold(0.0f64, |s, a| s.max(a.abs())).max(1e-300);
         let n = layout.kept;
-        for (j, b) in self.border_vectors(layout.m, x).iter().enumerate() {
+        let borders = self.border_vectors(layout.m, x);
+        for (j, (b, _)) in borders.iter().enumerate() {
             for (i, bi) in b.iter().enumerate() {
                 for (r, c) in [(i, n + j), (n + j, i)] {
                     let k = layout.pattern.position(r, c).expect("a border entry");
                     v[k] = scale * bi;
                 }
+            }
+        }
+        // The gas amount's column is the last of the block m = 0, with its corner.
+        if let (0, Some((_, norm))) = (layout.m, borders.last()) {
+            if self.gas_amount.is_some() {
+                let j = n + borders.len() - 1;
+                let k = layout.pattern.position(j, j).expect("a border corner");
+                v[k] = self.gas_corner(x, params, scale, *norm);
             }
         }
     }

@@ -200,6 +200,9 @@ pub struct AxisymModel {
     /// The parameter index of a fluid level governed by the fluid-volume constraint
     /// ([`super::volume`]): the block m = 0 is then bordered by the volume's gradient.
     pub volume_level: Option<usize>,
+    /// The gas whose amount the gas-amount constraint holds ([`super::gas`]): the block
+    /// m = 0 is then bordered by the volume's gradient with a negative corner.
+    pub gas_amount: Option<super::gas::GasAmountBorder>,
     /// The free unknowns: (node, component 0 = r, 1 = z).
     free: Vec<(usize, usize)>,
     /// Per node and component, the index of the unknown (None: held).
@@ -255,6 +258,7 @@ impl AxisymModel {
             pressures,
             planes: Vec::new(),
             volume_level: None,
+            gas_amount: None,
             free,
             index,
         }
@@ -691,7 +695,7 @@ impl AxisymModel {
                         v[k] += c * local.as_slice()[ij];
                     }
                 }
-                self.set_border(layout, &x, &mut v);
+                self.set_border(layout, &x, params, &mut v);
                 v
             })
             .collect();

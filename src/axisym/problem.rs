@@ -24,6 +24,9 @@ pub struct AxisymProblem {
     pub modes: usize,
     /// The fluid-volume constraint, when its level is free (the second free parameter).
     pub volume: Option<VolumeTarget>,
+    /// The gas-amount constraint, when its gas's pressure is free (the second free
+    /// parameter; never together with `volume`).
+    pub gas: Option<GasTarget>,
     pattern: Arc<SymmetricPattern>,
     /// Per element, (local i, local j, slot in the tangent's values).
     slots: Vec<Vec<(usize, usize, usize)>>,
@@ -43,6 +46,25 @@ pub struct VolumeTarget {
     pub target: f64,
     /// −ρ g (the row's scale, so that ∂g/∂q is the level's load).
     pub scale: f64,
+}
+
+/// The gas-amount constraint on the path (`super::gas`): the row
+/// g = (P_atm + p) V(q) − C* frees the gas's pressure parameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GasTarget {
+    /// The gas's pressure parameter and the ambient pressure.
+    pub gas: super::GasAmountBorder,
+    /// C* (when `target_parameter` is `None`).
+    pub target: f64,
+    /// The parameter that is C*, if any.
+    pub target_parameter: Option<usize>,
+}
+
+impl GasTarget {
+    /// C* at the parameters `params`.
+    pub fn amount(&self, params: &[f64]) -> f64 {
+        self.target_parameter.map_or(self.target, |j| params[j])
+    }
 }
 
 fn model_error(e: AxisymError) -> ModelError {
@@ -100,6 +122,7 @@ impl AxisymProblem {
             control,
             modes,
             volume: None,
+            gas: None,
             pattern: Arc::new(pattern),
             slots,
             solver: SharedFactorization::default(),
@@ -111,18 +134,25 @@ impl AxisymProblem {
     pub fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
         let mut p = self.params.clone();
         p[self.control] = lambda[0];
-        if let (Some(v), Some(h)) = (self.volume, lambda.get(1)) {
-            p[v.level] = *h;
+        if let (Some(k), Some(h)) = (self.second(), lambda.get(1)) {
+            p[k] = *h;
         }
         p
     }
 
+    /// The parameter a constraint frees: the fluid's level or the gas's pressure.
+    pub fn second(&self) -> Option<usize> {
+        self.volume
+            .map(|v| v.level)
+            .or(self.gas.map(|g| g.gas.pressure))
+    }
+
     /// The free parameters at every parameter's value `params` (the control, then the level
-    /// the volume constraint frees).
+    /// a constraint frees).
     pub fn free_values(&self, params: &[f64]) -> DVector<f64> {
         let mut l = vec![params[self.control]];
-        if let Some(v) = self.volume {
-            l.push(params[v.level]);
+        if let Some(k) = self.second() {
+            l.push(params[k]);
         }
         DVector::from_vec(l)
     }
@@ -134,7 +164,7 @@ impl Problem for AxisymProblem {
     }
 
     fn free_parameters(&self) -> usize {
-        1 + usize::from(self.volume.is_some())
+        1 + usize::from(self.second().is_some())
     }
 
     fn evaluate(
@@ -160,9 +190,11 @@ impl Problem for AxisymProblem {
         let free = self.free_parameters();
         let mut loads = DMatrix::zeros(n, free);
         loads.set_column(0, &e.loads.column(self.control));
-        let (constraints, constraint_q) = match self.volume {
-            Some(v) => {
+        let mut constraint_lambda = DMatrix::zeros(0, free);
+        let (constraints, constraint_q) = match (self.volume, self.gas) {
+            (Some(v), _) => {
                 loads.set_column(1, &e.loads.column(v.level));
+                constraint_lambda = DMatrix::zeros(1, free);
                 let x = self.model.positions(q.as_slice());
                 let dv = self.model.volume_gradient(q.as_slice());
                 (
@@ -170,7 +202,22 @@ impl Problem for AxisymProblem {
                     DMatrix::from_row_slice(1, n, &dv) * v.scale,
                 )
             }
-            None => (DVector::zeros(0), DMatrix::zeros(0, n)),
+            (None, Some(g)) => {
+                loads.set_column(1, &e.loads.column(g.gas.pressure));
+                let row =
+                    self.model
+                        .gas_amount_row(&g.gas, g.amount(&params), q.as_slice(), &params);
+                constraint_lambda = DMatrix::zeros(1, free);
+                constraint_lambda[(0, 1)] = row.grad_p;
+                if g.target_parameter == Some(self.control) {
+                    constraint_lambda[(0, 0)] = -1.0;
+                }
+                (
+                    DVector::from_element(1, row.value),
+                    DMatrix::from_row_slice(1, n, &row.grad_q),
+                )
+            }
+            (None, None) => (DVector::zeros(0), DMatrix::zeros(0, n)),
         };
         Ok(Linearization {
             residual: DVector::from_vec(e.gradient),
@@ -181,7 +228,7 @@ impl Problem for AxisymProblem {
                 solver: self.solver.clone(),
             },
             loads,
-            constraint_lambda: DMatrix::zeros(constraints.len(), free),
+            constraint_lambda,
             constraints,
             constraint_q,
         })

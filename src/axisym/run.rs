@@ -1,7 +1,8 @@
 //! A scene on an axisymmetric mesh (`[mesh] generator = "axisymmetric"`), made into the
 //! axisymmetric model and run: the same scene keys, effects and analyses as on a 3-D mesh, for
 //! the effects the meridian implements (gas at a given over-pressure, fluid wetting the
-//! membrane wholly or in part, fluid spinning about z, fixed edges); every other effect, constraint or key
+//! membrane wholly or in part, fluid spinning about z, fixed edges; the fluid-volume, gas-amount
+//! and fixed constraints); every other effect, constraint or key
 //! is refused in one line that names it. Stability is by wave number m = 0..=`mesh.modes`
 //! (docs/theory.md §15.3).
 
@@ -47,6 +48,8 @@ pub struct AxisymStudy {
     stress_free_volume: Option<f64>,
     /// The fluid-volume constraint: (fluid effect, level parameter, target).
     volume: Option<(usize, usize, scene::Target)>,
+    /// The gas-amount constraint (its target `f64::NAN` while "initial", set at the start).
+    gas: Option<super::GasTarget>,
 }
 
 fn unsupported(what: String) -> AxisymRunError {
@@ -146,12 +149,17 @@ impl AxisymStudy {
             meridian.sliding.1 = true;
         }
         let mut volume = None;
+        let mut gas = None;
         for (i, c) in scene.constraints.iter().enumerate() {
-            let scene::Constraint::FluidVolume(v) = c else {
-                return Err(unsupported(format!(
-                    "constraint[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements fluid-volume); use a 3-D mesh",
-                    c.kind()
-                )));
+            let v = match c {
+                scene::Constraint::FluidVolume(v) => v,
+                scene::Constraint::GasAmount(g) => {
+                    gas = Some(gas_amount_constraint(&scene, &parameters, i, g)?);
+                    continue;
+                }
+                // Every parameter but the control and the one a constraint frees stays at its
+                // start value.
+                scene::Constraint::Fixed(_) => continue,
             };
             match scene.effects.get(v.effect) {
                 Some(Effect::Fluid(f)) if f.side == scene::FluidSide::Inside => {}
@@ -256,6 +264,8 @@ impl AxisymStudy {
         let mut model = AxisymModel::new(meridian, pressures);
         model.planes = planes;
         model.volume_level = volume.as_ref().map(|v| v.1);
+        // A fluid volume needs a fluid, which the gas-amount constraint refuses: never both.
+        model.gas_amount = gas.as_ref().map(|g: &super::GasTarget| g.gas);
         let stress_free_volume = model
             .meridian
             .closed()
@@ -270,6 +280,7 @@ impl AxisymStudy {
             modes,
             stress_free_volume,
             volume,
+            gas,
         })
     }
 
@@ -351,6 +362,43 @@ impl AxisymStudy {
             Analysis::CriticalCurve(_) | Analysis::Surface(_) => PathOptions::default(),
         }
     }
+}
+
+/// The gas-amount constraint `constraint[i]` on the meridian: a gas effect whose pressure is
+/// a parameter other than the control, alone in the membrane (no fluid, whose volume the gas
+/// would share).
+fn gas_amount_constraint(
+    scene: &Scene,
+    parameters: &[String],
+    i: usize,
+    g: &scene::GasAmountConstraint,
+) -> Result<super::GasTarget, AxisymRunError> {
+    if let Some(k) = scene
+        .effects
+        .iter()
+        .position(|e| matches!(e, Effect::Fluid(_) | Effect::Spin(_)))
+    {
+        return Err(unsupported(format!(
+            "constraint[{i}].effect = {}: the axisymmetric model holds the amount of a gas alone in the membrane (effect[{k}] is a {}); use a 3-D mesh",
+            g.effect,
+            scene.effects[k].kind()
+        )));
+    }
+    let position = |n: &str| parameters.iter().position(|p| p == n);
+    let pressure = position(&g.pressure).expect("validated pressure");
+    let (target, target_parameter) = match &g.value {
+        scene::Target::Value(v) => (*v, None),
+        scene::Target::Initial => (f64::NAN, None),
+        scene::Target::Parameter(n) => (f64::NAN, Some(position(n).expect("validated amount"))),
+    };
+    Ok(super::GasTarget {
+        gas: super::GasAmountBorder {
+            pressure,
+            ambient: g.ambient_pressure,
+        },
+        target,
+        target_parameter,
+    })
 }
 
 fn shape_name(s: AxisymShape) -> &'static str {
@@ -511,6 +559,25 @@ pub fn run(
             lambda = l0;
         }
     }
+    // The gas-amount constraint: its amount measured at the start, given, or a parameter;
+    // the gas's pressure free from here on.
+    if let Some(g) = study.gas {
+        let mut g = g;
+        if g.target.is_nan() && g.target_parameter.is_none() {
+            g.target = study.model.gas_amount(&g.gas, q.as_slice(), &params);
+        }
+        problem.gas = Some(g);
+        let l0 = problem.free_values(&params);
+        let amount = study.model.gas_amount(&g.gas, q.as_slice(), &params);
+        if g.amount(&params) != amount {
+            let (q1, l1, it) =
+                crate::analysis::continuation::solve_at(&mut problem, &q, &l0, &start_opts)
+                    .map_err(describe)?;
+            (q, lambda, iterations) = (q1, l1, iterations + it);
+        } else {
+            lambda = l0;
+        }
+    }
     let (stop_stretch, stop_displacement) = match &study.scene.analysis {
         Analysis::Path(p) => (p.stop_stretch, p.stop_displacement),
         _ => (None, None),
@@ -568,7 +635,11 @@ pub fn run(
             path
         }
     };
-    let level = study.volume.as_ref().map(|v| v.1);
+    let level = study
+        .volume
+        .as_ref()
+        .map(|v| v.1)
+        .or(study.gas.map(|g| g.gas.pressure));
     let param_at = |l: &[f64]| {
         let mut p = params.clone();
         p[control] = l[0];
