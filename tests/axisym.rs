@@ -94,6 +94,7 @@ mod scenes {
     //! Axisymmetric scenes (`[mesh] generator = "axisymmetric"`) through the library run and
     //! the command line.
 
+    use crate::common::{reservoir_balloon, reservoir_limit, RESERVOIR_PATH};
     use memstab::analysis::critical::CriticalKind;
     use memstab::analysis::events::{Extremum, StopReason};
     use memstab::axisym::run::{run, AxisymReport, AxisymStudy};
@@ -285,78 +286,7 @@ mod scenes {
     /// constraint holds (P_atm = 0.1).
     /// `mesh` is the body of its `[mesh]` table.
     fn reservoir_text(mesh: &str) -> String {
-        format!(
-            r#"[scene]
-name = "reservoir-balloon-axisymmetric"
-
-[mesh]
-{mesh}
-
-[material]
-model = "mooney-rivlin"
-mu = 100.0
-k = 0.1
-thickness = 0.01
-
-[[effect]]
-type = "gas"
-pressure = "p"
-
-[[effect]]
-type = "gas"
-pressure = "q"
-
-[parameters.p]
-start = 0.19
-min = 0.0
-max = 3.0
-
-[parameters.q]
-start = 0.3
-
-[parameters.n]
-start = 1.94
-
-[[constraint]]
-type = "gas-amount"
-effect = 1
-value = "n"
-ambient-pressure = 0.1
-
-[[constraint]]
-type = "fixed"
-parameter = "n"
-
-[analysis]
-type = "path"
-control = "p"
-steps = 400
-max-step = 0.1
-stop-stretch = 2.6
-
-[start]
-stretch = 1.05
-"#
-        )
-    }
-
-    /// The reservoir balloon's limit pressure at amount n in closed form: the maximum over
-    /// the stretch λ > 1.2 of p_s(λ) − n/(V₀λ³) + P_atm (V₀ = 4π/3), by golden section.
-    fn reservoir_limit(n: f64) -> (f64, f64) {
-        let v0 = 4.0 * std::f64::consts::PI / 3.0;
-        let p = |l: f64| memstab::reference::sphere_pressure(0.1, l) - n / (v0 * l.powi(3)) + 0.1;
-        let (mut a, mut b) = (1.2f64, 3.0f64);
-        let g = (5f64.sqrt() - 1.0) / 2.0;
-        for _ in 0..200 {
-            let (c, d) = (b - g * (b - a), a + g * (b - a));
-            if p(c) > p(d) {
-                b = d;
-            } else {
-                a = c;
-            }
-        }
-        let l = 0.5 * (a + b);
-        (p(l), l)
+        reservoir_balloon("reservoir-balloon-axisymmetric", mesh, RESERVOIR_PATH)
     }
 
     /// The held gas amount on the meridian: along the whole path (P_atm + q) V = n, the

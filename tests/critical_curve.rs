@@ -1,7 +1,7 @@
 //! Critical curves: the balloon's limit point followed in (p, k) to its cusp against the closed
 //! form, the derivatives of the block test function, and the curve's outputs.
 
-use crate::common::{balloon_with_k, fold_k};
+use crate::common::{balloon_with_k, fold_k, reservoir_balloon, reservoir_limit, RESERVOIR_PATH};
 use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::curve::{BlockTest, DIFFERENCE_STEP};
 use memstab::analysis::run;
@@ -13,7 +13,7 @@ use memstab::study::Study;
 /// The sphere's pressure in closed form, p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²); its fold
 /// line is [`fold_k`].
 fn sphere_p(l: f64, k: f64) -> f64 {
-    2.0 / (1.0 + k) * (1.0 / l - l.powi(-7)) * (1.0 + k * l * l)
+    memstab::reference::sphere_pressure(k, l)
 }
 
 /// The cusp: the maximum of k(λ) on the fold line, by golden-section search.
@@ -652,53 +652,10 @@ fn a_curve_starts_from_a_finished_runs_critical_point() {
 /// limit point of the constrained path, whose bordered trivial block is singular there.
 /// `analysis` is the scene's `[analysis]` table and any constraint it needs.
 fn reservoir_balloon_text(frequency: usize, analysis: &str) -> String {
-    format!(
-        r#"[scene]
-name = "reservoir-balloon"
-
-[mesh]
-generator = "icosphere"
-radius = 1.0
-frequency = {frequency}
-
-[material]
-model = "mooney-rivlin"
-mu = 100.0
-k = 0.1
-thickness = 0.01
-
-[[effect]]
-type = "gas"
-pressure = "p"
-
-[[effect]]
-type = "gas"
-pressure = "q"
-
-[parameters.p]
-start = 0.19
-min = 0.0
-max = 3.0
-
-[parameters.q]
-start = 0.3
-
-[parameters.n]
-start = 1.94
-min = 0.5
-max = 3.0
-
-[[constraint]]
-type = "gas-amount"
-effect = 1
-value = "n"
-ambient-pressure = 0.1
-
-{analysis}
-
-[start]
-stretch = 1.05
-"#
+    reservoir_balloon(
+        "reservoir-balloon",
+        &format!("generator = \"icosphere\"\nradius = 1.0\nfrequency = {frequency}"),
+        analysis,
     )
 }
 
@@ -712,21 +669,9 @@ path-steps = 400
 max-step = 0.1
 "#;
 
-/// The reservoir balloon's limit pressure at amount n in closed form: the maximum over the
-/// stretch λ of p_s(λ) − n/(V₀λ³) + P after the sphere's own maximum (V₀ = 4π/3).
+/// The reservoir balloon's limit pressure at amount n in closed form.
 fn reservoir_limit_p(n: f64) -> f64 {
-    let p = |l: f64| sphere_p(l, 0.1) - n / (4.0 * std::f64::consts::PI / 3.0 * l.powi(3)) + 0.1;
-    let (mut a, mut b) = (1.2f64, 3.0f64);
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    for _ in 0..200 {
-        let (c, d) = (b - g * (b - a), a + g * (b - a));
-        if p(c) > p(d) {
-            b = d;
-        } else {
-            a = c;
-        }
-    }
-    p(0.5 * (a + b))
+    reservoir_limit(n).0
 }
 
 /// The test function bordered by the gas-amount constraint: its derivatives in q and in every
@@ -766,10 +711,7 @@ fn constrained_limit_curve_agrees_with_paths_at_fixed_amounts_and_the_closed_for
     }
     for r in curve.rows.iter().skip(1).take(3) {
         let amount = r.parameters[n];
-        let path = "[[constraint]]\ntype = \"fixed\"\nparameter = \"n\"\n\n[analysis]\n\
-                    type = \"path\"\ncontrol = \"p\"\nsteps = 400\nmax-step = 0.1\n\
-                    stop-stretch = 2.6\n";
-        let text = reservoir_balloon_text(3, path).replacen(
+        let text = reservoir_balloon_text(3, RESERVOIR_PATH).replacen(
             "start = 1.94",
             &format!("start = {amount:.17e}"),
             1,

@@ -489,6 +489,23 @@ pub struct AxisymReport {
     pub block_time: Duration,
 }
 
+/// The start with a constraint just added to `problem`: solved again when the state `q`
+/// does not meet it (`unmet`), else `q` with the free values as they are (no iteration).
+fn meet(
+    problem: &mut AxisymProblem,
+    q: &DVector<f64>,
+    params: &[f64],
+    unmet: bool,
+    opts: &PathOptions,
+) -> Result<(DVector<f64>, DVector<f64>, usize), SolveError> {
+    let l0 = problem.free_values(params);
+    if unmet {
+        crate::analysis::continuation::solve_at(problem, q, &l0, opts)
+    } else {
+        Ok((q.clone(), l0, 0))
+    }
+}
+
 /// Runs an axisymmetric study's analysis; `progress(point, control)` at every converged point
 /// (the start is point 0, as in [`crate::analysis::run`]).
 pub fn run(
@@ -549,15 +566,9 @@ pub fn run(
             target,
             scale: if scale == 0.0 { -1.0 } else { scale },
         });
-        let l0 = problem.free_values(&params);
-        if target != v0 {
-            let (q1, l1, it) =
-                crate::analysis::continuation::solve_at(&mut problem, &q, &l0, &start_opts)
-                    .map_err(describe)?;
-            (q, lambda, iterations) = (q1, l1, iterations + it);
-        } else {
-            lambda = l0;
-        }
+        let (q1, l1, it) =
+            meet(&mut problem, &q, &params, target != v0, &start_opts).map_err(describe)?;
+        (q, lambda, iterations) = (q1, l1, iterations + it);
     }
     // The gas-amount constraint: its amount measured at the start, given, or a parameter;
     // the gas's pressure free from here on.
@@ -567,16 +578,9 @@ pub fn run(
             g.target = study.model.gas_amount(&g.gas, q.as_slice(), &params);
         }
         problem.gas = Some(g);
-        let l0 = problem.free_values(&params);
-        let amount = study.model.gas_amount(&g.gas, q.as_slice(), &params);
-        if g.amount(&params) != amount {
-            let (q1, l1, it) =
-                crate::analysis::continuation::solve_at(&mut problem, &q, &l0, &start_opts)
-                    .map_err(describe)?;
-            (q, lambda, iterations) = (q1, l1, iterations + it);
-        } else {
-            lambda = l0;
-        }
+        let unmet = g.amount(&params) != study.model.gas_amount(&g.gas, q.as_slice(), &params);
+        let (q1, l1, it) = meet(&mut problem, &q, &params, unmet, &start_opts).map_err(describe)?;
+        (q, lambda, iterations) = (q1, l1, iterations + it);
     }
     let (stop_stretch, stop_displacement) = match &study.scene.analysis {
         Analysis::Path(p) => (p.stop_stretch, p.stop_displacement),

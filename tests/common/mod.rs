@@ -84,3 +84,84 @@ pub fn balloon_with_k(frequency: usize, middle: &str) -> String {
     assert!(text.contains("k = \"k\""), "{text}");
     text
 }
+
+/// A balloon under a pressure p (effect 0) that also holds a reservoir of gas (effect 1) at
+/// the over-pressure q, its amount (P + q)V the parameter n held by a `gas-amount`
+/// constraint (P = 0.1); `mesh` is the body of its `[mesh]` table, `analysis` its
+/// `[analysis]` table and any constraint that needs.
+#[allow(dead_code)]
+pub fn reservoir_balloon(name: &str, mesh: &str, analysis: &str) -> String {
+    format!(
+        r#"[scene]
+name = "{name}"
+
+[mesh]
+{mesh}
+
+[material]
+model = "mooney-rivlin"
+mu = 100.0
+k = 0.1
+thickness = 0.01
+
+[[effect]]
+type = "gas"
+pressure = "p"
+
+[[effect]]
+type = "gas"
+pressure = "q"
+
+[parameters.p]
+start = 0.19
+min = 0.0
+max = 3.0
+
+[parameters.q]
+start = 0.3
+
+[parameters.n]
+start = 1.94
+min = 0.5
+max = 3.0
+
+[[constraint]]
+type = "gas-amount"
+effect = 1
+value = "n"
+ambient-pressure = 0.1
+
+{analysis}
+
+[start]
+stretch = 1.05
+"#
+    )
+}
+
+/// The reservoir balloon's path in p at its amount n held.
+#[allow(dead_code)]
+pub const RESERVOIR_PATH: &str = "[[constraint]]\ntype = \"fixed\"\nparameter = \"n\"\n\n\
+                                  [analysis]\ntype = \"path\"\ncontrol = \"p\"\nsteps = 400\n\
+                                  max-step = 0.1\nstop-stretch = 2.6\n";
+
+/// The reservoir balloon's limit point at amount n in closed form, (p, λ): the maximum over
+/// the stretch λ ∈ [1.2, 3] (after the sphere's own maximum) of p_s(λ) − n/(V₀λ³) + P
+/// (V₀ = 4π/3, p_s the k = 0.1 sphere's pressure), by golden section.
+#[allow(dead_code)]
+pub fn reservoir_limit(n: f64) -> (f64, f64) {
+    let v0 = 4.0 * std::f64::consts::PI / 3.0;
+    let p = |l: f64| memstab::reference::sphere_pressure(0.1, l) - n / (v0 * l.powi(3)) + 0.1;
+    let (mut a, mut b) = (1.2f64, 3.0f64);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..200 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if p(c) > p(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let l = 0.5 * (a + b);
+    (p(l), l)
+}
