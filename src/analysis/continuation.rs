@@ -145,6 +145,35 @@ pub enum Tangent {
 }
 
 impl Tangent {
+    /// K W, the whole tangent (sparse part and rank-one terms) times the columns of `w`.
+    pub fn times(&self, w: &DMatrix<f64>) -> DMatrix<f64> {
+        match self {
+            Tangent::Dense(k) => k * w,
+            Tangent::Sparse {
+                pattern,
+                values,
+                rank_one,
+                ..
+            } => {
+                let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+                let mut kw = DMatrix::zeros(w.nrows(), w.ncols());
+                for j in 0..w.nrows() {
+                    for p in cp[j]..cp[j + 1] {
+                        let i = ri[p];
+                        for c in 0..w.ncols() {
+                            kw[(i, c)] += values[p] * w[(j, c)];
+                        }
+                    }
+                }
+                for (c, a) in rank_one {
+                    let aw = w.transpose() * a;
+                    kw += a * (aw.transpose() * *c);
+                }
+                kw
+            }
+        }
+    }
+
     /// max |K_ij| (of the sparse part and of each rank-one term).
     pub fn amax(&self) -> f64 {
         match self {

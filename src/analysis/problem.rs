@@ -226,36 +226,16 @@ impl<'a> SymmetricProblem<'a> {
             row.copy_from(&v.transpose());
         }
         let s = lin.tangent.amax().max(1e-300);
+        let kw = lin.tangent.times(w);
         match &mut lin.tangent {
             Tangent::Dense(k) => {
-                let kw = &*k * w;
                 let wkw = w.transpose() * &kw;
                 let mut pkp = &*k - w * kw.transpose() - &kw * w.transpose()
                     + w * (wkw + DMatrix::identity(w.ncols(), w.ncols()) * s) * w.transpose();
                 pkp = (&pkp + pkp.transpose()) * 0.5;
                 *k = pkp;
             }
-            Tangent::Sparse {
-                pattern,
-                values,
-                rank_one,
-                ..
-            } => {
-                // K W of the whole tangent, sparse part and rank-one terms.
-                let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
-                let mut kw = DMatrix::zeros(w.nrows(), w.ncols());
-                for j in 0..w.nrows() {
-                    for p in cp[j]..cp[j + 1] {
-                        let i = ri[p];
-                        for c in 0..w.ncols() {
-                            kw[(i, c)] += values[p] * w[(j, c)];
-                        }
-                    }
-                }
-                for (c, a) in rank_one.iter() {
-                    let aw = w.transpose() * a;
-                    kw += a * (aw.transpose() * *c);
-                }
+            Tangent::Sparse { rank_one, .. } => {
                 // The old rank-one terms projected, then − W (KW)ᵀ − (KW) Wᵀ + W M Wᵀ with
                 // M = Wᵀ K W + s I, written as Z C Zᵀ (Z = [W, KW]) and C diagonalised.
                 for (_, a) in rank_one.iter_mut() {
