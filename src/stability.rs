@@ -817,7 +817,7 @@ impl<'a> Stability<'a> {
                     .fold(0.0, f64::max),
             )
             .max(1e-300);
-        let x = model.positions(u);
+        let x = model.positions(u, params);
         // Unit rigid fields: their projections onto a block are of order one or round-off.
         // ‖t + ω × x_i‖ over the free nodes: the norm of each rigid field, without building it.
         let rigid_norms: Vec<f64> = self

@@ -224,6 +224,25 @@ impl Study {
             .mesh_radius
             .as_ref()
             .map(|q| (quantity(q), scene.start_value(q)));
+        // A plate closing the rim off the origin's plane would have to move with the radius.
+        let encloses = scene.effects.iter().any(|e| match e {
+            scene::Effect::Gas(_) | scene::Effect::GasAmount(_) | scene::Effect::Fluid(_) => true,
+            scene::Effect::Spin(_) | scene::Effect::Plane(_) => false,
+        });
+        if let (Some(c), Some((Quantity::Parameter(_), _)), true) = (&closing, &radius, encloses) {
+            if c.z.abs() > 1e-12 * m.size().max(1e-300) {
+                return Err(StudyError::Unsupported(format!(
+                    "mesh.radius = \"{}\": the plate closing the rim at z = {} would move with \
+                     the radius; give a number, or a rim in the plane z = 0",
+                    scene
+                        .mesh_radius
+                        .as_ref()
+                        .and_then(|q| q.parameter())
+                        .unwrap_or_default(),
+                    c.z
+                )));
+            }
+        }
         let membrane = match radius {
             Some((r, r0)) => membrane.with_reference_radius(r, r0),
             None => membrane,
@@ -391,6 +410,13 @@ impl Study {
             parameters.clone(),
         )
         .with_sliding(&sliding);
+        // Held nodes scale with the reference radius (docs/theory.md §2.8).
+        let model = match radius {
+            Some((Quantity::Parameter(p), r0)) if !fixed.is_empty() || !sliding.is_empty() => {
+                model.with_scaled_holding(p, r0)
+            }
+            _ => model,
+        };
         let basis = SparseBasis::fixed_point(&action, model.layout());
         if let Some(d) = scene.start.hold_translation {
             // The held translation must be a symmetric displacement.
@@ -439,7 +465,7 @@ impl Study {
     /// The measures at displacement `u` and parameters `params`, in the order of
     /// [`Study::measures`].
     pub fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64> {
-        let x = self.model.positions(u);
+        let x = self.model.positions(u, params);
         let tris = self.model.layout().triangles();
         // The reference is the mesh scaled by R/R0 when the radius is a parameter.
         let scale = self
@@ -492,7 +518,7 @@ impl Study {
 
     /// Sets the targets of constraints declared `"initial"` from the state (u, params).
     pub fn set_targets(&mut self, u: &[f64], params: &[f64]) {
-        let x = self.model.positions(u);
+        let x = self.model.positions(u, params);
         for (c, &initial) in self.constraints.iter_mut().zip(&self.targets_from_start) {
             if initial {
                 c.set_target(c.measure(self.model.layout(), &x, params));

@@ -98,7 +98,7 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let mut eval = model.new_evaluation();
     model.evaluate(&u, &[], Request::ALL, &mut eval).unwrap();
     // Rigid motions restricted from the orbit representatives equal the explicit restriction.
-    let x = model.positions(&u);
+    let x = model.positions(&u, &[]);
     for k in 0..6 {
         let mut motion = [0.0; 6];
         motion[k] = 1.0;

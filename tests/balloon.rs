@@ -58,7 +58,7 @@ fn balloon(frequency: usize, k: f64, to_stretch: f64) -> Extrema {
     assert!(basis.dim() > 0 && basis.dim() < model.layout().unknowns() / 20);
     let v0 = m.volume();
     let stretch_of = |problem: &SymmetricProblem, q: &DVector<f64>| -> f64 {
-        let x = model.positions(&problem.displacement(q));
+        let x = model.positions(&problem.displacement(q), &[0.0]);
         let v: f64 = m
             .triangles
             .iter()

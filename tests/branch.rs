@@ -152,7 +152,9 @@ fn abstract_hg_potential_has_the_d5d_and_d3d_branches_in_closed_form() {
             b.points.len()
         );
         let state = |k: usize| {
-            let x = problem.model.positions(&b.points[k].u);
+            let x = problem
+                .model
+                .positions(&b.points[k].u, &b.points[k].parameters);
             problem.potential.project(&problem.potential.radial(&x))
         };
         let first = state(1);

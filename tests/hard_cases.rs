@@ -140,7 +140,7 @@ fn last_positions(study: &Study, result: &RunResult) -> Vec<Vec3> {
         .iter()
         .find(|s| s.label() == label)
         .expect("the last point is saved");
-    study.model.positions(&state.u)
+    study.model.positions(&state.u, &state.params)
 }
 
 /// Runs `memstab run SCENE --out DIR --quiet --json`; checks the exit code (0, or 1 with a
@@ -586,7 +586,7 @@ fn waterline_through_node_rings_of_a_clamped_cap_is_finite_and_symmetric() {
         horizontal_displacement(&model, 0.04, 0.01),
     ] {
         for &h in &heights {
-            let on_level = model.positions(&u).iter().filter(|x| x.z == h).count();
+            let on_level = model.positions(&u, &[]).iter().filter(|x| x.z == h).count();
             assert!(on_level >= 1);
             let scale = max_abs(&evaluate_finite(&model, &u, &[0.25]).loads[0]);
             let e = check_at_level(&model, &u, h, scale);
@@ -1037,7 +1037,7 @@ fn collapsed_element_is_a_clean_model_error() {
     for c in 0..3 {
         u[model.layout().dof(centre, c).unwrap()] = x[other][c];
     }
-    assert_eq!(model.positions(&u)[centre], x[other]);
+    assert_eq!(model.positions(&u, &[])[centre], x[other]);
     let mut e = model.new_evaluation();
     let err = model
         .evaluate(&u, &[0.3], Request::ALL, &mut e)

@@ -1,10 +1,12 @@
 //! The reference radius of a generated mesh as a parameter (`[mesh] radius = "R"`): the
 //! balloon's limit curve in (p, R) against the closed form p R/(μH) = const, a path in R
-//! against the mesh generated at that radius, and the values refused.
+//! against the mesh generated at that radius, held (fixed and sliding) boundaries that scale
+//! with R and their loads against differences, and the values refused.
 
 use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
-use memstab::model::Model;
+use memstab::model::check::check_derivatives;
+use memstab::model::{Model, Request};
 use memstab::scene::Scene;
 use memstab::study::Study;
 
@@ -155,7 +157,7 @@ stretch = 1.1
     let names = &result.report.measures;
     let at = |name: &str| names.iter().position(|m| m == name).unwrap();
     let stretch = row.measures[at("stretch")];
-    let x = study.model.positions(&last.u);
+    let x = study.model.positions(&last.u, &last.params);
     // The same balloon generated at that radius, found by its own start solve.
     let fixed = balloon(
         &format!("{radius:?}"),
@@ -165,7 +167,8 @@ stretch = 1.1
     );
     let mut other = Study::build(scene(&fixed)).unwrap();
     let alone = run(&mut other, |_, _| {}).expect("the equilibrium solves");
-    let y = other.model.positions(&alone.states.last().unwrap().u);
+    let last_alone = alone.states.last().unwrap();
+    let y = other.model.positions(&last_alone.u, &last_alone.params);
     let gap = x
         .iter()
         .zip(&y)
@@ -191,8 +194,9 @@ fn memstab(args: &[&str]) -> std::process::Output {
         .expect("the memstab binary runs")
 }
 
-/// A radius parameter that starts or may go at or below 0, on a membrane with fixed nodes, or
-/// of the axisymmetric generator: exit code 2, one line naming the key, nothing written.
+/// A radius parameter that starts or may go at or below 0, on a membrane closed by a plate
+/// off the plane z = 0 (which would have to move with it), or of the axisymmetric generator:
+/// exit code 2, one line naming the key, nothing written.
 #[test]
 fn bad_radius_parameters_are_refused_without_writing() {
     let tmp = tempfile::tempdir().unwrap();
@@ -202,13 +206,6 @@ fn bad_radius_parameters_are_refused_without_writing() {
             "[parameters.p]\nstart = 0.4879036\n\n[parameters.R]\n{r}\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"R\"\n\n[analysis]\ntype = \"path\"\ncontrol = \"p\"\nsteps = 3\n"
         )
     };
-    let disc = std::fs::read_to_string(format!(
-        "{}/scenes/disc_upward.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap()
-    .replacen("radius = 1.1", "radius = \"R\"", 1)
-        + "\n[parameters.R]\nstart = 1.1\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"R\"\n";
     let axisym = std::fs::read_to_string(format!(
         "{}/scenes/axisymmetric/balloon.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -230,7 +227,16 @@ fn bad_radius_parameters_are_refused_without_writing() {
             balloon("\"R\"", &path_tail("start = 1.0\nmin = 0.0")),
             vec!["parameters.R.min", "mesh.radius"],
         ),
-        ("fixed.toml", disc, vec!["mesh.radius", "rim"]),
+        (
+            "plate.toml",
+            held_scene(
+                false,
+                0.3,
+                "[[effect]]\ntype = \"gas\"\npressure = \"p\"\n\n[parameters.p]\nstart = \
+                 0.5\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"p\"\n",
+            ),
+            vec!["mesh.radius", "plate", "z = 0"],
+        ),
         (
             "axisym.toml",
             axisym.replacen(&axisym_radius, "radius = \"R\"", 1),
@@ -257,5 +263,190 @@ fn bad_radius_parameters_are_refused_without_writing() {
             assert!(err.contains(needle), "{name}: '{needle}' not in: {err}");
         }
         assert!(!dir.exists(), "{name}: {} was created", dir.display());
+    }
+}
+
+/// A clamped disc (`membrane` = its effects and constraints) or a truncated sphere cut at
+/// z = `cut` whose edge slides on planes z = const, with the reference radius the parameter R
+/// (start 1.1) as the path's control.
+fn held_scene(disc: bool, cut: f64, effects: &str) -> String {
+    let mesh = if disc {
+        "generator = \"disc\"\nradius = \"R\"\nsectors = 7\ndivisions = 3".to_string()
+    } else {
+        format!(
+            "generator = \"truncated-sphere\"\nradius = \"R\"\ncut-height = {cut:?}\npattern = \
+             \"C8v\"\ndivisions = 3"
+        )
+    };
+    let boundary = if disc {
+        "[boundary]\nfixed = [\"rim\"]\n"
+    } else {
+        "[boundary]\n\n[[boundary.slide]]\nset = \"cut\"\nnormal = [0.0, 0.0, 1.0]\n"
+    };
+    format!(
+        "[scene]\nname = \"held\"\n\n[mesh]\n{mesh}\n\n[material]\nmodel = \
+         \"mooney-rivlin\"\nmu = 100.0\nk = 0.1\nthickness = 0.01\nprestretch = 1.1\n\n\
+         {effects}\n{boundary}\n[parameters.R]\nstart = 1.1\nmin = 0.5\nmax = 2.0\n\n\
+         [analysis]\ntype = \"path\"\ncontrol = \"R\"\nsteps = 3\n"
+    )
+}
+
+/// Deterministic pseudo-random numbers in [−1, 1].
+fn noise(seed: u64, n: usize) -> Vec<f64> {
+    let mut s = seed.wrapping_mul(6364136223846793005) | 1;
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        })
+        .collect()
+}
+
+/// Held boundaries with a radius parameter, on a clamped disc (gas below, a pond above; or a
+/// fixed amount of gas, whose tangent has a rank-one term) and on truncated spheres whose cut
+/// edge slides on the floor (a fluid with its volume held and spin; a gas with its amount
+/// held): at R ≠ R0 a fixed node sits at (R/R0) X̂ and a sliding one in the plane through
+/// (R/R0) X̂; ∂F/∂R — whose part from the moving held coordinates is K_{u,held} ∂x/∂R — and
+/// every constraint's ∂g/∂R agree with central differences in R, at states off equilibrium
+/// and with every other derivative checked too.
+#[test]
+fn held_boundaries_scale_with_the_radius_and_their_loads_are_derivatives() {
+    let gas_pond = "[[effect]]\ntype = \"gas\"\npressure = \"p\"\n\n[[effect]]\ntype = \
+                    \"fluid\"\nside = \"above\"\ndensity = 0.5\ngravity = 1.0\nlevel = 0.05\n\n\
+                    [parameters.p]\nstart = 0.4\n\n[[constraint]]\ntype = \"gas-amount\"\n\
+                    value = \"initial\"\nambient-pressure = 1.0\n";
+    let amount = "[[effect]]\ntype = \"gas-amount\"\namount = 2.5\nambient-pressure = 1.0\n";
+    let squeeze = "[[effect]]\ntype = \"plane\"\nnormal = [-1.0, 0.0, 0.0]\noffset = -0.9\n\
+                   penalty = 1000.0\nexponent = 3\n\n[[effect]]\ntype = \"spin\"\ndensity = \
+                   0.2\nomega2 = \"w2\"\n\n[parameters.w2]\nstart = 5.0\n\n[[constraint]]\ntype = \"fixed\"\n\
+                   parameter = \"w2\"\n";
+    let spinning = "[[effect]]\ntype = \"fluid\"\nside = \"inside\"\nfilled = true\ndensity = \
+                    0.2\ngravity = 1.0\nlevel = \"h\"\n\n[[effect]]\ntype = \"spin\"\ndensity \
+                    = 0.2\nomega2 = \"w2\"\n\n[parameters.h]\nstart = 3.0\n\n[parameters.w2]\n\
+                    start = 5.0\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"w2\"\n\n\
+                    [[constraint]]\ntype = \"fluid-volume\"\nvalue = \"initial\"\n";
+    // (scene, whether its held nodes move with R: not those in the plane z = 0).
+    let cases = [
+        (
+            "clamped disc, gas and pond",
+            held_scene(true, 0.0, gas_pond),
+            true,
+        ),
+        (
+            "clamped disc, gas amount",
+            held_scene(true, 0.0, amount),
+            true,
+        ),
+        (
+            "cap sliding on z = -0.3",
+            held_scene(false, -0.3, squeeze),
+            true,
+        ),
+        (
+            "cap sliding on z = 0, fluid",
+            held_scene(false, 0.0, spinning),
+            false,
+        ),
+    ];
+    for (k, (file, text, moves)) in cases.into_iter().enumerate() {
+        let r0 = 1.1;
+        let mut study = Study::build(scene(&text)).unwrap();
+        let r = study.parameters.iter().position(|p| p == "R").unwrap();
+        let mut params: Vec<f64> = study.start.clone();
+        params[r] = 1.15 * r0;
+        let n = study.model.unknowns();
+        let scale = 0.05 * r0;
+        let mut u: Vec<f64> = noise(k as u64 + 1, n).iter().map(|v| scale * v).collect();
+        // A bulge of the flat disc, so that the gas under it has a volume.
+        if file.contains("disc") {
+            for (i, xh) in study.model.reference().iter().enumerate() {
+                if let Some(dz) = study.model.layout().dof(i, 2) {
+                    u[dz] += 0.3 * r0 * (1.0 - (xh.x * xh.x + xh.y * xh.y) / (r0 * r0));
+                }
+            }
+        }
+        let d = noise(k as u64 + 77, n);
+        // Targets "initial" from the unloaded start, so that g is not of the state itself.
+        study.set_targets(&vec![0.0; n], &study.start.clone());
+        let model = &study.model;
+        // Where the held nodes are.
+        let x = model.positions(&u, &params);
+        let layout = model.layout();
+        let (mut fixed, mut sliding, mut worst) = (0, 0, 0.0f64);
+        for (i, xi) in x.iter().enumerate() {
+            let xh = model.reference()[i];
+            if layout.dof(i, 0).is_none() {
+                fixed += 1;
+                worst = worst.max((xi - xh * 1.15).norm());
+            } else if let Some(nn) = layout.slide_normal(i) {
+                sliding += 1;
+                let normal_part = nn.dot(&(xi - xh * 1.15));
+                let u_normal = (0..3)
+                    .map(|c| nn[c] * u[layout.dof(i, c).unwrap()])
+                    .sum::<f64>();
+                worst = worst.max((normal_part - u_normal).abs());
+            }
+        }
+        assert!(fixed + sliding > 0, "{file}: no held node");
+        let at_start = model.positions(&u, &study.start);
+        let moved = x.iter().zip(&at_start).filter(|(a, b)| a != b).count();
+        assert_eq!(moved > 0, moves, "{file}: {moved} nodes moved with R");
+        assert!(
+            worst < 1e-14,
+            "{file}: held nodes off (R/R0) X̂ by {worst:e}"
+        );
+        let e = check_derivatives(model, &u, &params, &d, 1e-6).unwrap();
+        eprintln!("{file} ({fixed} fixed, {sliding} sliding): {e:?}");
+        assert!(e.residual < 1e-7, "{file}: {e:?}");
+        assert!(e.tangent < 1e-6, "{file}: {e:?}");
+        assert!(e.loads < 1e-7, "{file}: {e:?}");
+        // The load of R is not only the membrane's own: the held coordinates' part is there.
+        let mut eval = model.new_evaluation();
+        model
+            .evaluate(&u, &params, Request::ALL, &mut eval)
+            .unwrap();
+        let load_norm = eval.loads[r].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(load_norm > 0.0, "{file}: no load in R");
+        // Every constraint's derivatives in R and along d.
+        for c in &study.constraints {
+            let at = |p: &[f64], u: &[f64]| c.evaluate(layout, &model.positions(u, p), p);
+            let v = at(&params, &u);
+            let h = 1e-6 * r0;
+            let (mut pp, mut pm) = (params.clone(), params.clone());
+            pp[r] += h;
+            pm[r] -= h;
+            let fd_r = (at(&pp, &u).value - at(&pm, &u).value) / (2.0 * h);
+            let shifted =
+                |s: f64| -> Vec<f64> { u.iter().zip(&d).map(|(a, b)| a + s * b).collect() };
+            let fd_u =
+                (at(&params, &shifted(1e-6)).value - at(&params, &shifted(-1e-6)).value) / 2e-6;
+            let exact_u: f64 = v.grad_u.iter().zip(&d).map(|(g, di)| g * di).sum();
+            let size = v
+                .grad_u
+                .iter()
+                .map(|g| g.abs())
+                .sum::<f64>()
+                .max(v.value.abs());
+            eprintln!(
+                "  {}: dg/dR {} vs differences {fd_r}; along d {exact_u} vs {fd_u}",
+                c.name(),
+                v.grad_params[r]
+            );
+            assert_eq!(
+                fd_r.abs() > 1e-3 * size,
+                moves,
+                "{file}: {}: dg/dR",
+                c.name()
+            );
+            assert!(
+                (v.grad_params[r] - fd_r).abs() < 1e-7 * size,
+                "{file}: {} dg/dR {} vs {fd_r}",
+                c.name(),
+                v.grad_params[r]
+            );
+            assert!((exact_u - fd_u).abs() < 1e-7 * size, "{file}: {}", c.name());
+        }
     }
 }

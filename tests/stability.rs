@@ -74,7 +74,7 @@ fn states(sym: &SymmetricMesh, model: &FeModel, to_stretch: f64) -> Vec<(Vec<f64
     let mut problem = SymmetricProblem::new(model, &basis, &[], vec![0.0], Some(0));
     let probe = SymmetricProblem::new(model, &basis, &[], vec![0.0], Some(0));
     let stretch = |q: &DVector<f64>| {
-        let x = model.positions(&probe.displacement(q));
+        let x = model.positions(&probe.displacement(q), &[]);
         let v: f64 = sym
             .mesh
             .triangles
@@ -205,7 +205,7 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
     );
 
     let ambient = 1.0;
-    let x = model.positions(&u);
+    let x = model.positions(&u, &[p]);
     let mut amount = GasAmountConstraint {
         pressure: 0,
         ambient,
@@ -250,7 +250,7 @@ fn constrained_index_matches_a_dense_computation_and_the_gas_amount_effect() {
         let a = DVector::from_column_slice(a);
         k += &a * a.transpose() * *cc;
     }
-    let rigid = closed.rigid_modes(&closed.rigid_motions(), &closed.positions(&u));
+    let rigid = closed.rigid_modes(&closed.rigid_motions(), &closed.positions(&u, &[]));
     let r = DMatrix::from_columns(
         &rigid
             .iter()
@@ -297,7 +297,7 @@ fn sparse_block_inertia_agrees_with_dense_eigenvalues_along_the_path() {
     let mut seen = std::collections::BTreeSet::new();
     let ambient = 1.0;
     for (u, p, s) in states(&sym, &model, 3.6) {
-        let x = model.positions(&u);
+        let x = model.positions(&u, &[p]);
         let mut amount = GasAmountConstraint {
             pressure: 0,
             ambient,
@@ -422,7 +422,7 @@ fn lanczos_block_eigenvalues_agree_with_dense_along_the_path() {
     let ambient = 1.0;
     let mut seen = std::collections::BTreeSet::new();
     for (u, p, s) in states(&sym, &model, 3.6) {
-        let x = model.positions(&u);
+        let x = model.positions(&u, &[p]);
         let mut amount = GasAmountConstraint {
             pressure: 0,
             ambient,

@@ -576,7 +576,7 @@ fn a_sliding_edge_moves_in_its_plane_only_and_settles_at_a_right_angle() {
     assert_eq!(s.action.group().name(), "C8v");
     let result = run(&mut s, |_, _| {}).expect("the equilibrium converges");
     let u = &result.states[0].u;
-    let x = s.model.positions(u);
+    let x = s.model.positions(u, &result.states[0].params);
     let rim = &s.mesh.mesh.boundaries["cut"];
     for &i in rim {
         assert_eq!(x[i].z, -0.5, "node {i} left the floor");

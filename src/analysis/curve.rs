@@ -167,7 +167,7 @@ impl<'a> BlockTest<'a> {
         }
         self.model
             .evaluate(u, params, Request::ALL, &mut self.eval)?;
-        let x = self.model.positions(u);
+        let x = self.model.positions(u, params);
         let layout = self.model.layout();
         self.scales = self
             .constraints
@@ -217,7 +217,7 @@ impl<'a> BlockTest<'a> {
             return k;
         }
         let (m, c) = (k.nrows(), self.constraints.len());
-        let x = self.model.positions(u);
+        let x = self.model.positions(u, params);
         let (ls, gs, cc) = self.constraint_rows(&self.eval, &x, params);
         let mut j = DMatrix::zeros(m + c, m + c);
         j.view_mut((0, 0), (m, m)).copy_from(&k);
@@ -347,14 +347,14 @@ impl<'a> BlockTest<'a> {
         let (mut grad_q, mut grad_params) =
             self.mixed_third_derivatives(u, params, &al, &a, epsl)?;
         let layout = self.model.layout();
-        let x = self.model.positions(u);
+        let x = self.model.positions(u, params);
         let v = phi.rows(0, m).into_owned();
         let vl = psi.rows(0, m).into_owned();
         // aᵀ ∇g_k along ±ε a: Hess g_k a.
         let shifted = |s: f64| -> Vec<f64> { u.iter().zip(&a).map(|(x, d)| x + s * d).collect() };
         let (xp, xm) = (
-            self.model.positions(&shifted(eps)),
-            self.model.positions(&shifted(-eps)),
+            self.model.positions(&shifted(eps), params),
+            self.model.positions(&shifted(-eps), params),
         );
         for (k, con) in self.constraints.iter().enumerate() {
             let gp = con.evaluate(layout, &xp, params).grad_u;
@@ -886,7 +886,7 @@ fn follow_curve(
         .expect("the critical point's irrep is one of the basis");
     let ib = &adapted.irreps[mu];
     let block = ib.first();
-    let x = study.model.positions(&cp.state);
+    let x = study.model.positions(&cp.state, &cp.parameters);
     let rigid = study
         .model
         .rigid_motions()

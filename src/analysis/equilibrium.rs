@@ -106,7 +106,7 @@ fn solve_start_with(
             return Err(RunError::InsideOut { volume });
         }
     }
-    if let Some(defect) = study.model.state_defect(&u) {
+    if let Some(defect) = study.model.state_defect(&u, &params) {
         return Err(RunError::Degenerate(defect));
     }
     study.set_targets(&u, &params);

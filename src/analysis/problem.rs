@@ -416,7 +416,7 @@ impl Problem for SymmetricProblem<'_> {
         let mut constraint_q = DMatrix::zeros(c, m);
         let mut constraint_lambda = DMatrix::zeros(c, nf);
         if c > 0 {
-            let x = self.model.positions(&self.u);
+            let x = self.model.positions(&self.u, &self.params);
             for (k, con) in self.constraints.iter().enumerate() {
                 let v = con.evaluate(self.model.layout(), &x, &self.params);
                 constraints[k] = v.value;
@@ -443,12 +443,9 @@ impl Problem for SymmetricProblem<'_> {
         Ok(lin)
     }
 
-    fn defect(
-        &self,
-        q: &DVector<f64>,
-        _lambda: &DVector<f64>,
-    ) -> Option<crate::model::StateDefect> {
-        self.model.state_defect(&self.displacement(q))
+    fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<crate::model::StateDefect> {
+        self.model
+            .state_defect(&self.displacement(q), &self.parameters(lambda))
     }
 }
 

@@ -179,7 +179,9 @@ pub fn closed_form_error(problem: &IhProblem, graph: &BranchGraph) -> f64 {
     let mut worst: f64 = 0.0;
     for b in &graph.branches {
         let z = |k: usize| {
-            let x = problem.model.positions(&b.points[k].u);
+            let x = problem
+                .model
+                .positions(&b.points[k].u, &b.points[k].parameters);
             problem.potential.project(&problem.potential.radial(&x))
         };
         if b.points.len() < 2 {

@@ -239,11 +239,11 @@ impl Constraint for GasAmountConstraint {
         let pa = params[self.pressure] + self.ambient;
         let v = self.gas_volume(layout, x, params);
         let closing = self.closing.as_deref();
-        let grad_u = gather(layout, x, |t, xt| {
+        let mut grad_params = vec![0.0; params.len()];
+        let grad_u = gather(layout, x, &mut grad_params, |t, xt| {
             enclosed(closing, t, xt).grad.map(|g| pa * g)
         });
-        let mut grad_params = vec![0.0; params.len()];
-        grad_params[self.pressure] = v;
+        grad_params[self.pressure] += v;
         if let Some(j) = self.fluid.and_then(|f| f.parameter()) {
             grad_params[j] -= pa;
         }

@@ -548,7 +548,8 @@ impl Constraint for FluidVolumeConstraint {
             d_dh += s * dv;
             plate_height = if filled { c.z } else { c.z.min(h) };
         }
-        let grad_u = gather(layout, x, |t, xt| {
+        let mut grad_params = vec![0.0; params.len()];
+        let grad_u = gather(layout, x, &mut grad_params, |t, xt| {
             let mut g = fluid_volume_of(xt, h, filled).grad;
             if let Some(c) = face.filter(|c| c.touches(t)) {
                 for (gi, ai) in g.iter_mut().zip(c.area_local(t, xt).grad) {
@@ -557,8 +558,7 @@ impl Constraint for FluidVolumeConstraint {
             }
             g.map(|gi| s * gi)
         });
-        let mut grad_params = vec![0.0; params.len()];
-        grad_params[self.level] = d_dh;
+        grad_params[self.level] += d_dh;
         let target = match self.target_parameter {
             Some(j) => {
                 grad_params[j] -= 1.0;

@@ -27,6 +27,22 @@ pub struct Layout {
     node_slots: Vec<[u32; 9]>,
     /// For every node that slides in a plane, the plane's unit normal (docs/theory.md §6.2).
     slide: Vec<Option<Vec3>>,
+    /// Held coordinates that move with a parameter ([`Layout::with_held_motion`]).
+    held: Option<HeldMotion>,
+}
+
+/// Held coordinates that move with a parameter Λ_p: node i sits at X_i + (Λ_p − Λ_p⁰) r_i,
+/// where r_i = ∂x_i/∂Λ_p is non-zero only in held directions (all three of a fixed node, the
+/// normal of a sliding one). The residual's load ∂F/∂Λ_p then has the implicit part
+/// K_{u,x} r, the tangent's coupling of the unknowns to the moving coordinates
+/// (docs/theory.md §2.8), which the assembler adds from every local Hessian.
+#[derive(Debug, Clone)]
+struct HeldMotion {
+    parameter: usize,
+    start: f64,
+    rates: Vec<Vec3>,
+    /// For every triangle, whether one of its nodes moves.
+    moving: Vec<bool>,
 }
 
 impl Layout {
@@ -92,7 +108,74 @@ impl Layout {
             tri_slots,
             node_slots,
             slide: vec![None; nodes],
+            held: None,
         }
+    }
+
+    /// Moves held coordinates with the parameter `parameter`: node i at X_i + (Λ_p − `start`)
+    /// `rates[i]`. A rate must lie in the node's held directions: zero for a free node, along
+    /// the normal for a sliding one, anything for a fixed one (checked; panics otherwise, a
+    /// programming error). Call after [`Layout::with_sliding`].
+    pub fn with_held_motion(mut self, parameter: usize, start: f64, rates: Vec<Vec3>) -> Self {
+        assert_eq!(rates.len(), self.nodes(), "one rate per node");
+        for (i, r) in rates.iter().enumerate() {
+            let held = match (self.dof_of[i][0] == NONE, self.slide[i]) {
+                (true, _) => true,
+                (false, Some(n)) => (r - n * n.dot(r)).norm() <= 1e-12 * r.norm(),
+                (false, None) => *r == Vec3::zeros(),
+            };
+            assert!(held, "node {i} moves in a direction it is not held in");
+        }
+        let moving = self
+            .triangles
+            .iter()
+            .map(|t| t.iter().any(|&i| rates[i] != Vec3::zeros()))
+            .collect();
+        self.held = Some(HeldMotion {
+            parameter,
+            start,
+            rates,
+            moving,
+        });
+        self
+    }
+
+    /// The parameter the held coordinates move with, if any.
+    pub fn held_parameter(&self) -> Option<usize> {
+        self.held.as_ref().map(|h| h.parameter)
+    }
+
+    /// Moves the held coordinates of the positions `x` to where the parameters `params`
+    /// put them (nothing without a held motion).
+    pub fn add_held_motion(&self, params: &[f64], x: &mut [Vec3]) {
+        if let Some(h) = &self.held {
+            let d = params[h.parameter] - h.start;
+            for (xi, r) in x.iter_mut().zip(&h.rates) {
+                *xi += r * d;
+            }
+        }
+    }
+
+    /// Σ_i g_i · r_i over every node, unknown or held, for a gradient `g(t, x_t)` given per
+    /// triangle: the rate of the quantity along the held motion (0 without one).
+    pub fn along_held_motion(
+        &self,
+        x: &[Vec3],
+        grad: impl Fn(usize, &[Vec3; 3]) -> [f64; 9],
+    ) -> f64 {
+        let Some(h) = &self.held else {
+            return 0.0;
+        };
+        let mut rate = 0.0;
+        for (t, &[a, b, c]) in self.triangles.iter().enumerate() {
+            if h.moving[t] {
+                let g = grad(t, &[x[a], x[b], x[c]]);
+                for (k, node) in [a, b, c].into_iter().enumerate() {
+                    rate += (0..3).map(|c| g[3 * k + c] * h.rates[node][c]).sum::<f64>();
+                }
+            }
+        }
+        rate
     }
 
     /// Lets each `(node, normal)` slide in the plane through its reference position with that
@@ -430,6 +513,17 @@ impl<'a> Assembler<'a> {
                     }
                 }
             }
+            // The implicit load of moving held coordinates: Σ_b H_ab r_b.
+            if let Some(h) = self.layout.held.as_ref().filter(|h| want_l && h.moving[t]) {
+                let r: [f64; 9] = std::array::from_fn(|b| h.rates[tris[t][b / 3]][b % 3]);
+                for (a, &d) in dofs.iter().enumerate() {
+                    if d != NONE {
+                        let row = &terms.local.hess[a];
+                        out.loads[h.parameter][d as usize] +=
+                            row.iter().zip(&r).map(|(k, r)| k * r).sum::<f64>();
+                    }
+                }
+            }
         }
         Ok(())
     }
@@ -484,13 +578,21 @@ impl<'a> Assembler<'a> {
                     out.tangent[slot as usize] += terms.hess[k / 3][k % 3];
                 }
             }
+            // The implicit load of a moving held coordinate of this (sliding) node.
+            if let Some(h) = self.layout.held.as_ref().filter(|_| want_l) {
+                let r = h.rates[i];
+                for (k, &d) in dofs.iter().enumerate() {
+                    out.loads[h.parameter][d as usize] +=
+                        (0..3).map(|l| terms.hess[k][l] * r[l]).sum::<f64>();
+                }
+            }
         }
         Ok(())
     }
 
     /// Assembles Σ_t (per-triangle gradient) into a vector over the unknowns, for global
     /// potentials φ(Q(u)) whose tangent has the rank-one part φ''(Q) ∇Q ∇Qᵀ.
-    pub fn gradient_vector<F>(&self, x: &[Vec3], kernel: F) -> Vec<f64>
+    pub fn gradient_vector<F>(&self, x: &[Vec3], kernel: F) -> GlobalGradient
     where
         F: Fn(usize, &[Vec3; 3]) -> [f64; 9],
     {
@@ -503,24 +605,34 @@ impl<'a> Assembler<'a> {
                 }
             }
         }
-        v
+        GlobalGradient {
+            along_held: self.layout.along_held_motion(x, kernel),
+            unknowns: v,
+        }
     }
 
-    /// A vector over the unknowns from one 3-vector per node (fixed nodes dropped): the
-    /// gradient of a global potential that depends on each node's position, for its
-    /// rank-one tangent terms.
-    pub fn node_vector(&self, mut value: impl FnMut(usize) -> [f64; 3]) -> Vec<f64> {
+    /// The gradient of a global potential that depends on each node's position, from one
+    /// 3-vector per node, for its rank-one tangent terms (fixed nodes count only in the rate
+    /// along the held motion).
+    pub fn node_vector(&self, mut value: impl FnMut(usize) -> [f64; 3]) -> GlobalGradient {
         let mut v = vec![0.0; self.layout.unknowns];
+        let mut along_held = 0.0;
         for (i, dofs) in self.layout.dof_of.iter().enumerate() {
+            let x = value(i);
+            if let Some(h) = &self.layout.held {
+                along_held += (0..3).map(|k| x[k] * h.rates[i][k]).sum::<f64>();
+            }
             if dofs[0] == NONE {
                 continue;
             }
-            let x = value(i);
             for (k, &d) in dofs.iter().enumerate() {
                 v[d as usize] = x[k];
             }
         }
-        v
+        GlobalGradient {
+            unknowns: v,
+            along_held,
+        }
     }
 
     /// Adds a constant to Π (the value of a global potential).
@@ -528,10 +640,27 @@ impl<'a> Assembler<'a> {
         self.out.energy += value;
     }
 
-    /// Adds the rank-one term c a aᵀ to the tangent (only when the tangent is requested).
-    pub fn add_rank_one(&mut self, c: f64, a: Vec<f64>) {
+    /// Adds the rank-one term c a aᵀ to the tangent (only when the tangent is requested),
+    /// and with a held motion its implicit load c a (a · r).
+    pub fn add_rank_one(&mut self, c: f64, a: GlobalGradient) {
+        if let Some(p) = self.layout.held_parameter().filter(|_| self.request.loads) {
+            let w = c * a.along_held;
+            for (l, ai) in self.out.loads[p].iter_mut().zip(&a.unknowns) {
+                *l += w * ai;
+            }
+        }
         if self.request.tangent {
-            self.out.rank_one.push((c, a));
+            self.out.rank_one.push((c, a.unknowns));
         }
     }
+}
+
+/// The gradient ∇Q of a global quantity over the unknowns, and its rate along the layout's
+/// held motion, Σ_i ∇_i Q · r_i over every node (fixed ones included; 0 without one).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GlobalGradient {
+    /// ∂Q/∂u.
+    pub unknowns: Vec<f64>,
+    /// dQ/dΛ_p through the held coordinates alone.
+    pub along_held: f64,
 }

@@ -34,10 +34,13 @@ pub trait Constraint: Send + Sync {
     fn evaluate(&self, layout: &Layout, x: &[Vec3], params: &[f64]) -> ConstraintValue;
 }
 
-/// Scatters per-triangle gradients `grad(t, x_t)` into a vector over the unknowns.
+/// Scatters per-triangle gradients `grad(t, x_t)` into a vector over the unknowns, and adds
+/// the quantity's rate along the layout's held motion to `grad_params` at its parameter
+/// (docs/theory.md §2.8): held coordinates that move with Λ_p move g with them.
 pub fn gather(
     layout: &Layout,
     x: &[Vec3],
+    grad_params: &mut [f64],
     grad: impl Fn(usize, &[Vec3; 3]) -> [f64; 9],
 ) -> Vec<f64> {
     let mut v = vec![0.0; layout.unknowns()];
@@ -50,6 +53,9 @@ pub fn gather(
                 }
             }
         }
+    }
+    if let Some(p) = layout.held_parameter() {
+        grad_params[p] += layout.along_held_motion(x, grad);
     }
     v
 }

@@ -12,7 +12,9 @@ pub mod constraint;
 mod local;
 pub mod validity;
 
-pub use assembly::{Assembler, Evaluation, Layout, NodeTerms, Request, Subset, TriangleTerms};
+pub use assembly::{
+    Assembler, Evaluation, GlobalGradient, Layout, NodeTerms, Request, Subset, TriangleTerms,
+};
 pub use local::Local;
 pub use validity::StateDefect;
 
@@ -343,10 +345,12 @@ pub trait Model: Sync {
     fn pattern(&self) -> &SymmetricPattern {
         self.layout().pattern()
     }
-    /// Current node positions x = X + u (fixed nodes at X).
-    fn positions(&self, u: &[f64]) -> Vec<Vec3> {
+    /// Current node positions x = X + u at the parameters `params` (fixed nodes at X, or
+    /// where a held motion moves them: [`Layout::with_held_motion`]).
+    fn positions(&self, u: &[f64], params: &[f64]) -> Vec<Vec3> {
         let mut x = self.reference().to_vec();
         self.layout().add_displacements(u, &mut x);
+        self.layout().add_held_motion(params, &mut x);
         x
     }
     /// Evaluates what `request` asks for at (u, Λ) into `out` (buffers are reused).
@@ -361,11 +365,11 @@ pub trait Model: Sync {
     fn new_evaluation(&self) -> Evaluation;
     /// Why the displacement `u` is not a membrane state (collapsed, torn, inside out or not
     /// finite; [`validity`]), or `None`.
-    fn state_defect(&self, u: &[f64]) -> Option<StateDefect> {
+    fn state_defect(&self, u: &[f64], params: &[f64]) -> Option<StateDefect> {
         validity::state_defect(
             self.reference(),
             self.layout().triangles(),
-            &self.positions(u),
+            &self.positions(u, params),
         )
     }
 }
@@ -382,7 +386,7 @@ impl FeModel {
     /// Every effect's per-triangle fields at (u, Λ), in effect order (a quantity that two
     /// effects show, such as two fluids' pressures, is summed).
     pub fn cell_fields(&self, u: &[f64], params: &[f64]) -> Vec<CellField> {
-        let x = self.positions(u);
+        let x = self.positions(u, params);
         let mut fields: Vec<CellField> = Vec::new();
         for f in self
             .effects
@@ -404,7 +408,7 @@ impl FeModel {
     /// Every effect's per-node fields at (u, Λ), in effect order (a quantity that several
     /// effects show, such as gas and fluid pressure, is summed).
     pub fn node_fields(&self, u: &[f64], params: &[f64]) -> Vec<NodeField> {
-        let x = self.positions(u);
+        let x = self.positions(u, params);
         let mut fields: Vec<NodeField> = Vec::new();
         for f in self
             .effects
@@ -445,6 +449,25 @@ impl FeModel {
     /// given normals ([`Layout::with_sliding`]).
     pub fn with_sliding(mut self, sliding: &[(usize, Vec3)]) -> Self {
         self.layout = self.layout.with_sliding(sliding);
+        self
+    }
+
+    /// Moves the held coordinates with the reference radius R = Λ_`parameter`, the mesh
+    /// having been built at R0 = `built_at`: a fixed node to (R/R0) X_i, a sliding one to the
+    /// plane through (R/R0) X_i with its normal (docs/theory.md §2.8). Call after
+    /// [`FeModel::with_sliding`].
+    pub fn with_scaled_holding(mut self, parameter: usize, built_at: f64) -> Self {
+        let rates = (0..self.reference.len())
+            .map(|i| {
+                let x = self.reference[i] / built_at;
+                match (self.layout.dof(i, 0), self.layout.slide_normal(i)) {
+                    (None, _) => x,
+                    (Some(_), Some(n)) => n * n.dot(&x),
+                    (Some(_), None) => Vec3::zeros(),
+                }
+            })
+            .collect();
+        self.layout = self.layout.with_held_motion(parameter, built_at, rates);
         self
     }
 
@@ -639,11 +662,17 @@ impl Model for FeModel {
     ) -> Result<(), ModelError> {
         assert_eq!(u.len(), self.unknowns(), "state length");
         assert_eq!(params.len(), self.parameters.len(), "parameter count");
+        // The implicit load of a held motion comes from the local Hessians.
+        let request = Request {
+            tangent: request.tangent || (request.loads && self.layout.held_parameter().is_some()),
+            ..request
+        };
         out.reset(request);
         let mut x = std::mem::take(&mut out.positions);
         x.clear();
         x.extend_from_slice(&self.reference);
         self.layout.add_displacements(u, &mut x);
+        self.layout.add_held_motion(params, &mut x);
         let result = (|| {
             for effect in &self.effects {
                 let mut asm = Assembler::new(&self.layout, out, request, effect.name());

@@ -156,20 +156,16 @@ pub fn write_run(
     let mut states: Vec<PathBuf> = Vec::new();
     let (mut turning, mut critical) = (0usize, 0usize);
     for s in &result.states {
-        let positions = study.model.positions(&s.u);
+        let positions = study.model.positions(&s.u, &s.params);
         let label = s.label();
         let fields = state_fields(study, s);
         let saved = match (&s.kind, &s.mode) {
             (StateKind::Step, _) => writer.save(s.step, s.control, &positions, fields),
             (StateKind::Critical { .. }, Some(mode)) => {
                 critical += 1;
-                let field: Vec<[f64; 3]> = study
-                    .model
-                    .positions(mode)
-                    .iter()
-                    .zip(study.model.reference())
-                    .map(|(x, x0)| (x - x0).into())
-                    .collect();
+                let mut moved = vec![crate::model::Vec3::zeros(); study.model.reference().len()];
+                study.model.layout().add_displacements(mode, &mut moved);
+                let field: Vec<[f64; 3]> = moved.iter().map(|&v| v.into()).collect();
                 writer.save_as(
                     &format!("critical_{critical:02}"),
                     &label,
@@ -317,7 +313,7 @@ pub fn write_run(
 /// accepted state) is written as 0 rather than as NaN.
 pub fn state_fields(study: &Study, s: &crate::report::State) -> Fields {
     let finite = |v: &f64| if v.is_finite() { *v } else { 0.0 };
-    let x = study.model.positions(&s.u);
+    let x = study.model.positions(&s.u, &s.params);
     let normals = node_normals(&x, &study.mesh.mesh.triangles);
     let fields = study
         .model

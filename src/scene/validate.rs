@@ -429,26 +429,13 @@ fn held_sets(scene: &Scene) -> Vec<&str> {
         .collect()
 }
 
-/// `[mesh] radius = "R"`: a declared parameter, on a membrane no node of which is held at its
-/// reference position (the model scales the reference, not the held positions).
+/// `[mesh] radius = "R"`: a declared parameter with positive values (held nodes scale with
+/// it, docs/theory.md §2.8).
 fn check_mesh_radius(scene: &Scene) -> Result<(), Problem> {
-    let Some(q) = &scene.mesh_radius else {
-        return Ok(());
-    };
-    check_quantity("mesh.radius", q, Range::Positive, &scene.parameters)?;
-    let held = held_sets(scene);
-    if !held.is_empty() {
-        return Err(Problem::at(
-            "mesh.radius",
-            format!(
-                "= \"{}\": a parameter radius needs a membrane without fixed or sliding nodes \
-                 (the boundary holds {}); give a number",
-                q.parameter().unwrap_or_default(),
-                held.join(", ")
-            ),
-        ));
+    match &scene.mesh_radius {
+        Some(q) => check_quantity("mesh.radius", q, Range::Positive, &scene.parameters),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
