@@ -450,3 +450,77 @@ fn held_boundaries_scale_with_the_radius_and_their_loads_are_derivatives() {
         }
     }
 }
+
+/// A clamped disc under gas whose reference radius is `radius` (a number or "R"), with the
+/// parameters, constraints and analysis `tail`.
+fn clamped_disc(radius: &str, tail: &str) -> String {
+    format!(
+        "[scene]\nname = \"clamped-disc\"\n\n[mesh]\ngenerator = \"disc\"\nradius = {radius}\n\
+         sectors = 7\ndivisions = 4\n\n[material]\nmodel = \"mooney-rivlin\"\nmu = 100.0\nk = \
+         0.0\nthickness = 0.01\nprestretch = 1.05\n\n[[effect]]\ntype = \"gas\"\npressure = \
+         \"p\"\n\n[boundary]\nfixed = [\"rim\"]\n\n{tail}"
+    )
+}
+
+/// The clamped disc under gas: its rim held at (R/R0) X̂, the disc scaled to R is the disc
+/// generated at R, so by the balloon's scaling argument (docs/theory.md §2.8) its limit
+/// pressure times R is one constant along the limit point followed in (p, R). And a path in R
+/// at a fixed pressure ends where the disc generated at that radius is in equilibrium.
+#[test]
+fn a_clamped_discs_limit_pressure_scales_as_one_over_the_radius() {
+    let curve_tail = "[parameters.p]\nstart = 0.0\nmin = 0.0\nmax = 10.0\n\n[parameters.R]\n\
+                      start = 1.0\nmin = 0.6\nmax = 1.8\n\n[analysis]\ntype = \
+                      \"critical-curve\"\ncontrol = \"p\"\nsecond = \"R\"\nfrom = \"limit\"\n\
+                      steps = 60\npath-steps = 300\nmax-step = 0.1\n";
+    let mut study = Study::build(scene(&clamped_disc("\"R\"", curve_tail))).unwrap();
+    let result = run(&mut study, |_, _| {}).expect("the curve runs");
+    let curve = result.curve.expect("a curve");
+    assert_eq!(curve.kind, CriticalKind::LimitPoint);
+    let col = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
+    let (p, r) = (col("p"), col("R"));
+    let pr0 = curve.rows[0].parameters[p] * curve.rows[0].parameters[r];
+    let (mut lo, mut hi, mut spread) = (f64::MAX, 0.0f64, 0.0f64);
+    for row in &curve.rows {
+        let radius = row.parameters[r];
+        lo = lo.min(radius);
+        hi = hi.max(radius);
+        spread = spread.max((row.parameters[p] * radius / pr0 - 1.0).abs());
+    }
+    eprintln!(
+        "{} points, R in [{lo}, {hi}], p R = {pr0}: spread {spread:e}",
+        curve.rows.len()
+    );
+    assert!(
+        curve.rows.len() > 5 && hi / lo > 1.5,
+        "R covers [{lo}, {hi}]"
+    );
+    assert!(spread < 1e-9, "p R varies by {spread:e}");
+
+    let path_tail = "[parameters.p]\nstart = 1.0\n\n[parameters.R]\nstart = 1.0\nmin = 0.5\n\
+                     max = 1.3\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"p\"\n\n\
+                     [analysis]\ntype = \"path\"\ncontrol = \"R\"\ndirection = \"increase\"\n\
+                     steps = 60\nmax-step = 0.05\n";
+    let mut study = Study::build(scene(&clamped_disc("\"R\"", path_tail))).unwrap();
+    let result = run(&mut study, |_, _| {}).expect("the path runs");
+    let last = result.states.last().expect("the last state");
+    let radius = last.params[study.parameters.iter().position(|p| p == "R").unwrap()];
+    assert!(radius > 1.25, "the path ends at R = {radius}");
+    let x = study.model.positions(&last.u, &last.params);
+    let fixed = clamped_disc(
+        &format!("{radius:?}"),
+        "[parameters.p]\nstart = 1.0\n\n[analysis]\ntype = \"equilibrium\"\n",
+    );
+    let mut other = Study::build(scene(&fixed)).unwrap();
+    let alone = run(&mut other, |_, _| {}).expect("the equilibrium solves");
+    let own = alone.states.last().unwrap();
+    let y = other.model.positions(&own.u, &own.params);
+    let gap = x
+        .iter()
+        .zip(&y)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    let rise = y.iter().map(|v| v.z).fold(0.0, f64::max);
+    eprintln!("R = {radius}: positions within {gap:e} (the centre rises {rise})");
+    assert!(rise > 0.1 * radius, "the disc barely inflates: {rise}");
+    assert!(gap < 1e-10 * radius, "positions differ by {gap:e}");
+}
