@@ -411,3 +411,106 @@ fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_
     assert_eq!(limit_lines.len(), 2);
     assert!(limit_lines.iter().all(|l| l.points.len() == 7));
 }
+
+/// The disc's limit point followed in its radius R (`scenes/thesis/paper1_disc_limit_curve_radius.toml`,
+/// 1 792 triangles, its rim held at the scaled positions): the level rises steadily as R
+/// falls from 1.1 to 0.5. At a point of the curve near R = 0.75 its level h16 is within its
+/// own O(h²) distance of the meridian's limit level at that radius (`generator =
+/// "axisymmetric"`, the scene's physics with the radius a number): the distance estimated from
+/// the same disc at 8 divisions, e(16) ≈ |h16 − h8|/3, the check allowing twice that and asking
+/// the Richardson value to be far nearer the meridian's than h16 is.
+#[test]
+fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
+    use memstab::axisym::run::{run as run_axisym, AxisymStudy};
+    let mut study = Study::build(bundled("thesis/paper1_disc_limit_curve_radius.toml")).unwrap();
+    let curve = run(&mut study, |_, _| {})
+        .expect("the curve runs")
+        .curve
+        .unwrap();
+    assert_eq!(curve.kind, CriticalKind::LimitPoint);
+    assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
+    let index = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
+    let (h, r) = (index("h"), index("R"));
+    for w in curve.rows.windows(2) {
+        assert!(
+            w[1].parameters[r] < w[0].parameters[r],
+            "R turns back: {:?}",
+            w[1]
+        );
+        assert!(
+            w[1].parameters[h] > w[0].parameters[h],
+            "h falls: {:?}",
+            w[1]
+        );
+    }
+    let last = curve.rows.last().unwrap();
+    assert!(
+        last.parameters[r] <= 0.5,
+        "the curve stops at R = {}",
+        last.parameters[r]
+    );
+    let row = curve
+        .rows
+        .iter()
+        .min_by(|a, b| {
+            (a.parameters[r] - 0.75)
+                .abs()
+                .total_cmp(&(b.parameters[r] - 0.75).abs())
+        })
+        .unwrap();
+    let (radius, h16) = (row.parameters[r], row.parameters[h]);
+    // The same disc at that radius (a number), 8 divisions: a path in h to its fold.
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let below = std::fs::read_to_string(format!("{dir}/scenes/disc_fluid_below.toml")).unwrap();
+    assert!(below.contains("\nradius = 1.1") && below.contains("\ndivisions = 16"));
+    let coarse = below
+        .replacen("\nradius = 1.1", &format!("\nradius = {radius:?}"), 1)
+        .replacen("\ndivisions = 16", "\ndivisions = 8", 1);
+    assert!(coarse.contains(&format!("\nradius = {radius:?}")));
+    let mut path = Study::build(Scene::from_toml_str(&coarse, "coarse").unwrap()).unwrap();
+    let report = run(&mut path, |_, _| {}).expect("the path runs").report;
+    let hp = report.parameters.iter().position(|p| p == "h").unwrap();
+    let h8 = report
+        .turning_points
+        .first()
+        .expect("the path folds")
+        .parameters[hp];
+    // The meridian at that radius.
+    let axi = std::fs::read_to_string(format!("{dir}/scenes/axisymmetric/disc_upward.toml"))
+        .unwrap()
+        .replacen("\nradius = 1.1\n", &format!("\nradius = {radius:?}\n"), 1)
+        .replacen("\nk = 0.1\n", "\nk = 0.0\n", 1)
+        .replacen("\nmax = 4.9\n", "\nmax = 8.0\n", 1);
+    assert!(axi.contains("\nk = 0.0\n") && axi.contains("\nmax = 8.0\n"));
+    assert!(axi.contains(&format!("\nradius = {radius:?}\n")));
+    let meridian = run_axisym(
+        &AxisymStudy::build(Scene::from_toml_str(&axi, "meridian").unwrap()).unwrap(),
+        |_, _| {},
+    )
+    .unwrap();
+    let ha = meridian
+        .critical
+        .iter()
+        .find(|c| c.m == 0)
+        .unwrap_or_else(|| {
+            panic!(
+                "no m = 0 limit point: {:?} {:?}",
+                meridian.stop, meridian.critical
+            )
+        })
+        .parameters[0];
+    let distance = (h16 - h8).abs() / 3.0;
+    let richardson = h16 + (h16 - h8) / 3.0;
+    eprintln!(
+        "R = {radius}: h8 = {h8}, h16 = {h16}, Richardson {richardson}; meridian {ha}; \
+         |h16 - meridian| = {:.2e}, O(h^2) distance {distance:.2e}",
+        (h16 - ha).abs()
+    );
+    assert!((h16 - ha).abs() <= 2.0 * distance, "{h16} vs {ha}");
+    assert!((richardson - ha).abs() < (h16 - ha).abs());
+    // Measured: the Richardson value within 4e-5 of the meridian's, 0.4 % of the distance.
+    assert!(
+        (richardson - ha).abs() < 0.05 * distance,
+        "{richardson} vs {ha}"
+    );
+}
