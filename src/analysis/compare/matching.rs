@@ -158,6 +158,9 @@ pub struct Verdict {
     pub kind: VerdictKind,
     /// Fewer images than the rung's multiplicity were found in range.
     pub missing: Option<Missing>,
+    /// The images lie on the other side of a turn of the path than the rung
+    /// (the matching's second pass).
+    pub across_turn: bool,
 }
 
 /// The measurement of a rung's images.
@@ -216,10 +219,14 @@ impl std::fmt::Display for Verdict {
             VerdictKind::Split => f.write_str("split")?,
         }
         match self.missing {
-            Some(Missing::Partner) => f.write_str("; partner not found in range"),
-            Some(Missing::Image) => f.write_str("; an image not found in range"),
-            None => Ok(()),
+            Some(Missing::Partner) => f.write_str("; partner not found in range")?,
+            Some(Missing::Image) => f.write_str("; an image not found in range")?,
+            None => {}
         }
+        if self.across_turn {
+            f.write_str("; met on the other side of the path's turn")?;
+        }
+        Ok(())
     }
 }
 
@@ -303,7 +310,11 @@ fn measure(
         multiplicity,
         gap,
         split,
-        verdict: Verdict { kind, missing },
+        verdict: Verdict {
+            kind,
+            missing,
+            across_turn: false,
+        },
         distances: Vec::new(),
     }
 }
@@ -345,6 +356,9 @@ pub struct Rung {
     /// two resolutions.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub orders: Vec<DistanceOrder>,
+    /// Whether the reference meets the rung as the control rises.
+    #[serde(skip)]
+    rising: bool,
 }
 
 /// The observed order of a rung's distance from the continuum between two resolutions of one
@@ -404,6 +418,7 @@ pub(super) fn match_rungs(meshes: &[MeshRuns], floor: f64) -> (Vec<Rung>, Vec<Un
             out.push(rung(meshes, &mut used, source, group, floor));
         }
     }
+    across_turns(meshes, &mut used, &mut out, floor);
     let mut unmatched = Vec::new();
     for (k, mesh) in meshes.iter().enumerate() {
         for (l, level) in mesh.levels.iter().enumerate() {
@@ -467,17 +482,10 @@ fn rung(
                 level.resolution,
             ));
         }
-        let order = match levels.as_slice() {
-            [a, b] => match (a.split, b.split, a.gap, b.gap) {
-                (Some(true), Some(true), Some(ga), Some(gb)) => Some((ga / gb).log2()),
-                _ => None,
-            },
-            _ => None,
-        };
         all.push(MeshImages {
             mesh: mesh.label.clone(),
+            order: gap_order(&levels),
             levels,
-            order,
         });
     }
     Rung {
@@ -490,6 +498,104 @@ fn rung(
         images: all,
         continuum: None,
         orders: Vec::new(),
+        rising: first.rising,
+    }
+}
+
+/// log2(gap_coarse / gap_fine) when both resolutions split the rung.
+fn gap_order(levels: &[Image]) -> Option<f64> {
+    match levels {
+        [a, b] => match (a.split, b.split, a.gap, b.gap) {
+            (Some(true), Some(true), Some(ga), Some(gb)) => Some((ga / gb).log2()),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The second pass over the rungs of wave number m that are not folds, for every run in which
+/// the first found no image: a bifurcation that the reference meets just after a turn of the
+/// path may come just before it on a mesh, when the mesh's error at that fold, e = |F_mesh −
+/// F_ref|, exceeds the point's distance from the fold. So a rung within e of a reference fold
+/// F_ref takes as its images the points no rung took with its m on the other piece of the path,
+/// nearest in value, provided they lie within e of the mesh's image F_mesh of that fold; they
+/// are marked `across_turn`. Folds keep to their piece, and unlabelled modes (an icosphere's)
+/// get no second pass.
+fn across_turns(meshes: &[MeshRuns], used: &mut [Vec<Vec<bool>>], rungs: &mut [Rung], floor: f64) {
+    // Every fold rung: its reference value and its image per (mesh, level), if found.
+    let folds: Vec<(f64, Vec<Vec<Option<f64>>>)> = rungs
+        .iter()
+        .filter(|r| r.kind.0.iter().all(|k| *k == CriticalKind::LimitPoint))
+        .map(|r| {
+            let images = r
+                .images
+                .iter()
+                .map(|im| {
+                    im.levels
+                        .iter()
+                        .map(|l| l.values.first().copied())
+                        .collect()
+                })
+                .collect();
+            (r.values[0], images)
+        })
+        .collect();
+    for rung in rungs.iter_mut() {
+        if rung.m.is_none() || rung.kind.0.contains(&CriticalKind::LimitPoint) {
+            continue;
+        }
+        let like = Likeness {
+            m: rung.m,
+            fold: false,
+            rising: !rung.rising,
+        };
+        let v = rung.values.iter().sum::<f64>() / rung.values.len() as f64;
+        for (k, mesh) in meshes.iter().enumerate().skip(1) {
+            let images_k = &mut rung.images[k];
+            for (l, level) in mesh.levels.iter().enumerate() {
+                if !images_k.levels[l].points.is_empty() {
+                    continue;
+                }
+                // The folds near which the mesh's error may have reordered the rung.
+                let near: Vec<(f64, f64)> = folds
+                    .iter()
+                    .filter_map(|(f_ref, im)| {
+                        let f_mesh = im[k].get(l).copied().flatten()?;
+                        let e = (f_mesh - f_ref).abs();
+                        ((v - f_ref).abs() <= e).then_some((f_mesh, e))
+                    })
+                    .collect();
+                if near.is_empty() {
+                    continue;
+                }
+                let before = used[k][l].clone();
+                let found = images(
+                    &level.critical,
+                    &mut used[k][l],
+                    like,
+                    v,
+                    rung.multiplicity,
+                    floor,
+                );
+                let by_its_fold = |j: &usize| {
+                    let p = level.critical[*j].value;
+                    near.iter().any(|(f, e)| (p - f).abs() <= *e)
+                };
+                if found.is_empty() || !found.iter().all(by_its_fold) {
+                    used[k][l] = before;
+                    continue;
+                }
+                let mut image = measure(
+                    &level.critical,
+                    found,
+                    (rung.multiplicity, false),
+                    level.resolution,
+                );
+                image.verdict.across_turn = true;
+                images_k.levels[l] = image;
+            }
+            images_k.order = gap_order(&images_k.levels);
+        }
     }
 }
 
@@ -617,5 +723,59 @@ mod tests {
         // Nor do such two points of one mesh form a rung together.
         let mesh = [rung, back];
         assert_eq!(rungs(&mesh, 0.0, &[false, false]), vec![vec![0], vec![1]]);
+    }
+
+    fn runs(label: &str, critical: Vec<Point>) -> MeshRuns {
+        MeshRuns {
+            label: label.into(),
+            generator: "disc".into(),
+            levels: vec![super::super::Level {
+                mesh: label.into(),
+                resolution: 8,
+                nodes: 0,
+                triangles: 0,
+                group: label.into(),
+                order: 1,
+                unknowns: 0,
+                symmetric_unknowns: 0,
+                stop: crate::analysis::events::StopReason::Bounds,
+                note: None,
+                warnings: Vec::new(),
+                seconds: 0.0,
+                critical,
+            }],
+        }
+    }
+
+    #[test]
+    fn a_bifurcation_the_mesh_error_moves_across_a_nearby_fold_is_matched_across_the_turn() {
+        // The reference folds at 18.774 and meets the m = 4 double just after the turn; the
+        // mesh, 0.6 off at the fold, meets its m = 4 pair 0.03 before its own fold. On a mesh
+        // without an image of the fold, a point of the reference's m = 1 met after the turn
+        // is left unmatched.
+        let fold = |v: f64| point(CriticalKind::LimitPoint, "A1", v, 0);
+        let mut m4 = point(CriticalKind::MultipleBifurcation(2), "m=4", 18.769, 4);
+        m4.multiplicity = 2;
+        m4.rising = false;
+        let m1 = point(CriticalKind::MultipleBifurcation(2), "m=1", 17.723, 1);
+        let reference = runs("axisymmetric", vec![m1.clone(), fold(18.774), m4]);
+        let b = |irrep: &str, v: f64| point(CriticalKind::SimpleBifurcation, irrep, v, 4);
+        let mut far = point(CriticalKind::SimpleBifurcation, "B1", 16.33, 1);
+        far.rising = false;
+        let mesh = runs("C8v", vec![b("B2", 19.346), b("B1", 19.350), fold(19.377)]);
+        let other = runs("C2v", vec![far]);
+        let (rungs, unmatched) = match_rungs(&[reference, mesh, other], 0.0);
+        let rung = rungs.iter().find(|r| r.m == Some(4)).unwrap();
+        let image = &rung.images[1].levels[0];
+        assert_eq!(image.values, vec![19.346, 19.350]);
+        assert!(image.verdict.across_turn);
+        assert!(image
+            .verdict
+            .to_string()
+            .ends_with("met on the other side of the path's turn"));
+        let one = rungs.iter().find(|r| r.m == Some(1)).unwrap();
+        assert!(one.images[2].levels[0].points.is_empty());
+        assert_eq!(unmatched.len(), 1, "{unmatched:?}");
+        assert_eq!(unmatched[0].mesh, "C2v");
     }
 }

@@ -44,7 +44,11 @@
 //! a rung. Folds are the images of folds, with one exception: a mesh whose trivial irrep
 //! holds one mode of an m ≥ 1 pair (cos 2θ on C2v and C1v) does not protect that bifurcation,
 //! and its path folds near it instead. Such a fold with the rung's m is its image, reported as
-//! "imperfect"; the path turns there, so no further image is sought beyond it.
+//! "imperfect"; the path turns there, so no further image is sought beyond it. A second pass
+//! takes, for a bifurcation rung without image on a mesh, the points of its m on the *other*
+//! piece, when the rung lies within the mesh's error at a fold, e = |F_mesh − F_ref|, of that
+//! fold and the points within e of F_mesh: the mesh's error has moved the bifurcation across
+//! the turn (reported as "met on the other side of the path's turn").
 //!
 //! A rung's *gap* on a mesh is measured: the spread of the values of its images there. One
 //! point in a 2-D irrep is a double by construction ("not split: double … in E1"); two points
