@@ -50,6 +50,8 @@ pub struct AxisymStudy {
     volume: Option<(usize, usize, scene::Target)>,
     /// The gas-amount constraint (its target `f64::NAN` while "initial", set at the start).
     gas: Option<super::GasTarget>,
+    /// `[start] hold-translation` along ±e_z: the sign.
+    hold: Option<f64>,
 }
 
 fn unsupported(what: String) -> AxisymRunError {
@@ -170,11 +172,6 @@ impl AxisymStudy {
                     )))
                 }
             }
-            if let scene::Target::Parameter(n) = &v.value {
-                return Err(unsupported(format!(
-                    "constraint[{i}].value = \"{n}\": the axisymmetric model holds a number or \"initial\""
-                )));
-            }
             let level = parameters
                 .iter()
                 .position(|p| *p == v.level)
@@ -188,18 +185,16 @@ impl AxisymStudy {
                 Effect::Gas(g) => pressures.push(Pressure::Gas {
                     pressure: index(&g.pressure),
                 }),
-                Effect::Fluid(f) => {
-                    pressures.push(Pressure::Fluid {
-                        filled: f.filled,
-                        density: index(&f.density),
-                        gravity: index(&f.gravity),
-                        level: index(&f.level),
-                        front: match f.side {
-                            scene::FluidSide::Above => true,
-                            scene::FluidSide::Below | scene::FluidSide::Inside => false,
-                        },
-                    })
-                }
+                Effect::Fluid(f) => pressures.push(Pressure::Fluid {
+                    filled: f.filled,
+                    density: index(&f.density),
+                    gravity: index(&f.gravity),
+                    level: index(&f.level),
+                    front: match f.side {
+                        scene::FluidSide::Above => true,
+                        scene::FluidSide::Below | scene::FluidSide::Inside => false,
+                    },
+                }),
                 // The fluid spinning behind the membrane, as the 3-D effect takes it.
                 Effect::Spin(s) => pressures.push(Pressure::Spin {
                     density: index(&s.density),
@@ -219,20 +214,40 @@ impl AxisymStudy {
                         exponent: p.exponent,
                     });
                 }
-                Effect::GasAmount(_) => {
-                    return Err(unsupported(format!(
-                        "effect[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements gas, fluid, spin, plane, fixed and sliding edges); use a 3-D mesh",
-                        e.kind()
-                    )))
-                }
+                // The fluid's amount a fluid-volume constraint holds is what the gas leaves
+                // out of the enclosure (a number or a parameter: validated).
+                Effect::GasAmount(g) => pressures.push(Pressure::GasAmount {
+                    amount: index(&g.amount),
+                    ambient: g.ambient_pressure,
+                    fluid: volume.as_ref().and_then(|v| match &v.2 {
+                        scene::Target::Value(x) => Some(Quantity::Value(*x)),
+                        scene::Target::Parameter(n) => {
+                            Some(index(&scene::Quantity::Parameter(n.clone())))
+                        }
+                        scene::Target::Initial => None,
+                    }),
+                }),
             }
         }
-        if scene.start.from.is_some() || scene.start.hold_translation.is_some() {
+        if scene.start.from.is_some() {
             return Err(unsupported(
-                "start: start.from and start.hold-translation are not implemented by the axisymmetric model"
-                    .into(),
+                "start.from: not implemented by the axisymmetric model".into(),
             ));
         }
+        let hold = match scene.start.hold_translation {
+            None => None,
+            Some(d) if d[0].hypot(d[1]) > 1e-12 => {
+                return Err(unsupported(format!(
+                    "start.hold-translation = {d:?}: the axisymmetric model holds the translation along the axis only ([0, 0, ±1])"
+                )))
+            }
+            Some(_) if !meridian.closed() || planes.is_empty() => {
+                return Err(unsupported(
+                    "start.hold-translation: the axisymmetric model lowers a closed meridian (shape = \"sphere\") onto a plane effect only".into(),
+                ))
+            }
+            Some(d) => Some(d[2].signum()),
+        };
         let control_name = match &scene.analysis {
             Analysis::Path(p) => {
                 if p.branches.is_some() {
@@ -262,7 +277,7 @@ impl AxisymStudy {
                 .expect("validated control")
         });
         let mut model = AxisymModel::new(meridian, pressures);
-        model.planes = planes;
+        model.set_planes(planes);
         model.volume_level = volume.as_ref().map(|v| v.1);
         // A fluid volume needs a fluid, which the gas-amount constraint refuses: never both.
         model.gas_amount = gas.as_ref().map(|g: &super::GasTarget| g.gas);
@@ -281,6 +296,7 @@ impl AxisymStudy {
             stress_free_volume,
             volume,
             gas,
+            hold,
         })
     }
 
@@ -536,39 +552,68 @@ pub fn run(
         ..opts.clone()
     };
     let describe = |e: SolveError| AxisymRunError::Start(e.to_string());
-    let (mut q, mut lambda, mut iterations) =
-        crate::analysis::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
-            .map_err(describe)?;
-    // The fluid-volume constraint: its target measured at the start, or given; its level
-    // free from here on.
-    if let Some((effect, level, target)) = &study.volume {
-        let v0 = study.model.volume(&study.model.positions(q.as_slice()));
+    // The fluid-volume constraint at the state q: its target measured there, given, or a
+    // parameter; its level free from then on.
+    let volume_target = |q: &DVector<f64>| {
+        let (effect, level, target) = study.volume.as_ref()?;
+        let v0 = study
+            .model
+            .held_fluid(&study.model.positions(q.as_slice()), &params)
+            .expect("a fluid-volume constraint has its fluid")
+            .volume;
         let Some(Effect::Fluid(f)) = study.scene.effects.get(*effect) else {
             unreachable!("a validated fluid-volume constraint")
         };
+        let position = |n: &str| {
+            study
+                .parameters
+                .iter()
+                .position(|p| p == n)
+                .expect("validated parameter")
+        };
         let value = |x: &scene::Quantity| match x {
             scene::Quantity::Value(v) => *v,
-            scene::Quantity::Parameter(n) => {
-                params[study
-                    .parameters
-                    .iter()
-                    .position(|p| p == n)
-                    .expect("validated parameter")]
-            }
+            scene::Quantity::Parameter(n) => params[position(n)],
         };
         let scale = -value(&f.density) * value(&f.gravity);
-        let target = match target {
-            scene::Target::Value(v) => *v,
-            scene::Target::Initial | scene::Target::Parameter(_) => v0,
+        let (target, target_parameter) = match target {
+            scene::Target::Value(v) => (*v, None),
+            scene::Target::Initial => (v0, None),
+            scene::Target::Parameter(n) => (params[position(n)], Some(position(n))),
         };
-        problem.volume = Some(super::VolumeTarget {
-            level: *level,
-            target,
-            scale: if scale == 0.0 { -1.0 } else { scale },
-        });
-        let (q1, l1, it) =
-            meet(&mut problem, &q, &params, target != v0, &start_opts).map_err(describe)?;
-        (q, lambda, iterations) = (q1, l1, iterations + it);
+        Some((
+            super::VolumeTarget {
+                level: *level,
+                target,
+                scale: if scale == 0.0 { -1.0 } else { scale },
+                target_parameter,
+            },
+            target != v0,
+        ))
+    };
+    // A sphere not yet resting on its plane: its mean height held, lowered until the holding
+    // force vanishes, with the fluid's volume (so its weight) held throughout
+    // (docs/theory.md §7.8, §15.16).
+    let (q0, lambda0) = match study.hold {
+        Some(sign) => {
+            problem.volume = volume_target(&q0).map(|t| t.0);
+            let w = study.model.held_translation(sign);
+            let l0 = problem.free_values(&params);
+            crate::analysis::release::released(&mut problem, &q0, &l0, w, &start_opts)
+                .map_err(describe)?
+        }
+        None => (q0, lambda0),
+    };
+    let (mut q, mut lambda, mut iterations) =
+        crate::analysis::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
+            .map_err(describe)?;
+    if problem.volume.is_none() {
+        if let Some((target, unmet)) = volume_target(&q) {
+            problem.volume = Some(target);
+            let (q1, l1, it) =
+                meet(&mut problem, &q, &params, unmet, &start_opts).map_err(describe)?;
+            (q, lambda, iterations) = (q1, l1, iterations + it);
+        }
     }
     // The gas-amount constraint: its amount measured at the start, given, or a parameter;
     // the gas's pressure free from here on.
