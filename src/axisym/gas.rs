@@ -128,6 +128,15 @@ impl AxisymModel {
         Ok(out)
     }
 
+    /// The over-pressure C/(V − V*) − P_atm of the first gas-amount effect at the nodes `x`
+    /// (NaN without one, or where its gas volume is not positive).
+    pub fn gas_pressure(&self, x: &[[f64; 2]], params: &[f64]) -> f64 {
+        self.gas_amounts_at(x, params)
+            .ok()
+            .and_then(|g| g.first().map(GasAmountAt::pressure))
+            .unwrap_or(f64::NAN)
+    }
+
     /// The pressures with every gas-amount effect replaced by a gas at its over-pressure at
     /// the nodes `x` (what the integrals along the meridian and the blocks see).
     pub(super) fn resolved_pressures(

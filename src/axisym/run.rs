@@ -310,11 +310,22 @@ impl AxisymStudy {
         if self.stress_free_volume.is_some() {
             n.push("stretch".into());
         }
+        if self.has_gas_amount() {
+            n.push("gas_pressure".into());
+        }
         n
     }
 
-    /// The measures at displacement q.
-    pub fn measure(&self, q: &[f64]) -> Vec<f64> {
+    fn has_gas_amount(&self) -> bool {
+        self.model
+            .pressures
+            .iter()
+            .any(|p| matches!(p, Pressure::GasAmount { .. }))
+    }
+
+    /// The measures at displacement q, parameters `params` (the gas-amount effect's
+    /// over-pressure C/(V − V*) − P_atm depends on them).
+    pub fn measure(&self, q: &[f64], params: &[f64]) -> Vec<f64> {
         let x = self.model.positions(q);
         let nodes = &self.model.meridian.nodes;
         let max = x
@@ -326,6 +337,9 @@ impl AxisymStudy {
         let mut out = vec![max, x[0][1], v];
         if let Some(v0) = self.stress_free_volume {
             out.push((v / v0).cbrt());
+        }
+        if self.has_gas_amount() {
+            out.push(self.model.gas_pressure(&x, params));
         }
         out
     }
@@ -635,7 +649,7 @@ pub fn run(
     let k_stretch = names.iter().position(|n| n == "stretch");
     let k_displacement = names.iter().position(|n| n == "max-displacement");
     // A stop is reached where its measure passes the target from the start's side.
-    let start_measures = study.measure(q.as_slice());
+    let start_measures = study.measure(q.as_slice(), &problem.parameters(&lambda));
     let side = |k: usize, target: f64| (k, target, (start_measures[k] - target).signum());
     let stretch_side = k_stretch.zip(stop_stretch).map(|(k, t)| side(k, t));
     let displacement_side = k_displacement
@@ -644,11 +658,11 @@ pub fn run(
     let mut count = 0usize;
     let path: ModePath = match &study.scene.analysis {
         Analysis::Path(_) => {
-            let stop = |_: &AxisymProblem, p: &PathPoint| {
+            let stop = |problem: &AxisymProblem, p: &PathPoint| {
                 if stretch_side.is_none() && displacement_side.is_none() {
                     return None;
                 }
-                let now = study.measure(p.q.as_slice());
+                let now = study.measure(p.q.as_slice(), &problem.parameters(&p.lambda));
                 let passed = |s: Option<(usize, f64, f64)>| {
                     s.and_then(|(k, t, side)| ((now[k] - t) * side <= 0.0).then_some(t))
                 };
@@ -689,12 +703,16 @@ pub fn run(
         .as_ref()
         .map(|v| v.1)
         .or(study.gas.map(|g| g.gas.pressure));
-    let param_at = |l: &[f64]| {
+    let full_params = |l: &[f64]| {
         let mut p = params.clone();
         p[control] = l[0];
         if let (Some(k), Some(h)) = (level, l.get(1)) {
             p[k] = *h;
         }
+        p
+    };
+    let param_at = |l: &[f64]| {
+        let mut p = full_params(l);
         p.truncate(study.parameters.len());
         p
     };
@@ -707,7 +725,7 @@ pub fn run(
             step: i,
             arclength: p.arclength,
             parameters: param_at(p.lambda.as_slice()),
-            measures: study.measure(p.q.as_slice()),
+            measures: study.measure(p.q.as_slice(), &full_params(p.lambda.as_slice())),
             iterations: if i == 0 { iterations } else { p.iterations },
             index: ix.clone(),
         })
@@ -719,7 +737,7 @@ pub fn run(
             kind: t.kind,
             after_step: t.after_step,
             parameters: param_at(&t.lambda),
-            measures: study.measure(&t.q),
+            measures: study.measure(&t.q, &full_params(&t.lambda)),
         })
         .collect();
     let critical = path
@@ -731,7 +749,7 @@ pub fn run(
             kind: c.kind,
             after_step: c.after_step,
             parameters: param_at(&c.lambda),
-            measures: study.measure(&c.q),
+            measures: study.measure(&c.q, &full_params(&c.lambda)),
             localised: c.localised,
             eigenvalue: c.eigenvalue,
         })
