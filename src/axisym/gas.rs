@@ -112,7 +112,7 @@ impl AxisymModel {
             };
             let v = *volume.get_or_insert_with(|| self.volume(x));
             let gas_volume = v - fluid.map_or(0.0, |f| f.value(params));
-            if !(gas_volume > 0.0) {
+            if gas_volume.is_nan() || gas_volume <= 0.0 {
                 return Err(AxisymError::Input(format!(
                     "the gas volume {gas_volume:e} (enclosed {v:e} less the fluid's) is not positive"
                 )));

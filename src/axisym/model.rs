@@ -4,7 +4,8 @@
 //! clamped end holds both, a node on the axis holds u_r = 0 (regularity), and on a closed
 //! meridian (both ends on the axis, none clamped) the first node's u_z is held too, which
 //! removes the rigid translation along z and costs nothing at an equilibrium of a
-//! self-equilibrated load (a gas in a closed membrane exerts no net force).
+//! self-equilibrated load (a gas in a closed membrane exerts no net force), unless a plane
+//! carries the membrane (docs/theory.md §15.16).
 //!
 //! The potential is Π = Π_membrane + Σ Π_pressure, each integrated by Gauss–Legendre
 //! quadrature along the meridian and exactly in θ (a factor 2π):
@@ -567,8 +568,8 @@ impl AxisymModel {
     /// node), the kept columns it is made of, and their number. Clamped ends hold everything;
     /// a node on the axis keeps W for m = 0, U = −V for m = 1 and nothing for m ≥ 2; on a
     /// closed meridian the rigid motions of the block are removed by holding unknowns that
-    /// meet them (docs/theory.md §15.2): W at the first node for m = 0 (translation along z)
-    /// and V at the widest node (rotation about z); for m = 1 the first node's U = −V
+    /// meet them (docs/theory.md §15.2): W at the first node for m = 0 (translation along z;
+    /// not with a plane, which holds it, §15.16) and V at the widest node (rotation about z); for m = 1 the first node's U = −V
     /// (translation) and W at the widest node (rotation about a horizontal axis).
     pub(super) fn kept_map(&self, m: usize) -> (Vec<Option<(usize, f64)>>, usize) {
         let nodes = &self.meridian.nodes;

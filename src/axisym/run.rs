@@ -1,8 +1,10 @@
 //! A scene on an axisymmetric mesh (`[mesh] generator = "axisymmetric"`), made into the
 //! axisymmetric model and run: the same scene keys, effects and analyses as on a 3-D mesh, for
-//! the effects the meridian implements (gas at a given over-pressure, fluid wetting the
-//! membrane wholly or in part, fluid spinning about z, fixed edges; the fluid-volume, gas-amount
-//! and fixed constraints); every other effect, constraint or key
+//! the effects the meridian implements (gas at a given over-pressure or of a fixed amount above
+//! an inside fluid, fluid wetting the membrane wholly or in part, fluid spinning about z,
+//! planes normal to the axis, fixed and sliding edges; the fluid-volume, gas-amount and fixed
+//! constraints; the held-translation start of a sphere on a plane); every other effect,
+//! constraint or key
 //! is refused in one line that names it. Stability is by wave number m = 0..=`mesh.modes`
 //! (docs/theory.md §15.3).
 
