@@ -555,6 +555,104 @@ mod paper2 {
         std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
     }
 
+    /// The Paper 2 potentials through the public model, at a generic state of a sphere of
+    /// 8 elements whose south pole is pushed through the plane, a gas amount above a fluid
+    /// whose level crosses an element: the gradient, the tangent (its rank-one term included)
+    /// and the loads of C, V*, ρ, h and the plane's offset against central differences, and
+    /// ∇V_f, ∂V_f/∂h against differences of the fluid volume.
+    #[test]
+    fn the_gas_amount_above_a_fluid_on_a_plane_matches_finite_differences() {
+        use memstab::axisym::{AxisymModel, FloorPlane, Meridian, Pressure};
+        use memstab::effects::membrane::MooneyRivlin;
+        use memstab::effects::Quantity;
+        let meridian = Meridian::sphere(1.0, 8, 1.05, MooneyRivlin::new(1.0, 0.1, 0.1)).unwrap();
+        let pressures = vec![
+            Pressure::GasAmount {
+                amount: Quantity::Parameter(0),
+                ambient: 1.0,
+                fluid: Some(Quantity::Parameter(1)),
+            },
+            Pressure::Fluid {
+                density: Quantity::Parameter(2),
+                gravity: Quantity::Value(1.0),
+                level: Quantity::Parameter(3),
+                front: false,
+                filled: false,
+            },
+        ];
+        let mut model = AxisymModel::new(meridian, pressures);
+        model.set_planes(vec![FloorPlane {
+            normal_z: 1.0,
+            offset: Quantity::Parameter(4),
+            penalty: Quantity::Value(100.0),
+            exponent: 3,
+        }]);
+        model.volume_level = Some(3);
+        let q: Vec<f64> = (0..model.dim())
+            .map(|k| 0.02 * ((k as f64) * 2.3).cos())
+            .collect();
+        let x = model.positions(&q);
+        let params = vec![6.5, 0.8, 1.0, -0.45, x[x.len() - 1][1] + 0.03];
+        let e = model.evaluate(&q, &params).unwrap();
+        assert_eq!(e.rank_one.len(), 1);
+        let d = 1e-6;
+        let shifted = |k: usize, s: f64| {
+            let mut q = q.clone();
+            q[k] += s;
+            q
+        };
+        for k in 0..model.dim() {
+            let (ep, em) = (
+                model.evaluate(&shifted(k, d), &params).unwrap(),
+                model.evaluate(&shifted(k, -d), &params).unwrap(),
+            );
+            let g = (ep.energy - em.energy) / (2.0 * d);
+            assert!((g - e.gradient[k]).abs() < 1e-7 * (1.0 + g.abs()), "{k}");
+            for j in 0..model.dim() {
+                let t = (ep.gradient[j] - em.gradient[j]) / (2.0 * d);
+                let want = e.tangent[(j, k)];
+                assert!(
+                    (t - want).abs() < 1e-6 * (1.0 + t.abs()),
+                    "({j}, {k}): {t} vs {want}"
+                );
+            }
+        }
+        for j in 0..params.len() {
+            let (mut pp, mut pm) = (params.clone(), params.clone());
+            pp[j] += d;
+            pm[j] -= d;
+            let (ep, em) = (
+                model.evaluate(&q, &pp).unwrap(),
+                model.evaluate(&q, &pm).unwrap(),
+            );
+            for k in 0..model.dim() {
+                let l = (ep.gradient[k] - em.gradient[k]) / (2.0 * d);
+                let want = e.loads[(k, j)];
+                assert!(
+                    (l - want).abs() < 1e-6 * (1.0 + l.abs()),
+                    "load ({k}, {j}): {l} vs {want}"
+                );
+            }
+            assert!(
+                e.loads.column(j).amax() > 1e-3,
+                "parameter {j} loads the state"
+            );
+        }
+        let h = params[3];
+        let vf = |q: &[f64], h: f64| model.fluid_volume(&model.positions(q), h).0;
+        let (_, grad, section) = model.fluid_volume(&x, h);
+        let grad = model.free_part(&grad);
+        for (k, gk) in grad.iter().enumerate() {
+            let fd = (vf(&shifted(k, d), h) - vf(&shifted(k, -d), h)) / (2.0 * d);
+            assert!(
+                (fd - gk).abs() < 1e-8 * (1.0 + fd.abs()),
+                "{k}: {fd} vs {gk}"
+            );
+        }
+        let fd = (vf(&q, h + d) - vf(&q, h - d)) / (2.0 * d);
+        assert!((fd - section).abs() < 1e-8 * fd, "{fd} vs {section}");
+    }
+
     /// The meridian's maximum of p at `elements` elements with the plane's penalty
     /// `penalty`: the turning point, checked to be the m = 0 limit point of the path.
     fn meridian_max(elements: usize, penalty: f64) -> f64 {
