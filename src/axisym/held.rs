@@ -55,8 +55,8 @@ impl AxisymModel {
 
     /// The translation along `sign` e_z as the held field of `[start] hold-translation`
     /// (docs/theory.md §15.16) over the free unknowns: every free height weighted by its
-    /// ring's reference area, so that wᵀ q / |w|²-scaled holds the surface's mean height and
-    /// the holding force R w is a uniform load per reference area.
+    /// ring's reference area, so that holding wᵀ q / |w|² holds an area-weighted mean height
+    /// and the holding force R w is a uniform load per reference area.
     pub fn held_translation(&self, sign: f64) -> nalgebra::DVector<f64> {
         let a = self.ring_areas();
         nalgebra::DVector::from_iterator(
