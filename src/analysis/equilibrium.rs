@@ -7,10 +7,8 @@
 //! in the fixed-point space of the scene's group; an inside-out solution is refused; the
 //! targets of constraints declared `"initial"` are then measured there.
 
-use super::continuation::{
-    point_at, solve_at, Continuation, Linearization, PathOptions, PhaseTimes, Problem, SolveError,
-};
-use super::events::{locate, Crossings, StopReason};
+use super::continuation::{solve_at, PathOptions, PhaseTimes};
+use super::events::{Crossings, StopReason};
 use super::{Observer, Record, RunError, SymmetricProblem};
 use crate::model::Model;
 use crate::report::StateKind;
@@ -82,8 +80,9 @@ fn solve_start_with(
                 }
             }
             let w = study.basis.restrict(&e);
-            released(&mut problem, &q0, &lambda, w, &start_opts)
+            super::release::released(&mut problem, &q0, &lambda, w, &start_opts)
                 .map_err(|e| RunError::start(study, e))?
+                .0
         }
         None => q0,
     };
@@ -112,128 +111,6 @@ fn solve_start_with(
     study.set_targets(&u, &params);
     Ok((u, params, iterations, times))
 }
-
-/// A problem with the mean translation along a direction held (docs/theory.md §7.8): its
-/// unknowns are the inner problem's q, the held mean displacement ζ (the control) and the
-/// uniform force R that holds it (free), with
-///
-/// ```text
-///   R_held(q, ζ, R) = R_inner(q) − R w,      g = wᵀ q / |w|² − ζ = 0,
-/// ```
-///
-/// w = Bᵀ e the restricted translation field e_i = d. The inner problem's own free
-/// parameters stay at the values given.
-struct HeldTranslation<'p, 'a> {
-    inner: &'p mut SymmetricProblem<'a>,
-    lambda: nalgebra::DVector<f64>,
-    w: nalgebra::DVector<f64>,
-}
-
-impl Problem for HeldTranslation<'_, '_> {
-    fn dim(&self) -> usize {
-        self.inner.dim()
-    }
-
-    fn free_parameters(&self) -> usize {
-        2
-    }
-
-    fn evaluate(
-        &mut self,
-        q: &nalgebra::DVector<f64>,
-        lambda: &nalgebra::DVector<f64>,
-    ) -> Result<Linearization, crate::model::ModelError> {
-        let lin = self.inner.evaluate(q, &self.lambda)?;
-        let m = q.len();
-        let w2 = self.w.norm_squared();
-        let mut loads = nalgebra::DMatrix::zeros(m, 2);
-        loads.set_column(1, &(-&self.w));
-        let mut constraint_lambda = nalgebra::DMatrix::zeros(1, 2);
-        constraint_lambda[(0, 0)] = -1.0;
-        Ok(Linearization {
-            residual: lin.residual - &self.w * lambda[1],
-            tangent: lin.tangent,
-            loads,
-            constraints: nalgebra::DVector::from_element(1, self.w.dot(q) / w2 - lambda[0]),
-            constraint_q: nalgebra::DMatrix::from_row_slice(1, m, (&self.w / w2).as_slice()),
-            constraint_lambda,
-        })
-    }
-}
-
-/// The start homotopy of `[start] hold-translation` (docs/theory.md §7.8): from `q0`, solve
-/// with the mean translation along `w` held at its start value; then move the held position
-/// along an auxiliary path until the holding force vanishes, and return that state (the
-/// caller solves the free problem from it). A free body resting on a plane has a singular
-/// tangent until it touches the plane; held, it has none.
-fn released(
-    problem: &mut SymmetricProblem<'_>,
-    q0: &nalgebra::DVector<f64>,
-    lambda: &nalgebra::DVector<f64>,
-    w: nalgebra::DVector<f64>,
-    opts: &PathOptions,
-) -> Result<nalgebra::DVector<f64>, SolveError> {
-    if w.norm() == 0.0 {
-        return Err(SolveError::Model(crate::model::ModelError::Global {
-            effect: "start".into(),
-            what: "start.hold-translation: the scene's group moves that direction, so the \
-                   symmetric states cannot translate along it"
-                .into(),
-        }));
-    }
-    let zeta = w.dot(q0) / w.norm_squared();
-    let mut held = HeldTranslation {
-        inner: problem,
-        lambda: lambda.clone(),
-        w,
-    };
-    let start = nalgebra::DVector::from_vec(vec![zeta, 0.0]);
-    let (q, l, _) = solve_at(&mut held, q0, &start, opts)?;
-    let force = |l: &nalgebra::DVector<f64>| l[1];
-    let scale = held.w.norm() * opts.state_scale;
-    let mut point = point_at(&mut held, q, l, 0, opts, None)?;
-    if force(&point.lambda) == 0.0 {
-        return Ok(point.q);
-    }
-    // Move ζ the way that reduces |R|.
-    if point.tangent[point.q.len() + 1] * force(&point.lambda) > 0.0 {
-        point.tangent = -point.tangent;
-    }
-    let release_opts = PathOptions {
-        bounds: (f64::NEG_INFINITY, f64::INFINITY),
-        ..opts.clone()
-    };
-    let mut driver = Continuation::new(held, point, release_opts);
-    for _ in 0..RELEASE_STEPS {
-        let Ok(step) = driver.step() else { break };
-        let (f0, f1) = (force(&step.from.lambda), force(&driver.point().lambda));
-        if f0.signum() == f1.signum() {
-            continue;
-        }
-        let s1 = driver.point().arclength - step.from.arclength;
-        let from = step.from.clone();
-        let tol = 1e-12 * (f0.abs().max(f1.abs())).max(scale * 1e-300);
-        let (s, _) = locate(
-            |s| driver.step_from(&from, s).ok().map(|p| force(&p.lambda)),
-            f0,
-            s1,
-            f1,
-            tol,
-        )
-        .ok_or(SolveError::SingularTangent)?;
-        return driver
-            .step_from(&from, s)
-            .map(|p| p.q)
-            .map_err(|_| SolveError::SingularTangent);
-    }
-    Err(SolveError::NotReleased {
-        steps: RELEASE_STEPS,
-        force: force(&driver.point().lambda),
-    })
-}
-
-/// Steps the release of a held translation may take.
-const RELEASE_STEPS: usize = 400;
 
 /// The state that a one-point command (`spectrum`, `export-matrix`) analyses, with
 /// `overrides` (parameter index, value) in place of start values — the state `run` would

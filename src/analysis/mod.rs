@@ -33,6 +33,7 @@ pub mod modes;
 pub mod newton;
 pub mod path;
 mod problem;
+pub mod release;
 pub mod surface;
 
 pub use continuation::PhaseTimes;

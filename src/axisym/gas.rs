@@ -20,7 +20,8 @@
 //! As for the fluid volume, the first variation of V along a field of wave number m ≥ 1
 //! vanishes (∫ cos mθ dθ = 0): the constraint borders the block m = 0 only.
 
-use super::AxisymModel;
+use super::{AxisymError, AxisymModel, Pressure};
+use crate::effects::Quantity;
 
 /// A gas amount held on the meridian: the gas's pressure parameter and the ambient pressure.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,25 +66,145 @@ impl AxisymModel {
             grad_p: v,
         }
     }
+}
 
-    /// The corner of the block m = 0 bordered by the column α ∇V (kept unknowns),
-    /// α = `scale`/`norm`: −α² V/(P_atm + p), so that the Schur complement adds
-    /// ((P_atm + p)/V) ∇V ∇Vᵀ to the block.
-    pub(super) fn gas_corner(&self, x: &[[f64; 2]], params: &[f64], scale: f64, norm: f64) -> f64 {
-        let Some(gas) = self.gas_amount else {
-            return 0.0;
-        };
-        let alpha = scale / norm;
-        -alpha * alpha * self.volume(x) / (gas.ambient + params[gas.pressure])
+/// A gas-amount effect at a state: C, P_atm, V* and the gas volume V_g = V − V*.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct GasAmountAt {
+    pub amount: f64,
+    pub ambient: f64,
+    pub gas_volume: f64,
+    /// The parameters C and V* are (if they are).
+    pub amount_parameter: Option<usize>,
+    pub fluid_parameter: Option<usize>,
+}
+
+impl GasAmountAt {
+    /// The over-pressure C/V_g − P_atm.
+    pub fn pressure(&self) -> f64 {
+        self.amount / self.gas_volume - self.ambient
+    }
+
+    /// The coefficient C/V_g² of the rank-one stiffness along ∇V.
+    pub fn stiffness(&self) -> f64 {
+        self.amount / (self.gas_volume * self.gas_volume)
+    }
+}
+
+impl AxisymModel {
+    /// Every gas-amount effect at the nodes `x` (a gas volume that is not positive is an
+    /// error: the fluid fills the enclosure).
+    pub(super) fn gas_amounts_at(
+        &self,
+        x: &[[f64; 2]],
+        params: &[f64],
+    ) -> Result<Vec<GasAmountAt>, AxisymError> {
+        let mut out = Vec::new();
+        let mut volume = None;
+        for load in &self.pressures {
+            let Pressure::GasAmount {
+                amount,
+                ambient,
+                fluid,
+            } = *load
+            else {
+                continue;
+            };
+            let v = *volume.get_or_insert_with(|| self.volume(x));
+            let gas_volume = v - fluid.map_or(0.0, |f| f.value(params));
+            if gas_volume.is_nan() || gas_volume <= 0.0 {
+                return Err(AxisymError::Input(format!(
+                    "the gas volume {gas_volume:e} (enclosed {v:e} less the fluid's) is not positive"
+                )));
+            }
+            out.push(GasAmountAt {
+                amount: amount.value(params),
+                ambient,
+                gas_volume,
+                amount_parameter: amount.parameter(),
+                fluid_parameter: fluid.and_then(|f| f.parameter()),
+            });
+        }
+        Ok(out)
+    }
+
+    /// The over-pressure C/(V − V*) − P_atm of the first gas-amount effect at the nodes `x`
+    /// (NaN without one, or where its gas volume is not positive).
+    pub fn gas_pressure(&self, x: &[[f64; 2]], params: &[f64]) -> f64 {
+        self.gas_amounts_at(x, params)
+            .ok()
+            .and_then(|g| g.first().map(GasAmountAt::pressure))
+            .unwrap_or(f64::NAN)
+    }
+
+    /// The pressures with every gas-amount effect replaced by a gas at its over-pressure at
+    /// the nodes `x` (what the integrals along the meridian and the blocks see).
+    pub(super) fn resolved_pressures(
+        &self,
+        x: &[[f64; 2]],
+        params: &[f64],
+    ) -> Result<Vec<Pressure>, AxisymError> {
+        if !self
+            .pressures
+            .iter()
+            .any(|p| matches!(p, Pressure::GasAmount { .. }))
+        {
+            return Ok(self.pressures.clone());
+        }
+        let mut gases = self.gas_amounts_at(x, params)?.into_iter();
+        Ok(self
+            .pressures
+            .iter()
+            .map(|p| match p {
+                Pressure::GasAmount { .. } => Pressure::Gas {
+                    pressure: Quantity::Value(gases.next().expect("one per effect").pressure()),
+                },
+                other => *other,
+            })
+            .collect())
+    }
+
+    /// The gas-amount effects' global terms, after the integrals of the resolved gases
+    /// (which gave −p ∇V, −p ∇²V and the energy −p V): the energy −C ln V_g + P_atm V_g in
+    /// place of −p V, the loads ∂R/∂C = −∇V/V_g and ∂R/∂V* = −(C/V_g²) ∇V, and the rank-one
+    /// stiffness (C/V_g²) ∇V ∇Vᵀ.
+    pub(super) fn add_gas_amounts(
+        &self,
+        q: &[f64],
+        x: &[[f64; 2]],
+        params: &[f64],
+        out: &mut super::Evaluated,
+    ) -> Result<(), AxisymError> {
+        let gases = self.gas_amounts_at(x, params)?;
+        if gases.is_empty() {
+            return Ok(());
+        }
+        let v = self.volume(x);
+        let grad = self.volume_gradient(q);
+        for g in gases {
+            let p = g.pressure();
+            out.energy += p * v - g.amount * g.gas_volume.ln() + g.ambient * g.gas_volume;
+            for (j, c) in [
+                (g.amount_parameter, -1.0 / g.gas_volume),
+                (g.fluid_parameter, -g.stiffness()),
+            ] {
+                if let Some(j) = j {
+                    for (k, dv) in grad.iter().enumerate() {
+                        out.loads[(k, j)] += c * dv;
+                    }
+                }
+            }
+            out.rank_one.push((g.stiffness(), grad.clone()));
+        }
+        Ok(())
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Meridian, Pressure};
+    use super::super::Meridian;
     use super::*;
     use crate::effects::membrane::MooneyRivlin;
-    use crate::effects::Quantity;
 
     /// A sphere stretched off its reference under two gases, the second one's amount held.
     fn generic_balloon() -> (AxisymModel, Vec<f64>, Vec<f64>, GasAmountBorder) {
@@ -135,6 +256,72 @@ mod tests {
         let d = (g(&q, &pp) - g(&q, &pm)) / (2.0 * h);
         assert!((d - row.grad_p).abs() < 1e-8 * (1.0 + d.abs()), "{d}");
         assert!(row.grad_q.iter().any(|v| v.abs() > 0.1));
+    }
+
+    /// The block m = 0 of the sphere on its plane, bordered by the gas amount's rank-one
+    /// stiffness and the fluid volume: its negative count less the two borders is the index
+    /// of (K + (C/V_g²) ∇V ∇Vᵀ) bordered by the fluid's L = −ρ g ∇V_f and C = −ρ g A_s
+    /// (docs/theory.md §8.3), evaluated independently from the dense tangent.
+    #[test]
+    fn the_gas_amount_and_fluid_borders_give_the_constrained_index() {
+        use super::super::model::tests::generic_paper2;
+        use nalgebra::DMatrix;
+        let (model, q, params) = generic_paper2();
+        assert_eq!(model.block_layout(0).border, 2);
+        assert_eq!(model.block_layout(1).border, 0);
+        let layout = model.block_layout(0);
+        let values = model.block_values(&layout, &q, &params).unwrap();
+        let n = layout.kept + layout.border;
+        let d = layout.pattern.to_dense(&values);
+        let full = DMatrix::from_fn(n, n, |i, j| d[(i, j)]);
+        let negatives = |a: &DMatrix<f64>| {
+            let tol = 1e-9 * a.amax();
+            a.clone()
+                .symmetric_eigenvalues()
+                .iter()
+                .filter(|v| **v < -tol)
+                .count()
+        };
+        // The independent count: the dense tangent (rank-one term included) bordered by the
+        // level's load and ∂g/∂h, on the free unknowns (the block m = 0 keeps every one of
+        // them and the twist V, whose block is positive: add its count apart).
+        let e = model.evaluate(&q, &params).unwrap();
+        let x = model.positions(&q);
+        let fluid = model.held_fluid(&x, &params).unwrap();
+        let m = model.dim();
+        let mut k = DMatrix::zeros(m + 1, m + 1);
+        k.view_mut((0, 0), (m, m)).copy_from(&e.tangent);
+        let l = model.free_part(&fluid.gradient);
+        for i in 0..m {
+            k[(i, m)] = -fluid.weight * l[i];
+            k[(m, i)] = -fluid.weight * l[i];
+        }
+        k[(m, m)] = -fluid.weight * fluid.section;
+        let constrained = negatives(&k) - 1;
+        // The twist block (V only) of the bare m = 0 block.
+        let (map, _) = model.kept_map(0);
+        let twist: Vec<usize> = (0..map.len())
+            .filter(|j| j % 3 == 1)
+            .filter_map(|j| map[j].map(|c| c.0))
+            .collect();
+        let t = DMatrix::from_fn(twist.len(), twist.len(), |i, j| d[(twist[i], twist[j])]);
+        assert_eq!(negatives(&full) - 2, constrained + negatives(&t));
+        // Each corner's Schur complement adds c |g|² along its column: C/V_g² for the gas,
+        // ρ g/A_s for the fluid.
+        let gas = model.gas_amounts_at(&x, &params).unwrap()[0];
+        let gv = model.volume_gradient(&q);
+        let norm2 = |g: &[f64]| g.iter().map(|v| v * v).sum::<f64>();
+        let expected = [
+            gas.stiffness() * norm2(&gv),
+            fluid.weight / fluid.section * norm2(&l),
+        ];
+        for (j, want) in expected.iter().enumerate() {
+            let c = layout.kept + j;
+            let col = (0..layout.kept).map(|i| d[(i, c)].powi(2)).sum::<f64>();
+            let added = col / -d[(c, c)];
+            assert!((added / want - 1.0).abs() < 1e-10, "{j}: {added} vs {want}");
+        }
+        assert!(fluid.section > 0.0 && gas.gas_volume > 0.0);
     }
 
     /// The bordered blocks: one border column for m = 0, none for m ≥ 1, and the Schur

@@ -37,9 +37,35 @@ impl AxisymModel {
     /// Border columns of the block of wave number m.
     pub(super) fn border_count(&self, m: usize) -> usize {
         let held = usize::from(self.free_body() && m <= 1);
-        let volume =
-            usize::from(m == 0 && (self.volume_level.is_some() || self.gas_amount.is_some()));
-        held + volume
+        if m != 0 {
+            return held;
+        }
+        let constraint = usize::from(self.volume_level.is_some() || self.gas_amount.is_some());
+        held + self.gas_amount_effects() + constraint
+    }
+
+    /// The number of gas-amount effects (each borders the block m = 0 with its rank-one
+    /// stiffness).
+    fn gas_amount_effects(&self) -> usize {
+        self.pressures
+            .iter()
+            .filter(|p| matches!(p, super::Pressure::GasAmount { .. }))
+            .count()
+    }
+
+    /// The translation along `sign` e_z as the held field of `[start] hold-translation`
+    /// (docs/theory.md §15.16) over the free unknowns: every free height weighted by its
+    /// ring's reference area, so that holding wᵀ q / |w|² holds an area-weighted mean height
+    /// and the holding force R w is a uniform load per reference area.
+    pub fn held_translation(&self, sign: f64) -> nalgebra::DVector<f64> {
+        let a = self.ring_areas();
+        nalgebra::DVector::from_iterator(
+            self.dim(),
+            (0..self.dim()).map(|k| match self.free_unknown(k) {
+                (i, 1) => sign * a[i],
+                _ => 0.0,
+            }),
+        )
     }
 
     /// The reference area of every node's ring per radian, ∫ N_i |X_ξ| R dξ.
@@ -64,49 +90,87 @@ impl AxisymModel {
     }
 
     /// The border columns of the block of wave number m at the nodes `x`, on its kept
-    /// unknowns (each of unit length).
-    /// Each with its length before it was made of unit length.
-    fn border_vectors(&self, m: usize, x: &[[f64; 2]]) -> Vec<(Vec<f64>, f64)> {
+    /// unknowns, each of unit length, with its length before it was made so and the
+    /// coefficient c of the rank-one term c g gᵀ (g the column before normalising) that the
+    /// Schur complement of its corner adds to the block: infinite for a hard border (a held
+    /// motion, a filled fluid's volume; corner 0).
+    fn border_vectors(
+        &self,
+        m: usize,
+        x: &[[f64; 2]],
+        params: &[f64],
+    ) -> Vec<(Vec<f64>, f64, f64)> {
         let (map, cols) = self.kept_map(m);
-        let from_full = |full: &dyn Fn(usize, usize) -> f64| {
+        let from_full = |full: &dyn Fn(usize, usize) -> f64, c: f64| {
             let mut b = vec![0.0; cols];
             for (j, slot) in map.iter().enumerate() {
-                if let Some((col, c)) = slot {
-                    b[*col] += c * full(j / 3, j % 3);
+                if let Some((col, coefficient)) = slot {
+                    b[*col] += coefficient * full(j / 3, j % 3);
                 }
             }
             let norm = b.iter().map(|v| v * v).sum::<f64>().sqrt().max(1e-300);
             b.iter_mut().for_each(|v| *v /= norm);
-            (b, norm)
+            (b, norm, c)
         };
+        fn axisymmetric(g: &[[f64; 2]]) -> impl Fn(usize, usize) -> f64 + '_ {
+            move |i: usize, c: usize| match c {
+                0 => g[i][0],
+                2 => g[i][1],
+                _ => 0.0,
+            }
+        }
         let mut out = Vec::new();
         if self.free_body() && m <= 1 {
             let a = self.ring_areas();
             out.push(if m == 0 {
                 // The rotation about z: V = r.
-                from_full(&|i, c| if c == 1 { a[i] * x[i][0] } else { 0.0 })
+                from_full(
+                    &|i, c| if c == 1 { a[i] * x[i][0] } else { 0.0 },
+                    f64::INFINITY,
+                )
             } else {
                 // The drift along x: U = 1, V = −1.
-                from_full(&|i, c| match c {
-                    0 => a[i],
-                    1 => -a[i],
-                    _ => 0.0,
-                })
+                from_full(
+                    &|i, c| match c {
+                        0 => a[i],
+                        1 => -a[i],
+                        _ => 0.0,
+                    },
+                    f64::INFINITY,
+                )
             });
         }
-        if m == 0 && (self.volume_level.is_some() || self.gas_amount.is_some()) {
+        if m != 0 {
+            return out;
+        }
+        if self.gas_amount_effects() > 0 || self.gas_amount.is_some() {
             let g = self.volume_gradient_nodes(x);
-            out.push(from_full(&|i, c| match c {
-                0 => g[i][0],
-                2 => g[i][1],
-                _ => 0.0,
-            }));
+            // A gas amount's rank-one stiffness (C/V_g²) ∇V ∇Vᵀ; the tangent has it as such.
+            for gas in self.gas_amounts_at(x, params).unwrap_or_default() {
+                out.push(from_full(&axisymmetric(&g), gas.stiffness()));
+            }
+            // The gas-amount constraint: ((P_atm + p)/V) ∇V ∇Vᵀ (docs/theory.md §15.15).
+            if let Some(gas) = self.gas_amount {
+                let c = (gas.ambient + params[gas.pressure]) / self.volume(x);
+                out.push(from_full(&axisymmetric(&g), c));
+            }
+        }
+        // The fluid-volume constraint: (ρ g/A_s) ∇V_f ∇V_fᵀ, hard for a filled enclosure
+        // (A_s = 0; docs/theory.md §8.3, §15.16).
+        if let Some(f) = self.held_fluid(x, params) {
+            let c = if f.section > 0.0 && f.weight > 0.0 {
+                f.weight / f.section
+            } else {
+                f64::INFINITY
+            };
+            out.push(from_full(&axisymmetric(&f.gradient), c));
         }
         out
     }
 
     /// Writes the border of `layout` at the nodes `x` into the block values `v`, each column
-    /// scaled to the block's largest entry.
+    /// scaled to the block's largest entry (α = scale/|g|), with the corner −α²/c of its
+    /// rank-one coefficient c, so that the Schur complement adds c g gᵀ.
     pub(super) fn set_border(
         &self,
         layout: &BlockLayout,
@@ -119,22 +183,24 @@ impl AxisymModel {
         }
         let scale = v.iter().fold(0.0f64, |s, a| s.max(a.abs())).max(1e-300);
         let n = layout.kept;
-        let borders = self.border_vectors(layout.m, x);
-        for (j, (b, _)) in borders.iter().enumerate() {
+        let borders = self.border_vectors(layout.m, x, params);
+        for (j, (b, norm, c)) in borders.iter().enumerate() {
             for (i, bi) in b.iter().enumerate() {
-                for (r, c) in [(i, n + j), (n + j, i)] {
-                    let k = layout.pattern.position(r, c).expect("a border entry");
+                for (r, col) in [(i, n + j), (n + j, i)] {
+                    let k = layout.pattern.position(r, col).expect("a border entry");
                     v[k] = scale * bi;
                 }
             }
-        }
-        // The gas amount's column is the last of the block m = 0, with its corner.
-        if let (0, Some((_, norm))) = (layout.m, borders.last()) {
-            if self.gas_amount.is_some() {
-                let j = n + borders.len() - 1;
-                let k = layout.pattern.position(j, j).expect("a border corner");
-                v[k] = self.gas_corner(x, params, scale, *norm);
-            }
+            let alpha = scale / norm;
+            let k = layout
+                .pattern
+                .position(n + j, n + j)
+                .expect("a border corner");
+            v[k] = if c.is_finite() {
+                -alpha * alpha / c
+            } else {
+                0.0
+            };
         }
     }
 }

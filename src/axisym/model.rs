@@ -4,7 +4,8 @@
 //! clamped end holds both, a node on the axis holds u_r = 0 (regularity), and on a closed
 //! meridian (both ends on the axis, none clamped) the first node's u_z is held too, which
 //! removes the rigid translation along z and costs nothing at an equilibrium of a
-//! self-equilibrated load (a gas in a closed membrane exerts no net force).
+//! self-equilibrated load (a gas in a closed membrane exerts no net force), unless a plane
+//! carries the membrane (docs/theory.md §15.16).
 //!
 //! The potential is Π = Π_membrane + Σ Π_pressure, each integrated by Gauss–Legendre
 //! quadrature along the meridian and exactly in θ (a factor 2π):
@@ -68,6 +69,19 @@ pub enum Pressure {
         /// ω².
         omega2: Quantity,
     },
+    /// A fixed amount of gas at constant temperature on the side n points away from,
+    /// sharing the enclosure with the fluid amount `fluid` (docs/theory.md §3.5, §15.16):
+    /// Π = −C ln V_g + P_atm V_g with V_g = V − V*, the over-pressure C/V_g − P_atm. A global
+    /// term: the model resolves it to a gas at that over-pressure for the integrals along the
+    /// meridian and adds the rank-one stiffness (C/V_g²) ∇V ∇Vᵀ ([`super::gas`]).
+    GasAmount {
+        /// C = absolute pressure × gas volume.
+        amount: Quantity,
+        /// The ambient (absolute) pressure P_atm.
+        ambient: f64,
+        /// V*: the fluid's amount in the same enclosure (none: the gas fills it).
+        fluid: Option<Quantity>,
+    },
 }
 
 /// p, p'(z), and the same for the derivative along parameter `j` (when it enters).
@@ -80,7 +94,7 @@ struct PressureAt {
 impl Pressure {
     fn sign(&self) -> f64 {
         match self {
-            Pressure::Gas { .. } | Pressure::Spin { .. } => -1.0,
+            Pressure::Gas { .. } | Pressure::Spin { .. } | Pressure::GasAmount { .. } => -1.0,
             Pressure::Fluid { front, .. } => {
                 if *front {
                     1.0
@@ -94,7 +108,7 @@ impl Pressure {
     /// ∂p/∂r at radius r (the spin's; 0 for a pressure of z alone).
     fn radial(&self, r: f64, params: &[f64]) -> f64 {
         match self {
-            Pressure::Gas { .. } | Pressure::Fluid { .. } => 0.0,
+            Pressure::Gas { .. } | Pressure::Fluid { .. } | Pressure::GasAmount { .. } => 0.0,
             Pressure::Spin { density, omega2 } => density.value(params) * omega2.value(params) * r,
         }
     }
@@ -111,6 +125,8 @@ impl Pressure {
                 };
                 (0.5 * d * r * r, 0.0)
             }
+            // Resolved to a gas at its over-pressure before any integral (`resolved_pressures`).
+            (Pressure::GasAmount { .. }, _) => (0.0, 0.0),
             (Pressure::Gas { pressure }, None) => (pressure.value(params), 0.0),
             (Pressure::Gas { pressure }, Some(j)) => (
                 if pressure.parameter() == Some(j) {
@@ -159,17 +175,17 @@ impl Pressure {
     }
 
     /// The parameter index of the level of a fluid with a wetting line.
-    fn level_parameter(&self) -> Option<usize> {
+    pub(super) fn level_parameter(&self) -> Option<usize> {
         match self {
-            Pressure::Gas { .. } | Pressure::Spin { .. } => None,
+            Pressure::Gas { .. } | Pressure::Spin { .. } | Pressure::GasAmount { .. } => None,
             Pressure::Fluid { filled: true, .. } => None,
             Pressure::Fluid { level, .. } => level.parameter(),
         }
     }
 
-    fn level(&self, params: &[f64]) -> Option<f64> {
+    pub(super) fn level(&self, params: &[f64]) -> Option<f64> {
         match self {
-            Pressure::Gas { .. } | Pressure::Spin { .. } => None,
+            Pressure::Gas { .. } | Pressure::Spin { .. } | Pressure::GasAmount { .. } => None,
             Pressure::Fluid { filled: true, .. } => None,
             Pressure::Fluid { level, .. } => Some(level.value(params)),
         }
@@ -209,6 +225,32 @@ pub struct AxisymModel {
     index: Vec<[Option<usize>; 2]>,
 }
 
+/// The free unknowns of `meridian` and the index of every node's components: a clamped end
+/// holds both, a node on the axis its r, a sliding end its z, and the first pole's z when
+/// `hold_pole`.
+type Unknowns = (Vec<(usize, usize)>, Vec<[Option<usize>; 2]>);
+
+fn unknowns(meridian: &Meridian, hold_pole: bool) -> Unknowns {
+    let n = meridian.nodes.len();
+    let mut free = Vec::new();
+    let mut index = vec![[None; 2]; n];
+    for (i, x) in meridian.nodes.iter().enumerate() {
+        if meridian.is_clamped(i) {
+            continue;
+        }
+        for (c, slot) in index[i].iter_mut().enumerate() {
+            let held = (c == 0 && x[0] == 0.0)
+                || (c == 1 && hold_pole && i == 0)
+                || (c == 1 && meridian.is_sliding(i));
+            if !held {
+                *slot = Some(free.len());
+                free.push((i, c));
+            }
+        }
+    }
+    (free, index)
+}
+
 /// Π, its gradient and its Hessian over the free unknowns.
 #[derive(Debug, Clone)]
 pub struct Evaluated {
@@ -220,6 +262,10 @@ pub struct Evaluated {
     pub tangent: nalgebra::DMatrix<f64>,
     /// ∂²Π/∂q∂λ_j for every parameter j (columns).
     pub loads: nalgebra::DMatrix<f64>,
+    /// Rank-one terms c a aᵀ of the tangent (a gas amount's), over the free unknowns: part
+    /// of [`Self::tangent`] in [`AxisymModel::evaluate`], handed on separately by
+    /// [`AxisymModel::evaluate_elements`].
+    pub rank_one: Vec<(f64, Vec<f64>)>,
 }
 
 /// A symmetric Fourier block on its own pattern (both triangles stored).
@@ -233,26 +279,8 @@ pub struct Block {
 
 impl AxisymModel {
     /// The model of `meridian` under `pressures`.
-    #[allow(clippy::needless_range_loop)]
     pub fn new(meridian: Meridian, pressures: Vec<Pressure>) -> Self {
-        let n = meridian.nodes.len();
-        let closed = meridian.closed();
-        let mut free = Vec::new();
-        let mut index = vec![[None; 2]; n];
-        for (i, x) in meridian.nodes.iter().enumerate() {
-            if meridian.is_clamped(i) {
-                continue;
-            }
-            for c in 0..2 {
-                let held = (c == 0 && x[0] == 0.0)
-                    || (c == 1 && closed && i == 0)
-                    || (c == 1 && meridian.is_sliding(i));
-                if !held {
-                    index[i][c] = Some(free.len());
-                    free.push((i, c));
-                }
-            }
-        }
+        let (free, index) = unknowns(&meridian, meridian.closed());
         Self {
             meridian,
             pressures,
@@ -262,6 +290,20 @@ impl AxisymModel {
             free,
             index,
         }
+    }
+
+    /// Sets the rigid planes. A closed meridian resting on a plane is not self-equilibrated
+    /// (the plane carries the fluid's weight), so its first pole's height is then free: the
+    /// plane's contact holds the translation along z, and a start that does not touch it yet
+    /// holds the mean height instead (`[start] hold-translation`, docs/theory.md §15.16).
+    pub fn set_planes(&mut self, planes: Vec<FloorPlane>) {
+        self.planes = planes;
+        (self.free, self.index) = unknowns(&self.meridian, self.pole_held());
+    }
+
+    /// Whether the first pole's height is held: on a closed meridian without a plane.
+    pub fn pole_held(&self) -> bool {
+        self.meridian.closed() && self.planes.is_empty()
     }
 
     /// The index of the unknown of node `node`, component `c` (0: r, 1: z), if it is free.
@@ -320,6 +362,10 @@ impl AxisymModel {
                 }
             }
         })?;
+        for (c, a) in &out.rank_one {
+            let a = nalgebra::DVector::from_column_slice(a);
+            tangent += &a * a.transpose() * *c;
+        }
         out.tangent = tangent;
         Ok(out)
     }
@@ -345,7 +391,9 @@ impl AxisymModel {
             gradient: vec![0.0; nq],
             tangent: nalgebra::DMatrix::zeros(0, 0),
             loads: nalgebra::DMatrix::zeros(nq, params.len()),
+            rank_one: Vec::new(),
         };
+        let pressures = self.resolved_pressures(&x, params)?;
         let lam = self.meridian.prestretch;
         let h = self.meridian.material.thickness;
         for e in 0..self.meridian.elements() {
@@ -393,7 +441,7 @@ impl AxisymModel {
             // Pressures: Π = −s π ∫ r² p(z) z_ξ dξ, a fluid with a wetting line over the
             // element's wet part only (docs/theory.md §15.14).
             let zs = [x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]];
-            for load in &self.pressures {
+            for load in &pressures {
                 if let Pressure::Spin { .. } = load {
                     // On the 5-point rule below.
                     continue;
@@ -455,7 +503,7 @@ impl AxisymModel {
                 }
             }
             // The spin: r⁴ z_ξ is of degree 9 on a quadratic element.
-            for load in &self.pressures {
+            for load in &pressures {
                 let Pressure::Spin { density, omega2 } = *load else {
                     continue;
                 };
@@ -499,6 +547,7 @@ impl AxisymModel {
             }
             tangent(e, &kk);
         }
+        self.add_gas_amounts(q, &x, params, &mut out)?;
         if !out.energy.is_finite() || out.gradient.iter().any(|v| !v.is_finite()) {
             return Err(AxisymError::NonFinite);
         }
@@ -519,8 +568,8 @@ impl AxisymModel {
     /// node), the kept columns it is made of, and their number. Clamped ends hold everything;
     /// a node on the axis keeps W for m = 0, U = −V for m = 1 and nothing for m ≥ 2; on a
     /// closed meridian the rigid motions of the block are removed by holding unknowns that
-    /// meet them (docs/theory.md §15.2): W at the first node for m = 0 (translation along z)
-    /// and V at the widest node (rotation about z); for m = 1 the first node's U = −V
+    /// meet them (docs/theory.md §15.2): W at the first node for m = 0 (translation along z;
+    /// not with a plane, which holds it, §15.16) and V at the widest node (rotation about z); for m = 1 the first node's U = −V
     /// (translation) and W at the widest node (rotation about a horizontal axis).
     pub(super) fn kept_map(&self, m: usize) -> (Vec<Option<(usize, f64)>>, usize) {
         let nodes = &self.meridian.nodes;
@@ -538,7 +587,7 @@ impl AxisymModel {
             let rigid = |c: usize| {
                 closed
                     && match (m, c) {
-                        (0, 2) => i == 0,
+                        (0, 2) => i == 0 && self.pole_held(),
                         (0, 1) | (1, 2) => i == widest,
                         _ => false,
                     }
@@ -655,8 +704,8 @@ impl AxisymModel {
         // The spin on the 5-point rule (its terms are of degree 9), a fluid with a wetting
         // line on its element's wet part (docs/theory.md §15.14), the rest on 4 points.
         let (spin, rest): (Vec<Pressure>, Vec<Pressure>) = self
-            .pressures
-            .iter()
+            .resolved_pressures(&x, params)?
+            .into_iter()
             .partition(|p| matches!(p, Pressure::Spin { .. }));
         let (wetting, rest): (Vec<Pressure>, Vec<Pressure>) =
             rest.into_iter().partition(|p| p.level(params).is_some());
@@ -1026,6 +1075,82 @@ pub(super) mod tests {
             .map(|k| 0.03 * ((k as f64) * 1.7).sin() + 0.02)
             .collect();
         (model, q, vec![0.7, 0.6, 1.7, 0.2, 50.0])
+    }
+
+    /// A closed sphere stretched off its reference, resting on a plane (its pole's height
+    /// free), holding a fixed amount of gas above a fluid whose level crosses an element:
+    /// the Paper 2 potentials at a generic state. Parameters: C, V*, ρ, h, the plane's
+    /// offset.
+    pub(crate) fn generic_paper2() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let mat = MooneyRivlin::new(1.0, 0.1, 0.1);
+        let meridian = Meridian::sphere(1.0, 6, 1.05, mat).unwrap();
+        let pressures = vec![
+            Pressure::GasAmount {
+                amount: Quantity::Parameter(0),
+                ambient: 0.7,
+                fluid: Some(Quantity::Parameter(1)),
+            },
+            Pressure::Fluid {
+                density: Quantity::Parameter(2),
+                gravity: Quantity::Value(1.3),
+                level: Quantity::Parameter(3),
+                front: false,
+                filled: false,
+            },
+        ];
+        let mut model = AxisymModel::new(meridian, pressures);
+        model.set_planes(vec![FloorPlane {
+            normal_z: 1.0,
+            offset: Quantity::Parameter(4),
+            penalty: Quantity::Value(40.0),
+            exponent: 3,
+        }]);
+        model.volume_level = Some(3);
+        let q: Vec<f64> = (0..model.dim())
+            .map(|k| 0.03 * ((k as f64) * 1.7).sin() - 0.01)
+            .collect();
+        // The plane 0.02 above the south pole: the pole's ring through it.
+        let pole = model.positions(&q).last().unwrap()[1];
+        (model, q, vec![6.0, 0.9, 0.8, -0.3, pole + 0.02])
+    }
+
+    /// The sphere on its plane: the gas amount sharing the enclosure with a partly wet fluid
+    /// (its rank-one stiffness and the loads of C and V*), the plane on the free pole.
+    #[test]
+    fn gas_amount_above_fluid_on_a_plane_matches_finite_differences() {
+        let (model, q, params) = generic_paper2();
+        assert!(!model.pole_held() && model.unknown(0, 1).is_some());
+        let x = model.positions(&q);
+        assert!(x[x.len() - 1][1] < params[4] && x[x.len() - 3][1] > params[4]);
+        assert!(x.iter().any(|p| p[1] > params[3]) && x.iter().any(|p| p[1] < params[3]));
+        let e = model.evaluate(&q, &params).unwrap();
+        assert_eq!(e.rank_one.len(), 1);
+        check_derivatives(&model, &q, &params);
+        block_is_tangent_with_rank_one(&model, &q, &params);
+    }
+
+    /// The m = 0 block without its border is the tangent less its rank-one terms.
+    fn block_is_tangent_with_rank_one(model: &AxisymModel, q: &[f64], params: &[f64]) {
+        let mut e = model.evaluate(q, params).unwrap();
+        for (c, a) in &e.rank_one {
+            let a = nalgebra::DVector::from_column_slice(a);
+            e.tangent -= &a * a.transpose() * *c;
+        }
+        let block = model.block(0, q, params).unwrap();
+        let dense = block.pattern.to_dense(&block.values);
+        let (map, _) = model.kept_map(0);
+        for (a, &(i, c)) in model.free.iter().enumerate() {
+            let ka = map[3 * i + 2 * c].unwrap().0;
+            for (b, &(j, d)) in model.free.iter().enumerate() {
+                let kb = map[3 * j + 2 * d].unwrap().0;
+                let t = e.tangent[(a, b)];
+                assert!(
+                    (dense[(ka, kb)] - t).abs() < 1e-10 * e.tangent.amax(),
+                    "({a}, {b}): block {} vs tangent {t}",
+                    dense[(ka, kb)]
+                );
+            }
+        }
     }
 
     /// Central differences of the energy and the gradient against the gradient, the tangent

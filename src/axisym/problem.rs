@@ -37,15 +37,24 @@ pub struct AxisymProblem {
 }
 
 /// The fluid-volume constraint on the path (`super::volume`): the row
-/// g = scale · (V(q) − V*), scale = −ρ g, frees the level parameter `level`.
+/// g = scale · (V_f(q, h) − V*), scale = −ρ g, frees the level parameter `level`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VolumeTarget {
     /// The level's parameter index.
     pub level: usize,
-    /// V*.
+    /// V* (when `target_parameter` is `None`).
     pub target: f64,
     /// −ρ g (the row's scale, so that ∂g/∂q is the level's load).
     pub scale: f64,
+    /// The parameter that is V*, if any.
+    pub target_parameter: Option<usize>,
+}
+
+impl VolumeTarget {
+    /// V* at the parameters `params`.
+    pub fn amount(&self, params: &[f64]) -> f64 {
+        self.target_parameter.map_or(self.target, |j| params[j])
+    }
 }
 
 /// The gas-amount constraint on the path (`super::gas`): the row
@@ -196,9 +205,18 @@ impl Problem for AxisymProblem {
                 loads.set_column(1, &e.loads.column(v.level));
                 constraint_lambda = DMatrix::zeros(1, free);
                 let x = self.model.positions(q.as_slice());
-                let dv = self.model.volume_gradient(q.as_slice());
+                let fluid = self
+                    .model
+                    .held_fluid(&x, &params)
+                    .expect("a fluid-volume constraint has its fluid");
+                let dv = self.model.free_part(&fluid.gradient);
+                // ∂g/∂h = scale · A_s, ∂g/∂V* = −scale.
+                constraint_lambda[(0, 1)] = v.scale * fluid.section;
+                if v.target_parameter == Some(self.control) {
+                    constraint_lambda[(0, 0)] = -v.scale;
+                }
                 (
-                    DVector::from_element(1, v.scale * (self.model.volume(&x) - v.target)),
+                    DVector::from_element(1, v.scale * (fluid.volume - v.amount(&params))),
                     DMatrix::from_row_slice(1, n, &dv) * v.scale,
                 )
             }
@@ -224,7 +242,11 @@ impl Problem for AxisymProblem {
             tangent: Tangent::Sparse {
                 pattern: self.pattern.clone(),
                 values,
-                rank_one: Vec::new(),
+                rank_one: e
+                    .rank_one
+                    .into_iter()
+                    .map(|(c, a)| (c, DVector::from_vec(a)))
+                    .collect(),
                 solver: self.solver.clone(),
             },
             loads,

@@ -1,8 +1,10 @@
 //! A scene on an axisymmetric mesh (`[mesh] generator = "axisymmetric"`), made into the
 //! axisymmetric model and run: the same scene keys, effects and analyses as on a 3-D mesh, for
-//! the effects the meridian implements (gas at a given over-pressure, fluid wetting the
-//! membrane wholly or in part, fluid spinning about z, fixed edges; the fluid-volume, gas-amount
-//! and fixed constraints); every other effect, constraint or key
+//! the effects the meridian implements (gas at a given over-pressure or of a fixed amount above
+//! an inside fluid, fluid wetting the membrane wholly or in part, fluid spinning about z,
+//! planes normal to the axis, fixed and sliding edges; the fluid-volume, gas-amount and fixed
+//! constraints; the held-translation start of a sphere on a plane); every other effect,
+//! constraint or key
 //! is refused in one line that names it. Stability is by wave number m = 0..=`mesh.modes`
 //! (docs/theory.md §15.3).
 
@@ -50,6 +52,8 @@ pub struct AxisymStudy {
     volume: Option<(usize, usize, scene::Target)>,
     /// The gas-amount constraint (its target `f64::NAN` while "initial", set at the start).
     gas: Option<super::GasTarget>,
+    /// `[start] hold-translation` along ±e_z: the sign.
+    hold: Option<f64>,
 }
 
 fn unsupported(what: String) -> AxisymRunError {
@@ -170,11 +174,6 @@ impl AxisymStudy {
                     )))
                 }
             }
-            if let scene::Target::Parameter(n) = &v.value {
-                return Err(unsupported(format!(
-                    "constraint[{i}].value = \"{n}\": the axisymmetric model holds a number or \"initial\""
-                )));
-            }
             let level = parameters
                 .iter()
                 .position(|p| *p == v.level)
@@ -188,18 +187,16 @@ impl AxisymStudy {
                 Effect::Gas(g) => pressures.push(Pressure::Gas {
                     pressure: index(&g.pressure),
                 }),
-                Effect::Fluid(f) => {
-                    pressures.push(Pressure::Fluid {
-                        filled: f.filled,
-                        density: index(&f.density),
-                        gravity: index(&f.gravity),
-                        level: index(&f.level),
-                        front: match f.side {
-                            scene::FluidSide::Above => true,
-                            scene::FluidSide::Below | scene::FluidSide::Inside => false,
-                        },
-                    })
-                }
+                Effect::Fluid(f) => pressures.push(Pressure::Fluid {
+                    filled: f.filled,
+                    density: index(&f.density),
+                    gravity: index(&f.gravity),
+                    level: index(&f.level),
+                    front: match f.side {
+                        scene::FluidSide::Above => true,
+                        scene::FluidSide::Below | scene::FluidSide::Inside => false,
+                    },
+                }),
                 // The fluid spinning behind the membrane, as the 3-D effect takes it.
                 Effect::Spin(s) => pressures.push(Pressure::Spin {
                     density: index(&s.density),
@@ -219,20 +216,40 @@ impl AxisymStudy {
                         exponent: p.exponent,
                     });
                 }
-                Effect::GasAmount(_) => {
-                    return Err(unsupported(format!(
-                        "effect[{i}] (type = \"{}\"): not implemented by the axisymmetric model (it implements gas, fluid, spin, plane, fixed and sliding edges); use a 3-D mesh",
-                        e.kind()
-                    )))
-                }
+                // The fluid's amount a fluid-volume constraint holds is what the gas leaves
+                // out of the enclosure (a number or a parameter: validated).
+                Effect::GasAmount(g) => pressures.push(Pressure::GasAmount {
+                    amount: index(&g.amount),
+                    ambient: g.ambient_pressure,
+                    fluid: volume.as_ref().and_then(|v| match &v.2 {
+                        scene::Target::Value(x) => Some(Quantity::Value(*x)),
+                        scene::Target::Parameter(n) => {
+                            Some(index(&scene::Quantity::Parameter(n.clone())))
+                        }
+                        scene::Target::Initial => None,
+                    }),
+                }),
             }
         }
-        if scene.start.from.is_some() || scene.start.hold_translation.is_some() {
+        if scene.start.from.is_some() {
             return Err(unsupported(
-                "start: start.from and start.hold-translation are not implemented by the axisymmetric model"
-                    .into(),
+                "start.from: not implemented by the axisymmetric model".into(),
             ));
         }
+        let hold = match scene.start.hold_translation {
+            None => None,
+            Some(d) if d[0].hypot(d[1]) > 1e-12 => {
+                return Err(unsupported(format!(
+                    "start.hold-translation = {d:?}: the axisymmetric model holds the translation along the axis only ([0, 0, ±1])"
+                )))
+            }
+            Some(_) if !meridian.closed() || planes.is_empty() => {
+                return Err(unsupported(
+                    "start.hold-translation: the axisymmetric model lowers a closed meridian (shape = \"sphere\") onto a plane effect only".into(),
+                ))
+            }
+            Some(d) => Some(d[2].signum()),
+        };
         let control_name = match &scene.analysis {
             Analysis::Path(p) => {
                 if p.branches.is_some() {
@@ -262,7 +279,7 @@ impl AxisymStudy {
                 .expect("validated control")
         });
         let mut model = AxisymModel::new(meridian, pressures);
-        model.planes = planes;
+        model.set_planes(planes);
         model.volume_level = volume.as_ref().map(|v| v.1);
         // A fluid volume needs a fluid, which the gas-amount constraint refuses: never both.
         model.gas_amount = gas.as_ref().map(|g: &super::GasTarget| g.gas);
@@ -281,6 +298,7 @@ impl AxisymStudy {
             stress_free_volume,
             volume,
             gas,
+            hold,
         })
     }
 
@@ -294,11 +312,22 @@ impl AxisymStudy {
         if self.stress_free_volume.is_some() {
             n.push("stretch".into());
         }
+        if self.has_gas_amount() {
+            n.push("gas_pressure".into());
+        }
         n
     }
 
-    /// The measures at displacement q.
-    pub fn measure(&self, q: &[f64]) -> Vec<f64> {
+    fn has_gas_amount(&self) -> bool {
+        self.model
+            .pressures
+            .iter()
+            .any(|p| matches!(p, Pressure::GasAmount { .. }))
+    }
+
+    /// The measures at displacement q, parameters `params` (the gas-amount effect's
+    /// over-pressure C/(V − V*) − P_atm depends on them).
+    pub fn measure(&self, q: &[f64], params: &[f64]) -> Vec<f64> {
         let x = self.model.positions(q);
         let nodes = &self.model.meridian.nodes;
         let max = x
@@ -310,6 +339,9 @@ impl AxisymStudy {
         let mut out = vec![max, x[0][1], v];
         if let Some(v0) = self.stress_free_volume {
             out.push((v / v0).cbrt());
+        }
+        if self.has_gas_amount() {
+            out.push(self.model.gas_pressure(&x, params));
         }
         out
     }
@@ -536,39 +568,68 @@ pub fn run(
         ..opts.clone()
     };
     let describe = |e: SolveError| AxisymRunError::Start(e.to_string());
-    let (mut q, mut lambda, mut iterations) =
-        crate::analysis::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
-            .map_err(describe)?;
-    // The fluid-volume constraint: its target measured at the start, or given; its level
-    // free from here on.
-    if let Some((effect, level, target)) = &study.volume {
-        let v0 = study.model.volume(&study.model.positions(q.as_slice()));
+    // The fluid-volume constraint at the state q: its target measured there, given, or a
+    // parameter; its level free from then on.
+    let volume_target = |q: &DVector<f64>| {
+        let (effect, level, target) = study.volume.as_ref()?;
+        let v0 = study
+            .model
+            .held_fluid(&study.model.positions(q.as_slice()), &params)
+            .expect("a fluid-volume constraint has its fluid")
+            .volume;
         let Some(Effect::Fluid(f)) = study.scene.effects.get(*effect) else {
             unreachable!("a validated fluid-volume constraint")
         };
+        let position = |n: &str| {
+            study
+                .parameters
+                .iter()
+                .position(|p| p == n)
+                .expect("validated parameter")
+        };
         let value = |x: &scene::Quantity| match x {
             scene::Quantity::Value(v) => *v,
-            scene::Quantity::Parameter(n) => {
-                params[study
-                    .parameters
-                    .iter()
-                    .position(|p| p == n)
-                    .expect("validated parameter")]
-            }
+            scene::Quantity::Parameter(n) => params[position(n)],
         };
         let scale = -value(&f.density) * value(&f.gravity);
-        let target = match target {
-            scene::Target::Value(v) => *v,
-            scene::Target::Initial | scene::Target::Parameter(_) => v0,
+        let (target, target_parameter) = match target {
+            scene::Target::Value(v) => (*v, None),
+            scene::Target::Initial => (v0, None),
+            scene::Target::Parameter(n) => (params[position(n)], Some(position(n))),
         };
-        problem.volume = Some(super::VolumeTarget {
-            level: *level,
-            target,
-            scale: if scale == 0.0 { -1.0 } else { scale },
-        });
-        let (q1, l1, it) =
-            meet(&mut problem, &q, &params, target != v0, &start_opts).map_err(describe)?;
-        (q, lambda, iterations) = (q1, l1, iterations + it);
+        Some((
+            super::VolumeTarget {
+                level: *level,
+                target,
+                scale: if scale == 0.0 { -1.0 } else { scale },
+                target_parameter,
+            },
+            target != v0,
+        ))
+    };
+    // A sphere not yet resting on its plane: its mean height held, lowered until the holding
+    // force vanishes, with the fluid's volume (so its weight) held throughout
+    // (docs/theory.md §7.8, §15.16).
+    let (q0, lambda0) = match study.hold {
+        Some(sign) => {
+            problem.volume = volume_target(&q0).map(|t| t.0);
+            let w = study.model.held_translation(sign);
+            let l0 = problem.free_values(&params);
+            crate::analysis::release::released(&mut problem, &q0, &l0, w, &start_opts)
+                .map_err(describe)?
+        }
+        None => (q0, lambda0),
+    };
+    let (mut q, mut lambda, mut iterations) =
+        crate::analysis::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
+            .map_err(describe)?;
+    if problem.volume.is_none() {
+        if let Some((target, unmet)) = volume_target(&q) {
+            problem.volume = Some(target);
+            let (q1, l1, it) =
+                meet(&mut problem, &q, &params, unmet, &start_opts).map_err(describe)?;
+            (q, lambda, iterations) = (q1, l1, iterations + it);
+        }
     }
     // The gas-amount constraint: its amount measured at the start, given, or a parameter;
     // the gas's pressure free from here on.
@@ -590,7 +651,7 @@ pub fn run(
     let k_stretch = names.iter().position(|n| n == "stretch");
     let k_displacement = names.iter().position(|n| n == "max-displacement");
     // A stop is reached where its measure passes the target from the start's side.
-    let start_measures = study.measure(q.as_slice());
+    let start_measures = study.measure(q.as_slice(), &problem.parameters(&lambda));
     let side = |k: usize, target: f64| (k, target, (start_measures[k] - target).signum());
     let stretch_side = k_stretch.zip(stop_stretch).map(|(k, t)| side(k, t));
     let displacement_side = k_displacement
@@ -599,11 +660,11 @@ pub fn run(
     let mut count = 0usize;
     let path: ModePath = match &study.scene.analysis {
         Analysis::Path(_) => {
-            let stop = |_: &AxisymProblem, p: &PathPoint| {
+            let stop = |problem: &AxisymProblem, p: &PathPoint| {
                 if stretch_side.is_none() && displacement_side.is_none() {
                     return None;
                 }
-                let now = study.measure(p.q.as_slice());
+                let now = study.measure(p.q.as_slice(), &problem.parameters(&p.lambda));
                 let passed = |s: Option<(usize, f64, f64)>| {
                     s.and_then(|(k, t, side)| ((now[k] - t) * side <= 0.0).then_some(t))
                 };
@@ -644,12 +705,16 @@ pub fn run(
         .as_ref()
         .map(|v| v.1)
         .or(study.gas.map(|g| g.gas.pressure));
-    let param_at = |l: &[f64]| {
+    let full_params = |l: &[f64]| {
         let mut p = params.clone();
         p[control] = l[0];
         if let (Some(k), Some(h)) = (level, l.get(1)) {
             p[k] = *h;
         }
+        p
+    };
+    let param_at = |l: &[f64]| {
+        let mut p = full_params(l);
         p.truncate(study.parameters.len());
         p
     };
@@ -662,7 +727,7 @@ pub fn run(
             step: i,
             arclength: p.arclength,
             parameters: param_at(p.lambda.as_slice()),
-            measures: study.measure(p.q.as_slice()),
+            measures: study.measure(p.q.as_slice(), &full_params(p.lambda.as_slice())),
             iterations: if i == 0 { iterations } else { p.iterations },
             index: ix.clone(),
         })
@@ -674,7 +739,7 @@ pub fn run(
             kind: t.kind,
             after_step: t.after_step,
             parameters: param_at(&t.lambda),
-            measures: study.measure(&t.q),
+            measures: study.measure(&t.q, &full_params(&t.lambda)),
         })
         .collect();
     let critical = path
@@ -686,7 +751,7 @@ pub fn run(
             kind: c.kind,
             after_step: c.after_step,
             parameters: param_at(&c.lambda),
-            measures: study.measure(&c.q),
+            measures: study.measure(&c.q, &full_params(&c.lambda)),
             localised: c.localised,
             eigenvalue: c.eigenvalue,
         })

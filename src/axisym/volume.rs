@@ -21,7 +21,7 @@
 //! The volume's first variation along a field of wave number m ≥ 1 is ∫ n·δx dA with
 //! n·δx ∝ cos mθ, whose θ integral vanishes: the constraint borders the block m = 0 only.
 
-use super::{shape, AxisymModel, GAUSS};
+use super::{shape, AxisymModel, Pressure, GAUSS};
 use std::f64::consts::PI;
 
 impl AxisymModel {
@@ -41,7 +41,89 @@ impl AxisymModel {
 
     /// ∂V/∂q over the free unknowns at displacement `q`.
     pub fn volume_gradient(&self, q: &[f64]) -> Vec<f64> {
-        let g = self.volume_gradient_nodes(&self.positions(q));
+        self.free_part(&self.volume_gradient_nodes(&self.positions(q)))
+    }
+}
+
+/// The volume a fluid-volume constraint holds at a state: V_f, its gradient over the nodes
+/// (r, z) and the section ∂V_f/∂h.
+#[derive(Debug, Clone)]
+pub struct HeldFluid {
+    /// V_f.
+    pub volume: f64,
+    /// ∂V_f/∂(r_i, z_i) at every node.
+    pub gradient: Vec<[f64; 2]>,
+    /// ∂V_f/∂h, the area of the section at the level (0 for a filled enclosure).
+    pub section: f64,
+    /// ρ g of the fluid.
+    pub weight: f64,
+}
+
+impl AxisymModel {
+    /// The volume of fluid below the level `h` at the nodes `x`, V_f = −π ∫_wet r² z_ξ dξ
+    /// (docs/theory.md §15.16), its gradient over the nodes and ∂V_f/∂h. The limits of the wet
+    /// part move with the state: at a wetting line ξ* (z(ξ*) = h), ∂ξ*/∂z_l = −N_l/z_ξ and
+    /// ∂ξ*/∂h = 1/z_ξ, which add π r² N_l sgn z_ξ to ∂V_f/∂z_l and −π r² sgn z_ξ to ∂V_f/∂h
+    /// (+ at an upper limit of a wet part, where z rises through h).
+    pub fn fluid_volume(&self, x: &[[f64; 2]], h: f64) -> (f64, Vec<[f64; 2]>, f64) {
+        let mut v = 0.0;
+        let mut g = vec![[0.0; 2]; x.len()];
+        let mut section = 0.0;
+        for e in 0..self.meridian.elements() {
+            let zs = [x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]];
+            let wet = super::wet_part(zs, h);
+            for &(xi, w) in &wet.rule {
+                let p = volume_point(x, e, xi, w);
+                v -= PI * p.r * p.r * p.dz * p.w;
+                for k in 0..3 {
+                    g[2 * e + k][0] -= 2.0 * PI * p.r * p.dz * p.n[k] * p.w;
+                    g[2 * e + k][1] -= PI * p.r * p.r * p.dn[k] * p.w;
+                }
+            }
+            for &(xi, slope) in &wet.crossings {
+                let p = volume_point(x, e, xi, 0.0);
+                let c = PI * p.r * p.r * slope.signum();
+                for k in 0..3 {
+                    g[2 * e + k][1] += c * p.n[k];
+                }
+                section -= c;
+            }
+        }
+        (v, g, section)
+    }
+
+    /// The fluid the fluid-volume constraint holds at the nodes `x` (the fluid whose level is
+    /// the parameter [`Self::volume_level`]): below its level, or the whole enclosure for a
+    /// filled one.
+    pub fn held_fluid(&self, x: &[[f64; 2]], params: &[f64]) -> Option<HeldFluid> {
+        let level = self.volume_level?;
+        let (filled, weight) = self.pressures.iter().find_map(|p| match p {
+            Pressure::Fluid {
+                density,
+                gravity,
+                level: l,
+                filled,
+                ..
+            } if l.parameter() == Some(level) => {
+                Some((*filled, density.value(params) * gravity.value(params)))
+            }
+            _ => None,
+        })?;
+        let (volume, gradient, section) = if filled {
+            (self.volume(x), self.volume_gradient_nodes(x), 0.0)
+        } else {
+            self.fluid_volume(x, params[level])
+        };
+        Some(HeldFluid {
+            volume,
+            gradient,
+            section,
+            weight,
+        })
+    }
+
+    /// Node gradients over the free unknowns.
+    pub fn free_part(&self, g: &[[f64; 2]]) -> Vec<f64> {
         (0..self.dim())
             .map(|k| {
                 let (i, c) = self.free_unknown(k);
@@ -49,6 +131,17 @@ impl AxisymModel {
             })
             .collect()
     }
+}
+
+/// The point ξ (weight w) of element `e` of the nodes `x`.
+fn volume_point(x: &[[f64; 2]], e: usize, xi: f64, w: f64) -> VolumePoint {
+    let (n, dn) = shape(xi);
+    let (mut r, mut dz) = (0.0, 0.0);
+    for k in 0..3 {
+        r += n[k] * x[2 * e + k][0];
+        dz += dn[k] * x[2 * e + k][1];
+    }
+    VolumePoint { w, n, dn, r, dz }
 }
 
 /// A Gauss point of element `e` of the nodes `x`: its weight, the shape functions and their
@@ -63,20 +156,12 @@ pub(super) struct VolumePoint {
 
 /// The Gauss points of element `e` of the nodes `x`.
 pub(super) fn volume_points(x: &[[f64; 2]], e: usize) -> impl Iterator<Item = VolumePoint> + '_ {
-    GAUSS.iter().map(move |&(xi, w)| {
-        let (n, dn) = shape(xi);
-        let (mut r, mut dz) = (0.0, 0.0);
-        for k in 0..3 {
-            r += n[k] * x[2 * e + k][0];
-            dz += dn[k] * x[2 * e + k][1];
-        }
-        VolumePoint { w, n, dn, r, dz }
-    })
+    GAUSS.iter().map(move |&(xi, w)| volume_point(x, e, xi, w))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::model::tests::generic_filled;
+    use super::super::model::tests::{generic_filled, generic_paper2};
     use super::super::perturbation;
     use super::*;
 
@@ -99,6 +184,54 @@ mod tests {
             );
         }
         assert!(g.iter().any(|v| v.abs() > 0.1));
+    }
+
+    /// The volume of fluid below a level crossing an element: ∇V_f and ∂V_f/∂h against
+    /// central differences of V_f, and ∇V_f is the level's load over −ρ g (docs/theory.md
+    /// §4.4), the wetting line's terms included.
+    #[test]
+    fn the_fluid_volume_below_the_level_matches_finite_differences() {
+        let (model, q, params) = generic_paper2();
+        let h = params[3];
+        let vf = |q: &[f64], h: f64| model.fluid_volume(&model.positions(q), h).0;
+        let (v, g, section) = model.fluid_volume(&model.positions(&q), h);
+        let g = model.free_part(&g);
+        let total = model.volume(&model.positions(&q));
+        assert!(v > 0.1 * total && v < 0.9 * total, "{v} of {total}");
+        let d = 1e-6;
+        for k in 0..model.dim() {
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[k] += d;
+            qm[k] -= d;
+            let fd = (vf(&qp, h) - vf(&qm, h)) / (2.0 * d);
+            assert!(
+                (fd - g[k]).abs() < 1e-8 * (1.0 + fd.abs()),
+                "{k}: {fd} vs {}",
+                g[k]
+            );
+        }
+        let fd = (vf(&q, h + d) - vf(&q, h - d)) / (2.0 * d);
+        assert!((fd - section).abs() < 1e-8 * fd.abs(), "{fd} vs {section}");
+        assert!(section > 0.1);
+        // ∂R/∂h = −ρ g ∇V_f.
+        let e = model.evaluate(&q, &params).unwrap();
+        let weight = params[2] * 1.3;
+        for (k, gk) in g.iter().enumerate() {
+            let load = e.loads[(k, 3)];
+            assert!(
+                (load + weight * gk).abs() < 1e-10 * (1.0 + load.abs()),
+                "{k}: {load} vs {}",
+                -weight * gk
+            );
+        }
+        let held = model.held_fluid(&model.positions(&q), &params).unwrap();
+        assert_eq!(held.volume, v);
+        assert!((held.weight - weight).abs() < 1e-15);
+        // A filled fluid holds the whole enclosure.
+        let (filled, qf, pf) = generic_filled();
+        let xf = filled.positions(&qf);
+        let held = filled.held_fluid(&xf, &pf).unwrap();
+        assert_eq!((held.volume, held.section), (filled.volume(&xf), 0.0));
     }
 
     /// The volume's first variation ∫ n·δx dA, sampled in θ, is ∇V·(U, W) for m = 0 and
