@@ -762,10 +762,10 @@ impl<'a> Stability<'a> {
 
     /// An evaluation buffer for [`Stability::analyse`] that assembles only the triangles
     /// around the orbit representatives (all a block restriction reads; ≈ 1/|G| of the
-    /// mesh). Its F and K are exact only there. With a block of complex type (built without
-    /// orbit-local form) the whole mesh is assembled.
+    /// mesh). Its F and K are exact only there. With a block without orbit-local form the
+    /// whole mesh is assembled.
     pub fn new_evaluation(&self) -> Evaluation {
-        // A block without orbit-local form (complex type) reads K everywhere.
+        // A block without orbit-local form reads K everywhere.
         let Some(reps) = self
             .basis
             .irreps
