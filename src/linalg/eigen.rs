@@ -106,6 +106,14 @@ pub enum EigenError {
     /// The dense eigenproblem of the Lanczos tridiagonal matrix failed.
     #[error("Lanczos tridiagonal eigen: {0}")]
     Tridiagonal(String),
+    /// The inertia of the realification of a Hermitian matrix (an operator with a complex
+    /// structure, [`Operator::partner`]) counted an odd number of eigenvalues below a shift:
+    /// its double eigenvalues have come apart, and half the count would be wrong.
+    #[error("the real form of a Hermitian block counts {counted} eigenvalues below the shift, an odd number")]
+    OddPairedCount {
+        /// The count of the real form.
+        counted: usize,
+    },
     /// The eigenvalues found did not reproduce the inertia ([`lowest_eigenpairs`]).
     #[error("after {attempts} attempts the inertia counts {counted} eigenvalues where Lanczos found {found}")]
     Unverified {
@@ -203,6 +211,14 @@ pub trait Operator {
     fn apply(&self, x: &mut [f64]) -> Result<(), FactorError>;
     /// x ← its orthogonal projection onto the subspace (the identity by default).
     fn project(&self, _x: &mut [f64]) {}
+    /// x ← J x for a complex structure J of the operator (Jᵀ = −J, J² = −I, J commuting
+    /// with the operator and the projection), when the operator is the realification of a
+    /// Hermitian one: every eigenvalue is then double, with eigenvectors x and J x, and
+    /// [`Operator::rank`] counts each such pair once. Returns `false` (the default) when
+    /// there is none, leaving x alone.
+    fn partner(&self, _x: &mut [f64]) -> bool {
+        false
+    }
 }
 
 impl Operator for SymmetricFactorization {
@@ -294,6 +310,13 @@ pub struct Pairs {
 /// on `op` = (A − shift·I)⁻¹ with full reorthogonalisation, restarted from a fresh direction
 /// on breakdown (see the [module documentation](self)); with `vectors`, the Ritz vectors too.
 /// `attempt` varies the start vector (0 is the default one).
+///
+/// With a complex structure J ([`Operator::partner`]) every new Lanczos vector (and every
+/// fresh direction) is also orthogonalised against the partners J v_i of the earlier ones:
+/// the Krylov space V then stays orthogonal to J V (as it is in exact arithmetic, vᵀ J w
+/// vanishing for any two Krylov vectors of one start because J times a power of the operator
+/// is antisymmetric), so the iteration is complex Lanczos on the Hermitian operator and
+/// finds each double eigenvalue once.
 pub fn nearest_eigenpairs(
     op: &dyn Operator,
     shift: f64,
@@ -314,10 +337,25 @@ pub fn nearest_eigenpairs(
     }
     let mut rng = SEED ^ attempt.wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let mut target = (3 * k).max(START_SPACE).min(rank);
-    // Columns 0..=m: the Lanczos vectors and the next one.
+    // Columns 0..=m: the Lanczos vectors and the next one; with a complex structure, their
+    // partners J v_i.
+    let paired = op.partner(&mut vec![0.0; dim]);
     let mut v = faer::Mat::<f64>::zeros(dim, target + 1);
-    let start = fresh_direction(op, v.as_ref(), 0, &mut rng).ok_or(EigenError::StartVector)?;
+    let mut jv = faer::Mat::<f64>::zeros(if paired { dim } else { 0 }, target + 1);
+    let set_partner = |jv: &mut faer::Mat<f64>, j: usize, x: faer::ColRef<'_, f64>| {
+        if paired {
+            let mut y: Vec<f64> = x.iter().copied().collect();
+            op.partner(&mut y);
+            jv.col_mut(j)
+                .iter_mut()
+                .zip(&y)
+                .for_each(|(a, b)| *a = *b);
+        }
+    };
+    let start = fresh_direction(op, v.as_ref(), jv.as_ref(), 0, &mut rng)
+        .ok_or(EigenError::StartVector)?;
     v.col_mut(0).copy_from(&start);
+    set_partner(&mut jv, 0, v.col(0));
     let (mut alpha, mut beta): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut exhausted = false;
     let mut largest = 0.0f64;
@@ -325,6 +363,7 @@ pub fn nearest_eigenpairs(
     loop {
         if v.ncols() < target + 1 {
             v.resize_with(dim, target + 1, |_, _| 0.0);
+            jv.resize_with(jv.nrows(), target + 1, |_, _| 0.0);
         }
         while alpha.len() < target && !exhausted {
             let j = alpha.len();
@@ -336,7 +375,7 @@ pub fn nearest_eigenpairs(
             let a = v.col(j).transpose() * wc.as_ref();
             alpha.push(a);
             largest = largest.max(a.abs());
-            orthogonalise(v.as_ref(), j + 1, wc.as_mut());
+            orthogonalise_paired(v.as_ref(), jv.as_ref(), j + 1, wc.as_mut());
             let b = wc.norm_l2();
             if b > BREAKDOWN_TOLERANCE * largest && j + 1 < rank {
                 wc /= faer::Scale(b);
@@ -345,12 +384,15 @@ pub fn nearest_eigenpairs(
             } else {
                 beta.push(0.0);
                 match (j + 1 < rank)
-                    .then(|| fresh_direction(op, v.as_ref(), j + 1, &mut rng))
+                    .then(|| fresh_direction(op, v.as_ref(), jv.as_ref(), j + 1, &mut rng))
                     .flatten()
                 {
                     Some(r) => v.col_mut(j + 1).copy_from(&r),
                     None => exhausted = true,
                 }
+            }
+            if !exhausted {
+                set_partner(&mut jv, j + 1, v.col(j + 1));
             }
         }
         let m = alpha.len();
@@ -676,11 +718,28 @@ fn orthogonalise(v: faer::MatRef<'_, f64>, j: usize, mut w: faer::ColMut<'_, f64
     }
 }
 
+/// `w` minus its projections on the first `j` columns of `v` and, when `jv` has rows, of
+/// their partners `jv` (orthonormal together), twice.
+fn orthogonalise_paired(
+    v: faer::MatRef<'_, f64>,
+    jv: faer::MatRef<'_, f64>,
+    j: usize,
+    mut w: faer::ColMut<'_, f64>,
+) {
+    orthogonalise(v, j, w.as_mut());
+    if jv.nrows() > 0 {
+        orthogonalise(jv, j, w.as_mut());
+        orthogonalise(v, j, w.as_mut());
+    }
+}
+
 /// A pseudo-random unit vector in the operator's subspace orthogonal to the first `j` columns
-/// of `v` (xorshift state `rng`), or `None` when they span the subspace.
+/// of `v` and of their partners `jv` (xorshift state `rng`), or `None` when they span the
+/// subspace.
 fn fresh_direction(
     op: &dyn Operator,
     v: faer::MatRef<'_, f64>,
+    jv: faer::MatRef<'_, f64>,
     j: usize,
     rng: &mut u64,
 ) -> Option<faer::Col<f64>> {
@@ -695,7 +754,7 @@ fn fresh_direction(
     op.project(&mut x);
     let mut r = faer::Col::<f64>::from_fn(x.len(), |i| x[i]);
     let before = r.norm_l2();
-    orthogonalise(v, j, r.as_mut());
+    orthogonalise_paired(v, jv, j, r.as_mut());
     let norm = r.norm_l2();
     if norm.is_nan() || norm <= 1e-8 * before {
         return None;
