@@ -19,8 +19,11 @@
 //!
 //! The index of the state is Σ_μ d_μ · neg(block μ).
 //!
-//! A complex-type irrep (the E_k of a chiral C_n) has a Hermitian block (docs/theory.md
-//! §10.6), solved dense: its eigenvalues, each d = 2 times in K, its negative count from them.
+//! A complex-type irrep (the E_k of a chiral C_n) has a Hermitian block H (docs/theory.md
+//! §10.6), each eigenvalue d = 2 times in K. Solved dense, its eigenvalues are H's; solved
+//! sparse, the real block R = [[A, C], [−C, A]] is bordered J-invariantly (J [p; q] = [−q; p]),
+//! its inertia halved (an odd count is an error, and the block goes dense) and its Lanczos
+//! kept orthogonal to the partners J v, so each double eigenvalue is found once.
 //!
 //! How a block is solved (docs/theory.md §8.6–§8.8):
 //! - the negative count, at every path point, from the inertia of one sparse LBLᵀ of the
