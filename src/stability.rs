@@ -288,14 +288,15 @@ impl BorderedBlock {
             .inertia()
             .ok_or(EigenError::Factor(FactorError::NotFactorized))?;
         let p = self.constrained.len();
-        let below = inertia
-            .negative
-            .checked_sub(p + self.d_negative)
-            .ok_or(EigenError::Unverified {
-                attempts: 0,
-                counted: inertia.negative,
-                found: p + self.d_negative,
-            })?;
+        let below =
+            inertia
+                .negative
+                .checked_sub(p + self.d_negative)
+                .ok_or(EigenError::Unverified {
+                    attempts: 0,
+                    counted: inertia.negative,
+                    found: p + self.d_negative,
+                })?;
         match self.paired {
             false => Ok(below),
             true if below % 2 == 0 => Ok(below / 2),

@@ -168,7 +168,9 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
             // The orbit-local R (from K's columns at the representatives) is the explicit
             // column-by-column Bᵀ K B, and its sparse form the same matrix without the
             // rank-one terms.
-            let slow = b.first().restrict_tangent_to(b.first(), layout, &eval, &mut work);
+            let slow = b
+                .first()
+                .restrict_tangent_to(b.first(), layout, &eval, &mut work);
             let slow = (&slow + slow.transpose()) * 0.5;
             assert!(
                 (&k0 - &slow).amax() < 1e-12 * scale,

@@ -51,7 +51,10 @@ fn three_ways(
         assert_eq!(full.negatives(), near.negatives(), "{method:?}");
         for (a, b) in full.blocks.iter().zip(&near.blocks) {
             for (x, y) in a.eigenvalues.iter().zip(&b.eigenvalues) {
-                assert!((x - y).abs() <= 1e-10 * full.scale, "{method:?}: {x} vs {y}");
+                assert!(
+                    (x - y).abs() <= 1e-10 * full.scale,
+                    "{method:?}: {x} vs {y}"
+                );
             }
         }
         full
@@ -63,8 +66,7 @@ fn three_ways(
 /// modes are equal; every Lanczos vector x of a complex block satisfies R x = λ x for its R.
 fn agree(model: &dyn Model, basis: &AdaptedBasis, u: &[f64], params: &[f64], what: &str) {
     let lowest = 6;
-    let [dense, lanczos, by_cost] =
-        three_ways(model, basis, u, params, Detail::Vectors { lowest });
+    let [dense, lanczos, by_cost] = three_ways(model, basis, u, params, Detail::Vectors { lowest });
     let scale = dense.scale;
     let layout = model.layout();
     let mut eval = model.new_evaluation();
@@ -91,7 +93,11 @@ fn agree(model: &dyn Model, basis: &AdaptedBasis, u: &[f64], params: &[f64], wha
             assert_eq!(2 * l.size, l.vectors.nrows(), "{name}: real coordinates");
             let r = ib.first().restrict_tangent(layout, &eval, &mut Vec::new());
             // (With rigid modes the vectors are those of R on their complement.)
-            let checked = if l.rigid_modes == 0 { l.vectors.ncols() } else { 0 };
+            let checked = if l.rigid_modes == 0 {
+                l.vectors.ncols()
+            } else {
+                0
+            };
             for (k, lam) in l.eigenvalues.iter().enumerate().take(checked) {
                 let x: DVector<f64> = l.vectors.column(k).into_owned();
                 let res = (&r * &x - &x * *lam).amax() / x.amax();
@@ -147,8 +153,13 @@ fn chiral_free_disc_deflates_rigid_modes_in_e1_alike() {
     })
     .unwrap();
     let m = &sym.mesh;
-    let membrane =
-        Membrane::new(&m.nodes, &m.triangles, MooneyRivlin::new(1.0, 0.2, 1.0), 1.1).unwrap();
+    let membrane = Membrane::new(
+        &m.nodes,
+        &m.triangles,
+        MooneyRivlin::new(1.0, 0.2, 1.0),
+        1.1,
+    )
+    .unwrap();
     let model = FeModel::new(
         m.nodes.clone(),
         m.triangles.clone(),

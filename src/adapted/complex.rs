@@ -290,11 +290,7 @@ pub(super) fn complex_basis(
         seeds: seeds.iter().map(|&(_, s)| s).collect(),
         by_orbit,
     };
-    SparseBasis::with_complex_seeds(
-        layout.unknowns(),
-        u.into_iter().chain(v).collect(),
-        complex,
-    )
+    SparseBasis::with_complex_seeds(layout.unknowns(), u.into_iter().chain(v).collect(), complex)
 }
 
 /// The Hermitian m × m block H = A + i C of the real 2m × 2m block R = [[A, C], [−C, A]] in

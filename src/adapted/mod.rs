@@ -359,7 +359,8 @@ impl SparseBasis {
                                     .collect()
                             };
                             let out = (pick(e), pick(mc + e));
-                            h.iter_mut().for_each(|x| *x = nalgebra::Complex::new(0.0, 0.0));
+                            h.iter_mut()
+                                .for_each(|x| *x = nalgebra::Complex::new(0.0, 0.0));
                             out
                         },
                     )

@@ -58,7 +58,8 @@ pub use payoff::{
 };
 pub use peer::{run_peer, PeerResult};
 pub use ponding::{
-    ponding_level, ponding_level_in, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML};
+    ponding_level, ponding_level_in, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML,
+};
 pub use run::{
     run_accuracy, run_axisym, run_branching, run_curves, run_scaling, run_thesis, AccuracyOptions,
     BenchFiles, ScalingOptions, ThesisOptions,
