@@ -19,8 +19,11 @@
 //!
 //! The index of the state is Σ_μ d_μ · neg(block μ).
 //!
-//! A complex-type irrep (the E_k of a chiral C_n) has a Hermitian block (docs/theory.md
-//! §10.6), solved dense: its eigenvalues, each d = 2 times in K, its negative count from them.
+//! A complex-type irrep (the E_k of a chiral C_n) has a Hermitian block H (docs/theory.md
+//! §10.6), each eigenvalue d = 2 times in K. Solved dense, its eigenvalues are H's; solved
+//! sparse, the real block R = [[A, C], [−C, A]] is bordered J-invariantly (J [p; q] = [−q; p]),
+//! its inertia halved (an odd count is an error, and the block goes dense) and its Lanczos
+//! kept orthogonal to the partners J v, so each double eigenvalue is found once.
 //!
 //! How a block is solved (docs/theory.md §8.6–§8.8):
 //! - the negative count, at every path point, from the inertia of one sparse LBLᵀ of the
@@ -159,7 +162,30 @@ const SPARSE_SOLVE_SECONDS_PER_VALUE: f64 = 4.0e-9;
 /// eigenvalues by a dense solve: three numeric factorisations (the count at 0, the shift,
 /// the check) and about max(3·lowest, 40) + 20 solves, against the m³ of the dense solve.
 pub fn lanczos_is_cheaper(m: usize, lowest: usize, factorization: &SymmetricFactorization) -> bool {
-    let dense = DENSE_EIGEN_SECONDS_PER_M3 * (m as f64).powi(3);
+    lanczos_beats(
+        DENSE_EIGEN_SECONDS_PER_M3 * (m as f64).powi(3),
+        lowest,
+        factorization,
+    )
+}
+
+/// As [`lanczos_is_cheaper`] for a complex-type block of 2m real columns (`factorization`
+/// of its real form): the dense solve is of the Hermitian m × m block, about four times the
+/// flops of a real one of that size.
+pub fn lanczos_is_cheaper_complex(
+    m: usize,
+    lowest: usize,
+    factorization: &SymmetricFactorization,
+) -> bool {
+    lanczos_beats(
+        4.0 * DENSE_EIGEN_SECONDS_PER_M3 * (m as f64).powi(3),
+        lowest,
+        factorization,
+    )
+}
+
+/// Whether the Lanczos estimate on `factorization` is below `dense` seconds.
+fn lanczos_beats(dense: f64, lowest: usize, factorization: &SymmetricFactorization) -> bool {
     let solves = (3 * lowest).max(40) as f64 + 20.0;
     let sparse = 3.0 * SPARSE_FACTOR_SECONDS_PER_FLOP * factorization.flops()
         + solves * SPARSE_SOLVE_SECONDS_PER_VALUE * factorization.factor_len() as f64;
@@ -201,6 +227,34 @@ struct BorderedBlock {
     held: usize,
     /// Largest |B_μᵀ K r| over the rigid modes, relative to ‖K‖.
     rigid_residual: f64,
+    /// A complex-type block (docs/theory.md §10.6): K_μ is the real R = [[A, C], [−C, A]],
+    /// commuting with J [p; q] = [−q; p], its border is J-invariant, every eigenvalue of the
+    /// restricted matrix is double and counts once.
+    paired: bool,
+}
+
+/// x ← J x, J [p; q] = [−q; p]: the partner of real coordinates in a complex-type block's
+/// basis [u, v] (multiplication by −i of the complex coordinates z = p − i q).
+fn partner_in_place(x: &mut [f64]) {
+    let m = x.len() / 2;
+    let (p, q) = x.split_at_mut(m);
+    for (pi, qi) in p.iter_mut().zip(q.iter_mut()) {
+        let (a, b) = (*pi, *qi);
+        *pi = -b;
+        *qi = a;
+    }
+}
+
+/// The columns of r followed by their partners J r (a J-invariant span).
+fn with_partners(r: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut out = DMatrix::zeros(r.nrows(), 2 * r.ncols());
+    for (k, c) in r.column_iter().enumerate() {
+        out.set_column(k, &c);
+        let mut x: Vec<f64> = c.iter().copied().collect();
+        partner_in_place(&mut x);
+        out.set_column(r.ncols() + k, &DVector::from_vec(x));
+    }
+    out
 }
 
 impl BorderedBlock {
@@ -215,7 +269,9 @@ impl BorderedBlock {
 
     /// The eigenvalues of the restricted matrix below σ, from a factorisation of M − σ J:
     /// In(M) = In(E_D) + In(S − σ) + (p, p, 0). A zero pivot (σ an eigenvalue to round-off)
-    /// is an error with `strict`, else it counts as neither negative nor positive.
+    /// is an error with `strict`, else it counts as neither negative nor positive. A paired
+    /// (complex-type) block counts each double eigenvalue once: half the count, which must be
+    /// even ([`EigenError::OddPairedCount`] otherwise).
     fn count_below(
         &self,
         fact: &mut SymmetricFactorization,
@@ -232,14 +288,20 @@ impl BorderedBlock {
             .inertia()
             .ok_or(EigenError::Factor(FactorError::NotFactorized))?;
         let p = self.constrained.len();
-        inertia
-            .negative
-            .checked_sub(p + self.d_negative)
-            .ok_or(EigenError::Unverified {
-                attempts: 0,
-                counted: inertia.negative,
-                found: p + self.d_negative,
-            })
+        let below =
+            inertia
+                .negative
+                .checked_sub(p + self.d_negative)
+                .ok_or(EigenError::Unverified {
+                    attempts: 0,
+                    counted: inertia.negative,
+                    found: p + self.d_negative,
+                })?;
+        match self.paired {
+            false => Ok(below),
+            true if below % 2 == 0 => Ok(below / 2),
+            true => Err(EigenError::OddPairedCount { counted: below }),
+        }
     }
 }
 
@@ -255,13 +317,24 @@ impl Operator for BlockFamily<'_> {
         self.block.m
     }
     fn rank(&self) -> usize {
-        Bordered::new(self.fact, self.block.m, &self.block.constrained).rank()
+        let rank = Bordered::new(self.fact, self.block.m, &self.block.constrained).rank();
+        if self.block.paired {
+            rank / 2
+        } else {
+            rank
+        }
     }
     fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
         Bordered::new(self.fact, self.block.m, &self.block.constrained).apply(x)
     }
     fn project(&self, x: &mut [f64]) {
         Bordered::new(self.fact, self.block.m, &self.block.constrained).project(x)
+    }
+    fn partner(&self, x: &mut [f64]) -> bool {
+        if self.block.paired {
+            partner_in_place(x);
+        }
+        self.block.paired
     }
 }
 
@@ -468,7 +541,7 @@ fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
 fn complex_block(
     ib: &crate::adapted::IrrepBasis,
     k: &DMatrix<f64>,
-    r: &DMatrix<f64>,
+    (r, rigid_modes): (&DMatrix<f64>, usize),
     scale: f64,
     with_vectors: bool,
 ) -> BlockSpectrum {
@@ -480,7 +553,7 @@ fn complex_block(
     let rc = DMatrix::from_fn(m, rc_cols.len(), |i, j| rc_cols[j][i]);
     // ‖z‖ = ‖[p; q]‖: a rigid column of order one stays of order one.
     let rigid = ComplexComplement::of(&rc, 1e-12);
-    let rigid_modes = rigid.rank();
+    let held = rigid.rank().saturating_sub(rigid_modes);
     let rigid_residual = if r.ncols() > 0 {
         (k * r).amax() / (scale * r.amax().max(1e-300))
     } else {
@@ -501,8 +574,7 @@ fn complex_block(
         dim: ib.dim,
         size: m,
         rigid_modes,
-        // Held neutral motions are deflated in the real blocks only; a complex block keeps them.
-        held: 0,
+        held,
         rigid_residual,
         eigenvalues: values,
         complete: true,
@@ -561,8 +633,18 @@ impl<'a> Stability<'a> {
     ) -> Option<BorderedBlock> {
         let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
         let m = b.dim();
+        let paired = b.is_complex();
         // Border columns: zero-E first (rigid and held span, zero-C constraints), then
-        // invertible D.
+        // invertible D. A complex-type block borders J-invariantly: the rigid columns with
+        // their partners, each rank-one term c a aᵀ as (c/2)(a aᵀ + J a (J a)ᵀ) — the part of
+        // it that commutes with J, as the dense Hermitian block takes it.
+        let paired_r;
+        let r = if paired {
+            paired_r = with_partners(r);
+            &paired_r
+        } else {
+            r
+        };
         let rigid = Complement::of(r, 1e-12);
         let deflated = rigid.rank();
         let mut zero_cols: Vec<DVector<f64>> =
@@ -571,9 +653,22 @@ impl<'a> Stability<'a> {
         let mut d_block: Vec<(usize, usize, f64)> = Vec::new();
         let mut d_negative = 0;
         for (c, a) in &eval.rank_one {
-            if *c != 0.0 {
+            if *c == 0.0 {
+                continue;
+            }
+            let ar = b.restrict(a);
+            if paired {
+                let mut jar: Vec<f64> = ar.iter().copied().collect();
+                partner_in_place(&mut jar);
+                for col in [ar, DVector::from_vec(jar)] {
+                    let k = d_cols.len();
+                    d_cols.push(col);
+                    d_block.push((k, k, -2.0 / c));
+                    d_negative += usize::from(*c > 0.0);
+                }
+            } else {
                 let k = d_cols.len();
-                d_cols.push(b.restrict(a));
+                d_cols.push(ar);
                 d_block.push((k, k, -1.0 / c));
                 d_negative += usize::from(*c > 0.0);
             }
@@ -666,8 +761,9 @@ impl<'a> Stability<'a> {
             values: mv,
             diagonal,
             rigid_modes,
-            held: deflated - rigid_modes,
+            held: if paired { deflated / 2 } else { deflated }.saturating_sub(rigid_modes),
             rigid_residual,
+            paired,
         })
     }
 
@@ -691,7 +787,7 @@ impl<'a> Stability<'a> {
         let mut spectrum = BlockSpectrum {
             irrep: String::new(),
             dim: 0,
-            size: m,
+            size: if block.paired { m / 2 } else { m },
             rigid_modes: block.rigid_modes,
             held: block.held,
             rigid_residual: block.rigid_residual,
@@ -762,10 +858,10 @@ impl<'a> Stability<'a> {
 
     /// An evaluation buffer for [`Stability::analyse`] that assembles only the triangles
     /// around the orbit representatives (all a block restriction reads; ≈ 1/|G| of the
-    /// mesh). Its F and K are exact only there. With a block of complex type (built without
-    /// orbit-local form) the whole mesh is assembled.
+    /// mesh). Its F and K are exact only there. With a block without orbit-local form the
+    /// whole mesh is assembled.
     pub fn new_evaluation(&self) -> Evaluation {
-        // A block without orbit-local form (complex type) reads K everywhere.
+        // A block without orbit-local form reads K everywhere.
         let Some(reps) = self
             .basis
             .irreps
@@ -875,7 +971,13 @@ impl<'a> Stability<'a> {
                         .collect::<Vec<DVector<f64>>>(),
                 )
             };
-            let rigid_modes = Complement::of(&r, 1e-12).rank();
+            // A complex-type block deflates the complex span of the rigid modes: r and J r,
+            // each pair one mode.
+            let rigid_modes = if ib.complex {
+                Complement::of(&with_partners(&r), 1e-12).rank() / 2
+            } else {
+                Complement::of(&r, 1e-12).rank()
+            };
             // Held mean motions, at the reference positions, deflated with them.
             let r_rigid = r.clone();
             let r = if self.holds.is_empty() {
@@ -923,8 +1025,13 @@ impl<'a> Stability<'a> {
                         && match self.method {
                             BlockEigen::Lanczos => true,
                             BlockEigen::ByCost => self.factorizations[mu].lock().is_ok_and(|g| {
-                                g.as_ref()
-                                    .is_some_and(|(_, f)| lanczos_is_cheaper(m, lowest, f))
+                                g.as_ref().is_some_and(|(_, f)| {
+                                    if ib.complex {
+                                        lanczos_is_cheaper_complex(m / 2, lowest, f)
+                                    } else {
+                                        lanczos_is_cheaper(m, lowest, f)
+                                    }
+                                })
                             }),
                             BlockEigen::Dense | BlockEigen::DenseUpTo(_) => false,
                         };
@@ -942,7 +1049,6 @@ impl<'a> Stability<'a> {
                             return BlockSpectrum {
                                 irrep: ib.name.clone(),
                                 dim: ib.dim,
-                                size: m,
                                 ..spectrum
                             };
                         }
@@ -951,7 +1057,7 @@ impl<'a> Stability<'a> {
             }
             let k = b.restrict_tangent(layout, eval, &mut Vec::new());
             if ib.complex {
-                return complex_block(ib, &k, &r, scale, with_vectors);
+                return complex_block(ib, &k, (&r, rigid_modes), scale, with_vectors);
             }
             let rigid = Complement::of(&r, 1e-12);
             let held = rigid.rank() - rigid_modes;

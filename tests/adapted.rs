@@ -165,6 +165,36 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
                 "{name}: {}",
                 b.name
             );
+            // The orbit-local R (from K's columns at the representatives) is the explicit
+            // column-by-column Bᵀ K B, and its sparse form the same matrix without the
+            // rank-one terms.
+            let slow = b
+                .first()
+                .restrict_tangent_to(b.first(), layout, &eval, &mut work);
+            let slow = (&slow + slow.transpose()) * 0.5;
+            assert!(
+                (&k0 - &slow).amax() < 1e-12 * scale,
+                "{name}: orbit-local {} differs from the explicit block by {:e}",
+                b.name,
+                (&k0 - &slow).amax() / scale
+            );
+            let (pattern, values) = b
+                .first()
+                .restrict_tangent_sparse(layout, &eval)
+                .expect("a complex-type block has an orbit-local form");
+            let sparse = pattern.to_dense(&values);
+            let mut rank_one = DMatrix::zeros(2 * m, 2 * m);
+            for (cr, av) in &eval.rank_one {
+                let ar = b.first().restrict(av);
+                rank_one += &ar * ar.transpose() * *cr;
+            }
+            let sparse = DMatrix::from_fn(2 * m, 2 * m, |i, j| sparse[(i, j)]) + rank_one;
+            assert!(
+                (&k0 - &sparse).amax() < 1e-12 * scale,
+                "{name}: sparse {} differs from the dense block by {:e}",
+                b.name,
+                (&k0 - &sparse).amax() / scale
+            );
             o += 2 * m;
             continue;
         }

@@ -8,6 +8,7 @@ mod axisym;
 mod balloon;
 mod bench_smoke;
 mod branch;
+mod chiral;
 mod cli;
 mod cli_branch;
 mod cli_compare;

@@ -20,12 +20,25 @@
 //! R's, each once instead of twice: every eigenvalue of E_k's block is double in K by
 //! construction. An eigenvector z of H is the real field Σ_e Re(z_e) u_e − Im(z_e) v_e, i.e.
 //! the real coordinates [Re z; −Im z] in [u, v]; its partner (i z) is [Im z; Re z].
+//!
+//! **Orbit-local form.** As for the real irreps (module docs of [`crate::adapted`]), H needs
+//! K only at the orbit representatives: with P Hermitian, P² = P and P K = K P,
+//!
+//!   H_{fe} = (P s_f)ᴴ K P s_e = s_fᴴ P K s_e = (1/|G|) Σ_g conj χ(g) s_fᴴ (T(g) K s_e)_{i_f},
+//!
+//! where K s_e lives on the neighbours j of e's representative and only the elements g with
+//! π_g(j) = i_f (f's representative) contribute. R is then [[Re H, Im H], [−Im H, Re H]] on
+//! the pattern of H repeated four times.
 
+use super::orbit::OrbitFrame;
 use super::SparseBasis;
+use crate::linalg::SymmetricPattern;
 use crate::model::Layout;
 use meshes::GroupAction;
 use nalgebra::{Complex, DMatrix, Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::Arc;
 
 type C64 = Complex<f64>;
 
@@ -41,19 +54,172 @@ pub(super) fn character(matrices: &[DMatrix<f64>], j: &DMatrix<f64>) -> Vec<C64>
         .collect()
 }
 
+/// The orbit-local form of a complex-type block (module docs): per complex column e its
+/// representative node and complex seed s_e (b_e = P s_e), and conj χ(g)/|G| per element.
+#[derive(Debug, Clone)]
+pub(super) struct ComplexSeeds {
+    frame: Arc<OrbitFrame>,
+    /// conj χ(g)/|G|.
+    coef: Vec<C64>,
+    /// Representative node of each complex column's orbit.
+    pub(super) rep: Vec<u32>,
+    /// The complex seed of each column at its representative.
+    seeds: Vec<Vector3<C64>>,
+    /// The complex columns on each free orbit (contiguous).
+    by_orbit: Vec<Range<u32>>,
+}
+
+/// Per-thread scratch of [`ComplexSeeds::hermitian_column`]: the nodes touched by K s_e and
+/// K s_e at them.
+#[derive(Default)]
+pub(super) struct HermitianScratch {
+    touched: Vec<u32>,
+    w: Vec<Vector3<C64>>,
+}
+
+impl ComplexSeeds {
+    /// Number m of complex columns.
+    pub(super) fn len(&self) -> usize {
+        self.rep.len()
+    }
+
+    /// Column e of H = bᴴ K b (module docs) added into `out` (length m).
+    pub(super) fn hermitian_column(
+        &self,
+        e: usize,
+        layout: &Layout,
+        tangent: &[f64],
+        scratch: &mut HermitianScratch,
+        out: &mut [C64],
+    ) {
+        let frame = &*self.frame;
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let i0 = self.rep[e] as usize;
+        let s = self.seeds[e];
+        let HermitianScratch { touched, w } = scratch;
+        touched.clear();
+        w.clear();
+        for c in 0..3 {
+            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+            let range = col_ptr[dof]..col_ptr[dof + 1];
+            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
+                let (j, comp) = frame.node_of[r];
+                let t = match touched.iter().position(|&n| n == j) {
+                    Some(t) => t,
+                    None => {
+                        touched.push(j);
+                        w.push(Vector3::zeros());
+                        touched.len() - 1
+                    }
+                };
+                w[t][comp as usize] += s[c] * k;
+            }
+        }
+        for (t, &j) in touched.iter().enumerate() {
+            let cols = self.by_orbit[frame.orbit_of[j as usize] as usize].clone();
+            if cols.is_empty() {
+                continue;
+            }
+            for &g in frame.to_rep(j as usize) {
+                let r = &frame.rotations[g as usize];
+                let wt = &w[t];
+                let x = Vector3::from_fn(|a, _| {
+                    (0..3).map(|c| wt[c] * r[(a, c)]).sum::<C64>() * self.coef[g as usize]
+                });
+                for f in cols.clone() {
+                    let sf = &self.seeds[f as usize];
+                    out[f as usize] += (0..3).map(|c| sf[c].conj() * x[c]).sum::<C64>();
+                }
+            }
+        }
+    }
+
+    /// The pattern of H: column e meets every column on an orbit that holds a neighbour of
+    /// e's representative (by K's pattern).
+    fn hermitian_pattern(&self, layout: &Layout) -> Vec<(usize, usize)> {
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let mut entries = Vec::new();
+        let mut orbits: Vec<u32> = Vec::new();
+        for e in 0..self.rep.len() {
+            let i0 = self.rep[e] as usize;
+            orbits.clear();
+            for c in 0..3 {
+                let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+                for &r in &row_idx[col_ptr[dof]..col_ptr[dof + 1]] {
+                    let o = self.frame.orbit_of[self.frame.node_of[r].0 as usize];
+                    if !orbits.contains(&o) {
+                        orbits.push(o);
+                    }
+                }
+            }
+            for &o in &orbits {
+                entries.extend(self.by_orbit[o as usize].clone().map(|f| (f as usize, e)));
+            }
+        }
+        entries
+    }
+
+    /// The pattern of the real R = [[A, C], [−C, A]] (2m × 2m): H's pattern in each quarter.
+    pub(super) fn real_pattern(&self, layout: &Layout) -> SymmetricPattern {
+        let m = self.len();
+        let entries = self.hermitian_pattern(layout);
+        SymmetricPattern::from_entries(
+            2 * m,
+            entries
+                .into_iter()
+                .flat_map(|(f, e)| [(f, e), (f, m + e), (m + f, e), (m + f, m + e)]),
+        )
+    }
+
+    /// The dense H = bᴴ K b from the representatives' columns of K (without rank-one terms).
+    pub(super) fn hermitian_dense(&self, layout: &Layout, tangent: &[f64]) -> DMatrix<C64> {
+        let m = self.len();
+        let mut h = DMatrix::<C64>::zeros(m, m);
+        if m == 0 {
+            return h;
+        }
+        h.as_mut_slice()
+            .par_chunks_mut(m)
+            .enumerate()
+            .for_each_init(HermitianScratch::default, |scratch, (e, col)| {
+                self.hermitian_column(e, layout, tangent, scratch, col)
+            });
+        h
+    }
+}
+
+/// The real 2m × 2m R = [[Re H, Im H], [−Im H, Re H]] of a Hermitian m × m H (module docs).
+pub(super) fn realify(h: &DMatrix<C64>) -> DMatrix<f64> {
+    let m = h.nrows();
+    DMatrix::from_fn(2 * m, 2 * m, |i, j| {
+        let (f, e) = (i % m, j % m);
+        match (i < m, j < m) {
+            (true, true) | (false, false) => h[(f, e)].re,
+            (true, false) => h[(f, e)].im,
+            (false, true) => -h[(f, e)].im,
+        }
+    })
+}
+
 /// The real columns [u_1 … u_m, v_1 … v_m] of the isotypic component of the complex-type
-/// irrep with character `chi` on the free `orbits` (module docs).
+/// irrep with character `chi` on the free `orbits` (module docs), with their orbit-local
+/// form.
 pub(super) fn complex_basis(
     action: &GroupAction,
     layout: &Layout,
+    frame: &Arc<OrbitFrame>,
     orbits: &[Vec<usize>],
     chi: &[C64],
 ) -> SparseBasis {
     let group = action.group();
     let order = group.order() as f64;
     let mut seeds: Vec<(usize, Vector3<C64>)> = Vec::new();
+    let mut by_orbit = Vec::with_capacity(orbits.len());
     for orbit in orbits {
         let i0 = orbit[0];
+        let start = seeds.len() as u32;
         let mut gram = DMatrix::<C64>::zeros(3, 3);
         for h in (0..group.order()).filter(|&h| action.node_perm(h)[i0] == i0) {
             let r = group.element(h);
@@ -74,6 +240,7 @@ pub(super) fn complex_basis(
             let y = eig.eigenvectors.column(k) / C64::new(lam.sqrt(), 0.0);
             seeds.push((i0, Vector3::new(y[0], y[1], y[2])));
         }
+        by_orbit.push(start..seeds.len() as u32);
     }
     let rotations: Vec<Matrix3<f64>> = group.elements().to_vec();
     let columns: Vec<(Column, Column)> = seeds
@@ -116,7 +283,14 @@ pub(super) fn complex_basis(
         })
         .collect();
     let (u, v): (Vec<_>, Vec<_>) = columns.into_iter().unzip();
-    SparseBasis::from_columns(layout.unknowns(), u.into_iter().chain(v).collect())
+    let complex = ComplexSeeds {
+        frame: frame.clone(),
+        coef: chi.iter().map(|c| c.conj() / order).collect(),
+        rep: seeds.iter().map(|&(i, _)| i as u32).collect(),
+        seeds: seeds.iter().map(|&(_, s)| s).collect(),
+        by_orbit,
+    };
+    SparseBasis::with_complex_seeds(layout.unknowns(), u.into_iter().chain(v).collect(), complex)
 }
 
 /// The Hermitian m × m block H = A + i C of the real 2m × 2m block R = [[A, C], [−C, A]] in

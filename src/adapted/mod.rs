@@ -30,7 +30,9 @@
 //! **Complex type.** The 2-D irreps E_k of a chiral group have commutant ℂ, and the formulas
 //! above (which rest on Schur's P_{ab} P_{cd} = δ_{bc} P_{ad}) do not hold for them; their
 //! isotypic component is built from the complex projector of their 1-D complex character
-//! instead, and their block is Hermitian (see `complex.rs` and docs/theory.md §10.6).
+//! instead, and their block is Hermitian (see `complex.rs` and docs/theory.md §10.6). Its
+//! columns have an orbit-local form of their own (complex seeds), from which the real block
+//! R = [[A, C], [−C, A]] is restricted, dense or sparse, from the representatives as above.
 
 mod complex;
 mod orbit;
@@ -63,6 +65,8 @@ pub struct SparseBasis {
     by_dof: std::sync::OnceLock<Vec<Vec<u32>>>,
     /// The orbit-local form, when the basis was built from a group action.
     seeds: Option<Seeds>,
+    /// The orbit-local form of a complex-type block's columns [u, v] (complex.rs).
+    complex: Option<complex::ComplexSeeds>,
     /// The sparsity pattern of Bᵀ K B (built on first use),
     /// and for each stored entry the slot of its transpose.
     pattern: std::sync::OnceLock<(Arc<SymmetricPattern>, Vec<u32>)>,
@@ -85,8 +89,31 @@ impl SparseBasis {
             columns,
             by_dof: std::sync::OnceLock::new(),
             seeds: Some(seeds),
+            complex: None,
             pattern: std::sync::OnceLock::new(),
         }
+    }
+
+    fn with_complex_seeds(
+        unknowns: usize,
+        columns: Vec<Vec<(usize, f64)>>,
+        complex: complex::ComplexSeeds,
+    ) -> Self {
+        Self {
+            unknowns,
+            columns,
+            by_dof: std::sync::OnceLock::new(),
+            seeds: None,
+            complex: Some(complex),
+            pattern: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// Whether the columns are the [u, v] of a complex-type block (docs/theory.md §10.6):
+    /// then Bᵀ K B = [[A, C], [−C, A]] commutes with J [p; q] = [−q; p] and every eigenvalue
+    /// is double.
+    pub fn is_complex(&self) -> bool {
+        self.complex.is_some()
     }
 
     fn from_columns(unknowns: usize, columns: Vec<Vec<(usize, f64)>>) -> Self {
@@ -95,6 +122,7 @@ impl SparseBasis {
             columns,
             by_dof: std::sync::OnceLock::new(),
             seeds: None,
+            complex: None,
             pattern: std::sync::OnceLock::new(),
         }
     }
@@ -127,9 +155,12 @@ impl SparseBasis {
     /// Bᵀ v for a G-invariant v (T(g) v = v, such as the residual and the load vectors at a
     /// symmetric state), from v's entries at the orbit representatives only: with b = Σ_b
     /// P_{0b} s_b, ⟨b, v⟩ = Σ_b ⟨s_b, P_{b0} v⟩, which is ⟨s, v⟩ for the trivial irrep and 0
-    /// for any other (Σ_g D(g) = 0). Falls back to [`SparseBasis::restrict`] for a basis
-    /// without orbit-local form.
+    /// for any other (Σ_g D(g) = 0), a complex-type block included (Σ_g conj χ(g) = 0).
+    /// Falls back to [`SparseBasis::restrict`] for a basis without orbit-local form.
     pub fn restrict_invariant(&self, v: &[f64]) -> DVector<f64> {
+        if self.complex.is_some() {
+            return DVector::zeros(self.dim());
+        }
         let Some(seeds) = &self.seeds else {
             return self.restrict(v);
         };
@@ -194,8 +225,12 @@ impl SparseBasis {
     /// without orbit-local form): F, ∂F/∂Λ and K's columns there are all that
     /// [`SparseBasis::restrict_invariant`] and [`SparseBasis::restrict_tangent`] read.
     pub fn representatives(&self) -> Option<Vec<usize>> {
-        let seeds = self.seeds.as_ref()?;
-        let mut reps: Vec<usize> = seeds.rep.iter().map(|&i| i as usize).collect();
+        let rep = match (&self.seeds, &self.complex) {
+            (Some(seeds), _) => &seeds.rep,
+            (None, Some(complex)) => &complex.rep,
+            (None, None) => return None,
+        };
+        let mut reps: Vec<usize> = rep.iter().map(|&i| i as usize).collect();
         reps.dedup();
         Some(reps)
     }
@@ -222,9 +257,17 @@ impl SparseBasis {
         eval: &Evaluation,
         work: &mut Vec<f64>,
     ) -> DMatrix<f64> {
-        let out = match &self.seeds {
-            Some(seeds) => self.restrict_tangent_seeded(seeds, layout, eval),
-            None => self.restrict_tangent_to(self, layout, eval, work),
+        let out = match (&self.seeds, &self.complex) {
+            (Some(seeds), _) => self.restrict_tangent_seeded(seeds, layout, eval),
+            (None, Some(complex)) => {
+                let mut out = complex::realify(&complex.hermitian_dense(layout, &eval.tangent));
+                for (c, a) in &eval.rank_one {
+                    let ar = self.restrict(a);
+                    out += &ar * ar.transpose() * *c;
+                }
+                out
+            }
+            (None, None) => self.restrict_tangent_to(self, layout, eval, work),
         };
         (&out + out.transpose()) * 0.5
     }
@@ -260,14 +303,21 @@ impl SparseBasis {
     /// The sparse part of Bᵀ K B (without `eval`'s rank-one terms) on its own pattern, for
     /// a basis built from a group action (`None` otherwise). The pattern — column e meets
     /// the columns on the orbits next to e's representative — is computed on first use.
+    /// A complex-type block gives its real R = [[A, C], [−C, A]] (complex.rs).
     pub fn restrict_tangent_sparse(
         &self,
         layout: &Layout,
         eval: &Evaluation,
     ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
-        let seeds = self.seeds.as_ref()?;
+        if self.seeds.is_none() && self.complex.is_none() {
+            return None;
+        }
         let (pattern, transpose) = self.pattern.get_or_init(|| {
-            let pattern = seeds.block_pattern(layout);
+            let pattern = match (&self.seeds, &self.complex) {
+                (Some(seeds), _) => seeds.block_pattern(layout),
+                (None, Some(complex)) => complex.real_pattern(layout),
+                (None, None) => unreachable!("checked above"),
+            };
             let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
             let mut transpose = vec![0u32; pattern.nnz()];
             for e in 0..pattern.n() {
@@ -282,8 +332,65 @@ impl SparseBasis {
         });
         let pattern = pattern.clone();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let columns: Vec<Vec<f64>> = match (&self.seeds, &self.complex) {
+            (Some(seeds), _) => self.seeded_columns(seeds, &pattern, layout, eval),
+            (None, Some(complex)) => {
+                // Column e of H gives the real columns e and m + e of R.
+                let mc = complex.len();
+                let halves: Vec<(Vec<f64>, Vec<f64>)> = (0..mc)
+                    .into_par_iter()
+                    .map_init(
+                        || {
+                            (
+                                complex::HermitianScratch::default(),
+                                vec![nalgebra::Complex::new(0.0, 0.0); mc],
+                            )
+                        },
+                        |(scratch, h), e| {
+                            complex.hermitian_column(e, layout, &eval.tangent, scratch, h);
+                            let pick = |col: usize| -> Vec<f64> {
+                                row_idx[col_ptr[col]..col_ptr[col + 1]]
+                                    .iter()
+                                    .map(|&r| match (r < mc, col < mc) {
+                                        (true, true) | (false, false) => h[r % mc].re,
+                                        (true, false) => h[r].im,
+                                        (false, true) => -h[r - mc].im,
+                                    })
+                                    .collect()
+                            };
+                            let out = (pick(e), pick(mc + e));
+                            h.iter_mut()
+                                .for_each(|x| *x = nalgebra::Complex::new(0.0, 0.0));
+                            out
+                        },
+                    )
+                    .collect();
+                let (u, v): (Vec<_>, Vec<_>) = halves.into_iter().unzip();
+                u.into_iter().chain(v).collect()
+            }
+            (None, None) => unreachable!("checked above"),
+        };
+        // Symmetrise: the two triangles agree up to round-off.
+        let raw: Vec<f64> = columns.concat();
+        let values = raw
+            .iter()
+            .zip(transpose)
+            .map(|(v, &q)| 0.5 * (v + raw[q as usize]))
+            .collect();
+        Some((pattern, values))
+    }
+
+    /// The columns of the sparse Bᵀ K B of a real seeded block on its `pattern`.
+    fn seeded_columns(
+        &self,
+        seeds: &Seeds,
+        pattern: &SymmetricPattern,
+        layout: &Layout,
+        eval: &Evaluation,
+    ) -> Vec<Vec<f64>> {
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let m = self.dim();
-        let columns: Vec<Vec<f64>> = (0..m)
+        (0..m)
             .into_par_iter()
             .map_init(
                 || (ColumnScratch::new(seeds.d), vec![0.0; m]),
@@ -295,15 +402,7 @@ impl SparseBasis {
                     values
                 },
             )
-            .collect();
-        // Symmetrise: the two triangles agree up to round-off.
-        let raw: Vec<f64> = columns.concat();
-        let values = raw
-            .iter()
-            .zip(transpose)
-            .map(|(v, &q)| 0.5 * (v + raw[q as usize]))
-            .collect();
-        Some((pattern, values))
+            .collect()
     }
 
     /// The columns containing each unknown.
@@ -455,7 +554,7 @@ impl AdaptedBasis {
     /// (module docs): the first copy from the seeds of each orbit, partner a as
     /// P^μ_{a0} of those columns. A complex-type irrep gets the 2m real columns of its
     /// whole isotypic component from the complex projector of its character
-    /// (docs/theory.md §10.6), built explicitly (without orbit-local form). Fixed orbits are
+    /// (docs/theory.md §10.6), in an orbit-local form of complex seeds. Fixed orbits are
     /// skipped.
     pub fn new(action: &GroupAction, layout: &Layout) -> Result<Self, AdaptedError> {
         let group = action.group();
@@ -501,7 +600,7 @@ impl AdaptedBasis {
                             AdaptedError::ComplexType(irrep.name().into(), group.name().into())
                         })?;
                     let chi = complex::character(irrep.matrices(), j);
-                    let first = complex::complex_basis(action, layout, &orbits, &chi);
+                    let first = complex::complex_basis(action, layout, &frame, &orbits, &chi);
                     (first, predicted / 2, true)
                 }
             };

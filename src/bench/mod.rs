@@ -57,7 +57,9 @@ pub use payoff::{
     C8V_DENSITY, DISC_FLUID_ABOVE_TOML,
 };
 pub use peer::{run_peer, PeerResult};
-pub use ponding::{ponding_level, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML};
+pub use ponding::{
+    ponding_level, ponding_level_in, ponding_scene, wave_number, PondingLevel, Rung, PONDING_TOML,
+};
 pub use run::{
     run_accuracy, run_axisym, run_branching, run_curves, run_scaling, run_thesis, AccuracyOptions,
     BenchFiles, ScalingOptions, ThesisOptions,

@@ -43,8 +43,10 @@ pub struct Rung {
 /// A ponding run on one disc.
 #[derive(Debug, Clone)]
 pub struct PondingLevel {
-    /// Radial divisions of the C7v disc.
+    /// Radial divisions of the disc.
     pub divisions: usize,
+    /// The disc's group: C7v, or the chiral C7 of [`ponding_level_in`].
+    pub group: String,
     /// Triangles.
     pub elements: usize,
     /// Unknowns.
@@ -58,8 +60,28 @@ pub struct PondingLevel {
 /// The ponding ladder on a C7v disc with `divisions`, density swept over [0, 20] in 60 steps
 /// (past the (3, 1) rung at 14.65 even on coarse discs), by [`crate::analysis::run`].
 pub fn ponding_level(divisions: usize) -> Result<PondingLevel, String> {
+    ponding_level_in(divisions, None)
+}
+
+/// [`ponding_level`] on the same disc with its group replaced by `group` (a subgroup of C7v:
+/// the chiral C7, whose E_k blocks are of complex type).
+pub fn ponding_level_in(divisions: usize, group: Option<&str>) -> Result<PondingLevel, String> {
     let t = Instant::now();
-    let mut study = Study::build(ponding_scene(divisions, 20.0, 60)?).map_err(|e| e.to_string())?;
+    let scene = match group {
+        None => ponding_scene(divisions, 20.0, 60)?,
+        Some(g) => {
+            let text = PONDING_TOML
+                .replace(
+                    "divisions = 16 ",
+                    &format!("group = \"{g}\"\ndivisions = {divisions} "),
+                )
+                .replace("max = 46.0 ", "max = 20.0 ")
+                .replace("samples = 92", "samples = 60");
+            Scene::from_toml_str(&text, &format!("ponding on {g}, divisions {divisions}"))
+                .map_err(|e| e.to_string())?
+        }
+    };
+    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
     let r = crate::analysis::run(&mut study, |_, _| {})
         .map_err(|e| e.to_string())?
         .report;
@@ -88,6 +110,7 @@ pub fn ponding_level(divisions: usize) -> Result<PondingLevel, String> {
     }
     Ok(PondingLevel {
         divisions,
+        group: study.action.group().name().to_string(),
         elements: study.model.layout().triangles().len(),
         unknowns: study.model.unknowns(),
         rungs,

@@ -795,6 +795,59 @@ pub fn ponding_table(levels: &[PondingLevel]) -> String {
     text
 }
 
+/// The ponding ladder on the chiral disc beside the C7v one of the same divisions: the same
+/// rungs (each E_k double on both), the difference of their densities, and both times.
+pub fn ponding_chiral_table(reference: &PondingLevel, chiral: &PondingLevel) -> String {
+    let mut text = String::new();
+    let md = &mut text;
+    let _ = writeln!(
+        md,
+        "\n### The same ladder on the chiral {} disc (d = {})\n\n\
+         A twisted pattern without mirrors, so another mesh with its own discretisation \
+         error; its E_k blocks are of complex type (docs/theory.md §10.6), solved dense or \
+         sparse by cost like the real ones.\n",
+        chiral.group, chiral.divisions
+    );
+    let _ = writeln!(
+        md,
+        "| (m, k) | {0} irrep | {0} | {1} irrep | {1} | difference |",
+        reference.group, chiral.group
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for r in &reference.rungs {
+        let _ = write!(
+            md,
+            "| ({}, {}) | {} (×{}) | {:.6} |",
+            r.mk.0, r.mk.1, r.irrep, r.multiplicity, r.rho
+        );
+        match chiral.rungs.iter().find(|s| s.mk == r.mk) {
+            Some(s) => {
+                let _ = writeln!(
+                    md,
+                    " {} (×{}) | {:.6} | {:.3e} |",
+                    s.irrep,
+                    s.multiplicity,
+                    s.rho,
+                    (s.rho - r.rho).abs()
+                );
+            }
+            None => {
+                let _ = writeln!(md, " – | – | – |");
+            }
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\n- {}: `run` in {} ms; {}: `run` in {} ms ({} unknowns each).",
+        reference.group,
+        ms(reference.time),
+        chiral.group,
+        ms(chiral.time),
+        chiral.unknowns
+    );
+    text
+}
+
 /// Relative error against wall time, log–log, one series for the maximum and one for the
 /// minimum, each point labelled with its frequency. No font files are read (SVG text).
 pub fn accuracy_svg(levels: &[BalloonLevel]) -> Result<String, Box<dyn std::error::Error>> {

@@ -8,7 +8,7 @@ use super::full_path::{full_path_stability, FullPathStability};
 use super::one_line;
 use super::payoff::{c8v_payoff, payoff, PayoffCase};
 use super::peer::run_peer;
-use super::ponding::ponding_level;
+use super::ponding::{ponding_level, ponding_level_in};
 use super::report;
 use super::scaling::{scaling_level, ScalingFits};
 use crate::output::write_atomic;
@@ -169,6 +169,14 @@ pub fn run_accuracy(
         ponding.push(ponding_level(d).map_err(|e| format!("ponding d = {d}: {}", one_line(&e)))?);
     }
     md += &report::ponding_table(&ponding);
+    // The same ladder on the chiral C7 disc of the finest level: complex-type E_k blocks.
+    let d = divisions[1];
+    progress(&format!("ponding, chiral C7 disc with {d} divisions …"));
+    let chiral = ponding_level_in(d, Some("C7"))
+        .map_err(|e| format!("ponding on C7, d = {d}: {}", one_line(&e)))?;
+    if let Some(reference) = ponding.last() {
+        md += &report::ponding_chiral_table(reference, &chiral);
+    }
 
     // 5. Branch switching.
     let branch_divisions = if quick { 8 } else { 16 };

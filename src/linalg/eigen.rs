@@ -42,6 +42,12 @@
 //! restricted operator whose inertia a stability block counts (docs/theory.md §8.8). Ritz
 //! vectors come with the values when asked for.
 //!
+//! **Pairs.** An operator with a complex structure J ([`Operator::partner`]: the real form
+//! of a Hermitian operator, every eigenvalue double with eigenvectors x and J x) has each new
+//! Lanczos vector and every fresh direction orthogonalised against the partners J v_i too, and
+//! its rank counted in pairs: the iteration is complex Lanczos on the Hermitian operator and
+//! finds each double eigenvalue once (docs/theory.md §10.6).
+//!
 //! **The lowest eigenvalues, certified.** [`lowest_eigenpairs`] finds the n lowest
 //! eigenvalues of a [`ShiftFamily`] (a matrix that can be factorised at any shift, with the
 //! inertia of each factorisation): the inertia at σ says how many eigenvalues lie below σ,
@@ -106,6 +112,14 @@ pub enum EigenError {
     /// The dense eigenproblem of the Lanczos tridiagonal matrix failed.
     #[error("Lanczos tridiagonal eigen: {0}")]
     Tridiagonal(String),
+    /// The inertia of the realification of a Hermitian matrix (an operator with a complex
+    /// structure, [`Operator::partner`]) counted an odd number of eigenvalues below a shift:
+    /// its double eigenvalues have come apart, and half the count would be wrong.
+    #[error("the real form of a Hermitian block counts {counted} eigenvalues below the shift, an odd number")]
+    OddPairedCount {
+        /// The count of the real form.
+        counted: usize,
+    },
     /// The eigenvalues found did not reproduce the inertia ([`lowest_eigenpairs`]).
     #[error("after {attempts} attempts the inertia counts {counted} eigenvalues where Lanczos found {found}")]
     Unverified {
@@ -203,6 +217,14 @@ pub trait Operator {
     fn apply(&self, x: &mut [f64]) -> Result<(), FactorError>;
     /// x ← its orthogonal projection onto the subspace (the identity by default).
     fn project(&self, _x: &mut [f64]) {}
+    /// x ← J x for a complex structure J of the operator (Jᵀ = −J, J² = −I, J commuting
+    /// with the operator and the projection), when the operator is the realification of a
+    /// Hermitian one: every eigenvalue is then double, with eigenvectors x and J x, and
+    /// [`Operator::rank`] counts each such pair once. Returns `false` (the default) when
+    /// there is none, leaving x alone.
+    fn partner(&self, _x: &mut [f64]) -> bool {
+        false
+    }
 }
 
 impl Operator for SymmetricFactorization {
@@ -294,6 +316,13 @@ pub struct Pairs {
 /// on `op` = (A − shift·I)⁻¹ with full reorthogonalisation, restarted from a fresh direction
 /// on breakdown (see the [module documentation](self)); with `vectors`, the Ritz vectors too.
 /// `attempt` varies the start vector (0 is the default one).
+///
+/// With a complex structure J ([`Operator::partner`]) every new Lanczos vector (and every
+/// fresh direction) is also orthogonalised against the partners J v_i of the earlier ones:
+/// the Krylov space V then stays orthogonal to J V (as it is in exact arithmetic, vᵀ J w
+/// vanishing for any two Krylov vectors of one start because J times a power of the operator
+/// is antisymmetric), so the iteration is complex Lanczos on the Hermitian operator and
+/// finds each double eigenvalue once.
 pub fn nearest_eigenpairs(
     op: &dyn Operator,
     shift: f64,
@@ -314,10 +343,22 @@ pub fn nearest_eigenpairs(
     }
     let mut rng = SEED ^ attempt.wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let mut target = (3 * k).max(START_SPACE).min(rank);
-    // Columns 0..=m: the Lanczos vectors and the next one.
+    // Columns 0..=m: the Lanczos vectors and the next one; with a complex structure, their
+    // partners J v_i.
+    let paired = op.partner(&mut vec![0.0; dim]);
     let mut v = faer::Mat::<f64>::zeros(dim, target + 1);
-    let start = fresh_direction(op, v.as_ref(), 0, &mut rng).ok_or(EigenError::StartVector)?;
+    let mut jv = faer::Mat::<f64>::zeros(if paired { dim } else { 0 }, target + 1);
+    let set_partner = |jv: &mut faer::Mat<f64>, j: usize, x: faer::ColRef<'_, f64>| {
+        if paired {
+            let mut y: Vec<f64> = x.iter().copied().collect();
+            op.partner(&mut y);
+            jv.col_mut(j).iter_mut().zip(&y).for_each(|(a, b)| *a = *b);
+        }
+    };
+    let start =
+        fresh_direction(op, v.as_ref(), jv.as_ref(), 0, &mut rng).ok_or(EigenError::StartVector)?;
     v.col_mut(0).copy_from(&start);
+    set_partner(&mut jv, 0, v.col(0));
     let (mut alpha, mut beta): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut exhausted = false;
     let mut largest = 0.0f64;
@@ -325,6 +366,7 @@ pub fn nearest_eigenpairs(
     loop {
         if v.ncols() < target + 1 {
             v.resize_with(dim, target + 1, |_, _| 0.0);
+            jv.resize_with(jv.nrows(), target + 1, |_, _| 0.0);
         }
         while alpha.len() < target && !exhausted {
             let j = alpha.len();
@@ -336,7 +378,7 @@ pub fn nearest_eigenpairs(
             let a = v.col(j).transpose() * wc.as_ref();
             alpha.push(a);
             largest = largest.max(a.abs());
-            orthogonalise(v.as_ref(), j + 1, wc.as_mut());
+            orthogonalise_paired(v.as_ref(), jv.as_ref(), j + 1, wc.as_mut());
             let b = wc.norm_l2();
             if b > BREAKDOWN_TOLERANCE * largest && j + 1 < rank {
                 wc /= faer::Scale(b);
@@ -345,12 +387,15 @@ pub fn nearest_eigenpairs(
             } else {
                 beta.push(0.0);
                 match (j + 1 < rank)
-                    .then(|| fresh_direction(op, v.as_ref(), j + 1, &mut rng))
+                    .then(|| fresh_direction(op, v.as_ref(), jv.as_ref(), j + 1, &mut rng))
                     .flatten()
                 {
                     Some(r) => v.col_mut(j + 1).copy_from(&r),
                     None => exhausted = true,
                 }
+            }
+            if !exhausted {
+                set_partner(&mut jv, j + 1, v.col(j + 1));
             }
         }
         let m = alpha.len();
@@ -676,11 +721,28 @@ fn orthogonalise(v: faer::MatRef<'_, f64>, j: usize, mut w: faer::ColMut<'_, f64
     }
 }
 
+/// `w` minus its projections on the first `j` columns of `v` and, when `jv` has rows, of
+/// their partners `jv` (orthonormal together), twice.
+fn orthogonalise_paired(
+    v: faer::MatRef<'_, f64>,
+    jv: faer::MatRef<'_, f64>,
+    j: usize,
+    mut w: faer::ColMut<'_, f64>,
+) {
+    orthogonalise(v, j, w.as_mut());
+    if jv.nrows() > 0 {
+        orthogonalise(jv, j, w.as_mut());
+        orthogonalise(v, j, w.as_mut());
+    }
+}
+
 /// A pseudo-random unit vector in the operator's subspace orthogonal to the first `j` columns
-/// of `v` (xorshift state `rng`), or `None` when they span the subspace.
+/// of `v` and of their partners `jv` (xorshift state `rng`), or `None` when they span the
+/// subspace.
 fn fresh_direction(
     op: &dyn Operator,
     v: faer::MatRef<'_, f64>,
+    jv: faer::MatRef<'_, f64>,
     j: usize,
     rng: &mut u64,
 ) -> Option<faer::Col<f64>> {
@@ -695,7 +757,7 @@ fn fresh_direction(
     op.project(&mut x);
     let mut r = faer::Col::<f64>::from_fn(x.len(), |i| x[i]);
     let before = r.norm_l2();
-    orthogonalise(v, j, r.as_mut());
+    orthogonalise_paired(v, jv, j, r.as_mut());
     let norm = r.norm_l2();
     if norm.is_nan() || norm <= 1e-8 * before {
         return None;
@@ -1145,5 +1207,142 @@ mod tests {
             vec![-1.0, -0.1, 0.2]
         );
         assert_eq!(nearest([1.0, 2.0], 0.0, 5), vec![1.0, 2.0]);
+    }
+
+    /// The real form R = [[A, C], [−C, A]] of a banded Hermitian H = A + i C (m × m) with
+    /// J [p; q] = [−q; p]: its inertia halved, its partner map, its rank counted in pairs.
+    struct Paired {
+        pattern: SymmetricPattern,
+        values: Vec<f64>,
+        diagonal: Vec<usize>,
+        fact: SymmetricFactorization,
+        m: usize,
+    }
+
+    impl Paired {
+        fn new(m: usize) -> (Self, Vec<f64>) {
+            // H_ii, H_{i,i+1}, H_{i,i+3}: a spread of values around zero (some negative).
+            let h = |i: usize, j: usize| -> (f64, f64) {
+                let (a, b) = (i.min(j), i.max(j));
+                let sign = if i <= j { 1.0 } else { -1.0 };
+                match b - a {
+                    0 => ((a as f64 * 0.37).sin() * 2.0 + 0.3, 0.0),
+                    1 => (0.4 + 0.1 * (a as f64).cos(), sign * 0.3),
+                    3 => (0.05, sign * (0.2 + 0.05 * (a as f64 * 1.3).sin())),
+                    _ => (0.0, 0.0),
+                }
+            };
+            let near = |i: usize, j: usize| matches!(i.abs_diff(j), 0 | 1 | 3);
+            let r = |i: usize, j: usize| -> f64 {
+                let (f, e) = (i % m, j % m);
+                let (a, c) = h(f, e);
+                match (i < m, j < m) {
+                    (true, true) | (false, false) => a,
+                    (true, false) => c,
+                    (false, true) => -c,
+                }
+            };
+            let entries = (0..2 * m)
+                .flat_map(|j| (0..2 * m).map(move |i| (i, j)))
+                .filter(|&(i, j)| near(i % m, j % m))
+                .collect::<Vec<_>>();
+            let pattern = SymmetricPattern::from_entries(2 * m, entries);
+            let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+            let mut values = vec![0.0; pattern.nnz()];
+            for j in 0..2 * m {
+                for p in col_ptr[j]..col_ptr[j + 1] {
+                    values[p] = r(row_idx[p], j);
+                }
+            }
+            let diagonal = (0..2 * m)
+                .map(|j| pattern.position(j, j).unwrap())
+                .collect();
+            // H's eigenvalues, each once: every other one of R's dense ones.
+            let dense = sorted_dense(&pattern.to_dense(&values));
+            for pair in dense.chunks(2) {
+                assert!((pair[0] - pair[1]).abs() < 1e-12, "{pair:?} double");
+            }
+            let once = dense.iter().step_by(2).copied().collect();
+            let fact = SymmetricFactorization::new(&pattern).unwrap();
+            let paired = Self {
+                pattern,
+                values,
+                diagonal,
+                fact,
+                m,
+            };
+            (paired, once)
+        }
+    }
+
+    impl Operator for Paired {
+        fn dim(&self) -> usize {
+            2 * self.m
+        }
+        fn rank(&self) -> usize {
+            self.m
+        }
+        fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
+            self.fact.solve_in_place(x)
+        }
+        fn partner(&self, x: &mut [f64]) -> bool {
+            let (p, q) = x.split_at_mut(self.m);
+            for (a, b) in p.iter_mut().zip(q.iter_mut()) {
+                let (pa, qb) = (*a, *b);
+                *a = -qb;
+                *b = pa;
+            }
+            true
+        }
+    }
+
+    impl ShiftFamily for Paired {
+        fn factor(&mut self, shift: f64) -> Result<usize, EigenError> {
+            let mut v = self.values.clone();
+            for &p in &self.diagonal {
+                v[p] -= shift;
+            }
+            self.fact.factorize(&v).map_err(EigenError::Factor)?;
+            let negative = self.fact.inertia().unwrap().negative;
+            assert_eq!(negative % 2, 0, "the real form counts in pairs");
+            Ok(negative / 2)
+        }
+    }
+
+    /// On the real form of a Hermitian matrix, Lanczos with partner orthogonalisation finds
+    /// each double eigenvalue once (the lowest n of the Hermitian matrix, certified by the
+    /// halved inertia), with unit eigenvectors x of R orthogonal to each other's partners;
+    /// the whole space (rank m pairs) is exhausted after m values.
+    #[test]
+    fn paired_lanczos_finds_each_double_eigenvalue_once() {
+        let m = 70;
+        let (mut paired, once) = Paired::new(m);
+        let negative = once.iter().filter(|&&v| v < 0.0).count();
+        assert!(negative > 3, "{negative} negative values");
+        let n = negative + 4;
+        let found = lowest_eigenpairs(&mut paired, n, -1e-3, 1e-3, true).unwrap();
+        assert_close(&found.values, &once[..n], 1.0, 1e-10);
+        let dense = paired.pattern.to_dense(&paired.values);
+        for (x, lam) in found.vectors.iter().zip(&found.values) {
+            let xv = faer::Col::<f64>::from_fn(2 * m, |i| x[i]);
+            let res = (&dense * &xv - &xv * faer::Scale(*lam)).norm_l2();
+            assert!(res < 1e-8, "residual {res:e}");
+        }
+        for (i, x) in found.vectors.iter().enumerate() {
+            for y in &found.vectors[..i] {
+                let mut jy = y.clone();
+                paired.partner(&mut jy);
+                let (d, dj): (f64, f64) = (
+                    x.iter().zip(y).map(|(a, b)| a * b).sum(),
+                    x.iter().zip(&jy).map(|(a, b)| a * b).sum(),
+                );
+                assert!(d.abs() < 1e-8 && dj.abs() < 1e-8, "{d:e} {dj:e}");
+            }
+        }
+        // Every pair once: m values exhaust the space.
+        paired.factor(-10.0).unwrap();
+        let all = nearest_eigenpairs(&paired, -10.0, 2 * m, false, 0).unwrap();
+        assert!(all.exhausted);
+        assert_close(&all.values, &once, 1.0, 1e-9);
     }
 }
