@@ -313,6 +313,56 @@ fn the_meridian_gives_every_rung_its_continuum_value_and_distance() {
     assert!(row.contains(&memstab::text::sci(d)), "{row} lacks {d}");
 }
 
+/// The meridian's own error beside its continuum value: without `--refine`, its run at
+/// twice the elements gives |value(2N) − value(N)|, the same as the two levels of `--refine`
+/// give, which bounds its distance from the closed form and is far below the C8v distances at 64 elements (no warning); on a meridian of one
+/// element it is not, and the table says so in one warning line.
+#[test]
+fn the_meridian_reports_its_own_error_and_warns_when_it_is_coarse() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = small_ponding(dir.path());
+    let json = compare_json(&[&path, "--meshes", "axisymmetric,C8v"]);
+    assert!(json["meshes"][0]["check"].is_object(), "the check run");
+    let refined = compare_json(&[&path, "--meshes", "axisymmetric,C8v", "--refine"]);
+    assert!(
+        refined["meshes"][0]["check"].is_null(),
+        "no check run with --refine"
+    );
+    for (m, j2) in [(0u64, 5.783186), (1, 14.681971), (2, 26.374616)] {
+        let exact = PONDING_SCALE * j2;
+        let r = rung(&json, m);
+        let continuum = r["continuum"].as_f64().unwrap();
+        let own = r["continuum_error"].as_f64().unwrap();
+        assert!(own > 0.0, "m = {m}");
+        // The closed form is the model's to about 1e-6 (the level a hair above the rim,
+        // j² to 7 digits).
+        assert!(
+            (continuum - exact).abs() <= 2.0 * own + 2e-6 * exact,
+            "m = {m}: continuum {continuum}, closed form {exact}, own error {own:e}"
+        );
+        // With --refine the estimate is the one of the meridian's two levels: the same runs.
+        let r2 = rung(&refined, m);
+        let own2 = r2["continuum_error"].as_f64().unwrap();
+        assert!(
+            (own2 - own).abs() <= 1e-6 * own,
+            "m = {m}: {own2:e} vs {own:e}"
+        );
+        let d = on(r, "C8v")["levels"][0]["distances"][0].as_f64().unwrap();
+        assert!(own < 1e-3 * d.abs(), "m = {m}: {own:e} vs {d:e}");
+        assert_eq!(r["continuum_coarse"], false, "m = {m}");
+    }
+    let out = memstab(&["compare", &path, "--meshes", "axisymmetric,C8v"]);
+    let table = text(&out.stdout);
+    assert!(table.contains("continuum ±"), "{table}");
+    assert!(!table.contains("warning"), "{table}");
+    let out = memstab(&["compare", &path, "--meshes", "axisymmetric:elements=1,C8v"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let table = text(&out.stdout);
+    let warnings: Vec<&str> = table.lines().filter(|l| l.starts_with("warning")).collect();
+    assert_eq!(warnings.len(), 1, "{table}");
+    assert!(warnings[0].contains("meridian's own error"), "{table}");
+}
+
 /// The same `type = "spin"` on the meridian and on the C8v disc: the flat pre-stretched
 /// clamped disc over spinning fluid, held while ω² sweeps. The C8v values approach the
 /// meridian's at second order (6 → 12 divisions), so both discretise one continuum spin load.

@@ -267,7 +267,11 @@ fn print_table(c: &Comparison) {
                 let distance = match (continuum, c.meshes[k].generator.as_str()) {
                     (false, _) => String::new(),
                     (true, "axisymmetric") if !shown.values.is_empty() => {
-                        format!("  {:<dw$}", "continuum")
+                        // Its own error: the meridian at N against 2N elements.
+                        let own = r
+                            .continuum_error
+                            .map_or_else(String::new, |e| format!(" ±{}", sci(e)));
+                        format!("  {:<dw$}", format!("continuum{own}"))
                     }
                     (true, _) if shown.distances.is_empty() => format!("  {:<dw$}", "-"),
                     (true, _) => format!("  {:<dw$}", distances(&shown.distances)),
@@ -310,6 +314,17 @@ fn print_table(c: &Comparison) {
                 );
             }
         }
+    }
+    let coarse: Vec<String> = (c.rungs.iter().enumerate())
+        .filter(|(_, r)| r.continuum_coarse)
+        .map(|(n, _)| (n + 1).to_string())
+        .collect();
+    if !coarse.is_empty() {
+        out!(
+            "warning: the meridian's own error (its run at twice the elements; ±) is not small against the 3-D distances at rung{} {}: give it more elements (axisymmetric:elements=N)",
+            if coarse.len() > 1 { "s" } else { "" },
+            coarse.join(", ")
+        );
     }
     if !c.unmatched.is_empty() {
         out!("points without a counterpart on the reference mesh:");

@@ -352,6 +352,13 @@ pub struct Rung {
     /// The continuum's value: the image on the axisymmetric mesh (its finest run), when one
     /// is compared.
     pub continuum: Option<f64>,
+    /// The continuum value's own error estimate: |value(2N) − value(N)| of the meridian's
+    /// runs at N and 2N elements (the refined level, or its check run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuum_error: Option<f64>,
+    /// Whether that estimate is not small (above a tenth) against the smallest nonzero
+    /// |distance| of a 3-D image: the meridian is then too coarse to measure them against.
+    pub continuum_coarse: bool,
     /// Observed orders of the distance from the continuum between the runs of one group at
     /// two resolutions.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -497,6 +504,8 @@ fn rung(
         found_at: meshes[0].levels[source].resolution,
         images: all,
         continuum: None,
+        continuum_error: None,
+        continuum_coarse: false,
         orders: Vec::new(),
         rising: first.rising,
     }
@@ -612,6 +621,22 @@ pub(super) fn measure_distances(meshes: &[MeshRuns], rungs: &mut [Rung], continu
             .map(|l| l.values.iter().sum::<f64>() / l.values.len() as f64);
         rung.continuum = c;
         let Some(c) = c else { continue };
+        let mean = |l: &Image| l.values.iter().sum::<f64>() / l.values.len() as f64;
+        rung.continuum_error = match (&rung.images[continuum].levels[..], &meshes[continuum].check)
+        {
+            // Refined: the two levels' values.
+            ([a, b, ..], _) if !a.values.is_empty() && !b.values.is_empty() => {
+                Some((mean(b) - mean(a)).abs())
+            }
+            // The check run's point with the rung's m nearest the continuum value (20 %).
+            (_, Some(check)) => check
+                .critical
+                .iter()
+                .filter(|p| p.m == rung.m && (p.value - c).abs() <= 0.2 * c.abs())
+                .map(|p| (p.value - c).abs())
+                .min_by(f64::total_cmp),
+            _ => None,
+        };
         // (group, resolution, largest |distance|) of every 3-D run with images.
         let mut runs: Vec<(String, usize, f64)> = Vec::new();
         for (k, im) in rung.images.iter_mut().enumerate() {
@@ -623,6 +648,15 @@ pub(super) fn measure_distances(meshes: &[MeshRuns], rungs: &mut [Rung], continu
                 }
             }
         }
+        let nearest = runs
+            .iter()
+            .map(|r| r.2)
+            .filter(|&d| d > 0.0)
+            .min_by(f64::total_cmp);
+        rung.continuum_coarse = matches!(
+            (rung.continuum_error, nearest),
+            (Some(e), Some(d)) if e > 0.1 * d
+        );
         runs.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)));
         runs.dedup_by(|a, b| a.0 == b.0 && a.1 == b.1);
         rung.orders = runs

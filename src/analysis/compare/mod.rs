@@ -19,7 +19,10 @@
 //! - `axisymmetric` (or `axisymmetric:elements=N,…`): the scene on its meridian
 //!   (docs/theory.md §15.7), the `[mesh]` geometry carried over; its critical points, labelled
 //!   by m, are the continuum values that every rung's images are measured against
-//!   ([`Image::distances`], [`Rung::orders`]).
+//!   ([`Image::distances`], [`Rung::orders`]). The meridian's own error is estimated by its
+//!   run at twice the elements (the refined level with `refine`, else an extra run,
+//!   [`MeshRuns::check`]): [`Rung::continuum_error`] = |value(2N) − value(N)|, flagged
+//!   ([`Rung::continuum_coarse`]) when it exceeds a tenth of the smallest 3-D distance.
 //!
 //! The first mesh is the reference. [`CompareOptions::divisions`] sets the divisions of every
 //! disc and truncated sphere (an icosphere's frequency) unless a full override sets them;
@@ -199,6 +202,10 @@ pub struct MeshRuns {
     pub generator: String,
     /// One run per resolution.
     pub levels: Vec<Level>,
+    /// The meridian's run at twice its elements, without `refine` (whose second level is
+    /// that run): its own error estimate, |value(2N) − value(N)|.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub check: Option<Level>,
 }
 
 /// A critical point without a counterpart on the reference mesh.
@@ -619,6 +626,16 @@ pub fn compare(
             };
             jobs.push((k, l, job));
         }
+        // Without `refine` the meridian also runs at twice its elements, for its own error.
+        if let (1, MeshSpec::Axisymmetric(a)) = (levels, &coarse.mesh) {
+            let mut s = coarse.clone();
+            if let MeshSpec::Axisymmetric(b) = &mut s.mesh {
+                b.elements = a.elements * 2;
+            }
+            let study = AxisymStudy::build(s)
+                .map_err(|e| CompareError::Input(one_line(&format!("mesh '{}': {e}", t.label))))?;
+            jobs.push((k, 1, Job::Meridian(Box::new(study))));
+        }
         if k == 0 {
             first_scene = Some(coarse);
         }
@@ -639,15 +656,22 @@ pub fn compare(
             label: t.label.clone(),
             generator: String::new(),
             levels: Vec::new(),
+            check: None,
         })
         .collect();
-    let mut slots: Vec<Vec<Option<Level>>> = vec![vec![None; levels]; typed.len()];
+    let mut slots: Vec<Vec<Option<Level>>> = vec![vec![None; levels + 1]; typed.len()];
     for r in results {
         let (k, l, level) = r?;
         slots[k][l] = Some(level);
     }
-    for (k, s) in slots.into_iter().enumerate() {
-        meshes[k].levels = s.into_iter().map(|l| l.expect("every job ran")).collect();
+    for (k, mut s) in slots.into_iter().enumerate() {
+        // Slot `levels` is the meridian's check run, when there is one.
+        meshes[k].check = if levels == 1 { s[1].take() } else { None };
+        meshes[k].levels = s
+            .into_iter()
+            .take(levels)
+            .map(|l| l.expect("every job ran"))
+            .collect();
         meshes[k].generator = meshes[k].levels[0]
             .mesh
             .split_whitespace()
@@ -764,11 +788,13 @@ mod tests {
                 label: "C8v".into(),
                 generator: "disc".into(),
                 levels: vec![level(reference)],
+                check: None,
             },
             MeshRuns {
                 label: "C2v".into(),
                 generator: "disc".into(),
                 levels: vec![level(other)],
+                check: None,
             },
         ];
         let (rungs, unmatched) = match_rungs(&meshes, 1e-3);
