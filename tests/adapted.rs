@@ -332,7 +332,9 @@ fn chiral_discs_have_hermitian_blocks() {
 }
 
 /// On a C7v disc viewed as C7, the Hermitian block of E_k has exactly the spectrum of the
-/// C7v E_k block, and C7's A block the union of A1's and A2's.
+/// C7v E_k block, and C7's A block the union of A1's and A2's: with the rim fixed, and with
+/// it sliding in its plane z = 0 (the candidates of a complex block projected onto the plane,
+/// as a real block's are).
 #[test]
 fn c7_blocks_of_a_c7v_mesh_are_the_c7v_blocks() {
     let sym = disc(&DiscOptions {
@@ -342,8 +344,16 @@ fn c7_blocks_of_a_c7v_mesh_are_the_c7v_blocks() {
         group: None,
     })
     .unwrap();
-    let fixed = sym.mesh.boundaries["rim"].clone();
-    let model = model(&sym, &fixed, true);
+    let rim = sym.mesh.boundaries["rim"].clone();
+    let sliding: Vec<(usize, memstab::model::Vec3)> = rim
+        .iter()
+        .map(|&i| (i, memstab::model::Vec3::z()))
+        .collect();
+    c7_blocks_are_the_c7v_blocks(&sym, &model(&sym, &rim, true));
+    c7_blocks_are_the_c7v_blocks(&sym, &model(&sym, &[], true).with_sliding(&sliding));
+}
+
+fn c7_blocks_are_the_c7v_blocks(sym: &SymmetricMesh, model: &FeModel) {
     let layout = model.layout();
     let c7 = GroupAction::compute(&sym.mesh, symmetry::Group::by_name("C7").unwrap()).unwrap();
     let full = AdaptedBasis::new(&sym.action, layout).unwrap();

@@ -230,6 +230,14 @@ pub(super) fn complex_basis(
                 }
             }
         }
+        // A node sliding in a plane: only candidates within the plane (u·n = 0).
+        if let Some(n) = layout.slide_normal(i0) {
+            let p = DMatrix::<C64>::from_fn(3, 3, |c, c2| {
+                let delta = if c == c2 { 1.0 } else { 0.0 };
+                C64::new(delta - n[c] * n[c2], 0.0)
+            });
+            gram = &p * gram * &p;
+        }
         let gram = (&gram + gram.adjoint()) * C64::new(0.5, 0.0);
         let eig = SymmetricEigen::new(gram);
         // Genuine directions have eigenvalues of order |H|/|G|, round-off ones of 1e-16.
