@@ -778,6 +778,7 @@ mod tests {
                 seconds: 0.0,
                 critical,
             }],
+            check: None,
         }
     }
 
