@@ -2,8 +2,8 @@
 //! and the sparse real block R = [[A, C], [−C, A]] (its inertia halved, its lowest eigenvalues
 //! by shift-invert Lanczos kept orthogonal to the partners J v) give the same eigenvalues,
 //! each once, the same negative counts and eigenvectors of the same block — at loaded states
-//! of the ponding disc with negative eigenvalues in E_k, and on a free disc whose rigid
-//! modes lie in E1. (Every block Lanczos includes the real A block; the check is the complex
+//! of the ponding disc with negative eigenvalues in E_k, on a free disc whose rigid modes
+//! lie in E1, and with rank-one terms inside a complex block. (Every block Lanczos includes the real A block; the check is the complex
 //! ones.)
 
 use memstab::adapted::AdaptedBasis;
@@ -175,4 +175,52 @@ fn chiral_free_disc_deflates_rigid_modes_in_e1_alike() {
     let e1 = basis.irreps.iter().position(|b| b.name == "E1").unwrap();
     assert_eq!(dense.blocks[e1].rigid_modes, 2);
     assert_eq!(lanczos.blocks[e1].rigid_modes, 2);
+}
+
+/// Rank-one terms in a complex block: an invariant potential on the E1 radial fields of the
+/// C5 icosphere (vertex down, viewed as C5; docs/theory.md §14.6) hands its z-terms to the
+/// solver as rank-one terms c a aᵀ with a in E1's isotypic component, which the sparse
+/// complex block borders by a and J a (each with E = −2/c). At three values of λ the dense
+/// and the sparse complex blocks agree (a border of a alone, E = −1/c, fails this).
+#[test]
+fn chiral_blocks_agree_with_rank_one_terms_in_them() {
+    use memstab::effects::invariant::IrrepPotential;
+    use meshes::generators::{icosphere_oriented, Down, IcosphereOptions};
+    let sym = icosphere_oriented(
+        &IcosphereOptions {
+            radius: 1.0,
+            frequency: 2,
+        },
+        Down::Vertex,
+    )
+    .unwrap();
+    let m = &sym.mesh;
+    let c5 = meshes::GroupAction::compute(m, symmetry::Group::by_name("C5").unwrap()).unwrap();
+    let membrane = Membrane::new(
+        &m.nodes,
+        &m.triangles,
+        MooneyRivlin::new(1.0, 0.2, 1.0),
+        1.1,
+    )
+    .unwrap();
+    let potential = IrrepPotential::new(&c5, &m.nodes, "E1", 0, [0.3, 0.2, 0.5]).unwrap();
+    let model = FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        vec![Box::new(membrane), Box::new(potential)],
+        vec!["lambda".into()],
+    );
+    let basis = AdaptedBasis::new(&c5, model.layout()).unwrap();
+    let e1 = basis.irreps.iter().position(|b| b.name == "E1").unwrap();
+    assert!(basis.irreps[e1].complex);
+    let u = vec![0.0; model.layout().unknowns()];
+    let mut eval = model.new_evaluation();
+    for lambda in [0.5, 1.0, 1.8] {
+        model
+            .evaluate(&u, &[lambda], memstab::model::Request::ALL, &mut eval)
+            .unwrap();
+        assert!(!eval.rank_one.is_empty(), "no rank-one terms at {lambda}");
+        agree(&model, &basis, &u, &[lambda], &format!("lambda = {lambda}"));
+    }
 }
