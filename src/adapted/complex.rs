@@ -138,27 +138,8 @@ impl ComplexSeeds {
     /// The pattern of H: column e meets every column on an orbit that holds a neighbour of
     /// e's representative (by K's pattern).
     fn hermitian_pattern(&self, layout: &Layout) -> Vec<(usize, usize)> {
-        let pattern = layout.pattern();
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let mut entries = Vec::new();
-        let mut orbits: Vec<u32> = Vec::new();
-        for e in 0..self.rep.len() {
-            let i0 = self.rep[e] as usize;
-            orbits.clear();
-            for c in 0..3 {
-                let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
-                for &r in &row_idx[col_ptr[dof]..col_ptr[dof + 1]] {
-                    let o = self.frame.orbit_of[self.frame.node_of[r].0 as usize];
-                    if !orbits.contains(&o) {
-                        orbits.push(o);
-                    }
-                }
-            }
-            for &o in &orbits {
-                entries.extend(self.by_orbit[o as usize].clone().map(|f| (f as usize, e)));
-            }
-        }
-        entries
+        self.frame
+            .column_neighbours(layout, &self.rep, &self.by_orbit)
     }
 
     /// The pattern of the real R = [[A, C], [−C, A]] (2m × 2m): H's pattern in each quarter.

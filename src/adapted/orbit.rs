@@ -29,6 +29,39 @@ pub(super) struct OrbitFrame {
 }
 
 impl OrbitFrame {
+    /// The (row, column) pairs of a block whose column e has its seed at node `rep[e]` and
+    /// whose columns on orbit o are `by_orbit[o]`: column e meets every column on an orbit
+    /// that holds a neighbour of e's representative (by K's pattern).
+    pub(super) fn column_neighbours(
+        &self,
+        layout: &Layout,
+        rep: &[u32],
+        by_orbit: &[Range<u32>],
+    ) -> Vec<(usize, usize)> {
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let mut entries = Vec::new();
+        let mut orbits: Vec<u32> = Vec::new();
+        for (e, &i0) in rep.iter().enumerate() {
+            orbits.clear();
+            for c in 0..3 {
+                let dof = layout
+                    .dof(i0 as usize, c)
+                    .expect("a free orbit has unknowns");
+                for &r in &row_idx[col_ptr[dof]..col_ptr[dof + 1]] {
+                    let o = self.orbit_of[self.node_of[r].0 as usize];
+                    if !orbits.contains(&o) {
+                        orbits.push(o);
+                    }
+                }
+            }
+            for &o in &orbits {
+                entries.extend(by_orbit[o as usize].clone().map(|f| (f as usize, e)));
+            }
+        }
+        entries
+    }
+
     pub(super) fn new(action: &GroupAction, layout: &Layout, orbits: &[Vec<usize>]) -> Self {
         let group = action.group();
         let nodes = layout.nodes();
@@ -166,26 +199,9 @@ impl Seeds {
     /// The pattern of Bᵀ K B: column e meets every column on an orbit that holds a
     /// neighbour of e's representative (by K's pattern).
     pub(super) fn block_pattern(&self, layout: &Layout) -> SymmetricPattern {
-        let pattern = layout.pattern();
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let mut entries = Vec::new();
-        let mut orbits: Vec<u32> = Vec::new();
-        for e in 0..self.rep.len() {
-            let i0 = self.rep[e] as usize;
-            orbits.clear();
-            for c in 0..3 {
-                let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
-                for &r in &row_idx[col_ptr[dof]..col_ptr[dof + 1]] {
-                    let o = self.frame.orbit_of[self.frame.node_of[r].0 as usize];
-                    if !orbits.contains(&o) {
-                        orbits.push(o);
-                    }
-                }
-            }
-            for &o in &orbits {
-                entries.extend(self.by_orbit[o as usize].clone().map(|f| (f as usize, e)));
-            }
-        }
+        let entries = self
+            .frame
+            .column_neighbours(layout, &self.rep, &self.by_orbit);
         SymmetricPattern::from_entries(self.rep.len(), entries)
     }
 
