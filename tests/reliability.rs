@@ -426,13 +426,23 @@ fn an_interrupted_run_writes_what_it_has_and_a_manifest() {
     std::fs::create_dir(&out).unwrap();
     let stale = out.join(".memstab-stale.tmp");
     std::fs::write(&stale, "debris").unwrap();
-    // The ponding disc without its displacement stop: 400 steps, long enough to interrupt.
+    // The disc under fluid without its displacement stop, on 32 divisions (7 168
+    // triangles): about 3 s of path, four times the wait before the interrupt, and its first
+    // point within a tenth of a second.
     let text = std::fs::read_to_string(scene("disc_fluid_above.toml")).unwrap();
     let long = text
         .lines()
         .filter(|l| !l.starts_with("stop-displacement"))
+        .map(|l| {
+            if l.starts_with("divisions = 16") {
+                "divisions = 32"
+            } else {
+                l
+            }
+        })
         .collect::<Vec<_>>()
         .join("\n");
+    assert!(long.contains("\ndivisions = 32\n"), "the mesh was refined");
     assert_ne!(long.len(), text.trim_end().len(), "the stop was removed");
     let long_scene = dir.path().join("long.toml");
     std::fs::write(&long_scene, long).unwrap();
