@@ -156,26 +156,33 @@ impl Layout {
         }
     }
 
-    /// Σ_i g_i · r_i over every node, unknown or held, for a gradient `g(t, x_t)` given per
-    /// triangle: the rate of the quantity along the held motion (0 without one).
-    pub fn along_held_motion(
+    /// Σ_t (per-triangle gradient `grad(t, x_t)`) gathered over the unknowns, with the
+    /// quantity's rate along the held motion, Σ_i g_i · r_i over every node, unknown or held
+    /// (0 without one), in one pass.
+    pub fn gather(
         &self,
         x: &[Vec3],
         grad: impl Fn(usize, &[Vec3; 3]) -> [f64; 9],
-    ) -> f64 {
-        let Some(h) = &self.held else {
-            return 0.0;
-        };
-        let mut rate = 0.0;
+    ) -> GlobalGradient {
+        let mut v = vec![0.0; self.unknowns];
+        let mut along_held = 0.0;
         for (t, &[a, b, c]) in self.triangles.iter().enumerate() {
-            if h.moving[t] {
-                let g = grad(t, &[x[a], x[b], x[c]]);
+            let g = grad(t, &[x[a], x[b], x[c]]);
+            for (k, &d) in self.tri_dofs[t].iter().enumerate() {
+                if d != NONE {
+                    v[d as usize] += g[k];
+                }
+            }
+            if let Some(h) = self.held.as_ref().filter(|h| h.moving[t]) {
                 for (k, node) in [a, b, c].into_iter().enumerate() {
-                    rate += (0..3).map(|c| g[3 * k + c] * h.rates[node][c]).sum::<f64>();
+                    along_held += (0..3).map(|c| g[3 * k + c] * h.rates[node][c]).sum::<f64>();
                 }
             }
         }
-        rate
+        GlobalGradient {
+            unknowns: v,
+            along_held,
+        }
     }
 
     /// Lets each `(node, normal)` slide in the plane through its reference position with that
@@ -596,19 +603,7 @@ impl<'a> Assembler<'a> {
     where
         F: Fn(usize, &[Vec3; 3]) -> [f64; 9],
     {
-        let mut v = vec![0.0; self.layout.unknowns];
-        for (t, [a, b, c]) in self.layout.triangles.iter().enumerate() {
-            let g = kernel(t, &[x[*a], x[*b], x[*c]]);
-            for (k, &d) in self.layout.tri_dofs[t].iter().enumerate() {
-                if d != NONE {
-                    v[d as usize] += g[k];
-                }
-            }
-        }
-        GlobalGradient {
-            along_held: self.layout.along_held_motion(x, kernel),
-            unknowns: v,
-        }
+        self.layout.gather(x, kernel)
     }
 
     /// The gradient of a global potential that depends on each node's position, from one

@@ -43,19 +43,9 @@ pub fn gather(
     grad_params: &mut [f64],
     grad: impl Fn(usize, &[Vec3; 3]) -> [f64; 9],
 ) -> Vec<f64> {
-    let mut v = vec![0.0; layout.unknowns()];
-    for (t, &[a, b, c]) in layout.triangles().iter().enumerate() {
-        let g = grad(t, &[x[a], x[b], x[c]]);
-        for (k, node) in [a, b, c].into_iter().enumerate() {
-            for comp in 0..3 {
-                if let Some(d) = layout.dof(node, comp) {
-                    v[d] += g[3 * k + comp];
-                }
-            }
-        }
-    }
+    let g = layout.gather(x, grad);
     if let Some(p) = layout.held_parameter() {
-        grad_params[p] += layout.along_held_motion(x, grad);
+        grad_params[p] += g.along_held;
     }
-    v
+    g.unknowns
 }
