@@ -2,9 +2,8 @@
 //! through its pressure maximum and minimum, and the comparison of its turning points with
 //! the closed form of a sphere (docs/theory.md §13.1–§13.2).
 
-use crate::analysis::events::Extremum;
 use crate::reference::{sphere_extrema, sphere_pressure, SphereExtremum};
-use crate::report::PathReport;
+use crate::results::{Extremum, PathReport};
 use crate::scene::{Effect, MeshSpec, Scene, SceneError};
 use crate::study::Study;
 

@@ -13,7 +13,7 @@
 //! - [`adapted`]: symmetry-adapted bases; [`stability`]: inertia and spectra by irrep;
 //! - [`analysis`]: the path driver, events, the analyses a scene asks for, and branch
 //!   switching at their bifurcation points;
-//! - [`report`]: typed results; [`output`]: the writers;
+//! - [`results`]: typed results; [`output`]: the writers;
 //! - [`reference`](mod@reference): closed forms; [`demo`]: the bundled demo;
 //!   [`bench`](mod@bench): the studies behind
 //!   `memstab bench` (a leaf: nothing else uses it); [`text`]: number formatting.
@@ -31,7 +31,7 @@ pub mod linalg;
 pub mod model;
 pub mod output;
 pub mod reference;
-pub mod report;
+pub mod results;
 pub mod scene;
 pub mod stability;
 pub mod study;

@@ -95,10 +95,9 @@ mod scenes {
     //! the command line.
 
     use crate::common::{reservoir_balloon, reservoir_limit, RESERVOIR_PATH};
-    use memstab::analysis::critical::CriticalKind;
-    use memstab::analysis::events::{Extremum, StopReason};
     use memstab::axisym::run::{run, AxisymReport, AxisymStudy};
     use memstab::reference::{ponding_scale, BESSEL_J2};
+    use memstab::results::{CriticalKind, Extremum, StopReason};
     use memstab::scene::Scene;
     use std::process::Command;
 
@@ -546,9 +545,8 @@ fn the_partly_wet_pond_inflated_from_below_converges_on_the_meridian_and_in_3d()
 /// over-pressure p above a fixed fluid volume V = 0.5 in a closed sphere resting on a plane,
 /// lowered onto it by the held-translation start, the path in p through its maximum.
 mod paper2 {
-    use memstab::analysis::critical::CriticalKind;
-    use memstab::analysis::events::Extremum;
     use memstab::axisym::run::{run, AxisymStudy};
+    use memstab::results::{CriticalKind, Extremum};
     use memstab::scene::Scene;
 
     fn text(name: &str) -> String {

@@ -11,7 +11,6 @@
 use crate::common::follow;
 use memstab::adapted::SparseBasis;
 use memstab::analysis::continuation::PathOptions;
-use memstab::analysis::events::{Extremum, StopReason};
 use memstab::analysis::SymmetricProblem;
 use memstab::effects::gas::GasPressure;
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
@@ -21,6 +20,7 @@ use meshes::generators::{icosphere, IcosphereOptions};
 use nalgebra::DVector;
 
 use memstab::reference::{sphere_pressure as closed_form, L_MAX, L_MIN, P_MAX, P_MIN};
+use memstab::results::{Extremum, StopReason};
 
 struct Extrema {
     max: (f64, f64),

@@ -3,11 +3,13 @@
 //! the reflection classes of E1, E2, E3 (and the kernels of B1, A2) on a C8v disc, and a split
 //! pair on a C2v disc whose branches approach the C8v double's under refinement.
 
-use memstab::analysis::branch::{self, Bifurcation, Half, Halves, Node, SwitchedBranch};
-use memstab::analysis::critical::CriticalPoint;
+use memstab::analysis::branch;
 use memstab::analysis::run;
 use memstab::bench::branching::{ih_branches, ih_problem, IH_COEFFICIENTS};
 use memstab::model::Model;
+use memstab::results::{
+    Bifurcation, Branches, CriticalPoint, Half, Halves, Node, Skip, SwitchedBranch,
+};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use nalgebra::DVector;
@@ -79,7 +81,7 @@ fn stabiliser(study: &Study, u: &[f64]) -> Vec<usize> {
 }
 
 /// The branches leaving the path's critical point `k` (1-based).
-fn leaving(b: &branch::Branches, k: usize) -> Vec<&SwitchedBranch> {
+fn leaving(b: &Branches, k: usize) -> Vec<&SwitchedBranch> {
     let n = b.graph.path_point(k).expect("the point is a node");
     b.graph
         .leaving(n)
@@ -296,7 +298,7 @@ fn upward_disc_e1_point_has_two_mirror_branches() {
 }
 
 /// The first E1 point's number among the path's critical points, and its branches' classes.
-fn classes(b: &branch::Branches, k: usize) -> Vec<(String, usize)> {
+fn classes(b: &Branches, k: usize) -> Vec<(String, usize)> {
     let mut c: Vec<(String, usize)> = leaving(b, k)
         .iter()
         .map(|x| (x.isotropy.clone(), x.elements.len()))
@@ -382,7 +384,7 @@ fn c8v_disc_points_give_the_classes_of_the_lemma() {
                 n,
                 Node::Critical {
                     on: None,
-                    skipped: Some(branch::Skip::NotRequested),
+                    skipped: Some(Skip::NotRequested),
                     ..
                 }
             )
@@ -419,7 +421,7 @@ fn control_at(curve: &[(f64, f64)], target: f64) -> f64 {
 }
 
 /// Switches at the given critical points of a disc's path; the branches, in point order.
-fn branches_at(s: &Study, critical: &[CriticalPoint], points: Vec<usize>) -> branch::Branches {
+fn branches_at(s: &Study, critical: &[CriticalPoint], points: Vec<usize>) -> Branches {
     let mut opts = branch::options(s, None);
     opts.steps = 12;
     opts.path.max_steps = 12;
@@ -517,16 +519,13 @@ fn depth_two_switches_at_the_branches_points() {
         if b.graph.branches[*parent].parent.is_some() {
             // On a branch of depth 2: not switched again.
             assert!(out.is_empty());
-            assert!(matches!(
-                skipped,
-                Some(branch::Skip::LimitPoint | branch::Skip::Depth)
-            ));
+            assert!(matches!(skipped, Some(Skip::LimitPoint | Skip::Depth)));
             continue;
         }
         match point.irrep.as_str() {
             "A1" => {
                 assert!(out.is_empty());
-                assert_eq!(skipped, &Some(branch::Skip::LimitPoint));
+                assert_eq!(skipped, &Some(Skip::LimitPoint));
             }
             "A2" => {
                 assert_eq!(out.len(), 1, "the kernel of A2, one branch");

@@ -2,11 +2,10 @@
 //! form, the derivatives of the block test function, and the curve's outputs.
 
 use crate::common::{balloon_with_k, fold_k, reservoir_balloon, reservoir_limit, RESERVOIR_PATH};
-use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::curve::{BlockTest, DIFFERENCE_STEP};
 use memstab::analysis::run;
 use memstab::model::Model;
-use memstab::report::{CurveEventKind, CurveReport};
+use memstab::results::{CriticalKind, CurveEventKind, CurveReport};
 use memstab::scene::Scene;
 use memstab::study::Study;
 
@@ -60,7 +59,7 @@ max-step = 0.05
     )
 }
 
-fn curve_of(frequency: usize) -> (CurveReport, memstab::analysis::RunResult) {
+fn curve_of(frequency: usize) -> (CurveReport, memstab::results::RunResult) {
     let mut study = Study::build(balloon_curve_scene(frequency)).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
     (result.curve.clone().expect("a curve"), result)
@@ -152,7 +151,7 @@ fn balloon_limit_curve_reaches_its_cusp_on_the_closed_form_fold_line() {
 /// (directional differences of the tangent) and ∂σ/∂Λ (differences of the loads) against
 /// differences of σ itself, and the step's truncation error, estimated by Richardson
 /// extrapolation from ε and 2ε, against 1e-7 of the derivative.
-fn check_test_derivatives(study: &Study, cp: &memstab::analysis::critical::CriticalPoint) {
+fn check_test_derivatives(study: &Study, cp: &memstab::results::CriticalPoint) {
     let adapted = memstab::adapted::AdaptedBasis::new(&study.action, study.model.layout()).unwrap();
     let mu = adapted
         .irreps
@@ -244,7 +243,7 @@ fn a_critical_curve_run_writes_its_curve() {
     // The path stopped at the point the curve starts from.
     assert_eq!(
         result.report.stop,
-        memstab::analysis::events::StopReason::CriticalPoint
+        memstab::results::StopReason::CriticalPoint
     );
     for name in ["curve.csv", "curve.json", "curve.svg"] {
         assert!(written.files().contains(&dir.path().join(name)), "{name}");

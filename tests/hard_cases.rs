@@ -15,17 +15,17 @@
 
 use memstab::adapted::SparseBasis;
 use memstab::analysis::continuation::{step_from, Continuation, PathOptions};
-use memstab::analysis::events::{Branch, StopReason};
+use memstab::analysis::events::Branch;
 use memstab::analysis::path::trace;
+use memstab::analysis::run;
 use memstab::analysis::SymmetricProblem;
-use memstab::analysis::{run, RunResult};
 use memstab::effects::gas::GasPressure;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::check::check_derivatives;
 use memstab::model::{Effect, Evaluation, FeModel, Model, ModelError, Request, Vec3};
-use memstab::report::PathReport;
+use memstab::results::{PathReport, RunResult, StopReason};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use meshes::generators::{

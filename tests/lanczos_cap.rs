@@ -3,8 +3,9 @@
 //! whose crossings are localised and classified in blocks solved by Lanczos.
 
 use memstab::adapted::AdaptedBasis;
-use memstab::analysis::{critical::CriticalKind, run};
+use memstab::analysis::run;
 use memstab::model::Model;
+use memstab::results::CriticalKind;
 use memstab::scene::Scene;
 use memstab::stability::{BlockEigen, Detail, Stability};
 use memstab::study::Study;
@@ -191,7 +192,7 @@ fn a_c1v_cap_localises_and_classifies_its_crossings() {
 }
 
 /// Kind, irrep and control of each critical point, for messages.
-fn kinds(critical: &[memstab::analysis::critical::CriticalPoint]) -> Vec<String> {
+fn kinds(critical: &[memstab::results::CriticalPoint]) -> Vec<String> {
     critical
         .iter()
         .map(|c| format!("{:?} {} {}", c.kind, c.irrep, c.parameters[0]))

@@ -3,10 +3,10 @@
 //! against the mesh generated at that radius, held (fixed and sliding) boundaries that scale
 //! with R and their loads against differences, and the values refused.
 
-use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
 use memstab::model::check::check_derivatives;
 use memstab::model::{Model, Request};
+use memstab::results::CriticalKind;
 use memstab::scene::Scene;
 use memstab::study::Study;
 

@@ -2,14 +2,13 @@
 //! with its pressure maximum and minimum as turning points) and a small icosphere: CSV, JSON,
 //! SVG, VTU + PVD, and their errors.
 
-use memstab::analysis::critical::{CriticalKind, CriticalPoint, Isotropy};
-use memstab::analysis::events::{Extremum, StopReason};
 use memstab::output::{
     default_axes, write_csv, write_diagram, write_diagram_with, write_json, write_spectrum_diagram,
     Diagram, Marker, MarkerKind, OutputError, Progress, PvdTime, Segment, StateWriter, ZERO_LINE,
 };
-use memstab::report::{
-    MeshInfo, PathReport, PathRow, Spectra, SpectrumIrrep, SpectrumRow, TurningRow,
+use memstab::results::{
+    CriticalKind, CriticalPoint, Extremum, Isotropy, MeshInfo, PathReport, PathRow, Spectra,
+    SpectrumIrrep, SpectrumRow, StopReason, TurningRow,
 };
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::write::Fields;

@@ -4,10 +4,10 @@
 //! content (the wave number m of the mode's deflection), never by sorted order; doubles are
 //! exact on symmetric meshes and splits are measured, with their gap under refinement.
 
-use memstab::analysis::critical::CriticalPoint;
 use memstab::analysis::run;
 use memstab::model::Model;
 use memstab::reference::{BESSEL_J2, PONDING_SCALE};
+use memstab::results::CriticalPoint;
 use memstab::scene::Scene;
 use memstab::study::Study;
 

@@ -5,7 +5,7 @@
 //! with code 2 without writing anything.
 
 use memstab::analysis::run;
-use memstab::report::PathReport;
+use memstab::results::PathReport;
 use memstab::scene::{MeshSpec, Scene};
 use memstab::study::Study;
 use meshes::write::{write_mesh, Fields, Format};

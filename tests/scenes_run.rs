@@ -1,13 +1,13 @@
 //! Bundled scenes run end to end through scene → study → path: the right turning points,
 //! finite numbers everywhere, and a stop reason that says why.
 
-use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
 use memstab::reference::{L_MAX, L_MIN, P_MAX, P_MIN};
+use memstab::results::CriticalKind;
 use memstab::scene::Scene;
 use memstab::study::Study;
 
-fn run_scene(name: &str) -> memstab::analysis::RunResult {
+fn run_scene(name: &str) -> memstab::results::RunResult {
     let scene = Scene::load(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR")))
         .expect("bundled scene loads");
     let mut study = Study::build(scene).expect("bundled scene builds");
@@ -24,7 +24,7 @@ fn run_scene(name: &str) -> memstab::analysis::RunResult {
     result
 }
 
-fn column(report: &memstab::report::PathReport, name: &str) -> usize {
+fn column(report: &memstab::results::PathReport, name: &str) -> usize {
     report
         .measures
         .iter()

@@ -102,7 +102,7 @@ fn every_state_file_carries_the_fields() {
 #[test]
 fn the_node_fields_are_the_normal_and_the_pressure_of_the_loads() {
     use memstab::model::NodeQuantity;
-    use memstab::report::{State, StateKind};
+    use memstab::results::{State, StateKind};
     // The balloon: the gas pressure p at every node, normals of unit length out of the sphere.
     let text = scene_text("balloon.toml").replace("frequency = 8", "frequency = 4");
     let mut study = Study::build(Scene::from_toml_str(&text, "balloon").unwrap()).unwrap();
@@ -204,9 +204,8 @@ fn a_slack_disc_run_reports_wrinkling_from_its_first_point() {
 /// disc (pre-stretch 0.9, every triangle wrinkled at rest) against the same disc taut.
 #[test]
 fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
-    use memstab::analysis::critical::{CriticalKind, CriticalPoint, Isotropy};
     use memstab::output::wrinkled_critical;
-    use memstab::report::Wrinkling;
+    use memstab::results::{CriticalKind, CriticalPoint, Isotropy, Wrinkling};
     let point = |study: &Study, kind| CriticalPoint {
         kind,
         irrep: "E1".to_string(),
@@ -263,7 +262,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
     let stray = Wrinkling {
         triangles,
         first: None,
-        critical: vec![memstab::report::WrinkledCritical {
+        critical: vec![memstab::results::WrinkledCritical {
             critical: 7,
             wrinkled: 1,
         }],

@@ -6,12 +6,13 @@
 use crate::common::follow;
 use memstab::adapted::SparseBasis;
 use memstab::analysis::continuation::PathOptions;
-use memstab::analysis::events::{Branch, Extremum, StopReason};
+use memstab::analysis::events::Branch;
 use memstab::analysis::SymmetricProblem;
 use memstab::effects::gas::GasPressure;
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel, Model};
+use memstab::results::{Extremum, StopReason};
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::GroupAction;
 use nalgebra::DVector;

@@ -2,9 +2,8 @@
 //! line, the index across it, its triangles and critical lines, its files, and bad keys.
 
 use crate::common::{balloon_with_k, fold_k};
-use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
-use memstab::report::SurfaceReport;
+use memstab::results::{CriticalKind, SurfaceReport};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use std::path::Path;

@@ -4,8 +4,6 @@
 //! of effects, restarts and the start homotopy, and classification that agrees with the path.
 
 use memstab::adapted::{AdaptedBasis, SparseBasis};
-use memstab::analysis::critical::CriticalKind;
-use memstab::analysis::events::StopReason;
 use memstab::analysis::{run, run_with, Observer};
 use memstab::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
 use memstab::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
@@ -16,7 +14,7 @@ use memstab::effects::Quantity;
 use memstab::model::check::check_derivatives;
 use memstab::model::constraint::Constraint;
 use memstab::model::{Effect, Evaluation, FeModel, Layout, Model, ModelError, Request, Vec3};
-use memstab::report::PathReport;
+use memstab::results::{CriticalKind, PathReport, StopReason};
 use memstab::scene::Scene;
 use memstab::stability::{Detail, Stability};
 use memstab::study::Study;

@@ -7,9 +7,8 @@
 //! (`scenes/thesis/paper2_solution_surface_f8.toml`), and the spinning filled cap's hilltop
 //! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
 
-use memstab::analysis::critical::CriticalKind;
 use memstab::analysis::run;
-use memstab::report::{CurveEvent, CurveEventKind, CurveReport};
+use memstab::results::{CriticalKind, CurveEvent, CurveEventKind, CurveReport};
 use memstab::scene::Scene;
 use memstab::study::Study;
 

@@ -26,17 +26,22 @@
 //! and of the branches) and the ends of branches, edges are branches.
 
 use super::continuation::{point_at, step_off, Continuation, PathOptions, PathPoint, Stalled};
-use super::critical::{isotropy, CriticalKind, CriticalPoint};
-use super::events::{Crossings, Detector, Event, IndexChanges, MeasureFn, StopReason};
+use super::critical::isotropy;
+use super::events::{Crossings, Detector, Event, IndexChanges, MeasureFn};
 use super::path::trace;
 use super::SymmetricProblem;
 use crate::adapted::{AdaptedBasis, SparseBasis};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout, Model, Request};
+use crate::results::{
+    directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches,
+    CriticalKind, CriticalPoint, Half, Halves, MeshInfo, Node, PathReport, PathRow, RecordedPoint,
+    Reduced, Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow, ASYMMETRY,
+};
 use crate::stability::Stability;
 use meshes::GroupAction;
 use nalgebra::DVector;
-use petgraph::graph::{DiGraph, NodeIndex};
+use petgraph::graph::NodeIndex;
 use symmetry::{IrrepKind, SubgroupLattice};
 
 /// Step along the parent path (scaled arclength) for the derivative of the critical
@@ -51,103 +56,6 @@ const QUADRATIC_ZERO: f64 = 1e-9;
 const TRANSVERSAL_ZERO: f64 = 1e-10;
 /// Tolerance of the checks that a kernel direction is what the representation theory says.
 const DIRECTION_TOL: f64 = 1e-6;
-
-/// Which half of an axial line a branch leaves along: +φ or −φ.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Half {
-    /// Along +φ.
-    Plus,
-    /// Along −φ.
-    Minus,
-}
-
-impl Half {
-    /// +1 or −1.
-    pub fn sign(self) -> f64 {
-        match self {
-            Half::Plus => 1.0,
-            Half::Minus => -1.0,
-        }
-    }
-}
-
-impl std::fmt::Display for Half {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Half::Plus => "+",
-            Half::Minus => "-",
-        })
-    }
-}
-
-/// Whether the two halves of an axial line are one branch up to symmetry.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Halves {
-    /// Some element of the normaliser maps v to −v: one branch, followed along +φ.
-    Conjugate,
-    /// No element maps v to −v: two branches, both followed.
-    Distinct,
-}
-
-impl std::fmt::Display for Halves {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Halves::Conjugate => "conjugate",
-            Halves::Distinct => "distinct",
-        })
-    }
-}
-
-/// The bifurcation in Fix(Σ), by the reduced equation's quadratic coefficient.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Bifurcation {
-    /// C₃ = 0 (by symmetry, or measured at round-off): the branch leaves tangent to φ.
-    Pitchfork,
-    /// C₃ ≠ 0: the branch crosses the path; its halves go to either side in the control.
-    Transcritical,
-}
-
-impl std::fmt::Display for Bifurcation {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Bifurcation::Pitchfork => "pitchfork",
-            Bifurcation::Transcritical => "transcritical",
-        })
-    }
-}
-
-/// Why a critical point was not switched at (or not at all of its directions).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Skip {
-    /// The trivial irrep: a fold of the path, no branch leaves it.
-    LimitPoint,
-    /// Not among the requested points (`points`).
-    NotRequested,
-    /// A critical point of a branch at the requested depth.
-    Depth,
-    /// A complex-type irrep (a chiral group): no axial subgroup.
-    ComplexIrrep(String),
-    /// The irrep has no axial isotropy subgroup.
-    NoAxialSubgroup(String),
-    /// Something the switch could not do (names what).
-    Failed(String),
-}
-
-impl std::fmt::Display for Skip {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Skip::LimitPoint => f.write_str("a limit point: no branches leave it"),
-            Skip::NotRequested => f.write_str("not requested"),
-            Skip::Depth => f.write_str("beyond the requested depth"),
-            Skip::ComplexIrrep(i) => write!(
-                f,
-                "irrep {i} is of complex type (a chiral group): it has no axial subgroup, branch switching is not supported"
-            ),
-            Skip::NoAxialSubgroup(i) => write!(f, "irrep {i} has no axial isotropy subgroup"),
-            Skip::Failed(why) => write!(f, "switching failed: {why}"),
-        }
-    }
-}
 
 /// Settings of branch switching: how deep, and the continuation along each branch.
 #[derive(Debug, Clone)]
@@ -220,159 +128,6 @@ pub struct Direction {
     /// Whether symmetry lets the quadratic coefficient be non-zero (an invariant cubic exists
     /// and ±φ are not conjugate).
     pub quadratic_allowed: bool,
-}
-
-/// The reduced bifurcation equation along φ in Fix(Σ): g(a, s) = a (b s + ½ C₃ a + …), a the
-/// amplitude along φ, s the parent path's scaled arclength (docs/theory.md §14.3).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Reduced {
-    /// b/‖K‖: the critical eigenvalue's rate of change along the path (per unit scaled
-    /// arclength).
-    pub path_slope: f64,
-    /// C₃ σ/‖K‖: its rate of change along φ (per unit scaled amplitude, σ the state scale);
-    /// exactly 0 where symmetry forbids a quadratic term.
-    pub mode_slope: f64,
-    /// Pitchfork or transcritical.
-    pub bifurcation: Bifurcation,
-    /// ds/dA at the point (A the scaled amplitude): −mode_slope/(2 path_slope), 0 for a
-    /// pitchfork.
-    pub path_per_amplitude: f64,
-}
-
-/// One point of a branch.
-#[derive(Debug, Clone)]
-pub struct BranchPoint {
-    /// Displacement over the unknowns.
-    pub u: Vec<f64>,
-    /// Every parameter.
-    pub parameters: Vec<f64>,
-    /// Arclength from the critical point (scaled).
-    pub arclength: f64,
-    /// Newton iterations of the corrector (0 at the critical point).
-    pub iterations: usize,
-    /// Index Σ_ν d_ν neg_ν by the irreps of Σ (`None` at the critical point, where a block is
-    /// singular, or where stability is not analysed).
-    pub index: Option<usize>,
-    /// RMS over the free nodes of the part of u outside Fix(G), G the scene's group: 0 on the
-    /// path, the amplitude of the symmetry breaking on a branch.
-    pub asymmetry: f64,
-    /// The stabiliser of u in the scene's group: its elements, sorted.
-    pub stabiliser: Vec<usize>,
-    /// Its class name in the scene's group's lattice.
-    pub stabiliser_class: String,
-}
-
-/// A turning point of the control along a branch.
-#[derive(Debug, Clone)]
-pub struct BranchTurning {
-    /// Maximum or minimum.
-    pub kind: super::events::Extremum,
-    /// The branch point just before it.
-    pub after_step: usize,
-    /// Displacement.
-    pub u: Vec<f64>,
-    /// Every parameter.
-    pub parameters: Vec<f64>,
-}
-
-/// A followed branch.
-#[derive(Debug, Clone)]
-pub struct SwitchedBranch {
-    /// The node of the critical point it leaves.
-    pub from: NodeIndex,
-    /// The branch it leaves from (`None`: the path).
-    pub parent: Option<usize>,
-    /// The irrep of the critical point (of the parent's group).
-    pub irrep: String,
-    /// The isotropy subgroup's class name in the scene's group's lattice (`C1v`, `D5d`, …).
-    pub isotropy: String,
-    /// Σ as elements of the scene's group, sorted.
-    pub elements: Vec<usize>,
-    /// Σ's class name in the parent's lattice.
-    pub class_in_parent: String,
-    /// Which half.
-    pub half: Half,
-    /// Whether the halves are conjugate (then only `+` is followed).
-    pub halves: Halves,
-    /// The reduced equation at the critical point.
-    pub reduced: Reduced,
-    /// Unknowns of Fix(Σ).
-    pub symmetric_unknowns: usize,
-    /// The points, the critical point first.
-    pub points: Vec<BranchPoint>,
-    /// Turning points of the control along the branch.
-    pub turning: Vec<BranchTurning>,
-    /// Critical points along the branch, classified by the irreps of Σ.
-    pub critical: Vec<CriticalPoint>,
-    /// Why the branch ended.
-    pub stop: StopReason,
-    /// Why stability was not analysed along it, if it was not.
-    pub stability_note: Option<String>,
-    /// What could not be settled (crossings not localised, a state of another isotropy …).
-    pub warnings: Vec<String>,
-    /// The sign of the branch in the bifurcation diagram (its half, times its parent's).
-    pub sign: f64,
-    /// Wall time of the switch and the continuation.
-    pub time: std::time::Duration,
-}
-
-impl SwitchedBranch {
-    /// True when every point after the critical point has exactly Σ as its stabiliser.
-    pub fn isotropy_exact(&self) -> bool {
-        self.points.len() > 1
-            && self.points[1..]
-                .iter()
-                .all(|p| p.stabiliser == self.elements)
-    }
-}
-
-/// A node of the branch graph.
-#[derive(Debug, Clone)]
-pub enum Node {
-    /// A critical point of the path (`on = None`) or of branch `on`.
-    Critical {
-        /// The branch it lies on (`None`: the path).
-        on: Option<usize>,
-        /// Its number among that path's critical points (1-based, in the order found).
-        number: usize,
-        /// The point.
-        point: Box<CriticalPoint>,
-        /// Why no branch (or not every predicted branch) leaves it.
-        skipped: Option<Skip>,
-    },
-    /// Where branch `branch` ended.
-    End {
-        /// The branch.
-        branch: usize,
-        /// Why it ended.
-        stop: StopReason,
-    },
-}
-
-/// The branches and how they connect: nodes are critical points and branch ends, edge
-/// weights index [`BranchGraph::branches`].
-#[derive(Debug, Clone, Default)]
-pub struct BranchGraph {
-    /// The graph.
-    pub graph: DiGraph<Node, usize>,
-    /// The branches, in the order followed.
-    pub branches: Vec<SwitchedBranch>,
-}
-
-impl BranchGraph {
-    /// The branches leaving node `n`, in the order followed.
-    pub fn leaving(&self, n: NodeIndex) -> Vec<usize> {
-        let mut b: Vec<usize> = self.graph.edges(n).map(|e| *e.weight()).collect();
-        b.sort_unstable();
-        b
-    }
-
-    /// The node of the path's critical point number `k` (1-based).
-    pub fn path_point(&self, k: usize) -> Option<NodeIndex> {
-        self.graph.node_indices().find(
-            |&n| matches!(self.graph[n], Node::Critical { on: None, number, .. } if number == k),
-        )
-    }
 }
 
 /// What branch switching needs of the problem: the model and its constraints, the measures
@@ -883,12 +638,15 @@ impl Switching<'_> {
                 Err(why) => {
                     s *= 0.5;
                     if s < opts.min_step {
-                        branch.stop = StopReason::Stalled(Stalled {
-                            min_step: opts.min_step,
-                            after: 0,
-                            control: self.control.map_or(0.0, |c| cp.parameters[c]),
-                            why,
-                        });
+                        branch.stop = StopReason::Stalled(
+                            Stalled {
+                                min_step: opts.min_step,
+                                after: 0,
+                                control: self.control.map_or(0.0, |c| cp.parameters[c]),
+                                why,
+                            }
+                            .into(),
+                        );
                         return branch;
                     }
                 }
@@ -1037,35 +795,6 @@ fn set_skip(g: &mut BranchGraph, node: NodeIndex, skip: Skip) {
     }
 }
 
-/// A branch as a path of its own: the report its directory's files are written from.
-#[derive(Debug, Clone)]
-pub struct BranchRun {
-    /// The branch's path: rows (the critical point it leaves first, with no index), turning
-    /// and critical points, why it stopped; its group is the isotropy subgroup, its measures
-    /// the scene's and `asymmetry`.
-    pub report: crate::report::PathReport,
-    /// Its states to write.
-    pub states: Vec<crate::report::State>,
-    /// Its directory in the output directory (`branch_01`, …).
-    pub directory: String,
-}
-
-/// The branches of a run.
-#[derive(Debug, Clone)]
-pub struct Branches {
-    /// The graph of critical points and branches.
-    pub graph: BranchGraph,
-    /// One per branch of the graph, in its order.
-    pub runs: Vec<BranchRun>,
-    /// The depth asked for.
-    pub depth: usize,
-    /// Wall time of all the switches and branches.
-    pub time: std::time::Duration,
-}
-
-/// The measure name of a branch state's asymmetry (see [`BranchPoint::asymmetry`]).
-pub const ASYMMETRY: &str = "asymmetry";
-
 /// The branch options of a study whose path analysis asks for `[analysis.branches]`, with
 /// `depth`, `steps`, `max_step` and `points` overriding the scene's when given.
 pub fn options(
@@ -1134,11 +863,6 @@ pub fn run(
     }
 }
 
-/// The directory of branch `i` (0-based): `branch_01`, `branch_02`, …
-pub fn directory(i: usize) -> String {
-    format!("branch_{:02}", i + 1)
-}
-
 /// The report and states of one branch.
 fn branch_run(
     study: &crate::study::Study,
@@ -1146,7 +870,6 @@ fn branch_run(
     i: usize,
     save_every: usize,
 ) -> BranchRun {
-    use crate::report::{PathRow, State, StateKind, TurningRow};
     let measures = |u: &[f64], p: &[f64], asym: f64| {
         let mut m = study.measure(u, p);
         m.push(asym);
@@ -1230,11 +953,11 @@ fn branch_run(
     let m = &study.mesh;
     let mut measure_names: Vec<String> = study.measures.iter().map(|(n, _)| n.clone()).collect();
     measure_names.push(ASYMMETRY.to_string());
-    let report = crate::report::PathReport {
+    let report = PathReport {
         scene: study.scene.info.name.clone(),
         origin: study.scene.origin.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),
-        mesh: crate::report::MeshInfo {
+        mesh: MeshInfo {
             generator: study.scene.mesh.generator().to_string(),
             nodes: m.mesh.nodes.len(),
             elements: m.mesh.triangles.len(),
@@ -1268,21 +991,6 @@ fn branch_run(
         states,
         directory: directory(i),
     }
-}
-
-/// A critical point as a finished run records it (`path.json`), without its state.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RecordedPoint {
-    /// Its irrep.
-    pub irrep: String,
-    /// Every parameter.
-    pub parameters: Vec<f64>,
-    /// Every measure.
-    pub measures: Vec<f64>,
-    /// The path step before it.
-    pub after_step: usize,
-    /// |eigenvalue|/‖K‖ there.
-    pub residual_eigenvalue: f64,
 }
 
 /// The recorded critical points of a run of `study` as [`CriticalPoint`]s, point `n`

@@ -5,9 +5,11 @@
 //! symmetric bifurcation: the state cannot fold). The lowest eigenvalue of every block at
 //! every sample goes into the report's [`Spectra`] (what `path.svg` plots for this analysis).
 
-use super::events::{Crossings, End, Event, StopReason};
+use super::events::{Crossings, End, Event};
 use super::{Observer, Record};
-use crate::report::{Spectra, SpectrumIrrep, SpectrumRow, StateKind, SPECTRUM_EIGENVALUES};
+use crate::results::{
+    Spectra, SpectrumIrrep, SpectrumRow, StateKind, StopReason, SPECTRUM_EIGENVALUES,
+};
 use crate::stability::Spectrum;
 use crate::study::Study;
 

@@ -24,6 +24,7 @@
 use crate::linalg::bordered::{bordered_solve, solve_dense, sparse_lu_solve, SharedFactorization};
 use crate::linalg::SymmetricPattern;
 use crate::model::{ModelError, StateDefect};
+use crate::results::PhaseTimes;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
@@ -74,36 +75,6 @@ impl<P: Problem + ?Sized> Problem for &mut P {
     }
     fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<StateDefect> {
         (**self).defect(q, lambda)
-    }
-}
-
-/// Time spent by a problem's evaluations, by phase.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct PhaseTimes {
-    /// Assembling the model (`Model::evaluate`).
-    pub assembly: std::time::Duration,
-    /// Restricting residual, loads, constraints and tangent to the problem's basis.
-    pub projection: std::time::Duration,
-    /// Number of evaluations.
-    pub evaluations: usize,
-}
-
-impl std::ops::Sub for PhaseTimes {
-    type Output = PhaseTimes;
-    fn sub(self, o: PhaseTimes) -> PhaseTimes {
-        PhaseTimes {
-            assembly: self.assembly.saturating_sub(o.assembly),
-            projection: self.projection.saturating_sub(o.projection),
-            evaluations: self.evaluations.saturating_sub(o.evaluations),
-        }
-    }
-}
-
-impl std::ops::AddAssign for PhaseTimes {
-    fn add_assign(&mut self, o: PhaseTimes) {
-        self.assembly += o.assembly;
-        self.projection += o.projection;
-        self.evaluations += o.evaluations;
     }
 }
 
@@ -759,6 +730,18 @@ pub struct Stalled {
     pub why: StepError,
 }
 
+impl From<Stalled> for crate::results::Stalled {
+    /// The plain-data record of a stall, the failure kept as its message.
+    fn from(s: Stalled) -> Self {
+        Self {
+            min_step: s.min_step,
+            after: s.after,
+            control: s.control,
+            why: s.why.to_string(),
+        }
+    }
+}
+
 /// An accepted step.
 #[derive(Debug, Clone)]
 pub struct Accepted {
@@ -888,5 +871,32 @@ impl<P: Problem> Continuation<P> {
     /// ([`corrected_from`]).
     pub fn corrected_from(&mut self, from: &PathPoint, s: f64) -> Result<PathPoint, StepError> {
         corrected_from(&mut self.problem, from, s, &self.opts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Stalled, StepError};
+
+    /// A stall recorded as plain data reads as the driver's own.
+    #[test]
+    fn a_stall_is_recorded_in_the_same_words() {
+        for why in [
+            StepError::Singular,
+            StepError::BranchJump {
+                distance: 0.734,
+                angle: 41.6,
+            },
+            StepError::NotConverged { iterations: 25 },
+        ] {
+            let stalled = Stalled {
+                min_step: 1e-8,
+                after: 17,
+                control: 0.1 + 0.2,
+                why,
+            };
+            let words = stalled.to_string();
+            assert_eq!(crate::results::Stalled::from(stalled).to_string(), words);
+        }
     }
 }

@@ -29,17 +29,17 @@
 //! orbit representatives; for another block u ± εa is not symmetric, and those two assemble
 //! the whole mesh.
 
-use super::continuation::{
-    Accepted, Continuation, Linearization, PathOptions, PathPoint, PhaseTimes, Problem,
-};
-use super::critical::{CriticalKind, CriticalPoint};
-use super::events::{Crossings, Detector, End, Event, IndexChanges, States, StopReason};
-use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
+use super::continuation::{Accepted, Continuation, Linearization, PathOptions, PathPoint, Problem};
+use super::events::{Crossings, Detector, End, Event, IndexChanges, States};
+use super::{Observer, Record, RunError, SymmetricProblem};
 use crate::adapted::SparseBasis;
 use crate::model::check::tangent_times;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model, ModelError, Request, Subset};
-use crate::report::{CurveEvent, CurveEventKind, CurveReport, CurveRow};
+use crate::results::{
+    CriticalKind, CriticalPoint, CurveEvent, CurveEventKind, CurveReport, CurveRow, PhaseTimes,
+    RecordedPoint, RunTimes, StateKind, StopReason,
+};
 use crate::scene::{Analysis, CurveStart, Direction};
 use crate::stability::Spectrum;
 use crate::study::Study;
@@ -776,12 +776,7 @@ pub(super) fn run(
         let cp = saved_point(study)?;
         // The run's point is this run's one path row and critical point.
         record.row(study, 0, 0.0, &cp.state, cp.parameters.clone(), 0, None);
-        record.state(
-            0,
-            crate::report::StateKind::Step,
-            cp.state.clone(),
-            &cp.parameters,
-        );
+        record.state(0, StateKind::Step, cp.state.clone(), &cp.parameters);
         record.critical(cp.clone());
         times.path = t0.elapsed();
         let curve = follow_curve(study, crossings, &cp, observer)?;
@@ -842,7 +837,7 @@ fn saved_point(study: &Study) -> Result<CriticalPoint, RunError> {
                 .into(),
         ));
     };
-    let recorded = super::branch::RecordedPoint {
+    let recorded = RecordedPoint {
         irrep: saved.irrep.clone(),
         parameters: saved.parameters.clone(),
         measures: study.measure(&saved.state, &saved.parameters),

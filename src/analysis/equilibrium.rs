@@ -7,11 +7,11 @@
 //! in the fixed-point space of the scene's group; an inside-out solution is refused; the
 //! targets of constraints declared `"initial"` are then measured there.
 
-use super::continuation::{solve_at, PathOptions, PhaseTimes};
-use super::events::{Crossings, StopReason};
+use super::continuation::{solve_at, PathOptions};
+use super::events::Crossings;
 use super::{Observer, Record, RunError, SymmetricProblem};
 use crate::model::Model;
-use crate::report::StateKind;
+use crate::results::{PhaseTimes, StateKind, StopReason};
 use crate::scene::{Analysis, Direction};
 use crate::study::{Measure, Study};
 

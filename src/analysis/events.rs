@@ -7,14 +7,13 @@
 //! [`follow`] runs a driver with a list of detectors until one of them stops it, the step
 //! budget is used or the driver stalls.
 
-use super::continuation::{Accepted, Continuation, PathPoint, Problem, Stalled};
-use super::critical::{isotropy, CriticalKind, CriticalPoint};
+use super::continuation::{Accepted, Continuation, PathPoint, Problem};
+use super::critical::isotropy;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model};
+use crate::results::{BranchTimes, CriticalKind, CriticalPoint, Extremum, StopReason};
 use crate::stability::{Detail, Spectrum, Stability};
-use crate::text::num;
 use meshes::GroupAction;
-use serde::Serialize;
 
 /// Relative size below which a localised eigenvalue counts as zero.
 const ZERO_EIGENVALUE: f64 = 1e-10;
@@ -111,30 +110,6 @@ fn locate_within(
     Some((best, fbest))
 }
 
-/// A maximum or a minimum of a parameter along the path.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Extremum {
-    /// The parameter was increasing before the point.
-    Maximum,
-    /// The parameter was decreasing before the point.
-    Minimum,
-}
-
-impl std::fmt::Display for Extremum {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Self::Maximum => "maximum",
-            Self::Minimum => "minimum",
-        })
-    }
-}
-
-impl Serialize for Extremum {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
-    }
-}
-
 /// A turning point of a free parameter, localised where its tangent component vanishes.
 #[derive(Debug, Clone)]
 pub struct TurningPoint {
@@ -146,84 +121,6 @@ pub struct TurningPoint {
     pub point: PathPoint,
     /// The index of the accepted point just before it.
     pub after_step: usize,
-}
-
-/// Why a path ended.
-#[derive(Debug, Clone, PartialEq)]
-pub enum StopReason {
-    /// The control left its `[min, max]` range; the last point is the first beyond it.
-    Bounds,
-    /// The budget of accepted steps was used.
-    StepBudget {
-        /// The budget.
-        steps: usize,
-    },
-    /// A closed membrane's stretch reached the scene's `stop-stretch`.
-    Stretch {
-        /// The target.
-        target: f64,
-    },
-    /// The largest displacement reached the scene's `stop-displacement`.
-    Displacement {
-        /// The target.
-        target: f64,
-    },
-    /// A caller's stop condition held.
-    Condition,
-    /// The critical point the analysis looked for was found (a critical curve's start).
-    CriticalPoint,
-    /// The step was cut below the minimum.
-    Stalled(Stalled),
-    /// A single equilibrium was solved.
-    Equilibrium,
-    /// A held state's control swept its range.
-    Swept {
-        /// Lower end.
-        min: f64,
-        /// Upper end.
-        max: f64,
-        /// Number of steps.
-        samples: usize,
-    },
-    /// A sweep without a control parameter.
-    NoControl,
-    /// A stop was requested (SIGINT, SIGTERM): the path ends at its last point.
-    Interrupted,
-}
-
-impl std::fmt::Display for StopReason {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Bounds => f.write_str(
-                "the control parameter left its [min, max] range (the last point is the first beyond it)",
-            ),
-            Self::StepBudget { steps } => write!(f, "the step budget ({steps}) was used"),
-            Self::Stretch { target } => write!(f, "the stretch reached {}", num(*target)),
-            Self::Displacement { target } => {
-                write!(f, "the largest displacement reached {}", num(*target))
-            }
-            Self::Condition => f.write_str("the stop condition held"),
-            Self::CriticalPoint => f.write_str("the critical point asked for was found"),
-            Self::Stalled(s) => write!(f, "{s}"),
-            Self::Equilibrium => f.write_str("equilibrium found"),
-            Self::Swept { min, max, samples } => {
-                write!(
-                    f,
-                    "the control swept [{}, {}] in {samples} steps",
-                    num(*min),
-                    num(*max)
-                )
-            }
-            Self::NoControl => f.write_str("no control parameter"),
-            Self::Interrupted => f.write_str("interrupted"),
-        }
-    }
-}
-
-impl Serialize for StopReason {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
-    }
 }
 
 /// Something a detector found between two accepted points (or at the start).
@@ -283,19 +180,6 @@ pub struct Branch {
     pub times: BranchTimes,
 }
 
-/// Where [`follow`]'s time went.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct BranchTimes {
-    /// The driver's steps (predictor–corrector, step control), wall time.
-    pub steps: std::time::Duration,
-    /// Of `steps`: the problem's evaluations.
-    pub steps_problem: super::continuation::PhaseTimes,
-    /// The detectors (localisation included), wall time.
-    pub events: std::time::Duration,
-    /// The caller's `progress`, wall time.
-    pub progress: std::time::Duration,
-}
-
 impl Branch {
     /// The turning points found.
     pub fn turning_points(&self) -> impl Iterator<Item = &TurningPoint> {
@@ -346,7 +230,7 @@ pub fn follow<P: Problem>(
         let step = match step {
             Ok(step) => step,
             Err(stalled) => {
-                branch.stop = StopReason::Stalled(stalled);
+                branch.stop = StopReason::Stalled(stalled.into());
                 return branch;
             }
         };

@@ -36,39 +36,20 @@ mod problem;
 pub mod release;
 pub mod surface;
 
-pub use continuation::PhaseTimes;
 pub use problem::{held_gauge, SymmetricProblem, SPARSE_TANGENT_FROM};
 
 use crate::adapted::AdaptedBasis;
 use crate::model::Model;
-use crate::report::{MeshInfo, PathReport, PathRow, PointState, Spectra, State, TurningRow};
+use crate::results::{
+    CriticalPoint, CurveReport, MeshInfo, PathReport, PathRow, PointState, RunResult, RunTimes,
+    Spectra, State, StateKind, StopReason, SurfaceReport, TurningRow,
+};
 use crate::scene::Analysis;
 use crate::stability::Stability;
 use crate::study::Study;
 use continuation::SolveError;
-use critical::CriticalPoint;
-use events::{BranchTimes, Crossings, StopReason};
-use std::time::{Duration, Instant};
-
-/// A finished run.
-#[derive(Debug, Clone)]
-pub struct RunResult {
-    /// What was found.
-    pub report: PathReport,
-    /// States to write (every `save-every` steps, the last one, turning and critical points).
-    pub states: Vec<State>,
-    /// Every path row's state (parameters and fixed-point coordinates), for `path.states`.
-    pub points: Vec<PointState>,
-    /// Where the time went.
-    pub times: RunTimes,
-    /// The critical curve of a `critical-curve` analysis.
-    pub curve: Option<crate::report::CurveReport>,
-    /// The equilibrium surface of a `surface` analysis.
-    pub surface: Option<crate::report::SurfaceReport>,
-    /// The branches of the path's bifurcation points, when the scene asks for them
-    /// (`[analysis.branches]`).
-    pub branches: Option<branch::Branches>,
-}
+use events::Crossings;
+use std::time::Instant;
 
 /// Why a run failed before it produced a path.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -109,23 +90,6 @@ impl RunError {
             control: study.control.map(|c| study.parameters[c].clone()),
         }
     }
-}
-
-/// Where a run's time went, by phase (what `memstab bench` reports).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct RunTimes {
-    /// The start solve (wall time).
-    pub start: Duration,
-    /// Of `start`: the evaluations of the fixed-point problem.
-    pub start_problem: PhaseTimes,
-    /// Building the symmetry-adapted basis of every irrep (once).
-    pub adapted_basis: Duration,
-    /// The path (wall time of its correction at fixed control, the steps and the events).
-    pub path: Duration,
-    /// Of `path`: the steps of the driver (wall time), and of those the evaluations.
-    pub steps: BranchTimes,
-    /// Of `path`'s events: the index by irrep blocks at every point.
-    pub index: Duration,
 }
 
 /// What a caller sees of a run while it goes: the progress, and every accepted state.
@@ -254,8 +218,8 @@ pub(crate) struct Record {
     spectra: Spectra,
     irreps: Vec<String>,
     control: Option<usize>,
-    curve: Option<crate::report::CurveReport>,
-    surface: Option<crate::report::SurfaceReport>,
+    curve: Option<CurveReport>,
+    surface: Option<SurfaceReport>,
 }
 
 impl Record {
@@ -307,7 +271,7 @@ impl Record {
     }
 
     /// A state to write.
-    fn state(&mut self, step: usize, kind: crate::report::StateKind, u: Vec<f64>, params: &[f64]) {
+    fn state(&mut self, step: usize, kind: StateKind, u: Vec<f64>, params: &[f64]) {
         self.states.push(State {
             step,
             kind,
@@ -322,7 +286,7 @@ impl Record {
     fn critical(&mut self, cp: CriticalPoint) {
         self.states.push(State {
             step: cp.after_step,
-            kind: crate::report::StateKind::Critical {
+            kind: StateKind::Critical {
                 kind: cp.kind,
                 irrep: cp.irrep.clone(),
             },

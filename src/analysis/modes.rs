@@ -11,11 +11,11 @@
 //! [`ModeProblem`] is followed.
 
 use super::continuation::{Accepted, Continuation, PathOptions, PathPoint, Problem, SolveError};
-use super::critical::CriticalKind;
-use super::events::{locate, Detector, Event, Extremum, StopReason};
+use super::events::{locate, Detector, Event};
 use crate::linalg::eigen::shift_invert;
 use crate::linalg::{FactorError, SymmetricFactorization, SymmetricPattern};
 use crate::model::ModelError;
+use crate::results::{CriticalKind, Extremum, StopReason};
 use nalgebra::DVector;
 use rayon::prelude::*;
 use std::sync::Arc;

@@ -5,10 +5,10 @@
 
 use super::continuation::{Continuation, PathPoint, Problem};
 use super::events::{
-    follow, Branch, Crossings, Detector, Event, IndexChanges, StopReason, StopWhen, TurningPoints,
+    follow, Branch, Crossings, Detector, Event, IndexChanges, StopWhen, TurningPoints,
 };
-use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
-use crate::report::{StateKind, TurningRow};
+use super::{Observer, Record, RunError, SymmetricProblem};
+use crate::results::{RunTimes, StateKind, StopReason, TurningRow};
 use crate::scene::Analysis;
 use crate::study::{Measure, Study};
 use crate::text::{num, sig_digits};

@@ -1,11 +1,12 @@
 //! A model restricted to the fixed-point space of a (sub)group, for the path follower.
 
 use crate::adapted::SparseBasis;
-use crate::analysis::continuation::{Linearization, PhaseTimes, Problem, Tangent};
+use crate::analysis::continuation::{Linearization, Problem, Tangent};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricFactorization;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Subset};
+use crate::results::PhaseTimes;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 

@@ -11,10 +11,12 @@
 //! paths are joined across `b` into critical lines ([`join`]): on a limit line the surface
 //! folds over the (a, b) plane, and the index of its vertices changes there.
 
-use super::critical::{CriticalKind, CriticalPoint};
-use super::events::{Crossings, Detector, Event, IndexChanges, StopReason};
-use super::{Observer, Record, RunError, RunTimes, SymmetricProblem};
-use crate::report::{CriticalLine, CriticalLinePoint, SurfacePath, SurfaceReport, SurfaceVertex};
+use super::events::{Crossings, Detector, Event, IndexChanges};
+use super::{Observer, Record, RunError, SymmetricProblem};
+use crate::results::{
+    CriticalKind, CriticalLine, CriticalLinePoint, CriticalPoint, RunTimes, StopReason,
+    SurfacePath, SurfaceReport, SurfaceVertex,
+};
 use crate::scene::Analysis;
 use crate::study::Study;
 use crate::text::num;

@@ -3,11 +3,12 @@
 //! knows blocks and wave numbers, not membranes.
 
 use super::{AxisymError, AxisymModel, BlockLayout};
-use crate::analysis::continuation::{Linearization, PhaseTimes, Problem, Tangent};
+use crate::analysis::continuation::{Linearization, Problem, Tangent};
 use crate::analysis::modes::{ModeBlock, ModeProblem};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricPattern;
 use crate::model::ModelError;
+use crate::results::PhaseTimes;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 use std::time::Instant;

@@ -10,12 +10,10 @@
 
 use super::{AxisymModel, AxisymProblem, Meridian, Pressure};
 use crate::analysis::continuation::{PathOptions, PathPoint, SolveError};
-use crate::analysis::critical::CriticalKind;
-use crate::analysis::events::StopReason;
 use crate::analysis::modes::{self, ModePath};
 use crate::effects::membrane::MooneyRivlin;
 use crate::effects::Quantity;
-use crate::report::TurningRow;
+use crate::results::{CriticalKind, StopReason, TurningRow};
 use crate::scene::{self, Analysis, AxisymShape, Direction, Effect, MeshSpec, Scene};
 use nalgebra::DVector;
 use serde::Serialize;

@@ -4,10 +4,9 @@
 //! spectra by irrep at every accepted state.
 
 use crate::adapted::AdaptedBasis;
-use crate::analysis::events::Extremum;
 use crate::model::{Model, Request};
 use crate::reference::{P_MAX, P_MIN};
-use crate::report::StateKind;
+use crate::results::{Extremum, StateKind};
 use crate::scene::{Analysis, Scene};
 use crate::stability::{BlockEigen, Stability};
 use crate::study::Study;

@@ -3,14 +3,14 @@
 //! the branches from the first E1 double point of the upward-loaded C7v disc
 //! (`scenes/disc_upward.toml`) on a mesh of the given divisions (16: the thesis mesh).
 
-use crate::analysis::branch::{self, BranchGraph, BranchOptions, Level, Switching};
+use crate::analysis::branch::{BranchOptions, Level, Switching};
 use crate::analysis::continuation::{Continuation, PathOptions};
-use crate::analysis::critical::CriticalPoint;
 use crate::analysis::events::{Crossings, Detector, IndexChanges};
 use crate::analysis::path::trace;
 use crate::analysis::SymmetricProblem;
 use crate::effects::invariant::IrrepPotential;
 use crate::model::{FeModel, Model};
+use crate::results::{BranchGraph, Branches, CriticalPoint, RunResult, StopReason};
 use crate::scene::Scene;
 use crate::stability::Stability;
 use crate::study::Study;
@@ -66,7 +66,7 @@ pub struct Switched {
     /// The path's critical points.
     pub critical: Vec<CriticalPoint>,
     /// The path's points, why it ended and what it could not settle.
-    pub path: (usize, crate::analysis::events::StopReason, Vec<String>),
+    pub path: (usize, StopReason, Vec<String>),
     /// The branches.
     pub graph: BranchGraph,
     /// The path (the trivial solution u = 0 from λ = 0.5 to 1.5, with its index).
@@ -152,11 +152,11 @@ pub fn ih_branches(problem: &IhProblem, steps: usize) -> Result<Switched, String
 
 /// The upward-loaded disc with `divisions` as `run` computes it: its path to h = 4.9 and the
 /// branches of its bifurcation points (the first E1 double point), `steps` points each. The
-/// branches' own wall time is [`branch::Branches::time`].
+/// branches' own wall time is [`Branches::time`].
 pub fn disc_upward_branches(
     divisions: usize,
     steps: usize,
-) -> Result<(crate::analysis::RunResult, branch::Branches), String> {
+) -> Result<(RunResult, Branches), String> {
     let text = DISC_UPWARD_TOML
         .replace("divisions = 16 ", &format!("divisions = {divisions} "))
         .replace("steps = 30 ", &format!("steps = {steps} "));

@@ -3,7 +3,7 @@
 //! E1 double point of the C7v disc under fluid from below followed in its prestretch.
 
 use crate::analysis::run;
-use crate::report::{CurveEventKind, CurveReport};
+use crate::results::{CurveEventKind, CurveReport};
 use crate::scene::Scene;
 use crate::study::Study;
 use std::time::{Duration, Instant};

@@ -23,7 +23,7 @@
 //! How the phases are timed: the balloon path is what `memstab run` computes
 //! ([`crate::analysis::run_with`]: start solve, adapted basis, the path with the index by
 //! irrep blocks at every point and the critical points localised), with the run's own phase
-//! times ([`crate::analysis::RunTimes`]): `model.evaluate` (assembly) and the restriction of
+//! times ([`crate::results::RunTimes`]): `model.evaluate` (assembly) and the restriction of
 //! residual, loads and tangent to the fixed-point space (projection) as the fixed-point
 //! problem counts them; what is left of the start solve and the steps is the dense linear
 //! algebra of the fixed-point system (factorisations and solves of a matrix of size m + 1, m

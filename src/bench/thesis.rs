@@ -12,9 +12,9 @@
 
 use super::full_path::{full_path_stability, FullPathStability};
 use super::peer::{run_peer, PeerResult};
-use crate::analysis::{run_with, Observer, RunTimes};
+use crate::analysis::{run_with, Observer};
 use crate::model::Model;
-use crate::report::PathReport;
+use crate::results::{PathReport, RunTimes};
 use crate::scene::Scene;
 use crate::study::Study;
 use std::path::Path;

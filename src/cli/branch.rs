@@ -15,9 +15,10 @@
 use super::common::{build_study, load_scene, one_line, sig_digits};
 use super::CliError;
 use clap::Args;
-use memstab::analysis::branch::{self, Branches, Node};
+use memstab::analysis::branch;
 use memstab::analysis::equilibrium::solve_start;
 use memstab::output::{write_branches, BranchesWritten, FinishedRun};
+use memstab::results::{directory, Branches, Node};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -151,7 +152,7 @@ pub(crate) fn print_branches(b: &Branches, written: &BranchesWritten, control: &
             continue;
         };
         let leaving = g.leaving(n);
-        let on = on.map_or_else(|| "path".to_string(), branch::directory);
+        let on = on.map_or_else(|| "path".to_string(), directory);
         match skipped {
             Some(why) if leaving.is_empty() => {
                 if on == "path" {

@@ -6,7 +6,7 @@ use super::summary::print_summary;
 use super::CliError;
 use clap::Args;
 use memstab::demo::closed_form_check;
-use memstab::report::PathReport;
+use memstab::results::PathReport;
 use memstab::study::Study;
 use std::path::PathBuf;
 

@@ -16,9 +16,9 @@
 use super::summary::print_summary;
 use super::CliError;
 use clap::Args;
-use memstab::analysis::events::StopReason;
-use memstab::analysis::{run as run_study, RunResult};
+use memstab::analysis::run as run_study;
 use memstab::output::{write_run, Progress, RunSummary, Written};
+use memstab::results::{RunResult, StopReason};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use memstab::text::one_line;

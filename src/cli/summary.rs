@@ -2,9 +2,8 @@
 //! path, turning and critical points (with each mode's wave number where the mesh has an
 //! axis), where the membrane wrinkles, the files written; and a critical curve's events.
 
-use memstab::analysis::RunResult;
 use memstab::output::{file_name, Written};
-use memstab::report::{CurveReport, PathReport, SurfaceReport};
+use memstab::results::{CurveReport, PathReport, RunResult, SurfaceReport};
 use memstab::study::Study;
 use memstab::text::sig_digits;
 use std::path::Path;

@@ -4,53 +4,14 @@
 
 use super::diagram::{write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark};
 use super::{write_run, write_whole, OutputError, WriteRunError};
-use crate::analysis::branch::{Branches, Node, ASYMMETRY};
-use crate::analysis::critical::CriticalKind;
-use crate::analysis::events::StopReason;
-use crate::analysis::RunResult;
-use crate::report::PathReport;
+use crate::results::{
+    Branches, CriticalKind, Node, PathReport, PrimaryPath, RunResult, StopReason, ASYMMETRY,
+};
 use crate::study::Study;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io;
 use std::path::{Path, PathBuf};
-
-/// What the diagram needs of the path the branches leave: the control and the index at
-/// every point.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PrimaryPath {
-    /// The scene's name.
-    pub scene: String,
-    /// The scene's group.
-    pub group: String,
-    /// The control's name.
-    pub control: String,
-    /// Parameter names, in order.
-    pub parameters: Vec<String>,
-    /// The control at every point.
-    pub values: Vec<f64>,
-    /// The index at every point.
-    pub index: Vec<Option<usize>>,
-}
-
-impl PrimaryPath {
-    /// The path of a run's report.
-    pub fn of(report: &PathReport) -> Self {
-        let c = report.parameters.iter().position(|p| *p == report.control);
-        Self {
-            scene: report.scene.clone(),
-            group: report.group.clone(),
-            control: report.control.clone(),
-            parameters: report.parameters.clone(),
-            values: report
-                .rows
-                .iter()
-                .map(|r| c.map_or(0.0, |c| r.parameters[c]))
-                .collect(),
-            index: report.rows.iter().map(|r| r.index).collect(),
-        }
-    }
-}
 
 /// What [`write_branches`] wrote.
 #[derive(Debug, Clone)]
@@ -138,7 +99,7 @@ struct GraphJson<'a> {
 
 /// Where a path lies: `path` or its branch's directory.
 fn on_name(on: Option<usize>) -> String {
-    on.map_or_else(|| "path".to_string(), crate::analysis::branch::directory)
+    on.map_or_else(|| "path".to_string(), crate::results::directory)
 }
 
 /// The stable (index 0) and unstable stretches of a branch's rows (row 0, the critical
@@ -201,13 +162,13 @@ pub fn write_branch_graph(
                 branches: g
                     .leaving(n)
                     .into_iter()
-                    .map(crate::analysis::branch::directory)
+                    .map(crate::results::directory)
                     .collect(),
                 skipped: skipped.as_ref().map(|s| s.to_string()),
             },
             Node::End { branch, stop } => NodeJson::End {
                 id: n.index(),
-                branch: crate::analysis::branch::directory(*branch),
+                branch: crate::results::directory(*branch),
                 stop,
             },
         });

@@ -1,7 +1,7 @@
 //! `path.csv`: the path as a table, one row per converged point.
 
 use super::{check_finite, write_whole, Num, OutputError};
-use crate::report::PathReport;
+use crate::results::PathReport;
 use std::path::{Path, PathBuf};
 
 /// Writes `dir/path.csv` and returns its path.
@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 /// The header is `step,arclength,<each parameter>,<each measure>,iterations,index` and, when
 /// the rows have their blocks' negative counts, `index_<irrep>` for every irrep of
 /// [`PathReport::irreps`] (names quoted as in RFC 4180 if they contain a comma, a quote or a
-/// line break), followed by one row per [`PathRow`](crate::report::PathRow); `index` is the
+/// line break), followed by one row per [`PathRow`](crate::results::PathRow); `index` is the
 /// instability index Σ d·neg at the point and `index_<irrep>` the negative count neg of that
 /// irrep's block (each such eigenvalue is d-fold in K), empty where it was not computed (no
 /// stability analysis, a singular block). Numbers are printed with the fewest digits that parse

@@ -3,7 +3,7 @@
 use super::scales::Scales;
 use super::svg::{chart, padded, xml_chars, AxisScale};
 use super::{write_whole, Num, OutputError};
-use crate::report::{CurveEventKind, CurveReport};
+use crate::results::{CurveEventKind, CurveReport};
 use plotters::prelude::*;
 use std::io;
 use std::path::{Path, PathBuf};

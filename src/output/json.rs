@@ -1,7 +1,7 @@
 //! `path.json`: the whole report with its metadata.
 
 use super::{check_finite, write_whole, OutputError};
-use crate::report::PathReport;
+use crate::results::PathReport;
 use std::io;
 use std::path::{Path, PathBuf};
 
@@ -63,7 +63,7 @@ fn by_name(names: &[String], values: &serde_json::Value) -> serde_json::Value {
 /// One critical point as written to `critical.json`.
 #[derive(serde::Serialize)]
 struct CriticalJson<'a> {
-    kind: crate::analysis::critical::CriticalKind,
+    kind: crate::results::CriticalKind,
     irrep: &'a str,
     multiplicity: usize,
     parameters: std::collections::BTreeMap<&'a str, f64>,
@@ -99,7 +99,7 @@ pub fn write_critical(dir: &Path, report: &PathReport) -> Result<PathBuf, Output
 pub fn write_critical_with(
     dir: &Path,
     report: &PathReport,
-    events: &[crate::report::CurveEvent],
+    events: &[crate::results::CurveEvent],
 ) -> Result<PathBuf, OutputError> {
     let path = dir.join("critical.json");
     let list: Vec<CriticalJson> = report

@@ -4,7 +4,7 @@
 //! old manifest is removed before anything else is written.
 
 use super::{write_whole, OutputError};
-use crate::analysis::events::StopReason;
+use crate::results::StopReason;
 use sha2::{Digest, Sha256};
 use std::io::Read;
 use std::path::{Path, PathBuf};

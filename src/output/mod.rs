@@ -26,7 +26,7 @@
 //! and the offending value. One writer per file: `csv.rs`, `json.rs`, `svg.rs`, `states.rs`,
 //! `progress.rs`.
 //!
-//! [`PathReport`]: crate::report::PathReport
+//! [`PathReport`]: crate::results::PathReport
 
 mod axisym;
 mod branches;
@@ -46,7 +46,7 @@ mod surface;
 mod svg;
 
 pub use axisym::{write_axisym_run, AXISYM_RUN_FILES};
-pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten, PrimaryPath};
+pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten};
 pub use csv::write_csv;
 pub use curve::{write_curve, write_curve_with};
 pub use diagram::{
@@ -73,7 +73,7 @@ pub use svg::{
     SPECTRUM_AXIS, ZERO_LINE,
 };
 
-use crate::report::PathReport;
+use crate::results::PathReport;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
@@ -220,7 +220,7 @@ fn check_finite(path: &Path, report: &PathReport) -> Result<(), OutputError> {
     check_spectra(path, report)
 }
 
-/// Checks the report's [`Spectra`](crate::report::Spectra): a value per irrep in every row,
+/// Checks the report's [`Spectra`](crate::results::Spectra): a value per irrep in every row,
 /// every number finite (a lowest eigenvalue that was not computed is `None`, never NaN).
 fn check_spectra(path: &Path, report: &PathReport) -> Result<(), OutputError> {
     let spectra = &report.spectra;

@@ -8,9 +8,8 @@
 //! X + u) and its mode (the point field `critical_mode`). The scene itself is rebuilt from
 //! its file, and must give the same model (name, group, unknowns).
 
-use super::PrimaryPath;
-use crate::analysis::branch::RecordedPoint;
 use crate::model::Model;
+use crate::results::{PrimaryPath, RecordedPoint};
 use crate::study::Study;
 use serde_json::Value;
 use std::path::{Path, PathBuf};

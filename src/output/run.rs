@@ -5,12 +5,12 @@ use super::{
     write_spectrum_diagram_with, Diagram, Marker, MarkerKind, OutputError, PvdTime, StateWriter,
     SPECTRUM_AXIS,
 };
-use crate::analysis::critical::CriticalKind;
-use crate::analysis::events::{Extremum, StopReason};
-use crate::analysis::RunResult;
 use crate::model::CellQuantity;
 use crate::model::Model;
-use crate::report::{PathReport, StateKind, WrinkledCritical, WrinkledPoint, Wrinkling};
+use crate::results::{
+    CriticalKind, Extremum, PathReport, RunResult, StateKind, StopReason, WrinkledCritical,
+    WrinkledPoint, Wrinkling,
+};
 use crate::study::Study;
 use meshes::write::Fields;
 use std::path::{Path, PathBuf};
@@ -272,7 +272,7 @@ pub fn write_run(
     done.extend(surface.iter().cloned());
     let branches = match &result.branches {
         Some(b) => {
-            let primary = super::PrimaryPath::of(&result.report);
+            let primary = crate::results::PrimaryPath::of(&result.report);
             match super::write_branches(study, b, &primary, out) {
                 Ok(w) => {
                     done.extend(w.files.iter().cloned());
@@ -311,7 +311,7 @@ pub fn write_run(
 /// pressure), per triangle what they show (stretches, thickness, tensions, where the
 /// membrane would wrinkle, fluid and contact pressure); a non-finite value (never at an
 /// accepted state) is written as 0 rather than as NaN.
-pub fn state_fields(study: &Study, s: &crate::report::State) -> Fields {
+pub fn state_fields(study: &Study, s: &crate::results::State) -> Fields {
     let finite = |v: &f64| if v.is_finite() { *v } else { 0.0 };
     let x = study.model.positions(&s.u, &s.params);
     let normals = node_normals(&x, &study.mesh.mesh.triangles);
@@ -394,7 +394,7 @@ fn wrinkled(study: &Study, u: &[f64], params: &[f64]) -> Option<usize> {
 /// triangles, with how many; empty when the model shows no `wrinkled` field.
 pub fn wrinkled_critical(
     study: &Study,
-    critical: &[crate::analysis::critical::CriticalPoint],
+    critical: &[crate::results::CriticalPoint],
 ) -> Vec<WrinkledCritical> {
     critical
         .iter()

@@ -11,7 +11,7 @@
 //! the parameter's name and its values.
 
 use super::svg::{short, AxisScale, ReferenceCurve};
-use crate::report::PathReport;
+use crate::results::PathReport;
 use crate::scene::{Effect, MeshSpec, Quantity, Scene};
 
 /// The scales of a scene's quantities, by name.

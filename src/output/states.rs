@@ -2,7 +2,7 @@
 //! collections.
 
 use super::{check_dir, OutputError};
-use crate::report::SavedState;
+use crate::results::SavedState;
 use meshes::write::{write_mesh, write_pvd, write_pvd_named, Field, Fields, Format};
 use meshes::{Mesh, Vec3};
 use std::path::{Path, PathBuf};
@@ -197,7 +197,7 @@ impl StateWriter {
     }
 
     /// Writes `path.pvd` (also when no state was saved: an empty collection) and returns the
-    /// saved states for [`PathReport::saved`](crate::report::PathReport::saved).
+    /// saved states for [`PathReport::saved`](crate::results::PathReport::saved).
     ///
     /// # Errors
     /// [`OutputError::Io`] if `path.pvd` cannot be written.

@@ -16,7 +16,7 @@
 //! nothing is written); the file is written whole (temporary file and rename).
 
 use super::{write_whole, OutputError};
-use crate::report::{PointState, StatesInfo};
+use crate::results::{PointState, StatesInfo};
 use std::io;
 use std::path::{Path, PathBuf};
 

@@ -3,8 +3,7 @@
 
 use super::svg::{chart, padded, xml_chars};
 use super::{write_whole, Num, OutputError};
-use crate::analysis::critical::CriticalKind;
-use crate::report::SurfaceReport;
+use crate::results::{CriticalKind, SurfaceReport};
 use plotters::prelude::*;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};

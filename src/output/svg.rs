@@ -10,7 +10,7 @@
 //! only estimates text extents for the layout, so no font file is read or needed.
 
 use super::{check_finite, write_whole, OutputError};
-use crate::report::{PathReport, TurningRow};
+use crate::results::{PathReport, TurningRow};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::error::Error;
@@ -31,7 +31,7 @@ pub enum MarkerKind {
 }
 
 /// A labelled point of the diagram, given by all its parameters and measures (like a
-/// [`PathRow`](crate::report::PathRow)), so it is placed whatever the axes are.
+/// [`PathRow`](crate::results::PathRow)), so it is placed whatever the axes are.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Marker {
     /// Parameter values, in the order of [`PathReport::parameters`].
@@ -53,7 +53,7 @@ pub struct Marker {
 impl Marker {
     /// The marker of a turning point of the control, labelled like `max p = 1.3551`.
     pub fn turning(report: &PathReport, t: &TurningRow) -> Self {
-        let kind = if t.kind == crate::analysis::events::Extremum::Minimum {
+        let kind = if t.kind == crate::results::Extremum::Minimum {
             MarkerKind::Minimum
         } else {
             MarkerKind::Maximum
@@ -744,7 +744,7 @@ pub const SPECTRUM_AXIS: &str = "lowest eigenvalue / max|K_ij|";
 /// computed, or empty) get no line — nothing non-finite is drawn — and a legend entry that
 /// says so; samples where a block has no value break its line.
 ///
-/// [`Spectra`]: crate::report::Spectra
+/// [`Spectra`]: crate::results::Spectra
 ///
 /// # Errors
 /// [`OutputError::Invalid`] if the report has no spectra, a number (of the report, its spectra
@@ -834,8 +834,8 @@ pub fn write_spectrum_diagram_with(
     let higher: Vec<Vec<Vec<(f64, f64)>>> = (0..spectra.irreps.len())
         .map(|mu| {
             let mut runs: Vec<Vec<(f64, f64)>> = Vec::new();
-            for j in 1..crate::report::SPECTRUM_EIGENVALUES {
-                let value = |row: &crate::report::SpectrumRow| {
+            for j in 1..crate::results::SPECTRUM_EIGENVALUES {
+                let value = |row: &crate::results::SpectrumRow| {
                     row.eigenvalues
                         .get(mu)
                         .and_then(|e| e.get(j).copied())

@@ -47,8 +47,8 @@ pub fn follow<P: memstab::analysis::continuation::Problem>(
     mut stop: impl FnMut(&memstab::analysis::continuation::PathPoint) -> bool,
 ) -> Result<memstab::analysis::events::Branch, memstab::analysis::continuation::SolveError> {
     use memstab::analysis::continuation::Continuation;
-    use memstab::analysis::events::StopReason;
     use memstab::analysis::path::trace;
+    use memstab::results::StopReason;
     let mut driver = Continuation::start(problem, q0, lambda0, opts.clone())?;
     Ok(trace(
         &mut driver,

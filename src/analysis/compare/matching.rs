@@ -1,7 +1,7 @@
 //! Rungs of critical points and their images on the other meshes, measured.
 
 use super::{MeshRuns, Point, Unmatched, MATCH_TOLERANCE, PAIR_TOLERANCE, ROUND_OFF};
-use crate::analysis::critical::CriticalKind;
+use crate::results::CriticalKind;
 use crate::text::sci;
 use serde::Serialize;
 
@@ -772,7 +772,7 @@ mod tests {
                 order: 1,
                 unknowns: 0,
                 symmetric_unknowns: 0,
-                stop: crate::analysis::events::StopReason::Bounds,
+                stop: crate::results::StopReason::Bounds,
                 note: None,
                 warnings: Vec::new(),
                 seconds: 0.0,

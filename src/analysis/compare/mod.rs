@@ -72,12 +72,10 @@ pub use matching::{
 };
 pub use meshes::{parse_meshes, MeshChoice};
 
-use super::critical::{CriticalKind, CriticalPoint};
-use super::events::StopReason;
 use crate::adapted::AdaptedBasis;
 use crate::axisym::run::{AxisymRunError, AxisymStudy};
 use crate::model::Model;
-use crate::report::PathReport;
+use crate::results::{CriticalKind, CriticalPoint, PathReport, StopReason};
 use crate::scene::{Analysis, MeshSpec, Scene};
 use crate::stability::Stability;
 use crate::study::{Study, StudyError};

@@ -1,0 +1,33 @@
+//! What the analyses find, as plain data: the path with its parameters and measures, the
+//! turning and critical points, why a path stopped, the states to write, spectra, critical
+//! curves, equilibrium surfaces, the branches of bifurcation points, and where a run's time
+//! went. Writers (see [`crate::output`]) turn it into CSV, JSON, VTU + PVD and SVG diagrams.
+//!
+//! Nothing here computes beyond simple accessors. Every layer may use it; it uses none of
+//! them (std, serde, petgraph and [`crate::text`] only).
+
+mod branches;
+mod critical;
+mod curve;
+mod path;
+mod run;
+mod spectra;
+mod state;
+mod stop;
+mod surface;
+
+pub use branches::{
+    directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches, Half,
+    Halves, Node, PrimaryPath, RecordedPoint, Reduced, Skip, SwitchedBranch, ASYMMETRY,
+};
+pub use critical::{CriticalKind, CriticalPoint, Isotropy};
+pub use curve::{CurveEvent, CurveEventKind, CurveReport, CurveRow};
+pub use path::{
+    MeshInfo, PathReport, PathRow, PointState, SavedState, StatesInfo, TurningRow,
+    WrinkledCritical, WrinkledPoint, Wrinkling,
+};
+pub use run::{BranchTimes, PhaseTimes, RunResult, RunTimes};
+pub use spectra::{Spectra, SpectrumIrrep, SpectrumRow, SPECTRUM_EIGENVALUES};
+pub use state::{State, StateKind};
+pub use stop::{Extremum, Stalled, StopReason};
+pub use surface::{CriticalLine, CriticalLinePoint, SurfacePath, SurfaceReport, SurfaceVertex};

@@ -1,0 +1,275 @@
+//! What a path run found, in plain data: the path with its parameters and measures, the
+//! turning points, why it stopped, and the states saved for visualisation.
+
+use super::{CriticalPoint, Extremum, Spectra, StopReason};
+use serde::Serialize;
+
+/// The mesh a run used.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshInfo {
+    /// Generator name (`disc`, `icosphere`, `truncated-sphere`).
+    pub generator: String,
+    /// Number of nodes.
+    pub nodes: usize,
+    /// Number of triangles.
+    pub elements: usize,
+    /// The mesh's own symmetry group.
+    pub group: String,
+    /// Its order.
+    pub order: usize,
+}
+
+/// One converged point of the path.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathRow {
+    /// Index along the path (0 = start).
+    pub step: usize,
+    /// Arclength from the start (scaled norm).
+    pub arclength: f64,
+    /// Every parameter's value, in the order of [`PathReport::parameters`].
+    pub parameters: Vec<f64>,
+    /// Every measure's value, in the order of [`PathReport::measures`].
+    pub measures: Vec<f64>,
+    /// Newton iterations of the corrector.
+    pub iterations: usize,
+    /// Instability index Σ_μ d_μ neg_μ (rigid modes excluded), when stability was analysed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub index: Option<usize>,
+    /// The negative count of every irrep block, in the order of [`PathReport::irreps`]
+    /// (its index part: `index` = Σ_μ d_μ `negative[μ]`), when stability was analysed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub negative: Option<Vec<usize>>,
+}
+
+/// A turning point of the control parameter (a fold of the path in the control).
+#[derive(Debug, Clone, Serialize)]
+pub struct TurningRow {
+    /// `maximum` or `minimum` of the control.
+    pub kind: Extremum,
+    /// The path step just before it (`step` in the outputs).
+    #[serde(rename = "step")]
+    pub after_step: usize,
+    /// Parameters at the localised point.
+    pub parameters: Vec<f64>,
+    /// Measures at the localised point.
+    pub measures: Vec<f64>,
+}
+
+/// A state written as a VTU file.
+#[derive(Debug, Clone, Serialize)]
+pub struct SavedState {
+    /// Path step.
+    pub step: usize,
+    /// The control's value (the PVD "time").
+    pub control: f64,
+    /// File name relative to the output directory.
+    pub file: String,
+    /// What the state is: `step N`, `maximum`, `double bifurcation in E1` …
+    pub label: String,
+    /// True for the states of the path collection (`path.pvd`); turning and critical points
+    /// are written beside it.
+    pub in_collection: bool,
+}
+
+/// Everything a path run found.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathReport {
+    /// Scene name.
+    pub scene: String,
+    /// Where the scene came from (file path).
+    pub origin: String,
+    /// memstab's version.
+    pub version: String,
+    /// The mesh.
+    pub mesh: MeshInfo,
+    /// The group of the scene (the mesh group restricted to what every effect keeps).
+    pub group: String,
+    /// Its order.
+    pub group_order: usize,
+    /// Unknowns of the full model and of the fixed-point space the path was solved in.
+    pub unknowns: usize,
+    /// Dimension of the fixed-point space.
+    pub symmetric_unknowns: usize,
+    /// The control parameter.
+    pub control: String,
+    /// Parameter names (all of them, in scene order).
+    pub parameters: Vec<String>,
+    /// Measure names (e.g. `volume`, `stretch`, `max_displacement`).
+    pub measures: Vec<String>,
+    /// The path.
+    pub rows: Vec<PathRow>,
+    /// The irrep blocks of the rows' `negative` counts (`path.csv`'s `index_<irrep>`
+    /// columns); empty when no row has them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub irreps: Vec<String>,
+    /// Turning points of the control.
+    pub turning_points: Vec<TurningRow>,
+    /// Why the path ended (written in words).
+    pub stop: StopReason,
+    /// Critical points, localised and classified by irrep.
+    pub critical: Vec<CriticalPoint>,
+    /// Things the analysis could not settle (a crossing that could not be localised …).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+    /// Why stability was not analysed, if it was not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stability_note: Option<String>,
+    /// States written as VTU files.
+    pub saved: Vec<SavedState>,
+    /// The lowest eigenvalue of every irrep block at every sample of a linear-buckling sweep
+    /// (empty, and left out of `path.json`, for the other analyses).
+    #[serde(skip_serializing_if = "Spectra::is_empty")]
+    pub spectra: Spectra,
+    /// The file with every point's state (`path.states`), once written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub states: Option<StatesInfo>,
+    /// Where the membrane would wrinkle along the path (left out when the model shows no
+    /// `wrinkled` field or no point's state was kept).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wrinkling: Option<Wrinkling>,
+    /// The wave number m about z of each critical mode (one per critical point), where the
+    /// mesh has an axis (a disc, a truncated sphere; empty otherwise). Written into
+    /// `critical.json` as each point's `m`.
+    #[serde(skip)]
+    pub wave_numbers: Vec<usize>,
+}
+
+/// Where the membrane model stops being valid along a path: the triangles whose smaller
+/// principal tension is negative (they would wrinkle; the membrane energy does not describe
+/// them).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Wrinkling {
+    /// The mesh's triangles.
+    pub triangles: usize,
+    /// The first path point with any wrinkled triangle (`None`: nowhere on the path).
+    pub first: Option<WrinkledPoint>,
+    /// The critical points that lie in a wrinkled state (numbered from 1, as
+    /// `critical_NN.vtu`).
+    pub critical: Vec<WrinkledCritical>,
+}
+
+impl Wrinkling {
+    /// A warning for every critical point of `critical` (the report's, numbered from 1) that
+    /// lies in a wrinkled state: `critical point 2 (simple bifurcation in E1) lies in a
+    /// wrinkled state (12 of 320 triangles): the membrane model does not describe it there`.
+    pub fn warnings(&self, critical: &[CriticalPoint]) -> Vec<String> {
+        self.critical
+            .iter()
+            .filter_map(|c| {
+                let cp = critical.get(c.critical.checked_sub(1)?)?;
+                Some(format!(
+                    "critical point {} ({} in {}) lies in a wrinkled state ({} of {} \
+                     triangles): the membrane model does not describe it there",
+                    c.critical, cp.kind, cp.irrep, c.wrinkled, self.triangles
+                ))
+            })
+            .collect()
+    }
+}
+
+/// A path point with wrinkled triangles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct WrinkledPoint {
+    /// The path step (the row `step` of `path.csv`).
+    pub step: usize,
+    /// How many triangles are wrinkled there.
+    pub wrinkled: usize,
+}
+
+/// A critical point in a wrinkled state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct WrinkledCritical {
+    /// The critical point's number (1-based, as `critical_NN.vtu`).
+    pub critical: usize,
+    /// How many triangles are wrinkled there.
+    pub wrinkled: usize,
+}
+
+/// What `path.json` records of the file of every point's state (see `output::store`).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct StatesInfo {
+    /// The file name, relative to the output directory.
+    pub file: String,
+    /// Unknowns N per state.
+    pub unknowns: usize,
+    /// Parameters P per state.
+    pub parameters: usize,
+    /// Points M (point k is the row `step = k`).
+    pub points: usize,
+}
+
+/// One path point's state, compactly: every parameter and the coordinates q of u in the
+/// fixed-point basis the path was solved in (u = B q).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointState {
+    /// Every parameter (scene order).
+    pub parameters: Vec<f64>,
+    /// q.
+    pub q: Vec<f64>,
+}
+
+impl PathReport {
+    /// The smallest and largest instability index of the rows, `None` where no row has one.
+    pub fn index_range(&self) -> Option<(usize, usize)> {
+        let mut indices = self.rows.iter().filter_map(|r| r.index);
+        let first = indices.next()?;
+        Some(indices.fold((first, first), |(lo, hi), i| (lo.min(i), hi.max(i))))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(step: usize, index: Option<usize>) -> PathRow {
+        PathRow {
+            step,
+            arclength: step as f64,
+            parameters: vec![],
+            measures: vec![],
+            iterations: 1,
+            index,
+            negative: None,
+        }
+    }
+
+    #[test]
+    fn the_index_range_covers_every_row() {
+        let mut r = PathReport {
+            scene: String::new(),
+            origin: String::new(),
+            version: String::new(),
+            mesh: MeshInfo {
+                generator: String::new(),
+                nodes: 0,
+                elements: 0,
+                group: String::new(),
+                order: 1,
+            },
+            group: String::new(),
+            group_order: 1,
+            unknowns: 0,
+            symmetric_unknowns: 0,
+            control: String::new(),
+            parameters: vec![],
+            measures: vec![],
+            rows: vec![row(0, Some(0)), row(1, Some(1)), row(2, Some(1))],
+            turning_points: vec![],
+            stop: StopReason::Condition,
+            critical: vec![],
+            warnings: vec![],
+            stability_note: None,
+            saved: vec![],
+            spectra: Spectra::default(),
+            states: None,
+            wrinkling: None,
+            wave_numbers: Vec::new(),
+            irreps: Vec::new(),
+        };
+        assert_eq!(r.index_range(), Some((0, 1)));
+        r.rows = vec![row(0, Some(2)), row(1, None), row(2, Some(2))];
+        assert_eq!(r.index_range(), Some((2, 2)));
+        r.rows = vec![row(0, None)];
+        assert_eq!(r.index_range(), None);
+    }
+}

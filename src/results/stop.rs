@@ -1,0 +1,134 @@
+//! How a path ended, and the extrema of a parameter along it.
+
+use crate::text::num;
+use serde::Serialize;
+
+/// A maximum or a minimum of a parameter along the path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Extremum {
+    /// The parameter was increasing before the point.
+    Maximum,
+    /// The parameter was decreasing before the point.
+    Minimum,
+}
+
+impl std::fmt::Display for Extremum {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Maximum => "maximum",
+            Self::Minimum => "minimum",
+        })
+    }
+}
+
+impl Serialize for Extremum {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+/// Why a path ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StopReason {
+    /// The control left its `[min, max]` range; the last point is the first beyond it.
+    Bounds,
+    /// The budget of accepted steps was used.
+    StepBudget {
+        /// The budget.
+        steps: usize,
+    },
+    /// A closed membrane's stretch reached the scene's `stop-stretch`.
+    Stretch {
+        /// The target.
+        target: f64,
+    },
+    /// The largest displacement reached the scene's `stop-displacement`.
+    Displacement {
+        /// The target.
+        target: f64,
+    },
+    /// A caller's stop condition held.
+    Condition,
+    /// The critical point the analysis looked for was found (a critical curve's start).
+    CriticalPoint,
+    /// The step was cut below the minimum.
+    Stalled(Stalled),
+    /// A single equilibrium was solved.
+    Equilibrium,
+    /// A held state's control swept its range.
+    Swept {
+        /// Lower end.
+        min: f64,
+        /// Upper end.
+        max: f64,
+        /// Number of steps.
+        samples: usize,
+    },
+    /// A sweep without a control parameter.
+    NoControl,
+    /// A stop was requested (SIGINT, SIGTERM): the path ends at its last point.
+    Interrupted,
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Bounds => f.write_str(
+                "the control parameter left its [min, max] range (the last point is the first beyond it)",
+            ),
+            Self::StepBudget { steps } => write!(f, "the step budget ({steps}) was used"),
+            Self::Stretch { target } => write!(f, "the stretch reached {}", num(*target)),
+            Self::Displacement { target } => {
+                write!(f, "the largest displacement reached {}", num(*target))
+            }
+            Self::Condition => f.write_str("the stop condition held"),
+            Self::CriticalPoint => f.write_str("the critical point asked for was found"),
+            Self::Stalled(s) => write!(f, "{s}"),
+            Self::Equilibrium => f.write_str("equilibrium found"),
+            Self::Swept { min, max, samples } => {
+                write!(
+                    f,
+                    "the control swept [{}, {}] in {samples} steps",
+                    num(*min),
+                    num(*max)
+                )
+            }
+            Self::NoControl => f.write_str("no control parameter"),
+            Self::Interrupted => f.write_str("interrupted"),
+        }
+    }
+}
+
+impl Serialize for StopReason {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+/// Why the driver could not advance: every step was cut below the minimum. The plain-data
+/// record of the driver's [`Stalled`](crate::analysis::continuation::Stalled), its failure
+/// kept as its message; written in the same words.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stalled {
+    /// The minimum step.
+    pub min_step: f64,
+    /// The index of the last accepted point.
+    pub after: usize,
+    /// The control's value there.
+    pub control: f64,
+    /// Why the last attempt failed, in words.
+    pub why: String,
+}
+
+impl std::fmt::Display for Stalled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "step cut below {:e} after point {} (control = {}): {}",
+            self.min_step,
+            self.after,
+            num(self.control),
+            self.why
+        )
+    }
+}
