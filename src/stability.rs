@@ -37,8 +37,11 @@
 //!   the eigenvalues of the same matrix.
 
 use crate::adapted::AdaptedBasis;
-use crate::linalg::eigen::{self, Bordered, EigenError, Operator, ShiftFamily};
-use crate::linalg::{FactorError, SymmetricFactorization, SymmetricPattern};
+use crate::linalg::bordered_block::{
+    bordered_pattern, partner_in_place, with_partners, BorderedBlock, Complement,
+};
+use crate::linalg::eigen::EigenError;
+use crate::linalg::SymmetricFactorization;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model, ModelError, Request};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -205,242 +208,23 @@ pub struct Stability<'a> {
     factorizations: Vec<Mutex<Option<(usize, SymmetricFactorization)>>>,
 }
 
-/// The bordered sparse matrix of one block at a state (docs/theory.md §8.6):
-/// M = [[K_μ, U], [Uᵀ, E]] with U = [P, U_D], P an orthonormal basis of the rigid modes and
-/// of zero-C constraint loads (E = 0) and U_D the rank-one vectors and the loads of constraints
-/// with an invertible C (E = E_D). Factorised at any shift σ of K_μ's diagonal, its inertia
-/// counts the eigenvalues of the restricted matrix below σ.
-struct BorderedBlock {
-    /// Columns m of K_μ.
-    m: usize,
-    /// The orthonormal E = 0 columns (rigid span, zero-C constraints).
-    constrained: Vec<Vec<f64>>,
-    /// Negative eigenvalues of E_D.
-    d_negative: usize,
-    /// Values of M at σ = 0, on the bordered pattern.
-    values: Vec<f64>,
-    /// Positions of K_μ's diagonal in `values`.
-    diagonal: Vec<usize>,
+/// A block's bordered sparse matrix with what the stability analysis reports of its
+/// border: the rigid modes and held motions deflated there.
+struct SparseBlock {
+    /// The bordered matrix.
+    bordered: BorderedBlock,
     /// Rigid modes found in the block.
     rigid_modes: usize,
     /// Mean motions held in the block.
     held: usize,
     /// Largest |B_μᵀ K r| over the rigid modes, relative to ‖K‖.
     rigid_residual: f64,
-    /// A complex-type block (docs/theory.md §10.6): K_μ is the real R = [[A, C], [−C, A]],
-    /// commuting with J [p; q] = [−q; p], its border is J-invariant, every eigenvalue of the
-    /// restricted matrix is double and counts once.
-    paired: bool,
-}
-
-/// x ← J x, J [p; q] = [−q; p]: the partner of real coordinates in a complex-type block's
-/// basis [u, v] (multiplication by −i of the complex coordinates z = p − i q).
-fn partner_in_place(x: &mut [f64]) {
-    let m = x.len() / 2;
-    let (p, q) = x.split_at_mut(m);
-    for (pi, qi) in p.iter_mut().zip(q.iter_mut()) {
-        let (a, b) = (*pi, *qi);
-        *pi = -b;
-        *qi = a;
-    }
-}
-
-/// The columns of r followed by their partners J r (a J-invariant span).
-fn with_partners(r: &DMatrix<f64>) -> DMatrix<f64> {
-    let mut out = DMatrix::zeros(r.nrows(), 2 * r.ncols());
-    for (k, c) in r.column_iter().enumerate() {
-        out.set_column(k, &c);
-        let mut x: Vec<f64> = c.iter().copied().collect();
-        partner_in_place(&mut x);
-        out.set_column(r.ncols() + k, &DVector::from_vec(x));
-    }
-    out
-}
-
-impl BorderedBlock {
-    /// The values of M with σ subtracted from K_μ's diagonal.
-    fn shifted(&self, sigma: f64) -> Vec<f64> {
-        let mut v = self.values.clone();
-        for &p in &self.diagonal {
-            v[p] -= sigma;
-        }
-        v
-    }
-
-    /// The eigenvalues of the restricted matrix below σ, from a factorisation of M − σ J:
-    /// In(M) = In(E_D) + In(S − σ) + (p, p, 0). A zero pivot (σ an eigenvalue to round-off)
-    /// is an error with `strict`, else it counts as neither negative nor positive. A paired
-    /// (complex-type) block counts each double eigenvalue once: half the count, which must be
-    /// even ([`EigenError::OddPairedCount`] otherwise).
-    fn count_below(
-        &self,
-        fact: &mut SymmetricFactorization,
-        sigma: f64,
-        strict: bool,
-    ) -> Result<usize, EigenError> {
-        match fact.factorize(&self.shifted(sigma)) {
-            Ok(()) => {}
-            Err(e @ FactorError::Singular { .. }) if strict => return Err(EigenError::Factor(e)),
-            Err(FactorError::Singular { .. }) => {}
-            Err(e) => return Err(EigenError::Factor(e)),
-        }
-        let inertia = fact
-            .inertia()
-            .ok_or(EigenError::Factor(FactorError::NotFactorized))?;
-        let p = self.constrained.len();
-        let below =
-            inertia
-                .negative
-                .checked_sub(p + self.d_negative)
-                .ok_or(EigenError::Unverified {
-                    attempts: 0,
-                    counted: inertia.negative,
-                    found: p + self.d_negative,
-                })?;
-        match self.paired {
-            false => Ok(below),
-            true if below % 2 == 0 => Ok(below / 2),
-            true => Err(EigenError::OddPairedCount { counted: below }),
-        }
-    }
-}
-
-/// A bordered block with its factorisation, as a family of shifted matrices for
-/// [`eigen::lowest_eigenpairs`].
-struct BlockFamily<'b> {
-    block: &'b BorderedBlock,
-    fact: &'b mut SymmetricFactorization,
-}
-
-impl Operator for BlockFamily<'_> {
-    fn dim(&self) -> usize {
-        self.block.m
-    }
-    fn rank(&self) -> usize {
-        let rank = Bordered::new(self.fact, self.block.m, &self.block.constrained).rank();
-        if self.block.paired {
-            rank / 2
-        } else {
-            rank
-        }
-    }
-    fn apply(&self, x: &mut [f64]) -> Result<(), FactorError> {
-        Bordered::new(self.fact, self.block.m, &self.block.constrained).apply(x)
-    }
-    fn project(&self, x: &mut [f64]) {
-        Bordered::new(self.fact, self.block.m, &self.block.constrained).project(x)
-    }
-    fn partner(&self, x: &mut [f64]) -> bool {
-        if self.block.paired {
-            partner_in_place(x);
-        }
-        self.block.paired
-    }
-}
-
-impl ShiftFamily for BlockFamily<'_> {
-    fn factor(&mut self, shift: f64) -> Result<usize, EigenError> {
-        self.block.count_below(self.fact, shift, true)
-    }
 }
 
 /// The shift of the Lanczos iteration below zero, relative to max|K_ij|: far enough from a
 /// crossing eigenvalue (zero at the critical point) for the factorisation to stay regular,
 /// close enough to keep the wanted eigenvalues the nearest.
 const LANCZOS_SHIFT: f64 = 1e-6;
-
-/// The orthogonal complement of the columns of an m × c matrix r (c small: rigid modes,
-/// constraint gradients), as Q = H_1 ⋯ H_k, a product of Householder reflections from a
-/// QR factorisation of r with column pivoting: the first k columns of Q span r's columns,
-/// the other m − k their complement. Restricting a block to the complement then costs
-/// O(k m²) (a reflection from both sides per column) instead of the O(m³) of forming Z
-/// explicitly.
-struct Complement {
-    /// Unit Householder vectors v (H = I − 2 v vᵀ), zero above their pivot row.
-    reflectors: Vec<DVector<f64>>,
-}
-
-impl Complement {
-    /// Columns count when the part of them not yet spanned has squared norm above `floor`
-    /// (callers pass columns whose genuine parts are of order one).
-    fn of(r: &DMatrix<f64>, floor: f64) -> Self {
-        let m = r.nrows();
-        let mut a = r.clone();
-        let mut reflectors = Vec::new();
-        for k in 0..r.ncols().min(m) {
-            let (pivot, norm2) = (k..a.ncols())
-                .map(|j| (j, a.view((k, j), (m - k, 1)).norm_squared()))
-                .fold((k, -1.0), |best, x| if x.1 > best.1 { x } else { best });
-            if norm2 <= floor {
-                break;
-            }
-            a.swap_columns(k, pivot);
-            let mut v = DVector::zeros(m);
-            v.rows_mut(k, m - k).copy_from(&a.view((k, k), (m - k, 1)));
-            let alpha = -v[k].signum() * norm2.sqrt();
-            v[k] -= alpha;
-            v /= v.norm();
-            let vta = v.transpose() * &a;
-            a -= &v * vta * 2.0;
-            reflectors.push(v);
-        }
-        Self { reflectors }
-    }
-
-    /// The rank k of r.
-    fn rank(&self) -> usize {
-        self.reflectors.len()
-    }
-
-    /// Column k < rank of Q: an orthonormal basis of the span of r.
-    fn span_column(&self, k: usize, m: usize) -> DVector<f64> {
-        let mut x = DVector::zeros(m);
-        x[k] = 1.0;
-        for v in self.reflectors.iter().rev() {
-            let vx = v.dot(&x);
-            x -= v * (2.0 * vx);
-        }
-        x
-    }
-
-    /// (Qᵀ K Q) without its first k rows and columns: K on the complement.
-    fn restrict(&self, mut k: DMatrix<f64>) -> DMatrix<f64> {
-        if self.reflectors.is_empty() {
-            return k;
-        }
-        for v in &self.reflectors {
-            // H K H = K − 2 v wᵀ − 2 w vᵀ + 4 (vᵀ w) v vᵀ with w = K v.
-            let w = &k * v;
-            let vw = v.dot(&w);
-            k -= (v * w.transpose() + &w * v.transpose()) * 2.0;
-            k += v * v.transpose() * (4.0 * vw);
-        }
-        let (n, r) = (k.nrows(), self.rank());
-        k.view((r, r), (n - r, n - r)).into_owned()
-    }
-
-    /// (Qᵀ L) without its first k rows: the columns of L in complement coordinates.
-    fn restrict_columns(&self, mut l: DMatrix<f64>) -> DMatrix<f64> {
-        for v in &self.reflectors {
-            let vtl = v.transpose() * &l;
-            l -= v * vtl * 2.0;
-        }
-        let r = self.rank();
-        l.rows(r, l.nrows() - r).into_owned()
-    }
-
-    /// Q [0; y]: complement coordinates back to block coordinates.
-    fn lift(&self, y: &DMatrix<f64>) -> DMatrix<f64> {
-        let r = self.rank();
-        let mut x = DMatrix::zeros(y.nrows() + r, y.ncols());
-        x.rows_mut(r, y.nrows()).copy_from(y);
-        for v in self.reflectors.iter().rev() {
-            let vtx = v.transpose() * &x;
-            x -= v * vtx * 2.0;
-        }
-        x
-    }
-}
 
 /// Sorted eigen-decomposition of a symmetric matrix (empty-safe), by faer's dense
 /// self-adjoint eigensolver (much faster than nalgebra's on blocks of a few hundred).
@@ -519,19 +303,6 @@ fn reference_norms(motion: &[f64; 6], x: &[meshes::Vec3], layout: &crate::model:
         .sum::<f64>()
         .sqrt()
         .max(1e-300)
-}
-
-/// The pattern of [[K, U], [Uᵀ, E]] for a sparse K and `border` dense columns U and E.
-fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
-    let (m, col_ptr, row_idx) = (k.n(), k.col_ptr(), k.row_idx());
-    let entries = (0..m)
-        .flat_map(|j| {
-            row_idx[col_ptr[j]..col_ptr[j + 1]]
-                .iter()
-                .map(move |&i| (i, j))
-        })
-        .chain((m..m + border).flat_map(|j| (0..m + border).map(move |i| (i, j))));
-    SymmetricPattern::from_entries(m + border, entries)
 }
 
 /// The spectrum of a complex-type block (docs/theory.md §10.6) from its real restriction `k`
@@ -630,7 +401,7 @@ impl<'a> Stability<'a> {
         (r, rigid_modes): (&DMatrix<f64>, usize),
         border: Option<&(DMatrix<f64>, DMatrix<f64>)>,
         scale: f64,
-    ) -> Option<BorderedBlock> {
+    ) -> Option<SparseBlock> {
         let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
         let m = b.dim();
         let paired = b.is_complex();
@@ -754,16 +525,18 @@ impl<'a> Stability<'a> {
         } else {
             0.0
         };
-        Some(BorderedBlock {
-            m,
-            constrained,
-            d_negative,
-            values: mv,
-            diagonal,
+        Some(SparseBlock {
+            bordered: BorderedBlock {
+                m,
+                constrained,
+                d_negative,
+                values: mv,
+                diagonal,
+                paired,
+            },
             rigid_modes,
             held: if paired { deflated / 2 } else { deflated }.saturating_sub(rigid_modes),
             rigid_residual,
-            paired,
         })
     }
 
@@ -775,11 +548,12 @@ impl<'a> Stability<'a> {
     fn block_sparse(
         &self,
         mu: usize,
-        block: &BorderedBlock,
+        sparse: &SparseBlock,
         scale: f64,
         lowest: usize,
         vectors: bool,
     ) -> Option<BlockSpectrum> {
+        let block = &sparse.bordered;
         let mut guard = self.factorizations[mu].lock().ok()?;
         let (_, fact) = guard.as_mut()?;
         let negative = block.count_below(fact, 0.0, false).ok()?;
@@ -788,9 +562,9 @@ impl<'a> Stability<'a> {
             irrep: String::new(),
             dim: 0,
             size: if block.paired { m / 2 } else { m },
-            rigid_modes: block.rigid_modes,
-            held: block.held,
-            rigid_residual: block.rigid_residual,
+            rigid_modes: sparse.rigid_modes,
+            held: sparse.held,
+            rigid_residual: sparse.rigid_residual,
             eigenvalues: Vec::new(),
             complete: false,
             eigen_error: None,
@@ -801,18 +575,17 @@ impl<'a> Stability<'a> {
             return Some(spectrum);
         }
         let shift = -LANCZOS_SHIFT * scale;
-        let mut family = BlockFamily { block, fact };
         let wanted = lowest.max(negative + 1);
-        match eigen::lowest_eigenpairs(&mut family, wanted, shift, shift.abs(), vectors) {
-            Ok(found) => {
-                spectrum.complete = found.values.len() >= family.rank();
+        match block.lowest(fact, wanted, shift, vectors) {
+            (Ok(found), rank) => {
+                spectrum.complete = found.values.len() >= rank;
                 if vectors && !found.vectors.is_empty() {
                     spectrum.vectors =
                         DMatrix::from_fn(m, found.vectors.len(), |i, j| found.vectors[j][i]);
                 }
                 spectrum.eigenvalues = found.values;
             }
-            Err(e) => spectrum.eigen_error = Some(e),
+            (Err(e), _) => spectrum.eigen_error = Some(e),
         }
         Some(spectrum)
     }

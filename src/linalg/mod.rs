@@ -11,6 +11,7 @@
 //! elsewhere (eigen solvers), which was faster than rayon on the project's 2-core machines.
 
 pub mod bordered;
+pub mod bordered_block;
 pub mod eigen;
 pub mod hermitian;
 mod ldlt;
