@@ -752,10 +752,12 @@ fn describe(from: &CurveStart) -> String {
 
 /// Finds the critical point on the path in the control, then follows it in (control,
 /// second); the path is recorded in `record`, the curve returned.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn run(
     study: &Study,
     record: &mut Record,
     crossings: Option<Crossings<'_>>,
+    adapted: Option<&crate::adapted::AdaptedBasis>,
     u_start: &[f64],
     params_start: &[f64],
     observer: &mut dyn Observer,
@@ -765,7 +767,7 @@ pub(super) fn run(
         unreachable!("curve::run runs critical-curve analyses")
     };
     let t0 = Instant::now();
-    let Some(crossings) = crossings else {
+    let (Some(crossings), Some(adapted)) = (crossings, adapted) else {
         return Err(RunError::Curve(
             "the critical curve needs the stability analysis by irrep, which this scene's \
              group does not allow"
@@ -779,7 +781,7 @@ pub(super) fn run(
         record.state(0, StateKind::Step, cp.state.clone(), &cp.parameters);
         record.critical(cp.clone());
         times.path = t0.elapsed();
-        let curve = follow_curve(study, crossings, &cp, observer)?;
+        let curve = follow_curve(study, crossings, adapted, &cp, observer)?;
         return Ok((StopReason::CriticalPoint, curve));
     }
     // The path in the control up to the point.
@@ -823,7 +825,7 @@ pub(super) fn run(
             branch.stop
         )));
     };
-    let curve = follow_curve(study, crossings, &cp, observer)?;
+    let curve = follow_curve(study, crossings, adapted, &cp, observer)?;
     Ok((branch.stop, curve))
 }
 
@@ -859,6 +861,7 @@ fn saved_point(study: &Study) -> Result<CriticalPoint, RunError> {
 fn follow_curve(
     study: &Study,
     crossings: Crossings<'_>,
+    adapted: &crate::adapted::AdaptedBasis,
     cp: &CriticalPoint,
     observer: &mut dyn Observer,
 ) -> Result<CurveReport, RunError> {
@@ -873,7 +876,6 @@ fn follow_curve(
             .expect("validated parameter")
     };
     let (control, second) = (index(&analysis.control), index(&analysis.second));
-    let adapted = crossings.stability().basis();
     let mu = adapted
         .irreps
         .iter()

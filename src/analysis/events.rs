@@ -11,7 +11,7 @@ use super::continuation::{Accepted, Continuation, PathPoint, Problem};
 use super::critical::isotropy;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model};
-use crate::results::{BranchTimes, CriticalKind, CriticalPoint, Extremum, StopReason};
+use crate::results::{BranchTimes, CriticalKind, CriticalPoint, Extremum, Isotropy, StopReason};
 use crate::stability::{Detail, Spectrum, Stability};
 use meshes::GroupAction;
 
@@ -360,21 +360,135 @@ pub trait States {
 /// The measures of a state (u, every parameter), in the report's order.
 pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
 
-/// Index changes of the irrep blocks, localised and classified: the stability analysis of
-/// states of one model under one group (docs/theory.md §8, §10, §11).
-pub struct Crossings<'a> {
+/// Stability by blocks at states of one model (docs/theory.md §8, §10, §15.3): the tangent
+/// at a state splits into blocks (the irreps of a group, the wave numbers of a meridian), each
+/// standing for `dim` identical copies in the full tangent, and what a crossing needs of them —
+/// every block's negative count, its lowest eigenvalues and eigenvectors, the critical mode of
+/// an eigenvector and the subgroup that keeps it. The blocks are labelled in every
+/// [`Spectrum`] they return, the trivial block (the model's own symmetric states) first.
+pub trait Blocks {
+    /// The negative count of every block (no eigenvalues): what every path point needs to
+    /// detect a change of stability.
+    fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum>;
+    /// Every block's negative count and lowest eigenvalues.
+    fn spectrum(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum>;
+    /// The lowest `lowest` eigenvalues of block `block` (all of them for a block solved
+    /// dense), with eigenvectors when asked for; the other blocks left empty.
+    fn block_eigen(
+        &mut self,
+        u: &[f64],
+        params: &[f64],
+        block: usize,
+        lowest: usize,
+        vectors: bool,
+    ) -> Option<Spectrum>;
+    /// The mode of block `block`'s eigenvector `v` (its coordinates in the block), in the
+    /// coordinates a critical point carries it in (not yet normalised).
+    fn mode(&self, block: usize, v: &[f64]) -> Vec<f64>;
+    /// The subgroup that keeps the (unit) mode of block `block`.
+    fn isotropy(&self, block: usize, mode: &[f64]) -> Isotropy;
+}
+
+/// The blocks of a 3-D model by the irreps of the scene's group: every block's inertia from a
+/// sparse LBLᵀ around the orbit representatives, its eigenvalues dense or by Lanczos
+/// ([`Stability`]), the critical mode expanded from the first partner's basis, its isotropy
+/// under the group's action.
+pub struct IrrepBlocks<'a> {
     stability: Stability<'a>,
     constraints: &'a [Box<dyn Constraint>],
     action: &'a GroupAction,
     model: &'a dyn Model,
-    measure: MeasureFn<'a>,
-    control: Option<usize>,
-    held: bool,
     /// The model's evaluation buffer, reused by every spectrum (the tangent of a large mesh
     /// is megabytes; a fresh buffer per point would allocate it every time).
     eval: Evaluation,
     /// The evaluation around the orbit representatives, for the index at every point.
     local: Evaluation,
+}
+
+impl<'a> IrrepBlocks<'a> {
+    /// The blocks of `stability` at states of `model` with `constraints` active; modes'
+    /// isotropy under `action`.
+    pub fn new(
+        stability: Stability<'a>,
+        model: &'a dyn Model,
+        constraints: &'a [Box<dyn Constraint>],
+        action: &'a GroupAction,
+    ) -> Self {
+        Self {
+            eval: model.new_evaluation(),
+            local: stability.new_evaluation(),
+            stability,
+            constraints,
+            action,
+            model,
+        }
+    }
+}
+
+impl Blocks for IrrepBlocks<'_> {
+    fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
+        self.stability
+            .analyse(
+                u,
+                params,
+                self.constraints,
+                &mut self.local,
+                None,
+                Detail::Inertia,
+            )
+            .ok()
+    }
+
+    fn spectrum(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
+        self.stability
+            .spectrum_of(u, params, self.constraints, &mut self.eval, None, false)
+            .ok()
+    }
+
+    fn block_eigen(
+        &mut self,
+        u: &[f64],
+        params: &[f64],
+        block: usize,
+        lowest: usize,
+        vectors: bool,
+    ) -> Option<Spectrum> {
+        let detail = if vectors {
+            Detail::Vectors { lowest }
+        } else {
+            Detail::Eigenvalues { lowest }
+        };
+        self.stability
+            .analyse(
+                u,
+                params,
+                self.constraints,
+                &mut self.eval,
+                Some(block),
+                detail,
+            )
+            .ok()
+    }
+
+    fn mode(&self, block: usize, v: &[f64]) -> Vec<f64> {
+        let first = self.stability.basis().irreps[block].first();
+        let mut mode = vec![0.0; first.unknowns()];
+        first.expand(&nalgebra::DVector::from_column_slice(v), &mut mode);
+        mode
+    }
+
+    fn isotropy(&self, _block: usize, mode: &[f64]) -> Isotropy {
+        isotropy(self.action, self.model.layout(), mode)
+    }
+}
+
+/// Index changes of the blocks, localised and classified: the stability analysis of states of
+/// one model (docs/theory.md §8, §10, §11), by any [`Blocks`].
+pub struct Crossings<'a> {
+    blocks: Box<dyn Blocks + 'a>,
+    measure: MeasureFn<'a>,
+    control: Option<usize>,
+    held: bool,
 }
 
 impl<'a> Crossings<'a> {
@@ -391,49 +505,42 @@ impl<'a> Crossings<'a> {
         control: Option<usize>,
         held: bool,
     ) -> Self {
+        Self::of(
+            Box::new(IrrepBlocks::new(stability, model, constraints, action)),
+            measure,
+            control,
+            held,
+        )
+    }
+
+    /// The analysis of states by `blocks`; critical points get the measures of
+    /// `measure(u, params)`; `control` is the parameter a path follows, and `held` states
+    /// (linear buckling) name a singular trivial block a symmetric bifurcation.
+    pub fn of(
+        blocks: Box<dyn Blocks + 'a>,
+        measure: MeasureFn<'a>,
+        control: Option<usize>,
+        held: bool,
+    ) -> Self {
         Self {
-            eval: model.new_evaluation(),
-            local: stability.new_evaluation(),
-            stability,
-            constraints,
-            action,
-            model,
+            blocks,
             measure,
             control,
             held,
         }
     }
 
-    /// The stability analysis.
-    pub fn stability(&self) -> &Stability<'a> {
-        &self.stability
-    }
-
-    /// The negative count of every block only (sparse inertia, assembly around the orbit
-    /// representatives): what every path point needs to detect a change of stability.
+    /// The negative count of every block only: what every path point needs to detect a
+    /// change of stability.
     pub fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
-        self.stability
-            .analyse(
-                u,
-                params,
-                self.constraints,
-                &mut self.local,
-                None,
-                Detail::Inertia,
-            )
-            .ok()
+        self.blocks.index(u, params)
     }
 
-    /// Every block's negative count and eigenvalues: all of a block solved dense, the lowest
-    /// [`crate::stability::DEFAULT_LOWEST`] of one solved by Lanczos.
+    /// Every block's negative count and eigenvalues.
     pub fn spectrum(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
-        self.stability
-            .spectrum_of(u, params, self.constraints, &mut self.eval, None, false)
-            .ok()
+        self.blocks.spectrum(u, params)
     }
 
-    /// The lowest `lowest` eigenvalues of block `mu` at (u, params) (all of them for a block
-    /// solved dense), with eigenvectors when asked for; the other blocks left empty.
     fn block_eigen(
         &mut self,
         u: &[f64],
@@ -442,21 +549,7 @@ impl<'a> Crossings<'a> {
         lowest: usize,
         vectors: bool,
     ) -> Option<Spectrum> {
-        let detail = if vectors {
-            Detail::Vectors { lowest }
-        } else {
-            Detail::Eigenvalues { lowest }
-        };
-        self.stability
-            .analyse(
-                u,
-                params,
-                self.constraints,
-                &mut self.eval,
-                Some(mu),
-                detail,
-            )
-            .ok()
+        self.blocks.block_eigen(u, params, mu, lowest, vectors)
     }
 
     /// Localises every eigenvalue of every block whose negative count differs between the
@@ -606,21 +699,20 @@ impl<'a> Crossings<'a> {
                     warnings.push(not_localised("no eigenvector at the best point"));
                     continue;
                 }
-                let ib = &self.stability.basis().irreps[mu];
-                let v = block.vectors.column(k);
-                let mut mode = vec![0.0; ib.first().unknowns()];
-                ib.first().expand(&v.into_owned(), &mut mode);
+                let v: Vec<f64> = block.vectors.column(k).iter().copied().collect();
+                let mut mode = self.blocks.mode(mu, &v);
                 let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
                 mode.iter_mut().for_each(|x| *x /= norm);
+                let dim = block.dim;
                 found.push(CriticalPoint {
-                    kind: CriticalKind::of(mu == 0, ib.dim, self.held || !control_turns),
-                    irrep: ib.name.clone(),
-                    multiplicity: ib.dim,
+                    kind: CriticalKind::of(mu == 0, dim, self.held || !control_turns),
+                    irrep: block.irrep.clone(),
+                    multiplicity: dim,
                     measures: (self.measure)(&u, &p),
                     parameters: p,
                     after_step,
                     residual_eigenvalue: g_best.abs() / sp.scale,
-                    isotropy: isotropy(self.action, self.model.layout(), &mode),
+                    isotropy: self.blocks.isotropy(mu, &mode),
                     mode,
                     state: u,
                 });

@@ -175,6 +175,7 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
                 study,
                 &mut record,
                 crossings,
+                adapted.as_ref(),
                 &u_start,
                 &params_start,
                 observer,
