@@ -24,6 +24,7 @@ pub mod adapted;
 pub mod analysis;
 pub mod axisym;
 pub mod bench;
+pub mod continuation;
 pub mod demo;
 pub mod effects;
 pub mod limits;

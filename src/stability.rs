@@ -36,72 +36,20 @@
 //!   chosen by their estimated cost ([`BlockEigen::ByCost`]), not by a size limit: both give
 //!   the eigenvalues of the same matrix.
 
+use crate::adapted::labels::isotropy;
 use crate::adapted::AdaptedBasis;
+use crate::continuation::crossings::{BlockSpectrum, Blocks, Spectrum};
 use crate::linalg::bordered_block::{
     bordered_pattern, partner_in_place, with_partners, BorderedBlock, Complement,
 };
-use crate::linalg::eigen::EigenError;
 use crate::linalg::SymmetricFactorization;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model, ModelError, Request};
+use crate::results::Isotropy;
+use meshes::GroupAction;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rayon::prelude::*;
-use serde::Serialize;
 use std::sync::Mutex;
-
-/// The spectrum of one irrep's block.
-#[derive(Debug, Clone, Serialize)]
-pub struct BlockSpectrum {
-    /// Irrep name.
-    pub irrep: String,
-    /// Irrep dimension d (every eigenvalue below occurs d times in K).
-    pub dim: usize,
-    /// Block size m_μ (columns of one partner; complex columns for a complex-type irrep,
-    /// whose eigenvectors have the 2m real coordinates of its basis).
-    pub size: usize,
-    /// Rigid-body zero modes found in this block (deflated).
-    pub rigid_modes: usize,
-    /// Mean motions held in this block ([`crate::model::Model::held_motions`]: the rolling of
-    /// a spherical reference), deflated like the rigid modes but not zero modes.
-    pub held: usize,
-    /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium).
-    pub rigid_residual: f64,
-    /// Eigenvalues on the complement of the rigid modes (and of the constraints' border for the
-    /// trivial block), ascending: all of them when [`BlockSpectrum::complete`], else the lowest
-    /// ones (every negative one and at least one more); empty when none were asked for or
-    /// they could not be computed ([`BlockSpectrum::eigen_error`]).
-    pub eigenvalues: Vec<f64>,
-    /// Whether `eigenvalues` is the whole spectrum of the block (a dense solve) rather than
-    /// its lowest values (Lanczos).
-    pub complete: bool,
-    /// Why the eigenvalues could not be computed, when they were asked for and are missing.
-    #[serde(skip)]
-    pub eigen_error: Option<EigenError>,
-    /// Number of negative eigenvalues.
-    pub negative: usize,
-    /// Eigenvectors (columns, in block coordinates of the first partner) of the lowest
-    /// eigenvalues, kept for critical modes.
-    #[serde(skip)]
-    pub vectors: DMatrix<f64>,
-}
-
-/// The spectrum of a state by irrep.
-#[derive(Debug, Clone, Serialize)]
-pub struct Spectrum {
-    /// One per irrep, the trivial first.
-    pub blocks: Vec<BlockSpectrum>,
-    /// Instability index Σ_μ d_μ neg_μ (0 = stable).
-    pub index: usize,
-    /// max |K_ij|, the scale for "zero".
-    pub scale: f64,
-}
-
-impl Spectrum {
-    /// Negative counts per block, for comparing states.
-    pub fn negatives(&self) -> Vec<usize> {
-        self.blocks.iter().map(|b| b.negative).collect()
-    }
-}
 
 /// How much of each block [`Stability::analyse`] computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -894,6 +842,99 @@ impl<'a> Stability<'a> {
             index,
             scale,
         })
+    }
+}
+
+/// The blocks of a 3-D model by the irreps of the scene's group: every block's inertia from a
+/// sparse LBLᵀ around the orbit representatives, its eigenvalues dense or by Lanczos
+/// ([`Stability`]), the critical mode expanded from the first partner's basis, its isotropy
+/// under the group's action.
+pub struct IrrepBlocks<'a> {
+    stability: Stability<'a>,
+    constraints: &'a [Box<dyn Constraint>],
+    action: &'a GroupAction,
+    model: &'a dyn Model,
+    /// The model's evaluation buffer, reused by every spectrum (the tangent of a large mesh
+    /// is megabytes; a fresh buffer per point would allocate it every time).
+    eval: Evaluation,
+    /// The evaluation around the orbit representatives, for the index at every point.
+    local: Evaluation,
+}
+
+impl<'a> IrrepBlocks<'a> {
+    /// The blocks of `stability` at states of `model` with `constraints` active; modes'
+    /// isotropy under `action`.
+    pub fn new(
+        stability: Stability<'a>,
+        model: &'a dyn Model,
+        constraints: &'a [Box<dyn Constraint>],
+        action: &'a GroupAction,
+    ) -> Self {
+        Self {
+            eval: model.new_evaluation(),
+            local: stability.new_evaluation(),
+            stability,
+            constraints,
+            action,
+            model,
+        }
+    }
+}
+
+impl Blocks for IrrepBlocks<'_> {
+    fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
+        self.stability
+            .analyse(
+                u,
+                params,
+                self.constraints,
+                &mut self.local,
+                None,
+                Detail::Inertia,
+            )
+            .ok()
+    }
+
+    fn spectrum(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
+        self.stability
+            .spectrum_of(u, params, self.constraints, &mut self.eval, None, false)
+            .ok()
+    }
+
+    fn block_eigen(
+        &mut self,
+        u: &[f64],
+        params: &[f64],
+        block: usize,
+        lowest: usize,
+        vectors: bool,
+    ) -> Option<Spectrum> {
+        let detail = if vectors {
+            Detail::Vectors { lowest }
+        } else {
+            Detail::Eigenvalues { lowest }
+        };
+        self.stability
+            .analyse(
+                u,
+                params,
+                self.constraints,
+                &mut self.eval,
+                Some(block),
+                detail,
+            )
+            .ok()
+    }
+
+    fn mode(&self, block: usize, v: &[f64]) -> Vec<f64> {
+        let first = self.stability.basis().irreps[block].first();
+        let mut mode = vec![0.0; first.unknowns()];
+        first.expand(&nalgebra::DVector::from_column_slice(v), &mut mode);
+        mode
+    }
+
+    fn isotropy(&self, _block: usize, mode: &[f64]) -> Isotropy {
+        isotropy(self.action, self.model.layout(), mode)
     }
 }
 

@@ -10,8 +10,8 @@
 
 use crate::common::follow;
 use memstab::adapted::SparseBasis;
-use memstab::analysis::continuation::PathOptions;
 use memstab::analysis::SymmetricProblem;
+use memstab::continuation::PathOptions;
 use memstab::effects::gas::GasPressure;
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;

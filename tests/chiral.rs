@@ -7,10 +7,11 @@
 //! ones.)
 
 use memstab::adapted::AdaptedBasis;
+use memstab::continuation::crossings::Spectrum;
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::model::{FeModel, Model};
 use memstab::scene::Scene;
-use memstab::stability::{BlockEigen, Detail, Spectrum, Stability};
+use memstab::stability::{BlockEigen, Detail, Stability};
 use memstab::study::Study;
 use meshes::generators::{disc, DiscOptions};
 use nalgebra::DVector;

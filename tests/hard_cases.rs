@@ -14,11 +14,11 @@
 //! Scenes live in `tests/data/hard/`; the k = 0 balloon is the bundled `scenes/balloon_k0.toml`.
 
 use memstab::adapted::SparseBasis;
-use memstab::analysis::continuation::{step_from, Continuation, PathOptions};
-use memstab::analysis::events::Branch;
-use memstab::analysis::path::trace;
 use memstab::analysis::run;
 use memstab::analysis::SymmetricProblem;
+use memstab::continuation::events::trace;
+use memstab::continuation::events::Branch;
+use memstab::continuation::{step_from, Continuation, PathOptions};
 use memstab::effects::gas::GasPressure;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};

@@ -3,13 +3,13 @@
 //! rank-one terms are handled by Woodbury; free bodies are refused clearly.
 
 use memstab::adapted::SparseBasis;
-use memstab::analysis::newton::{newton, NewtonOptions};
 use memstab::analysis::run;
 use memstab::effects::gas::GasAmount;
 use memstab::effects::hydrostatic::{Fluid, FluidSide};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::volume::ClosingFace;
 use memstab::effects::Quantity;
+use memstab::model::newton::{newton, NewtonOptions};
 use memstab::model::{Effect, FeModel, Model, Request};
 use memstab::scene::Scene;
 use memstab::study::Study;

@@ -4,8 +4,8 @@
 
 use crate::common::follow;
 use memstab::adapted::{AdaptedBasis, SparseBasis};
-use memstab::analysis::continuation::PathOptions;
 use memstab::analysis::SymmetricProblem;
+use memstab::continuation::PathOptions;
 use memstab::effects::gas::GasAmountConstraint;
 use memstab::effects::gas::{GasAmount, GasPressure};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
@@ -377,48 +377,49 @@ fn lanczos_block_eigenvalues_agree_with_dense_along_the_path() {
     let lanczos = Stability::new(&model, &basis).with_block_eigen(BlockEigen::Lanczos);
     let mut eval = model.new_evaluation();
     let lowest = 6;
-    let compare =
-        |a: &memstab::stability::Spectrum, b: &memstab::stability::Spectrum, what: &str| {
-            assert_eq!(a.negatives(), b.negatives(), "{what}");
-            for (x, y) in a.blocks.iter().zip(&b.blocks) {
-                assert!(x.complete && y.eigen_error.is_none(), "{what} {}", x.irrep);
-                let n = lowest.max(y.negative + 1).min(x.eigenvalues.len());
+    let compare = |a: &memstab::continuation::crossings::Spectrum,
+                   b: &memstab::continuation::crossings::Spectrum,
+                   what: &str| {
+        assert_eq!(a.negatives(), b.negatives(), "{what}");
+        for (x, y) in a.blocks.iter().zip(&b.blocks) {
+            assert!(x.complete && y.eigen_error.is_none(), "{what} {}", x.irrep);
+            let n = lowest.max(y.negative + 1).min(x.eigenvalues.len());
+            assert!(
+                y.eigenvalues.len() >= n,
+                "{what} {}: {:?}",
+                x.irrep,
+                y.eigenvalues
+            );
+            for (i, (u, v)) in x.eigenvalues.iter().zip(&y.eigenvalues).take(n).enumerate() {
                 assert!(
-                    y.eigenvalues.len() >= n,
-                    "{what} {}: {:?}",
-                    x.irrep,
-                    y.eigenvalues
+                    (u - v).abs() <= 1e-9 * a.scale,
+                    "{what} {} λ_{i}: dense {u}, Lanczos {v}",
+                    x.irrep
                 );
-                for (i, (u, v)) in x.eigenvalues.iter().zip(&y.eigenvalues).take(n).enumerate() {
+            }
+            // The index from the computed eigenvalues is the inertia's.
+            let below = y.eigenvalues.iter().filter(|&&v| v < 0.0).count();
+            assert_eq!(below, y.negative, "{what} {}", x.irrep);
+            // Eigenvectors of simple eigenvalues agree up to sign.
+            for i in 0..n.min(x.vectors.ncols()).min(y.vectors.ncols()) {
+                let gap = |k: usize| {
+                    [k.wrapping_sub(1), k + 1]
+                        .iter()
+                        .filter_map(|&j| x.eigenvalues.get(j))
+                        .map(|w| (w - x.eigenvalues[k]).abs())
+                        .fold(f64::INFINITY, f64::min)
+                };
+                if gap(i) > 1e-6 * a.scale {
+                    let c = x.vectors.column(i).dot(&y.vectors.column(i)).abs();
                     assert!(
-                        (u - v).abs() <= 1e-9 * a.scale,
-                        "{what} {} λ_{i}: dense {u}, Lanczos {v}",
+                        (c - 1.0).abs() < 1e-6,
+                        "{what} {} vector {i}: |cos| = {c}",
                         x.irrep
                     );
                 }
-                // The index from the computed eigenvalues is the inertia's.
-                let below = y.eigenvalues.iter().filter(|&&v| v < 0.0).count();
-                assert_eq!(below, y.negative, "{what} {}", x.irrep);
-                // Eigenvectors of simple eigenvalues agree up to sign.
-                for i in 0..n.min(x.vectors.ncols()).min(y.vectors.ncols()) {
-                    let gap = |k: usize| {
-                        [k.wrapping_sub(1), k + 1]
-                            .iter()
-                            .filter_map(|&j| x.eigenvalues.get(j))
-                            .map(|w| (w - x.eigenvalues[k]).abs())
-                            .fold(f64::INFINITY, f64::min)
-                    };
-                    if gap(i) > 1e-6 * a.scale {
-                        let c = x.vectors.column(i).dot(&y.vectors.column(i)).abs();
-                        assert!(
-                            (c - 1.0).abs() < 1e-6,
-                            "{what} {} vector {i}: |cos| = {c}",
-                            x.irrep
-                        );
-                    }
-                }
             }
-        };
+        }
+    };
     let ambient = 1.0;
     let mut seen = std::collections::BTreeSet::new();
     for (u, p, s) in states(&sym, &model, 3.6) {

@@ -5,9 +5,9 @@
 
 use crate::common::follow;
 use memstab::adapted::SparseBasis;
-use memstab::analysis::continuation::PathOptions;
-use memstab::analysis::events::Branch;
 use memstab::analysis::SymmetricProblem;
+use memstab::continuation::events::Branch;
+use memstab::continuation::PathOptions;
 use memstab::effects::gas::GasPressure;
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;

@@ -1141,8 +1141,8 @@ fn a_free_cap_on_a_c1v_mesh_starts_at_rest_with_its_drift_held() {
 fn the_held_tangent_is_the_derivative_of_the_held_residual() {
     // The gauge of §7.9: R → P R with P = I − W Wᵀ; on the complement of W the held tangent
     // is the derivative of the held residual, dense and sparse, and W is its eigenvector.
-    use memstab::analysis::continuation::{Problem, Tangent};
     use memstab::analysis::SymmetricProblem;
+    use memstab::continuation::{Problem, Tangent};
     let s = study(&paper4_c1v("0.5"));
     let w = memstab::analysis::held_gauge(&s.model, &s.basis, true);
     assert_eq!(w.ncols(), 1, "the x drift");

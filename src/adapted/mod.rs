@@ -35,6 +35,7 @@
 //! R = [[A, C], [−C, A]] is restricted, dense or sparse, from the representatives as above.
 
 mod complex;
+pub mod labels;
 mod orbit;
 
 pub use complex::{hermitian, to_complex, to_real};

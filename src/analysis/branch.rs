@@ -25,12 +25,13 @@
 //! The result is a graph ([`BranchGraph`], petgraph): nodes are critical points (of the path
 //! and of the branches) and the ends of branches, edges are branches.
 
-use super::continuation::{point_at, step_off, Continuation, PathOptions, PathPoint, Stalled};
-use super::critical::isotropy;
-use super::events::{Crossings, Detector, Event, IndexChanges, MeasureFn};
-use super::path::trace;
 use super::SymmetricProblem;
+use crate::adapted::labels::isotropy;
 use crate::adapted::{AdaptedBasis, SparseBasis};
+use crate::continuation::crossings::{Crossings, IndexChanges};
+use crate::continuation::events::trace;
+use crate::continuation::events::{Detector, Event, MeasureFn};
+use crate::continuation::{point_at, step_off, Continuation, PathOptions, PathPoint, Stalled};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout, Model, Request};
 use crate::results::{
@@ -38,7 +39,7 @@ use crate::results::{
     CriticalKind, CriticalPoint, Half, Halves, MeshInfo, Node, PathReport, PathRow, RecordedPoint,
     Reduced, Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow, ASYMMETRY,
 };
-use crate::stability::Stability;
+use crate::stability::{IrrepBlocks, Stability};
 use meshes::GroupAction;
 use nalgebra::DVector;
 use petgraph::graph::NodeIndex;
@@ -655,10 +656,12 @@ impl Switching<'_> {
         let mut driver = Continuation::new(problem, first, self.options.path.clone());
         let crossings = child.adapted.as_ref().ok().map(|adapted| {
             Crossings::new(
-                Stability::new(self.model, adapted),
-                self.model,
-                self.constraints,
-                &child.action,
+                Box::new(IrrepBlocks::new(
+                    Stability::new(self.model, adapted),
+                    self.model,
+                    self.constraints,
+                    &child.action,
+                )),
                 self.measure,
                 self.control,
                 false,
@@ -774,7 +777,7 @@ impl Switching<'_> {
 /// branch leaves is point 0, the driver's first point is point 1.
 struct Numbered<D>(D);
 
-impl<P: super::continuation::Problem, D: Detector<P>> Detector<P> for Numbered<D> {
+impl<P: crate::continuation::Problem, D: Detector<P>> Detector<P> for Numbered<D> {
     fn start(&mut self, driver: &mut Continuation<P>) -> Vec<Event> {
         self.0.start(driver)
     }
@@ -782,7 +785,7 @@ impl<P: super::continuation::Problem, D: Detector<P>> Detector<P> for Numbered<D
     fn check(
         &mut self,
         driver: &mut Continuation<P>,
-        step: &super::continuation::Accepted,
+        step: &crate::continuation::Accepted,
         after: usize,
     ) -> Vec<Event> {
         self.0.check(driver, step, after + 1)

@@ -5,12 +5,13 @@
 //! symmetric bifurcation: the state cannot fold). The lowest eigenvalue of every block at
 //! every sample goes into the report's [`Spectra`] (what `path.svg` plots for this analysis).
 
-use super::events::{Crossings, End, Event};
 use super::{Observer, Record};
+use crate::continuation::crossings::Spectrum;
+use crate::continuation::crossings::{Crossings, End};
+use crate::continuation::events::Event;
 use crate::results::{
     Spectra, SpectrumIrrep, SpectrumRow, StateKind, StopReason, SPECTRUM_EIGENVALUES,
 };
-use crate::stability::Spectrum;
 use crate::study::Study;
 
 /// Sweeps the control over its range at the held state `u` (solved at `params_start`).
@@ -41,7 +42,7 @@ pub(super) fn run(
         samples,
     };
     for i in 0..=samples {
-        if i > 0 && super::interrupt::requested() {
+        if i > 0 && crate::continuation::interrupt::requested() {
             stop = StopReason::Interrupted;
             break;
         }

@@ -2,7 +2,7 @@
 //! control, followed as a second parameter varies.
 //!
 //! The point is found on the path in the control (the second parameter held), by the index
-//! changes of the irrep blocks ([`super::events::IndexChanges`]). Its block μ is singular
+//! changes of the irrep blocks ([`crate::continuation::events::IndexChanges`]). Its block μ is singular
 //! there with a *simple* zero — also at a d-fold bifurcation point of K, whose d partner
 //! blocks are identical — so the minimally augmented test function of the bordered block
 //!
@@ -29,10 +29,12 @@
 //! orbit representatives; for another block u ± εa is not symmetric, and those two assemble
 //! the whole mesh.
 
-use super::continuation::{Accepted, Continuation, Linearization, PathOptions, PathPoint, Problem};
-use super::events::{Crossings, Detector, End, Event, IndexChanges, States};
 use super::{Observer, Record, RunError, SymmetricProblem};
 use crate::adapted::SparseBasis;
+use crate::continuation::crossings::Spectrum;
+use crate::continuation::crossings::{Crossings, End, IndexChanges};
+use crate::continuation::events::{Detector, Event, States};
+use crate::continuation::{Accepted, Continuation, Linearization, PathOptions, PathPoint, Problem};
 use crate::model::check::tangent_times;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model, ModelError, Request, Subset};
@@ -41,7 +43,6 @@ use crate::results::{
     RecordedPoint, RunTimes, StateKind, StopReason,
 };
 use crate::scene::{Analysis, CurveStart, Direction};
-use crate::stability::Spectrum;
 use crate::study::Study;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
@@ -794,7 +795,7 @@ pub(super) fn run(
     let mut count = 0usize;
     let branch = {
         let mut extra: Vec<&mut dyn Detector<SymmetricProblem>> = vec![&mut first];
-        super::path::trace(
+        crate::continuation::events::trace(
             &mut driver,
             max_steps,
             |_, _| None,
@@ -964,7 +965,7 @@ fn follow_curve(
         if analysis.watch {
             extra.push(&mut others);
         }
-        super::path::trace(
+        crate::continuation::events::trace(
             &mut driver,
             analysis.steps,
             |_, p: &PathPoint| {

@@ -7,9 +7,9 @@
 //! in the fixed-point space of the scene's group; an inside-out solution is refused; the
 //! targets of constraints declared `"initial"` are then measured there.
 
-use super::continuation::{solve_at, PathOptions};
-use super::events::Crossings;
 use super::{Observer, Record, RunError, SymmetricProblem};
+use crate::continuation::crossings::Crossings;
+use crate::continuation::{solve_at, PathOptions};
 use crate::model::Model;
 use crate::results::{PhaseTimes, StateKind, StopReason};
 use crate::scene::{Analysis, Direction};
@@ -80,7 +80,7 @@ fn solve_start_with(
                 }
             }
             let w = study.basis.restrict(&e);
-            super::release::released(&mut problem, &q0, &lambda, w, &start_opts)
+            crate::continuation::release::released(&mut problem, &q0, &lambda, w, &start_opts)
                 .map_err(|e| RunError::start(study, e))?
                 .0
         }

@@ -23,32 +23,26 @@
 pub mod branch;
 pub mod buckling;
 pub mod compare;
-pub mod continuation;
-pub mod critical;
 pub mod curve;
 pub mod equilibrium;
-pub mod events;
-pub mod interrupt;
 pub mod modes;
-pub mod newton;
 pub mod path;
 mod problem;
-pub mod release;
 pub mod surface;
 
 pub use problem::{held_gauge, SymmetricProblem, SPARSE_TANGENT_FROM};
 
 use crate::adapted::AdaptedBasis;
+use crate::continuation::crossings::Crossings;
+use crate::continuation::SolveError;
 use crate::model::Model;
 use crate::results::{
     CriticalPoint, CurveReport, MeshInfo, PathReport, PathRow, PointState, RunResult, RunTimes,
     Spectra, State, StateKind, StopReason, SurfaceReport, TurningRow,
 };
 use crate::scene::Analysis;
-use crate::stability::Stability;
+use crate::stability::{IrrepBlocks, Stability};
 use crate::study::Study;
-use continuation::SolveError;
-use events::Crossings;
 use std::time::Instant;
 
 /// Why a run failed before it produced a path.
@@ -133,10 +127,12 @@ pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunRes
     let held = matches!(study.scene.analysis, Analysis::LinearBuckling(_));
     let crossings = adapted.as_ref().map(|b| {
         Crossings::new(
-            Stability::new(&study.model, b),
-            &study.model,
-            &study.constraints,
-            &study.action,
+            Box::new(IrrepBlocks::new(
+                Stability::new(&study.model, b),
+                &study.model,
+                &study.constraints,
+                &study.action,
+            )),
             &measure,
             study.control,
             held,

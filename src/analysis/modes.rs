@@ -10,8 +10,8 @@
 //! The analysis knows blocks and wave numbers only, not what makes them: any
 //! [`ModeProblem`] is followed.
 
-use super::continuation::{Accepted, Continuation, PathOptions, PathPoint, Problem, SolveError};
-use super::events::{locate, Detector, Event};
+use crate::continuation::events::{locate, Detector, Event};
+use crate::continuation::{Accepted, Continuation, PathOptions, PathPoint, Problem, SolveError};
 use crate::linalg::eigen::shift_invert;
 use crate::linalg::{FactorError, SymmetricFactorization, SymmetricPattern};
 use crate::model::ModelError;
@@ -297,7 +297,7 @@ pub fn follow<P: ModeProblem>(
     };
     let branch = {
         let mut extra: Vec<&mut dyn Detector<P>> = vec![&mut ix];
-        super::path::trace(&mut driver, max_steps, stop, &mut extra, progress)
+        crate::continuation::events::trace(&mut driver, max_steps, stop, &mut extra, progress)
     };
     let turning = branch
         .turning_points()

@@ -3,43 +3,15 @@
 //! at every point and every critical point where it changes localised and classified
 //! (docs/theory.md §7, §8, §11).
 
-use super::continuation::{Continuation, PathPoint, Problem};
-use super::events::{
-    follow, Branch, Crossings, Detector, Event, IndexChanges, StopWhen, TurningPoints,
-};
 use super::{Observer, Record, RunError, SymmetricProblem};
+use crate::continuation::crossings::{Crossings, IndexChanges};
+use crate::continuation::events::{Branch, Detector, Event};
+use crate::continuation::{Continuation, PathPoint};
 use crate::results::{RunTimes, StateKind, StopReason, TurningRow};
 use crate::scene::Analysis;
 use crate::study::{Measure, Study};
 use crate::text::{num, sig_digits};
 use std::time::Instant;
-
-/// The path of any problem in its control from the driver's point: turning points of the
-/// control, the `extra` detectors, and the stops — the control leaving the driver's bounds
-/// (the last point is the first beyond them), `stop`, or `max_steps` accepted steps.
-pub fn trace<P: Problem>(
-    driver: &mut Continuation<P>,
-    max_steps: usize,
-    mut stop: impl FnMut(&P, &PathPoint) -> Option<StopReason>,
-    extra: &mut [&mut (dyn Detector<P> + '_)],
-    progress: impl FnMut(&P, &PathPoint),
-) -> Branch {
-    let bounds = driver.options().bounds;
-    let mut stops = StopWhen(move |problem: &P, p: &PathPoint| {
-        if super::interrupt::requested() {
-            return Some(StopReason::Interrupted);
-        }
-        if p.lambda[0] < bounds.0 || p.lambda[0] > bounds.1 {
-            return Some(StopReason::Bounds);
-        }
-        stop(problem, p)
-    });
-    let mut turning = TurningPoints::of_control();
-    let mut detectors: Vec<&mut dyn Detector<P>> = vec![&mut turning];
-    detectors.extend(extra.iter_mut().map(|d| &mut **d as &mut dyn Detector<P>));
-    detectors.push(&mut stops);
-    follow(driver, &mut detectors, max_steps, progress)
-}
 
 /// The path driver in the scene group's fixed-point space, started at the converged start
 /// state (u_start, params_start) with the study's path options, and its step budget.
@@ -118,11 +90,17 @@ pub(super) fn run(
         if let Some(index) = index.as_mut() {
             extra.push(index);
         }
-        trace(&mut driver, max_steps, stops, &mut extra, |problem, p| {
-            observer.progress(count, p.lambda[0]);
-            observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
-            count += 1;
-        })
+        crate::continuation::events::trace(
+            &mut driver,
+            max_steps,
+            stops,
+            &mut extra,
+            |problem, p| {
+                observer.progress(count, p.lambda[0]);
+                observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
+                count += 1;
+            },
+        )
     };
     let mut problem = driver.into_problem();
     times.steps = branch.times;

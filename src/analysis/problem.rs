@@ -1,7 +1,7 @@
 //! A model restricted to the fixed-point space of a (sub)group, for the path follower.
 
 use crate::adapted::SparseBasis;
-use crate::analysis::continuation::{Linearization, Problem, Tangent};
+use crate::continuation::{Linearization, Problem, Tangent};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricFactorization;
 use crate::model::constraint::Constraint;
@@ -450,7 +450,7 @@ impl Problem for SymmetricProblem<'_> {
     }
 }
 
-impl crate::analysis::events::States for SymmetricProblem<'_> {
+impl crate::continuation::events::States for SymmetricProblem<'_> {
     fn displacement(&self, q: &DVector<f64>) -> Vec<f64> {
         SymmetricProblem::displacement(self, q)
     }

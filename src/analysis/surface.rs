@@ -11,8 +11,9 @@
 //! paths are joined across `b` into critical lines ([`join`]): on a limit line the surface
 //! folds over the (a, b) plane, and the index of its vertices changes there.
 
-use super::events::{Crossings, Detector, Event, IndexChanges};
 use super::{Observer, Record, RunError, SymmetricProblem};
+use crate::continuation::crossings::{Crossings, IndexChanges};
+use crate::continuation::events::{Detector, Event};
 use crate::results::{
     CriticalKind, CriticalLine, CriticalLinePoint, CriticalPoint, RunTimes, StopReason,
     SurfacePath, SurfaceReport, SurfaceVertex,
@@ -146,7 +147,7 @@ fn carry(
         );
         let lambda0 = problem.free_values(&next);
         let q0 = study.basis.restrict(&u);
-        match super::continuation::solve_at(&mut problem, &q0, &lambda0, &opts) {
+        match crate::continuation::solve_at(&mut problem, &q0, &lambda0, &opts) {
             Ok((q, lambda, _)) => {
                 u = problem.displacement(&q);
                 params = problem.parameters(&lambda);
@@ -247,7 +248,7 @@ pub(super) fn run(
             if let Some(w) = watch.as_mut() {
                 extra.push(w);
             }
-            super::path::trace(
+            crate::continuation::events::trace(
                 &mut driver,
                 max_steps,
                 |_, _| None,

@@ -210,7 +210,7 @@ mod tests {
     use super::super::model::tests::generic_filled;
     use super::super::{AxisymProblem, Meridian, Pressure};
     use super::BlockLayout;
-    use crate::analysis::continuation::{solve_at, PathOptions};
+    use crate::continuation::{solve_at, PathOptions};
     use crate::effects::membrane::MooneyRivlin;
     use crate::effects::Quantity;
     use nalgebra::{DMatrix, DVector};

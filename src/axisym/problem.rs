@@ -3,8 +3,8 @@
 //! knows blocks and wave numbers, not membranes.
 
 use super::{AxisymError, AxisymModel, BlockLayout};
-use crate::analysis::continuation::{Linearization, Problem, Tangent};
 use crate::analysis::modes::{ModeBlock, ModeProblem};
+use crate::continuation::{Linearization, Problem, Tangent};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricPattern;
 use crate::model::ModelError;

@@ -9,8 +9,8 @@
 //! (docs/theory.md §15.3).
 
 use super::{AxisymModel, AxisymProblem, Meridian, Pressure};
-use crate::analysis::continuation::{PathOptions, PathPoint, SolveError};
 use crate::analysis::modes::{self, ModePath};
+use crate::continuation::{PathOptions, PathPoint, SolveError};
 use crate::effects::membrane::MooneyRivlin;
 use crate::effects::Quantity;
 use crate::results::{CriticalKind, StopReason, TurningRow};
@@ -530,7 +530,7 @@ fn meet(
 ) -> Result<(DVector<f64>, DVector<f64>, usize), SolveError> {
     let l0 = problem.free_values(params);
     if unmet {
-        crate::analysis::continuation::solve_at(problem, q, &l0, opts)
+        crate::continuation::solve_at(problem, q, &l0, opts)
     } else {
         Ok((q.clone(), l0, 0))
     }
@@ -613,13 +613,13 @@ pub fn run(
             problem.volume = volume_target(&q0).map(|t| t.0);
             let w = study.model.held_translation(sign);
             let l0 = problem.free_values(&params);
-            crate::analysis::release::released(&mut problem, &q0, &l0, w, &start_opts)
+            crate::continuation::release::released(&mut problem, &q0, &l0, w, &start_opts)
                 .map_err(describe)?
         }
         None => (q0, lambda0),
     };
     let (mut q, mut lambda, mut iterations) =
-        crate::analysis::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
+        crate::continuation::solve_at(&mut problem, &q0, &lambda0, &start_opts)
             .map_err(describe)?;
     if problem.volume.is_none() {
         if let Some((target, unmet)) = volume_target(&q) {

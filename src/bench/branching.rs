@@ -4,15 +4,16 @@
 //! (`scenes/disc_upward.toml`) on a mesh of the given divisions (16: the thesis mesh).
 
 use crate::analysis::branch::{BranchOptions, Level, Switching};
-use crate::analysis::continuation::{Continuation, PathOptions};
-use crate::analysis::events::{Crossings, Detector, IndexChanges};
-use crate::analysis::path::trace;
 use crate::analysis::SymmetricProblem;
+use crate::continuation::crossings::{Crossings, IndexChanges};
+use crate::continuation::events::trace;
+use crate::continuation::events::Detector;
+use crate::continuation::{Continuation, PathOptions};
 use crate::effects::invariant::IrrepPotential;
 use crate::model::{FeModel, Model};
 use crate::results::{BranchGraph, Branches, CriticalPoint, RunResult, StopReason};
 use crate::scene::Scene;
-use crate::stability::Stability;
+use crate::stability::{IrrepBlocks, Stability};
 use crate::study::Study;
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::SymmetricMesh;
@@ -97,10 +98,12 @@ pub fn ih_branches(problem: &IhProblem, steps: usize) -> Result<Switched, String
     let mut driver = Continuation::start(p, &q0, &DVector::from_element(1, 0.52), opts.clone())
         .map_err(|e| e.to_string())?;
     let crossings = Crossings::new(
-        Stability::new(model, adapted),
-        model,
-        &[],
-        &problem.mesh.action,
+        Box::new(IrrepBlocks::new(
+            Stability::new(model, adapted),
+            model,
+            &[],
+            &problem.mesh.action,
+        )),
         &measure,
         Some(0),
         false,
@@ -115,7 +118,7 @@ pub fn ih_branches(problem: &IhProblem, steps: usize) -> Result<Switched, String
         .events
         .iter()
         .filter_map(|e| match e {
-            crate::analysis::events::Event::Warning(w) => Some(w.clone()),
+            crate::continuation::events::Event::Warning(w) => Some(w.clone()),
             _ => None,
         })
         .collect();

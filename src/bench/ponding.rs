@@ -118,7 +118,7 @@ pub fn ponding_level_in(divisions: usize, group: Option<&str>) -> Result<Ponding
     })
 }
 
-/// The wave number of a critical mode about z (see [`crate::analysis::critical::wave_number`]).
+/// The wave number of a critical mode about z (see [`crate::adapted::labels::wave_number`]).
 pub fn wave_number(study: &Study, mode: &[f64]) -> usize {
-    crate::analysis::critical::wave_number(study.model.reference(), study.model.layout(), mode, 12)
+    crate::adapted::labels::wave_number(study.model.reference(), study.model.layout(), mode, 12)
 }

@@ -92,10 +92,10 @@ pub(crate) fn main() -> ExitCode {
     // SIGINT and SIGTERM: the analyses stop at their next point and their outputs are
     // written; a second signal ends the process at once.
     let _ = ctrlc::set_handler(|| {
-        if memstab::analysis::interrupt::requested() {
+        if memstab::continuation::interrupt::requested() {
             std::process::exit(130);
         }
-        memstab::analysis::interrupt::request();
+        memstab::continuation::interrupt::request();
     });
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,

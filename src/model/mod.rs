@@ -10,6 +10,7 @@ mod assembly;
 pub mod check;
 pub mod constraint;
 mod local;
+pub mod newton;
 pub mod validity;
 
 pub use assembly::{

@@ -366,7 +366,7 @@ pub fn wave_numbers(study: &Study, report: &PathReport) -> Vec<usize> {
             .critical
             .iter()
             .map(|cp| {
-                crate::analysis::critical::wave_number(
+                crate::adapted::labels::wave_number(
                     study.model.reference(),
                     study.model.layout(),
                     &cp.mode,

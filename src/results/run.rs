@@ -40,7 +40,7 @@ pub struct RunTimes {
     pub index: Duration,
 }
 
-/// Where [`follow`](crate::analysis::events::follow)'s time went.
+/// Where [`follow`](crate::continuation::events::follow)'s time went.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct BranchTimes {
     /// The driver's steps (predictor–corrector, step control), wall time.

@@ -106,7 +106,7 @@ impl Serialize for StopReason {
 }
 
 /// Why the driver could not advance: every step was cut below the minimum. The plain-data
-/// record of the driver's [`Stalled`](crate::analysis::continuation::Stalled), its failure
+/// record of the driver's [`Stalled`](crate::continuation::Stalled), its failure
 /// kept as its message; written in the same words.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stalled {

@@ -39,15 +39,15 @@ pub fn texts(svg: &str) -> Vec<String> {
 /// point, the control leaves `opts.bounds` or `opts.max_steps` steps were taken: the
 /// library's driver ([`Continuation`]) with its turning-point detection ([`trace`]).
 #[allow(dead_code)]
-pub fn follow<P: memstab::analysis::continuation::Problem>(
+pub fn follow<P: memstab::continuation::Problem>(
     problem: P,
     q0: &nalgebra::DVector<f64>,
     lambda0: &nalgebra::DVector<f64>,
-    opts: &memstab::analysis::continuation::PathOptions,
-    mut stop: impl FnMut(&memstab::analysis::continuation::PathPoint) -> bool,
-) -> Result<memstab::analysis::events::Branch, memstab::analysis::continuation::SolveError> {
-    use memstab::analysis::continuation::Continuation;
-    use memstab::analysis::path::trace;
+    opts: &memstab::continuation::PathOptions,
+    mut stop: impl FnMut(&memstab::continuation::PathPoint) -> bool,
+) -> Result<memstab::continuation::events::Branch, memstab::continuation::SolveError> {
+    use memstab::continuation::events::trace;
+    use memstab::continuation::Continuation;
     use memstab::results::StopReason;
     let mut driver = Continuation::start(problem, q0, lambda0, opts.clone())?;
     Ok(trace(

@@ -258,9 +258,9 @@ pub struct Comparison {
     pub unmatched: Vec<Unmatched>,
 }
 
-/// The wave number of a critical mode about z (see [`super::critical::wave_number`]).
+/// The wave number of a critical mode about z (see [`crate::adapted::labels::wave_number`]).
 fn wave_number(study: &Study, mode: &[f64]) -> usize {
-    super::critical::wave_number(
+    crate::adapted::labels::wave_number(
         study.model.reference(),
         study.model.layout(),
         mode,

@@ -1,19 +1,18 @@
-//! Events along a path, one mechanism for all (docs/theory.md §7.6, §11.1–§11.2): at every accepted
-//! step of a [`Continuation`] each [`Detector`] compares the new point with the previous one
-//! and reports what happened in between — a turning point of a free parameter, a change of
-//! the index of an irrep block (a critical point), a user's stop — localised between the two
-//! points by the one routine [`locate`], on the arclength from the earlier point.
-//!
-//! [`follow`] runs a driver with a list of detectors until one of them stops it, the step
-//! budget is used or the driver stalls.
+//! Changes of stability along a path, for any model whose tangent splits into blocks
+//! (docs/theory.md §8, §10, §11, §15.3): the [`Blocks`] of a model at its states (the irreps
+//! of a group on a 3-D mesh, the wave numbers of a meridian), [`Crossings`] — where a block's
+//! negative count changes between two points, its eigenvalue's zero localised and the point
+//! classified — and [`IndexChanges`], the detector that watches the index at every point of a
+//! path and rejects steps that leave the connected path.
 
-use super::continuation::{Accepted, Continuation, PathPoint, Problem};
-use super::critical::isotropy;
-use crate::model::constraint::Constraint;
-use crate::model::{Evaluation, Model};
-use crate::results::{BranchTimes, CriticalKind, CriticalPoint, Extremum, Isotropy, StopReason};
-use crate::stability::{Detail, Spectrum, Stability};
-use meshes::GroupAction;
+use super::driver::{Accepted, Continuation, PathPoint, Problem};
+use super::events::{
+    locate_within, Admission, Detector, Event, MeasureFn, States, REJECTED_STEP_FACTOR,
+};
+use crate::linalg::eigen::EigenError;
+use crate::results::{CriticalKind, CriticalPoint, Isotropy};
+use nalgebra::DMatrix;
+use serde::Serialize;
 
 /// Relative size below which a localised eigenvalue counts as zero.
 const ZERO_EIGENVALUE: f64 = 1e-10;
@@ -23,10 +22,6 @@ const LOCATE_WIDTH: f64 = 1e-10;
 /// Relative size of the best eigenvalue found above which a crossing is not localised (docs/theory.md §8.9): the
 /// eigenvalue jumps instead of crossing zero (two branches, not one).
 const JUMP_EIGENVALUE: f64 = 1e-8;
-/// The control's component of the unit tangent below which a turning point is localised.
-const TURNING_TOLERANCE: f64 = 1e-12;
-/// The factor a rejected step is shortened by before it is tried again.
-const REJECTED_STEP_FACTOR: f64 = 0.25;
 /// Rejections in a row, each step a quarter of the one before, after which a step that still
 /// leaves the path ([`leaves_path`]) is accepted: the count then changes at a branch point of
 /// the fixed-point path itself (a symmetric bifurcation inside the fixed-point space, as on a
@@ -35,330 +30,59 @@ const REJECTED_STEP_FACTOR: f64 = 0.25;
 /// place.
 const MAX_REJECTIONS: usize = 3;
 
-/// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
-/// by the Illinois variant of regula falsi. Stops when |g| ≤ `tol` or after 60 evaluations;
-/// returns the best s and g(s) found. Where an evaluation fails (a state that does not
-/// converge, as right at a singular point of the path), the trial point is moved halfway
-/// towards the best point so far, up to 8 times; `None` only when no trial point inside the
-/// bracket could be evaluated.
-pub fn locate(
-    g: impl FnMut(f64) -> Option<f64>,
-    g0: f64,
-    s1: f64,
-    g1: f64,
-    tol: f64,
-) -> Option<(f64, f64)> {
-    locate_within(g, g0, s1, g1, tol, 1e-14)
+/// The spectrum of one block (an irrep's, a wave number's).
+#[derive(Debug, Clone, Serialize)]
+pub struct BlockSpectrum {
+    /// Irrep name.
+    pub irrep: String,
+    /// Irrep dimension d (every eigenvalue below occurs d times in K).
+    pub dim: usize,
+    /// Block size m_μ (columns of one partner; complex columns for a complex-type irrep,
+    /// whose eigenvectors have the 2m real coordinates of its basis).
+    pub size: usize,
+    /// Rigid-body zero modes found in this block (deflated).
+    pub rigid_modes: usize,
+    /// Mean motions held in this block ([`crate::model::Model::held_motions`]: the rolling of
+    /// a spherical reference), deflated like the rigid modes but not zero modes.
+    pub held: usize,
+    /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium).
+    pub rigid_residual: f64,
+    /// Eigenvalues on the complement of the rigid modes (and of the constraints' border for the
+    /// trivial block), ascending: all of them when [`BlockSpectrum::complete`], else the lowest
+    /// ones (every negative one and at least one more); empty when none were asked for or
+    /// they could not be computed ([`BlockSpectrum::eigen_error`]).
+    pub eigenvalues: Vec<f64>,
+    /// Whether `eigenvalues` is the whole spectrum of the block (a dense solve) rather than
+    /// its lowest values (Lanczos).
+    pub complete: bool,
+    /// Why the eigenvalues could not be computed, when they were asked for and are missing.
+    #[serde(skip)]
+    pub eigen_error: Option<EigenError>,
+    /// Number of negative eigenvalues.
+    pub negative: usize,
+    /// Eigenvectors (columns, in block coordinates of the first partner) of the lowest
+    /// eigenvalues, kept for critical modes.
+    #[serde(skip)]
+    pub vectors: DMatrix<f64>,
 }
 
-/// As [`locate`], stopping also when the bracket is narrower than `width` · |s1| (a jump of
-/// `g` rather than a zero then shows as a bracket that shrinks while |g| does not).
-fn locate_within(
-    mut g: impl FnMut(f64) -> Option<f64>,
-    g0: f64,
-    s1: f64,
-    g1: f64,
-    tol: f64,
-    width: f64,
-) -> Option<(f64, f64)> {
-    let (mut a, mut fa, mut b, mut fb) = (0.0, g0, s1, g1);
-    let (mut best, mut fbest) = if fa.abs() < fb.abs() {
-        (a, fa)
-    } else {
-        (b, fb)
-    };
-    let mut side = 0i8;
-    // Every earlier iteration evaluated a trial point.
-    for evaluated in 0..60 {
-        if fbest.abs() <= tol || (b - a).abs() <= width * s1.abs() {
-            break;
-        }
-        let s = (a * fb - b * fa) / (fb - fa);
-        let mut s = if s > a.min(b) && s < a.max(b) {
-            s
-        } else {
-            0.5 * (a + b)
-        };
-        let mut fs = g(s);
-        for _ in 0..8 {
-            if fs.is_some() {
-                break;
-            }
-            s = 0.5 * (s + best);
-            fs = g(s);
-        }
-        let Some(fs) = fs else {
-            return (evaluated > 0 || fbest.abs() <= tol).then_some((best, fbest));
-        };
-        if fs.abs() < fbest.abs() {
-            (best, fbest) = (s, fs);
-        }
-        if fs.signum() == fb.signum() {
-            (b, fb) = (s, fs);
-            if side == -1 {
-                fa *= 0.5;
-            }
-            side = -1;
-        } else {
-            (a, fa) = (s, fs);
-            if side == 1 {
-                fb *= 0.5;
-            }
-            side = 1;
-        }
-    }
-    Some((best, fbest))
+/// The spectrum of a state by block.
+#[derive(Debug, Clone, Serialize)]
+pub struct Spectrum {
+    /// One per irrep, the trivial first.
+    pub blocks: Vec<BlockSpectrum>,
+    /// Instability index Σ_μ d_μ neg_μ (0 = stable).
+    pub index: usize,
+    /// max |K_ij|, the scale for "zero".
+    pub scale: f64,
 }
 
-/// A turning point of a free parameter, localised where its tangent component vanishes.
-#[derive(Debug, Clone)]
-pub struct TurningPoint {
-    /// The free parameter (0: the control).
-    pub parameter: usize,
-    /// Maximum or minimum.
-    pub kind: Extremum,
-    /// The localised point.
-    pub point: PathPoint,
-    /// The index of the accepted point just before it.
-    pub after_step: usize,
-}
-
-/// Something a detector found between two accepted points (or at the start).
-#[derive(Debug, Clone)]
-pub enum Event {
-    /// A turning point of a free parameter.
-    Turning(TurningPoint),
-    /// A localised and classified critical point.
-    Critical(CriticalPoint),
-    /// The path must end here.
-    Stop(StopReason),
-    /// Something the analysis could not settle (a crossing that could not be localised …).
-    Warning(String),
-}
-
-/// A detector's verdict on a step before the step is accepted ([`Detector::admit`]).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Admission {
-    /// The step stays on the path.
-    Accept,
-    /// The step left the connected path: retry from the earlier point with a shorter step.
-    Reject,
-}
-
-/// What watches a path: called at its first point and after every accepted step.
-pub trait Detector<P: Problem> {
-    /// Called once at the first point (`driver.point()`).
-    fn start(&mut self, _driver: &mut Continuation<P>) -> Vec<Event> {
-        Vec::new()
-    }
-
-    /// Called after every step of the driver, before any detector checks it: `driver.point()`
-    /// is the new point. A detector that sees the step leave the connected path (as over a
-    /// nearly symmetric bifurcation that the mesh breaks, docs/theory.md §7.5.2) rejects it;
-    /// [`follow`] then retries from `step.from` with a quarter of the step, and no detector
-    /// sees the rejected point. A detector must accept once the step is short enough for
-    /// what it tests, so that the path goes on.
-    fn admit(&mut self, _driver: &mut Continuation<P>, _step: &Accepted) -> Admission {
-        Admission::Accept
-    }
-
-    /// Called after every accepted step: `driver.point()` is the new point, `step` says where
-    /// it came from and with which arclength, `after` is the index of the earlier point.
-    fn check(&mut self, driver: &mut Continuation<P>, step: &Accepted, after: usize) -> Vec<Event>;
-}
-
-/// A followed path: its points, what the detectors found, and why it ended.
-#[derive(Debug, Clone)]
-pub struct Branch {
-    /// Accepted points, the first one first.
-    pub points: Vec<PathPoint>,
-    /// Events in the order they were found.
-    pub events: Vec<Event>,
-    /// Why the path ended.
-    pub stop: StopReason,
-    /// Where [`follow`]'s time went.
-    pub times: BranchTimes,
-}
-
-impl Branch {
-    /// The turning points found.
-    pub fn turning_points(&self) -> impl Iterator<Item = &TurningPoint> {
-        self.events.iter().filter_map(|e| match e {
-            Event::Turning(t) => Some(t),
-            _ => None,
-        })
-    }
-
-    /// The critical points found.
-    pub fn critical_points(&self) -> impl Iterator<Item = &CriticalPoint> {
-        self.events.iter().filter_map(|e| match e {
-            Event::Critical(c) => Some(c),
-            _ => None,
-        })
+impl Spectrum {
+    /// Negative counts per block, for comparing states.
+    pub fn negatives(&self) -> Vec<usize> {
+        self.blocks.iter().map(|b| b.negative).collect()
     }
 }
-
-/// Follows the driver's path from its current point for at most `max_steps` accepted steps,
-/// running every detector at the first point and after every step, until a detector stops
-/// it, the budget is used or the driver stalls. `progress` sees every accepted point.
-pub fn follow<P: Problem>(
-    driver: &mut Continuation<P>,
-    detectors: &mut [&mut dyn Detector<P>],
-    max_steps: usize,
-    mut progress: impl FnMut(&P, &PathPoint),
-) -> Branch {
-    use std::time::Instant;
-    let mut branch = Branch {
-        points: vec![driver.point().clone()],
-        events: Vec::new(),
-        stop: StopReason::StepBudget { steps: max_steps },
-        times: BranchTimes::default(),
-    };
-    let t = Instant::now();
-    progress(driver.problem(), driver.point());
-    branch.times.progress += t.elapsed();
-    let t = Instant::now();
-    for d in detectors.iter_mut() {
-        branch.events.extend(d.start(driver));
-    }
-    branch.times.events += t.elapsed();
-    while branch.points.len() <= max_steps {
-        let (t, before) = (Instant::now(), driver.problem().phase_times());
-        let step = driver.step();
-        branch.times.steps += t.elapsed();
-        branch.times.steps_problem += driver.problem().phase_times() - before;
-        let step = match step {
-            Ok(step) => step,
-            Err(stalled) => {
-                branch.stop = StopReason::Stalled(stalled.into());
-                return branch;
-            }
-        };
-        let t = Instant::now();
-        let rejected = detectors
-            .iter_mut()
-            .any(|d| d.admit(driver, &step) != Admission::Accept);
-        branch.times.events += t.elapsed();
-        if rejected {
-            driver.retreat(step, REJECTED_STEP_FACTOR);
-            continue;
-        }
-        let after = branch.points.len() - 1;
-        let mut stop = None;
-        let t = Instant::now();
-        for d in detectors.iter_mut() {
-            for event in d.check(driver, &step, after) {
-                match event {
-                    Event::Stop(reason) => {
-                        stop.get_or_insert(reason);
-                    }
-                    other => branch.events.push(other),
-                }
-            }
-        }
-        branch.times.events += t.elapsed();
-        let t = Instant::now();
-        progress(driver.problem(), driver.point());
-        branch.times.progress += t.elapsed();
-        branch.points.push(driver.point().clone());
-        if let Some(reason) = stop {
-            branch.stop = reason;
-            return branch;
-        }
-    }
-    branch
-}
-
-/// Turning points of the free parameters `parameters` (0 is the control): a sign change of
-/// the parameter's tangent component, localised where it vanishes.
-pub struct TurningPoints {
-    parameters: Vec<usize>,
-}
-
-impl TurningPoints {
-    /// Turning points of the control.
-    pub fn of_control() -> Self {
-        Self {
-            parameters: vec![0],
-        }
-    }
-
-    /// Turning points of the given free parameters.
-    pub fn of(parameters: Vec<usize>) -> Self {
-        Self { parameters }
-    }
-}
-
-impl<P: Problem> Detector<P> for TurningPoints {
-    fn check(&mut self, driver: &mut Continuation<P>, step: &Accepted, after: usize) -> Vec<Event> {
-        let m = driver.problem().dim();
-        let mut found = Vec::new();
-        for &j in &self.parameters {
-            let (t0, t1) = (step.from.tangent[m + j], driver.point().tangent[m + j]);
-            if t1.signum() == t0.signum() || t0 == 0.0 {
-                continue;
-            }
-            let kind = if t0 > 0.0 {
-                Extremum::Maximum
-            } else {
-                Extremum::Minimum
-            };
-            if let Some(point) = localise_turning(driver, &step.from, step.step, m + j, t1) {
-                found.push(Event::Turning(TurningPoint {
-                    parameter: j,
-                    kind,
-                    point,
-                    after_step: after,
-                }));
-            }
-        }
-        found
-    }
-}
-
-/// Localises the turning point between `from` (tangent component `k` of one sign) and the
-/// point reached with step `s_hi` (component `t_hi` of the other) where the component
-/// vanishes, by [`locate`] on the step length.
-fn localise_turning<P: Problem>(
-    driver: &mut Continuation<P>,
-    from: &PathPoint,
-    s_hi: f64,
-    k: usize,
-    t_hi: f64,
-) -> Option<PathPoint> {
-    let (s, _) = locate(
-        |s| driver.step_from(from, s).ok().map(|p| p.tangent[k]),
-        from.tangent[k],
-        s_hi,
-        t_hi,
-        TURNING_TOLERANCE,
-    )?;
-    driver.step_from(from, s).ok()
-}
-
-/// Stops the path where `test` says so (checked at every accepted point, not localised).
-pub struct StopWhen<F>(pub F);
-
-impl<P: Problem, F: FnMut(&P, &PathPoint) -> Option<StopReason>> Detector<P> for StopWhen<F> {
-    fn check(&mut self, driver: &mut Continuation<P>, _: &Accepted, _: usize) -> Vec<Event> {
-        (self.0)(driver.problem(), driver.point())
-            .map(Event::Stop)
-            .into_iter()
-            .collect()
-    }
-}
-
-/// A problem whose points are states of a model: the displacement over the model's
-/// unknowns and every parameter, for the stability analysis.
-pub trait States {
-    /// The displacement u at q.
-    fn displacement(&self, q: &nalgebra::DVector<f64>) -> Vec<f64>;
-    /// Every parameter, with the free ones at `lambda`.
-    fn parameters(&self, lambda: &nalgebra::DVector<f64>) -> Vec<f64>;
-}
-
-/// The measures of a state (u, every parameter), in the report's order.
-pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
 
 /// Stability by blocks at states of one model (docs/theory.md §8, §10, §15.3): the tangent
 /// at a state splits into blocks (the irreps of a group, the wave numbers of a meridian), each
@@ -389,99 +113,6 @@ pub trait Blocks {
     fn isotropy(&self, block: usize, mode: &[f64]) -> Isotropy;
 }
 
-/// The blocks of a 3-D model by the irreps of the scene's group: every block's inertia from a
-/// sparse LBLᵀ around the orbit representatives, its eigenvalues dense or by Lanczos
-/// ([`Stability`]), the critical mode expanded from the first partner's basis, its isotropy
-/// under the group's action.
-pub struct IrrepBlocks<'a> {
-    stability: Stability<'a>,
-    constraints: &'a [Box<dyn Constraint>],
-    action: &'a GroupAction,
-    model: &'a dyn Model,
-    /// The model's evaluation buffer, reused by every spectrum (the tangent of a large mesh
-    /// is megabytes; a fresh buffer per point would allocate it every time).
-    eval: Evaluation,
-    /// The evaluation around the orbit representatives, for the index at every point.
-    local: Evaluation,
-}
-
-impl<'a> IrrepBlocks<'a> {
-    /// The blocks of `stability` at states of `model` with `constraints` active; modes'
-    /// isotropy under `action`.
-    pub fn new(
-        stability: Stability<'a>,
-        model: &'a dyn Model,
-        constraints: &'a [Box<dyn Constraint>],
-        action: &'a GroupAction,
-    ) -> Self {
-        Self {
-            eval: model.new_evaluation(),
-            local: stability.new_evaluation(),
-            stability,
-            constraints,
-            action,
-            model,
-        }
-    }
-}
-
-impl Blocks for IrrepBlocks<'_> {
-    fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
-        self.stability
-            .analyse(
-                u,
-                params,
-                self.constraints,
-                &mut self.local,
-                None,
-                Detail::Inertia,
-            )
-            .ok()
-    }
-
-    fn spectrum(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
-        self.stability
-            .spectrum_of(u, params, self.constraints, &mut self.eval, None, false)
-            .ok()
-    }
-
-    fn block_eigen(
-        &mut self,
-        u: &[f64],
-        params: &[f64],
-        block: usize,
-        lowest: usize,
-        vectors: bool,
-    ) -> Option<Spectrum> {
-        let detail = if vectors {
-            Detail::Vectors { lowest }
-        } else {
-            Detail::Eigenvalues { lowest }
-        };
-        self.stability
-            .analyse(
-                u,
-                params,
-                self.constraints,
-                &mut self.eval,
-                Some(block),
-                detail,
-            )
-            .ok()
-    }
-
-    fn mode(&self, block: usize, v: &[f64]) -> Vec<f64> {
-        let first = self.stability.basis().irreps[block].first();
-        let mut mode = vec![0.0; first.unknowns()];
-        first.expand(&nalgebra::DVector::from_column_slice(v), &mut mode);
-        mode
-    }
-
-    fn isotropy(&self, _block: usize, mode: &[f64]) -> Isotropy {
-        isotropy(self.action, self.model.layout(), mode)
-    }
-}
-
 /// Index changes of the blocks, localised and classified: the stability analysis of states of
 /// one model (docs/theory.md §8, §10, §11), by any [`Blocks`].
 pub struct Crossings<'a> {
@@ -492,31 +123,10 @@ pub struct Crossings<'a> {
 }
 
 impl<'a> Crossings<'a> {
-    /// The analysis of states of `model` (with `constraints` active, parameter `control`
-    /// the one a path follows) by `stability`; critical points get the measures of
-    /// `measure(u, params)` and the isotropy of their mode under `action`; `held` states
-    /// (linear buckling) name a singular trivial block a symmetric bifurcation.
-    pub fn new(
-        stability: Stability<'a>,
-        model: &'a dyn Model,
-        constraints: &'a [Box<dyn Constraint>],
-        action: &'a GroupAction,
-        measure: MeasureFn<'a>,
-        control: Option<usize>,
-        held: bool,
-    ) -> Self {
-        Self::of(
-            Box::new(IrrepBlocks::new(stability, model, constraints, action)),
-            measure,
-            control,
-            held,
-        )
-    }
-
     /// The analysis of states by `blocks`; critical points get the measures of
     /// `measure(u, params)`; `control` is the parameter a path follows, and `held` states
     /// (linear buckling) name a singular trivial block a symmetric bifurcation.
-    pub fn of(
+    pub fn new(
         blocks: Box<dyn Blocks + 'a>,
         measure: MeasureFn<'a>,
         control: Option<usize>,

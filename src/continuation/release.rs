@@ -4,10 +4,8 @@
 //! hold-translation`, [`super::equilibrium`]) and the meridian's (`crate::axisym::run`) share
 //! it.
 
-use super::continuation::{
-    point_at, solve_at, Continuation, Linearization, PathOptions, Problem, SolveError,
-};
 use super::events::locate;
+use super::{point_at, solve_at, Continuation, Linearization, PathOptions, Problem, SolveError};
 
 /// A problem with the mean translation along a direction held (docs/theory.md §7.8): its
 /// unknowns are the inner problem's q, the held mean displacement ζ (the control), the

@@ -1,17 +1,5 @@
-//! Critical points (docs/theory.md §8.6, §11): where the negative count of an irrep's block changes
-//! between two states of a path, the crossing eigenvalue is localised by a safeguarded secant
-//! search on the path parameter until it is at round-off relative to ‖K‖, and the point is
-//! classified by its irrep:
-//!
-//! - trivial irrep → **limit point** (a symmetric fold) where the control turns, else a
-//!   **symmetric bifurcation** (a branch point within the symmetric states, or a held state);
-//! - non-trivial 1-D irrep → **simple symmetry-breaking bifurcation**;
-//! - d-dimensional irrep → **d-fold bifurcation** (double, 3-, 4-, 5-fold): the eigenvalue is
-//!   d-fold in K by construction, the d partner blocks being identical.
-//!
-//! A change of the index of a block is seen even when two eigenvalues cross together, which
-//! a determinant sign would miss. Two close simple points on a mesh of lower symmetry are
-//! two separate crossings here, in two different 1-D irreps — never inferred, measured.
+//! What a critical mode is, on a 3-D mesh with its group: the subgroup of the group that keeps
+//! it (its isotropy), and its wave number about z on a mesh with an axis (docs/theory.md §11).
 
 use crate::model::Layout;
 use crate::results::Isotropy;
