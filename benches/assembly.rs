@@ -5,7 +5,7 @@
 
 use memstab::bench::{balloon_scene, solve_start};
 use memstab::model::{Model, Request};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 fn main() {
     divan::main();
@@ -13,7 +13,7 @@ fn main() {
 
 #[divan::bench(args = [8, 16], sample_count = 30)]
 fn evaluate_all(bencher: divan::Bencher, frequency: usize) {
-    let mut study = Study::build(balloon_scene(frequency).unwrap()).unwrap();
+    let mut study = MeshStudy::build(balloon_scene(frequency).unwrap()).unwrap();
     let params = study.start.clone();
     let u = solve_start(&mut study, &params).unwrap();
     let mut eval = study.model.new_evaluation();
@@ -27,7 +27,7 @@ fn evaluate_all(bencher: divan::Bencher, frequency: usize) {
 
 #[divan::bench(args = [16], sample_count = 30)]
 fn evaluate_residual_only(bencher: divan::Bencher, frequency: usize) {
-    let mut study = Study::build(balloon_scene(frequency).unwrap()).unwrap();
+    let mut study = MeshStudy::build(balloon_scene(frequency).unwrap()).unwrap();
     let params = study.start.clone();
     let u = solve_start(&mut study, &params).unwrap();
     let mut eval = study.model.new_evaluation();

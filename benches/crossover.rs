@@ -12,15 +12,15 @@ use memstab::adapted::AdaptedBasis;
 use memstab::bench::{solve_start, spinning_cap_scene};
 use memstab::model::Model;
 use memstab::stability::{BlockEigen, Detail, Stability};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 fn main() {
     divan::main();
 }
 
 /// The C1v cap with `divisions`, its start state at ω² = 0.3 and its adapted basis.
-fn cap(divisions: usize) -> (Study, Vec<f64>, Vec<f64>, AdaptedBasis) {
-    let mut study = Study::build(spinning_cap_scene("C1v", divisions, 1).unwrap()).unwrap();
+fn cap(divisions: usize) -> (MeshStudy, Vec<f64>, Vec<f64>, AdaptedBasis) {
+    let mut study = MeshStudy::build(spinning_cap_scene("C1v", divisions, 1).unwrap()).unwrap();
     let params = vec![0.3];
     let u = solve_start(&mut study, &params).unwrap();
     let basis = AdaptedBasis::new(&study.action, study.model.layout()).unwrap();

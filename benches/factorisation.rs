@@ -8,14 +8,14 @@
 use memstab::bench::{balloon_scene, solve_start};
 use memstab::linalg::SymmetricFactorization;
 use memstab::model::{Model, Request};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 fn main() {
     divan::main();
 }
 
-fn shifted_tangent(frequency: usize) -> (Study, Vec<f64>) {
-    let mut study = Study::build(balloon_scene(frequency).unwrap()).unwrap();
+fn shifted_tangent(frequency: usize) -> (MeshStudy, Vec<f64>) {
+    let mut study = MeshStudy::build(balloon_scene(frequency).unwrap()).unwrap();
     let params = study.start.clone();
     let u = solve_start(&mut study, &params).unwrap();
     let mut eval = study.model.new_evaluation();

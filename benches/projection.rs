@@ -7,7 +7,7 @@
 use memstab::adapted::AdaptedBasis;
 use memstab::bench::{balloon_scene, solve_start};
 use memstab::model::{Model, Request};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 fn main() {
     divan::main();
@@ -15,13 +15,13 @@ fn main() {
 
 #[divan::bench(args = [8, 16], sample_count = 5)]
 fn adapted_basis(bencher: divan::Bencher, frequency: usize) {
-    let study = Study::build(balloon_scene(frequency).unwrap()).unwrap();
+    let study = MeshStudy::build(balloon_scene(frequency).unwrap()).unwrap();
     bencher.bench_local(|| AdaptedBasis::new(&study.action, study.model.layout()).unwrap());
 }
 
 #[divan::bench(args = [8, 16], sample_count = 10)]
 fn restrict_all_blocks(bencher: divan::Bencher, frequency: usize) {
-    let mut study = Study::build(balloon_scene(frequency).unwrap()).unwrap();
+    let mut study = MeshStudy::build(balloon_scene(frequency).unwrap()).unwrap();
     let params = study.start.clone();
     let u = solve_start(&mut study, &params).unwrap();
     let mut eval = study.model.new_evaluation();

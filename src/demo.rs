@@ -5,7 +5,7 @@
 use crate::reference::{sphere_extrema, sphere_pressure, SphereExtremum};
 use crate::results::{Extremum, PathReport};
 use crate::scene::{Effect, MeshSpec, Scene, SceneError};
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 
 /// The demo scene's text, bundled so that `memstab demo` works from anywhere.
 pub const SCENE: &str = include_str!("../scenes/demo.toml");
@@ -65,7 +65,7 @@ impl ClosedFormCheck {
 
 /// The closed-form check of a run of a balloon under pressure control (an icosphere whose
 /// only effect is a gas at the control's pressure); `None` for any other run.
-pub fn closed_form_check(study: &Study, report: &PathReport) -> Option<ClosedFormCheck> {
+pub fn closed_form_check(study: &MeshStudy, report: &PathReport) -> Option<ClosedFormCheck> {
     let scene = &study.scene;
     let MeshSpec::Icosphere(ico) = &scene.mesh else {
         return None;

@@ -882,6 +882,15 @@ impl<'a> IrrepBlocks<'a> {
 }
 
 impl Blocks for IrrepBlocks<'_> {
+    fn names(&self) -> Vec<String> {
+        self.stability
+            .basis()
+            .irreps
+            .iter()
+            .map(|ib| ib.name.clone())
+            .collect()
+    }
+
     fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {
         self.stability
             .analyse(

@@ -457,7 +457,8 @@ fn the_upward_disc_double_is_within_its_mesh_distance_of_m_1() {
     let e1 = |divisions: usize| {
         let t = text.replace("divisions = 16", &format!("divisions = {divisions}"));
         let mut study =
-            memstab::study::Study::build(Scene::from_toml_str(&t, "up").unwrap()).unwrap();
+            memstab::study::mesh::MeshStudy::build(Scene::from_toml_str(&t, "up").unwrap())
+                .unwrap();
         let r = memstab::analysis::run(&mut study, |_, _| {}).unwrap();
         let cp = r.report.critical.iter().find(|c| c.irrep == "E1").unwrap();
         cp.parameters[0]
@@ -525,7 +526,8 @@ fn the_partly_wet_pond_inflated_from_below_converges_on_the_meridian_and_in_3d()
     let three_d = |divisions: usize| -> f64 {
         let t = text.replace("divisions = 16", &format!("divisions = {divisions}"));
         let mut study =
-            memstab::study::Study::build(Scene::from_toml_str(&t, "pond").unwrap()).unwrap();
+            memstab::study::mesh::MeshStudy::build(Scene::from_toml_str(&t, "pond").unwrap())
+                .unwrap();
         let r = memstab::analysis::run(&mut study, |_, _| {}).unwrap();
         let c = r.report.critical.iter().find(|c| c.irrep == "A1").unwrap();
         c.parameters[0]
@@ -688,7 +690,8 @@ mod paper2 {
         )
         .replace("frequency = 8 ", &format!("frequency = {f} "));
         let mut study =
-            memstab::study::Study::build(Scene::from_toml_str(&t, "p2").unwrap()).unwrap();
+            memstab::study::mesh::MeshStudy::build(Scene::from_toml_str(&t, "p2").unwrap())
+                .unwrap();
         let r = memstab::analysis::run(&mut study, |_, _| {}).unwrap();
         let c = r.report.critical.iter().find(|c| c.irrep == "A1").unwrap();
         c.parameters[r.report.parameters.iter().position(|n| n == "p").unwrap()]
@@ -794,7 +797,8 @@ mod paper2 {
             let t = text("thesis/paper2_sphere_on_plane_f8.toml")
                 .replace("frequency = 8 ", &format!("frequency = {f} "));
             let mut study =
-                memstab::study::Study::build(Scene::from_toml_str(&t, "p2").unwrap()).unwrap();
+                memstab::study::mesh::MeshStudy::build(Scene::from_toml_str(&t, "p2").unwrap())
+                    .unwrap();
             let r = memstab::analysis::run(&mut study, |_, _| {})
                 .unwrap()
                 .report;

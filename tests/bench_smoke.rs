@@ -152,7 +152,7 @@ fn export_matrix_writes_the_lower_triangle_of_the_pattern() {
     assert!(!text.contains("rank-one file:"));
 
     let scene = memstab::scene::Scene::load(scene).unwrap();
-    let study = memstab::study::Study::build(scene).unwrap();
+    let study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
     use memstab::model::Model;
     let pattern = study.model.pattern();
     assert_eq!(n, pattern.n());

@@ -3,7 +3,6 @@
 //! the reflection classes of E1, E2, E3 (and the kernels of B1, A2) on a C8v disc, and a split
 //! pair on a C2v disc whose branches approach the C8v double's under refinement.
 
-use memstab::analysis::branch;
 use memstab::analysis::run;
 use memstab::bench::branching::{ih_branches, ih_problem, IH_COEFFICIENTS};
 use memstab::model::Model;
@@ -11,12 +10,12 @@ use memstab::results::{
     Bifurcation, Branches, CriticalPoint, Half, Halves, Node, Skip, SwitchedBranch,
 };
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use nalgebra::DVector;
 
-fn study(text: &str) -> Study {
+fn study(text: &str) -> MeshStudy {
     let scene = Scene::from_toml_str(text, "test").expect("scene");
-    Study::build(scene).expect("study")
+    MeshStudy::build(scene).expect("study")
 }
 
 /// The bundled upward-loaded disc with other sectors, divisions, mesh group and bound, and
@@ -50,7 +49,7 @@ fn upward(
 }
 
 /// T(g) u of the study's action (independent of the library's).
-fn act(study: &Study, g: usize, u: &[f64]) -> Vec<f64> {
+fn act(study: &MeshStudy, g: usize, u: &[f64]) -> Vec<f64> {
     let layout = study.model.layout();
     let r = study.action.group().element(g);
     let mut out = vec![0.0; u.len()];
@@ -65,7 +64,7 @@ fn act(study: &Study, g: usize, u: &[f64]) -> Vec<f64> {
 }
 
 /// The elements of the study's group that map u to itself (to 1e-9 relative).
-fn stabiliser(study: &Study, u: &[f64]) -> Vec<usize> {
+fn stabiliser(study: &MeshStudy, u: &[f64]) -> Vec<usize> {
     let norm = u.iter().map(|v| v * v).sum::<f64>().sqrt();
     (0..study.action.group().order())
         .filter(|&g| {
@@ -331,11 +330,11 @@ fn c8v_disc_points_give_the_classes_of_the_lemma() {
         first("B1"),
         first("A2"),
     ];
-    let mut opts = branch::options(&s, None);
+    let mut opts = branch_options(&s, None);
     opts.steps = 6;
     opts.path.max_steps = 6;
     opts.points = Some(wanted.to_vec());
-    let b = branch::run(&s, critical, opts);
+    let b = memstab::study::switching::run(&s, critical, opts);
     let two = |d: usize| vec![(format!("C{d}v"), 2 * d), (format!("C{d}v'"), 2 * d)];
     assert_eq!(classes(&b, wanted[0]), two(1), "E1");
     assert_eq!(classes(&b, wanted[1]), two(2), "E2");
@@ -395,7 +394,7 @@ fn c8v_disc_points_give_the_classes_of_the_lemma() {
 
 /// The centre node's horizontal displacement (the tilt of an m = 1 branch) and the control at
 /// every point of a branch.
-fn tilt(s: &Study, b: &SwitchedBranch) -> Vec<(f64, f64)> {
+fn tilt(s: &MeshStudy, b: &SwitchedBranch) -> Vec<(f64, f64)> {
     let layout = s.model.layout();
     let centre = s
         .model
@@ -421,12 +420,12 @@ fn control_at(curve: &[(f64, f64)], target: f64) -> f64 {
 }
 
 /// Switches at the given critical points of a disc's path; the branches, in point order.
-fn branches_at(s: &Study, critical: &[CriticalPoint], points: Vec<usize>) -> Branches {
-    let mut opts = branch::options(s, None);
+fn branches_at(s: &MeshStudy, critical: &[CriticalPoint], points: Vec<usize>) -> Branches {
+    let mut opts = branch_options(s, None);
     opts.steps = 12;
     opts.path.max_steps = 12;
     opts.points = Some(points);
-    branch::run(s, critical, opts)
+    memstab::study::switching::run(s, critical, opts)
 }
 
 /// (d) On a C2v disc (8 sectors) the E1 double point of C8v is split into two simple points,
@@ -492,11 +491,11 @@ fn depth_two_switches_at_the_branches_points() {
     let memstab::scene::Analysis::Path(p) = &scene.analysis else {
         panic!("a path")
     };
-    let mut opts = branch::options(&s, p.branches.as_ref());
+    let mut opts = branch_options(&s, p.branches.as_ref());
     opts.depth = 2;
     opts.steps = 40;
     opts.path.max_steps = 40;
-    let b = branch::run(&s, &critical, opts);
+    let b = memstab::study::switching::run(&s, &critical, opts);
     let primary: Vec<&SwitchedBranch> = b
         .graph
         .branches
@@ -544,4 +543,15 @@ fn depth_two_switches_at_the_branches_points() {
         }
     }
     assert!(secondary >= 1, "some A2 point on the C1v branches");
+}
+
+/// The branch options of a study's path analysis with `[analysis.branches]` `b` (the defaults
+/// without it).
+fn branch_options(
+    s: &MeshStudy,
+    b: Option<&memstab::scene::BranchesAnalysis>,
+) -> memstab::study::BranchOptions {
+    memstab::analysis::registry::path(&s.scene.analysis)
+        .expect("a path analysis")
+        .branch_options(s, b)
 }

@@ -12,12 +12,12 @@ use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::model::{FeModel, Model};
 use memstab::scene::Scene;
 use memstab::stability::{BlockEigen, Detail, Stability};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use meshes::generators::{disc, DiscOptions};
 use nalgebra::DVector;
 
 /// The ponding scene on a C7 disc of `divisions`.
-fn ponding_c7(divisions: usize) -> Study {
+fn ponding_c7(divisions: usize) -> MeshStudy {
     let text = std::fs::read_to_string(format!(
         "{}/scenes/ponding.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -27,7 +27,7 @@ fn ponding_c7(divisions: usize) -> Study {
         "divisions = 16 ",
         &format!("group = \"C7\"\ndivisions = {divisions} "),
     );
-    Study::build(Scene::from_toml_str(&text, "ponding C7").unwrap()).unwrap()
+    MeshStudy::build(Scene::from_toml_str(&text, "ponding C7").unwrap()).unwrap()
 }
 
 /// The analysis of (u, params) with every block dense, every block by Lanczos, and by cost.

@@ -2,12 +2,12 @@
 //! form, the derivatives of the block test function, and the curve's outputs.
 
 use crate::common::{balloon_with_k, fold_k, reservoir_balloon, reservoir_limit, RESERVOIR_PATH};
-use memstab::analysis::curve::{BlockTest, DIFFERENCE_STEP};
 use memstab::analysis::run;
 use memstab::model::Model;
 use memstab::results::{CriticalKind, CurveEventKind, CurveReport};
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::block_test::{BlockTest, DIFFERENCE_STEP};
+use memstab::study::mesh::MeshStudy;
 
 /// The sphere's pressure in closed form, p R/(μH) = 2/(1+k)(λ⁻¹ − λ⁻⁷)(1 + kλ²); its fold
 /// line is [`fold_k`].
@@ -60,7 +60,7 @@ max-step = 0.05
 }
 
 fn curve_of(frequency: usize) -> (CurveReport, memstab::results::RunResult) {
-    let mut study = Study::build(balloon_curve_scene(frequency)).unwrap();
+    let mut study = MeshStudy::build(balloon_curve_scene(frequency)).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
     (result.curve.clone().expect("a curve"), result)
 }
@@ -151,7 +151,7 @@ fn balloon_limit_curve_reaches_its_cusp_on_the_closed_form_fold_line() {
 /// (directional differences of the tangent) and ∂σ/∂Λ (differences of the loads) against
 /// differences of σ itself, and the step's truncation error, estimated by Richardson
 /// extrapolation from ε and 2ε, against 1e-7 of the derivative.
-fn check_test_derivatives(study: &Study, cp: &memstab::results::CriticalPoint) {
+fn check_test_derivatives(study: &MeshStudy, cp: &memstab::results::CriticalPoint) {
     let adapted = memstab::adapted::AdaptedBasis::new(&study.action, study.model.layout()).unwrap();
     let mu = adapted
         .irreps
@@ -218,13 +218,13 @@ fn check_test_derivatives(study: &Study, cp: &memstab::results::CriticalPoint) {
 /// states u ± εa not symmetric: the whole mesh).
 #[test]
 fn block_test_function_derivatives_match_differences_of_sigma() {
-    let mut study = Study::build(balloon_curve_scene(4)).unwrap();
+    let mut study = MeshStudy::build(balloon_curve_scene(4)).unwrap();
     let result = run(&mut study, |_, _| {}).unwrap();
     check_test_derivatives(
         &study,
         result.report.critical.first().expect("a limit point"),
     );
-    let mut study = Study::build(disc_curve_scene()).unwrap();
+    let mut study = MeshStudy::build(disc_curve_scene()).unwrap();
     let result = run(&mut study, |_, _| {}).unwrap();
     let cp = result.report.critical.last().expect("a critical point");
     assert_eq!(cp.irrep, "E1");
@@ -235,7 +235,7 @@ fn block_test_function_derivatives_match_differences_of_sigma() {
 /// parameters and the block's eigenvalues.
 #[test]
 fn a_critical_curve_run_writes_its_curve() {
-    let mut study = Study::build(balloon_curve_scene(4)).unwrap();
+    let mut study = MeshStudy::build(balloon_curve_scene(4)).unwrap();
     let mut result = run(&mut study, |_, _| {}).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let written = memstab::output::write_run(&study, &mut result, dir.path()).unwrap();
@@ -408,7 +408,7 @@ fn full_spectrum(model: &memstab::model::FeModel, u: &[f64], params: &[f64]) -> 
 #[test]
 fn a_double_point_of_the_c7v_disc_stays_double_along_its_curve() {
     let scene = disc_curve_scene();
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let mut states = States::default();
     let result = memstab::analysis::run_with(&mut study, &mut states).expect("the curve runs");
     let curve = result.curve.expect("a curve");
@@ -472,7 +472,7 @@ fn disc_curve(from: &str, watch: bool) -> CurveReport {
         "[analysis]\ntype = \"critical-curve\"\ncontrol = \"h\"\nsecond = \"k\"\nfrom = \"{from}\"\n\
          steps = 60\npath-steps = 400\nmax-step = 0.05\nwatch = {watch}\n"
     ), None);
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
     result.curve.unwrap()
 }
@@ -541,7 +541,7 @@ fn the_disc_limit_and_double_point_curves_cross_at_one_hilltop() {
             "[analysis]\ntype = \"path\"\ncontrol = \"h\"\nsteps = 400\nmax-step = 0.05\n",
             Some(k),
         );
-        let mut study = Study::build(scene).unwrap();
+        let mut study = MeshStudy::build(scene).unwrap();
         let result = run(&mut study, |_, _| {}).expect("the path runs");
         let h = result
             .report
@@ -583,7 +583,7 @@ fn a_curve_starts_from_a_finished_runs_critical_point() {
         &curve_text[end..]
     );
     let mut study =
-        Study::build(Scene::from_toml_str(&path_text, "balloon-path").unwrap()).unwrap();
+        MeshStudy::build(Scene::from_toml_str(&path_text, "balloon-path").unwrap()).unwrap();
     let mut result = run(&mut study, |_, _| {}).unwrap();
     assert_eq!(result.report.critical[0].kind, CriticalKind::LimitPoint);
     let dir = tempfile::tempdir().unwrap();
@@ -596,9 +596,14 @@ fn a_curve_starts_from_a_finished_runs_critical_point() {
         )
     };
     let scene = Scene::from_toml_str(&from_run("0"), "balloon-from-run").unwrap();
-    let mut study = Study::build(scene).unwrap();
-    memstab::output::load_curve_start(&mut study).unwrap();
-    let resumed = run(&mut study, |_, _| {}).expect("the curve runs from the saved point");
+    let mut study = MeshStudy::build(scene).unwrap();
+    let start = memstab::analysis::restart::start_of(&study).unwrap();
+    let resumed = memstab::analysis::run_from(
+        &mut study,
+        &start,
+        &mut memstab::analysis::Progress(|_, _| {}),
+    )
+    .expect("the curve runs from the saved point");
     // No path: the saved point is the run's one row and critical point.
     assert_eq!(resumed.report.rows.len(), 1);
     assert_eq!(resumed.report.critical.len(), 1);
@@ -636,8 +641,8 @@ fn a_curve_starts_from_a_finished_runs_critical_point() {
         "{err}"
     );
     let scene = Scene::from_toml_str(&from_run("7"), "seven").unwrap();
-    let mut study = Study::build(scene).unwrap();
-    let err = memstab::output::load_curve_start(&mut study).unwrap_err();
+    let study = MeshStudy::build(scene).unwrap();
+    let err = memstab::analysis::restart::start_of(&study).unwrap_err();
     assert!(
         err.contains("'analysis.from' = 7") && err.contains("critical point"),
         "{err}"
@@ -679,7 +684,7 @@ fn reservoir_limit_p(n: f64) -> f64 {
 fn constrained_block_test_function_derivatives_match_differences_of_sigma() {
     let scene =
         Scene::from_toml_str(&reservoir_balloon_text(3, RESERVOIR_CURVE), "reservoir").unwrap();
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).unwrap();
     let cp = result.report.critical.first().expect("a limit point");
     assert_eq!(cp.kind, CriticalKind::LimitPoint);
@@ -693,7 +698,7 @@ fn constrained_block_test_function_derivatives_match_differences_of_sigma() {
 fn constrained_limit_curve_agrees_with_paths_at_fixed_amounts_and_the_closed_form() {
     let scene =
         Scene::from_toml_str(&reservoir_balloon_text(3, RESERVOIR_CURVE), "reservoir").unwrap();
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the constrained curve runs");
     let curve = result.curve.clone().expect("a curve");
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
@@ -727,7 +732,8 @@ fn reservoir_path_limit(extra: &str, amount: f64) -> f64 {
         &format!("start = {amount:.17e}"),
         1,
     );
-    let mut study = Study::build(Scene::from_toml_str(&text, "reservoir-path").unwrap()).unwrap();
+    let mut study =
+        MeshStudy::build(Scene::from_toml_str(&text, "reservoir-path").unwrap()).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the path runs");
     let limit = result
         .report
@@ -750,7 +756,8 @@ fn a_limit_curve_with_two_constraints_keeps_both_and_agrees_with_paths() {
                   [[constraint]]\ntype = \"gas-amount\"\neffect = 2\nvalue = 0.97\n\
                   ambient-pressure = 0.1\n\n";
     let text = reservoir_balloon_text(3, &format!("{second}{RESERVOIR_CURVE}"));
-    let mut study = Study::build(Scene::from_toml_str(&text, "two-reservoirs").unwrap()).unwrap();
+    let mut study =
+        MeshStudy::build(Scene::from_toml_str(&text, "two-reservoirs").unwrap()).unwrap();
     assert_eq!(study.constraints.len(), 2);
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
     let curve = result.curve.clone().expect("a curve");

@@ -206,9 +206,9 @@ fn export_with_rank_one_terms_round_trips_and_scipy_agrees() {
 
     // The same state by the library: the model's K (sparse part and its rank-one terms).
     let scene = memstab::scene::Scene::load(&scene_path).unwrap();
-    let mut study = memstab::study::Study::build(scene).unwrap();
+    let mut study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
     let params = study.start.clone();
-    let (u, _, _) = memstab::analysis::equilibrium::solve_start(&mut study, &params).unwrap();
+    let u = memstab::bench::solve_start(&mut study, &params).unwrap();
     let model = &study.model;
     assert_eq!(model.unknowns(), n);
     let mut eval = model.new_evaluation();

@@ -9,7 +9,7 @@ use memstab::effects::Quantity;
 use memstab::model::constraint::Constraint;
 use memstab::model::Model;
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use std::f64::consts::PI;
 
 /// Volume of the unit sphere between z = c and z = t (c ≤ t ≤ 1): π ∫ (1 − z²) dz.
@@ -18,7 +18,7 @@ fn segment(c: f64, t: f64) -> f64 {
     PI * (f(t) - f(c))
 }
 
-fn study(divisions: usize) -> Study {
+fn study(divisions: usize) -> MeshStudy {
     let text = format!(
         r#"
 [scene]
@@ -49,7 +49,7 @@ value = "initial"
 type = "equilibrium"
 "#
     );
-    Study::build(Scene::from_toml_str(&text, "cap").unwrap()).unwrap()
+    MeshStudy::build(Scene::from_toml_str(&text, "cap").unwrap()).unwrap()
 }
 
 #[test]
@@ -116,7 +116,7 @@ fn the_docs_example_holds_its_fluid_volume_along_the_path() {
     let toml = toml
         .replace("steps = 300", "steps = 40")
         .replace("divisions = 12 ", "divisions = 6 ");
-    let mut study = Study::build(Scene::from_toml_str(&toml, "docs example").unwrap()).unwrap();
+    let mut study = MeshStudy::build(Scene::from_toml_str(&toml, "docs example").unwrap()).unwrap();
     assert_eq!(study.action.group().name(), "C8v");
     let r = run(&mut study, |_, _| {}).unwrap().report;
     assert!(r.rows.len() > 5, "{}", r.stop);

@@ -8,7 +8,7 @@
 
 use memstab::limits::Limits;
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -157,7 +157,7 @@ fn load_and_build(path: &Path) -> Result<(), TestCaseError> {
     let outcome = Scene::load(path)
         .map_err(|e| e.to_string())
         .and_then(|scene| {
-            Study::build_within(scene, &limits())
+            MeshStudy::build_within(scene, &limits())
                 .map(|_| ())
                 .map_err(|e| e.to_string())
         });
@@ -264,7 +264,7 @@ fn a_huge_declared_group_is_refused_by_name() {
     assert!(text.contains("group = \"C7v\""));
     std::fs::write(&path, text.replace("group = \"C7v\"", "group = \"C3000v\"")).unwrap();
     let scene = Scene::load(&path).expect("a valid group name");
-    let err = Study::build_within(scene, &limits())
+    let err = MeshStudy::build_within(scene, &limits())
         .err()
         .expect("refused by the limits");
     assert!(err.to_string().contains("C3000v"), "{err}");

@@ -15,7 +15,6 @@
 
 use memstab::adapted::SparseBasis;
 use memstab::analysis::run;
-use memstab::analysis::SymmetricProblem;
 use memstab::continuation::events::trace;
 use memstab::continuation::events::Branch;
 use memstab::continuation::{step_from, Continuation, PathOptions};
@@ -27,7 +26,8 @@ use memstab::model::check::check_derivatives;
 use memstab::model::{Effect, Evaluation, FeModel, Model, ModelError, Request, Vec3};
 use memstab::results::{PathReport, RunResult, StopReason};
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
+use memstab::study::SymmetricProblem;
 use meshes::generators::{
     disc, icosphere, truncated_sphere, DiscOptions, IcosphereOptions, TruncatedSphereOptions,
 };
@@ -58,13 +58,13 @@ fn edit(text: &str, from: &str, to: &str) -> String {
     text.replace(from, to)
 }
 
-fn study_of(text: &str, origin: &str) -> Study {
+fn study_of(text: &str, origin: &str) -> MeshStudy {
     let scene = Scene::from_toml_str(text, origin).unwrap_or_else(|e| panic!("{origin}: {e}"));
-    Study::build(scene).unwrap_or_else(|e| panic!("{origin}: {e}"))
+    MeshStudy::build(scene).unwrap_or_else(|e| panic!("{origin}: {e}"))
 }
 
 /// Runs the study; every row finite and the stop reason clear.
-fn run_checked(study: &mut Study) -> RunResult {
+fn run_checked(study: &mut MeshStudy) -> RunResult {
     let result = run(study, |_, _| {}).unwrap_or_else(|e| panic!("the start failed: {e}"));
     let r = &result.report;
     assert!(
@@ -132,7 +132,7 @@ fn parameter(report: &PathReport, name: &str) -> usize {
 }
 
 /// The positions of the last path point.
-fn last_positions(study: &Study, result: &RunResult) -> Vec<Vec3> {
+fn last_positions(study: &MeshStudy, result: &RunResult) -> Vec<Vec3> {
     let last = result.report.rows.len() - 1;
     let label = format!("step {last}");
     let state = result

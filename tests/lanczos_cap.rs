@@ -8,11 +8,11 @@ use memstab::model::Model;
 use memstab::results::CriticalKind;
 use memstab::scene::Scene;
 use memstab::stability::{BlockEigen, Detail, Stability};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 /// A clamped cap filled with fluid under a head above its top, spinning about z (ω² the
 /// control): the Paper 4-like scene of the bench, on `pattern` with `divisions`.
-pub fn spinning_cap(pattern: &str, divisions: usize, steps: usize) -> Study {
+pub fn spinning_cap(pattern: &str, divisions: usize, steps: usize) -> MeshStudy {
     spinning_cap_stepping(pattern, divisions, steps, 0.05, 0.5)
 }
 
@@ -23,7 +23,7 @@ fn spinning_cap_stepping(
     steps: usize,
     initial_step: f64,
     max_step: f64,
-) -> Study {
+) -> MeshStudy {
     let text = format!(
         r#"
 [scene]
@@ -62,7 +62,7 @@ max-step = {max_step}
 save-every = 100
 "#
     );
-    Study::build(Scene::from_toml_str(&text, "spinning-cap").unwrap()).unwrap()
+    MeshStudy::build(Scene::from_toml_str(&text, "spinning-cap").unwrap()).unwrap()
 }
 
 /// On a C1 cap of 2187 unknowns (one block, larger than a dense solve was once allowed), the

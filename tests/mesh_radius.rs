@@ -8,7 +8,7 @@ use memstab::model::check::check_derivatives;
 use memstab::model::{Model, Request};
 use memstab::results::CriticalKind;
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 /// The closed-form limit pressure of the k = 0.1 balloon, p R/(μH) at its maximum, and the
 /// stretch there (scenes/balloon.toml).
@@ -71,7 +71,7 @@ stretch = 1.05
     let again = Scene::from_toml_str(&loaded.to_toml(), "again").unwrap();
     assert_eq!(again.mesh_radius, loaded.mesh_radius);
     assert_eq!(again.mesh, loaded.mesh);
-    let mut study = Study::build(loaded).unwrap();
+    let mut study = MeshStudy::build(loaded).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
     let curve = result.curve.expect("a curve");
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
@@ -144,7 +144,7 @@ max-step = 0.05
 stretch = 1.1
 "#,
     );
-    let mut study = Study::build(scene(&text)).unwrap();
+    let mut study = MeshStudy::build(scene(&text)).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the path runs");
     let last = result.states.last().expect("the last state");
     let r_col = study.parameters.iter().position(|p| p == "R").unwrap();
@@ -165,7 +165,7 @@ stretch = 1.1
             "[parameters.p]\nstart = 0.9\n\n[analysis]\ntype = \"equilibrium\"\n\n[start]\nstretch = {stretch:?}\n"
         ),
     );
-    let mut other = Study::build(scene(&fixed)).unwrap();
+    let mut other = MeshStudy::build(scene(&fixed)).unwrap();
     let alone = run(&mut other, |_, _| {}).expect("the equilibrium solves");
     let last_alone = alone.states.last().unwrap();
     let y = other.model.positions(&last_alone.u, &last_alone.params);
@@ -352,7 +352,7 @@ fn held_boundaries_scale_with_the_radius_and_their_loads_are_derivatives() {
     ];
     for (k, (file, text, moves)) in cases.into_iter().enumerate() {
         let r0 = 1.1;
-        let mut study = Study::build(scene(&text)).unwrap();
+        let mut study = MeshStudy::build(scene(&text)).unwrap();
         let r = study.parameters.iter().position(|p| p == "R").unwrap();
         let mut params: Vec<f64> = study.start.clone();
         params[r] = 1.15 * r0;
@@ -472,7 +472,7 @@ fn a_clamped_discs_limit_pressure_scales_as_one_over_the_radius() {
                       start = 1.0\nmin = 0.6\nmax = 1.8\n\n[analysis]\ntype = \
                       \"critical-curve\"\ncontrol = \"p\"\nsecond = \"R\"\nfrom = \"limit\"\n\
                       steps = 60\npath-steps = 300\nmax-step = 0.1\n";
-    let mut study = Study::build(scene(&clamped_disc("\"R\"", curve_tail))).unwrap();
+    let mut study = MeshStudy::build(scene(&clamped_disc("\"R\"", curve_tail))).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
     let curve = result.curve.expect("a curve");
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
@@ -500,7 +500,7 @@ fn a_clamped_discs_limit_pressure_scales_as_one_over_the_radius() {
                      max = 1.3\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"p\"\n\n\
                      [analysis]\ntype = \"path\"\ncontrol = \"R\"\ndirection = \"increase\"\n\
                      steps = 60\nmax-step = 0.05\n";
-    let mut study = Study::build(scene(&clamped_disc("\"R\"", path_tail))).unwrap();
+    let mut study = MeshStudy::build(scene(&clamped_disc("\"R\"", path_tail))).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the path runs");
     let last = result.states.last().expect("the last state");
     let radius = last.params[study.parameters.iter().position(|p| p == "R").unwrap()];
@@ -510,7 +510,7 @@ fn a_clamped_discs_limit_pressure_scales_as_one_over_the_radius() {
         &format!("{radius:?}"),
         "[parameters.p]\nstart = 1.0\n\n[analysis]\ntype = \"equilibrium\"\n",
     );
-    let mut other = Study::build(scene(&fixed)).unwrap();
+    let mut other = MeshStudy::build(scene(&fixed)).unwrap();
     let alone = run(&mut other, |_, _| {}).expect("the equilibrium solves");
     let own = alone.states.last().unwrap();
     let y = other.model.positions(&own.u, &own.params);

@@ -10,11 +10,11 @@ use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel, Model};
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use meshes::SymmetricMesh;
 use symmetry::Invariant;
 
-fn ponding(max: f64) -> Study {
+fn ponding(max: f64) -> MeshStudy {
     let text = std::fs::read_to_string(format!(
         "{}/scenes/ponding.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -24,11 +24,11 @@ fn ponding(max: f64) -> Study {
         .replace("divisions = 16 ", "divisions = 8 ")
         .replace("max = 46.0 ", &format!("max = {max} "))
         .replace("samples = 92", "samples = 24");
-    Study::build(Scene::from_toml_str(&text, "near-double").unwrap()).unwrap()
+    MeshStudy::build(Scene::from_toml_str(&text, "near-double").unwrap()).unwrap()
 }
 
 /// (irrep, multiplicity, ρ) of the critical points near the E1 rung (ρ ≈ 5.3).
-fn e1_rung(study: &mut Study) -> Vec<(String, usize, f64)> {
+fn e1_rung(study: &mut MeshStudy) -> Vec<(String, usize, f64)> {
     let r = run(study, |_, _| {}).unwrap().report;
     r.critical
         .iter()

@@ -12,7 +12,7 @@ use memstab::effects::Quantity;
 use memstab::model::newton::{newton, NewtonOptions};
 use memstab::model::{Effect, FeModel, Model, Request};
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use meshes::generators::{truncated_sphere, TruncatedSphereOptions};
 
 fn max_abs(v: &[f64]) -> f64 {
@@ -31,7 +31,7 @@ fn full_newton_recovers_the_symmetric_equilibrium_of_the_sagging_disc() {
         .replace("divisions = 16 ", "divisions = 8 ")
         .replace("start = 0.0 ", "start = 1.5 ")
         + "[analysis]\ntype = \"equilibrium\"\n";
-    let mut study = Study::build(Scene::from_toml_str(&text, "sag").unwrap()).unwrap();
+    let mut study = MeshStudy::build(Scene::from_toml_str(&text, "sag").unwrap()).unwrap();
     let result = run(&mut study, |_, _| {}).unwrap();
     let u_sym = &result.states.last().expect("the equilibrium is saved").u;
     let params = vec![1.5];

@@ -9,7 +9,7 @@ use memstab::model::Model;
 use memstab::reference::{BESSEL_J2, PONDING_SCALE};
 use memstab::results::CriticalPoint;
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 /// T0/(μ H λ0²) for k = 0, λ0 = 1.1.
 const SCALE: f64 = PONDING_SCALE;
@@ -54,7 +54,7 @@ fn ladder(
         text = text.replace("divisions =", &format!("group = \"{g}\"\ndivisions ="));
     }
     let scene = Scene::from_toml_str(&text, "ponding variant").unwrap();
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let r = run(&mut study, |_, _| {}).unwrap().report;
     assert!(r.stability_note.is_none(), "{:?}", r.stability_note);
     r.critical
@@ -78,7 +78,7 @@ fn ladder(
 }
 
 /// The m (0..=12) whose cos/sin mθ carries most of the mode's deflection.
-fn wave_number(study: &Study, c: &CriticalPoint) -> usize {
+fn wave_number(study: &MeshStudy, c: &CriticalPoint) -> usize {
     let layout = study.model.layout();
     let nodes = study.model.reference();
     (0..=12)

@@ -7,7 +7,7 @@
 use memstab::analysis::run;
 use memstab::results::PathReport;
 use memstab::scene::{MeshSpec, Scene};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use meshes::write::{write_mesh, Fields, Format};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -53,9 +53,9 @@ fn write_disc(dir: &Path, name: &str, binary: bool) -> PathBuf {
     path
 }
 
-fn run_text(text: &str, origin: &str) -> (Study, PathReport) {
+fn run_text(text: &str, origin: &str) -> (MeshStudy, PathReport) {
     let scene = Scene::from_toml_str(text, origin).unwrap_or_else(|e| panic!("{e}"));
-    let mut study = Study::build(scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut study = MeshStudy::build(scene).unwrap_or_else(|e| panic!("{e}"));
     let result = run(&mut study, |_, _| {}).unwrap_or_else(|e| panic!("{origin}: {e}"));
     (study, result.report)
 }
@@ -133,7 +133,7 @@ fn the_group_defaults_to_c1_and_hidden_symmetry_is_a_warning() {
         panic!("a file mesh")
     };
     assert_eq!(f.group, "C1");
-    let study = Study::build(scene).unwrap();
+    let study = MeshStudy::build(scene).unwrap();
     assert_eq!(study.mesh.group().name(), "C1");
     assert_eq!(study.action.group().order(), 1);
     let [warning] = study.warnings.as_slice() else {
@@ -370,7 +370,7 @@ fn the_bundled_file_scene_matches_its_generator() {
         }
     }
     let run_scene = |s: Scene| {
-        let mut study = Study::build(s).unwrap();
+        let mut study = MeshStudy::build(s).unwrap();
         assert!(study.warnings.is_empty(), "{:?}", study.warnings);
         run(&mut study, |_, _| {}).unwrap().report
     };

@@ -5,12 +5,12 @@ use memstab::analysis::run;
 use memstab::reference::{L_MAX, L_MIN, P_MAX, P_MIN};
 use memstab::results::CriticalKind;
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 fn run_scene(name: &str) -> memstab::results::RunResult {
     let scene = Scene::load(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR")))
         .expect("bundled scene loads");
-    let mut study = Study::build(scene).expect("bundled scene builds");
+    let mut study = MeshStudy::build(scene).expect("bundled scene builds");
     let result = run(&mut study, |_, _| {}).expect("the start converges");
     for r in &result.report.rows {
         assert!(
@@ -130,7 +130,7 @@ fn ponding_disc_sags_as_the_bessel_solution_below_the_first_rung() {
     let t0 = 1.0 - 1.1f64.powi(-6); // k = 0: T0/(μH) = 1 − λ0⁻⁶, μH = 1
     let k = (rho / t0).sqrt();
     let exact = h * (1.0 / bessel_j0(k * a) - 1.0);
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let r = run(&mut study, |_, _| {}).unwrap().report;
     assert_eq!(r.rows.len(), 1);
     assert_eq!(r.rows[0].parameters[0], 1.0);

@@ -6,12 +6,12 @@
 
 use crate::common::follow;
 use memstab::adapted::SparseBasis;
-use memstab::analysis::SymmetricProblem;
 use memstab::continuation::PathOptions;
 use memstab::effects::gas::{GasAmount, GasPressure};
 use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel, Model};
+use memstab::study::SymmetricProblem;
 use meshes::generators::{icosphere, IcosphereOptions};
 use nalgebra::DVector;
 

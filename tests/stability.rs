@@ -4,7 +4,6 @@
 
 use crate::common::follow;
 use memstab::adapted::{AdaptedBasis, SparseBasis};
-use memstab::analysis::SymmetricProblem;
 use memstab::continuation::PathOptions;
 use memstab::effects::gas::GasAmountConstraint;
 use memstab::effects::gas::{GasAmount, GasPressure};
@@ -13,6 +12,7 @@ use memstab::effects::Quantity;
 use memstab::model::constraint::Constraint;
 use memstab::model::{Effect, FeModel, Model, Request};
 use memstab::stability::{Detail, Stability};
+use memstab::study::SymmetricProblem;
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::SymmetricMesh;
 use nalgebra::{DMatrix, DVector};

@@ -3,10 +3,9 @@
 //! h = H/λ², nowhere wrinkled; a slack disc (pre-stretch below 1) is wrinkled everywhere;
 //! and every state file carries the fields.
 
-use memstab::analysis::equilibrium::solve_start;
 use memstab::model::{CellQuantity, Model};
 use memstab::scene::Scene;
-use memstab::study::{Measure, Study};
+use memstab::study::mesh::{Measure, MeshStudy};
 use std::path::Path;
 
 fn scene_text(name: &str) -> String {
@@ -21,9 +20,12 @@ fn scene_text(name: &str) -> String {
 #[test]
 fn the_balloon_tension_follows_the_closed_form_and_a_slack_disc_wrinkles() {
     let text = scene_text("balloon.toml").replace("frequency = 8", "frequency = 4");
-    let mut study = Study::build(Scene::from_toml_str(&text, "balloon").unwrap()).unwrap();
+    let mut study = MeshStudy::build(Scene::from_toml_str(&text, "balloon").unwrap()).unwrap();
     let start = study.start.clone();
-    let (u, params, _) = solve_start(&mut study, &start).unwrap();
+    let (u, params) = (
+        memstab::bench::solve_start(&mut study, &start).unwrap(),
+        start.clone(),
+    );
     let k = study
         .measures
         .iter()
@@ -51,7 +53,7 @@ fn the_balloon_tension_follows_the_closed_form_and_a_slack_disc_wrinkles() {
 
     let slack = scene_text("disc_fluid_below.toml").replace("prestretch = 1.1", "prestretch = 0.9");
     assert!(slack.contains("prestretch = 0.9"));
-    let study = Study::build(Scene::from_toml_str(&slack, "slack").unwrap()).unwrap();
+    let study = MeshStudy::build(Scene::from_toml_str(&slack, "slack").unwrap()).unwrap();
     let u = vec![0.0; study.model.layout().unknowns()];
     let fields = study.model.cell_fields(&u, &study.start);
     let wrinkled = &fields
@@ -105,9 +107,12 @@ fn the_node_fields_are_the_normal_and_the_pressure_of_the_loads() {
     use memstab::results::{State, StateKind};
     // The balloon: the gas pressure p at every node, normals of unit length out of the sphere.
     let text = scene_text("balloon.toml").replace("frequency = 8", "frequency = 4");
-    let mut study = Study::build(Scene::from_toml_str(&text, "balloon").unwrap()).unwrap();
+    let mut study = MeshStudy::build(Scene::from_toml_str(&text, "balloon").unwrap()).unwrap();
     let start = study.start.clone();
-    let (u, params, _) = solve_start(&mut study, &start).unwrap();
+    let (u, params) = (
+        memstab::bench::solve_start(&mut study, &start).unwrap(),
+        start.clone(),
+    );
     let nodes = study.model.node_fields(&u, &params);
     assert_eq!(nodes.len(), 1);
     assert_eq!(nodes[0].quantity, NodeQuantity::Pressure);
@@ -141,7 +146,7 @@ fn the_node_fields_are_the_normal_and_the_pressure_of_the_loads() {
     // the nodes +0.5 (the fluid pushes along the upward normal).
     let text = scene_text("disc_fluid_below.toml").replace("start = 0.0 ", "start = 0.5 ");
     assert!(text.contains("start = 0.5 "));
-    let study = Study::build(Scene::from_toml_str(&text, "disc").unwrap()).unwrap();
+    let study = MeshStudy::build(Scene::from_toml_str(&text, "disc").unwrap()).unwrap();
     let u = vec![0.0; study.model.layout().unknowns()];
     let cells = study.model.cell_fields(&u, &study.start);
     let fluid = cells
@@ -206,7 +211,7 @@ fn a_slack_disc_run_reports_wrinkling_from_its_first_point() {
 fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
     use memstab::output::wrinkled_critical;
     use memstab::results::{CriticalKind, CriticalPoint, Isotropy, Wrinkling};
-    let point = |study: &Study, kind| CriticalPoint {
+    let point = |study: &MeshStudy, kind| CriticalPoint {
         kind,
         irrep: "E1".to_string(),
         multiplicity: 2,
@@ -225,8 +230,8 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
     let taut = scene_text("disc_fluid_below.toml");
     let slack = taut.replace("prestretch = 1.1", "prestretch = 0.9");
     assert_ne!(taut, slack);
-    let taut = Study::build(Scene::from_toml_str(&taut, "taut").unwrap()).unwrap();
-    let slack = Study::build(Scene::from_toml_str(&slack, "slack").unwrap()).unwrap();
+    let taut = MeshStudy::build(Scene::from_toml_str(&taut, "taut").unwrap()).unwrap();
+    let slack = MeshStudy::build(Scene::from_toml_str(&slack, "slack").unwrap()).unwrap();
     let triangles = slack.mesh.mesh.triangles.len();
 
     let taut_points = [point(&taut, CriticalKind::SimpleBifurcation)];

@@ -5,7 +5,6 @@
 
 use crate::common::follow;
 use memstab::adapted::SparseBasis;
-use memstab::analysis::SymmetricProblem;
 use memstab::continuation::events::Branch;
 use memstab::continuation::PathOptions;
 use memstab::effects::gas::GasPressure;
@@ -13,6 +12,7 @@ use memstab::effects::membrane::{Membrane, MooneyRivlin};
 use memstab::effects::Quantity;
 use memstab::model::{Effect, FeModel, Model};
 use memstab::results::{Extremum, StopReason};
+use memstab::study::SymmetricProblem;
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::GroupAction;
 use nalgebra::DVector;

@@ -5,7 +5,7 @@ use crate::common::{balloon_with_k, fold_k};
 use memstab::analysis::run;
 use memstab::results::{CriticalKind, SurfaceReport};
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use std::path::Path;
 use std::process::Command;
 
@@ -28,7 +28,7 @@ fn surface_of(frequency: usize) -> SurfaceReport {
         "balloon-surface",
     )
     .unwrap();
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the surface runs");
     result.surface.expect("a surface")
 }

@@ -17,7 +17,7 @@ use memstab::model::{Effect, Evaluation, FeModel, Layout, Model, ModelError, Req
 use memstab::results::{CriticalKind, PathReport, StopReason};
 use memstab::scene::Scene;
 use memstab::stability::{Detail, Stability};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use meshes::generators::{truncated_sphere, TruncatedSphereOptions};
 use proptest::prelude::*;
 use std::path::Path;
@@ -49,8 +49,8 @@ fn parameter(r: &PathReport, name: &str) -> usize {
     r.parameters.iter().position(|m| m == name).unwrap()
 }
 
-fn study(text: &str) -> Study {
-    Study::build(Scene::from_toml_str(text, "test").expect("the scene loads")).expect("builds")
+fn study(text: &str) -> MeshStudy {
+    MeshStudy::build(Scene::from_toml_str(text, "test").expect("the scene loads")).expect("builds")
 }
 
 fn bundled(name: &str) -> String {
@@ -282,7 +282,7 @@ fn fixed(q: &memstab::scene::Quantity) -> f64 {
 }
 
 /// membrane, the fluid to the fixed level `h` and the plane: no parameters.
-fn equivalent_model(study: &Study, h: f64, p: f64) -> FeModel {
+fn equivalent_model(study: &MeshStudy, h: f64, p: f64) -> FeModel {
     let m = &study.mesh.mesh;
     let mat = &study.scene.material;
     let effects: Vec<Box<dyn Effect>> = vec![
@@ -1132,7 +1132,7 @@ fn a_free_cap_on_a_c1v_mesh_starts_at_rest_with_its_drift_held() {
         &bundled("thesis/paper4_spinning_cap.toml").replace("divisions = 12 ", "divisions = 6 "),
     );
     assert_eq!(
-        memstab::analysis::held_gauge(&c8v.model, &c8v.basis, true).ncols(),
+        memstab::study::held_gauge(&c8v.model, &c8v.basis, true).ncols(),
         0
     );
 }
@@ -1141,10 +1141,10 @@ fn a_free_cap_on_a_c1v_mesh_starts_at_rest_with_its_drift_held() {
 fn the_held_tangent_is_the_derivative_of_the_held_residual() {
     // The gauge of §7.9: R → P R with P = I − W Wᵀ; on the complement of W the held tangent
     // is the derivative of the held residual, dense and sparse, and W is its eigenvector.
-    use memstab::analysis::SymmetricProblem;
     use memstab::continuation::{Problem, Tangent};
+    use memstab::study::SymmetricProblem;
     let s = study(&paper4_c1v("0.5"));
-    let w = memstab::analysis::held_gauge(&s.model, &s.basis, true);
+    let w = memstab::study::held_gauge(&s.model, &s.basis, true);
     assert_eq!(w.ncols(), 1, "the x drift");
     let m = s.basis.dim();
     let u0 = random_vector(7, s.model.unknowns(), 1e-3);

@@ -10,7 +10,7 @@
 use memstab::analysis::run;
 use memstab::results::{CriticalKind, CurveEvent, CurveEventKind, CurveReport};
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 
 fn bundled(name: &str) -> Scene {
     Scene::load(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).expect("the scene loads")
@@ -23,12 +23,12 @@ fn bundled(name: &str) -> Scene {
 /// k = 0.02: for larger k the disc bifurcates into m = 1 before its level reaches the fold.
 #[test]
 fn the_disc_limit_point_rises_with_k_and_meets_the_first_double_point_at_one_hilltop() {
-    let mut path = Study::build(bundled("disc_fluid_below.toml")).unwrap();
+    let mut path = MeshStudy::build(bundled("disc_fluid_below.toml")).unwrap();
     let path = run(&mut path, |_, _| {}).expect("the path runs").report;
     let h_path = path.parameters.iter().position(|p| p == "h").unwrap();
     let fold = path.turning_points.first().expect("the k = 0 path folds");
 
-    let mut study = Study::build(bundled("thesis/paper1_disc_limit_curve_k.toml")).unwrap();
+    let mut study = MeshStudy::build(bundled("thesis/paper1_disc_limit_curve_k.toml")).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
         .curve
@@ -88,7 +88,7 @@ fn cap_hilltop(from: &str) -> (f64, f64) {
         panic!("the hilltop scene is a critical curve")
     };
     analysis.from = memstab::scene::CurveStart::Irrep(from.to_string());
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
         .curve
@@ -124,7 +124,7 @@ fn the_spinning_caps_m4_bifurcations_meet_the_limit_curve_at_two_close_hilltops(
     };
     analysis.from = memstab::scene::CurveStart::Limit;
     analysis.steps = 80;
-    let mut study = Study::build(scene).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
     let limit = run(&mut study, |_, _| {})
         .expect("the limit curve runs")
         .curve
@@ -153,7 +153,7 @@ fn the_spinning_caps_m4_bifurcations_meet_the_limit_curve_at_two_close_hilltops(
     let first = |k: f64| {
         let mut scene = bundled("thesis/paper4_spinning_cap.toml");
         scene.material.k = memstab::scene::Quantity::Value(k);
-        let mut study = Study::build(scene).unwrap();
+        let mut study = MeshStudy::build(scene).unwrap();
         let report = run(&mut study, |_, _| {}).expect("the path runs").report;
         let mut points: Vec<_> = report
             .critical
@@ -183,7 +183,7 @@ fn disc_below(group: &str, down_to: f64) -> (f64, Vec<(String, String, f64)>) {
         1,
     )
     .replacen("steps = 400", "steps = 400\nstop-displacement = 1.9", 1);
-    let mut study = Study::build(Scene::from_toml_str(&text, "disc").unwrap()).unwrap();
+    let mut study = MeshStudy::build(Scene::from_toml_str(&text, "disc").unwrap()).unwrap();
     let report = run(&mut study, |_, _| {}).expect("the path runs").report;
     let h = report.parameters.iter().position(|p| p == "h").unwrap();
     let fold = report.turning_points.first().expect("the path folds");
@@ -216,7 +216,7 @@ fn a_mesh_without_symmetry_keeps_the_fold_and_loses_the_double_points() {
         "{after_c7v:?}"
     );
     assert!(after_c1.is_empty(), "{after_c1:?}");
-    let study = Study::build(bundled("thesis/paper1_disc_irregular.toml")).expect("builds");
+    let study = MeshStudy::build(bundled("thesis/paper1_disc_irregular.toml")).expect("builds");
     assert_eq!(study.action.group().order(), 1);
 }
 
@@ -228,7 +228,7 @@ fn a_mesh_without_symmetry_keeps_the_fold_and_loses_the_double_points() {
 #[test]
 fn the_gas_pressure_fold_of_the_sphere_on_a_plane_falls_as_the_fluid_volume_grows() {
     let name = "thesis/paper2_gas_pressure_fold_f8.toml";
-    let mut study = Study::build(bundled(name)).unwrap();
+    let mut study = MeshStudy::build(bundled(name)).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
         .curve
@@ -287,7 +287,7 @@ fn the_gas_pressure_fold_of_the_sphere_on_a_plane_falls_as_the_fluid_volume_grow
     let end = block + text[block..].find("\n\n").unwrap() + 2;
     text.replace_range(block..end, "");
     let text = text.replace("value = \"V\"", "value = 4.0");
-    let mut path = Study::build(Scene::from_toml_str(&text, "test").unwrap()).unwrap();
+    let mut path = MeshStudy::build(Scene::from_toml_str(&text, "test").unwrap()).unwrap();
     let report = run(&mut path, |_, _| {}).unwrap().report;
     assert_eq!(
         report.turning_points.len(),
@@ -313,7 +313,7 @@ fn the_gas_pressure_fold_of_the_sphere_on_a_plane_falls_as_the_fluid_volume_grow
 #[test]
 fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_line() {
     let mut study =
-        Study::build(bundled("thesis/paper2_solution_surface_f8.toml")).expect("builds");
+        MeshStudy::build(bundled("thesis/paper2_solution_surface_f8.toml")).expect("builds");
     let surface = run(&mut study, |_, _| {})
         .expect("the surface runs")
         .surface
@@ -323,7 +323,7 @@ fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_
     let p = surface.parameter("p").unwrap();
     let v = surface.parameter("V").unwrap();
     let mut curve_study =
-        Study::build(bundled("thesis/paper2_gas_pressure_fold_f8.toml")).expect("builds");
+        MeshStudy::build(bundled("thesis/paper2_gas_pressure_fold_f8.toml")).expect("builds");
     let curve = run(&mut curve_study, |_, _| {})
         .expect("the curve runs")
         .curve
@@ -421,7 +421,8 @@ fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_
 #[test]
 fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
     use memstab::axisym::run::{run as run_axisym, AxisymStudy};
-    let mut study = Study::build(bundled("thesis/paper1_disc_limit_curve_radius.toml")).unwrap();
+    let mut study =
+        MeshStudy::build(bundled("thesis/paper1_disc_limit_curve_radius.toml")).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
         .curve
@@ -466,7 +467,7 @@ fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
         .replacen("\nradius = 1.1", &format!("\nradius = {radius:?}"), 1)
         .replacen("\ndivisions = 16", "\ndivisions = 8", 1);
     assert!(coarse.contains(&format!("\nradius = {radius:?}")));
-    let mut path = Study::build(Scene::from_toml_str(&coarse, "coarse").unwrap()).unwrap();
+    let mut path = MeshStudy::build(Scene::from_toml_str(&coarse, "coarse").unwrap()).unwrap();
     let report = run(&mut path, |_, _| {}).expect("the path runs").report;
     let hp = report.parameters.iter().position(|p| p == "h").unwrap();
     let h8 = report

@@ -5,30 +5,60 @@
 //! symmetric bifurcation: the state cannot fold). The lowest eigenvalue of every block at
 //! every sample goes into the report's [`Spectra`] (what `path.svg` plots for this analysis).
 
-use super::{Observer, Record};
+use super::equilibrium::path_options;
+use super::{Analysis, Context, RunError};
+use crate::continuation::crossings::End;
 use crate::continuation::crossings::Spectrum;
-use crate::continuation::crossings::{Crossings, End};
 use crate::continuation::events::Event;
+use crate::continuation::{PathOptions, Settings};
 use crate::results::{
     Spectra, SpectrumIrrep, SpectrumRow, StateKind, StopReason, SPECTRUM_EIGENVALUES,
 };
+use crate::scene::LinearBucklingAnalysis;
 use crate::study::Study;
 
+/// `type = "linear-buckling"`.
+pub struct Buckling(pub LinearBucklingAnalysis);
+
+impl Analysis for Buckling {
+    fn options(&self, study: &dyn Study) -> PathOptions {
+        let settings = Settings {
+            tolerance: self.0.tolerance,
+            max_iterations: self.0.max_iterations,
+            ..Settings::default()
+        };
+        path_options(study, &settings, Some((f64::NEG_INFINITY, f64::INFINITY)))
+    }
+
+    fn held(&self) -> bool {
+        true
+    }
+
+    fn run(&self, study: &dyn Study, cx: &mut Context<'_>) -> Result<StopReason, RunError> {
+        let (u, params) = (cx.start.u.clone(), cx.start.params.clone());
+        Ok(sweep(study, cx, &u, &params, self.0.samples))
+    }
+}
+
 /// Sweeps the control over its range at the held state `u` (solved at `params_start`).
-pub(super) fn run(
-    study: &Study,
-    record: &mut Record,
-    mut crossings: Option<Crossings<'_>>,
+fn sweep(
+    study: &dyn Study,
+    cx: &mut Context<'_>,
     u: &[f64],
     params_start: &[f64],
     samples: usize,
-    observer: &mut dyn Observer,
 ) -> StopReason {
-    let Some(c) = study.control else {
+    let Some(control) = study.control() else {
         return StopReason::NoControl;
     };
-    let spec = &study.scene.parameters[&study.parameters[c]];
-    let (lo, hi) = (spec.min.unwrap_or(0.0), spec.max.unwrap_or(1.0));
+    let c = control.index;
+    let (lo, hi) = (
+        Some(control.min).filter(|v| v.is_finite()).unwrap_or(0.0),
+        Some(control.max).filter(|v| v.is_finite()).unwrap_or(1.0),
+    );
+    let record = &mut cx.record;
+    let observer = &mut *cx.observer;
+    let mut crossings = cx.crossings.take();
     let at = |value: f64| {
         let mut p = params_start.to_vec();
         p[c] = value;
@@ -74,7 +104,7 @@ pub(super) fn run(
                     Some((u.to_vec(), at(va + s)))
                 }) {
                     match event {
-                        Event::Critical(cp) => record.critical(cp),
+                        Event::Critical(cp) => record.add_critical(cp),
                         Event::Warning(w) => record.warnings.push(w),
                         Event::Turning(_) | Event::Stop(_) => {}
                     }

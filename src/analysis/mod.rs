@@ -1,24 +1,22 @@
-//! Everything that follows equilibria (docs/architecture.md): the stepping driver
-//! ([`continuation`]), the one event mechanism ([`events`]: turning points, critical points,
-//! stops), the problem in the fixed-point space of a (sub)group ([`SymmetricProblem`]),
-//! classification ([`critical`]), and the analyses a scene asks for — one file each:
+//! The analyses a scene asks for, each written once against the study seam
+//! ([`crate::study::Study`]), so that the 3-D mesh and the meridian run the same code
+//! (docs/architecture.md):
 //!
-//! - [`equilibrium`]: the start state (the one start solve every command uses) or a single
-//!   equilibrium;
-//! - [`path`]: the path in the control through turning points, with the index by irrep at
-//!   every point and the critical points where it changes;
+//! - [`equilibrium`]: the start state alone, with its stability;
+//! - [`path`]: the path in the control through turning points, with the index by block at
+//!   every point and the critical points where it changes, and the branches that leave its
+//!   bifurcation points (`[analysis.branches]`);
 //! - [`buckling`]: the start state held while the control sweeps its range;
 //! - [`curve`]: a critical point followed in two parameters (cusps of limit-point curves);
 //! - [`surface`]: the equilibrium manifold in two parameters, a family of paths stitched
 //!   into triangles, with its critical lines;
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
-//!   splits measured;
-//! - [`branch`]: the branches that leave a path's bifurcation points (`[analysis.branches]`),
-//!   by the equivariant branching lemma, each followed in its isotropy subgroup's
-//!   fixed-point space.
+//!   splits measured.
 //!
-//! [`run`] dispatches on the scene's analysis and collects a [`RunResult`]: the report, the
-//! states to write and where the time went.
+//! Each analysis implements [`Analysis`]; [`registry::analysis`] maps a scene's
+//! `[analysis]` to it — the one place that names the scene's analysis types. [`run`] solves
+//! the start state, hands the analysis a [`Context`] and collects a [`RunResult`]: the report,
+//! the states to write and where the time went.
 
 pub mod branch;
 pub mod buckling;
@@ -27,64 +25,20 @@ pub mod curve;
 pub mod equilibrium;
 pub mod modes;
 pub mod path;
-mod problem;
+pub mod registry;
+pub mod restart;
 pub mod surface;
 
-pub use problem::{held_gauge, SymmetricProblem, SPARSE_TANGENT_FROM};
+pub use crate::study::RunError;
 
-use crate::adapted::AdaptedBasis;
 use crate::continuation::crossings::Crossings;
-use crate::continuation::SolveError;
-use crate::model::Model;
+use crate::continuation::PathOptions;
 use crate::results::{
-    CriticalPoint, CurveReport, MeshInfo, PathReport, PathRow, PointState, RunResult, RunTimes,
-    Spectra, State, StateKind, StopReason, SurfaceReport, TurningRow,
+    CriticalPoint, CurveReport, PathReport, PathRow, PointState, RunResult, RunTimes, Spectra,
+    State, StateKind, StopReason, SurfaceReport, TurningRow,
 };
-use crate::scene::Analysis;
-use crate::stability::{IrrepBlocks, Stability};
-use crate::study::Study;
+use crate::study::{Point, Start, Study};
 use std::time::Instant;
-
-/// Why a run failed before it produced a path.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum RunError {
-    /// Newton did not converge at the start.
-    #[error("the start state did not converge: {}", .error.describe(.control.as_deref()))]
-    Start {
-        /// Why.
-        error: SolveError,
-        /// The control parameter's name (none for a single equilibrium).
-        control: Option<String>,
-    },
-    /// `start.from` names a saved state that was not loaded into the study.
-    #[error("the start state: start.from is set but no saved state was loaded (output::store::load_start)")]
-    NotLoaded,
-    /// Newton converged to a membrane turned inside out.
-    #[error("the start state did not converge: Newton converged to an inside-out membrane (enclosed volume {volume:e}); start closer to the intended state (start.stretch, the start values)")]
-    InsideOut {
-        /// The enclosed volume found.
-        volume: f64,
-    },
-    /// A critical curve could not be found or started.
-    #[error("critical curve: {0}")]
-    Curve(String),
-    /// No path of a surface could be started.
-    #[error("surface: {0}")]
-    Surface(String),
-    /// Newton converged to a state that is no membrane state.
-    #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
-    Degenerate(crate::model::StateDefect),
-}
-
-impl RunError {
-    /// A start failure of `study`'s solve, naming its control parameter.
-    pub fn start(study: &Study, error: SolveError) -> Self {
-        Self::Start {
-            error,
-            control: study.control.map(|c| study.parameters[c].clone()),
-        }
-    }
-}
 
 /// What a caller sees of a run while it goes: the progress, and every accepted state.
 pub trait Observer {
@@ -103,136 +57,132 @@ impl<F: FnMut(usize, f64)> Observer for Progress<F> {
     }
 }
 
-/// Runs the scene's analysis; `progress(step, control)` is called at every converged point.
-pub fn run(study: &mut Study, progress: impl FnMut(usize, f64)) -> Result<RunResult, RunError> {
-    run_with(study, &mut Progress(progress))
+/// One analysis of a study: what it needs before the start, and its run.
+pub trait Analysis {
+    /// The continuation options of its path (or of the start solve alone): the scene's
+    /// settings, the control's bounds, the study's state scale.
+    fn options(&self, study: &dyn Study) -> PathOptions;
+    /// Whether the start state is held while the control sweeps (linear buckling): a singular
+    /// trivial block is then a symmetric bifurcation, and a one-point command analyses the
+    /// held state at the control it is given.
+    fn held(&self) -> bool {
+        false
+    }
+    /// Runs from the converged start state in `cx`, recording into it; returns why it
+    /// stopped.
+    fn run(&self, study: &dyn Study, cx: &mut Context<'_>) -> Result<StopReason, RunError>;
+}
+
+/// What an analysis works with: the start state, the stability by blocks (if the study has
+/// it), the record it fills, the caller's observer and the clock.
+pub struct Context<'a> {
+    /// The converged start state.
+    pub start: Point,
+    /// A critical point of a finished run to start from ([`Start::Critical`]).
+    pub from: Option<CriticalPoint>,
+    /// The index by blocks and its crossings, unless the study allows no stability analysis.
+    pub crossings: Option<Crossings<'a>>,
+    /// What the run found so far.
+    pub record: Record,
+    /// The caller's view of the run.
+    pub observer: &'a mut dyn Observer,
+    /// Where the time went.
+    pub times: RunTimes,
+}
+
+/// Runs the scene's analysis from its start state; `progress(step, control)` is called at
+/// every converged point.
+pub fn run(study: &mut dyn Study, progress: impl FnMut(usize, f64)) -> Result<RunResult, RunError> {
+    run_from(study, &Start::Solve, &mut Progress(progress))
 }
 
 /// As [`run`], with an [`Observer`] that also sees every accepted state.
-pub fn run_with(study: &mut Study, observer: &mut dyn Observer) -> Result<RunResult, RunError> {
+pub fn run_with(study: &mut dyn Study, observer: &mut dyn Observer) -> Result<RunResult, RunError> {
+    run_from(study, &Start::Solve, observer)
+}
+
+/// Runs the scene's analysis from `start`, with an [`Observer`].
+pub fn run_from(
+    study: &mut dyn Study,
+    start: &Start,
+    observer: &mut dyn Observer,
+) -> Result<RunResult, RunError> {
+    let analysis = registry::analysis(&study.scene().analysis);
     let mut times = RunTimes::default();
     let t = Instant::now();
-    let start = study.start.clone();
-    let (u_start, params_start, start_problem) = equilibrium::solve_start_timed(study, &start)?;
+    let opts = analysis.options(study);
+    let (guess, params) = match start {
+        Start::From { u, params } => (Some(u.as_slice()), params.clone()),
+        Start::Solve | Start::Critical(_) => (None, study.start_values().to_vec()),
+    };
+    let point = study.solve_start(guess, &params, &opts)?;
     times.start = t.elapsed();
-    times.start_problem = start_problem;
-    let study: &Study = study;
+    times.start_problem = point.times;
+    let study: &dyn Study = study;
     let t = Instant::now();
-    let (adapted, stability_note) = match AdaptedBasis::new(&study.action, study.model.layout()) {
-        Ok(b) => (Some(b), None),
-        Err(e) => (None, Some(format!("stability not analysed: {e}"))),
-    };
+    let blocks = study.blocks();
     times.adapted_basis = t.elapsed();
+    let stability_note = blocks
+        .as_ref()
+        .err()
+        .map(|e| format!("stability not analysed: {e}"));
     let measure = |u: &[f64], p: &[f64]| study.measure(u, p);
-    let held = matches!(study.scene.analysis, Analysis::LinearBuckling(_));
-    let crossings = adapted.as_ref().map(|b| {
-        Crossings::new(
-            Box::new(IrrepBlocks::new(
-                Stability::new(&study.model, b),
-                &study.model,
-                &study.constraints,
-                &study.action,
-            )),
-            &measure,
-            study.control,
-            held,
-        )
-    });
-    let mut record = Record::new(study);
-    let stop = match &study.scene.analysis {
-        Analysis::Path(_) => path::run(
-            study,
-            &mut record,
-            crossings,
-            &u_start,
-            &params_start,
-            observer,
-            &mut times,
-        )?,
-        Analysis::Equilibrium(_) => equilibrium::run(
-            study,
-            &mut record,
-            crossings,
-            &u_start,
-            &params_start,
-            observer,
-        )?,
-        Analysis::LinearBuckling(a) => buckling::run(
-            study,
-            &mut record,
-            crossings,
-            &u_start,
-            &params_start,
-            a.samples,
-            observer,
-        ),
-        Analysis::CriticalCurve(_) => {
-            let (stop, curve) = curve::run(
-                study,
-                &mut record,
-                crossings,
-                adapted.as_ref(),
-                &u_start,
-                &params_start,
-                observer,
-                &mut times,
-            )?;
-            record.curve = Some(curve);
-            stop
-        }
-        Analysis::Surface(_) => {
-            let (stop, surface) = surface::run(
-                study,
-                &mut record,
-                crossings,
-                &u_start,
-                &params_start,
-                observer,
-                &mut times,
-            )?;
-            record.surface = Some(surface);
-            stop
-        }
+    let control = study.control().map(|c| c.index);
+    let crossings = blocks
+        .ok()
+        .map(|b| Crossings::new(b, &measure, control, analysis.held()));
+    let mut cx = Context {
+        start: point,
+        from: match start {
+            Start::Critical(cp) => Some((**cp).clone()),
+            Start::Solve | Start::From { .. } => None,
+        },
+        crossings,
+        record: Record::new(study),
+        observer,
+        times,
     };
-    let mut result = record.finish(study, stop, stability_note, times);
-    if let Analysis::Path(p) = &study.scene.analysis {
-        if let Some(b) = &p.branches {
-            let opts = branch::options(study, Some(b));
-            result.branches = Some(branch::run(study, &result.report.critical, opts));
-        }
-    }
+    let stop = analysis.run(study, &mut cx)?;
+    let mut result = cx.record.finish(study, stop, stability_note, cx.times);
+    study.annotate(&mut result);
     Ok(result)
 }
 
 /// What an analysis collects for the report, in the order it finds it.
-pub(crate) struct Record {
+pub struct Record {
     rows: Vec<PathRow>,
     states: Vec<State>,
     points: Vec<PointState>,
     turning: Vec<TurningRow>,
     critical: Vec<CriticalPoint>,
-    warnings: Vec<String>,
+    /// What could not be settled on the way.
+    pub warnings: Vec<String>,
     spectra: Spectra,
     irreps: Vec<String>,
     control: Option<usize>,
-    curve: Option<CurveReport>,
-    surface: Option<SurfaceReport>,
+    /// The critical curve of a `critical-curve` analysis.
+    pub curve: Option<CurveReport>,
+    /// The equilibrium surface of a `surface` analysis.
+    pub surface: Option<SurfaceReport>,
+    /// The branches of the path's bifurcation points.
+    pub branches: Option<crate::results::Branches>,
 }
 
 impl Record {
-    fn new(study: &Study) -> Self {
+    fn new(study: &dyn Study) -> Self {
         Self {
             rows: Vec::new(),
             states: Vec::new(),
             points: Vec::new(),
             turning: Vec::new(),
             critical: Vec::new(),
-            warnings: study.warnings.clone(),
+            warnings: study.warnings().to_vec(),
             spectra: Spectra::default(),
             irreps: Vec::new(),
-            control: study.control,
+            control: study.control().map(|c| c.index),
             curve: None,
             surface: None,
+            branches: None,
         }
     }
 
@@ -240,11 +190,21 @@ impl Record {
         self.control.map_or(0.0, |c| params[c])
     }
 
+    /// The path's rows so far.
+    pub fn rows(&self) -> &[PathRow] {
+        &self.rows
+    }
+
+    /// The critical points so far.
+    pub fn critical(&self) -> &[CriticalPoint] {
+        &self.critical
+    }
+
     /// A row of the path table.
     #[allow(clippy::too_many_arguments)]
     fn row(
         &mut self,
-        study: &Study,
+        study: &dyn Study,
         step: usize,
         arclength: f64,
         u: &[f64],
@@ -254,7 +214,7 @@ impl Record {
     ) {
         self.points.push(PointState {
             parameters: params.clone(),
-            q: study.basis.restrict(u).iter().copied().collect(),
+            q: study.coordinates(u),
         });
         self.rows.push(PathRow {
             step,
@@ -280,7 +240,7 @@ impl Record {
     }
 
     /// A critical point, with its state and mode to write.
-    fn critical(&mut self, cp: CriticalPoint) {
+    fn add_critical(&mut self, cp: CriticalPoint) {
         self.states.push(State {
             step: cp.after_step,
             kind: StateKind::Critical {
@@ -297,32 +257,24 @@ impl Record {
 
     fn finish(
         self,
-        study: &Study,
+        study: &dyn Study,
         stop: StopReason,
         stability_note: Option<String>,
         times: RunTimes,
     ) -> RunResult {
-        let m = &study.mesh;
+        let about = study.about();
         let report = PathReport {
-            scene: study.scene.info.name.clone(),
-            origin: study.scene.origin.clone(),
+            scene: about.scene.clone(),
+            origin: about.origin.clone(),
             version: env!("CARGO_PKG_VERSION").to_string(),
-            mesh: MeshInfo {
-                generator: study.scene.mesh.generator().to_string(),
-                nodes: m.mesh.nodes.len(),
-                elements: m.mesh.triangles.len(),
-                group: m.group().name().to_string(),
-                order: m.group().order(),
-            },
-            group: study.action.group().name().to_string(),
-            group_order: study.action.group().order(),
-            unknowns: study.basis.unknowns(),
-            symmetric_unknowns: study.basis.dim(),
-            control: study
-                .control
-                .map_or_else(String::new, |c| study.parameters[c].clone()),
-            parameters: study.parameters.clone(),
-            measures: study.measures.iter().map(|(n, _)| n.clone()).collect(),
+            mesh: about.mesh.clone(),
+            group: about.group.clone(),
+            group_order: about.group_order,
+            unknowns: about.unknowns,
+            symmetric_unknowns: about.symmetric_unknowns,
+            control: study.control().map_or_else(String::new, |c| c.name.clone()),
+            parameters: about.parameters.clone(),
+            measures: about.measures.clone(),
             rows: self.rows,
             turning_points: self.turning,
             stop,
@@ -343,7 +295,7 @@ impl Record {
             times,
             curve: self.curve,
             surface: self.surface,
-            branches: None,
+            branches: self.branches,
         }
     }
 }

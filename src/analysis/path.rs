@@ -1,151 +1,210 @@
 //! The `path` analysis: the equilibrium path in the control from the start state, in the
-//! fixed-point space of the scene's group, through turning points, with the index by irrep
-//! at every point and every critical point where it changes localised and classified
-//! (docs/theory.md §7, §8, §11).
+//! study's symmetric space, through turning points, with the index by block at every point and
+//! every critical point where it changes localised and classified (docs/theory.md §7, §8,
+//! §11); and, with `[analysis.branches]`, the branches that leave its bifurcation points
+//! (docs/theory.md §14).
 
-use super::{Observer, Record, RunError, SymmetricProblem};
-use crate::continuation::crossings::{Crossings, IndexChanges};
-use crate::continuation::events::{Branch, Detector, Event};
-use crate::continuation::{Continuation, PathPoint};
-use crate::results::{RunTimes, StateKind, StopReason, TurningRow};
-use crate::scene::Analysis;
-use crate::study::{Measure, Study};
+use super::equilibrium::path_options;
+use super::{Analysis, Context, Record, RunError};
+use crate::continuation::crossings::IndexChanges;
+use crate::continuation::events::{trace, Branch, Detector, Event};
+use crate::continuation::{Continuation, PathOptions, PathPoint, Settings};
+use crate::results::{StateKind, StopReason, TurningRow};
+use crate::scene::{BranchesAnalysis, PathAnalysis};
+use crate::study::{BranchOptions, Followed, Free, Point, Study};
 use crate::text::{num, sig_digits};
 use std::time::Instant;
 
-/// The path driver in the scene group's fixed-point space, started at the converged start
-/// state (u_start, params_start) with the study's path options, and its step budget.
+/// The path driver of `study`, started at the converged state `start` with `opts`, the
+/// neutral motions held for the start's tangent and released beyond it.
 pub(super) fn start_driver<'a>(
-    study: &'a Study,
-    u_start: &[f64],
-    params_start: &[f64],
-) -> Result<(Continuation<SymmetricProblem<'a>>, usize), RunError> {
-    let opts = super::equilibrium::path_options(study);
-    let problem = SymmetricProblem::new(
-        &study.model,
-        &study.basis,
-        &study.constraints,
-        params_start.to_vec(),
-        study.control,
-    )
-    .holding_neutral();
-    let lambda0 = problem.free_values(params_start);
-    let q_start = study.basis.restrict(u_start);
-    let max_steps = opts.max_steps;
+    study: &'a dyn Study,
+    start: &Point,
+    opts: PathOptions,
+) -> Result<Continuation<Box<dyn Followed + 'a>>, RunError> {
+    let problem = study.problem(&start.params, &Free::path(study.control().map(|c| c.index)));
+    let lambda0 = problem.free_values(&start.params);
+    let q_start = problem.coordinates(&start.u);
     let mut driver = Continuation::start(problem, &q_start, &lambda0, opts)
         .map_err(|e| RunError::start(study, e))?;
     // The start's tangent is taken with the neutral motions held; beyond it the path is free.
     driver.problem_mut().release_held();
-    Ok((driver, max_steps))
+    Ok(driver)
 }
 
-/// Follows the path from the start state (u_start, params_start); returns why it stopped.
-pub(super) fn run(
-    study: &Study,
-    record: &mut Record,
-    crossings: Option<Crossings<'_>>,
-    u_start: &[f64],
-    params_start: &[f64],
-    observer: &mut dyn Observer,
-    times: &mut RunTimes,
-) -> Result<StopReason, RunError> {
-    let Analysis::Path(analysis) = &study.scene.analysis else {
-        unreachable!("path::run runs path analyses")
+/// `type = "path"`.
+pub struct Path(pub PathAnalysis);
+
+impl Path {
+    /// Its options on `study` (as [`Analysis::options`]).
+    pub fn options_of(&self, study: &dyn Study) -> PathOptions {
+        self.options(study)
+    }
+
+    fn settings(&self) -> Settings {
+        crate::scene::Analysis::Path(self.0.clone()).settings()
+    }
+
+    /// The branch options of `[analysis.branches]` (or `branches`, overriding it), with the
+    /// path's continuation settings where the branches give none.
+    pub fn branch_options(
+        &self,
+        study: &dyn Study,
+        branches: Option<&BranchesAnalysis>,
+    ) -> BranchOptions {
+        branch_options(
+            study,
+            &self.options(study),
+            branches.or(self.0.branches.as_ref()),
+            self.0.save_every,
+        )
+    }
+}
+
+/// The branch options of a path with `path` options: `branches`' depth, steps, largest step
+/// and points (the defaults without them), each branch saving every `save_every`-th state.
+pub fn branch_options(
+    study: &dyn Study,
+    path: &PathOptions,
+    branches: Option<&BranchesAnalysis>,
+    save_every: usize,
+) -> BranchOptions {
+    let _ = study;
+    let default = BranchesAnalysis {
+        depth: 1,
+        steps: 40,
+        max_step: None,
+        points: None,
     };
-    let t0 = Instant::now();
-    let (mut driver, max_steps) = start_driver(study, u_start, params_start)?;
-    let stretch = study
-        .measures
-        .iter()
-        .position(|(_, m)| *m == Measure::Stretch);
-    let displacement = study
-        .measures
-        .iter()
-        .position(|(_, m)| *m == Measure::MaxDisplacement);
-    // A stop is reached where its measure passes the target from the start's side.
-    let start_measures = study.measure(u_start, params_start);
-    let side = |target: f64, k: usize| (target, k, (start_measures[k] - target).signum());
-    let stop_stretch = analysis.stop_stretch.zip(stretch).map(|(t, k)| side(t, k));
-    let stop_displacement = analysis
-        .stop_displacement
-        .zip(displacement)
-        .map(|(t, k)| side(t, k));
-    let stops = |problem: &SymmetricProblem, p: &PathPoint| {
-        if stop_stretch.is_none() && stop_displacement.is_none() {
-            return None;
-        }
-        let u = problem.displacement(&p.q);
-        let now = study.measure(&u, &problem.parameters(&p.lambda));
-        let passed = |stop: Option<(f64, usize, f64)>| {
-            stop.and_then(|(target, k, side)| ((now[k] - target) * side <= 0.0).then_some(target))
+    let b = branches.unwrap_or(&default);
+    let max_step = b.max_step.unwrap_or(path.max_step);
+    BranchOptions {
+        depth: b.depth,
+        steps: b.steps,
+        points: b.points.clone(),
+        path: PathOptions {
+            max_step,
+            initial_step: path.initial_step.min(max_step),
+            min_step: path.min_step.min(max_step),
+            max_steps: b.steps,
+            ..path.clone()
+        },
+        save_every,
+    }
+}
+
+impl Analysis for Path {
+    fn options(&self, study: &dyn Study) -> PathOptions {
+        path_options(study, &self.settings(), None)
+    }
+
+    /// Follows the path from the start state; returns why it stopped. With
+    /// `[analysis.branches]`, then the branches of its critical points.
+    fn run(&self, study: &dyn Study, cx: &mut Context<'_>) -> Result<StopReason, RunError> {
+        let analysis = &self.0;
+        let t0 = Instant::now();
+        let opts = self.options(study);
+        let max_steps = opts.max_steps;
+        let mut driver = start_driver(study, &cx.start, opts)?;
+        let measures = &study.about().measures;
+        let stretch = measures.iter().position(|m| m == "stretch");
+        let displacement = measures.iter().position(|m| m == "max_displacement");
+        // A stop is reached where its measure passes the target from the start's side.
+        let start_measures = study.measure(&cx.start.u, &cx.start.params);
+        let side = |target: f64, k: usize| (target, k, (start_measures[k] - target).signum());
+        let stop_stretch = analysis.stop_stretch.zip(stretch).map(|(t, k)| side(t, k));
+        let stop_displacement = analysis
+            .stop_displacement
+            .zip(displacement)
+            .map(|(t, k)| side(t, k));
+        // The driver's problem is boxed: the stop sees it as the driver holds it.
+        #[allow(clippy::borrowed_box)]
+        let stops = |problem: &Box<dyn Followed + '_>, p: &PathPoint| {
+            if stop_stretch.is_none() && stop_displacement.is_none() {
+                return None;
+            }
+            let u = problem.displacement(&p.q);
+            let now = study.measure(&u, &problem.parameters(&p.lambda));
+            let passed = |stop: Option<(f64, usize, f64)>| {
+                stop.and_then(|(target, k, side)| {
+                    ((now[k] - target) * side <= 0.0).then_some(target)
+                })
+            };
+            passed(stop_stretch)
+                .map(|target| StopReason::Stretch { target })
+                .or_else(|| {
+                    passed(stop_displacement).map(|target| StopReason::Displacement { target })
+                })
         };
-        passed(stop_stretch)
-            .map(|target| StopReason::Stretch { target })
-            .or_else(|| passed(stop_displacement).map(|target| StopReason::Displacement { target }))
-    };
-    let mut index = crossings.map(IndexChanges::new);
-    let mut count = 0usize;
-    let branch = {
-        let mut extra: Vec<&mut dyn Detector<SymmetricProblem>> = Vec::new();
-        if let Some(index) = index.as_mut() {
-            extra.push(index);
-        }
-        crate::continuation::events::trace(
-            &mut driver,
-            max_steps,
-            stops,
-            &mut extra,
-            |problem, p| {
+        let mut index = cx.crossings.take().map(IndexChanges::new);
+        let mut count = 0usize;
+        let observer = &mut *cx.observer;
+        let branch = {
+            let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
+            if let Some(index) = index.as_mut() {
+                extra.push(index);
+            }
+            trace(&mut driver, max_steps, stops, &mut extra, |problem, p| {
                 observer.progress(count, p.lambda[0]);
                 observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
                 count += 1;
-            },
-        )
-    };
-    let mut problem = driver.into_problem();
-    times.steps = branch.times;
-    if let Some(w) = held_force_warning(study, &mut problem, &branch) {
-        record.warnings.push(w);
-    }
-    let (indices, negatives) = match &index {
-        Some(ix) => {
-            times.index = ix.index_time;
-            record.irreps.clone_from(&ix.irreps);
-            (ix.indices.clone(), ix.negatives.clone())
+            })
+        };
+        let mut problem = driver.into_problem();
+        cx.times.steps = branch.times;
+        if let Some(w) = held_force_warning(study, &self.options(study), &mut problem, &branch) {
+            cx.record.warnings.push(w);
         }
-        None => (vec![None; branch.points.len()], Vec::new()),
-    };
-    record_branch(
-        study,
-        record,
-        &problem,
-        &branch,
-        &indices,
-        analysis.save_every,
-    );
-    let first = record.rows.len() - branch.points.len().min(record.rows.len());
-    for (row, negative) in record.rows[first..].iter_mut().zip(negatives) {
-        row.negative = negative;
+        let record = &mut cx.record;
+        let (indices, negatives) = match &index {
+            Some(ix) => {
+                cx.times.index = ix.index_time;
+                record.irreps.clone_from(&ix.irreps);
+                (ix.indices.clone(), ix.negatives.clone())
+            }
+            None => (vec![None; branch.points.len()], Vec::new()),
+        };
+        record_branch(
+            study,
+            record,
+            &problem,
+            &branch,
+            &indices,
+            analysis.save_every,
+        );
+        let first = record.rows.len() - branch.points.len().min(record.rows.len());
+        for (row, negative) in record.rows[first..].iter_mut().zip(negatives) {
+            row.negative = negative;
+        }
+        if let (Some((target, k, _)), false) = (
+            stop_stretch,
+            matches!(branch.stop, StopReason::Stretch { .. }),
+        ) {
+            let (lo, hi) = record
+                .rows
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                    (a.min(r.measures[k]), b.max(r.measures[k]))
+                });
+            record.warnings.push(format!(
+                "analysis.stop-stretch = {} was not reached: the stretch ran over [{}, {}]",
+                num(target),
+                sig_digits(lo, 6),
+                sig_digits(hi, 6)
+            ));
+        }
+        cx.times.path = t0.elapsed();
+        if analysis.branches.is_some() {
+            let options = self.branch_options(study, None);
+            let critical = cx.record.critical.clone();
+            cx.record.branches = Some(
+                study
+                    .branches(&critical, options)
+                    .map_err(RunError::Branches)?,
+            );
+        }
+        Ok(branch.stop)
     }
-    if let (Some((target, k, _)), false) = (
-        stop_stretch,
-        matches!(branch.stop, StopReason::Stretch { .. }),
-    ) {
-        let (lo, hi) = record
-            .rows
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
-                (a.min(r.measures[k]), b.max(r.measures[k]))
-            });
-        record.warnings.push(format!(
-            "analysis.stop-stretch = {} was not reached: the stretch ran over [{}, {}]",
-            num(target),
-            sig_digits(lo, 6),
-            sig_digits(hi, 6)
-        ));
-    }
-    times.path = t0.elapsed();
-    Ok(branch.stop)
 }
 
 /// Largest force, relative to the residual's scale, that may hold the neutral motions at a
@@ -154,13 +213,12 @@ pub const HELD_FORCE_TOLERANCE: f64 = 1e-6;
 
 /// The largest force that holds the neutral motions along `branch` (docs/theory.md §7.9),
 /// relative to the residual's scale, and the control where it is taken; `None` when the
-/// fixed-point space holds none.
+/// problem holds none.
 pub fn held_force(
-    study: &Study,
-    problem: &mut SymmetricProblem,
+    opts: &PathOptions,
+    problem: &mut dyn Followed,
     branch: &Branch,
 ) -> Option<(f64, f64)> {
-    let opts = super::equilibrium::path_options(study);
     let sigma = opts.parameter_scales.first().copied().unwrap_or(1.0);
     let mut worst: Option<(f64, f64)> = None;
     for p in &branch.points {
@@ -177,17 +235,18 @@ pub fn held_force(
 /// [`HELD_FORCE_TOLERANCE`]: the path is then an equilibrium of the held body, not of the
 /// free one.
 fn held_force_warning(
-    study: &Study,
-    problem: &mut SymmetricProblem,
+    study: &dyn Study,
+    opts: &PathOptions,
+    problem: &mut dyn Followed,
     branch: &Branch,
 ) -> Option<String> {
-    let (force, at) = held_force(study, problem, branch)?;
+    let (force, at) = held_force(opts, problem, branch)?;
     (force > HELD_FORCE_TOLERANCE).then(|| {
         format!(
             "the neutral motions held in the fixed-point space need a force of {} of the \
              residual's scale at {} = {}: the path is held there, not free",
             sig_digits(force, 3),
-            study.parameters[study.control.unwrap_or(0)],
+            study.about().parameters[study.control().map_or(0, |c| c.index)],
             sig_digits(at, 6)
         )
     })
@@ -197,9 +256,9 @@ fn held_force_warning(
 /// `save_every`-th state and the last, the critical points after the rows they follow, the
 /// warnings, and the turning points with their states.
 pub(super) fn record_branch(
-    study: &Study,
+    study: &dyn Study,
     record: &mut Record,
-    problem: &SymmetricProblem,
+    problem: &dyn Followed,
     branch: &Branch,
     indices: &[Option<usize>],
     save_every: usize,
@@ -221,7 +280,7 @@ pub(super) fn record_branch(
         let index = indices.get(i).copied().flatten();
         record.row(study, i, p.arclength, &u, params, p.iterations, index);
         while let Some(cp) = critical.next_if(|cp| cp.after_step + 1 == i) {
-            record.critical(cp);
+            record.add_critical(cp);
         }
     }
     for event in &branch.events {

@@ -11,15 +11,18 @@
 //! paths are joined across `b` into critical lines ([`join`]): on a limit line the surface
 //! folds over the (a, b) plane, and the index of its vertices changes there.
 
-use super::{Observer, Record, RunError, SymmetricProblem};
-use crate::continuation::crossings::{Crossings, IndexChanges};
-use crate::continuation::events::{Detector, Event};
+use super::equilibrium::path_options;
+use super::path::{record_branch, start_driver};
+use super::{Analysis, Context, RunError};
+use crate::continuation::crossings::IndexChanges;
+use crate::continuation::events::{trace, Detector, Event};
+use crate::continuation::{solve_at, PathOptions, Settings};
 use crate::results::{
-    CriticalKind, CriticalLine, CriticalLinePoint, CriticalPoint, RunTimes, StopReason,
-    SurfacePath, SurfaceReport, SurfaceVertex,
+    CriticalKind, CriticalLine, CriticalLinePoint, CriticalPoint, StopReason, SurfacePath,
+    SurfaceReport, SurfaceVertex,
 };
-use crate::scene::Analysis;
-use crate::study::Study;
+use crate::scene::SurfaceAnalysis;
+use crate::study::{Followed, Free, Point, Study};
 use crate::text::num;
 use std::time::Instant;
 
@@ -121,13 +124,13 @@ pub fn join(paths: &[SurfacePath]) -> Vec<CriticalLine> {
 /// carried from the converged (u, params) by Newton at fixed control, the step in `b` halved
 /// where Newton fails.
 fn carry(
-    study: &Study,
+    study: &dyn Study,
+    opts: &PathOptions,
     u: &[f64],
     params: &[f64],
     b: usize,
     target: f64,
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
-    let opts = super::equilibrium::path_options(study);
     let (mut u, mut params) = (u.to_vec(), params.to_vec());
     let mut step = target - params[b];
     let mut halvings = 0;
@@ -138,16 +141,15 @@ fn carry(
         } else {
             params[b] + step
         };
-        let mut problem = SymmetricProblem::new(
-            &study.model,
-            &study.basis,
-            &study.constraints,
-            next.clone(),
-            study.control,
-        );
+        let free = Free {
+            control: study.control().map(|c| c.index),
+            constraints: true,
+            ..Free::default()
+        };
+        let mut problem = study.problem(&next, &free);
         let lambda0 = problem.free_values(&next);
-        let q0 = study.basis.restrict(&u);
-        match crate::continuation::solve_at(&mut problem, &q0, &lambda0, &opts) {
+        let q0 = problem.coordinates(&u);
+        match solve_at(&mut problem, &q0, &lambda0, opts) {
             Ok((q, lambda, _)) => {
                 u = problem.displacement(&q);
                 params = problem.parameters(&lambda);
@@ -160,7 +162,7 @@ fn carry(
             Err(e) => {
                 return Err(format!(
                     "the start state could not be carried to {} = {}: {}",
-                    study.parameters[b],
+                    study.about().parameters[b],
                     num(next[b]),
                     e.describe(None)
                 ))
@@ -170,185 +172,211 @@ fn carry(
     Ok((u, params))
 }
 
-/// Follows the surface's paths; the first path is recorded in `record` (its rows, states and
-/// critical points are the run's path outputs), the surface returned with the first path's
-/// stop.
-pub(super) fn run(
-    study: &Study,
-    record: &mut Record,
-    crossings: Option<Crossings<'_>>,
-    u_start: &[f64],
-    params_start: &[f64],
-    observer: &mut dyn Observer,
-    times: &mut RunTimes,
-) -> Result<(StopReason, SurfaceReport), RunError> {
-    let Analysis::Surface(analysis) = &study.scene.analysis else {
-        unreachable!("surface::run runs surface analyses")
-    };
-    let t0 = Instant::now();
-    let index = |name: &str| {
-        study
-            .parameters
-            .iter()
-            .position(|p| p == name)
-            .expect("validated parameter")
-    };
-    let b = index(analysis.b());
-    let measure = analysis
-        .measure
-        .clone()
-        .or_else(|| study.measures.first().map(|(n, _)| n.clone()))
-        .unwrap_or_default();
-    let values = analysis.b_values();
-    let mut warnings = Vec::new();
-    // The start state at every value of b, carried outwards from the start's b.
-    let mut starts: Vec<Option<(Vec<f64>, Vec<f64>)>> = vec![None; values.len()];
-    let split = values.partition_point(|&v| v < params_start[b]);
-    let up: Vec<usize> = (split..values.len()).collect();
-    let down: Vec<usize> = (0..split).rev().collect();
-    for side in [up, down] {
-        let mut from = (u_start.to_vec(), params_start.to_vec());
-        for j in side {
-            match carry(study, &from.0, &from.1, b, values[j]) {
-                Ok(state) => {
-                    from = state.clone();
-                    starts[j] = Some(state);
+/// `type = "surface"`.
+pub struct Surface(pub SurfaceAnalysis);
+
+impl Analysis for Surface {
+    /// Every path of the surface: the ranges' first bounds the paths' parameter.
+    fn options(&self, study: &dyn Study) -> PathOptions {
+        let a = &self.0;
+        let settings: Settings = crate::scene::Analysis::Surface(a.clone()).settings();
+        let bounds = study
+            .control()
+            .map_or((f64::NEG_INFINITY, f64::INFINITY), |c| c.bounds());
+        path_options(
+            study,
+            &settings,
+            Some((bounds.0.max(a.ranges[0][0]), bounds.1.min(a.ranges[0][1]))),
+        )
+    }
+
+    /// Follows the surface's paths; the first path is recorded (its rows, states and
+    /// critical points are the run's path outputs), the surface put into the record with the
+    /// first path's stop.
+    fn run(&self, study: &dyn Study, cx: &mut Context<'_>) -> Result<StopReason, RunError> {
+        let analysis = &self.0;
+        let opts = self.options(study);
+        let t0 = Instant::now();
+        let index = |name: &str| {
+            study
+                .about()
+                .parameters
+                .iter()
+                .position(|p| p == name)
+                .expect("validated parameter")
+        };
+        let b = index(analysis.b());
+        let measure = analysis
+            .measure
+            .clone()
+            .or_else(|| study.about().measures.first().cloned())
+            .unwrap_or_default();
+        let values = analysis.b_values();
+        let mut warnings = Vec::new();
+        let (u_start, params_start) = (&cx.start.u, &cx.start.params);
+        // The start state at every value of b, carried outwards from the start's b.
+        let mut starts: Vec<Option<(Vec<f64>, Vec<f64>)>> = vec![None; values.len()];
+        let split = values.partition_point(|&v| v < params_start[b]);
+        let up: Vec<usize> = (split..values.len()).collect();
+        let down: Vec<usize> = (0..split).rev().collect();
+        for side in [up, down] {
+            let mut from = (u_start.to_vec(), params_start.to_vec());
+            for j in side {
+                match carry(study, &opts, &from.0, &from.1, b, values[j]) {
+                    Ok(state) => {
+                        from = state.clone();
+                        starts[j] = Some(state);
+                    }
+                    Err(why) => {
+                        warnings.push(format!(
+                            "no path at {} = {}: {why}",
+                            analysis.b(),
+                            num(values[j])
+                        ));
+                        break;
+                    }
                 }
-                Err(why) => {
+            }
+        }
+        let mut crossings = cx.crossings.take();
+        let mut paths: Vec<SurfacePath> = Vec::new();
+        let mut recorded: Option<StopReason> = None;
+        let mut count = 0usize;
+        for (j, start) in starts.iter().enumerate() {
+            let Some((u0, p0)) = start else { continue };
+            let point = Point {
+                u: u0.clone(),
+                params: p0.clone(),
+                iterations: 0,
+                times: Default::default(),
+            };
+            let max_steps = opts.max_steps;
+            let mut driver = match start_driver(study, &point, opts.clone()) {
+                Ok(d) => d,
+                Err(e) => {
                     warnings.push(format!(
-                        "no path at {} = {}: {why}",
+                        "no path at {} = {}: {e}",
                         analysis.b(),
                         num(values[j])
                     ));
-                    break;
+                    continue;
+                }
+            };
+            let mut watch = crossings.take().map(IndexChanges::new);
+            let observer = &mut *cx.observer;
+            let branch = {
+                let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
+                if let Some(w) = watch.as_mut() {
+                    extra.push(w);
+                }
+                trace(
+                    &mut driver,
+                    max_steps,
+                    |_, _| None,
+                    &mut extra,
+                    |problem, p| {
+                        observer.progress(count, p.lambda[0]);
+                        observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
+                        count += 1;
+                    },
+                )
+            };
+            let problem = driver.into_problem();
+            let indices = match &watch {
+                Some(w) => {
+                    cx.times.index += w.index_time;
+                    w.indices.clone()
+                }
+                None => vec![None; branch.points.len()],
+            };
+            crossings = watch.map(IndexChanges::into_crossings);
+            cx.times.steps.steps += branch.times.steps;
+            cx.times.steps.events += branch.times.events;
+            cx.times.steps.progress += branch.times.progress;
+            if recorded.is_none() {
+                record_branch(
+                    study,
+                    &mut cx.record,
+                    &*problem,
+                    &branch,
+                    &indices,
+                    usize::MAX,
+                );
+                recorded = Some(branch.stop.clone());
+            } else {
+                for event in &branch.events {
+                    if let Event::Warning(w) = event {
+                        warnings.push(format!("{} = {}: {w}", analysis.b(), num(values[j])));
+                    }
                 }
             }
+            let vertices = branch
+                .points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let u = problem.displacement(&p.q);
+                    let params = problem.parameters(&p.lambda);
+                    SurfaceVertex {
+                        step: i,
+                        arclength: p.arclength,
+                        measures: study.measure(&u, &params),
+                        parameters: params,
+                        index: indices.get(i).copied().flatten(),
+                    }
+                })
+                .collect();
+            let first_vertex = paths
+                .last()
+                .map_or(0, |p: &SurfacePath| p.first_vertex + p.vertices.len());
+            paths.push(SurfacePath {
+                b: values[j],
+                first_vertex,
+                vertices,
+                critical: branch
+                    .critical_points()
+                    .cloned()
+                    .collect::<Vec<CriticalPoint>>(),
+                stop: branch.stop.clone(),
+            });
         }
-    }
-    let mut crossings = crossings;
-    let mut paths: Vec<SurfacePath> = Vec::new();
-    let mut recorded: Option<StopReason> = None;
-    let mut count = 0usize;
-    for (j, start) in starts.iter().enumerate() {
-        let Some((u0, p0)) = start else { continue };
-        let (mut driver, max_steps) = match super::path::start_driver(study, u0, p0) {
-            Ok(d) => d,
-            Err(e) => {
-                warnings.push(format!(
-                    "no path at {} = {}: {e}",
-                    analysis.b(),
-                    num(values[j])
-                ));
-                continue;
-            }
+        let Some(stop) = recorded else {
+            return Err(RunError::Surface(format!(
+                "no path could be started: {}",
+                warnings.join("; ")
+            )));
         };
-        let mut watch = crossings.take().map(IndexChanges::new);
-        let branch = {
-            let mut extra: Vec<&mut dyn Detector<SymmetricProblem>> = Vec::new();
-            if let Some(w) = watch.as_mut() {
-                extra.push(w);
-            }
-            crate::continuation::events::trace(
-                &mut driver,
-                max_steps,
-                |_, _| None,
-                &mut extra,
-                |problem, p| {
-                    observer.progress(count, p.lambda[0]);
-                    observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
-                    count += 1;
-                },
-            )
-        };
-        let problem = driver.into_problem();
-        let indices = match &watch {
-            Some(w) => {
-                times.index += w.index_time;
-                w.indices.clone()
-            }
-            None => vec![None; branch.points.len()],
-        };
-        crossings = watch.map(IndexChanges::into_crossings);
-        times.steps.steps += branch.times.steps;
-        times.steps.events += branch.times.events;
-        times.steps.progress += branch.times.progress;
-        if recorded.is_none() {
-            super::path::record_branch(study, record, &problem, &branch, &indices, usize::MAX);
-            recorded = Some(branch.stop.clone());
-        } else {
-            for event in &branch.events {
-                if let Event::Warning(w) = event {
-                    warnings.push(format!("{} = {}: {w}", analysis.b(), num(values[j])));
-                }
-            }
+        if crossings.is_none() {
+            warnings.push(
+                "the index is not computed: the scene's group allows no stability analysis by \
+                 irrep"
+                    .into(),
+            );
         }
-        let vertices = branch
-            .points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let u = problem.displacement(&p.q);
-                let params = problem.parameters(&p.lambda);
-                SurfaceVertex {
-                    step: i,
-                    arclength: p.arclength,
-                    measures: study.measure(&u, &params),
-                    parameters: params,
-                    index: indices.get(i).copied().flatten(),
-                }
-            })
-            .collect();
-        let first_vertex = paths
-            .last()
-            .map_or(0, |p: &SurfacePath| p.first_vertex + p.vertices.len());
-        paths.push(SurfacePath {
-            b: values[j],
-            first_vertex,
-            vertices,
-            critical: branch
-                .critical_points()
-                .cloned()
-                .collect::<Vec<CriticalPoint>>(),
-            stop: branch.stop.clone(),
-        });
-    }
-    let Some(stop) = recorded else {
-        return Err(RunError::Surface(format!(
-            "no path could be started: {}",
-            warnings.join("; ")
-        )));
-    };
-    if crossings.is_none() {
-        warnings.push(
-            "the index is not computed: the scene's group allows no stability analysis by irrep"
-                .into(),
-        );
-    }
-    let mut triangles = Vec::new();
-    for pair in paths.windows(2) {
-        triangles.extend(stitch(
-            &fractions(&pair[0].vertices),
-            pair[0].first_vertex,
-            &fractions(&pair[1].vertices),
-            pair[1].first_vertex,
-        ));
-    }
-    let lines = join(&paths);
-    times.path = t0.elapsed();
-    Ok((
-        stop,
-        SurfaceReport {
+        let mut triangles = Vec::new();
+        for pair in paths.windows(2) {
+            triangles.extend(stitch(
+                &fractions(&pair[0].vertices),
+                pair[0].first_vertex,
+                &fractions(&pair[1].vertices),
+                pair[1].first_vertex,
+            ));
+        }
+        let lines = join(&paths);
+        cx.times.path = t0.elapsed();
+        cx.record.surface = Some(SurfaceReport {
             a: analysis.a().to_string(),
             b: analysis.b().to_string(),
             measure,
-            parameters: study.parameters.clone(),
-            measures: study.measures.iter().map(|(n, _)| n.clone()).collect(),
+            parameters: study.about().parameters.clone(),
+            measures: study.about().measures.clone(),
             paths,
             triangles,
             lines,
             warnings,
-        },
-    ))
+        });
+        Ok(stop)
+    }
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ use crate::reference::{P_MAX, P_MIN};
 use crate::results::{Extremum, StateKind};
 use crate::scene::{Analysis, Scene};
 use crate::stability::{BlockEigen, Stability};
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use std::time::{Duration, Instant};
 
 /// The bundled balloon scene text (k = 0.1, icosphere `frequency = 8`).
@@ -146,7 +146,10 @@ pub struct LevelOptions {
 /// phase; with `stability` the spectrum by irrep is computed at every converged point (as
 /// `run` does). Returns the level and the study (for the payoff at the maximum). The level
 /// must reach both turning points.
-pub fn balloon_level(frequency: usize, stability: bool) -> Result<(BalloonLevel, Study), String> {
+pub fn balloon_level(
+    frequency: usize,
+    stability: bool,
+) -> Result<(BalloonLevel, MeshStudy), String> {
     let opts = LevelOptions {
         stability,
         ..LevelOptions::default()
@@ -171,7 +174,7 @@ pub fn balloon_level(frequency: usize, stability: bool) -> Result<(BalloonLevel,
 pub fn balloon_level_with(
     frequency: usize,
     options: &LevelOptions,
-) -> Result<(BalloonLevel, Study), String> {
+) -> Result<(BalloonLevel, MeshStudy), String> {
     if options.max_points == Some(0) {
         return Err("a path has at least one point".into());
     }
@@ -181,11 +184,11 @@ pub fn balloon_level_with(
         // The path accepts up to `steps` steps after the start.
         p.steps = p.steps.min(n - 1);
     }
-    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
+    let mut study = MeshStudy::build(scene).map_err(|e| e.to_string())?;
     let mut observer = SpectraObserver::default();
     let result = crate::analysis::run_with(&mut study, &mut observer).map_err(|e| e.to_string())?;
     let wall = start.elapsed();
-    let study_ref: &Study = &study;
+    let study_ref: &MeshStudy = &study;
     let report = &result.report;
     let times = result.times;
     let turning = |kind: Extremum| {

@@ -3,8 +3,6 @@
 //! the branches from the first E1 double point of the upward-loaded C7v disc
 //! (`scenes/disc_upward.toml`) on a mesh of the given divisions (16: the thesis mesh).
 
-use crate::analysis::branch::{BranchOptions, Level, Switching};
-use crate::analysis::SymmetricProblem;
 use crate::continuation::crossings::{Crossings, IndexChanges};
 use crate::continuation::events::trace;
 use crate::continuation::events::Detector;
@@ -14,7 +12,9 @@ use crate::model::{FeModel, Model};
 use crate::results::{BranchGraph, Branches, CriticalPoint, RunResult, StopReason};
 use crate::scene::Scene;
 use crate::stability::{IrrepBlocks, Stability};
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
+use crate::study::switching::{Level, Switching};
+use crate::study::{BranchOptions, SymmetricProblem};
 use meshes::generators::{icosphere, IcosphereOptions};
 use meshes::SymmetricMesh;
 use nalgebra::DVector;
@@ -132,6 +132,7 @@ pub fn ih_branches(problem: &IhProblem, steps: usize) -> Result<Switched, String
         control: Some(0),
         top: &top,
         options: BranchOptions {
+            save_every: 10,
             depth: 1,
             steps,
             points: None,
@@ -165,7 +166,7 @@ pub fn disc_upward_branches(
         .replace("steps = 30 ", &format!("steps = {steps} "));
     let scene = Scene::from_toml_str(&text, &format!("disc-upward, divisions {divisions}"))
         .map_err(|e| e.to_string())?;
-    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
+    let mut study = MeshStudy::build(scene).map_err(|e| e.to_string())?;
     let mut result = crate::analysis::run(&mut study, |_, _| {}).map_err(|e| e.to_string())?;
     let branches = result
         .branches

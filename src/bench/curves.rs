@@ -5,7 +5,7 @@
 use crate::analysis::run;
 use crate::results::{CurveEventKind, CurveReport};
 use crate::scene::Scene;
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use std::time::{Duration, Instant};
 
 /// The bundled fluid-below disc scene text (C7v, 16 divisions).
@@ -75,7 +75,7 @@ pub struct CurveRun {
 
 /// Runs `scene` and times it.
 pub fn curve_run(label: &str, scene: Scene) -> Result<CurveRun, String> {
-    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
+    let mut study = MeshStudy::build(scene).map_err(|e| e.to_string())?;
     let unknowns = (study.basis.unknowns(), study.basis.dim());
     let t = Instant::now();
     let result = run(&mut study, |_, _| {}).map_err(|e| e.to_string())?;

@@ -5,7 +5,7 @@
 
 use crate::linalg::{eigen, SymmetricFactorization};
 use crate::model::{Model, Request};
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use std::time::{Duration, Instant};
 
 /// τ / max|K_ij| of [`full_path_stability`]: the index without symmetry is the negative count
@@ -115,7 +115,7 @@ fn shifted(
 /// dense eigen-decomposition of K. Refused when the study has active constraints (the index
 /// by blocks is then that of the bordered system) or K has rank-one terms.
 pub fn full_path_stability(
-    study: &Study,
+    study: &MeshStudy,
     states: &[(Vec<f64>, Vec<f64>)],
     lowest: usize,
     dense: bool,

@@ -68,13 +68,14 @@ pub use scaling::{fit_exponent, memory, scaling_level, ScalingFits, ScalingLevel
 pub use thesis::{spinning_cap_scene, thesis_run, thesis_table, ThesisRun, SPINNING_CAP_TOML};
 
 use crate::model::{Evaluation, FeModel, Model};
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 
-/// The start state as `run` solves it ([`crate::analysis::equilibrium::solve_start`]): the
-/// displacement over all unknowns.
-pub fn solve_start(study: &mut Study, params: &[f64]) -> Result<Vec<f64>, String> {
-    crate::analysis::equilibrium::solve_start(study, params)
-        .map(|(u, _, _)| u)
+/// The start state as `run` solves it ([`crate::study::Study::solve_start`], with the
+/// options of the scene's analysis): the displacement over all unknowns.
+pub fn solve_start(study: &mut MeshStudy, params: &[f64]) -> Result<Vec<f64>, String> {
+    let opts = crate::analysis::registry::analysis(&study.scene.analysis).options(study);
+    crate::study::Study::solve_start(study, None, params, &opts)
+        .map(|p| p.u)
         .map_err(|e| e.to_string())
 }
 

@@ -9,7 +9,7 @@ use crate::linalg::{eigen, SymmetricFactorization};
 use crate::model::{Evaluation, FeModel, Model, Request};
 use crate::scene::Scene;
 use crate::stability::Stability;
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use nalgebra::DMatrix;
 use std::time::{Duration, Instant};
 
@@ -141,7 +141,7 @@ pub fn shift_invert(
 /// shift-invert of K for the `lowest` eigenvalues nearest a small negative shift (when
 /// `sparse`).
 pub fn payoff(
-    study: &Study,
+    study: &MeshStudy,
     u: &[f64],
     params: &[f64],
     dense: bool,
@@ -310,7 +310,7 @@ pub fn c8v_payoff(
     sparse: bool,
     lowest: usize,
 ) -> Result<Payoff, String> {
-    let mut study = Study::build(c8v_disc_scene(divisions)?).map_err(|e| e.to_string())?;
+    let mut study = MeshStudy::build(c8v_disc_scene(divisions)?).map_err(|e| e.to_string())?;
     let group = study.action.group().name().to_string();
     if group != "C8v" {
         return Err(format!("the disc's scene group is {group}, not C8v"));

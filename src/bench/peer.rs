@@ -4,7 +4,7 @@
 
 use crate::model::{Model, Request};
 use crate::output::write_matrix_market;
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use std::path::Path;
 
 /// The peer solver's result on the exported K.
@@ -24,7 +24,7 @@ pub struct PeerResult {
 /// eigenvalues nearest `sigma`, if a python with scipy is found; the error says why not.
 pub fn run_peer(
     out: &Path,
-    study: &Study,
+    study: &MeshStudy,
     u: &[f64],
     p: &[f64],
     sigma: f64,

@@ -5,7 +5,7 @@
 use crate::model::Model;
 use crate::reference::{BESSEL_J2, PONDING_SCALE};
 use crate::scene::Scene;
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use std::time::{Duration, Instant};
 
 /// The bundled ponding scene text (C7v disc, `divisions = 16`).
@@ -81,7 +81,7 @@ pub fn ponding_level_in(divisions: usize, group: Option<&str>) -> Result<Ponding
                 .map_err(|e| e.to_string())?
         }
     };
-    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
+    let mut study = MeshStudy::build(scene).map_err(|e| e.to_string())?;
     let r = crate::analysis::run(&mut study, |_, _| {})
         .map_err(|e| e.to_string())?
         .report;
@@ -119,6 +119,6 @@ pub fn ponding_level_in(divisions: usize, group: Option<&str>) -> Result<Ponding
 }
 
 /// The wave number of a critical mode about z (see [`crate::adapted::labels::wave_number`]).
-pub fn wave_number(study: &Study, mode: &[f64]) -> usize {
+pub fn wave_number(study: &MeshStudy, mode: &[f64]) -> usize {
     crate::adapted::labels::wave_number(study.model.reference(), study.model.layout(), mode, 12)
 }

@@ -16,7 +16,7 @@ use crate::analysis::{run_with, Observer};
 use crate::model::Model;
 use crate::results::{PathReport, RunTimes};
 use crate::scene::Scene;
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -125,8 +125,8 @@ pub fn thesis_run(
     peer_out: Option<&Path>,
 ) -> Result<ThesisRun, String> {
     let wall = Instant::now();
-    let mut study =
-        Study::build(spinning_cap_scene(pattern, divisions, steps)?).map_err(|e| e.to_string())?;
+    let mut study = MeshStudy::build(spinning_cap_scene(pattern, divisions, steps)?)
+        .map_err(|e| e.to_string())?;
     let study_time = wall.elapsed();
     let mut states = States(Vec::new());
     let result = run_with(&mut study, &mut states).map_err(|e| e.to_string())?;
@@ -269,7 +269,7 @@ pub struct SceneRun {
 pub fn scene_run(path: &Path) -> Result<SceneRun, String> {
     let wall = Instant::now();
     let scene = Scene::load(path).map_err(|e| e.to_string())?;
-    let mut study = Study::build(scene).map_err(|e| e.to_string())?;
+    let mut study = MeshStudy::build(scene).map_err(|e| e.to_string())?;
     let result = crate::analysis::run(&mut study, |_, _| {}).map_err(|e| e.to_string())?;
     let wall = wall.elapsed();
     let report = &result.report;

@@ -16,7 +16,6 @@ use super::common::{build_study, load_scene, one_line, sig_digits};
 use super::CliError;
 use clap::Args;
 use memstab::analysis::branch;
-use memstab::analysis::equilibrium::solve_start;
 use memstab::output::{write_branches, BranchesWritten, FinishedRun};
 use memstab::results::{directory, Branches, Node};
 use std::path::PathBuf;
@@ -79,33 +78,19 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(&finished.origin));
     let mut study = build_study(load_scene(&scene_file)?)?;
-    finished.check(&study).map_err(input)?;
-    let (state, mode) = finished.state(&study, args.critical).map_err(input)?;
-    let critical = branch::recorded_points(&study, &finished.critical, args.critical, state, mode)
-        .map_err(CliError::Input)?;
-    let start = study.start.clone();
-    solve_start(&mut study, &start).map_err(|e| {
-        CliError::Failure(format!("{}; nothing was written", one_line(&e.to_string())))
-    })?;
-    let scene_branches = match &study.scene.analysis {
-        memstab::scene::Analysis::Path(p) => p.branches.clone(),
-        _ => None,
+    let overrides = branch::Overrides {
+        depth: args.depth,
+        steps: args.steps,
+        max_step: args.max_step,
     };
-    let mut opts = branch::options(&study, scene_branches.as_ref());
-    opts.points = Some(vec![args.critical]);
-    if let Some(d) = args.depth {
-        opts.depth = d;
-    }
-    if let Some(s) = args.steps {
-        opts.steps = s;
-        opts.path.max_steps = s;
-    }
-    if let Some(m) = args.max_step {
-        opts.path.max_step = m;
-        opts.path.initial_step = opts.path.initial_step.min(m);
-        opts.path.min_step = opts.path.min_step.min(m);
-    }
-    let branches = branch::run(&study, &critical, opts);
+    let branches = branch::from_run(&mut study, &finished, args.critical, &overrides).map_err(
+        |e| match e {
+            branch::BranchError::Input(why) => CliError::Input(one_line(&why)),
+            branch::BranchError::Start(e) => {
+                CliError::Failure(format!("{}; nothing was written", one_line(&e.to_string())))
+            }
+        },
+    )?;
     let written = write_branches(&study, &branches, &finished.path, &out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     if args.json {

@@ -3,7 +3,7 @@
 
 use super::CliError;
 use memstab::scene::Scene;
-use memstab::study::{Study, StudyError};
+use memstab::study::mesh::{MeshStudy, StudyError};
 use std::path::Path;
 
 /// Loads and validates a scene file; any problem is bad input (exit 2).
@@ -13,20 +13,20 @@ pub(super) fn load_scene(path: &Path) -> Result<Scene, CliError> {
 
 /// Builds the study (mesh, the scene's group, effects, model); a scene that cannot be built is
 /// bad input (exit 2), as in `memstab run`.
-/// A `[start] from` and a critical curve's `from-run` are loaded here: a saved state that cannot be read or does not fit is bad
-/// input too (the message names the scene file and the key).
-pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
-    let origin = scene.origin.clone();
-    let mut study = Study::build(scene).map_err(|e| match e {
+pub(super) fn build_study(scene: Scene) -> Result<MeshStudy, CliError> {
+    MeshStudy::build(scene).map_err(|e| match e {
         StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
             CliError::Input(one_line(&e.to_string()))
         }
-    })?;
-    memstab::output::store::load_start(&mut study)
-        .map_err(|e| CliError::Input(one_line(&format!("{origin}: {e}"))))?;
-    memstab::output::load_curve_start(&mut study)
-        .map_err(|e| CliError::Input(one_line(&format!("{origin}: {e}"))))?;
-    Ok(study)
+    })
+}
+
+/// The start the study's scene asks for ([`memstab::analysis::restart::start_of`]): a
+/// `[start] from` or a critical curve's `from-run` that cannot be read or does not fit is
+/// bad input (the message names the scene file and the key).
+pub(super) fn start_of(study: &MeshStudy) -> Result<memstab::study::Start, CliError> {
+    memstab::analysis::restart::start_of(study)
+        .map_err(|e| CliError::Input(one_line(&format!("{}: {e}", study.scene.origin))))
 }
 
 /// A saved path point of a finished run, as `spectrum` and `export-matrix` analyse it with
@@ -34,7 +34,7 @@ pub(super) fn build_study(scene: Scene) -> Result<Study, CliError> {
 /// `path.json`) and checked against it, and point `n`'s displacement and parameters from
 /// `path.states`. Anything missing or not matching is bad input (exit 2).
 pub(super) struct SavedPoint {
-    pub study: Study,
+    pub study: MeshStudy,
     pub run: memstab::output::FinishedRun,
     pub u: Vec<f64>,
     pub params: Vec<f64>,
@@ -63,8 +63,8 @@ pub(super) fn saved_point(
         )));
     }
     let study = build_study(load_scene(&file)?)?;
-    run.check_model(&study).map_err(input)?;
-    let (u, params) = run.point(&study, n).map_err(input)?;
+    memstab::analysis::restart::check_model(&run, &study).map_err(input)?;
+    let (u, params) = memstab::analysis::restart::point(&run, &study, n).map_err(input)?;
     Ok(SavedPoint {
         study,
         run,

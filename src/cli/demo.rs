@@ -7,7 +7,7 @@ use super::CliError;
 use clap::Args;
 use memstab::demo::closed_form_check;
 use memstab::results::PathReport;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -31,7 +31,7 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
 }
 
 /// Prints the closed-form check of a balloon under pressure control.
-fn print_closed_form(study: &Study, report: &PathReport) {
+fn print_closed_form(study: &MeshStudy, report: &PathReport) {
     let Some(check) = closed_form_check(study, report) else {
         return;
     };

@@ -16,9 +16,10 @@
 use super::common::{build_study, check_out_file, load_scene, parse_at, saved_point};
 use super::CliError;
 use clap::Args;
-use memstab::analysis::equilibrium::{state_at, StartState};
+use memstab::analysis::equilibrium::state_at;
 use memstab::model::{Model, Request};
 use memstab::output::{rank_one_path, write_matrix_market};
+use memstab::study::Point;
 use std::path::PathBuf;
 
 /// Arguments of `memstab export-matrix`.
@@ -84,9 +85,10 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
             let scene = load_scene(&args.input)?;
             refuse_sliding(&scene)?;
             let mut study = build_study(scene)?;
+            let start = super::common::start_of(&study)?;
             let at = parse_at(&args.at, &study.parameters)?;
-            let StartState { u, params, .. } =
-                state_at(&mut study, &at).map_err(|e| super::spectrum::not_converged(&e, &at))?;
+            let Point { u, params, .. } = state_at(&mut study, &at, &start)
+                .map_err(|e| super::spectrum::not_converged(&e, &at))?;
             (study, u, params)
         }
     };

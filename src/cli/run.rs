@@ -16,11 +16,11 @@
 use super::summary::print_summary;
 use super::CliError;
 use clap::Args;
-use memstab::analysis::run as run_study;
+use memstab::analysis::run_from;
 use memstab::output::{write_run, Progress, RunSummary, Written};
 use memstab::results::{RunResult, StopReason};
 use memstab::scene::Scene;
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use memstab::text::one_line;
 use std::path::{Path, PathBuf};
 
@@ -71,19 +71,22 @@ pub(super) fn execute(
     scene: Scene,
     out: &Path,
     quiet: bool,
-) -> Result<(Study, RunResult, Written), CliError> {
+) -> Result<(MeshStudy, RunResult, Written), CliError> {
     super::common::check_out(out)?;
     let mut study = super::common::build_study(scene)?;
+    let start = super::common::start_of(&study)?;
     let dir = super::common::OutDir::create(out)?;
-    let control = study
-        .control
-        .map_or_else(|| "control".to_string(), |c| study.parameters[c].clone());
-    let range = study.control.and_then(|c| {
-        let b = study.scene.parameters.get(&study.parameters[c])?;
-        Some((b.min?, b.max?))
-    });
+    let handle = memstab::study::Study::control(&study);
+    let control = handle.map_or_else(|| "control".to_string(), |c| c.name.clone());
+    let range = handle
+        .map(|c| (c.min, c.max))
+        .filter(|(a, b)| a.is_finite() && b.is_finite());
     let progress = Progress::new(&control, range, quiet);
-    let result = run_study(&mut study, |point, value| progress.set(point + 1, value));
+    let result = run_from(
+        &mut study,
+        &start,
+        &mut memstab::analysis::Progress(|point, value| progress.set(point + 1, value)),
+    );
     let result = match result {
         Ok(r) => r,
         Err(e) => {

@@ -19,9 +19,10 @@ use super::common::{build_study, load_scene, one_line, parse_at, saved_point, sc
 use super::CliError;
 use clap::Args;
 use memstab::adapted::AdaptedBasis;
-use memstab::analysis::equilibrium::{held, state_at, StartState};
+use memstab::analysis::equilibrium::state_at;
 use memstab::model::Model;
 use memstab::stability::{Detail, Stability};
+use memstab::study::Point;
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -98,7 +99,7 @@ struct SpectrumJson {
 pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let (study, at, u, params, iterations, point) = state(args)?;
     let origin = study.scene.origin.clone();
-    let held = held(&study);
+    let held = memstab::analysis::registry::analysis(&study.scene.analysis).held();
     let adapted = AdaptedBasis::new(&study.action, study.model.layout())
         .map_err(|e| CliError::Input(format!("scene '{origin}': {e}")))?;
     let stability = Stability::new(&study.model, &adapted);
@@ -306,7 +307,7 @@ fn state(
     args: &SpectrumArgs,
 ) -> Result<
     (
-        memstab::study::Study,
+        memstab::study::mesh::MeshStudy,
         Vec<(usize, f64)>,
         Vec<f64>,
         Vec<f64>,
@@ -333,12 +334,14 @@ fn state(
         )));
     }
     let mut study = build_study(load_scene(&args.input)?)?;
+    let start = super::common::start_of(&study)?;
     let at = parse_at(&args.at, &study.parameters)?;
-    let StartState {
+    let Point {
         u,
         params,
         iterations,
-    } = state_at(&mut study, &at).map_err(|e| not_converged(&e, &at))?;
+        ..
+    } = state_at(&mut study, &at, &start).map_err(|e| not_converged(&e, &at))?;
     Ok((study, at, u, params, iterations, None))
 }
 

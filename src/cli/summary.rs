@@ -4,7 +4,7 @@
 
 use memstab::output::{file_name, Written};
 use memstab::results::{CurveReport, PathReport, RunResult, SurfaceReport};
-use memstab::study::Study;
+use memstab::study::mesh::MeshStudy;
 use memstab::text::sig_digits;
 use std::path::Path;
 
@@ -18,7 +18,7 @@ fn control_index(report: &PathReport) -> Option<usize> {
     report.parameters.iter().position(|p| *p == report.control)
 }
 
-pub(super) fn print_summary(study: &Study, result: &RunResult, out: &Path, written: &Written) {
+pub(super) fn print_summary(study: &MeshStudy, result: &RunResult, out: &Path, written: &Written) {
     let report = &result.report;
     let m = &report.mesh;
     out!("scene '{}' ({})", report.scene, report.origin);

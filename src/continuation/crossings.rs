@@ -10,8 +10,9 @@ use super::events::{
     locate_within, Admission, Detector, Event, MeasureFn, States, REJECTED_STEP_FACTOR,
 };
 use crate::linalg::eigen::EigenError;
+use crate::model::ModelError;
 use crate::results::{CriticalKind, CriticalPoint, Isotropy};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 /// Relative size below which a localised eigenvalue counts as zero.
@@ -91,6 +92,9 @@ impl Spectrum {
 /// an eigenvector and the subgroup that keeps it. The blocks are labelled in every
 /// [`Spectrum`] they return, the trivial block (the model's own symmetric states) first.
 pub trait Blocks {
+    /// The blocks' names (`A1`, `E2`, `m3` …), the trivial block first: the names their
+    /// spectra carry.
+    fn names(&self) -> Vec<String>;
     /// The negative count of every block (no eigenvalues): what every path point needs to
     /// detect a change of stability.
     fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum>;
@@ -111,6 +115,42 @@ pub trait Blocks {
     fn mode(&self, block: usize, v: &[f64]) -> Vec<f64>;
     /// The subgroup that keeps the (unit) mode of block `block`.
     fn isotropy(&self, block: usize, mode: &[f64]) -> Isotropy;
+}
+
+/// σ, the null vector of the bordered block and the derivatives of σ.
+#[derive(Debug, Clone)]
+pub struct TestValue {
+    /// σ.
+    pub sigma: f64,
+    /// v in the block's coordinates (bᵀ v = 1).
+    pub vector: DVector<f64>,
+    /// ∂σ/∂q in the coordinates of the problem the curve follows.
+    pub grad_q: DVector<f64>,
+    /// ∂σ/∂Λ_j for every parameter of the model.
+    pub grad_params: Vec<f64>,
+}
+
+/// The minimally augmented test function of one block at states of a model (docs/theory.md
+/// §11.7): σ from the bordered block [[K_b, b], [bᵀ, 0]] [v; σ] = [0; 1], zero exactly where
+/// the block is singular, with its derivatives — the extra equation of a critical curve.
+pub trait CriticalTest {
+    /// σ, v and the derivatives of σ at the state (u, params).
+    fn evaluate(&mut self, u: &[f64], params: &[f64]) -> Result<TestValue, ModelError>;
+    /// σ and v at (u, params).
+    fn value(&mut self, u: &[f64], params: &[f64]) -> Result<(f64, DVector<f64>), ModelError>;
+    /// Replaces the border (normalised); σ's zero set does not change.
+    fn set_border(&mut self, border: &DVector<f64>);
+    /// Takes the scales of the block's constraint rows at (u, params), where it has them.
+    fn rescale(&mut self, _u: &[f64], _params: &[f64]) -> Result<(), ModelError> {
+        Ok(())
+    }
+    /// The matrix whose singularity σ tests at (u, params), dense and symmetric, and the
+    /// tangent's scale max|K_ij|.
+    fn block_tangent(
+        &mut self,
+        u: &[f64],
+        params: &[f64],
+    ) -> Result<(DMatrix<f64>, f64), ModelError>;
 }
 
 /// Index changes of the blocks, localised and classified: the stability analysis of states of
@@ -138,6 +178,11 @@ impl<'a> Crossings<'a> {
             control,
             held,
         }
+    }
+
+    /// The number of block `name` (0 the trivial one), if it is one.
+    pub fn block(&self, name: &str) -> Option<usize> {
+        self.blocks.names().iter().position(|n| n == name)
     }
 
     /// The negative count of every block only: what every path point needs to detect a

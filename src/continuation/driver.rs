@@ -56,6 +56,28 @@ pub trait Problem {
     }
 }
 
+impl<P: Problem + ?Sized> Problem for Box<P> {
+    fn dim(&self) -> usize {
+        (**self).dim()
+    }
+    fn free_parameters(&self) -> usize {
+        (**self).free_parameters()
+    }
+    fn evaluate(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Linearization, ModelError> {
+        (**self).evaluate(q, lambda)
+    }
+    fn phase_times(&self) -> PhaseTimes {
+        (**self).phase_times()
+    }
+    fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<StateDefect> {
+        (**self).defect(q, lambda)
+    }
+}
+
 impl<P: Problem + ?Sized> Problem for &mut P {
     fn dim(&self) -> usize {
         (**self).dim()
@@ -430,7 +452,63 @@ pub struct PathOptions {
     pub direction: f64,
 }
 
+/// The continuation settings an analysis takes from its scene (the shared keys of
+/// `[analysis]`, docs/scenes.md): steps, step sizes, the corrector's tolerance and
+/// iterations, the first step's sense and how often a state is saved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Budget of accepted steps.
+    pub steps: usize,
+    /// First arclength step.
+    pub initial_step: f64,
+    /// Smallest step before giving up.
+    pub min_step: f64,
+    /// Largest step.
+    pub max_step: f64,
+    /// Relative tolerance of the corrector.
+    pub tolerance: f64,
+    /// Newton iterations per corrector before the step is cut.
+    pub max_iterations: usize,
+    /// The first step's sense in the control: +1 increasing, −1 decreasing.
+    pub direction: f64,
+    /// Save every n-th state of a path.
+    pub save_every: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let o = PathOptions::default();
+        Self {
+            steps: o.max_steps,
+            initial_step: o.initial_step,
+            min_step: o.min_step,
+            max_step: o.max_step,
+            tolerance: o.tolerance,
+            max_iterations: o.max_iterations,
+            direction: o.direction,
+            save_every: 10,
+        }
+    }
+}
+
 impl PathOptions {
+    /// The options of a path with `settings`, its control within `bounds`, q in units of
+    /// `state_scale` and `free` free parameters in units of one.
+    pub fn new(settings: &Settings, bounds: (f64, f64), state_scale: f64, free: usize) -> Self {
+        Self {
+            initial_step: settings.initial_step,
+            min_step: settings.min_step,
+            max_step: settings.max_step,
+            max_steps: settings.steps,
+            max_iterations: settings.max_iterations,
+            tolerance: settings.tolerance,
+            bounds,
+            parameter_scales: vec![1.0; free.max(1)],
+            state_scale,
+            direction: settings.direction,
+        }
+    }
+
     /// The unit of free parameter j (1 where none is given).
     pub fn parameter_scale(&self, j: usize) -> f64 {
         self.parameter_scales.get(j).copied().unwrap_or(1.0)

@@ -366,5 +366,14 @@ pub trait States {
     fn parameters(&self, lambda: &nalgebra::DVector<f64>) -> Vec<f64>;
 }
 
+impl<S: States + ?Sized> States for Box<S> {
+    fn displacement(&self, q: &nalgebra::DVector<f64>) -> Vec<f64> {
+        (**self).displacement(q)
+    }
+    fn parameters(&self, lambda: &nalgebra::DVector<f64>) -> Vec<f64> {
+        (**self).parameters(lambda)
+    }
+}
+
 /// The measures of a state (u, every parameter), in the report's order.
 pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);

@@ -7,7 +7,7 @@ use super::{write_run, write_whole, OutputError, WriteRunError};
 use crate::results::{
     Branches, CriticalKind, Node, PathReport, PrimaryPath, RunResult, StopReason, ASYMMETRY,
 };
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io;
@@ -317,7 +317,7 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
 /// # Errors
 /// The first error, with the files already written.
 pub fn write_branches(
-    study: &Study,
+    study: &MeshStudy,
     branches: &Branches,
     primary: &PrimaryPath,
     out: &Path,

@@ -59,7 +59,7 @@ pub use matrix_market::{
     RANK_ONE_FILE_TAG,
 };
 pub use progress::Progress;
-pub use reopen::{load_curve_start, FinishedRun, ReopenError};
+pub use reopen::{FinishedRun, ReopenError};
 pub use run::{
     file_name, node_normals, state_fields, wave_numbers, wrinkled_critical, write_run,
     CriticalSummary, RunSummary, TurningSummary, WriteRunError, Written, RUN_FILES,

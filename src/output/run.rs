@@ -11,7 +11,7 @@ use crate::results::{
     CriticalKind, Extremum, PathReport, RunResult, StateKind, StopReason, WrinkledCritical,
     WrinkledPoint, Wrinkling,
 };
-use crate::study::Study;
+use crate::study::mesh::MeshStudy;
 use meshes::write::Fields;
 use std::path::{Path, PathBuf};
 
@@ -117,7 +117,7 @@ pub fn file_name(p: &Path) -> String {
 /// maximum — the control would not follow the path). Turning and critical points are written
 /// beside it under their own names; critical states carry their mode.
 pub fn write_run(
-    study: &Study,
+    study: &MeshStudy,
     result: &mut RunResult,
     out: &Path,
 ) -> Result<Written, WriteRunError> {
@@ -311,7 +311,7 @@ pub fn write_run(
 /// pressure), per triangle what they show (stretches, thickness, tensions, where the
 /// membrane would wrinkle, fluid and contact pressure); a non-finite value (never at an
 /// accepted state) is written as 0 rather than as NaN.
-pub fn state_fields(study: &Study, s: &crate::results::State) -> Fields {
+pub fn state_fields(study: &MeshStudy, s: &crate::results::State) -> Fields {
     let finite = |v: &f64| if v.is_finite() { *v } else { 0.0 };
     let x = study.model.positions(&s.u, &s.params);
     let normals = node_normals(&x, &study.mesh.mesh.triangles);
@@ -359,7 +359,7 @@ const MAX_WAVE_NUMBER: usize = 24;
 
 /// The wave number m about z of every critical mode, when the mesh has an axis (a disc or a
 /// truncated sphere, as `compare` labels them); empty otherwise.
-pub fn wave_numbers(study: &Study, report: &PathReport) -> Vec<usize> {
+pub fn wave_numbers(study: &MeshStudy, report: &PathReport) -> Vec<usize> {
     use crate::scene::MeshSpec;
     match study.scene.mesh {
         MeshSpec::Disc(_) | MeshSpec::TruncatedSphere(_) => report
@@ -381,7 +381,7 @@ pub fn wave_numbers(study: &Study, report: &PathReport) -> Vec<usize> {
 
 /// The number of wrinkled triangles of the state (u, Λ), or `None` when the model shows no
 /// `wrinkled` field.
-fn wrinkled(study: &Study, u: &[f64], params: &[f64]) -> Option<usize> {
+fn wrinkled(study: &MeshStudy, u: &[f64], params: &[f64]) -> Option<usize> {
     study
         .model
         .cell_fields(u, params)
@@ -393,7 +393,7 @@ fn wrinkled(study: &Study, u: &[f64], params: &[f64]) -> Option<usize> {
 /// The critical points (numbered from 1, as `critical_NN.vtu`) whose state has wrinkled
 /// triangles, with how many; empty when the model shows no `wrinkled` field.
 pub fn wrinkled_critical(
-    study: &Study,
+    study: &MeshStudy,
     critical: &[crate::results::CriticalPoint],
 ) -> Vec<WrinkledCritical> {
     critical
@@ -412,7 +412,7 @@ pub fn wrinkled_critical(
 /// Where the membrane wrinkles along the path: the first point with wrinkled triangles (from
 /// every point's kept state) and the critical points in a wrinkled state; `None` when the
 /// model shows no `wrinkled` field or no point's state was kept (a branch).
-fn wrinkling(study: &Study, result: &RunResult) -> Option<Wrinkling> {
+fn wrinkling(study: &MeshStudy, result: &RunResult) -> Option<Wrinkling> {
     if result.points.len() != result.report.rows.len() || result.points.is_empty() {
         return None;
     }
@@ -444,7 +444,7 @@ fn wrinkling(study: &Study, result: &RunResult) -> Option<Wrinkling> {
 /// critical point's label with its wave number where known: `(m, k)` on a ponding floor,
 /// the k-th rung of wave number m), the axes dimensionless where the scene fixes the scale,
 /// and the closed form of a balloon under it.
-fn diagram(study: &Study, report: &PathReport, axes: &(String, String)) -> Diagram {
+fn diagram(study: &MeshStudy, report: &PathReport, axes: &(String, String)) -> Diagram {
     // A critical point at a turning point of the control (a limit point) shares its marker.
     let control = report.parameters.iter().position(|p| *p == report.control);
     let same = |a: &[f64], b: &[f64]| {
@@ -523,7 +523,7 @@ fn diagram(study: &Study, report: &PathReport, axes: &(String, String)) -> Diagr
 
 /// True for a ponding floor: a disc under fluid whose density is the control, where the
 /// k-th critical point of wave number m is the rung j_{m,k} of the ladder.
-fn ponding_floor(study: &Study, report: &PathReport) -> bool {
+fn ponding_floor(study: &MeshStudy, report: &PathReport) -> bool {
     use crate::scene::{Effect, MeshSpec};
     matches!(study.scene.mesh, MeshSpec::Disc(_))
         && study.scene.effects.iter().any(|e| {

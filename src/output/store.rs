@@ -229,34 +229,3 @@ impl SavedRun {
         })
     }
 }
-
-/// Loads the start of `study`'s `[start] from` (if any): the saved point `point` of that run
-/// becomes the first guess, its parameters the start values (by name; a parameter the run did
-/// not have keeps the scene's start value). The message of an error names `start.from` or
-/// `start.point` and the value.
-pub fn load_start(study: &mut crate::study::Study) -> Result<(), String> {
-    let start = &study.scene.start;
-    let (Some(from), Some(point)) = (start.from.clone(), start.point) else {
-        return Ok(());
-    };
-    let shown = from.display().to_string();
-    let run = read_states(&from).map_err(|e| format!("'start.from' = \"{shown}\": {e}"))?;
-    let unknowns = study.basis.unknowns();
-    if run.unknowns != unknowns {
-        return Err(format!(
-            "'start.from' = \"{shown}\": its states have {} unknowns, this scene's model {unknowns} \
-             (another mesh or other fixed nodes)",
-            run.unknowns
-        ));
-    }
-    let saved = run
-        .point(point)
-        .map_err(|e| format!("'start.point' = {point}: {e}"))?;
-    for (name, value) in run.parameters.iter().zip(&saved.parameters) {
-        if let Some(k) = study.parameters.iter().position(|p| p == name) {
-            study.start[k] = *value;
-        }
-    }
-    study.saved_start = Some(saved.u);
-    Ok(())
-}

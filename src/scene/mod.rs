@@ -34,6 +34,7 @@ mod validate;
 pub use error::SceneError;
 pub use tags::{AnalysisKind, ConstraintKind, EffectKind, Generator};
 
+use crate::continuation::Settings;
 use meshes::generators::{self, DiscOptions, Down, IcosphereOptions, TruncatedSphereOptions};
 use meshes::{MeshError, SymmetricMesh};
 use serde::{Deserialize, Serialize};
@@ -964,7 +965,67 @@ fn default_max_iterations() -> usize {
     25
 }
 
+impl Direction {
+    /// +1 for `increase`, −1 for `decrease`.
+    pub fn sign(self) -> f64 {
+        match self {
+            Direction::Increase => 1.0,
+            Direction::Decrease => -1.0,
+        }
+    }
+}
+
 impl Analysis {
+    /// The continuation settings of this analysis: its own keys where it has them, the
+    /// driver's defaults for the others. A critical curve's are those of the curve (its path
+    /// to the point takes `path-steps` instead of `steps`, and increases the control); a
+    /// surface's are those of every path.
+    pub fn settings(&self) -> Settings {
+        let d = Settings::default();
+        match self {
+            Analysis::Path(p) => Settings {
+                steps: p.steps,
+                initial_step: p.initial_step,
+                min_step: p.min_step,
+                max_step: p.max_step,
+                tolerance: p.tolerance,
+                max_iterations: p.max_iterations,
+                direction: p.direction.sign(),
+                save_every: p.save_every,
+            },
+            Analysis::CriticalCurve(c) => Settings {
+                steps: c.steps,
+                initial_step: c.initial_step,
+                min_step: c.min_step,
+                max_step: c.max_step,
+                tolerance: c.tolerance,
+                max_iterations: c.max_iterations,
+                direction: c.direction.sign(),
+                save_every: usize::MAX,
+            },
+            Analysis::Surface(a) => Settings {
+                steps: a.steps,
+                initial_step: a.initial_step,
+                min_step: a.min_step,
+                max_step: a.max_step,
+                tolerance: a.tolerance,
+                max_iterations: a.max_iterations,
+                direction: a.direction.sign(),
+                save_every: usize::MAX,
+            },
+            Analysis::Equilibrium(e) => Settings {
+                tolerance: e.tolerance,
+                max_iterations: e.max_iterations,
+                ..d
+            },
+            Analysis::LinearBuckling(b) => Settings {
+                tolerance: b.tolerance,
+                max_iterations: b.max_iterations,
+                ..d
+            },
+        }
+    }
+
     /// The `type` of this analysis.
     pub fn kind(&self) -> AnalysisKind {
         match self {

@@ -78,7 +78,7 @@ use crate::model::Model;
 use crate::results::{CriticalKind, CriticalPoint, PathReport, StopReason};
 use crate::scene::{Analysis, MeshSpec, Scene};
 use crate::stability::Stability;
-use crate::study::{Study, StudyError};
+use crate::study::mesh::{MeshStudy, StudyError};
 use crate::text::{one_line, sig_digits};
 use matching::{match_rungs, measure_distances};
 use meshes::{common_sectors, describe, resolution, variant, Common};
@@ -259,7 +259,7 @@ pub struct Comparison {
 }
 
 /// The wave number of a critical mode about z (see [`crate::adapted::labels::wave_number`]).
-fn wave_number(study: &Study, mode: &[f64]) -> usize {
+fn wave_number(study: &MeshStudy, mode: &[f64]) -> usize {
     crate::adapted::labels::wave_number(
         study.model.reference(),
         study.model.layout(),
@@ -278,7 +278,7 @@ fn labelled(scene: &Scene) -> bool {
 
 /// One run of a comparison: a 3-D study or a meridian.
 enum Job {
-    Solid(Box<Study>),
+    Solid(Box<MeshStudy>),
     Meridian(Box<AxisymStudy>),
 }
 
@@ -375,7 +375,7 @@ fn execute_meridian(
 /// Runs one variant and collects its critical points.
 fn execute(
     label: &str,
-    mut study: Study,
+    mut study: MeshStudy,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Level, CompareError> {
     let start = Instant::now();
@@ -475,7 +475,7 @@ fn unaccounted(report: &PathReport) -> Vec<String> {
 /// eigenvalue's |g| / |dg/dλ|, the slope taken by central differences on the held state (the
 /// tangent is affine in the control there). `None` for path analyses, whose state moves with
 /// the control.
-fn precisions(study: &Study, critical: &[CriticalPoint]) -> Vec<Option<f64>> {
+fn precisions(study: &MeshStudy, critical: &[CriticalPoint]) -> Vec<Option<f64>> {
     let none = vec![None; critical.len()];
     let (Analysis::LinearBuckling(_), Some(c)) = (&study.scene.analysis, study.control) else {
         return none;
@@ -615,7 +615,7 @@ pub fn compare(
                 })?;
                 Job::Meridian(Box::new(study))
             } else {
-                let study = Study::build(s).map_err(|e| match e {
+                let study = MeshStudy::build(s).map_err(|e| match e {
                     StudyError::Scene(_) | StudyError::Unsupported(_) | StudyError::Limit(_) => {
                         CompareError::Input(one_line(&e.to_string()))
                     }

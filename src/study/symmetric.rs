@@ -459,3 +459,31 @@ impl crate::continuation::events::States for SymmetricProblem<'_> {
         SymmetricProblem::parameters(self, lambda)
     }
 }
+
+impl super::Followed for SymmetricProblem<'_> {
+    fn coordinates(&self, u: &[f64]) -> DVector<f64> {
+        self.basis.restrict(u)
+    }
+
+    fn free_values(&self, params: &[f64]) -> DVector<f64> {
+        SymmetricProblem::free_values(self, params)
+    }
+
+    fn free_indices(&self) -> Vec<usize> {
+        self.free.iter().map(|f| f.unwrap_or(0)).collect()
+    }
+
+    fn release_held(&mut self) {
+        SymmetricProblem::release_held(self)
+    }
+
+    fn held_force(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+        state_scale: f64,
+        parameter_scale: f64,
+    ) -> Option<Result<f64, crate::model::ModelError>> {
+        SymmetricProblem::held_force(self, q, lambda, state_scale, parameter_scale)
+    }
+}

@@ -1,10 +1,18 @@
-//! A scene made ready to solve: scene → mesh + group → effects → model (docs/architecture.md).
+//! A scene on a 3-D mesh made ready to solve: scene → mesh + group → effects → model
+//! (docs/architecture.md), and the [`Study`] it is for the analyses.
 //!
 //! Only the effects the scene lists are built. The scene's group is the mesh group restricted
 //! to what every effect keeps (computed from [`crate::model::Effect::keeps`], never typed in),
 //! and the path is followed in that group's fixed-point space.
 
+use super::block_test::BlockTest;
+use super::{
+    About, BranchOptions, Control, Followed, Free, Point, RunError, Study, SymmetricProblem,
+};
+use crate::adapted::AdaptedBasis;
 use crate::adapted::SparseBasis;
+use crate::continuation::crossings::{Blocks, CriticalTest};
+use crate::continuation::{solve_at, PathOptions};
 use crate::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
 use crate::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
 use crate::effects::membrane::{MaterialQuantities, Membrane};
@@ -14,8 +22,13 @@ use crate::effects::volume::ClosingFace;
 use crate::effects::Quantity;
 use crate::limits::Limits;
 use crate::model::constraint::Constraint;
+use crate::model::CellQuantity;
 use crate::model::{Effect, FeModel, Model, Vec3};
+use crate::results::{
+    Branches, CriticalPoint, MeshInfo, RunResult, WrinkledCritical, WrinkledPoint, Wrinkling,
+};
 use crate::scene::{self, Scene};
+use crate::stability::{IrrepBlocks, Stability};
 use meshes::{GroupAction, SymmetricMesh};
 use std::sync::Arc;
 use symmetry::Invariant;
@@ -32,26 +45,6 @@ pub enum StudyError {
     /// The scene would cost more than the limits allow (user input).
     #[error("{0}")]
     Limit(#[from] crate::limits::LimitError),
-}
-
-/// A critical point of a finished run, read back: where a critical curve starts with
-/// `analysis.from-run`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SavedCritical {
-    /// Its number in the run (1-based: `critical_NN.vtu`).
-    pub number: usize,
-    /// The irrep of its singular block.
-    pub irrep: String,
-    /// Every parameter there.
-    pub parameters: Vec<f64>,
-    /// Every measure there, as the run recorded them.
-    pub measures: Vec<f64>,
-    /// Its localised eigenvalue relative to ‖K‖, as the run recorded it.
-    pub residual_eigenvalue: f64,
-    /// The state over the unknowns.
-    pub state: Vec<f64>,
-    /// The critical mode over the unknowns (unit norm).
-    pub mode: Vec<f64>,
 }
 
 /// Measures reported along a path.
@@ -73,8 +66,8 @@ pub enum Measure {
     GasPressure(usize),
 }
 
-/// A scene ready to solve.
-pub struct Study {
+/// A scene on a 3-D mesh, ready to solve.
+pub struct MeshStudy {
     /// The scene.
     pub scene: Scene,
     /// The mesh with its own group.
@@ -100,12 +93,13 @@ pub struct Study {
     /// Warnings about the setup that a run should report, e.g. symmetry of a mesh file beyond
     /// its declared group ([`Scene::mesh_warnings`]).
     pub warnings: Vec<String>,
-    /// The critical point of a finished run a critical curve starts from (`analysis.from-run`),
-    /// once loaded (`output::reopen::load_curve_start`).
-    pub saved_critical: Option<SavedCritical>,
-    /// The saved state of `[start] from`, once loaded (`output::store::load_start`): the first
-    /// guess of the start solve instead of `start.stretch · X`.
-    pub saved_start: Option<Vec<f64>>,
+    /// What every report says of the study.
+    about: About,
+    /// The scene's control.
+    control_handle: Option<Control>,
+    /// The symmetry-adapted basis of the scene's group, built at the first stability analysis
+    /// (or why there is none: a group whose irreps the analysis cannot split by).
+    adapted: std::sync::OnceLock<Result<crate::adapted::AdaptedBasis, String>>,
     fluids: Vec<Fluid>,
     gases: Vec<GasAmount>,
     closed: bool,
@@ -128,7 +122,7 @@ fn side(s: scene::FluidSide) -> FluidSide {
     }
 }
 
-impl Study {
+impl MeshStudy {
     /// Builds mesh, effects, model, constraints and basis from a validated scene.
     pub fn build(scene: Scene) -> Result<Self, StudyError> {
         let limits = Limits::from_env()?;
@@ -436,7 +430,28 @@ impl Study {
                 )));
             }
         }
+        let about = About {
+            scene: scene.info.name.clone(),
+            origin: scene.origin.clone(),
+            mesh: MeshInfo {
+                generator: scene.mesh.generator().to_string(),
+                nodes: mesh.mesh.nodes.len(),
+                elements: mesh.mesh.triangles.len(),
+                group: mesh.group().name().to_string(),
+                order: mesh.group().order(),
+            },
+            group: action.group().name().to_string(),
+            group_order: action.group().order(),
+            unknowns: basis.unknowns(),
+            symmetric_unknowns: basis.dim(),
+            parameters: parameters.clone(),
+            measures: measures.iter().map(|(n, _)| n.clone()).collect(),
+        };
+        let control_handle = control.map(|c| handle(&scene, &parameters, c));
         Ok(Self {
+            about,
+            control_handle,
+            adapted: std::sync::OnceLock::new(),
             scene,
             mesh,
             action,
@@ -449,8 +464,6 @@ impl Study {
             basis,
             measures,
             warnings,
-            saved_start: None,
-            saved_critical: None,
             fluids,
             gases,
             closed,
@@ -526,12 +539,8 @@ impl Study {
         }
     }
 
-    /// The start displacement: a loaded saved state ([`Study::saved_start`]), else the
-    /// reference scaled by `start.stretch` about the origin.
+    /// The start displacement: the reference scaled by `start.stretch` about the origin.
     pub fn start_displacement(&self) -> Vec<f64> {
-        if let Some(u) = &self.saved_start {
-            return u.clone();
-        }
         let s = self.scene.start.stretch - 1.0;
         let mut u = vec![0.0; self.model.layout().unknowns()];
         for (i, x) in self.model.reference().iter().enumerate() {
@@ -542,6 +551,312 @@ impl Study {
             }
         }
         u
+    }
+}
+
+/// The handle of parameter `index` with its bounds from the scene.
+fn handle(scene: &Scene, parameters: &[String], index: usize) -> Control {
+    let p = &scene.parameters[&parameters[index]];
+    Control {
+        index,
+        name: parameters[index].clone(),
+        min: p.min.unwrap_or(f64::NEG_INFINITY),
+        max: p.max.unwrap_or(f64::INFINITY),
+    }
+}
+
+/// Largest wave number tried when labelling a critical mode.
+const MAX_WAVE_NUMBER: usize = 24;
+
+impl MeshStudy {
+    /// The symmetry-adapted basis of the scene's group, built once.
+    pub fn adapted(&self) -> Result<&AdaptedBasis, String> {
+        self.adapted
+            .get_or_init(|| {
+                AdaptedBasis::new(&self.action, self.model.layout()).map_err(|e| e.to_string())
+            })
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
+    /// The number of wrinkled triangles of the state (u, Λ), or `None` when the model shows
+    /// no `wrinkled` field.
+    fn wrinkled(&self, u: &[f64], params: &[f64]) -> Option<usize> {
+        self.model
+            .cell_fields(u, params)
+            .into_iter()
+            .find(|f| f.quantity == CellQuantity::Wrinkled)
+            .map(|f| f.values.iter().filter(|&&w| w > 0.5).count())
+    }
+
+    /// The critical points (numbered from 1, as `critical_NN.vtu`) whose state has wrinkled
+    /// triangles, with how many; empty when the model shows no `wrinkled` field.
+    pub fn wrinkled_critical(&self, critical: &[CriticalPoint]) -> Vec<WrinkledCritical> {
+        critical
+            .iter()
+            .enumerate()
+            .filter_map(|(k, cp)| {
+                let n = self.wrinkled(&cp.state, &cp.parameters)?;
+                (n > 0).then_some(WrinkledCritical {
+                    critical: k + 1,
+                    wrinkled: n,
+                })
+            })
+            .collect()
+    }
+
+    /// Where the membrane wrinkles along the path: the first point with wrinkled triangles
+    /// (from every point's kept state) and the critical points in a wrinkled state; `None`
+    /// when the model shows no `wrinkled` field or no point's state was kept (a branch).
+    fn wrinkling(&self, result: &RunResult) -> Option<Wrinkling> {
+        if result.points.len() != result.report.rows.len() || result.points.is_empty() {
+            return None;
+        }
+        let mut first = None;
+        for (row, p) in result.report.rows.iter().zip(&result.points) {
+            let u = self.expand(&p.q);
+            let n = self.wrinkled(&u, &p.parameters)?;
+            if n > 0 {
+                first = Some(WrinkledPoint {
+                    step: row.step,
+                    wrinkled: n,
+                });
+                break;
+            }
+        }
+        let critical = self.wrinkled_critical(&result.report.critical);
+        Some(Wrinkling {
+            triangles: self.mesh.mesh.triangles.len(),
+            first,
+            critical,
+        })
+    }
+
+    /// The wave number m about z of every critical mode, when the mesh has an axis (a disc or
+    /// a truncated sphere, as `compare` labels them); empty otherwise.
+    pub fn wave_numbers(&self, critical: &[CriticalPoint]) -> Vec<usize> {
+        match self.scene.mesh {
+            scene::MeshSpec::Disc(_) | scene::MeshSpec::TruncatedSphere(_) => critical
+                .iter()
+                .map(|cp| {
+                    crate::adapted::labels::wave_number(
+                        self.model.reference(),
+                        self.model.layout(),
+                        &cp.mode,
+                        MAX_WAVE_NUMBER,
+                    )
+                })
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+impl Study for MeshStudy {
+    fn about(&self) -> &About {
+        &self.about
+    }
+
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn control(&self) -> Option<&Control> {
+        self.control_handle.as_ref()
+    }
+
+    fn parameter(&self, index: usize) -> Control {
+        handle(&self.scene, &self.parameters, index)
+    }
+
+    fn start_values(&self) -> &[f64] {
+        &self.start
+    }
+
+    fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64> {
+        MeshStudy::measure(self, u, params)
+    }
+
+    /// The mesh radius times √nodes, so that a step is an RMS displacement relative to the
+    /// mesh size.
+    fn state_scale(&self) -> f64 {
+        let r = self
+            .model
+            .reference()
+            .iter()
+            .map(|x| x.norm())
+            .fold(0.0, f64::max)
+            .max(1e-300);
+        r * (self.model.reference().len() as f64).sqrt()
+    }
+
+    fn coordinates(&self, u: &[f64]) -> Vec<f64> {
+        self.basis.restrict(u).iter().copied().collect()
+    }
+
+    fn expand(&self, q: &[f64]) -> Vec<f64> {
+        let mut u = vec![0.0; self.basis.unknowns()];
+        self.basis
+            .expand(&nalgebra::DVector::from_column_slice(q), &mut u);
+        u
+    }
+
+    /// The start state, solved in the fixed-point space of the scene's group with every
+    /// parameter at `params` and no constraint active, from the reference scaled by
+    /// `start.stretch` (or `guess`), with the start homotopy of `[start] hold-translation`;
+    /// an inside-out or inadmissible solution is refused.
+    fn solve_start(
+        &mut self,
+        guess: Option<&[f64]>,
+        params: &[f64],
+        opts: &PathOptions,
+    ) -> Result<Point, RunError> {
+        let u0 = guess.map_or_else(|| self.start_displacement(), <[f64]>::to_vec);
+        let q0 = self.basis.restrict(&u0);
+        let study: &Self = self;
+        let mut problem = SymmetricProblem::new(
+            &study.model,
+            &study.basis,
+            &[],
+            params.to_vec(),
+            study.control,
+        )
+        .holding_neutral();
+        let lambda = problem.free_values(params);
+        let start_opts = PathOptions {
+            max_iterations: opts.max_iterations.max(50),
+            ..opts.clone()
+        };
+        let q0 = match study.scene.start.hold_translation {
+            Some(d) => {
+                let mut e = vec![0.0; study.basis.unknowns()];
+                for i in 0..study.model.reference().len() {
+                    for (c, dc) in d.iter().enumerate() {
+                        if let Some(k) = study.model.layout().dof(i, c) {
+                            e[k] = *dc;
+                        }
+                    }
+                }
+                let w = study.basis.restrict(&e);
+                crate::continuation::release::released(&mut problem, &q0, &lambda, w, &start_opts)
+                    .map_err(|e| RunError::start(study, e))?
+                    .0
+            }
+            None => q0,
+        };
+        let (q, lambda, iterations) = solve_at(&mut problem, &q0, &lambda, &start_opts)
+            .map_err(|e| RunError::start(study, e))?;
+        let params = problem.parameters(&lambda);
+        let times = problem.times;
+        let mut u = vec![0.0; study.basis.unknowns()];
+        study.basis.expand(&q, &mut u);
+        // A closed membrane with a negative enclosed volume is inside out (an open one closed
+        // by its plate may enclose a negative volume: a disc sagging below its rim).
+        if let Some(k) = study
+            .measures
+            .iter()
+            .position(|(_, m)| *m == Measure::Volume)
+            .filter(|_| study.closed())
+        {
+            let volume = study.measure(&u, &params)[k];
+            if volume <= 0.0 {
+                return Err(RunError::InsideOut { volume });
+            }
+        }
+        if let Some(defect) = study.model.state_defect(&u, &params) {
+            return Err(RunError::Degenerate(defect));
+        }
+        self.set_targets(&u, &params);
+        Ok(Point {
+            u,
+            params,
+            iterations,
+            times,
+        })
+    }
+
+    fn problem(&self, params: &[f64], free: &Free) -> Box<dyn Followed + '_> {
+        let constraints: &[Box<dyn crate::model::constraint::Constraint>] = if free.constraints {
+            &self.constraints
+        } else {
+            &[]
+        };
+        let mut problem = SymmetricProblem::new(
+            &self.model,
+            &self.basis,
+            constraints,
+            params.to_vec(),
+            free.control,
+        );
+        for &p in &free.also {
+            problem = problem.with_free_parameter(p);
+        }
+        if free.hold_neutral {
+            problem = problem.holding_neutral();
+        }
+        Box::new(problem)
+    }
+
+    fn blocks(&self) -> Result<Box<dyn Blocks + '_>, String> {
+        let adapted = self.adapted()?;
+        Ok(Box::new(IrrepBlocks::new(
+            Stability::new(&self.model, adapted),
+            &self.model,
+            &self.constraints,
+            &self.action,
+        )))
+    }
+
+    fn critical_test(&self, cp: &CriticalPoint) -> Result<Box<dyn CriticalTest + '_>, String> {
+        let adapted = self.adapted()?;
+        let mu = adapted
+            .irreps
+            .iter()
+            .position(|ib| ib.name == cp.irrep)
+            .ok_or_else(|| format!("{} has no irrep {}", self.about.group, cp.irrep))?;
+        let block = adapted.irreps[mu].first();
+        let x = self.model.positions(&cp.state, &cp.parameters);
+        let rigid = self
+            .model
+            .rigid_motions()
+            .iter()
+            .any(|m| block.restrict_rigid(m, &x, self.model.layout()).amax() > 1e-9);
+        if rigid {
+            return Err(format!(
+                "the block of {} holds rigid-body modes; following its critical points is not \
+                 supported yet",
+                cp.irrep
+            ));
+        }
+        let length = self
+            .model
+            .reference()
+            .iter()
+            .map(|x| x.norm())
+            .fold(0.0, f64::max)
+            .max(1e-300);
+        let border = block.restrict(&cp.mode);
+        let test = BlockTest::new(&self.model, block, &self.basis, mu == 0, &border, length)
+            .with_constraints(&self.constraints, &cp.state, &cp.parameters)
+            .map_err(|e| format!("the critical point's constraints: {e}"))?;
+        Ok(Box::new(test))
+    }
+
+    fn branches(
+        &self,
+        critical: &[CriticalPoint],
+        options: BranchOptions,
+    ) -> Result<Branches, String> {
+        Ok(super::switching::run(self, critical, options))
+    }
+
+    fn annotate(&self, result: &mut RunResult) {
+        result.report.wrinkling = self.wrinkling(result);
+        result.report.wave_numbers = self.wave_numbers(&result.report.critical);
     }
 }
 

@@ -1,0 +1,292 @@
+//! A scene made ready to follow — the seam between the models and the analyses
+//! (docs/architecture.md): every analysis runs against the [`Study`] trait, and two models
+//! implement it, the 3-D mesh with its symmetry group ([`mesh::MeshStudy`]) and the meridian of
+//! a membrane of revolution ([`meridian::MeridianStudy`]). A study names its parameters and
+//! measures, solves its start state, hands out the problem to follow in its own coordinates
+//! ([`Followed`]), the [`Blocks`] its tangent splits into (irreps, or wave numbers m), the test
+//! function of a critical block for critical curves, and the branches that leave a critical
+//! point; the writers see it only as the states it draws.
+
+pub mod block_test;
+pub mod mesh;
+pub mod switching;
+
+mod symmetric;
+
+pub use symmetric::{held_gauge, sparse_is_cheaper, SymmetricProblem, SPARSE_TANGENT_FROM};
+
+use crate::continuation::crossings::{Blocks, CriticalTest};
+use crate::continuation::events::States;
+use crate::continuation::{PathOptions, Problem, SolveError};
+use crate::model::{ModelError, StateDefect};
+use crate::results::{Branches, CriticalPoint, MeshInfo, PhaseTimes, RunResult};
+use crate::scene::Scene;
+use nalgebra::DVector;
+
+/// A parameter an analysis moves: its place among the scene's parameters, its name and the
+/// bounds a path in it stops at — built once from the scene by the study, handed to the driver
+/// and on to a branch's start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Control {
+    /// Its index among the parameters (scene order).
+    pub index: usize,
+    /// Its name.
+    pub name: String,
+    /// `[parameters.NAME] min` (−∞ without one).
+    pub min: f64,
+    /// `[parameters.NAME] max` (+∞ without one).
+    pub max: f64,
+}
+
+impl Control {
+    /// (min, max).
+    pub fn bounds(&self) -> (f64, f64) {
+        (self.min, self.max)
+    }
+
+    /// Its value among every parameter's.
+    pub fn value(&self, params: &[f64]) -> f64 {
+        params[self.index]
+    }
+}
+
+/// A state of a study: the displacement over its unknowns and every parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    /// The displacement over the model's unknowns.
+    pub u: Vec<f64>,
+    /// Every parameter (scene order).
+    pub params: Vec<f64>,
+    /// Newton iterations it took.
+    pub iterations: usize,
+    /// Where the time of its solve's evaluations went.
+    pub times: PhaseTimes,
+}
+
+/// Where an analysis starts.
+#[derive(Debug, Clone)]
+pub enum Start {
+    /// Newton from the scene's first guess (`start.stretch` times the reference, and the
+    /// start homotopy of `[start] hold-translation`).
+    Solve,
+    /// Newton from a saved state (`[start] from`): its displacement is the first guess, its
+    /// parameters the start values.
+    From {
+        /// The displacement over the model's unknowns.
+        u: Vec<f64>,
+        /// Every parameter (scene order).
+        params: Vec<f64>,
+    },
+    /// A critical point of a finished run, as it was saved (its state and mode): where a
+    /// critical curve's `from-run` and a branch start, without a path.
+    Critical(Box<CriticalPoint>),
+}
+
+/// What every report says of a study.
+#[derive(Debug, Clone)]
+pub struct About {
+    /// The scene's name.
+    pub scene: String,
+    /// Where it came from.
+    pub origin: String,
+    /// The mesh (a 3-D mesh, or the meridian).
+    pub mesh: MeshInfo,
+    /// The group the states are followed in (`C∞v` for the meridian).
+    pub group: String,
+    /// Its order (0: infinite).
+    pub group_order: usize,
+    /// The model's unknowns.
+    pub unknowns: usize,
+    /// The unknowns of the space the path is solved in.
+    pub symmetric_unknowns: usize,
+    /// Parameter names (scene order).
+    pub parameters: Vec<String>,
+    /// Measure names (`max_displacement`, `min_z`, `max_z`, `volume`, `stretch`, …).
+    pub measures: Vec<String>,
+}
+
+/// Which parameters a problem frees: the control first, then those the constraints govern
+/// (when they are active), then `also`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Free {
+    /// The control (none for a single equilibrium).
+    pub control: Option<usize>,
+    /// Whether the scene's constraints are active (each frees its parameter).
+    pub constraints: bool,
+    /// More free parameters after those (a critical curve's control).
+    pub also: Vec<usize>,
+    /// Whether the neutral motions are held besides the rigid ones (a start, docs/theory.md
+    /// §7.9), until [`Followed::release_held`].
+    pub hold_neutral: bool,
+}
+
+impl Free {
+    /// The path in `control` with the constraints active, its neutral motions held at the
+    /// start.
+    pub fn path(control: Option<usize>) -> Self {
+        Self {
+            control,
+            constraints: true,
+            also: Vec::new(),
+            hold_neutral: true,
+        }
+    }
+}
+
+/// A problem of a study in its own coordinates q, as the driver follows it: the states
+/// (u, every parameter) its points stand for, and the way back from a state.
+pub trait Followed: Problem + States {
+    /// The coordinates q of a state u.
+    fn coordinates(&self, u: &[f64]) -> DVector<f64>;
+    /// The free parameters' values among every parameter's.
+    fn free_values(&self, params: &[f64]) -> DVector<f64>;
+    /// The parameter index of every free parameter, in the order of λ.
+    fn free_indices(&self) -> Vec<usize>;
+    /// Releases the neutral motions held at the start ([`Free::hold_neutral`]).
+    fn release_held(&mut self) {}
+    /// The force that holds the neutral motions at (q, λ), relative to the residual's scale
+    /// (docs/theory.md §7.9); `None` when nothing is held.
+    fn held_force(
+        &mut self,
+        _q: &DVector<f64>,
+        _lambda: &DVector<f64>,
+        _state_scale: f64,
+        _parameter_scale: f64,
+    ) -> Option<Result<f64, ModelError>> {
+        None
+    }
+}
+
+impl<P: Followed + ?Sized> Followed for Box<P> {
+    fn coordinates(&self, u: &[f64]) -> DVector<f64> {
+        (**self).coordinates(u)
+    }
+    fn free_values(&self, params: &[f64]) -> DVector<f64> {
+        (**self).free_values(params)
+    }
+    fn free_indices(&self) -> Vec<usize> {
+        (**self).free_indices()
+    }
+    fn release_held(&mut self) {
+        (**self).release_held()
+    }
+    fn held_force(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+        state_scale: f64,
+        parameter_scale: f64,
+    ) -> Option<Result<f64, ModelError>> {
+        (**self).held_force(q, lambda, state_scale, parameter_scale)
+    }
+}
+
+/// Why a run failed before it produced a path.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunError {
+    /// Newton did not converge at the start.
+    #[error("the start state did not converge: {}", .error.describe(.control.as_deref()))]
+    Start {
+        /// Why.
+        error: SolveError,
+        /// The control parameter's name (none for a single equilibrium).
+        control: Option<String>,
+    },
+    /// Newton converged to a membrane turned inside out.
+    #[error("the start state did not converge: Newton converged to an inside-out membrane (enclosed volume {volume:e}); start closer to the intended state (start.stretch, the start values)")]
+    InsideOut {
+        /// The enclosed volume found.
+        volume: f64,
+    },
+    /// A critical curve could not be found or started.
+    #[error("critical curve: {0}")]
+    Curve(String),
+    /// No path of a surface could be started.
+    #[error("surface: {0}")]
+    Surface(String),
+    /// Branches could not be switched to.
+    #[error("branches: {0}")]
+    Branches(String),
+    /// Newton converged to a state that is no membrane state.
+    #[error("the start state did not converge: Newton converged to an inadmissible state: {0}; check the material (mu, thickness), the mesh's size and start.stretch against the loads")]
+    Degenerate(StateDefect),
+}
+
+impl RunError {
+    /// A start failure of `study`'s solve, naming its control parameter.
+    pub fn start(study: &(impl Study + ?Sized), error: SolveError) -> Self {
+        Self::Start {
+            error,
+            control: study.control().map(|c| c.name.clone()),
+        }
+    }
+}
+
+/// The seam: a scene made into a model that the analyses follow (module documentation).
+pub trait Study: Sync {
+    /// What every report says of it.
+    fn about(&self) -> &About;
+    /// The scene.
+    fn scene(&self) -> &Scene;
+    /// The scene's control, if it has one.
+    fn control(&self) -> Option<&Control>;
+    /// The handle of parameter `index`, with its bounds.
+    fn parameter(&self, index: usize) -> Control;
+    /// Every parameter's start value (scene order).
+    fn start_values(&self) -> &[f64];
+    /// What the set-up found that a run should report.
+    fn warnings(&self) -> &[String];
+    /// The measures of a state, in the order of [`About::measures`].
+    fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64>;
+    /// The unit of the state in the arclength.
+    fn state_scale(&self) -> f64;
+    /// The coordinates of a state in the space the path is solved in (what `path.states`
+    /// keeps), and the state of such coordinates.
+    fn coordinates(&self, u: &[f64]) -> Vec<f64>;
+    /// The state over the model's unknowns of coordinates `q` ([`Study::coordinates`]).
+    fn expand(&self, q: &[f64]) -> Vec<f64>;
+    /// Solves the start state with every parameter at `params` and no constraint active,
+    /// from `guess` (a saved state) or the scene's first guess, with the tolerances of
+    /// `opts`; sets the targets of the constraints declared `"initial"` there.
+    fn solve_start(
+        &mut self,
+        guess: Option<&[f64]>,
+        params: &[f64],
+        opts: &PathOptions,
+    ) -> Result<Point, RunError>;
+    /// The problem at `params` freeing `free`, in the study's coordinates.
+    fn problem(&self, params: &[f64], free: &Free) -> Box<dyn Followed + '_>;
+    /// The blocks its tangent splits into at a state. An error says why stability is not
+    /// analysed.
+    fn blocks(&self) -> Result<Box<dyn Blocks + '_>, String>;
+    /// The test function of the critical point's block, for a critical curve.
+    fn critical_test(&self, cp: &CriticalPoint) -> Result<Box<dyn CriticalTest + '_>, String>;
+    /// The branches that leave the critical points `critical` of a path (those `options`
+    /// asks for), followed.
+    fn branches(
+        &self,
+        critical: &[CriticalPoint],
+        options: BranchOptions,
+    ) -> Result<Branches, String>;
+    /// Labels the study adds to a finished run (the wave numbers of critical modes, where the
+    /// membrane wrinkles, the scales of its axes).
+    fn annotate(&self, result: &mut RunResult);
+}
+
+/// Settings of branch switching: how deep, and the continuation along each branch.
+#[derive(Debug, Clone)]
+pub struct BranchOptions {
+    /// 1: the branches of the path's critical points; 2: also those of their critical
+    /// points; …
+    pub depth: usize,
+    /// Points of each branch after the critical point it leaves (the step budget).
+    pub steps: usize,
+    /// The critical points of the path to switch at (1-based, in the order found); `None`:
+    /// every one.
+    pub points: Option<Vec<usize>>,
+    /// The continuation along a branch (first step, largest step, bounds, tolerances,
+    /// scales).
+    pub path: PathOptions,
+    /// Write every n-th state of a branch.
+    pub save_every: usize,
+}

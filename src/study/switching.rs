@@ -1,0 +1,993 @@
+//! Branch switching at critical points by the equivariant branching lemma (docs/theory.md
+//! §14): the branches that leave a bifurcation point of a path, one per conjugacy class of
+//! axial isotropy subgroups of its irrep (and per half where ±v are not conjugate), each
+//! followed in its own fixed-point space with stability by the irreps of its isotropy
+//! subgroup — and, to a chosen depth, the branches that leave those.
+//!
+//! At a critical point of a path in Fix(G) whose block μ is singular:
+//! 1. the kernel V_μ is spanned by the d partners x_a = P_{a0} x_0 of the block's null vector
+//!    x_0 (§10.1); for an axial isotropy subgroup Σ of μ (dim Fix_{V_μ}(Σ) = 1, from
+//!    [`symmetry::Group::isotropy`]) the kernel direction in Fix(Σ) is φ = Σ_a c_a x_a with c
+//!    spanning Fix_{V_μ}(Σ) in the irrep's coordinates (§14.2);
+//! 2. in Fix(Σ) the point is a simple bifurcation of the path; the reduced equation along φ,
+//!    g(a, s) = a (b s + ½ C₃ a + …), gives the branch's tangent: (φ, 0) for a pitchfork
+//!    (C₃ = 0 by symmetry: −v conjugate to v, or no invariant cubic), φ + κ t_path with
+//!    κ = −C₃/(2b) for a transcritical one (§14.3);
+//! 3. the branch is followed by the pseudo-arclength driver in Fix(Σ) from the critical point
+//!    along that tangent (both halves when ±v are not conjugate), its index by the irreps of
+//!    Σ at every point, its critical points localised and classified in Σ (§14.4).
+//!
+//! Limit points (the trivial irrep) have no branches; a simple point in a 1-D irrep has one
+//! axial subgroup, the irrep's kernel. A split pair of simple points is two such points, each
+//! switched on its own. Complex-type irreps (chiral groups) have no axial subgroup and are
+//! refused.
+//!
+//! The result is a graph ([`BranchGraph`], petgraph): nodes are critical points (of the path
+//! and of the branches) and the ends of branches, edges are branches.
+
+use super::mesh::MeshStudy;
+use super::{BranchOptions, SymmetricProblem};
+use crate::adapted::labels::isotropy;
+use crate::adapted::{AdaptedBasis, SparseBasis};
+use crate::continuation::crossings::{Crossings, IndexChanges};
+use crate::continuation::events::trace;
+use crate::continuation::events::{Detector, Event, MeasureFn};
+use crate::continuation::{point_at, step_off, Continuation, PathOptions, PathPoint, Stalled};
+use crate::model::constraint::Constraint;
+use crate::model::{Evaluation, Layout, Model, Request};
+use crate::results::{
+    directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches,
+    CriticalKind, CriticalPoint, Half, Halves, MeshInfo, Node, PathReport, PathRow, RecordedPoint,
+    Reduced, Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow, ASYMMETRY,
+};
+use crate::stability::{IrrepBlocks, Stability};
+use meshes::GroupAction;
+use nalgebra::DVector;
+use petgraph::graph::NodeIndex;
+use symmetry::{IrrepKind, SubgroupLattice};
+
+/// Step along the parent path (scaled arclength) for the derivative of the critical
+/// eigenvalue, b.
+const PATH_DELTA: f64 = 1e-4;
+/// Amplitude along the kernel direction (in units of the state scale) for C₃.
+const MODE_DELTA: f64 = 1e-4;
+/// |φᵀK(u + hφ)φ − φᵀK(u − hφ)φ| / ‖K‖ above which a quadratic coefficient that symmetry
+/// allows counts as non-zero (round-off of the difference is about 1e-14).
+const QUADRATIC_ZERO: f64 = 1e-9;
+/// |b| / ‖K‖ below which the critical eigenvalue does not cross transversally.
+const TRANSVERSAL_ZERO: f64 = 1e-10;
+/// Tolerance of the checks that a kernel direction is what the representation theory says.
+const DIRECTION_TOL: f64 = 1e-6;
+
+/// A group acting on the model, with what switching at a critical point of a path in its
+/// fixed-point space needs: the fixed-point basis, the symmetry-adapted basis (for stability
+/// by its irreps), its subgroup lattice, and where its elements are in the scene's group.
+pub struct Level {
+    /// The group's action on the mesh.
+    pub action: GroupAction,
+    /// An orthonormal basis of Fix(group).
+    pub basis: SparseBasis,
+    /// The adapted basis, or why there is none (a complex-type irrep).
+    pub adapted: Result<AdaptedBasis, String>,
+    /// The group's subgroups up to conjugacy.
+    pub lattice: SubgroupLattice,
+    /// Element i of this group is element `top_index[i]` of the scene's group.
+    pub top_index: Vec<usize>,
+}
+
+impl Level {
+    /// The level of `action`'s group on `layout`; `top_index` places its elements in the
+    /// scene's group.
+    pub fn new(action: GroupAction, layout: &Layout, top_index: Vec<usize>) -> Self {
+        let basis = SparseBasis::fixed_point(&action, layout);
+        let adapted = AdaptedBasis::new(&action, layout).map_err(|e| e.to_string());
+        let lattice = action.group().subgroup_lattice();
+        Self {
+            action,
+            basis,
+            adapted,
+            lattice,
+            top_index,
+        }
+    }
+
+    /// The scene's group itself.
+    pub fn top(action: &GroupAction, layout: &Layout) -> Self {
+        let n = action.group().order();
+        Self::new(action.clone(), layout, (0..n).collect())
+    }
+}
+
+/// A direction of the kernel along which the branching lemma predicts a branch.
+#[derive(Debug, Clone)]
+pub struct Direction {
+    /// The axial isotropy subgroup Σ (sorted element indices of the level's group).
+    pub elements: Vec<usize>,
+    /// Its class name in the level's lattice.
+    pub class: String,
+    /// The unit vector spanning Fix_{V_μ}(Σ), in the irrep's coordinates.
+    pub coefficients: DVector<f64>,
+    /// φ = Σ_a c_a x_a over the unknowns (unit norm).
+    pub field: Vec<f64>,
+    /// Whether ±φ are conjugate.
+    pub halves: Halves,
+    /// Whether symmetry lets the quadratic coefficient be non-zero (an invariant cubic exists
+    /// and ±φ are not conjugate).
+    pub quadratic_allowed: bool,
+}
+
+/// What branch switching needs of the problem: the model and its constraints, the measures
+/// of a state, the control, the scene's group and the options.
+pub struct Switching<'a> {
+    /// The model.
+    pub model: &'a dyn Model,
+    /// The active constraints.
+    pub constraints: &'a [Box<dyn Constraint>],
+    /// The measures of a state (critical points along branches carry them).
+    pub measure: MeasureFn<'a>,
+    /// The control parameter.
+    pub control: Option<usize>,
+    /// The scene's group.
+    pub top: &'a Level,
+    /// Depth, steps, continuation.
+    pub options: BranchOptions,
+}
+
+/// T(g) u: (T(g) u)_{π_g(i)} = R_g u_i.
+fn act(action: &GroupAction, layout: &Layout, g: usize, u: &[f64]) -> Vec<f64> {
+    let r = action.group().element(g);
+    let perm = action.node_perm(g);
+    let mut out = vec![0.0; u.len()];
+    for (i, &j) in perm.iter().enumerate().take(layout.nodes()) {
+        let (Some(di), Some(dj)) = (layout.dof(i, 0), layout.dof(j, 0)) else {
+            continue;
+        };
+        let v = r * nalgebra::Vector3::new(u[di], u[di + 1], u[di + 2]);
+        out[dj..dj + 3].copy_from_slice(v.as_slice());
+    }
+    out
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// The partners x_a = P_{a0} x_0 = (d/|G|) Σ_g D_{a0}(g) T(g) x_0 of a mode x_0 of the first
+/// partner of irrep `irrep` (docs/theory.md §14.2); x_0 itself first.
+pub fn partners(
+    action: &GroupAction,
+    layout: &Layout,
+    irrep: &symmetry::Irrep,
+    mode: &[f64],
+) -> Vec<Vec<f64>> {
+    let group = action.group();
+    let d = irrep.dim();
+    let mut out = vec![vec![0.0; mode.len()]; d];
+    for g in 0..group.order() {
+        let moved = act(action, layout, g, mode);
+        let m = irrep.matrix(g);
+        for (a, x) in out.iter_mut().enumerate() {
+            let w = m[(a, 0)];
+            if w != 0.0 {
+                x.iter_mut().zip(&moved).for_each(|(x, y)| *x += w * y);
+            }
+        }
+    }
+    let scale = d as f64 / group.order() as f64;
+    out.iter_mut()
+        .for_each(|x| x.iter_mut().for_each(|v| *v *= scale));
+    out
+}
+
+/// The kernel directions of a critical point of a path in Fix(level's group), one per
+/// conjugacy class of axial isotropy subgroups of its irrep (docs/theory.md §14.1–14.2); or
+/// why there are none.
+pub fn kernel_directions(
+    level: &Level,
+    layout: &Layout,
+    cp: &CriticalPoint,
+) -> Result<Vec<Direction>, Skip> {
+    let group = level.action.group();
+    let irrep = group
+        .irrep(&cp.irrep)
+        .ok_or_else(|| Skip::Failed(format!("{} has no irrep {}", group.name(), cp.irrep)))?;
+    if irrep.is_trivial() || matches!(cp.kind, CriticalKind::LimitPoint) {
+        return Err(Skip::LimitPoint);
+    }
+    if irrep.kind() != IrrepKind::Real {
+        return Err(Skip::ComplexIrrep(cp.irrep.clone()));
+    }
+    let iso = group
+        .isotropy(&level.lattice, irrep)
+        .map_err(|e| Skip::Failed(e.to_string()))?;
+    let x = partners(&level.action, layout, irrep, &cp.mode);
+    // x_0 must be the first partner's vector (P_00 x_0 = x_0) and the partners orthonormal.
+    let x0_err = norm(
+        &x[0]
+            .iter()
+            .zip(&cp.mode)
+            .map(|(a, b)| a - b)
+            .collect::<Vec<_>>(),
+    );
+    if x0_err > DIRECTION_TOL * norm(&cp.mode).max(1e-300) {
+        return Err(Skip::Failed(format!(
+            "the mode is not in the first partner of {} (|P x - x| = {x0_err:.1e})",
+            cp.irrep
+        )));
+    }
+    let cubic = group.invariant_cubics(irrep) > 0;
+    let mut dirs = Vec::new();
+    for s in iso.axial() {
+        let c = s.axis().expect("axial");
+        let mut field = vec![0.0; cp.mode.len()];
+        for (a, xa) in x.iter().enumerate() {
+            field.iter_mut().zip(xa).for_each(|(f, v)| *f += c[a] * v);
+        }
+        let n = norm(&field);
+        if (n - 1.0).abs() > DIRECTION_TOL {
+            return Err(Skip::Failed(format!(
+                "the kernel direction of {} in {} has norm {n}, not 1",
+                s.name, cp.irrep
+            )));
+        }
+        field.iter_mut().for_each(|v| *v /= n);
+        // φ is fixed by Σ and by nothing else of the group.
+        for g in 0..group.order() {
+            let moved = act(&level.action, layout, g, &field);
+            let err = norm(
+                &moved
+                    .iter()
+                    .zip(&field)
+                    .map(|(a, b)| a - b)
+                    .collect::<Vec<_>>(),
+            );
+            if (err <= DIRECTION_TOL) != s.elements.contains(&g) {
+                return Err(Skip::Failed(format!(
+                    "the kernel direction of {} in {}: element {g} {} it",
+                    s.name,
+                    cp.irrep,
+                    if err <= DIRECTION_TOL {
+                        "fixes"
+                    } else {
+                        "does not fix"
+                    }
+                )));
+            }
+        }
+        dirs.push(Direction {
+            elements: s.elements.clone(),
+            class: s.name.clone(),
+            coefficients: c,
+            field,
+            halves: if s.halves_conjugate() {
+                Halves::Conjugate
+            } else {
+                Halves::Distinct
+            },
+            quadratic_allowed: cubic && !s.halves_conjugate(),
+        });
+    }
+    if dirs.is_empty() {
+        return Err(Skip::NoAxialSubgroup(cp.irrep.clone()));
+    }
+    Ok(dirs)
+}
+
+/// φᵀ K φ at (u, params), and ‖K‖ = max |K_ij|.
+fn quadratic_form(
+    model: &dyn Model,
+    eval: &mut Evaluation,
+    u: &[f64],
+    params: &[f64],
+    phi: &[f64],
+) -> Result<(f64, f64), crate::model::ModelError> {
+    model.evaluate(u, params, Request::ALL, eval)?;
+    let mut y = vec![0.0; phi.len()];
+    model.pattern().matvec(&eval.tangent, phi, &mut y);
+    let mut q: f64 = y.iter().zip(phi).map(|(a, b)| a * b).sum();
+    let mut scale = eval.tangent.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (c, a) in &eval.rank_one {
+        let d: f64 = a.iter().zip(phi).map(|(x, y)| x * y).sum();
+        q += c * d * d;
+        scale = scale.max(c.abs() * a.iter().fold(0.0f64, |m, v| m.max(v * v)));
+    }
+    Ok((q, scale.max(1e-300)))
+}
+
+impl Switching<'_> {
+    /// Switches at every requested critical point of the path (`critical`, in the order
+    /// found) and, to the options' depth, at the critical points of the branches.
+    pub fn run(&self, critical: &[CriticalPoint]) -> BranchGraph {
+        let mut g = BranchGraph::default();
+        for (k, cp) in critical.iter().enumerate() {
+            let node = g.graph.add_node(Node::Critical {
+                on: None,
+                number: k + 1,
+                point: Box::new(cp.clone()),
+                skipped: None,
+            });
+            let requested = self
+                .options
+                .points
+                .as_ref()
+                .is_none_or(|p| p.contains(&(k + 1)));
+            if !requested {
+                set_skip(&mut g, node, Skip::NotRequested);
+                continue;
+            }
+            self.switch_at(self.top, None, node, cp, 1, 1.0, &mut g);
+        }
+        g
+    }
+
+    /// Switches at `cp`, a critical point of a path in Fix(level's group) (the branch
+    /// `parent`, or the path), and follows every branch; recurses while `depth` is within
+    /// the options' depth.
+    #[allow(clippy::too_many_arguments)]
+    fn switch_at(
+        &self,
+        level: &Level,
+        parent: Option<usize>,
+        node: NodeIndex,
+        cp: &CriticalPoint,
+        depth: usize,
+        sign: f64,
+        g: &mut BranchGraph,
+    ) {
+        let layout = self.model.layout();
+        let dirs = match kernel_directions(level, layout, cp) {
+            Ok(d) => d,
+            Err(skip) => {
+                set_skip(g, node, skip);
+                return;
+            }
+        };
+        for dir in &dirs {
+            let t0 = std::time::Instant::now();
+            let group = level.action.group();
+            let child = match group
+                .subgroup(&dir.elements)
+                .map_err(|e| e.to_string())
+                .and_then(|sub| {
+                    let action = level.action.restrict_to(&sub).map_err(|e| e.to_string())?;
+                    let top_index = sub
+                        .parent_index
+                        .iter()
+                        .map(|&i| level.top_index[i])
+                        .collect();
+                    Ok(Level::new(action, layout, top_index))
+                }) {
+                Ok(c) => c,
+                Err(e) => {
+                    set_skip(
+                        g,
+                        node,
+                        Skip::Failed(format!("isotropy subgroup {}: {e}", dir.class)),
+                    );
+                    continue;
+                }
+            };
+            let reduced = match self.reduced(level, cp, dir) {
+                Ok(r) => r,
+                Err(e) => {
+                    set_skip(g, node, Skip::Failed(e));
+                    continue;
+                }
+            };
+            let halves = match dir.halves {
+                Halves::Conjugate => vec![Half::Plus],
+                Halves::Distinct => vec![Half::Plus, Half::Minus],
+            };
+            // The set-up (Σ's action and bases, the reduced equation) is shared by the halves.
+            let setup = t0.elapsed() / halves.len() as u32;
+            for half in halves {
+                let t1 = std::time::Instant::now();
+                let mut branch = self.follow(level, &child, cp, dir, &reduced, half);
+                branch.from = node;
+                branch.parent = parent;
+                branch.sign = sign * half.sign();
+                branch.time = setup + t1.elapsed();
+                let id = g.branches.len();
+                let end = g.graph.add_node(Node::End {
+                    branch: id,
+                    stop: branch.stop.clone(),
+                });
+                g.graph.add_edge(node, end, id);
+                let found: Vec<CriticalPoint> = branch.critical.clone();
+                let branch_sign = branch.sign;
+                g.branches.push(branch);
+                for (k, c) in found.iter().enumerate() {
+                    let n = g.graph.add_node(Node::Critical {
+                        on: Some(id),
+                        number: k + 1,
+                        point: Box::new(c.clone()),
+                        skipped: None,
+                    });
+                    if depth < self.options.depth {
+                        self.switch_at(&child, Some(id), n, c, depth + 1, branch_sign, g);
+                    } else if c.kind == CriticalKind::LimitPoint {
+                        set_skip(g, n, Skip::LimitPoint);
+                    } else {
+                        set_skip(g, n, Skip::Depth);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The reduced equation along `dir` at `cp` (docs/theory.md §14.3): b from φᵀKφ at the
+    /// path's linear predictor ±δ, C₃ from φᵀKφ at u ± hφ (central differences, both
+    /// exact to O(δ²)); C₃ = 0 exactly where symmetry forbids it.
+    fn reduced(
+        &self,
+        level: &Level,
+        cp: &CriticalPoint,
+        dir: &Direction,
+    ) -> Result<Reduced, String> {
+        let tangent = self.path_tangent(level, cp)?;
+        let opts = &self.options.path;
+        let phi = &dir.field;
+        let mut eval = self.model.new_evaluation();
+        let problem = SymmetricProblem::new(
+            self.model,
+            &level.basis,
+            self.constraints,
+            cp.parameters.clone(),
+            self.control,
+        );
+        let m = level.basis.dim();
+        let lambda = problem.free_values(&cp.parameters);
+        let mut at = |s: f64| -> Result<(f64, f64), String> {
+            let q = level.basis.restrict(&cp.state) + tangent.rows(0, m) * (s * opts.state_scale);
+            let mut l = lambda.clone();
+            for j in 0..l.len() {
+                l[j] += tangent[m + j] * s * opts.parameter_scale(j);
+            }
+            let u = problem.displacement(&q);
+            let p = problem.parameters(&l);
+            quadratic_form(self.model, &mut eval, &u, &p, phi).map_err(|e| e.to_string())
+        };
+        let (q_plus, scale) = at(PATH_DELTA)?;
+        let (q_minus, _) = at(-PATH_DELTA)?;
+        let b = (q_plus - q_minus) / (2.0 * PATH_DELTA);
+        let h = MODE_DELTA * opts.state_scale;
+        let shifted =
+            |a: f64| -> Vec<f64> { cp.state.iter().zip(phi).map(|(u, f)| u + a * f).collect() };
+        let mut eval2 = self.model.new_evaluation();
+        let (c_plus, _) = quadratic_form(self.model, &mut eval2, &shifted(h), &cp.parameters, phi)
+            .map_err(|e| e.to_string())?;
+        let (c_minus, _) =
+            quadratic_form(self.model, &mut eval2, &shifted(-h), &cp.parameters, phi)
+                .map_err(|e| e.to_string())?;
+        let c3 = (c_plus - c_minus) / (2.0 * h);
+        let path_slope = b / scale;
+        let quadratic = dir.quadratic_allowed && (c_plus - c_minus).abs() > QUADRATIC_ZERO * scale;
+        let mode_slope = if quadratic {
+            c3 * opts.state_scale / scale
+        } else {
+            0.0
+        };
+        let transversal = path_slope.abs() > TRANSVERSAL_ZERO;
+        let path_per_amplitude = if quadratic && transversal {
+            -mode_slope / (2.0 * path_slope)
+        } else {
+            0.0
+        };
+        Ok(Reduced {
+            path_slope,
+            mode_slope,
+            bifurcation: if quadratic {
+                Bifurcation::Transcritical
+            } else {
+                Bifurcation::Pitchfork
+            },
+            path_per_amplitude,
+        })
+    }
+
+    /// The unit tangent (scaled variables) of the path in Fix(level's group) at `cp`, the
+    /// control increasing (the critical point is a regular point of that path: its singular
+    /// block is not the trivial one).
+    fn path_tangent(&self, level: &Level, cp: &CriticalPoint) -> Result<DVector<f64>, String> {
+        let mut problem = SymmetricProblem::new(
+            self.model,
+            &level.basis,
+            self.constraints,
+            cp.parameters.clone(),
+            self.control,
+        );
+        let q = level.basis.restrict(&cp.state);
+        let lambda = problem.free_values(&cp.parameters);
+        let opts = PathOptions {
+            direction: 1.0,
+            ..self.options.path.clone()
+        };
+        point_at(&mut problem, q, lambda, 0, &opts, None)
+            .map(|p| p.tangent)
+            .map_err(|e| format!("the path's tangent at the critical point: {e}"))
+    }
+
+    /// The unit tangent of the branch at the critical point in Fix(Σ) (scaled variables,
+    /// q/σ and λ): per unit scaled amplitude A = a/σ along φ the branch moves by ds/dA along
+    /// the path's unit tangent t_path, so the direction is (φ + (ds/dA) t_q, (ds/dA) t_λ),
+    /// normalised — (φ, 0) for a pitchfork — on the given half.
+    fn branch_tangent(
+        &self,
+        level: &Level,
+        child: &Level,
+        cp: &CriticalPoint,
+        dir: &Direction,
+        reduced: &Reduced,
+        half: Half,
+    ) -> Result<DVector<f64>, String> {
+        let m = child.basis.dim();
+        let nf = self.constraints.len() + 1;
+        let mut t = DVector::zeros(m + nf);
+        t.rows_mut(0, m)
+            .copy_from(&child.basis.restrict(&dir.field));
+        let k = reduced.path_per_amplitude;
+        if k != 0.0 {
+            let tp = self.path_tangent(level, cp)?;
+            let mp = level.basis.dim();
+            let mut up = vec![0.0; level.basis.unknowns()];
+            level.basis.expand(&tp.rows(0, mp).into_owned(), &mut up);
+            let mut tq = t.rows(0, m).into_owned();
+            tq += child.basis.restrict(&up) * k;
+            t.rows_mut(0, m).copy_from(&tq);
+            for j in 0..nf {
+                t[m + j] = k * tp[mp + j];
+            }
+        }
+        let n = t.norm();
+        if n == 0.0 || !n.is_finite() {
+            return Err("the branch direction is zero in Fix(Σ)".into());
+        }
+        Ok(t * (half.sign() / n))
+    }
+
+    /// Follows one half of the branch along `dir` from `cp`.
+    fn follow(
+        &self,
+        level: &Level,
+        child: &Level,
+        cp: &CriticalPoint,
+        dir: &Direction,
+        reduced: &Reduced,
+        half: Half,
+    ) -> SwitchedBranch {
+        let class_top = self
+            .top
+            .lattice
+            .class_of(&child.top_index)
+            .map(|c| self.top.lattice.classes()[c].name.clone())
+            .unwrap_or_else(|| dir.class.clone());
+        let mut elements = child.top_index.clone();
+        elements.sort_unstable();
+        let mut branch = SwitchedBranch {
+            from: NodeIndex::new(0),
+            parent: None,
+            irrep: cp.irrep.clone(),
+            isotropy: class_top,
+            elements,
+            class_in_parent: dir.class.clone(),
+            half,
+            halves: dir.halves,
+            reduced: *reduced,
+            symmetric_unknowns: child.basis.dim(),
+            points: vec![self.point(&cp.state, &cp.parameters, 0.0, 0, None)],
+            turning: Vec::new(),
+            critical: Vec::new(),
+            stop: StopReason::Condition,
+            stability_note: child
+                .adapted
+                .as_ref()
+                .err()
+                .map(|e| format!("stability not analysed: {e}")),
+            warnings: Vec::new(),
+            sign: half.sign(),
+            time: std::time::Duration::ZERO,
+        };
+        let tangent = match self.branch_tangent(level, child, cp, dir, reduced, half) {
+            Ok(t) => t,
+            Err(e) => {
+                branch.warnings.push(e);
+                return branch;
+            }
+        };
+        let mut problem = SymmetricProblem::new(
+            self.model,
+            &child.basis,
+            self.constraints,
+            cp.parameters.clone(),
+            self.control,
+        );
+        let start = PathPoint {
+            q: child.basis.restrict(&cp.state),
+            lambda: problem.free_values(&cp.parameters),
+            arclength: 0.0,
+            iterations: 0,
+            tangent: tangent.clone(),
+        };
+        // The first step leaves the critical point on the plane of fixed amplitude along φ
+        // (§14.4), which the parent path does not meet; it is taken before any detector sees
+        // a point: the singular block at the critical point is not a crossing of the branch.
+        let m = child.basis.dim();
+        let mut plane = DVector::zeros(tangent.len());
+        plane
+            .rows_mut(0, m)
+            .copy_from(&(child.basis.restrict(&dir.field) * half.sign()));
+        let opts = &self.options.path;
+        let mut s = opts.initial_step;
+        let first = loop {
+            match step_off(&mut problem, &start, &tangent, &plane, s, opts) {
+                Ok(p) => break p,
+                Err(why) => {
+                    s *= 0.5;
+                    if s < opts.min_step {
+                        branch.stop = StopReason::Stalled(
+                            Stalled {
+                                min_step: opts.min_step,
+                                after: 0,
+                                control: self.control.map_or(0.0, |c| cp.parameters[c]),
+                                why,
+                            }
+                            .into(),
+                        );
+                        return branch;
+                    }
+                }
+            }
+        };
+        let mut driver = Continuation::new(problem, first, self.options.path.clone());
+        let crossings = child.adapted.as_ref().ok().map(|adapted| {
+            Crossings::new(
+                Box::new(IrrepBlocks::new(
+                    Stability::new(self.model, adapted),
+                    self.model,
+                    self.constraints,
+                    &child.action,
+                )),
+                self.measure,
+                self.control,
+                false,
+            )
+        });
+        let mut index = crossings.map(|c| Numbered(IndexChanges::new(c)));
+        let followed = {
+            let mut extra: Vec<&mut dyn Detector<SymmetricProblem>> = Vec::new();
+            if let Some(ix) = index.as_mut() {
+                extra.push(ix);
+            }
+            trace(
+                &mut driver,
+                self.options.steps.saturating_sub(1),
+                |_, _| None,
+                &mut extra,
+                |_, _| {},
+            )
+        };
+        // The budget counts the branch's points after the critical point, the first step
+        // included.
+        let stop = match followed.stop {
+            StopReason::StepBudget { .. } => StopReason::StepBudget {
+                steps: self.options.steps,
+            },
+            other => other,
+        };
+        let problem = driver.into_problem();
+        let indices = index.map(|ix| ix.0.indices).unwrap_or_default();
+        for (i, p) in followed.points.iter().enumerate() {
+            let u = problem.displacement(&p.q);
+            let params = problem.parameters(&p.lambda);
+            let index = indices.get(i).copied().flatten();
+            branch
+                .points
+                .push(self.point(&u, &params, p.arclength, p.iterations, index));
+        }
+        // Points of the followed path are numbered from 1 on the branch (0 is the critical
+        // point it leaves); the index detector numbers its findings so already.
+        for event in followed.events {
+            match event {
+                Event::Critical(c) => branch.critical.push(c),
+                Event::Turning(t) => branch.turning.push(BranchTurning {
+                    kind: t.kind,
+                    after_step: t.after_step + 1,
+                    u: problem.displacement(&t.point.q),
+                    parameters: problem.parameters(&t.point.lambda),
+                }),
+                Event::Warning(w) => branch.warnings.push(w),
+                Event::Stop(_) => {}
+            }
+        }
+        branch.stop = stop;
+        if let Some(bad) = branch.points[1..]
+            .iter()
+            .position(|p| p.stabiliser != branch.elements)
+        {
+            branch.warnings.push(format!(
+                "point {} of the branch has the stabiliser {} (order {}), not its isotropy subgroup {}",
+                bad + 1,
+                branch.points[bad + 1].stabiliser_class,
+                branch.points[bad + 1].stabiliser.len(),
+                branch.isotropy
+            ));
+        }
+        branch
+    }
+
+    /// A branch point: its asymmetry and stabiliser in the scene's group.
+    fn point(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        arclength: f64,
+        iterations: usize,
+        index: Option<usize>,
+    ) -> BranchPoint {
+        let layout = self.model.layout();
+        let top = self.top;
+        let mut sym = vec![0.0; u.len()];
+        top.basis.expand(&top.basis.restrict(u), &mut sym);
+        let free = (0..layout.nodes())
+            .filter(|&i| layout.dof(i, 0).is_some())
+            .count()
+            .max(1);
+        let asym = sym
+            .iter()
+            .zip(u)
+            .map(|(s, v)| (v - s) * (v - s))
+            .sum::<f64>()
+            .sqrt()
+            / (free as f64).sqrt();
+        let stab = isotropy(&top.action, layout, u);
+        let stabiliser_class = top
+            .lattice
+            .class_of(&stab.elements)
+            .map(|c| top.lattice.classes()[c].name.clone())
+            .unwrap_or(stab.name);
+        BranchPoint {
+            u: u.to_vec(),
+            parameters: params.to_vec(),
+            arclength,
+            iterations,
+            index,
+            asymmetry: asym,
+            stabiliser: stab.elements,
+            stabiliser_class,
+        }
+    }
+}
+
+/// A detector whose findings are numbered by the branch's points — the critical point the
+/// branch leaves is point 0, the driver's first point is point 1.
+struct Numbered<D>(D);
+
+impl<P: crate::continuation::Problem, D: Detector<P>> Detector<P> for Numbered<D> {
+    fn start(&mut self, driver: &mut Continuation<P>) -> Vec<Event> {
+        self.0.start(driver)
+    }
+
+    fn check(
+        &mut self,
+        driver: &mut Continuation<P>,
+        step: &crate::continuation::Accepted,
+        after: usize,
+    ) -> Vec<Event> {
+        self.0.check(driver, step, after + 1)
+    }
+}
+
+fn set_skip(g: &mut BranchGraph, node: NodeIndex, skip: Skip) {
+    if let Node::Critical { skipped, .. } = &mut g.graph[node] {
+        skipped.get_or_insert(skip);
+    }
+}
+
+/// Switches at the path's critical points `critical` of `study` (in the scene's group) and
+/// follows the branches; each becomes a [`BranchRun`].
+pub fn run(study: &MeshStudy, critical: &[CriticalPoint], options: BranchOptions) -> Branches {
+    let t = std::time::Instant::now();
+    let save_every = options.save_every.max(1);
+    let layout = study.model.layout();
+    let top = Level::top(&study.action, layout);
+    let measure = |u: &[f64], p: &[f64]| study.measure(u, p);
+    let depth = options.depth;
+    let switching = Switching {
+        model: &study.model,
+        constraints: &study.constraints,
+        measure: &measure,
+        control: study.control,
+        top: &top,
+        options,
+    };
+    let graph = switching.run(critical);
+    let runs = graph
+        .branches
+        .iter()
+        .enumerate()
+        .map(|(i, b)| branch_run(study, b, i, save_every))
+        .collect();
+    Branches {
+        graph,
+        runs,
+        depth,
+        time: t.elapsed(),
+    }
+}
+
+/// The report and states of one branch.
+fn branch_run(study: &MeshStudy, b: &SwitchedBranch, i: usize, save_every: usize) -> BranchRun {
+    let measures = |u: &[f64], p: &[f64], asym: f64| {
+        let mut m = study.measure(u, p);
+        m.push(asym);
+        m
+    };
+    let control = |p: &[f64]| study.control.map_or(0.0, |c| p[c]);
+    let rows: Vec<PathRow> = b
+        .points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| PathRow {
+            step: k,
+            arclength: p.arclength,
+            parameters: p.parameters.clone(),
+            measures: measures(&p.u, &p.parameters, p.asymmetry),
+            iterations: p.iterations,
+            index: p.index,
+            negative: None,
+        })
+        .collect();
+    let last = b.points.len() - 1;
+    let mut states: Vec<State> = Vec::new();
+    let mut critical = b.critical.iter().peekable();
+    for (k, p) in b.points.iter().enumerate() {
+        if k % save_every == 0 || k == last {
+            states.push(State {
+                step: k,
+                kind: StateKind::Step,
+                control: control(&p.parameters),
+                u: p.u.clone(),
+                params: p.parameters.clone(),
+                mode: None,
+            });
+        }
+        while let Some(cp) = critical.next_if(|cp| cp.after_step + 1 == k) {
+            states.push(State {
+                step: cp.after_step,
+                kind: StateKind::Critical {
+                    kind: cp.kind,
+                    irrep: cp.irrep.clone(),
+                },
+                control: control(&cp.parameters),
+                u: cp.state.clone(),
+                params: cp.parameters.clone(),
+                mode: Some(cp.mode.clone()),
+            });
+        }
+    }
+    let asym_of = |u: &[f64]| -> f64 {
+        let mut s = vec![0.0; u.len()];
+        study.basis.expand(&study.basis.restrict(u), &mut s);
+        let free = study.basis.unknowns() as f64 / 3.0;
+        s.iter()
+            .zip(u)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt()
+            / free.max(1.0).sqrt()
+    };
+    let mut turning = Vec::new();
+    for t in &b.turning {
+        states.push(State {
+            step: t.after_step,
+            kind: StateKind::Turning(t.kind),
+            control: control(&t.parameters),
+            u: t.u.clone(),
+            params: t.parameters.clone(),
+            mode: None,
+        });
+        turning.push(TurningRow {
+            kind: t.kind,
+            after_step: t.after_step,
+            measures: measures(&t.u, &t.parameters, asym_of(&t.u)),
+            parameters: t.parameters.clone(),
+        });
+    }
+    let mut critical = b.critical.clone();
+    for c in &mut critical {
+        c.measures.push(asym_of(&c.state));
+    }
+    let m = &study.mesh;
+    let mut measure_names: Vec<String> = study.measures.iter().map(|(n, _)| n.clone()).collect();
+    measure_names.push(ASYMMETRY.to_string());
+    let report = PathReport {
+        scene: study.scene.info.name.clone(),
+        origin: study.scene.origin.clone(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        mesh: MeshInfo {
+            generator: study.scene.mesh.generator().to_string(),
+            nodes: m.mesh.nodes.len(),
+            elements: m.mesh.triangles.len(),
+            group: m.group().name().to_string(),
+            order: m.group().order(),
+        },
+        group: b.isotropy.clone(),
+        group_order: b.elements.len(),
+        unknowns: study.basis.unknowns(),
+        symmetric_unknowns: b.symmetric_unknowns,
+        control: study
+            .control
+            .map_or_else(String::new, |c| study.parameters[c].clone()),
+        parameters: study.parameters.clone(),
+        measures: measure_names,
+        rows,
+        turning_points: turning,
+        stop: b.stop.clone(),
+        critical,
+        warnings: b.warnings.clone(),
+        stability_note: b.stability_note.clone(),
+        saved: Vec::new(),
+        spectra: Default::default(),
+        states: None,
+        wrinkling: None,
+        wave_numbers: Vec::new(),
+        irreps: Vec::new(),
+    };
+    BranchRun {
+        report,
+        states,
+        directory: directory(i),
+    }
+}
+
+/// The recorded critical points of a run of `study` as [`CriticalPoint`]s, point `n`
+/// (1-based) with its `state` and unit `mode` (the others have none: they are nodes of the
+/// graph, not switched at). Fails naming the irrep when the study's group has no such irrep.
+pub fn recorded_points(
+    study: &MeshStudy,
+    recorded: &[RecordedPoint],
+    n: usize,
+    state: Vec<f64>,
+    mode: Vec<f64>,
+) -> Result<Vec<CriticalPoint>, String> {
+    let group = study.action.group();
+    let layout = study.model.layout();
+    let (mut state, mut mode) = (Some(state), Some(mode));
+    let mut out = Vec::with_capacity(recorded.len());
+    for (k, c) in recorded.iter().enumerate() {
+        let irrep = group.irrep(&c.irrep).ok_or_else(|| {
+            format!(
+                "critical point {}: {} has no irrep {}",
+                k + 1,
+                group.name(),
+                c.irrep
+            )
+        })?;
+        let (u, m) = if k + 1 == n {
+            (
+                state.take().unwrap_or_default(),
+                mode.take().unwrap_or_default(),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let iso = if m.is_empty() {
+            isotropy(&study.action, layout, &vec![0.0; layout.unknowns()])
+        } else {
+            isotropy(&study.action, layout, &m)
+        };
+        out.push(CriticalPoint {
+            kind: CriticalKind::of(irrep.is_trivial(), irrep.dim(), false),
+            irrep: c.irrep.clone(),
+            multiplicity: irrep.dim(),
+            parameters: c.parameters.clone(),
+            measures: c.measures.clone(),
+            after_step: c.after_step,
+            residual_eigenvalue: c.residual_eigenvalue,
+            isotropy: iso,
+            mode: m,
+            state: u,
+        });
+    }
+    Ok(out)
+}
