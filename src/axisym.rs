@@ -32,12 +32,17 @@
 //! Boundary conditions: a clamped end holds U = V = W = 0; a node on the axis (R = 0) holds
 //! the regularity of the field there: U = V = 0 for m = 0, W = 0 and U + V = 0 for m = 1
 //! (the field is then the constant U e_x), everything for m ≥ 2.
+//!
+//! A state and the modes of its blocks are drawn on the meridian revolved about z into a
+//! triangulated surface ([`revolved_mesh`], [`revolved_positions`], [`revolved_mode`];
+//! docs/theory.md §15.17).
 
 mod gas;
 mod held;
 mod model;
 mod plane;
 mod problem;
+mod revolve;
 pub mod run;
 mod spin;
 mod volume;
@@ -46,6 +51,10 @@ pub use gas::{GasAmountBorder, GasAmountRow};
 pub use model::{AxisymModel, Block, BlockLayout, Evaluated, Pressure};
 pub use plane::FloorPlane;
 pub use problem::{AxisymProblem, GasTarget, VolumeTarget};
+pub use revolve::{
+    default_segments, mode_amplitudes, revolved_mesh, revolved_mode, revolved_positions,
+    revolved_rings,
+};
 
 use crate::effects::membrane::MooneyRivlin;
 use nalgebra::{DMatrix, Matrix3, Vector3};
