@@ -1422,3 +1422,445 @@ mod revolve {
         assert!(read.topology().unwrap().boundary_loops.len() == 1);
     }
 }
+
+/// μ, k and H as parameters of the meridian (docs/theory.md §15.18): their loads ∂F/∂Λ
+/// against central differences of the gradient, the Fourier blocks at the parameters, and
+/// paths of the balloon with k a parameter, held or the control.
+mod material {
+    use memstab::axisym::run::{run, AxisymReport, AxisymStudy};
+    use memstab::axisym::{
+        critical_densities_at, AxisymModel, Hydrostatic, Meridian, MeridianMaterial, Pressure,
+    };
+    use memstab::effects::Quantity;
+    use memstab::reference::{ponding_scale, sphere_extrema, sphere_pressure, BESSEL_J2};
+    use memstab::results::CriticalKind;
+    use memstab::results::{Extremum, StopReason};
+    use memstab::scene::Scene;
+    use nalgebra::DMatrix;
+    use std::process::Command;
+
+    /// μ, k and H the parameters 0, 1 and 2.
+    const PARAMETRIC: MeridianMaterial = MeridianMaterial {
+        mu: Quantity::Parameter(0),
+        k: Quantity::Parameter(1),
+        thickness: Quantity::Parameter(2),
+    };
+
+    /// The balloon's meridian (a sphere of 8 elements, no pre-stretch) under a gas at the
+    /// parameter 3, inflated to about 1.3 with a wrinkle along the meridian and stretched
+    /// along the axis (the north pole, whose height is held, where it was): (model, q,
+    /// params).
+    fn balloon() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let meridian = Meridian::sphere(1.0, 8, 1.0, PARAMETRIC).unwrap();
+        let model = AxisymModel::new(
+            meridian,
+            vec![Pressure::Gas {
+                pressure: Quantity::Parameter(3),
+            }],
+        );
+        let x: Vec<[f64; 2]> = model
+            .meridian
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let s = 1.3 + 0.04 * (1.7 * i as f64).sin();
+                [p[0] * s, 1.0 + (p[1] - 1.0) * 1.4]
+            })
+            .collect();
+        let q = model.displacement_of(&x);
+        (model, q, vec![80.0, 0.15, 0.012, 0.9])
+    }
+
+    /// The pre-stretched clamped disc (radius 1.1 at λ0 = 1.1, 8 elements) under fluid of
+    /// density the parameter 3 above it (g = 1, level 0), sagged below the level with a
+    /// radial wrinkle: (model, q, params).
+    fn disc() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let meridian = Meridian::disc(1.1, 8, 1.1, PARAMETRIC).unwrap();
+        let fluid = Pressure::Fluid {
+            density: Quantity::Parameter(3),
+            gravity: Quantity::Value(1.0),
+            level: Quantity::Value(0.0),
+            front: true,
+            filled: false,
+        };
+        let model = AxisymModel::new(meridian, vec![fluid]);
+        let x: Vec<[f64; 2]> = model
+            .meridian
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let s = p[0] / 1.1;
+                [
+                    p[0] * (1.0 + 0.002 * (2.3 * i as f64).sin()),
+                    -0.15 * (1.0 - s * s) + 0.01 * (1.9 * i as f64).cos() * s * (1.0 - s),
+                ]
+            })
+            .collect();
+        let q = model.displacement_of(&x);
+        (model, q, vec![50.0, 0.2, 0.02, 1.5])
+    }
+
+    /// The largest |a − b| over the largest |b|.
+    fn relative(a: &[f64], b: &[f64]) -> f64 {
+        let scale = b.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        a.iter()
+            .zip(b)
+            .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
+            / scale
+    }
+
+    /// The loads of μ, k and H against central differences of the gradient in each, over
+    /// the column's largest entry. The gradient is linear in μ and in H, so there the
+    /// difference is exact but for round-off: at the step δ = 10⁻³ Λ that is ≈ ε/δ ≈ 10⁻¹³
+    /// of the load. In k the gradient is μ B/2 + c1(k) (A − B) with c1 = μ/(2(1 + k)), so the
+    /// central difference at the step δ has the truncation error (δ/(1 + k))² exactly, 10⁻¹⁰
+    /// at δ = 10⁻⁵ (1 + k), and the round-off ε |g|/δ over a load that may be a tenth of
+    /// |g|/(1 + k) (c1 and c2 move in opposite directions), ≈ 10⁻¹⁰ (2 × 10⁻⁹ measured at
+    /// δ = 10⁻⁶ k). The bound 10⁻⁸ leaves a factor of 50 over both, while a wrong factor,
+    /// sign or pair (∂c1/∂k, ∂c2/∂k) is an error of order one. The loads of μ and H are also,
+    /// to round-off, the membrane's own gradient over μ and over H, and the tangent is the
+    /// difference of the gradient in the state.
+    fn check_material_loads(model: &AxisymModel, q: &[f64], params: &[f64]) {
+        let e = model.evaluate(q, params).unwrap();
+        for (j, name) in [(0, "mu"), (1, "k"), (2, "thickness")] {
+            let step = if j == 1 {
+                1e-5 * (1.0 + params[j])
+            } else {
+                1e-3 * params[j]
+            };
+            let gradient = |s: f64| {
+                let mut p = params.to_vec();
+                p[j] += s;
+                model.evaluate(q, &p).unwrap().gradient
+            };
+            let (gp, gm) = (gradient(step), gradient(-step));
+            let fd: Vec<f64> = gp
+                .iter()
+                .zip(&gm)
+                .map(|(a, b)| (a - b) / (2.0 * step))
+                .collect();
+            let load: Vec<f64> = e.loads.column(j).iter().copied().collect();
+            let err = relative(&fd, &load);
+            eprintln!("{name}: load against central differences {err:.1e}");
+            assert!(err < 1e-8, "{name}: {err:e}");
+        }
+        let mut bare = model.clone();
+        bare.pressures.clear();
+        let membrane = bare.evaluate(q, params).unwrap().gradient;
+        for (j, value) in [(0, params[0]), (2, params[2])] {
+            let times: Vec<f64> = e.loads.column(j).iter().map(|l| l * value).collect();
+            assert!(relative(&times, &membrane) < 1e-14, "parameter {j}");
+        }
+        let step = 1e-6;
+        for k in 0..model.dim() {
+            let gradient = |s: f64| {
+                let mut q = q.to_vec();
+                q[k] += s;
+                model.evaluate(&q, params).unwrap().gradient
+            };
+            let (gp, gm) = (gradient(step), gradient(-step));
+            let fd: Vec<f64> = gp
+                .iter()
+                .zip(&gm)
+                .map(|(a, b)| (a - b) / (2.0 * step))
+                .collect();
+            let column: Vec<f64> = e.tangent.column(k).iter().copied().collect();
+            assert!(relative(&fd, &column) < 1e-6, "tangent column {k}");
+        }
+    }
+
+    #[test]
+    fn material_loads_match_central_differences_on_a_balloon_and_a_disc_under_fluid() {
+        let (model, q, params) = balloon();
+        check_material_loads(&model, &q, &params);
+        let (model, q, params) = disc();
+        check_material_loads(&model, &q, &params);
+    }
+
+    /// The same model with the material the numbers `params` gives it.
+    fn with_numbers(model: &AxisymModel, params: &[f64]) -> AxisymModel {
+        let mut fixed = model.clone();
+        fixed.meridian.material = MeridianMaterial {
+            mu: Quantity::Value(params[0]),
+            k: Quantity::Value(params[1]),
+            thickness: Quantity::Value(params[2]),
+        };
+        fixed
+    }
+
+    /// A dense block of wave number m as a nalgebra matrix.
+    fn dense_block(model: &AxisymModel, m: usize, q: &[f64], params: &[f64]) -> DMatrix<f64> {
+        let b = model.block(m, q, params).unwrap();
+        let d = b.pattern.to_dense(&b.values);
+        DMatrix::from_fn(d.nrows(), d.ncols(), |i, j| d[(i, j)])
+    }
+
+    /// The material read at the parameters: the energy, gradient, tangent and every block
+    /// m = 0..4 are those of the meridian with the same numbers, to the last bit, at two
+    /// sets of values.
+    #[test]
+    fn the_parametric_material_is_the_material_of_its_values() {
+        for (model, q, params) in [balloon(), disc()] {
+            for scale in [1.0, 1.7] {
+                let mut p = params.clone();
+                p[..3].iter_mut().for_each(|v| *v *= scale);
+                let fixed = with_numbers(&model, &p);
+                let (a, b) = (
+                    model.evaluate(&q, &p).unwrap(),
+                    fixed.evaluate(&q, &p).unwrap(),
+                );
+                assert_eq!(a.energy, b.energy);
+                assert_eq!(a.gradient, b.gradient);
+                assert_eq!(a.tangent, b.tangent);
+                for m in 0..5 {
+                    let (a, b) = (
+                        model.block(m, &q, &p).unwrap(),
+                        fixed.block(m, &q, &p).unwrap(),
+                    );
+                    assert_eq!(a.values, b.values, "m = {m}");
+                }
+            }
+        }
+    }
+
+    /// The block m = 0 on (U, W) is the tangent of the axisymmetric problem, with the
+    /// material at the parameters (the disc: the centre keeps W, every other node U, V, W,
+    /// the rim none).
+    #[test]
+    fn the_block_m0_is_the_tangent_with_the_material_as_parameters() {
+        let (model, q, params) = disc();
+        let e = model.evaluate(&q, &params).unwrap();
+        let block = dense_block(&model, 0, &q, &params);
+        let n = model.meridian.nodes.len();
+        assert_eq!(block.nrows(), 1 + 3 * (n - 2));
+        let column = |k: usize| {
+            let (i, c) = model.free_unknown(k);
+            if i == 0 {
+                0
+            } else {
+                1 + 3 * (i - 1) + 2 * c
+            }
+        };
+        let scale = e.tangent.amax();
+        for a in 0..model.dim() {
+            for b in 0..model.dim() {
+                let (t, k) = (e.tangent[(a, b)], block[(column(a), column(b))]);
+                assert!((t - k).abs() < 1e-10 * scale, "({a}, {b}): {k} vs {t}");
+            }
+        }
+    }
+
+    /// The lowest eigenvalue of a symmetric matrix over its largest magnitude.
+    fn lowest(k: &DMatrix<f64>) -> f64 {
+        let e = k.clone().symmetric_eigenvalues();
+        e.min() / e.amax()
+    }
+
+    /// At the disc's sagged state, the lowest critical densities of m = 0..3 from the
+    /// blocks sampled in θ ([`critical_densities_at`]) make the exactly integrated blocks
+    /// of the model singular (their lowest eigenvalue ≈ 10⁻¹⁶ of the largest: the two
+    /// integrations agree to round-off), and 1 % below them the lowest eigenvalue is
+    /// 3 × 10⁻⁶ … 5 × 10⁻⁵ of the largest: both read the material at the parameters.
+    #[test]
+    fn the_blocks_are_singular_at_the_critical_densities_of_the_parameters() {
+        let (model, q, params) = disc();
+        let x = model.positions(&q);
+        let load = Hydrostatic {
+            gravity: 1.0,
+            level: 0.0,
+        };
+        let ladder = critical_densities_at(&model.meridian, &x, &params, &load, 3, 1).unwrap();
+        for rung in &ladder {
+            let mut p = params.clone();
+            p[3] = rung.densities[0];
+            let at = lowest(&dense_block(&model, rung.m, &q, &p));
+            p[3] *= 0.99;
+            let below = lowest(&dense_block(&model, rung.m, &q, &p));
+            eprintln!(
+                "m = {}: ρ = {}, lowest eigenvalue there {at:.1e}, 1 % below {below:.1e}",
+                rung.m, rung.densities[0]
+            );
+            assert!(at.abs() < 1e-11, "m = {}: {at:e}", rung.m);
+            assert!(below > 1e-7, "m = {}: {below:e}", rung.m);
+        }
+        // Without the parameters the material cannot be read.
+        let err = memstab::axisym::critical_densities(&model.meridian, &x, &load, 3, 1);
+        assert!(err.unwrap_err().to_string().contains("material"));
+    }
+
+    /// The ponding ladder of the flat disc scales with μH and follows k through the
+    /// pre-stretch tension: γ = j²_{m,k} T0(k)/(μHλ0²) (64 elements: ≤ 1.3 × 10⁻⁷ of the
+    /// discretisation and ≤ 10⁻⁷ of the tabulated j², as for the numbers).
+    #[test]
+    fn the_ponding_ladder_follows_mu_k_and_h() {
+        let meridian = Meridian::disc(1.1, 64, 1.1, PARAMETRIC).unwrap();
+        let load = Hydrostatic {
+            gravity: 1.0,
+            level: 0.0,
+        };
+        for params in [[100.0, 0.0, 0.01], [40.0, 0.15, 0.05]] {
+            let ladder =
+                critical_densities_at(&meridian, &meridian.nodes, &params, &load, 2, 1).unwrap();
+            let scale = params[0] * params[2] * ponding_scale(params[1], 1.1);
+            for rung in &ladder {
+                let j2 = BESSEL_J2.iter().find(|e| e.0 == (rung.m, 1)).unwrap().1;
+                let err = rung.densities[0] / (scale * j2) - 1.0;
+                assert!(err.abs() < 1e-6, "{params:?}, m = {}: {err:e}", rung.m);
+            }
+        }
+    }
+
+    fn balloon_text() -> String {
+        std::fs::read_to_string(format!(
+            "{}/scenes/axisymmetric/balloon.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap()
+    }
+
+    fn run_text(text: &str) -> AxisymReport {
+        let study = AxisymStudy::build(Scene::from_toml_str(text, "balloon-k").unwrap()).unwrap();
+        run(&study, |_, _| {}).unwrap()
+    }
+
+    /// The bundled balloon with k the parameter "k" held at 0.1 by a `fixed` constraint, p
+    /// the control: the same path, its pressure maximum that of k the number 0.1.
+    #[test]
+    fn the_balloon_maximum_is_the_same_with_k_a_fixed_parameter() {
+        let text = balloon_text();
+        let held = text.replace("k = 0.1\n", "k = \"k\"\n").replace(
+            "[analysis]",
+            "[parameters.k]\nstart = 0.1\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"k\"\n\n[analysis]",
+        );
+        assert_ne!(held, text);
+        let (a, b) = (run_text(&text), run_text(&held));
+        let kp = b.parameters.iter().position(|n| n == "p").unwrap();
+        let kk = b.parameters.iter().position(|n| n == "k").unwrap();
+        assert_eq!(a.turning_points.len(), 2);
+        assert_eq!(a.turning_points.len(), b.turning_points.len());
+        for (s, t) in a.turning_points.iter().zip(&b.turning_points) {
+            assert_eq!(s.kind, t.kind);
+            let (ps, pt) = (s.parameters[0], t.parameters[kp]);
+            assert!((pt / ps - 1.0).abs() < 1e-12, "{:?}: {ps} vs {pt}", s.kind);
+            assert_eq!(t.parameters[kk], 0.1);
+        }
+        assert_eq!(a.rows.len(), b.rows.len());
+        assert_eq!(
+            a.critical.iter().map(|c| (c.m, c.kind)).collect::<Vec<_>>(),
+            b.critical.iter().map(|c| (c.m, c.kind)).collect::<Vec<_>>()
+        );
+    }
+
+    /// The balloon at the fixed pressure p = 1.3 (μH/R = 1) as a path in k, decreasing from
+    /// 0.1 (`balloon_text` with k the control).
+    fn k_path_text() -> String {
+        balloon_text()
+            .replace("k = 0.1\n", "k = \"k\"\n")
+            .replace("pressure = \"p\"", "pressure = 1.3")
+            .replace(
+                "[parameters.p]\nstart = 0.4879036          # holds the stretch 1.05 (closed form)\nmin = 0.0\nmax = 2.0",
+                "[parameters.k]\nstart = 0.1\nmin = 0.0\nmax = 0.3",
+            )
+            .replace("control = \"p\"", "control = \"k\"\ndirection = \"decrease\"")
+            .replace("stop-stretch = 4.0", "stop-stretch = 2.5")
+            .replace("stretch = 1.05", "stretch = 1.3")
+            .replace("modes = 20", "modes = 4")
+    }
+
+    /// At a fixed pressure the path in k runs along the closed form p R/(μH) = 1.3 =
+    /// 2/(1+k)(1/l − 1/l⁷)(1 + k l²) and turns (k at its minimum) where the pressure
+    /// maximum of the sphere is 1.3: the closed form's k there, to the meridian's error at
+    /// 64 elements (6 × 10⁻⁹ in p). A uniform stretch of the discrete sphere is exact in its
+    /// membrane energy and its volume, so the discretisation only scales p by a constant
+    /// (its area over three times its volume, against 1/R), and the stretch at the turn is
+    /// the closed form's to the localisation's round-off. The turn is the m = 0 limit point
+    /// of the path.
+    #[test]
+    fn a_path_in_k_at_fixed_pressure_turns_where_the_maximum_is_that_pressure() {
+        let r = run_text(&k_path_text());
+        assert_eq!(r.control, "k");
+        assert_eq!(r.stop, StopReason::Stretch { target: 2.5 });
+        let kl = r.measures.iter().position(|m| m == "stretch").unwrap();
+        for row in &r.rows {
+            let (k, l) = (row.parameters[0], row.measures[kl]);
+            let err = sphere_pressure(k, l) / 1.3 - 1.0;
+            assert!(err.abs() < 1e-7, "k = {k}, l = {l}: {err:e}");
+        }
+        assert_eq!(r.turning_points.len(), 1, "{:?}", r.turning_points);
+        let turn = &r.turning_points[0];
+        assert_eq!(turn.kind, Extremum::Minimum);
+        let (k, l) = (turn.parameters[0], turn.measures[kl]);
+        let max = sphere_extrema(k)[0];
+        assert!(max.maximum);
+        let (ep, el) = (max.pressure / 1.3 - 1.0, l / max.stretch - 1.0);
+        eprintln!("turn at k = {k}: closed-form maximum there {ep:.1e} off 1.3, stretch {el:.1e}");
+        assert!(ep.abs() < 1e-7, "{ep:e}");
+        assert!(el.abs() < 1e-9, "{el:e}");
+        let c = r.critical.first().expect("a critical point at the turn");
+        assert_eq!((c.m, c.kind), (0, CriticalKind::LimitPoint));
+        assert!(c.localised);
+        assert!((c.parameters[0] / k - 1.0).abs() < 1e-6);
+    }
+
+    fn memstab(args: &[&str]) -> std::process::Output {
+        Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(args)
+            .output()
+            .unwrap()
+    }
+
+    /// `memstab run` on the meridian scene whose material k is the parameter "k": the path
+    /// in k is written with its column, the turn among its turning points; the pre-stretch
+    /// as a parameter is refused in one line naming `material.prestretch`, exit 2.
+    #[test]
+    fn memstab_run_takes_k_as_a_parameter_on_the_meridian() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("balloon_k.toml");
+        std::fs::write(&file, k_path_text()).unwrap();
+        let out = dir.path().join("out");
+        let o = memstab(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let csv = std::fs::read_to_string(out.join("path.csv")).unwrap();
+        let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        assert!(head.contains(&"k") && !head.contains(&"p"), "{head:?}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+        assert_eq!(json["control"], "k");
+        let turns = json["turning_points"].as_array().unwrap();
+        assert_eq!(turns.len(), 1, "{turns:?}");
+        let k = turns[0]["parameters"]["k"].as_f64().unwrap();
+        assert!((sphere_extrema(k)[0].pressure / 1.3 - 1.0).abs() < 1e-6);
+
+        let text = k_path_text()
+            .replace("thickness = 0.01", "thickness = 0.01\nprestretch = \"s\"")
+            .replace("[analysis]", "[parameters.s]\nstart = 1.0\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"s\"\n\n[analysis]");
+        let file = dir.path().join("prestretch.toml");
+        std::fs::write(&file, text).unwrap();
+        let out = dir.path().join("refused");
+        let o = memstab(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("material.prestretch = \"s\""), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+}
