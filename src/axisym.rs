@@ -32,12 +32,17 @@
 //! Boundary conditions: a clamped end holds U = V = W = 0; a node on the axis (R = 0) holds
 //! the regularity of the field there: U = V = 0 for m = 0, W = 0 and U + V = 0 for m = 1
 //! (the field is then the constant U e_x), everything for m ≥ 2.
+//!
+//! A state and the modes of its blocks are drawn on the meridian revolved about z into a
+//! triangulated surface ([`revolved_mesh`], [`revolved_positions`], [`revolved_mode`];
+//! docs/theory.md §15.17).
 
 mod gas;
 mod held;
 mod model;
 mod plane;
 mod problem;
+mod revolve;
 pub mod run;
 mod spin;
 mod volume;
@@ -46,8 +51,13 @@ pub use gas::{GasAmountBorder, GasAmountRow};
 pub use model::{AxisymModel, Block, BlockLayout, Evaluated, Pressure};
 pub use plane::FloorPlane;
 pub use problem::{AxisymProblem, GasTarget, VolumeTarget};
+pub use revolve::{
+    default_segments, mode_amplitudes, revolved_mesh, revolved_mode, revolved_positions,
+    revolved_rings,
+};
 
 use crate::effects::membrane::MooneyRivlin;
+use crate::effects::Quantity;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// Gauss–Legendre points and weights on [−1, 1], 4 points (exact to degree 7).
@@ -156,6 +166,68 @@ pub enum AxisymError {
     /// A non-finite number appeared in the energy, its derivatives or a block.
     #[error("a non-finite value in the axisymmetric model")]
     NonFinite,
+    /// A material quantity is out of its range at the parameters.
+    #[error("{0}")]
+    Material(String),
+}
+
+/// The meridian's material: the shear modulus μ, the Mooney–Rivlin ratio k = c2/c1 and the
+/// stress-free thickness H, each a number or a parameter, evaluated at the parameters in
+/// every evaluation (docs/theory.md §15.18). The pre-stretch is a number,
+/// [`Meridian::prestretch`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeridianMaterial {
+    /// μ > 0.
+    pub mu: Quantity,
+    /// k ≥ 0.
+    pub k: Quantity,
+    /// H > 0.
+    pub thickness: Quantity,
+}
+
+impl From<MooneyRivlin> for MeridianMaterial {
+    /// The constants of `material` as numbers.
+    fn from(material: MooneyRivlin) -> Self {
+        Self {
+            mu: Quantity::Value(material.mu()),
+            k: Quantity::Value(material.k()),
+            thickness: Quantity::Value(material.thickness),
+        }
+    }
+}
+
+impl MeridianMaterial {
+    /// (μ, k, H) at `params`; an error naming the quantity that left its range.
+    pub fn values(&self, params: &[f64]) -> Result<[f64; 3], AxisymError> {
+        let v = [
+            self.mu.value(params),
+            self.k.value(params),
+            self.thickness.value(params),
+        ];
+        for (i, (&x, name)) in v.iter().zip(["mu", "k", "thickness"]).enumerate() {
+            let ok = x.is_finite() && if i == 1 { x >= 0.0 } else { x > 0.0 };
+            if !ok {
+                return Err(AxisymError::Material(format!(
+                    "the material's {name} = {x} is out of its range ({})",
+                    if i == 1 { ">= 0" } else { "> 0" }
+                )));
+            }
+        }
+        Ok(v)
+    }
+
+    /// The Mooney–Rivlin material at `params`.
+    pub fn at(&self, params: &[f64]) -> Result<MooneyRivlin, AxisymError> {
+        let [mu, k, thickness] = self.values(params)?;
+        Ok(MooneyRivlin::new(mu, k, thickness))
+    }
+
+    /// Whether μ, k or H is a parameter.
+    pub fn has_parameter(&self) -> bool {
+        [self.mu, self.k, self.thickness]
+            .iter()
+            .any(|q| q.parameter().is_some())
+    }
 }
 
 /// A meridian of quadratic elements: the stress-free data of a membrane of revolution.
@@ -165,8 +237,8 @@ pub struct Meridian {
     pub nodes: Vec<[f64; 2]>,
     /// The isotropic pre-stretch λ0 (the stress-free metric is the reference one / λ0²).
     pub prestretch: f64,
-    /// The material.
-    pub material: MooneyRivlin,
+    /// The material (μ, k, H: numbers or parameters).
+    pub material: MeridianMaterial,
     /// Which ends are clamped: (first node, last node).
     pub clamped: (bool, bool),
     /// Which ends slide on a plane z = const (docs/theory.md §15.9): the end node keeps its
@@ -196,7 +268,7 @@ impl Meridian {
         radius: f64,
         elements: usize,
         prestretch: f64,
-        material: MooneyRivlin,
+        material: impl Into<MeridianMaterial>,
     ) -> Result<Self, AxisymError> {
         check_size(radius, elements)?;
         let n = 2 * elements;
@@ -205,7 +277,7 @@ impl Meridian {
                 .map(|i| [radius * i as f64 / n as f64, 0.0])
                 .collect(),
             prestretch,
-            material,
+            material: material.into(),
             clamped: (false, true),
             sliding: (false, false),
         })
@@ -217,14 +289,14 @@ impl Meridian {
         radius: f64,
         elements: usize,
         prestretch: f64,
-        material: MooneyRivlin,
+        material: impl Into<MeridianMaterial>,
     ) -> Result<Self, AxisymError> {
         Self::arc(
             radius,
             std::f64::consts::PI,
             elements,
             prestretch,
-            material,
+            material.into(),
             false,
         )
     }
@@ -236,7 +308,7 @@ impl Meridian {
         cut_height: f64,
         elements: usize,
         prestretch: f64,
-        material: MooneyRivlin,
+        material: impl Into<MeridianMaterial>,
     ) -> Result<Self, AxisymError> {
         if !(cut_height.is_finite() && cut_height.abs() < radius) {
             return Err(AxisymError::Input(format!(
@@ -244,7 +316,7 @@ impl Meridian {
             )));
         }
         let angle = (cut_height / radius).acos();
-        Self::arc(radius, angle, elements, prestretch, material, true)
+        Self::arc(radius, angle, elements, prestretch, material.into(), true)
     }
 
     fn arc(
@@ -252,7 +324,7 @@ impl Meridian {
         angle: f64,
         elements: usize,
         prestretch: f64,
-        material: MooneyRivlin,
+        material: MeridianMaterial,
         clamped: bool,
     ) -> Result<Self, AxisymError> {
         check_size(radius, elements)?;
@@ -455,16 +527,18 @@ fn scatter(full: &mut DMatrix<f64>, e: usize, local: &nalgebra::SMatrix<f64, 9, 
     }
 }
 
-/// The membrane's block of wave number m at the state `x` (all 3(2E+1) unknowns, before the
-/// boundary conditions).
+/// The membrane's block of wave number m at the state `x` and the parameters `params` (all
+/// 3(2E+1) unknowns, before the boundary conditions).
 fn membrane_full(
     meridian: &Meridian,
     x: &[[f64; 2]],
+    params: &[f64],
     m: usize,
     phase: f64,
 ) -> Result<DMatrix<f64>, AxisymError> {
     let lam = meridian.prestretch;
-    let h = meridian.material.thickness;
+    let material = meridian.material.at(params)?;
+    let h = material.thickness;
     let nt = angles(m);
     let mut k = DMatrix::zeros(3 * meridian.nodes.len(), 3 * meridian.nodes.len());
     for e in 0..meridian.elements() {
@@ -474,10 +548,7 @@ fn membrane_full(
                 p.x_xi * (lam / p.dx_ref),
                 Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
             ];
-            let (_, _, hf) = meridian
-                .material
-                .energy_in_f(&f)
-                .ok_or(AxisymError::Degenerate(e))?;
+            let (_, _, hf) = material.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
             let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
             for t in 0..nt {
                 let theta = 2.0 * std::f64::consts::PI * t as f64 / nt as f64;
@@ -559,10 +630,28 @@ pub struct ModeLoads {
 /// held: linear buckling) by
 /// wave number m = 0..=`modes`: the positive ρ with det(K_m + ρ K_f,m) = 0, from the
 /// generalised symmetric eigenproblem with K_m positive definite (Cholesky K_m = L Lᵀ, the
-/// eigenvalues μ of −L⁻¹ K_f Lᵀ⁻¹, ρ = 1/μ for μ > 0), the `lowest` of each.
+/// eigenvalues μ of −L⁻¹ K_f Lᵀ⁻¹, ρ = 1/μ for μ > 0), the `lowest` of each. The material
+/// must be numbers ([`critical_densities_at`] takes parameters).
 pub fn critical_densities(
     meridian: &Meridian,
     x: &[[f64; 2]],
+    load: &Hydrostatic,
+    modes: usize,
+    lowest: usize,
+) -> Result<Vec<ModeLoads>, AxisymError> {
+    if meridian.material.has_parameter() {
+        return Err(AxisymError::Input(
+            "material: mu, k or thickness is a parameter; critical_densities_at takes the parameters".into(),
+        ));
+    }
+    critical_densities_at(meridian, x, &[], load, modes, lowest)
+}
+
+/// [`critical_densities`] with the material evaluated at the parameters `params`.
+pub fn critical_densities_at(
+    meridian: &Meridian,
+    x: &[[f64; 2]],
+    params: &[f64],
     load: &Hydrostatic,
     modes: usize,
     lowest: usize,
@@ -577,7 +666,7 @@ pub fn critical_densities(
     (0..=modes)
         .map(|m| {
             let t = meridian.kept(m);
-            let km = t.transpose() * membrane_full(meridian, x, m, 0.0)? * &t;
+            let km = t.transpose() * membrane_full(meridian, x, params, m, 0.0)? * &t;
             let kf = t.transpose() * hydrostatic_full(meridian, x, load, m, 0.0, true) * &t;
             let l = nalgebra::Cholesky::new((&km + km.transpose()) * 0.5)
                 .ok_or(AxisymError::Indefinite(m))?
@@ -626,13 +715,13 @@ mod tests {
         };
         for m in 1..5 {
             let phase = std::f64::consts::PI / (2.0 * m as f64);
-            let k0 = membrane_full(&meridian, &x, m, 0.0).unwrap();
-            let k1 = membrane_full(&meridian, &x, m, phase).unwrap();
+            let k0 = membrane_full(&meridian, &x, &[], m, 0.0).unwrap();
+            let k1 = membrane_full(&meridian, &x, &[], m, phase).unwrap();
             assert!((&k0 - &k1).amax() < 1e-12 * k0.amax(), "membrane, m = {m}");
             let f0 = hydrostatic_full(&meridian, &x, &load, m, 0.0, true);
             let f1 = hydrostatic_full(&meridian, &x, &load, m, phase, true);
             assert!((&f0 - &f1).amax() < 1e-12 * f0.amax(), "fluid, m = {m}");
-            let k2 = membrane_full(&meridian, &x, m + 1, 0.0).unwrap();
+            let k2 = membrane_full(&meridian, &x, &[], m + 1, 0.0).unwrap();
             assert!((&k0 - &k2).amax() > 1e-3 * k0.amax());
         }
     }

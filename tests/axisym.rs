@@ -866,3 +866,1005 @@ mod paper2 {
         }
     }
 }
+
+/// A meridian state drawn as a 3-D surface (docs/theory.md §15.17): the revolved reference
+/// mesh against the 3-D generators and the exact surfaces, the revolved states, and the
+/// mode fields of the Fourier blocks on it.
+mod revolve {
+    use memstab::axisym::{
+        default_segments, mode_amplitudes, revolved_mesh, revolved_mode, revolved_positions,
+        revolved_rings, AxisymModel, FloorPlane, Meridian, Pressure,
+    };
+    use memstab::effects::membrane::MooneyRivlin;
+    use memstab::effects::Quantity;
+    use memstab::output::{node_normals, StateWriter};
+    use meshes::generators::{
+        disc, icosphere, truncated_sphere, DiscOptions, IcosphereOptions, TruncatedSphereOptions,
+    };
+    use meshes::write::Fields;
+    use meshes::{Mesh, Vec3};
+    use std::collections::BTreeSet;
+    use std::f64::consts::PI;
+
+    fn mat() -> MooneyRivlin {
+        MooneyRivlin::new(1.0, 0.2, 0.1)
+    }
+
+    fn gas() -> Pressure {
+        Pressure::Gas {
+            pressure: Quantity::Value(0.1),
+        }
+    }
+
+    /// The three shapes: a clamped disc, a closed sphere, a cap clamped at its cut.
+    fn shapes(elements: usize) -> [(&'static str, Meridian); 3] {
+        [
+            ("disc", Meridian::disc(1.2, elements, 1.05, mat()).unwrap()),
+            (
+                "sphere",
+                Meridian::sphere(1.3, elements, 1.05, mat()).unwrap(),
+            ),
+            (
+                "cap",
+                Meridian::truncated_sphere(1.0, -0.5, elements, 1.05, mat()).unwrap(),
+            ),
+        ]
+    }
+
+    /// Models whose blocks hold unknowns in every way: a clamped disc, a closed sphere (its
+    /// rigid motions held), the sphere on a plane (its pole's height free), and a cap whose
+    /// cut slides (a free body: bordered blocks m = 0, 1).
+    fn models() -> Vec<(&'static str, AxisymModel)> {
+        let disc = AxisymModel::new(Meridian::disc(1.0, 4, 1.05, mat()).unwrap(), vec![]);
+        let sphere = AxisymModel::new(Meridian::sphere(1.0, 5, 1.05, mat()).unwrap(), vec![gas()]);
+        let mut on_plane = sphere.clone();
+        on_plane.set_planes(vec![FloorPlane {
+            normal_z: 1.0,
+            offset: Quantity::Value(-1.0),
+            penalty: Quantity::Value(10.0),
+            exponent: 1,
+        }]);
+        let mut cap = Meridian::truncated_sphere(1.0, 0.0, 4, 1.05, mat()).unwrap();
+        cap.clamped = (false, false);
+        cap.sliding = (false, true);
+        let cap = AxisymModel::new(cap, vec![gas()]);
+        vec![
+            ("disc", disc),
+            ("sphere", sphere),
+            ("sphere on a plane", on_plane),
+            ("sliding cap", cap),
+        ]
+    }
+
+    /// A generic vector of `n` entries.
+    fn generic(n: usize, seed: f64) -> Vec<f64> {
+        (0..n)
+            .map(|j| (1.7 * j as f64 + seed).sin() + 0.3)
+            .collect()
+    }
+
+    /// The (e_r, e_θ, e_z) components of `v` at angle θ.
+    fn cylindrical(v: [f64; 3], theta: f64) -> [f64; 3] {
+        let (s, c) = theta.sin_cos();
+        [v[0] * c + v[1] * s, -v[0] * s + v[1] * c, v[2]]
+    }
+
+    fn theta(k: usize, segments: usize) -> f64 {
+        2.0 * PI * k as f64 / segments as f64
+    }
+
+    /// Triangles whose area vector agrees with `outward` (at the centroid), and those that
+    /// do not.
+    fn agreeing(mesh: &Mesh, outward: impl Fn(Vec3) -> Vec3) -> (usize, usize) {
+        let mut counts = (0, 0);
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            let centroid = tri.iter().map(|&i| mesh.nodes[i]).sum::<Vec3>() / 3.0;
+            if mesh.area_vector(t).dot(&outward(centroid)) > 0.0 {
+                counts.0 += 1;
+            } else {
+                counts.1 += 1;
+            }
+        }
+        counts
+    }
+
+    fn as_set(nodes: &[usize]) -> BTreeSet<usize> {
+        nodes.iter().copied().collect()
+    }
+
+    /// The revolved reference meshes are sound surfaces (closed for the sphere, one boundary
+    /// loop on the edge ring for the disc and the cap), with the node counts of their rings
+    /// and poles, oriented as the 3-D generators orient theirs (+z on the disc, outward on the
+    /// cap and the sphere), and with the generators' node sets.
+    #[test]
+    fn revolved_reference_meshes_are_sound_and_oriented_as_the_generators() {
+        let (elements, segments) = (5, 12);
+        let up = |_: Vec3| Vec3::z();
+        let out = |c: Vec3| c;
+        let generated = [
+            disc(&DiscOptions::default()).unwrap().mesh,
+            icosphere(&IcosphereOptions::default()).unwrap().mesh,
+            truncated_sphere(&TruncatedSphereOptions::default())
+                .unwrap()
+                .mesh,
+        ];
+        for ((name, meridian), reference) in shapes(elements).into_iter().zip(generated) {
+            let mesh = revolved_mesh(&meridian, segments).unwrap();
+            let topology = mesh.topology().unwrap();
+            let rings = revolved_rings(&meridian, segments).unwrap();
+            let poles = rings.iter().filter(|r| r.len() == 1).count();
+            let n = 2 * elements + 1;
+            assert_eq!(mesh.nodes.len(), (n - poles) * segments + poles, "{name}");
+            assert_eq!(
+                mesh.triangles.len(),
+                2 * (n - 1) * segments - poles * segments,
+                "{name}"
+            );
+            // The same node-set names as the generator of the shape.
+            assert_eq!(
+                mesh.boundaries.keys().collect::<Vec<_>>(),
+                reference.boundaries.keys().collect::<Vec<_>>(),
+                "{name}"
+            );
+            let outward: &dyn Fn(Vec3) -> Vec3 = if name == "disc" { &up } else { &out };
+            assert_eq!(
+                agreeing(&mesh, outward),
+                (mesh.triangles.len(), 0),
+                "{name}"
+            );
+            assert_eq!(
+                agreeing(&reference, outward),
+                (reference.triangles.len(), 0),
+                "{name}: the generator"
+            );
+            match name {
+                "sphere" => {
+                    assert_eq!(poles, 2);
+                    assert!(topology.closed && topology.boundary_loops.is_empty());
+                    assert_eq!(topology.euler, 2);
+                    assert!(mesh.volume() > 0.0 && reference.volume() > 0.0);
+                    assert!(mesh.boundaries.is_empty());
+                }
+                _ => {
+                    let set = if name == "disc" { "rim" } else { "cut" };
+                    assert_eq!(poles, 1);
+                    assert!(!topology.closed);
+                    assert_eq!(topology.euler, 1, "{name}");
+                    assert_eq!(topology.boundary_loops.len(), 1, "{name}");
+                    let edge: Vec<usize> = rings[n - 1].clone().collect();
+                    assert_eq!(mesh.boundaries[set], edge, "{name}");
+                    assert_eq!(as_set(&topology.boundary_loops[0]), as_set(&edge), "{name}");
+                    // The edge ring is the generator's edge circle: z and radius.
+                    let (z, r) = (meridian.nodes[n - 1][1], meridian.nodes[n - 1][0]);
+                    for &i in &edge {
+                        let x = mesh.nodes[i];
+                        assert!((x.z - z).abs() < 1e-15 && (x.xy().norm() - r).abs() < 1e-14);
+                    }
+                    let g = reference.boundaries[set][0];
+                    assert!((reference.nodes[g].z - z).abs() < 1e-12, "{name}");
+                }
+            }
+        }
+        // Fewer than 3 segments draw no surface.
+        let [(_, meridian), ..] = shapes(2);
+        assert!(revolved_mesh(&meridian, 2)
+            .unwrap_err()
+            .to_string()
+            .contains("segments"));
+    }
+
+    fn sci(v: &[f64]) -> String {
+        v.iter()
+            .map(|x| format!("{x:.3e}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// The observed order log2(e(h) / e(h/2)) of a sequence of errors at halved sizes.
+    fn orders(errors: &[f64]) -> Vec<f64> {
+        errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect()
+    }
+
+    /// The relative errors of the revolved sphere's volume and area, and of the cap's area,
+    /// at (elements, segments).
+    fn errors(elements: usize, segments: usize) -> [f64; 3] {
+        let [_, (_, sphere), (_, cap)] = shapes(elements);
+        let (a, r, c) = (1.3_f64, 1.0_f64, -0.5_f64);
+        let s = revolved_mesh(&sphere, segments).unwrap();
+        let k = revolved_mesh(&cap, segments).unwrap();
+        [
+            (s.volume() / (4.0 / 3.0 * PI * a.powi(3)) - 1.0).abs(),
+            (s.area() / (4.0 * PI * a * a) - 1.0).abs(),
+            (k.area() / (2.0 * PI * r * (r - c)) - 1.0).abs(),
+        ]
+    }
+
+    /// Volume and area of the revolved surfaces converge to the exact ones at second order:
+    /// refining the meridian and the rings together, the meridian alone (fine rings) and the
+    /// rings alone (a fine meridian); the disc's area is the regular polygon's,
+    /// (N/2) R² sin(2π/N), of second order in 1/N.
+    #[test]
+    fn revolved_volume_and_area_converge_at_second_order() {
+        let labels = ["sphere volume", "sphere area", "cap area"];
+        let cases: [(&str, Vec<(usize, usize)>); 3] = [
+            ("together", vec![(4, 16), (8, 32), (16, 64), (32, 128)]),
+            (
+                "meridian",
+                vec![(4, 4096), (8, 4096), (16, 4096), (32, 4096)],
+            ),
+            (
+                "rings",
+                vec![(1024, 16), (1024, 32), (1024, 64), (1024, 128)],
+            ),
+        ];
+        for (refined, sizes) in cases {
+            let e: Vec<[f64; 3]> = sizes.iter().map(|&(el, sg)| errors(el, sg)).collect();
+            for (q, label) in labels.iter().enumerate() {
+                let series: Vec<f64> = e.iter().map(|x| x[q]).collect();
+                let p = orders(&series);
+                eprintln!(
+                    "{label}, {refined}: errors {}, orders {p:.3?}",
+                    sci(&series)
+                );
+                let last = p[p.len() - 1];
+                assert!(
+                    (last - 2.0).abs() < 0.05,
+                    "{label}, {refined}: errors {series:?}, orders {p:?}"
+                );
+            }
+        }
+        let radius = 1.2;
+        let series: Vec<f64> = [16, 32, 64, 128]
+            .iter()
+            .map(|&n| {
+                let mesh = revolved_mesh(&shapes(3)[0].1, n).unwrap();
+                let polygon = 0.5 * n as f64 * radius * radius * (2.0 * PI / n as f64).sin();
+                assert!((mesh.area() - polygon).abs() < 1e-13 * polygon);
+                (mesh.area() / (PI * radius * radius) - 1.0).abs()
+            })
+            .collect();
+        let p = orders(&series);
+        eprintln!("disc area, rings: errors {}, orders {p:.3?}", sci(&series));
+        assert!((p[p.len() - 1] - 2.0).abs() < 0.05, "{p:?}");
+    }
+
+    /// A state's revolved nodes are the current meridian nodes rotated to θ_k (a pole on the
+    /// axis at its height), in the reference mesh's numbering; at q = 0 they are its nodes.
+    #[test]
+    fn revolved_positions_are_the_rotated_meridian_nodes() {
+        let segments = default_segments(2);
+        for (name, model) in models() {
+            let mesh = revolved_mesh(&model.meridian, segments).unwrap();
+            let rest = revolved_positions(&model, &vec![0.0; model.dim()], segments).unwrap();
+            assert_eq!(rest, mesh.nodes, "{name}");
+            let q: Vec<f64> = generic(model.dim(), 0.4).iter().map(|v| 0.05 * v).collect();
+            let x = model.positions(&q);
+            let positions = revolved_positions(&model, &q, segments).unwrap();
+            assert_eq!(positions.len(), mesh.nodes.len());
+            let rings = revolved_rings(&model.meridian, segments).unwrap();
+            let mut moved = 0;
+            for (i, ring) in rings.iter().enumerate() {
+                let [r, z] = x[i];
+                if ring.len() == 1 {
+                    assert_eq!(r, 0.0, "{name}: a pole stays on the axis");
+                    assert_eq!(positions[ring.start], Vec3::new(0.0, 0.0, z));
+                    continue;
+                }
+                for (k, node) in ring.clone().enumerate() {
+                    let t = theta(k, segments);
+                    let expect = Vec3::new(r * t.cos(), r * t.sin(), z);
+                    assert!(
+                        (positions[node] - expect).norm() < 1e-15,
+                        "{name}: {i}, {k}"
+                    );
+                }
+                moved += usize::from((positions[ring.start] - mesh.nodes[ring.start]).norm() > 0.0);
+            }
+            assert!(moved > 0, "{name}");
+            // Held components stay: a clamped edge ring does not move.
+            if model.meridian.clamped.1 {
+                let edge = rings[rings.len() - 1].clone();
+                assert!(
+                    edge.clone().all(|i| positions[i] == mesh.nodes[i]),
+                    "{name}"
+                );
+            }
+            assert!(revolved_positions(&model, &q[1..], segments)
+                .unwrap_err()
+                .to_string()
+                .contains("unknowns"));
+        }
+    }
+
+    /// Fourier coefficients (a_j, b_j), j = 0 … N/2, of samples f(θ_k): f = Σ a_j cos jθ +
+    /// b_j sin jθ.
+    fn fourier(f: &[f64]) -> Vec<(f64, f64)> {
+        let n = f.len();
+        (0..=n / 2)
+            .map(|j| {
+                let weight = if j == 0 || 2 * j == n { 1.0 } else { 2.0 } / n as f64;
+                let (mut a, mut b) = (0.0, 0.0);
+                for (k, v) in f.iter().enumerate() {
+                    let (s, c) = theta(j * k % n, n).sin_cos();
+                    a += v * c;
+                    b += v * s;
+                }
+                (weight * a, weight * b)
+            })
+            .collect()
+    }
+
+    /// Along every ring the mode field of block m, in (e_r, e_θ, e_z), is U cos mθ,
+    /// V sin mθ, W cos mθ with the node's amplitudes: its discrete Fourier content is at m
+    /// only (m = 0: constant components, V the twist); border entries after the kept ones do
+    /// not enter, and a vector shorter than the kept unknowns is refused.
+    #[test]
+    fn the_mode_field_of_block_m_has_harmonic_m_only_along_a_ring() {
+        for (name, model) in models() {
+            for m in 0..=6 {
+                let segments = default_segments(m);
+                let layout = model.block_layout(m);
+                let mode = generic(layout.kept + layout.border, m as f64);
+                let field = revolved_mode(&model, m, &mode, segments).unwrap();
+                let bare = revolved_mode(&model, m, &mode[..layout.kept], segments).unwrap();
+                assert_eq!(field, bare, "{name}, m = {m}: the border is ignored");
+                let amplitudes = mode_amplitudes(&model, m, &mode).unwrap();
+                let rings = revolved_rings(&model.meridian, segments).unwrap();
+                let scale = amplitudes
+                    .iter()
+                    .flatten()
+                    .fold(0.0_f64, |s, v| s.max(v.abs()));
+                assert!(scale > 0.1, "{name}, m = {m}");
+                for (i, ring) in rings.iter().enumerate() {
+                    if ring.len() == 1 {
+                        continue;
+                    }
+                    let comps: Vec<[f64; 3]> = ring
+                        .clone()
+                        .enumerate()
+                        .map(|(k, node)| cylindrical(field[node], theta(k, segments)))
+                        .collect();
+                    let [u, v, w] = amplitudes[i];
+                    // (component, amplitude, true: cos / false: sin) of the field.
+                    let expect = [(0, u, true), (1, v, m == 0), (2, w, true)];
+                    for (c, amplitude, cosine) in expect {
+                        let samples: Vec<f64> = comps.iter().map(|x| x[c]).collect();
+                        for (j, (a, b)) in fourier(&samples).into_iter().enumerate() {
+                            let (ea, eb) = match (j == m, cosine) {
+                                (true, true) => (amplitude, 0.0),
+                                (true, false) => (0.0, amplitude),
+                                (false, _) => (0.0, 0.0),
+                            };
+                            assert!(
+                                (a - ea).abs() < 1e-13 * scale && (b - eb).abs() < 1e-13 * scale,
+                                "{name}, m = {m}, node {i}, component {c}, harmonic {j}: \
+                                 ({a}, {b}) vs ({ea}, {eb})"
+                            );
+                        }
+                    }
+                }
+            }
+            let kept = model.block_layout(1).kept;
+            let short = vec![1.0; kept - 1];
+            assert!(revolved_mode(&model, 1, &short, 16)
+                .unwrap_err()
+                .to_string()
+                .contains("kept unknowns"));
+        }
+    }
+
+    /// The field of block 0 is axisymmetric: the value at θ_k is the value at θ = 0 rotated
+    /// by θ_k about z; on the axis it is W e_z.
+    #[test]
+    fn the_mode_field_of_block_0_is_axisymmetric() {
+        for (name, model) in models() {
+            let segments = default_segments(0);
+            let kept = model.block_layout(0).kept;
+            let field = revolved_mode(&model, 0, &generic(kept, 0.9), segments).unwrap();
+            let amplitudes = mode_amplitudes(&model, 0, &generic(kept, 0.9)).unwrap();
+            for (i, ring) in revolved_rings(&model.meridian, segments)
+                .unwrap()
+                .iter()
+                .enumerate()
+            {
+                let first = field[ring.start];
+                if ring.len() == 1 {
+                    assert_eq!(first, [0.0, 0.0, amplitudes[i][2]], "{name}");
+                    continue;
+                }
+                for (k, node) in ring.clone().enumerate() {
+                    let (s, c) = theta(k, segments).sin_cos();
+                    let rotated = [
+                        c * first[0] - s * first[1],
+                        s * first[0] + c * first[1],
+                        first[2],
+                    ];
+                    let f = field[node];
+                    assert!(
+                        (0..3).all(|j| (f[j] - rotated[j]).abs() < 1e-14),
+                        "{name}: node {i}, θ_{k}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The field vanishes where the block holds it, for any kept entries: a clamped edge
+    /// (every m), a sliding edge's height (every m), a pole's field but W e_z for m = 0 and the
+    /// constant U e_x for m = 1 (nothing for m ≥ 2), and the rigid motions a closed sphere
+    /// holds — its first pole's height (m = 0; free on a plane) and translation (m = 1), the
+    /// twist (m = 0) and the height (m = 1) of its widest ring.
+    #[test]
+    fn the_mode_field_vanishes_where_it_is_held() {
+        let segments = 20;
+        for (name, model) in models() {
+            let rings = revolved_rings(&model.meridian, segments).unwrap();
+            let last = rings.len() - 1;
+            let widest = rings.len() / 2;
+            for m in 0..=4 {
+                let kept = model.block_layout(m).kept;
+                let field =
+                    revolved_mode(&model, m, &generic(kept, 2.0 + m as f64), segments).unwrap();
+                // Max |component c| in (e_r, e_θ, e_z) over the ring of node i.
+                let on_ring = |i: usize, c: usize| {
+                    rings[i]
+                        .clone()
+                        .enumerate()
+                        .map(|(k, node)| cylindrical(field[node], theta(k, segments))[c].abs())
+                        .fold(0.0_f64, f64::max)
+                };
+                for (i, ring) in rings.iter().enumerate() {
+                    if ring.len() > 1 {
+                        continue;
+                    }
+                    let [x, y, z] = field[ring.start];
+                    match m {
+                        0 => assert_eq!([x, y], [0.0, 0.0], "{name}: pole {i}"),
+                        1 => assert_eq!([y, z], [0.0, 0.0], "{name}: pole {i}"),
+                        _ => assert_eq!([x, y, z], [0.0; 3], "{name}: pole {i}, m = {m}"),
+                    }
+                }
+                match name {
+                    "disc" => {
+                        assert!((0..3).all(|c| on_ring(last, c) == 0.0), "m = {m}");
+                        if m == 1 {
+                            assert!(field[0][0] != 0.0, "the centre moves across the axis");
+                        }
+                    }
+                    "sliding cap" => {
+                        assert_eq!(on_ring(last, 2), 0.0, "m = {m}");
+                        assert!(on_ring(last, 0) > 0.0 && on_ring(last, 1) > 0.0, "m = {m}");
+                    }
+                    _ => {
+                        let pole = field[0];
+                        let held_pole_height = name == "sphere";
+                        match m {
+                            0 => assert_eq!(pole[2] == 0.0, held_pole_height, "{name}"),
+                            1 => assert_eq!(pole, [0.0; 3], "{name}"),
+                            _ => {}
+                        }
+                        let field_at_widest = |c| on_ring(widest, c);
+                        match m {
+                            // Zero to the round-off of the projection on e_θ.
+                            0 => assert!(field_at_widest(1) < 1e-15, "{name}"),
+                            1 => assert_eq!(field_at_widest(2), 0.0, "{name}"),
+                            _ => assert!((0..3).all(|c| field_at_widest(c) > 0.0), "{name}"),
+                        }
+                        assert!(field[field.len() - 1] != [0.0; 3] || m >= 2, "{name}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Every wave number's default drawing: at least 48 segments and 16 per wavelength, a
+    /// multiple of 4.
+    #[test]
+    fn default_segments_draw_every_wave_number() {
+        assert_eq!(default_segments(0), 48);
+        assert_eq!(default_segments(3), 48);
+        assert_eq!(default_segments(4), 64);
+        assert_eq!(default_segments(24), 384);
+        for m in 0..100 {
+            let n = default_segments(m);
+            assert!(
+                n.is_multiple_of(4) && n >= 48 && n >= 16 * m,
+                "m = {m}: {n}"
+            );
+        }
+    }
+
+    /// A revolved state written by the 3-D runs' state writer, with its `normal` and
+    /// `critical_mode` point fields, reads back through meshes' VTU reader as written: the
+    /// current nodes, the triangles, the node set, the mode and the displacement.
+    #[test]
+    fn a_revolved_state_round_trips_through_the_vtu_reader() {
+        let (_, model) = models().swap_remove(3);
+        let m = 2;
+        let segments = default_segments(m);
+        let mesh = revolved_mesh(&model.meridian, segments).unwrap();
+        let q: Vec<f64> = generic(model.dim(), 0.1).iter().map(|v| 0.03 * v).collect();
+        let positions = revolved_positions(&model, &q, segments).unwrap();
+        let kept = model.block_layout(m).kept;
+        let mode = revolved_mode(&model, m, &generic(kept, 1.1), segments).unwrap();
+        let normals = node_normals(&positions, &mesh.triangles);
+        let dir = tempfile::tempdir().unwrap();
+        let mut writer = StateWriter::new(dir.path(), &mesh).unwrap();
+        writer
+            .save_as(
+                "critical_01",
+                "m = 2",
+                false,
+                0,
+                0.5,
+                &positions,
+                Fields::new()
+                    .point_vector("normal", normals.clone())
+                    .point_vector("critical_mode", mode.clone()),
+            )
+            .unwrap();
+        let path = dir.path().join("critical_01.vtu");
+        let (read, field) = meshes::read::read_vtu_field(&path, "critical_mode").unwrap();
+        assert_eq!(read.nodes, positions);
+        assert_eq!(read.triangles, mesh.triangles);
+        assert_eq!(read.boundaries, mesh.boundaries);
+        assert!(read.boundaries.contains_key("cut"));
+        assert_eq!(field, mode);
+        let (_, normal) = meshes::read::read_vtu_field(&path, "normal").unwrap();
+        assert_eq!(normal, normals);
+        let (_, displacement) = meshes::read::read_vtu_field(&path, "displacement").unwrap();
+        for ((d, x), x0) in displacement.iter().zip(&positions).zip(&mesh.nodes) {
+            assert_eq!(*d, <[f64; 3]>::from(x - x0));
+        }
+        // The cap's normals point outward (away from the centre) at the state too.
+        let outward = normals
+            .iter()
+            .zip(&positions)
+            .filter(|(n, x)| Vec3::from(**n).dot(*x) > 0.0)
+            .count();
+        assert_eq!(outward, positions.len());
+        assert!(read.topology().unwrap().boundary_loops.len() == 1);
+    }
+}
+
+/// μ, k and H as parameters of the meridian (docs/theory.md §15.18): their loads ∂F/∂Λ
+/// against central differences of the gradient, the Fourier blocks at the parameters, and
+/// paths of the balloon with k a parameter, held or the control.
+mod material {
+    use memstab::axisym::run::{run, AxisymReport, AxisymStudy};
+    use memstab::axisym::{
+        critical_densities_at, AxisymModel, Hydrostatic, Meridian, MeridianMaterial, Pressure,
+    };
+    use memstab::effects::Quantity;
+    use memstab::reference::{ponding_scale, sphere_extrema, sphere_pressure, BESSEL_J2};
+    use memstab::results::CriticalKind;
+    use memstab::results::{Extremum, StopReason};
+    use memstab::scene::Scene;
+    use nalgebra::DMatrix;
+    use std::process::Command;
+
+    /// μ, k and H the parameters 0, 1 and 2.
+    const PARAMETRIC: MeridianMaterial = MeridianMaterial {
+        mu: Quantity::Parameter(0),
+        k: Quantity::Parameter(1),
+        thickness: Quantity::Parameter(2),
+    };
+
+    /// The balloon's meridian (a sphere of 8 elements, no pre-stretch) under a gas at the
+    /// parameter 3, inflated to about 1.3 with a wrinkle along the meridian and stretched
+    /// along the axis (the north pole, whose height is held, where it was): (model, q,
+    /// params).
+    fn balloon() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let meridian = Meridian::sphere(1.0, 8, 1.0, PARAMETRIC).unwrap();
+        let model = AxisymModel::new(
+            meridian,
+            vec![Pressure::Gas {
+                pressure: Quantity::Parameter(3),
+            }],
+        );
+        let x: Vec<[f64; 2]> = model
+            .meridian
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let s = 1.3 + 0.04 * (1.7 * i as f64).sin();
+                [p[0] * s, 1.0 + (p[1] - 1.0) * 1.4]
+            })
+            .collect();
+        let q = model.displacement_of(&x);
+        (model, q, vec![80.0, 0.15, 0.012, 0.9])
+    }
+
+    /// The pre-stretched clamped disc (radius 1.1 at λ0 = 1.1, 8 elements) under fluid of
+    /// density the parameter 3 above it (g = 1, level 0), sagged below the level with a
+    /// radial wrinkle: (model, q, params).
+    fn disc() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let meridian = Meridian::disc(1.1, 8, 1.1, PARAMETRIC).unwrap();
+        let fluid = Pressure::Fluid {
+            density: Quantity::Parameter(3),
+            gravity: Quantity::Value(1.0),
+            level: Quantity::Value(0.0),
+            front: true,
+            filled: false,
+        };
+        let model = AxisymModel::new(meridian, vec![fluid]);
+        let x: Vec<[f64; 2]> = model
+            .meridian
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let s = p[0] / 1.1;
+                [
+                    p[0] * (1.0 + 0.002 * (2.3 * i as f64).sin()),
+                    -0.15 * (1.0 - s * s) + 0.01 * (1.9 * i as f64).cos() * s * (1.0 - s),
+                ]
+            })
+            .collect();
+        let q = model.displacement_of(&x);
+        (model, q, vec![50.0, 0.2, 0.02, 1.5])
+    }
+
+    /// The largest |a − b| over the largest |b|.
+    fn relative(a: &[f64], b: &[f64]) -> f64 {
+        let scale = b.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        a.iter()
+            .zip(b)
+            .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
+            / scale
+    }
+
+    /// The loads of μ, k and H against central differences of the gradient in each, over
+    /// the column's largest entry. The gradient is linear in μ and in H, so there the
+    /// difference is exact but for round-off: at the step δ = 10⁻³ Λ that is ≈ ε/δ ≈ 10⁻¹³
+    /// of the load. In k the gradient is μ B/2 + c1(k) (A − B) with c1 = μ/(2(1 + k)), so the
+    /// central difference at the step δ has the truncation error (δ/(1 + k))² exactly, 10⁻¹⁰
+    /// at δ = 10⁻⁵ (1 + k), and the round-off ε |g|/δ over a load that may be a tenth of
+    /// |g|/(1 + k) (c1 and c2 move in opposite directions), ≈ 10⁻¹⁰ (2 × 10⁻⁹ measured at
+    /// δ = 10⁻⁶ k). The bound 10⁻⁸ leaves a factor of 50 over both, while a wrong factor,
+    /// sign or pair (∂c1/∂k, ∂c2/∂k) is an error of order one. The loads of μ and H are also,
+    /// to round-off, the membrane's own gradient over μ and over H, and the tangent is the
+    /// difference of the gradient in the state.
+    fn check_material_loads(model: &AxisymModel, q: &[f64], params: &[f64]) {
+        let e = model.evaluate(q, params).unwrap();
+        for (j, name) in [(0, "mu"), (1, "k"), (2, "thickness")] {
+            let step = if j == 1 {
+                1e-5 * (1.0 + params[j])
+            } else {
+                1e-3 * params[j]
+            };
+            let gradient = |s: f64| {
+                let mut p = params.to_vec();
+                p[j] += s;
+                model.evaluate(q, &p).unwrap().gradient
+            };
+            let (gp, gm) = (gradient(step), gradient(-step));
+            let fd: Vec<f64> = gp
+                .iter()
+                .zip(&gm)
+                .map(|(a, b)| (a - b) / (2.0 * step))
+                .collect();
+            let load: Vec<f64> = e.loads.column(j).iter().copied().collect();
+            let err = relative(&fd, &load);
+            eprintln!("{name}: load against central differences {err:.1e}");
+            assert!(err < 1e-8, "{name}: {err:e}");
+        }
+        let mut bare = model.clone();
+        bare.pressures.clear();
+        let membrane = bare.evaluate(q, params).unwrap().gradient;
+        for (j, value) in [(0, params[0]), (2, params[2])] {
+            let times: Vec<f64> = e.loads.column(j).iter().map(|l| l * value).collect();
+            assert!(relative(&times, &membrane) < 1e-14, "parameter {j}");
+        }
+        let step = 1e-6;
+        for k in 0..model.dim() {
+            let gradient = |s: f64| {
+                let mut q = q.to_vec();
+                q[k] += s;
+                model.evaluate(&q, params).unwrap().gradient
+            };
+            let (gp, gm) = (gradient(step), gradient(-step));
+            let fd: Vec<f64> = gp
+                .iter()
+                .zip(&gm)
+                .map(|(a, b)| (a - b) / (2.0 * step))
+                .collect();
+            let column: Vec<f64> = e.tangent.column(k).iter().copied().collect();
+            assert!(relative(&fd, &column) < 1e-6, "tangent column {k}");
+        }
+    }
+
+    #[test]
+    fn material_loads_match_central_differences_on_a_balloon_and_a_disc_under_fluid() {
+        let (model, q, params) = balloon();
+        check_material_loads(&model, &q, &params);
+        let (model, q, params) = disc();
+        check_material_loads(&model, &q, &params);
+    }
+
+    /// The same model with the material the numbers `params` gives it.
+    fn with_numbers(model: &AxisymModel, params: &[f64]) -> AxisymModel {
+        let mut fixed = model.clone();
+        fixed.meridian.material = MeridianMaterial {
+            mu: Quantity::Value(params[0]),
+            k: Quantity::Value(params[1]),
+            thickness: Quantity::Value(params[2]),
+        };
+        fixed
+    }
+
+    /// A dense block of wave number m as a nalgebra matrix.
+    fn dense_block(model: &AxisymModel, m: usize, q: &[f64], params: &[f64]) -> DMatrix<f64> {
+        let b = model.block(m, q, params).unwrap();
+        let d = b.pattern.to_dense(&b.values);
+        DMatrix::from_fn(d.nrows(), d.ncols(), |i, j| d[(i, j)])
+    }
+
+    /// The material read at the parameters: the energy, gradient, tangent and every block
+    /// m = 0..4 are those of the meridian with the same numbers, to the last bit, at two
+    /// sets of values.
+    #[test]
+    fn the_parametric_material_is_the_material_of_its_values() {
+        for (model, q, params) in [balloon(), disc()] {
+            for scale in [1.0, 1.7] {
+                let mut p = params.clone();
+                p[..3].iter_mut().for_each(|v| *v *= scale);
+                let fixed = with_numbers(&model, &p);
+                let (a, b) = (
+                    model.evaluate(&q, &p).unwrap(),
+                    fixed.evaluate(&q, &p).unwrap(),
+                );
+                assert_eq!(a.energy, b.energy);
+                assert_eq!(a.gradient, b.gradient);
+                assert_eq!(a.tangent, b.tangent);
+                for m in 0..5 {
+                    let (a, b) = (
+                        model.block(m, &q, &p).unwrap(),
+                        fixed.block(m, &q, &p).unwrap(),
+                    );
+                    assert_eq!(a.values, b.values, "m = {m}");
+                }
+            }
+        }
+    }
+
+    /// The block m = 0 on (U, W) is the tangent of the axisymmetric problem, with the
+    /// material at the parameters (the disc: the centre keeps W, every other node U, V, W,
+    /// the rim none).
+    #[test]
+    fn the_block_m0_is_the_tangent_with_the_material_as_parameters() {
+        let (model, q, params) = disc();
+        let e = model.evaluate(&q, &params).unwrap();
+        let block = dense_block(&model, 0, &q, &params);
+        let n = model.meridian.nodes.len();
+        assert_eq!(block.nrows(), 1 + 3 * (n - 2));
+        let column = |k: usize| {
+            let (i, c) = model.free_unknown(k);
+            if i == 0 {
+                0
+            } else {
+                1 + 3 * (i - 1) + 2 * c
+            }
+        };
+        let scale = e.tangent.amax();
+        for a in 0..model.dim() {
+            for b in 0..model.dim() {
+                let (t, k) = (e.tangent[(a, b)], block[(column(a), column(b))]);
+                assert!((t - k).abs() < 1e-10 * scale, "({a}, {b}): {k} vs {t}");
+            }
+        }
+    }
+
+    /// The lowest eigenvalue of a symmetric matrix over its largest magnitude.
+    fn lowest(k: &DMatrix<f64>) -> f64 {
+        let e = k.clone().symmetric_eigenvalues();
+        e.min() / e.amax()
+    }
+
+    /// At the disc's sagged state, the lowest critical densities of m = 0..3 from the
+    /// blocks sampled in θ ([`critical_densities_at`]) make the exactly integrated blocks
+    /// of the model singular (their lowest eigenvalue ≈ 10⁻¹⁶ of the largest: the two
+    /// integrations agree to round-off), and 1 % below them the lowest eigenvalue is
+    /// 3 × 10⁻⁶ … 5 × 10⁻⁵ of the largest: both read the material at the parameters.
+    #[test]
+    fn the_blocks_are_singular_at_the_critical_densities_of_the_parameters() {
+        let (model, q, params) = disc();
+        let x = model.positions(&q);
+        let load = Hydrostatic {
+            gravity: 1.0,
+            level: 0.0,
+        };
+        let ladder = critical_densities_at(&model.meridian, &x, &params, &load, 3, 1).unwrap();
+        for rung in &ladder {
+            let mut p = params.clone();
+            p[3] = rung.densities[0];
+            let at = lowest(&dense_block(&model, rung.m, &q, &p));
+            p[3] *= 0.99;
+            let below = lowest(&dense_block(&model, rung.m, &q, &p));
+            eprintln!(
+                "m = {}: ρ = {}, lowest eigenvalue there {at:.1e}, 1 % below {below:.1e}",
+                rung.m, rung.densities[0]
+            );
+            assert!(at.abs() < 1e-11, "m = {}: {at:e}", rung.m);
+            assert!(below > 1e-7, "m = {}: {below:e}", rung.m);
+        }
+        // Without the parameters the material cannot be read.
+        let err = memstab::axisym::critical_densities(&model.meridian, &x, &load, 3, 1);
+        assert!(err.unwrap_err().to_string().contains("material"));
+    }
+
+    /// The ponding ladder of the flat disc scales with μH and follows k through the
+    /// pre-stretch tension: γ = j²_{m,k} T0(k)/(μHλ0²) (64 elements: ≤ 1.3 × 10⁻⁷ of the
+    /// discretisation and ≤ 10⁻⁷ of the tabulated j², as for the numbers).
+    #[test]
+    fn the_ponding_ladder_follows_mu_k_and_h() {
+        let meridian = Meridian::disc(1.1, 64, 1.1, PARAMETRIC).unwrap();
+        let load = Hydrostatic {
+            gravity: 1.0,
+            level: 0.0,
+        };
+        for params in [[100.0, 0.0, 0.01], [40.0, 0.15, 0.05]] {
+            let ladder =
+                critical_densities_at(&meridian, &meridian.nodes, &params, &load, 2, 1).unwrap();
+            let scale = params[0] * params[2] * ponding_scale(params[1], 1.1);
+            for rung in &ladder {
+                let j2 = BESSEL_J2.iter().find(|e| e.0 == (rung.m, 1)).unwrap().1;
+                let err = rung.densities[0] / (scale * j2) - 1.0;
+                assert!(err.abs() < 1e-6, "{params:?}, m = {}: {err:e}", rung.m);
+            }
+        }
+    }
+
+    fn balloon_text() -> String {
+        std::fs::read_to_string(format!(
+            "{}/scenes/axisymmetric/balloon.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap()
+    }
+
+    fn run_text(text: &str) -> AxisymReport {
+        let study = AxisymStudy::build(Scene::from_toml_str(text, "balloon-k").unwrap()).unwrap();
+        run(&study, |_, _| {}).unwrap()
+    }
+
+    /// The bundled balloon with k the parameter "k" held at 0.1 by a `fixed` constraint, p
+    /// the control: the same path, its pressure maximum that of k the number 0.1.
+    #[test]
+    fn the_balloon_maximum_is_the_same_with_k_a_fixed_parameter() {
+        let text = balloon_text();
+        let held = text.replace("k = 0.1\n", "k = \"k\"\n").replace(
+            "[analysis]",
+            "[parameters.k]\nstart = 0.1\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"k\"\n\n[analysis]",
+        );
+        assert_ne!(held, text);
+        let (a, b) = (run_text(&text), run_text(&held));
+        let kp = b.parameters.iter().position(|n| n == "p").unwrap();
+        let kk = b.parameters.iter().position(|n| n == "k").unwrap();
+        assert_eq!(a.turning_points.len(), 2);
+        assert_eq!(a.turning_points.len(), b.turning_points.len());
+        for (s, t) in a.turning_points.iter().zip(&b.turning_points) {
+            assert_eq!(s.kind, t.kind);
+            let (ps, pt) = (s.parameters[0], t.parameters[kp]);
+            assert!((pt / ps - 1.0).abs() < 1e-12, "{:?}: {ps} vs {pt}", s.kind);
+            assert_eq!(t.parameters[kk], 0.1);
+        }
+        assert_eq!(a.rows.len(), b.rows.len());
+        assert_eq!(
+            a.critical.iter().map(|c| (c.m, c.kind)).collect::<Vec<_>>(),
+            b.critical.iter().map(|c| (c.m, c.kind)).collect::<Vec<_>>()
+        );
+    }
+
+    /// The balloon at the fixed pressure p = 1.3 (μH/R = 1) as a path in k, decreasing from
+    /// 0.1 (`balloon_text` with k the control).
+    fn k_path_text() -> String {
+        balloon_text()
+            .replace("k = 0.1\n", "k = \"k\"\n")
+            .replace("pressure = \"p\"", "pressure = 1.3")
+            .replace(
+                "[parameters.p]\nstart = 0.4879036          # holds the stretch 1.05 (closed form)\nmin = 0.0\nmax = 2.0",
+                "[parameters.k]\nstart = 0.1\nmin = 0.0\nmax = 0.3",
+            )
+            .replace("control = \"p\"", "control = \"k\"\ndirection = \"decrease\"")
+            .replace("stop-stretch = 4.0", "stop-stretch = 2.5")
+            .replace("stretch = 1.05", "stretch = 1.3")
+            .replace("modes = 20", "modes = 4")
+    }
+
+    /// At a fixed pressure the path in k runs along the closed form p R/(μH) = 1.3 =
+    /// 2/(1+k)(1/l − 1/l⁷)(1 + k l²) and turns (k at its minimum) where the pressure
+    /// maximum of the sphere is 1.3: the closed form's k there, to the meridian's error at
+    /// 64 elements (6 × 10⁻⁹ in p). A uniform stretch of the discrete sphere is exact in its
+    /// membrane energy and its volume, so the discretisation only scales p by a constant
+    /// (its area over three times its volume, against 1/R), and the stretch at the turn is
+    /// the closed form's to the localisation's round-off. The turn is the m = 0 limit point
+    /// of the path.
+    #[test]
+    fn a_path_in_k_at_fixed_pressure_turns_where_the_maximum_is_that_pressure() {
+        let r = run_text(&k_path_text());
+        assert_eq!(r.control, "k");
+        assert_eq!(r.stop, StopReason::Stretch { target: 2.5 });
+        let kl = r.measures.iter().position(|m| m == "stretch").unwrap();
+        for row in &r.rows {
+            let (k, l) = (row.parameters[0], row.measures[kl]);
+            let err = sphere_pressure(k, l) / 1.3 - 1.0;
+            assert!(err.abs() < 1e-7, "k = {k}, l = {l}: {err:e}");
+        }
+        assert_eq!(r.turning_points.len(), 1, "{:?}", r.turning_points);
+        let turn = &r.turning_points[0];
+        assert_eq!(turn.kind, Extremum::Minimum);
+        let (k, l) = (turn.parameters[0], turn.measures[kl]);
+        let max = sphere_extrema(k)[0];
+        assert!(max.maximum);
+        let (ep, el) = (max.pressure / 1.3 - 1.0, l / max.stretch - 1.0);
+        eprintln!("turn at k = {k}: closed-form maximum there {ep:.1e} off 1.3, stretch {el:.1e}");
+        assert!(ep.abs() < 1e-7, "{ep:e}");
+        assert!(el.abs() < 1e-9, "{el:e}");
+        let c = r.critical.first().expect("a critical point at the turn");
+        assert_eq!((c.m, c.kind), (0, CriticalKind::LimitPoint));
+        assert!(c.localised);
+        assert!((c.parameters[0] / k - 1.0).abs() < 1e-6);
+    }
+
+    fn memstab(args: &[&str]) -> std::process::Output {
+        Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(args)
+            .output()
+            .unwrap()
+    }
+
+    /// `memstab run` on the meridian scene whose material k is the parameter "k": the path
+    /// in k is written with its column, the turn among its turning points; the pre-stretch
+    /// as a parameter is refused in one line naming `material.prestretch`, exit 2.
+    #[test]
+    fn memstab_run_takes_k_as_a_parameter_on_the_meridian() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("balloon_k.toml");
+        std::fs::write(&file, k_path_text()).unwrap();
+        let out = dir.path().join("out");
+        let o = memstab(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let csv = std::fs::read_to_string(out.join("path.csv")).unwrap();
+        let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        assert!(head.contains(&"k") && !head.contains(&"p"), "{head:?}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+        assert_eq!(json["control"], "k");
+        let turns = json["turning_points"].as_array().unwrap();
+        assert_eq!(turns.len(), 1, "{turns:?}");
+        let k = turns[0]["parameters"]["k"].as_f64().unwrap();
+        assert!((sphere_extrema(k)[0].pressure / 1.3 - 1.0).abs() < 1e-6);
+
+        let text = k_path_text()
+            .replace("thickness = 0.01", "thickness = 0.01\nprestretch = \"s\"")
+            .replace("[analysis]", "[parameters.s]\nstart = 1.0\n\n[[constraint]]\ntype = \"fixed\"\nparameter = \"s\"\n\n[analysis]");
+        let file = dir.path().join("prestretch.toml");
+        std::fs::write(&file, text).unwrap();
+        let out = dir.path().join("refused");
+        let o = memstab(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("material.prestretch = \"s\""), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+}

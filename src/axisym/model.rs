@@ -15,14 +15,16 @@
 //!   Π_pressure = −s π ∫ r² p(z) z_ξ dξ,
 //! ```
 //!
-//! where a pressure p(z) pushes along −s n with n dA = x_ξ × x_θ dξ dθ: its first variation
-//! is s ∫ p n·δx dA (integrating by parts, the end terms vanish on the axis, r = 0, and at a
-//! clamped end, δz = 0). A gas of over-pressure P on the side n points away from is s = −1,
-//! p = P (Π = −P V with V = −π ∫ r² z_ξ dξ); a fluid of density ρ under gravity g with its
-//! level at h has p = ρ g (h − z), s = +1 on the side n points to ("above" a floor whose
-//! meridian runs outward from the axis) and s = −1 behind it, integrated over the part of
-//! each element below the level (z(ξ) < h, between the roots of a quadratic), where a moving
-//! wetting line adds a term to the tangent (docs/theory.md §15.14).
+//! with μ, k and H (in W and H) numbers or parameters read at every evaluation, their loads
+//! exact (docs/theory.md §15.18), and where a pressure p(z) pushes along −s n with
+//! n dA = x_ξ × x_θ dξ dθ: its first variation is s ∫ p n·δx dA (integrating by parts, the
+//! end terms vanish on the axis, r = 0, and at a clamped end, δz = 0). A gas of over-pressure
+//! P on the side n points away from is s = −1, p = P (Π = −P V with V = −π ∫ r² z_ξ dξ); a
+//! fluid of density ρ under gravity g with its level at h has p = ρ g (h − z), s = +1 on the
+//! side n points to ("above" a floor whose meridian runs outward from the axis) and s = −1
+//! behind it, integrated over the part of each element below the level (z(ξ) < h, between
+//! the roots of a quadratic), where a moving wetting line adds a term to the tangent
+//! (docs/theory.md §15.14).
 //!
 //! The blocks of wave number m are the second variations of the same potentials for the 3-D
 //! displacement δx = U cos mθ e_r + V sin mθ e_θ + W cos mθ e_z (docs/theory.md §15.2): with
@@ -30,6 +32,7 @@
 //! and 2π (C + S)ᵀH(C + S) for m = 0, exactly.
 
 use super::{AxisymError, FloorPlane, Meridian};
+use crate::effects::membrane::MooneyRivlin;
 use crate::effects::Quantity;
 use crate::linalg::SymmetricPattern;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -395,7 +398,19 @@ impl AxisymModel {
         };
         let pressures = self.resolved_pressures(&x, params)?;
         let lam = self.meridian.prestretch;
-        let h = self.meridian.material.thickness;
+        let quantities = &self.meridian.material;
+        let [mu, k, h] = quantities.values(params)?;
+        let material = MooneyRivlin::new(mu, k, h);
+        // The material's parameters: W is linear in μ (through c1, c2) and the energy in H,
+        // so their loads are the membrane's gradient over μ and over H; W is linear in
+        // (c1, c2), so the load of k is the gradient of the material (∂c1/∂k, ∂c2/∂k)
+        // (docs/theory.md §2.5, §15.18).
+        let (mu_slot, k_slot, h_slot) = (
+            quantities.mu.parameter(),
+            quantities.k.parameter(),
+            quantities.thickness.parameter(),
+        );
+        let along_k = k_slot.map(|_| MooneyRivlin::derivative_in_k(mu, k, h));
         for e in 0..self.meridian.elements() {
             // Element gradient and Hessian over its 6 unknowns (r, z per node, node-major).
             let mut g = [0.0; 6];
@@ -405,11 +420,7 @@ impl AxisymModel {
                 let a = lam / p.dx_ref;
                 let b = lam / p.big_r;
                 let f = [p.x_xi * a, Vector3::new(0.0, p.r * b, 0.0)];
-                let (w, pk, hf) = self
-                    .meridian
-                    .material
-                    .energy_in_f(&f)
-                    .ok_or(AxisymError::Degenerate(e))?;
+                let (w, pk, hf) = material.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
                 let da = 2.0 * PI * h * p.dx_ref * p.big_r / (lam * lam) * p.weight;
                 out.energy += w * da;
                 // ∂f_i/∂(node k, component c).
@@ -435,6 +446,21 @@ impl AxisymModel {
                             }
                         }
                         kk[(i, j)] += s * da;
+                    }
+                }
+                if let (Some(j), Some(dmat)) = (k_slot, &along_k) {
+                    let (_, dpk, _) = dmat.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
+                    for (i, l) in loads[j].iter_mut().enumerate() {
+                        let di = df(i / 2, i % 2);
+                        *l += (dpk[0].dot(&di[0]) + dpk[1].dot(&di[1])) * da;
+                    }
+                }
+            }
+            // Here g is the membrane's gradient alone.
+            for (slot, value) in [(mu_slot, mu), (h_slot, h)] {
+                if let Some(j) = slot {
+                    for (l, gi) in loads[j].iter_mut().zip(g) {
+                        *l += gi / value;
                     }
                 }
             }
@@ -701,6 +727,7 @@ impl AxisymModel {
     ) -> Result<Vec<Vec<f64>>, AxisymError> {
         let x = self.positions(q);
         let lam = self.meridian.prestretch;
+        let material = self.meridian.material.at(params)?;
         // The spin on the 5-point rule (its terms are of degree 9), a fluid with a wetting
         // line on its element's wet part (docs/theory.md §15.14), the rest on 4 points.
         let (spin, rest): (Vec<Pressure>, Vec<Pressure>) = self
@@ -711,7 +738,8 @@ impl AxisymModel {
             rest.into_iter().partition(|p| p.level(params).is_some());
         let points = (0..self.meridian.elements())
             .map(|e| {
-                let mut points = block_points(&self.meridian, &x, e, true, &rest, params)?;
+                let mut points =
+                    block_points(&self.meridian, &x, e, Some(&material), &rest, params)?;
                 if !spin.is_empty() {
                     let rule = &super::GAUSS5;
                     points.extend(block_points_on(&self.meridian, &x, e, &spin, params, rule));
@@ -831,30 +859,28 @@ struct BlockPoint {
     x_th: Vector3<f64>,
 }
 
-/// The Gauss points of element e at the nodes `x` with the membrane (when `membrane`) and
-/// the `pressures` evaluated once for the blocks of every wave number.
+/// The Gauss points of element e at the nodes `x` with the membrane of the material
+/// `membrane` (when given: the meridian's at the parameters) and the `pressures` evaluated
+/// once for the blocks of every wave number.
 fn block_points(
     meridian: &Meridian,
     x: &[[f64; 2]],
     e: usize,
-    membrane: bool,
+    membrane: Option<&MooneyRivlin>,
     pressures: &[Pressure],
     params: &[f64],
 ) -> Result<Vec<BlockPoint>, AxisymError> {
     let lam = meridian.prestretch;
-    let h = meridian.material.thickness;
     super::points(meridian, x, e)
         .into_iter()
         .map(|p| {
-            let membrane = if membrane {
+            let membrane = if let Some(material) = membrane {
+                let h = material.thickness;
                 let f = [
                     p.x_xi * (lam / p.dx_ref),
                     Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
                 ];
-                let (_, _, hf) = meridian
-                    .material
-                    .energy_in_f(&f)
-                    .ok_or(AxisymError::Degenerate(e))?;
+                let (_, _, hf) = material.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
                 let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
                 let mut hh = SMatrix::<f64, 6, 6>::zeros();
                 for (i, row) in hf.iter().enumerate() {
@@ -981,15 +1007,18 @@ fn block_local(points: &[BlockPoint], m: usize, lam: f64) -> SMatrix<f64, 9, 9> 
     local
 }
 
-/// The membrane's 9 × 9 block of wave number m on element e at the nodes `x`.
+/// The membrane's 9 × 9 block of wave number m on element e at the nodes `x` and the
+/// parameters `params`.
 #[cfg(test)]
 fn membrane_local(
     meridian: &Meridian,
     x: &[[f64; 2]],
+    params: &[f64],
     e: usize,
     m: usize,
 ) -> Result<SMatrix<f64, 9, 9>, AxisymError> {
-    let points = block_points(meridian, x, e, true, &[], &[])?;
+    let material = meridian.material.at(params)?;
+    let points = block_points(meridian, x, e, Some(&material), &[], &[])?;
     Ok(block_local(&points, m, meridian.prestretch))
 }
 
@@ -1003,14 +1032,13 @@ fn pressure_local(
     load: &Pressure,
     params: &[f64],
 ) -> SMatrix<f64, 9, 9> {
-    let points = block_points(meridian, x, e, false, &[*load], params).expect("no membrane");
+    let points = block_points(meridian, x, e, None, &[*load], params).expect("no membrane");
     block_local(&points, m, meridian.prestretch)
 }
 
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
-    use crate::effects::membrane::MooneyRivlin;
 
     /// A clamped cap, stretched and bent away from its reference, under a gas pressure and a
     /// fluid below it: every potential of the model at a generic state.
@@ -1184,6 +1212,31 @@ pub(super) mod tests {
         check_derivatives(&model, &q, &params);
     }
 
+    /// The generic cap with μ, k and H the parameters 4, 5 and 6 (docs/theory.md §15.18).
+    fn generic_material() -> (AxisymModel, Vec<f64>, Vec<f64>) {
+        let (mut model, q, mut params) = generic();
+        model.meridian.material = super::super::MeridianMaterial {
+            mu: Quantity::Parameter(4),
+            k: Quantity::Parameter(5),
+            thickness: Quantity::Parameter(6),
+        };
+        params.extend([1.3, 0.25, 0.08]);
+        (model, q, params)
+    }
+
+    /// μ, k and H as parameters: the gradient, the tangent and every load (theirs beside the
+    /// pressures') against central differences, the block m = 0 against the tangent and the
+    /// exact blocks m = 0..4 against the sampled ones, all at the parameters.
+    #[test]
+    fn material_parameters_match_finite_differences_and_the_blocks() {
+        let (model, q, params) = generic_material();
+        let e = model.evaluate(&q, &params).unwrap();
+        assert!((4..7).all(|j| e.loads.column(j).amax() > 1e-3));
+        check_derivatives(&model, &q, &params);
+        block_is_tangent(&model, &q, &params);
+        exact_equals_sampled(&model, &q, &params);
+    }
+
     /// The filled fluid (negative pressure above the head), the planes (linear and cubic,
     /// some nodes through them) and the sliding edge.
     #[test]
@@ -1324,8 +1377,13 @@ pub(super) mod tests {
     /// on 2m + 4 points, exact for these products), membrane and fluid.
     #[test]
     fn exact_theta_integrals_equal_the_sampled_blocks() {
-        let (model, q, _) = generic();
-        let x = model.positions(&q);
+        let (model, q, params) = generic();
+        exact_equals_sampled(&model, &q, &params);
+    }
+
+    /// The exact blocks m = 0..4 of the membrane and of a fluid against the sampled ones.
+    fn exact_equals_sampled(model: &AxisymModel, q: &[f64], params: &[f64]) {
+        let x = model.positions(q);
         let load = super::super::Hydrostatic {
             gravity: 1.3,
             level: 2.0,
@@ -1338,7 +1396,7 @@ pub(super) mod tests {
             filled: false,
         };
         for m in 0..5 {
-            let km = super::super::membrane_full(&model.meridian, &x, m, 0.0).unwrap();
+            let km = super::super::membrane_full(&model.meridian, &x, params, m, 0.0).unwrap();
             let kf = super::super::hydrostatic_full(&model.meridian, &x, &load, m, 0.0, true);
             let n = 3 * model.meridian.nodes.len();
             let (mut am, mut af) = (
@@ -1346,7 +1404,7 @@ pub(super) mod tests {
                 nalgebra::DMatrix::zeros(n, n),
             );
             for e in 0..model.meridian.elements() {
-                let a = membrane_local(&model.meridian, &x, e, m).unwrap();
+                let a = membrane_local(&model.meridian, &x, params, e, m).unwrap();
                 let f = pressure_local(&model.meridian, &x, e, m, &fluid, &[]);
                 super::super::scatter(&mut am, e, &a);
                 super::super::scatter(&mut af, e, &f);

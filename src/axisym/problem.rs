@@ -88,6 +88,10 @@ fn model_error(e: AxisymError) -> ModelError {
             effect: "axisymmetric".into(),
             what: "energy",
         },
+        AxisymError::Material(what) => ModelError::Global {
+            effect: "membrane".into(),
+            what,
+        },
         other => ModelError::Global {
             effect: "axisymmetric".into(),
             what: other.to_string(),

@@ -3,15 +3,14 @@
 //! the effects the meridian implements (gas at a given over-pressure or of a fixed amount above
 //! an inside fluid, fluid wetting the membrane wholly or in part, fluid spinning about z,
 //! planes normal to the axis, fixed and sliding edges; the fluid-volume, gas-amount and fixed
-//! constraints; the held-translation start of a sphere on a plane); every other effect,
-//! constraint or key
+//! constraints; the held-translation start of a sphere on a plane; the material's μ, k and H
+//! as numbers or parameters, the pre-stretch a number); every other effect, constraint or key
 //! is refused in one line that names it. Stability is by wave number m = 0..=`mesh.modes`
 //! (docs/theory.md §15.3).
 
-use super::{AxisymModel, AxisymProblem, Meridian, Pressure};
+use super::{AxisymModel, AxisymProblem, Meridian, MeridianMaterial, Pressure};
 use crate::analysis::modes::{self, ModePath};
 use crate::continuation::{PathOptions, PathPoint, SolveError};
-use crate::effects::membrane::MooneyRivlin;
 use crate::effects::Quantity;
 use crate::results::{CriticalKind, StopReason, TurningRow};
 use crate::scene::{self, Analysis, AxisymShape, Direction, Effect, MeshSpec, Scene};
@@ -77,21 +76,21 @@ impl AxisymStudy {
                     .expect("validated parameter"),
             ),
         };
-        let fixed_value = |key: &str, q: &scene::Quantity| {
-            match q {
-            scene::Quantity::Value(v) => Ok(*v),
-            scene::Quantity::Parameter(n) => Err(unsupported(format!(
-                "material.{key} = \"{n}\": the axisymmetric model takes the material as numbers, not parameters"
-            ))),
-        }
-        };
+        // μ, k and H numbers or parameters (docs/theory.md §15.18); the pre-stretch a number.
         let m = &scene.material;
-        let material = MooneyRivlin::new(
-            fixed_value("mu", &m.mu)?,
-            fixed_value("k", &m.k)?,
-            fixed_value("thickness", &m.thickness)?,
-        );
-        let prestretch = fixed_value("prestretch", &m.prestretch)?;
+        let material = MeridianMaterial {
+            mu: index(&m.mu),
+            k: index(&m.k),
+            thickness: index(&m.thickness),
+        };
+        let prestretch = match &m.prestretch {
+            scene::Quantity::Value(v) => *v,
+            scene::Quantity::Parameter(n) => {
+                return Err(unsupported(format!(
+                    "material.prestretch = \"{n}\": the axisymmetric model takes the pre-stretch as a number, not a parameter"
+                )))
+            }
+        };
         let input = |e: super::AxisymError| unsupported(format!("mesh: {e}"));
         let (mut meridian, edge) = match mesh.shape {
             AxisymShape::Disc => (

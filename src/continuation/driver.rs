@@ -3,7 +3,7 @@
 //! [`Problem`] — here the fixed-point space of a subgroup of the scene's group
 //! ([`crate::analysis::SymmetricProblem`]) — and advances one accepted point per
 //! [`Continuation::step`]. What happens along the way (turning points, changes of stability,
-//! stops) is the business of [`crate::analysis::events`], not of the driver.
+//! stops) is the business of [`crate::continuation::events`], not of the driver.
 //!
 //! Unknowns y = (q, λ) with q ∈ ℝ^m and the free parameters λ ∈ ℝ^{c+1}; equations
 //! R(q, λ) = 0 (m) and c augmenting equations g(q, λ) = 0 (fixed fluid volume, fixed amount

@@ -56,13 +56,26 @@ impl MooneyRivlin {
         }
     }
 
+    /// The derivative of [`MooneyRivlin::new`] in k: the constants
+    /// (∂c1/∂k, ∂c2/∂k) = (−μ, μ)/(2 (1 + k)²) with the same thickness. W is linear in
+    /// (c1, c2), so this material's W, gradient and Hessian in F are ∂/∂k of those of
+    /// `MooneyRivlin::new(mu, k, thickness)`.
+    pub fn derivative_in_k(mu: f64, k: f64, thickness: f64) -> Self {
+        let c1 = 0.5 * mu / (1.0 + k);
+        Self {
+            c1: -c1 / (1.0 + k),
+            c2: c1 / (1.0 + k),
+            thickness,
+        }
+    }
+
     /// The ratio k = c2/c1.
-    fn k(&self) -> f64 {
+    pub fn k(&self) -> f64 {
         self.c2 / self.c1
     }
 
     /// The shear modulus μ = 2 (c1 + c2).
-    fn mu(&self) -> f64 {
+    pub fn mu(&self) -> f64 {
         2.0 * (self.c1 + self.c2)
     }
 
