@@ -37,13 +37,14 @@
 //! triangulated surface ([`revolved_mesh`], [`revolved_positions`], [`revolved_mode`];
 //! docs/theory.md §15.17).
 
+pub mod blocks;
+pub mod critical_test;
 mod gas;
 mod held;
 mod model;
 mod plane;
 mod problem;
 mod revolve;
-pub mod run;
 mod spin;
 mod volume;
 

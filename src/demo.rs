@@ -5,7 +5,6 @@
 use crate::reference::{sphere_extrema, sphere_pressure, SphereExtremum};
 use crate::results::{Extremum, PathReport};
 use crate::scene::{Effect, MeshSpec, Scene, SceneError};
-use crate::study::mesh::MeshStudy;
 
 /// The demo scene's text, bundled so that `memstab demo` works from anywhere.
 pub const SCENE: &str = include_str!("../scenes/demo.toml");
@@ -65,8 +64,11 @@ impl ClosedFormCheck {
 
 /// The closed-form check of a run of a balloon under pressure control (an icosphere whose
 /// only effect is a gas at the control's pressure); `None` for any other run.
-pub fn closed_form_check(study: &MeshStudy, report: &PathReport) -> Option<ClosedFormCheck> {
-    let scene = &study.scene;
+pub fn closed_form_check(
+    scene: &crate::scene::Scene,
+    mesh: &meshes::Mesh,
+    report: &PathReport,
+) -> Option<ClosedFormCheck> {
     let MeshSpec::Icosphere(ico) = &scene.mesh else {
         return None;
     };
@@ -89,7 +91,6 @@ pub fn closed_form_check(study: &MeshStudy, report: &PathReport) -> Option<Close
     let extrema = sphere_extrema(k);
     // A polyhedron's pressure scale: p = dW/dV, with dW ∝ area and dV ∝ 3·volume, so the
     // discrete balloon's pressure exceeds the sphere's by R·A/(3V) − 1.
-    let mesh = &study.mesh.mesh;
     let polyhedron = ico.radius * mesh.area() / (3.0 * mesh.volume()) - 1.0;
     let turning = report
         .turning_points

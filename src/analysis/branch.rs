@@ -7,7 +7,6 @@ use super::{registry, restart, RunError};
 use crate::output::FinishedRun;
 use crate::results::Branches;
 use crate::scene::BranchesAnalysis;
-use crate::study::mesh::MeshStudy;
 use crate::study::Study;
 
 /// What `memstab branch` changes of the scene's `[analysis.branches]`.
@@ -34,18 +33,19 @@ pub enum BranchError {
 
 /// The branches of critical point `n` (1-based) of the finished `run` of `study`.
 pub fn from_run(
-    study: &mut MeshStudy,
+    study: &mut dyn Study,
     run: &FinishedRun,
     n: usize,
     overrides: &Overrides,
 ) -> Result<Branches, BranchError> {
     let input = |e: crate::output::ReopenError| BranchError::Input(e.to_string());
     restart::check(run, study).map_err(input)?;
-    let Some(path) = registry::path(&study.scene.analysis) else {
+    let Some(path) = registry::path(&study.scene().analysis) else {
         unreachable!("checked: the run's analysis is a path")
     };
     let (state, mode) = restart::critical_state(run, study, n).map_err(input)?;
-    let critical = crate::study::switching::recorded_points(study, &run.critical, n, state, mode)
+    let critical = study
+        .recorded(&run.critical, n, state, mode)
         .map_err(BranchError::Input)?;
     let opts = path.options_of(study);
     let params = study.start_values().to_vec();

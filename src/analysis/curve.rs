@@ -331,6 +331,13 @@ impl Curve {
 }
 
 impl Analysis for Curve {
+    fn restarts_from(&self) -> Option<(std::path::PathBuf, usize)> {
+        match (&self.0.from_run, &self.0.from) {
+            (Some(dir), CurveStart::Index(i)) => Some((dir.clone(), *i)),
+            _ => None,
+        }
+    }
+
     /// The options of the path that finds the curve's first point: the control increasing
     /// from the start for `path-steps` steps.
     fn options(&self, study: &dyn Study) -> PathOptions {

@@ -23,7 +23,6 @@ pub mod buckling;
 pub mod compare;
 pub mod curve;
 pub mod equilibrium;
-pub mod modes;
 pub mod path;
 pub mod registry;
 pub mod restart;
@@ -67,6 +66,11 @@ pub trait Analysis {
     /// held state at the control it is given.
     fn held(&self) -> bool {
         false
+    }
+    /// The finished run and the number (from 0) of its critical point the analysis starts
+    /// from, if it starts from one (a critical curve's `from-run`).
+    fn restarts_from(&self) -> Option<(std::path::PathBuf, usize)> {
+        None
     }
     /// Runs from the converged start state in `cx`, recording into it; returns why it
     /// stopped.

@@ -3,18 +3,15 @@
 //! `analysis.from-run`, `memstab branch`), read back with the readers of [`crate::output`] and
 //! checked against the study before anything is computed — the [`Start`] the analyses take.
 
-use crate::model::Model;
-use crate::output::store::read_states;
+use crate::output::store::{read_critical_states, read_states, CRITICAL_FILE};
 use crate::output::{FinishedRun, ReopenError};
 use crate::results::{CriticalPoint, RecordedPoint};
-use crate::scene::{Analysis, CurveStart};
-use crate::study::mesh::MeshStudy;
 use crate::study::{Start, Study};
 
 /// The start the scene asks for: a critical point of `analysis.from-run`, a saved point of
 /// `[start] from`, or the solve from the scene's first guess. The message of an error names
 /// the key (`start.from`, `start.point`, `analysis.from-run`, `analysis.from`) and the value.
-pub fn start_of(study: &MeshStudy) -> Result<Start, String> {
+pub fn start_of(study: &dyn Study) -> Result<Start, String> {
     if let Some(cp) = curve_start(study)? {
         return Ok(Start::Critical(Box::new(cp)));
     }
@@ -137,11 +134,12 @@ pub fn point(
     Ok((saved.u, saved.parameters))
 }
 
-/// The state and the unit mode of critical point `n` (1-based) of `run` from
-/// `critical_NN.vtu`, over the unknowns of `study`; `n` out of range is an error naming the range.
+/// The state and the unit mode of critical point `n` (1-based) of `run`, as its
+/// `critical.states` keeps them, over the unknowns of `study`; `n` out of range is an error
+/// naming the range.
 pub fn critical_state(
     run: &FinishedRun,
-    study: &MeshStudy,
+    study: &dyn Study,
     n: usize,
 ) -> Result<(Vec<f64>, Vec<f64>), ReopenError> {
     if n == 0 || n > run.critical.len() {
@@ -152,38 +150,35 @@ pub fn critical_state(
             if run.critical.len() == 1 { "" } else { "s" }
         )));
     }
-    let file = run.dir.join(format!("critical_{n:02}.vtu"));
-    let (mesh, mode) = meshes::read::read_vtu_field(&file, "critical_mode")
-        .map_err(|e| ReopenError(e.to_string()))?;
-    let reference = study.model.reference();
-    if mesh.nodes.len() != reference.len() {
+    let saved = read_critical_states(&run.dir).map_err(|e| ReopenError(e.to_string()))?;
+    let file = run.dir.join(CRITICAL_FILE);
+    let Some(point) = saved.get(n - 1) else {
         return Err(ReopenError(format!(
-            "{}: {} nodes, the scene's mesh has {}",
+            "{}: {} critical points, path.json names {}",
             file.display(),
-            mesh.nodes.len(),
-            reference.len()
+            saved.len(),
+            run.critical.len()
+        )));
+    };
+    let unknowns = study.about().unknowns;
+    if point.u.len() != unknowns {
+        return Err(ReopenError(format!(
+            "{}: critical point {n} has a state of {} unknowns, the scene's model has {unknowns}",
+            file.display(),
+            point.u.len()
         )));
     }
-    let layout = study.model.layout();
-    let mut u = vec![0.0; layout.unknowns()];
-    let mut m = vec![0.0; layout.unknowns()];
-    for (i, (x, x0)) in mesh.nodes.iter().zip(reference).enumerate() {
-        for k in 0..3 {
-            if let Some(d) = layout.dof(i, k) {
-                u[d] = x[k] - x0[k];
-                m[d] = mode[i][k];
-            }
-        }
-    }
-    let norm = m.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let norm = point.mode.iter().map(|v| v * v).sum::<f64>().sqrt();
     if !(norm > 0.0 && norm.is_finite()) {
         return Err(ReopenError(format!(
-            "{}: the critical mode is zero",
+            "{}: the mode of critical point {n} is zero",
             file.display()
         )));
     }
-    m.iter_mut().for_each(|v| *v /= norm);
-    Ok((u, m))
+    Ok((
+        point.u.clone(),
+        point.mode.iter().map(|v| v / norm).collect(),
+    ))
 }
 
 /// The critical point a critical curve of `study` starts from with
@@ -191,11 +186,8 @@ pub fn critical_state(
 /// model, and its critical point `analysis.from` (0 the first) with its state and mode from
 /// `critical_NN.vtu`. The message of an error names `analysis.from-run` or `analysis.from`
 /// and the value.
-fn curve_start(study: &MeshStudy) -> Result<Option<CriticalPoint>, String> {
-    let Analysis::CriticalCurve(a) = &study.scene.analysis else {
-        return Ok(None);
-    };
-    let (Some(dir), CurveStart::Index(i)) = (a.from_run.clone(), a.from.clone()) else {
+fn curve_start(study: &dyn Study) -> Result<Option<CriticalPoint>, String> {
+    let Some((dir, i)) = super::registry::analysis(&study.scene().analysis).restarts_from() else {
         return Ok(None);
     };
     let shown = dir.display().to_string();
@@ -212,14 +204,15 @@ fn curve_start(study: &MeshStudy) -> Result<Option<CriticalPoint>, String> {
     };
     let (state, mode) = critical_state(&run, study, i + 1).map_err(key)?;
     let recorded = RecordedPoint {
+        kind: point.kind.clone(),
         irrep: point.irrep.clone(),
         parameters: point.parameters.clone(),
         measures: study.measure(&state, &point.parameters),
         after_step: 0,
         residual_eigenvalue: point.residual_eigenvalue,
     };
-    let mut points =
-        crate::study::switching::recorded_points(study, &[recorded], 1, state, mode)
-            .map_err(|e| format!("'analysis.from' = {i}: critical point {}: {e}", i + 1))?;
+    let mut points = study
+        .recorded(&[recorded], 1, state, mode)
+        .map_err(|e| format!("'analysis.from' = {i}: critical point {}: {e}", i + 1))?;
     Ok(Some(points.remove(0)))
 }

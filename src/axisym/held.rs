@@ -280,7 +280,7 @@ mod tests {
             filled: true,
         };
         let model = super::AxisymModel::new(meridian, vec![fluid]);
-        let mut problem = AxisymProblem::new(model.clone(), vec![0.0], 0, 2);
+        let mut problem = AxisymProblem::new(model.clone(), vec![0.0], 0);
         let q0 = DVector::zeros(model.dim());
         let (q, _, _) = solve_at(
             &mut problem,

@@ -1,9 +1,10 @@
-//! The axisymmetric model as a path-following problem with Fourier-mode blocks: the seam
-//! between the meridian and the analysis ([`crate::analysis::modes::ModeProblem`]), which
-//! knows blocks and wave numbers, not membranes.
+//! The axisymmetric model as a path-following problem: the residual, tangent, loads and
+//! constraint rows of the meridian in its own unknowns q, the control and the parameter a
+//! constraint frees, and more free parameters for a critical curve — what the driver follows
+//! ([`crate::study::Followed`]); its stability is [`super::blocks::MeridianBlocks`].
 
-use super::{AxisymError, AxisymModel, BlockLayout};
-use crate::analysis::modes::{ModeBlock, ModeProblem};
+use super::{AxisymError, AxisymModel};
+use crate::continuation::events::States;
 use crate::continuation::{Linearization, Problem, Tangent};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricPattern;
@@ -21,8 +22,6 @@ pub struct AxisymProblem {
     pub params: Vec<f64>,
     /// The control's index among the parameters.
     pub control: usize,
-    /// The largest wave number analysed.
-    pub modes: usize,
     /// The fluid-volume constraint, when its level is free (the second free parameter).
     pub volume: Option<VolumeTarget>,
     /// The gas-amount constraint, when its gas's pressure is free (the second free
@@ -31,8 +30,11 @@ pub struct AxisymProblem {
     pattern: Arc<SymmetricPattern>,
     /// Per element, (local i, local j, slot in the tangent's values).
     slots: Vec<Vec<(usize, usize, usize)>>,
-    /// The layout of every block m = 0..=modes, built once.
-    layouts: Vec<BlockLayout>,
+    /// More free parameters after the control and the constraint's (a critical curve's
+    /// control).
+    pub also: Vec<usize>,
+    /// How many of `params` are the scene's (a dummy control slot may follow them).
+    pub named: usize,
     solver: SharedFactorization,
     times: PhaseTimes,
 }
@@ -77,7 +79,7 @@ impl GasTarget {
     }
 }
 
-fn model_error(e: AxisymError) -> ModelError {
+pub(super) fn model_error(e: AxisymError) -> ModelError {
     match e {
         AxisymError::Degenerate(element) => ModelError::Element {
             effect: "membrane".into(),
@@ -100,8 +102,8 @@ fn model_error(e: AxisymError) -> ModelError {
 }
 
 impl AxisymProblem {
-    /// The problem of `model` with `params`, the control `control`, blocks m = 0..=`modes`.
-    pub fn new(model: AxisymModel, params: Vec<f64>, control: usize, modes: usize) -> Self {
+    /// The problem of `model` with `params` and the control `control`.
+    pub fn new(model: AxisymModel, params: Vec<f64>, control: usize) -> Self {
         // Unknowns of one element couple: the pattern of the tangent.
         let elements = model.meridian.elements();
         let dofs: Vec<Vec<usize>> = (0..elements)
@@ -130,11 +132,11 @@ impl AxisymProblem {
             })
             .collect();
         Self {
-            layouts: (0..=modes).map(|m| model.block_layout(m)).collect(),
             model,
             params,
             control,
-            modes,
+            also: Vec::new(),
+            named: usize::MAX,
             volume: None,
             gas: None,
             pattern: Arc::new(pattern),
@@ -146,12 +148,27 @@ impl AxisymProblem {
 
     /// Every parameter at the free parameters λ.
     pub fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
+        let mut p = self.all_parameters(lambda);
+        p.truncate(self.named);
+        p
+    }
+
+    /// [`Self::parameters`] with a dummy control slot, as the model is evaluated.
+    fn all_parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
         let mut p = self.params.clone();
-        p[self.control] = lambda[0];
-        if let (Some(k), Some(h)) = (self.second(), lambda.get(1)) {
-            p[k] = *h;
+        for (k, v) in self.free_indices().into_iter().zip(lambda.iter()) {
+            p[k] = *v;
         }
         p
+    }
+
+    /// The parameter index of every free parameter: the control, the one a constraint
+    /// frees, then [`Self::also`].
+    pub fn free_indices(&self) -> Vec<usize> {
+        std::iter::once(self.control)
+            .chain(self.second())
+            .chain(self.also.iter().copied())
+            .collect()
     }
 
     /// The parameter a constraint frees: the fluid's level or the gas's pressure.
@@ -164,11 +181,10 @@ impl AxisymProblem {
     /// The free parameters at every parameter's value `params` (the control, then the level
     /// a constraint frees).
     pub fn free_values(&self, params: &[f64]) -> DVector<f64> {
-        let mut l = vec![params[self.control]];
-        if let Some(k) = self.second() {
-            l.push(params[k]);
-        }
-        DVector::from_vec(l)
+        DVector::from_iterator(
+            self.free_indices().len(),
+            self.free_indices().into_iter().map(|k| params[k]),
+        )
     }
 }
 
@@ -178,7 +194,7 @@ impl Problem for AxisymProblem {
     }
 
     fn free_parameters(&self) -> usize {
-        1 + usize::from(self.second().is_some())
+        1 + usize::from(self.second().is_some()) + self.also.len()
     }
 
     fn evaluate(
@@ -187,7 +203,7 @@ impl Problem for AxisymProblem {
         lambda: &DVector<f64>,
     ) -> Result<Linearization, ModelError> {
         let t = Instant::now();
-        let params = self.parameters(lambda);
+        let params = self.all_parameters(lambda);
         let mut values = vec![0.0; self.pattern.nnz()];
         let slots = &self.slots;
         let e = self
@@ -204,6 +220,10 @@ impl Problem for AxisymProblem {
         let free = self.free_parameters();
         let mut loads = DMatrix::zeros(n, free);
         loads.set_column(0, &e.loads.column(self.control));
+        let first_also = free - self.also.len();
+        for (j, &k) in self.also.iter().enumerate() {
+            loads.set_column(first_also + j, &e.loads.column(k));
+        }
         let mut constraint_lambda = DMatrix::zeros(0, free);
         let (constraints, constraint_q) = match (self.volume, self.gas) {
             (Some(v), _) => {
@@ -217,8 +237,10 @@ impl Problem for AxisymProblem {
                 let dv = self.model.free_part(&fluid.gradient);
                 // ∂g/∂h = scale · A_s, ∂g/∂V* = −scale.
                 constraint_lambda[(0, 1)] = v.scale * fluid.section;
-                if v.target_parameter == Some(self.control) {
-                    constraint_lambda[(0, 0)] = -v.scale;
+                for (j, k) in self.free_indices().into_iter().enumerate() {
+                    if j != 1 && v.target_parameter == Some(k) {
+                        constraint_lambda[(0, j)] = -v.scale;
+                    }
                 }
                 (
                     DVector::from_element(1, v.scale * (fluid.volume - v.amount(&params))),
@@ -232,8 +254,10 @@ impl Problem for AxisymProblem {
                         .gas_amount_row(&g.gas, g.amount(&params), q.as_slice(), &params);
                 constraint_lambda = DMatrix::zeros(1, free);
                 constraint_lambda[(0, 1)] = row.grad_p;
-                if g.target_parameter == Some(self.control) {
-                    constraint_lambda[(0, 0)] = -1.0;
+                for (j, k) in self.free_indices().into_iter().enumerate() {
+                    if j != 1 && g.target_parameter == Some(k) {
+                        constraint_lambda[(0, j)] = -1.0;
+                    }
                 }
                 (
                     DVector::from_element(1, row.value),
@@ -266,54 +290,26 @@ impl Problem for AxisymProblem {
     }
 }
 
-impl ModeProblem for AxisymProblem {
-    fn modes(&self) -> usize {
-        self.modes
+impl States for AxisymProblem {
+    fn displacement(&self, q: &DVector<f64>) -> Vec<f64> {
+        q.iter().copied().collect()
     }
 
-    fn border(&self, m: usize) -> usize {
-        self.layouts
-            .get(m)
-            .map_or_else(|| self.model.block_layout(m).border, |l| l.border)
+    fn parameters(&self, lambda: &DVector<f64>) -> Vec<f64> {
+        AxisymProblem::parameters(self, lambda)
+    }
+}
+
+impl crate::study::Followed for AxisymProblem {
+    fn coordinates(&self, u: &[f64]) -> DVector<f64> {
+        DVector::from_column_slice(u)
     }
 
-    fn block(
-        &mut self,
-        m: usize,
-        q: &DVector<f64>,
-        lambda: &DVector<f64>,
-    ) -> Result<(Arc<SymmetricPattern>, Vec<f64>), ModelError> {
-        let params = self.parameters(lambda);
-        let built;
-        let layout = match self.layouts.get(m) {
-            Some(l) => l,
-            None => {
-                built = self.model.block_layout(m);
-                &built
-            }
-        };
-        let values = self
-            .model
-            .block_values(layout, q.as_slice(), &params)
-            .map_err(model_error)?;
-        Ok((layout.pattern.clone(), values))
+    fn free_values(&self, params: &[f64]) -> DVector<f64> {
+        AxisymProblem::free_values(self, params)
     }
 
-    fn blocks(
-        &mut self,
-        q: &DVector<f64>,
-        lambda: &DVector<f64>,
-    ) -> Result<Vec<ModeBlock>, ModelError> {
-        let params = self.parameters(lambda);
-        let values = self
-            .model
-            .blocks_values(&self.layouts, q.as_slice(), &params)
-            .map_err(model_error)?;
-        Ok(self
-            .layouts
-            .iter()
-            .zip(values)
-            .map(|(l, v)| (l.pattern.clone(), v))
-            .collect())
+    fn free_indices(&self) -> Vec<usize> {
+        AxisymProblem::free_indices(self)
     }
 }

@@ -6,8 +6,9 @@
 //! `scenes/axisymmetric/paper4_spinning_cap.toml` (filled fluid, spin, floor, sliding edge,
 //! fluid volume held) with its critical points by wave number.
 
-use crate::axisym::run::{run, AxisymStudy};
+use crate::analysis::run;
 use crate::scene::Scene;
+use crate::study::meridian::MeridianStudy;
 use crate::text::sig_digits;
 use std::time::Instant;
 
@@ -23,15 +24,16 @@ pub fn axisym_section(elements: usize) -> Result<String, String> {
     let scene = Scene::from_toml_str(&text, &format!("axisymmetric balloon, {elements} elements"))
         .map_err(|e| e.to_string())?;
     let t = Instant::now();
-    let study = AxisymStudy::build(scene).map_err(|e| e.to_string())?;
-    let report = run(&study, |_, _| {}).map_err(|e| e.to_string())?;
+    let mut study = MeridianStudy::build(scene).map_err(|e| e.to_string())?;
+    let result = run(&mut study, |_, _| {}).map_err(|e| e.to_string())?;
     let wall = t.elapsed().as_secs_f64();
+    let report = &result.report;
     let points = report.rows.len();
     let mut md = format!(
         "\n## Axisymmetric balloon: modes 0..{} at every point\n\n\
          | elements | unknowns | points | wall (s) | per point (ms) | of it blocks (s) | p_max error | p_min error | critical points |\n\
          |---|---|---|---|---|---|---|---|---|\n",
-        report.modes
+        study.modes
     );
     let err = |k: usize| {
         report.turning_points.get(k).map_or("—".to_string(), |t| {
@@ -41,13 +43,14 @@ pub fn axisym_section(elements: usize) -> Result<String, String> {
     let critical: Vec<String> = report
         .critical
         .iter()
-        .map(|c| format!("m = {} at {}", c.m, sig_digits(c.parameters[0], 8)))
+        .zip(&report.wave_numbers)
+        .map(|(c, m)| format!("m = {m} at {}", sig_digits(c.parameters[0], 8)))
         .collect();
     md += &format!(
         "| {elements} | {} | {points} | {wall:.3} | {:.2} | {:.3} | {} | {} | {} |\n",
         report.unknowns,
         1e3 * wall / points.max(1) as f64,
-        report.block_time.as_secs_f64(),
+        result.times.index.as_secs_f64(),
         err(0),
         err(1),
         critical.join(", ")
@@ -71,9 +74,10 @@ pub fn paper4_section(levels: &[usize]) -> Result<String, String> {
         let scene = Scene::from_toml_str(&text, &format!("axisymmetric Paper 4 cap, {elements}"))
             .map_err(|e| e.to_string())?;
         let t = Instant::now();
-        let study = AxisymStudy::build(scene).map_err(|e| e.to_string())?;
-        let report = run(&study, |_, _| {}).map_err(|e| e.to_string())?;
+        let mut study = MeridianStudy::build(scene).map_err(|e| e.to_string())?;
+        let result = run(&mut study, |_, _| {}).map_err(|e| e.to_string())?;
         let wall = t.elapsed().as_secs_f64();
+        let report = &result.report;
         let points = report.rows.len();
         let w2 = report
             .parameters
@@ -83,13 +87,14 @@ pub fn paper4_section(levels: &[usize]) -> Result<String, String> {
         let critical: Vec<String> = report
             .critical
             .iter()
-            .map(|c| format!("m = {} at {}", c.m, sig_digits(c.parameters[w2], 7)))
+            .zip(&report.wave_numbers)
+            .map(|(c, m)| format!("m = {m} at {}", sig_digits(c.parameters[w2], 7)))
             .collect();
         md += &format!(
             "| {elements} | {} | {points} | {wall:.3} | {:.2} | {:.3} | {} |\n",
             report.unknowns,
             1e3 * wall / points.max(1) as f64,
-            report.block_time.as_secs_f64(),
+            result.times.index.as_secs_f64(),
             critical.join(", ")
         );
     }

@@ -60,8 +60,9 @@ pub fn run_peer(
     let mtx = out.join("K.mtx");
     write_matrix_market(
         &mtx,
-        &study.model,
-        &eval,
+        study.model.pattern(),
+        &eval.tangent,
+        &eval.rank_one,
         "memstab bench: the balloon at its pressure maximum",
     )
     .map_err(|e| e.to_string())?;

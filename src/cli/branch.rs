@@ -12,7 +12,7 @@
 //! not match the run, a bad flag value) is one line and exit 2, with nothing written; a start
 //! state that does not converge is exit 1.
 
-use super::common::{build_study, load_scene, one_line, sig_digits};
+use super::common::{load_scene, one_line, sig_digits};
 use super::CliError;
 use clap::Args;
 use memstab::analysis::branch;
@@ -77,13 +77,14 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
         .scene
         .clone()
         .unwrap_or_else(|| PathBuf::from(&finished.origin));
-    let mut study = build_study(load_scene(&scene_file)?)?;
+    let mut study = memstab::study::build(load_scene(&scene_file)?)
+        .map_err(|e| CliError::Input(one_line(&e)))?;
     let overrides = branch::Overrides {
         depth: args.depth,
         steps: args.steps,
         max_step: args.max_step,
     };
-    let branches = branch::from_run(&mut study, &finished, args.critical, &overrides).map_err(
+    let branches = branch::from_run(&mut *study, &finished, args.critical, &overrides).map_err(
         |e| match e {
             branch::BranchError::Input(why) => CliError::Input(one_line(&why)),
             branch::BranchError::Start(e) => {
@@ -91,7 +92,8 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
             }
         },
     )?;
-    let written = write_branches(&study, &branches, &finished.path, &out)
+    let scene = study.scene().clone();
+    let written = write_branches(&*study, &scene, &branches, &finished.path, &out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     if args.json {
         let files: Vec<String> = written

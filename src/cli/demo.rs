@@ -7,7 +7,7 @@ use super::CliError;
 use clap::Args;
 use memstab::demo::closed_form_check;
 use memstab::results::PathReport;
-use memstab::study::mesh::MeshStudy;
+use memstab::study::Study;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -24,15 +24,15 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
     let scene = memstab::demo::scene()
         .map_err(|e| CliError::Failure(format!("the bundled demo scene is broken: {e}")))?;
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
-    print_summary(&study, &result, &args.out, &written);
-    print_closed_form(&study, &result.report);
+    print_summary(&result, &args.out, &written);
+    print_closed_form(&*study, &result.report);
     interrupted(&result, &args.out)?;
     Ok(())
 }
 
 /// Prints the closed-form check of a balloon under pressure control.
-fn print_closed_form(study: &MeshStudy, report: &PathReport) {
-    let Some(check) = closed_form_check(study, report) else {
+fn print_closed_form(study: &dyn Study, report: &PathReport) {
+    let Some(check) = closed_form_check(study.scene(), study.mesh(), report) else {
         return;
     };
     out!();

@@ -109,8 +109,14 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let files = write_matrix_market(&args.out, &study.model, &eval, &comment)
-        .map_err(|e| CliError::Failure(e.to_string()))?;
+    let files = write_matrix_market(
+        &args.out,
+        study.model.pattern(),
+        &eval.tangent,
+        &eval.rank_one,
+        &comment,
+    )
+    .map_err(|e| CliError::Failure(e.to_string()))?;
     let n = study.model.unknowns();
     match &files.rank_one {
         None => out!(

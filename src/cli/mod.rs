@@ -14,7 +14,6 @@ macro_rules! out {
     };
 }
 
-mod axisym;
 mod bench;
 mod branch;
 mod common;

@@ -20,7 +20,7 @@ use memstab::analysis::run_from;
 use memstab::output::{write_run, Progress, RunSummary, Written};
 use memstab::results::{RunResult, StopReason};
 use memstab::scene::Scene;
-use memstab::study::mesh::MeshStudy;
+use memstab::study::Study;
 use memstab::text::one_line;
 use std::path::{Path, PathBuf};
 
@@ -41,16 +41,13 @@ pub(crate) struct RunArgs {
 
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
-    if let memstab::scene::MeshSpec::Axisymmetric(_) = scene.mesh {
-        return super::axisym::run(scene, &args.out, args.quiet, args.json);
-    }
-    let (study, result, written) = execute(scene, &args.out, args.quiet)?;
+    let (_study, result, written) = execute(scene, &args.out, args.quiet)?;
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
         out!("{text}");
     } else {
-        print_summary(&study, &result, &args.out, &written);
+        print_summary(&result, &args.out, &written);
     }
     interrupted(&result, &args.out)
 }
@@ -71,19 +68,20 @@ pub(super) fn execute(
     scene: Scene,
     out: &Path,
     quiet: bool,
-) -> Result<(MeshStudy, RunResult, Written), CliError> {
+) -> Result<(Box<dyn Study>, RunResult, Written), CliError> {
     super::common::check_out(out)?;
-    let mut study = super::common::build_study(scene)?;
-    let start = super::common::start_of(&study)?;
+    let mut study = memstab::study::build(scene).map_err(|e| CliError::Input(one_line(&e)))?;
+    let start = memstab::analysis::restart::start_of(&*study)
+        .map_err(|e| CliError::Input(one_line(&format!("{}: {e}", study.about().origin))))?;
     let dir = super::common::OutDir::create(out)?;
-    let handle = memstab::study::Study::control(&study);
+    let handle = study.control();
     let control = handle.map_or_else(|| "control".to_string(), |c| c.name.clone());
     let range = handle
         .map(|c| (c.min, c.max))
         .filter(|(a, b)| a.is_finite() && b.is_finite());
     let progress = Progress::new(&control, range, quiet);
     let result = run_from(
-        &mut study,
+        &mut *study,
         &start,
         &mut memstab::analysis::Progress(|point, value| progress.set(point + 1, value)),
     );
@@ -96,7 +94,8 @@ pub(super) fn execute(
     };
     progress.finish(format!("stopped: {}", result.report.stop));
     let mut result = result;
-    let written = write_run(&study, &mut result, out)
+    let scene = study.scene().clone();
+    let written = write_run(&*study, &scene, &mut result, out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     Ok((study, result, written))
 }

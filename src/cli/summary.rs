@@ -4,7 +4,6 @@
 
 use memstab::output::{file_name, Written};
 use memstab::results::{CurveReport, PathReport, RunResult, SurfaceReport};
-use memstab::study::mesh::MeshStudy;
 use memstab::text::sig_digits;
 use std::path::Path;
 
@@ -18,25 +17,38 @@ fn control_index(report: &PathReport) -> Option<usize> {
     report.parameters.iter().position(|p| *p == report.control)
 }
 
-pub(super) fn print_summary(study: &MeshStudy, result: &RunResult, out: &Path, written: &Written) {
+pub(super) fn print_summary(result: &RunResult, out: &Path, written: &Written) {
     let report = &result.report;
     let m = &report.mesh;
     out!("scene '{}' ({})", report.scene, report.origin);
-    out!(
-        "mesh: {} with {} nodes, {} triangles, group {} (order {})",
-        m.generator,
-        m.nodes,
-        m.elements,
-        m.group,
-        m.order
-    );
-    out!(
-        "scene group {} (order {}): solved in {} symmetric unknowns of {}",
-        report.group,
-        report.group_order,
-        study.basis.dim(),
-        study.basis.unknowns()
-    );
+    if m.order == 0 {
+        out!(
+            "mesh: {} meridian with {} nodes, {} quadratic elements; its states keep {} \
+             (stability by wave number m = 0..{})",
+            m.generator,
+            m.nodes,
+            m.elements,
+            m.group,
+            report.irreps.len().saturating_sub(1)
+        );
+        out!("solved in {} unknowns", report.unknowns);
+    } else {
+        out!(
+            "mesh: {} with {} nodes, {} triangles, group {} (order {})",
+            m.generator,
+            m.nodes,
+            m.elements,
+            m.group,
+            m.order
+        );
+        out!(
+            "scene group {} (order {}): solved in {} symmetric unknowns of {}",
+            report.group,
+            report.group_order,
+            report.symmetric_unknowns,
+            report.unknowns
+        );
+    }
     let c = control_index(report);
     let s = stretch_index(report);
     let n = report.rows.len();

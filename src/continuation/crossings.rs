@@ -115,6 +115,12 @@ pub trait Blocks {
     fn mode(&self, block: usize, v: &[f64]) -> Vec<f64>;
     /// The subgroup that keeps the (unit) mode of block `block`.
     fn isotropy(&self, block: usize, mode: &[f64]) -> Isotropy;
+    /// The size, relative to the spectrum's scale, below which a localised eigenvalue counts
+    /// as zero: a crossing is localised until its eigenvalue is that small (or its bracket
+    /// at round-off). Models whose block evaluations are cheap localise to round-off (0).
+    fn zero_eigenvalue(&self) -> f64 {
+        ZERO_EIGENVALUE
+    }
 }
 
 /// σ, the null vector of the bordered block and the derivatives of σ.
@@ -275,7 +281,7 @@ impl<'a> Crossings<'a> {
             for k in n0.min(n1)..n0.max(n1) {
                 let g0 = ends[0].get(k).copied().unwrap_or(0.0);
                 let g1 = ends[1].get(k).copied().unwrap_or(0.0);
-                let tol = ZERO_EIGENVALUE * a.spectrum.scale;
+                let tol = self.blocks.zero_eigenvalue() * a.spectrum.scale;
                 let mut failure = None;
                 // Every evaluated (s, eigenvalue, control), to tell a jump from a crossing.
                 let mut trials: Vec<(f64, f64, Option<f64>)> = Vec::new();

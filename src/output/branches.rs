@@ -7,7 +7,6 @@ use super::{write_run, write_whole, OutputError, WriteRunError};
 use crate::results::{
     Branches, CriticalKind, Node, PathReport, PrimaryPath, RunResult, StopReason, ASYMMETRY,
 };
-use crate::study::mesh::MeshStudy;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io;
@@ -317,7 +316,8 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
 /// # Errors
 /// The first error, with the files already written.
 pub fn write_branches(
-    study: &MeshStudy,
+    drawing: &dyn super::Drawing,
+    scene: &crate::scene::Scene,
     branches: &Branches,
     primary: &PrimaryPath,
     out: &Path,
@@ -343,7 +343,7 @@ pub fn write_branches(
             curve: None,
             surface: None,
         };
-        match write_run(study, &mut result, &dir) {
+        match write_run(drawing, scene, &mut result, &dir) {
             Ok(w) => done.extend(w.files()),
             Err(mut e) => {
                 done.append(&mut e.done);
@@ -361,7 +361,7 @@ pub fn write_branches(
     };
     done.push(json.clone());
     let mut picture = diagram(branches, primary);
-    let scale = super::Scales::of_scene(&study.scene).or_name(&primary.control);
+    let scale = super::Scales::of_scene(scene).or_name(&primary.control);
     picture.control = scale.label;
     for l in &mut picture.lines {
         for p in &mut l.points {

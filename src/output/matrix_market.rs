@@ -6,7 +6,7 @@
 //! ([`rank_one_path`]) that `K.mtx` names on a comment line ([`RANK_ONE_FILE_TAG`]).
 
 use super::{write_whole, OutputError};
-use crate::model::{Evaluation, FeModel, Model};
+use crate::linalg::SymmetricPattern;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
@@ -48,9 +48,10 @@ pub struct MatrixFiles {
     pub rank_one: Option<(PathBuf, usize)>,
 }
 
-/// Writes the full tangent K = S + Σ_k c_k a_k a_kᵀ of `eval` for an external solver.
+/// Writes the full tangent K = S + Σ_k c_k a_k a_kᵀ for an external solver: S the values
+/// `tangent` on `pattern`, the terms (c_k, a_k) `rank_one_terms`.
 ///
-/// - `path` (e.g. `K.mtx`): the sparse part S (`eval.tangent` on the model's pattern) in
+/// - `path` (e.g. `K.mtx`): the sparse part S (the values on the pattern) in
 ///   Matrix Market `coordinate real symmetric` format, lower triangle of the pattern
 ///   (explicit zeros included), 1-based. The lines of `comment` become `%` comment lines.
 /// - When K has rank-one terms (a `gas-amount` effect), also the companion file
@@ -64,18 +65,18 @@ pub struct MatrixFiles {
 /// written with 17 significant digits (exact round trip).
 pub fn write_matrix_market(
     path: &Path,
-    model: &FeModel,
-    eval: &Evaluation,
+    pattern: &SymmetricPattern,
+    tangent: &[f64],
+    rank_one_terms: &[(f64, Vec<f64>)],
     comment: &str,
 ) -> Result<MatrixFiles, OutputError> {
-    let rank_one = if eval.rank_one.is_empty() {
+    let rank_one = if rank_one_terms.is_empty() {
         None
     } else {
         let file = rank_one_path(path);
-        write_rank_one(&file, path, eval, comment)?;
-        Some((file, eval.rank_one.len()))
+        write_rank_one(&file, path, pattern.n(), rank_one_terms, comment)?;
+        Some((file, rank_one_terms.len()))
     };
-    let pattern = model.pattern();
     let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
     let n = pattern.n();
     let count = (0..n)
@@ -105,7 +106,7 @@ pub fn write_matrix_market(
         writeln!(w, "{n} {n} {count}")?;
         for j in 0..n {
             let range = col_ptr[j]..col_ptr[j + 1];
-            for (&i, &v) in row_idx[range.clone()].iter().zip(&eval.tangent[range]) {
+            for (&i, &v) in row_idx[range.clone()].iter().zip(&tangent[range]) {
                 if i >= j {
                     writeln!(w, "{} {} {v:.17e}", i + 1, j + 1)?;
                 }
@@ -123,12 +124,12 @@ pub fn write_matrix_market(
 fn write_rank_one(
     file: &Path,
     sparse: &Path,
-    eval: &Evaluation,
+    n: usize,
+    terms: &[(f64, Vec<f64>)],
     comment: &str,
 ) -> Result<(), OutputError> {
-    let n = eval.residual.len();
-    let r = eval.rank_one.len();
-    if let Some((_, a)) = eval.rank_one.iter().find(|(_, a)| a.len() != n) {
+    let r = terms.len();
+    if let Some((_, a)) = terms.iter().find(|(_, a)| a.len() != n) {
         return Err(OutputError::invalid(
             file,
             format!("a rank-one vector has {} entries, K has {n} rows", a.len()),
@@ -145,7 +146,7 @@ fn write_rank_one(
             "% rank-one terms of K = S + sum_k c_k a_k a_k^T, S in {sparse_name}: column k is a_k"
         )?;
         write!(w, "% {RANK_ONE_COEFFICIENTS_TAG}")?;
-        for (c, _) in &eval.rank_one {
+        for (c, _) in terms {
             write!(w, " {c:.17e}")?;
         }
         writeln!(w)?;
@@ -153,7 +154,7 @@ fn write_rank_one(
             writeln!(w, "% {line}")?;
         }
         writeln!(w, "{n} {r}")?;
-        for (_, a) in &eval.rank_one {
+        for (_, a) in terms {
             for v in a {
                 writeln!(w, "{v:.17e}")?;
             }

@@ -8,7 +8,7 @@
 //! | `path.svg` (linear buckling) | [`write_spectrum_diagram`] | the lowest eigenvalue of every irrep block against the control, critical points marked |
 //! | `curve.csv`, `curve.json`, `curve.svg` | [`write_curve`] | a critical curve: a row per point (both parameters, the measures, the block's eigenvalues, the irrep), its events, the second parameter against the control |
 //! | `surface.vtu`, `surface.json`, `surface.svg` | [`write_surface`] | an equilibrium surface: its vertices at (a, b, measure) with the index, its triangles and critical lines; the report; the measure against a by index |
-//! | `state_NNNN.vtu`, `path.pvd`, `events.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) with their fields ([`state_fields`]), the ParaView collection of the path's states and that of the turning and critical states |
+//! | `state_NNNN.vtu`, `path.pvd`, `events.pvd` | [`StateWriter`] | displaced meshes (base64 VTU) with the fields a [`Drawing`] gives, the ParaView collection of the path's states and that of the turning and critical states |
 //! | `path.states` | [`store::write_states`] | every path point's parameters and displacement, binary (what `[start] from` reads, [`store::read_states`]) |
 //! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
 //! | `branches.json` | [`write_branch_graph`] | the graph of critical points and branches |
@@ -28,7 +28,6 @@
 //!
 //! [`PathReport`]: crate::results::PathReport
 
-mod axisym;
 mod branches;
 mod csv;
 mod curve;
@@ -45,7 +44,6 @@ pub mod store;
 mod surface;
 mod svg;
 
-pub use axisym::{write_axisym_run, AXISYM_RUN_FILES};
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten};
 pub use csv::write_csv;
 pub use curve::{write_curve, write_curve_with};
@@ -61,11 +59,11 @@ pub use matrix_market::{
 pub use progress::Progress;
 pub use reopen::{FinishedRun, ReopenError};
 pub use run::{
-    file_name, node_normals, state_fields, wave_numbers, wrinkled_critical, write_run,
-    CriticalSummary, RunSummary, TurningSummary, WriteRunError, Written, RUN_FILES,
+    file_name, node_normals, write_run, CriticalSummary, RunSummary, TurningSummary, WriteRunError,
+    Written, RUN_FILES,
 };
 pub use scales::{balloon_closed_form, Scales};
-pub use states::{PvdTime, StateWriter, EVENTS_PVD};
+pub use states::{Drawing, PvdTime, StateWriter, EVENTS_PVD};
 pub use surface::write_surface;
 pub use svg::{
     default_axes, write_diagram, write_diagram_with, write_spectrum_diagram,

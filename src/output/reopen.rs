@@ -144,6 +144,11 @@ impl FinishedRun {
                 "after_step"
             };
             critical.push(RecordedPoint {
+                kind: cp
+                    .get("kind")
+                    .and_then(Value::as_str)
+                    .unwrap_or_default()
+                    .to_string(),
                 irrep: text(cp, "irrep", &file)?,
                 parameters: values("parameters", &parameters)?,
                 measures: values("measures", &measure_names)?,

@@ -1,26 +1,24 @@
 //! Every output of a run, written into its directory in one call: [`write_run`].
 
+use super::Drawing;
 use super::{
     default_axes, write_critical, write_csv, write_diagram_with, write_json,
     write_spectrum_diagram_with, Diagram, Marker, MarkerKind, OutputError, PvdTime, StateWriter,
     SPECTRUM_AXIS,
 };
-use crate::model::CellQuantity;
-use crate::model::Model;
 use crate::results::{
-    CriticalKind, Extremum, PathReport, RunResult, StateKind, StopReason, WrinkledCritical,
-    WrinkledPoint, Wrinkling,
+    CriticalKind, Extremum, PathReport, RunResult, StateKind, StopReason, Wrinkling,
 };
-use crate::study::mesh::MeshStudy;
-use meshes::write::Fields;
+use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// The files every run writes into its directory, besides its states.
-pub const RUN_FILES: [&str; 7] = [
+pub const RUN_FILES: [&str; 8] = [
     "path.csv",
     "path.states",
     "path.json",
     "critical.json",
+    "critical.states",
     "path.svg",
     "path.pvd",
     "events.pvd",
@@ -35,6 +33,8 @@ pub struct Written {
     pub json: PathBuf,
     /// `critical.json`.
     pub critical: PathBuf,
+    /// `critical.states`: every critical point's state and mode, binary.
+    pub critical_states: PathBuf,
     /// `path.svg`.
     pub svg: PathBuf,
     /// What the SVG shows, in words.
@@ -64,6 +64,7 @@ impl Written {
             self.csv.clone(),
             self.json.clone(),
             self.critical.clone(),
+            self.critical_states.clone(),
             self.svg.clone(),
             self.pvd.clone(),
             self.events.clone(),
@@ -117,7 +118,8 @@ pub fn file_name(p: &Path) -> String {
 /// maximum — the control would not follow the path). Turning and critical points are written
 /// beside it under their own names; critical states carry their mode.
 pub fn write_run(
-    study: &MeshStudy,
+    drawing: &dyn Drawing,
+    scene: &Scene,
     result: &mut RunResult,
     out: &Path,
 ) -> Result<Written, WriteRunError> {
@@ -141,10 +143,8 @@ pub fn write_run(
             out,
             &result.points,
             result.report.parameters.len(),
-            study.basis.unknowns(),
-            |q, u| study
-                .basis
-                .expand(&nalgebra::DVector::from_column_slice(q), u),
+            drawing.unknowns(),
+            |q, u| u.copy_from_slice(&drawing.expand(q)),
         ));
         result.report.states = Some(info);
         Some(points)
@@ -152,20 +152,16 @@ pub fn write_run(
         None
     };
     done.extend(points.clone());
-    let mut writer = attempt!(StateWriter::new(out, &study.mesh.mesh)).with_time(PvdTime::Step);
+    let mut writer = attempt!(StateWriter::new(out, drawing.mesh())).with_time(PvdTime::Step);
     let mut states: Vec<PathBuf> = Vec::new();
     let (mut turning, mut critical) = (0usize, 0usize);
     for s in &result.states {
-        let positions = study.model.positions(&s.u, &s.params);
+        let (positions, fields) = drawing.draw(s);
         let label = s.label();
-        let fields = state_fields(study, s);
         let saved = match (&s.kind, &s.mode) {
             (StateKind::Step, _) => writer.save(s.step, s.control, &positions, fields),
-            (StateKind::Critical { .. }, Some(mode)) => {
+            (StateKind::Critical { .. }, Some(_)) => {
                 critical += 1;
-                let mut moved = vec![crate::model::Vec3::zeros(); study.model.reference().len()];
-                study.model.layout().add_displacements(mode, &mut moved);
-                let field: Vec<[f64; 3]> = moved.iter().map(|&v| v.into()).collect();
                 writer.save_as(
                     &format!("critical_{critical:02}"),
                     &label,
@@ -173,7 +169,7 @@ pub fn write_run(
                     s.step,
                     s.control,
                     &positions,
-                    fields.point_vector("critical_mode", field),
+                    fields,
                 )
             }
             // The held state of a linear-buckling sweep is the state of every sample: the
@@ -214,8 +210,6 @@ pub fn write_run(
     result.report.saved = attempt!(writer.finish());
     done.push(pvd.clone());
     done.push(events.clone());
-    result.report.wrinkling = wrinkling(study, result);
-    result.report.wave_numbers = wave_numbers(study, &result.report);
 
     let json = attempt!(write_json(out, &result.report));
     done.push(json.clone());
@@ -224,10 +218,15 @@ pub fn write_run(
         None => attempt!(write_critical(out, &result.report)),
     };
     done.push(critical_json.clone());
+    let critical_states = attempt!(super::store::write_critical_states(
+        out,
+        &result.report.critical
+    ));
+    done.push(critical_states.clone());
     let report = &result.report;
     let (svg, plotted) = if report.spectra.is_empty() {
         let axes = axes(report);
-        let svg = write_diagram_with(out, report, &diagram(study, report, &axes));
+        let svg = write_diagram_with(out, report, &diagram(scene, report, &axes));
         let plotted = format!("{} against {}, turning points marked", axes.1, axes.0);
         (svg, plotted)
     } else {
@@ -247,8 +246,8 @@ pub fn write_run(
             "{SPECTRUM_AXIS} per irrep against {}{skipped}, critical points marked",
             report.control
         );
-        let scale = super::Scales::of(&study.scene, report).or_name(&report.control);
-        let rungs = ponding_floor(study, report);
+        let scale = super::Scales::of(scene, report).or_name(&report.control);
+        let rungs = ponding_floor(scene, report);
         (
             write_spectrum_diagram_with(out, report, Some(&scale), rungs),
             plotted,
@@ -260,7 +259,7 @@ pub fn write_run(
         Some(c) => attempt!(super::write_curve_with(
             out,
             c,
-            &super::Scales::of_scene(&study.scene)
+            &super::Scales::of_scene(scene)
         )),
         None => Vec::new(),
     };
@@ -273,7 +272,7 @@ pub fn write_run(
     let branches = match &result.branches {
         Some(b) => {
             let primary = crate::results::PrimaryPath::of(&result.report);
-            match super::write_branches(study, b, &primary, out) {
+            match super::write_branches(drawing, scene, b, &primary, out) {
                 Ok(w) => {
                     done.extend(w.files.iter().cloned());
                     Some(w)
@@ -294,6 +293,7 @@ pub fn write_run(
         csv,
         json,
         critical: critical_json,
+        critical_states,
         svg,
         plotted,
         pvd,
@@ -305,30 +305,6 @@ pub fn write_run(
         branches,
         manifest,
     })
-}
-
-/// The fields of a state: per node the unit normal and what the model's effects show (the
-/// pressure), per triangle what they show (stretches, thickness, tensions, where the
-/// membrane would wrinkle, fluid and contact pressure); a non-finite value (never at an
-/// accepted state) is written as 0 rather than as NaN.
-pub fn state_fields(study: &MeshStudy, s: &crate::results::State) -> Fields {
-    let finite = |v: &f64| if v.is_finite() { *v } else { 0.0 };
-    let x = study.model.positions(&s.u, &s.params);
-    let normals = node_normals(&x, &study.mesh.mesh.triangles);
-    let fields = study
-        .model
-        .node_fields(&s.u, &s.params)
-        .into_iter()
-        .fold(Fields::new().point_vector("normal", normals), |f, n| {
-            f.point_scalar(n.quantity.name(), n.values.iter().map(finite))
-        });
-    study
-        .model
-        .cell_fields(&s.u, &s.params)
-        .into_iter()
-        .fold(fields, |f, c| {
-            f.cell_scalar(c.quantity.name(), c.values.iter().map(finite))
-        })
 }
 
 /// The unit normal at each node of the surface at positions `x`: the sum of its triangles'
@@ -354,103 +330,18 @@ pub fn node_normals(x: &[meshes::Vec3], triangles: &[[usize; 3]]) -> Vec<[f64; 3
         .collect()
 }
 
-/// Largest wave number tried when labelling a critical mode.
-const MAX_WAVE_NUMBER: usize = 24;
-
-/// The wave number m about z of every critical mode, when the mesh has an axis (a disc or a
-/// truncated sphere, as `compare` labels them); empty otherwise.
-pub fn wave_numbers(study: &MeshStudy, report: &PathReport) -> Vec<usize> {
-    use crate::scene::MeshSpec;
-    match study.scene.mesh {
-        MeshSpec::Disc(_) | MeshSpec::TruncatedSphere(_) => report
-            .critical
-            .iter()
-            .map(|cp| {
-                crate::adapted::labels::wave_number(
-                    study.model.reference(),
-                    study.model.layout(),
-                    &cp.mode,
-                    MAX_WAVE_NUMBER,
-                )
-            })
-            .collect(),
-        // An axisymmetric run labels its critical points with m itself.
-        MeshSpec::Icosphere(_) | MeshSpec::File(_) | MeshSpec::Axisymmetric(_) => Vec::new(),
-    }
-}
-
-/// The number of wrinkled triangles of the state (u, Λ), or `None` when the model shows no
-/// `wrinkled` field.
-fn wrinkled(study: &MeshStudy, u: &[f64], params: &[f64]) -> Option<usize> {
-    study
-        .model
-        .cell_fields(u, params)
-        .into_iter()
-        .find(|f| f.quantity == CellQuantity::Wrinkled)
-        .map(|f| f.values.iter().filter(|&&w| w > 0.5).count())
-}
-
-/// The critical points (numbered from 1, as `critical_NN.vtu`) whose state has wrinkled
-/// triangles, with how many; empty when the model shows no `wrinkled` field.
-pub fn wrinkled_critical(
-    study: &MeshStudy,
-    critical: &[crate::results::CriticalPoint],
-) -> Vec<WrinkledCritical> {
-    critical
-        .iter()
-        .enumerate()
-        .filter_map(|(k, cp)| {
-            let n = wrinkled(study, &cp.state, &cp.parameters)?;
-            (n > 0).then_some(WrinkledCritical {
-                critical: k + 1,
-                wrinkled: n,
-            })
-        })
-        .collect()
-}
-
-/// Where the membrane wrinkles along the path: the first point with wrinkled triangles (from
-/// every point's kept state) and the critical points in a wrinkled state; `None` when the
-/// model shows no `wrinkled` field or no point's state was kept (a branch).
-fn wrinkling(study: &MeshStudy, result: &RunResult) -> Option<Wrinkling> {
-    if result.points.len() != result.report.rows.len() || result.points.is_empty() {
-        return None;
-    }
-    let mut u = vec![0.0; study.basis.unknowns()];
-    let mut first = None;
-    for (row, p) in result.report.rows.iter().zip(&result.points) {
-        study
-            .basis
-            .expand(&nalgebra::DVector::from_column_slice(&p.q), &mut u);
-        let n = wrinkled(study, &u, &p.parameters)?;
-        if n > 0 {
-            first = Some(WrinkledPoint {
-                step: row.step,
-                wrinkled: n,
-            });
-            break;
-        }
-    }
-    let critical = wrinkled_critical(study, &result.report.critical);
-    Some(Wrinkling {
-        triangles: study.mesh.mesh.triangles.len(),
-        first,
-        critical,
-    })
-}
-
 /// The diagram: the path drawn by instability index (a colour and line style per index, the
 /// change of index at the critical point), turning points and critical points marked (a
 /// critical point's label with its wave number where known: `(m, k)` on a ponding floor,
 /// the k-th rung of wave number m), the axes dimensionless where the scene fixes the scale,
 /// and the closed form of a balloon under it.
-fn diagram(study: &MeshStudy, report: &PathReport, axes: &(String, String)) -> Diagram {
+fn diagram(scene: &Scene, report: &PathReport, axes: &(String, String)) -> Diagram {
     // A critical point at a turning point of the control (a limit point) shares its marker.
     let control = report.parameters.iter().position(|p| *p == report.control);
     let same = |a: &[f64], b: &[f64]| {
         control.is_some_and(|c| (a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1e-12))
     };
-    let ponding = ponding_floor(study, report);
+    let ponding = ponding_floor(scene, report);
     let mut rung = std::collections::BTreeMap::<usize, usize>::new();
     let labels: Vec<String> = report
         .critical
@@ -504,13 +395,13 @@ fn diagram(study: &MeshStudy, report: &PathReport, axes: &(String, String)) -> D
             switches: true,
         });
     }
-    let scales = super::Scales::of(&study.scene, report);
+    let scales = super::Scales::of(scene, report);
     let mut d = Diagram::new(&axes.0, &axes.1)
         .markers(markers)
         .scales(scales.or_name(&axes.0), scales.or_name(&axes.1));
     d.turning_points = false;
     if axes.0 == "stretch" && axes.1 == report.control {
-        if let Some(curve) = super::balloon_closed_form(&study.scene, report) {
+        if let Some(curve) = super::balloon_closed_form(scene, report) {
             d = d.reference(curve);
         }
     }
@@ -523,12 +414,16 @@ fn diagram(study: &MeshStudy, report: &PathReport, axes: &(String, String)) -> D
 
 /// True for a ponding floor: a disc under fluid whose density is the control, where the
 /// k-th critical point of wave number m is the rung j_{m,k} of the ladder.
-fn ponding_floor(study: &MeshStudy, report: &PathReport) -> bool {
+fn ponding_floor(scene: &Scene, report: &PathReport) -> bool {
     use crate::scene::{Effect, MeshSpec};
-    matches!(study.scene.mesh, MeshSpec::Disc(_))
-        && study.scene.effects.iter().any(|e| {
-            matches!(e, Effect::Fluid(f) if f.density.parameter() == Some(report.control.as_str()))
-        })
+    let disc = match &scene.mesh {
+        MeshSpec::Disc(_) => true,
+        MeshSpec::Axisymmetric(a) => a.shape == crate::scene::AxisymShape::Disc,
+        _ => false,
+    };
+    disc && scene.effects.iter().any(
+        |e| matches!(e, Effect::Fluid(f) if f.density.parameter() == Some(report.control.as_str())),
+    )
 }
 
 /// The diagram's axes: [`default_axes`], except that an equilibrium analysis (no control)

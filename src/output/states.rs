@@ -2,7 +2,7 @@
 //! collections.
 
 use super::{check_dir, OutputError};
-use crate::results::SavedState;
+use crate::results::{SavedState, State};
 use meshes::write::{write_mesh, write_pvd, write_pvd_named, Field, Fields, Format};
 use meshes::{Mesh, Vec3};
 use std::path::{Path, PathBuf};
@@ -49,6 +49,22 @@ pub struct StateWriter {
     reference: Mesh,
     time: PvdTime,
     saved: Vec<SavedState>,
+}
+
+/// What the writers draw a run's states on — the studies implement it, so that the writers
+/// see a mesh and arrays, never a model: the mesh, and for each state its positions (in the
+/// mesh's node order) and fields.
+pub trait Drawing {
+    /// The mesh the states are drawn over (the reference mesh; a meridian revolved).
+    fn mesh(&self) -> &Mesh;
+    /// A state's positions and fields; a critical state's mode is the point vector field
+    /// `critical_mode`. A non-finite value (never at an accepted state) is drawn as 0.
+    fn draw(&self, state: &State) -> (Vec<Vec3>, Fields);
+    /// The model's unknowns (the length of a state's displacement).
+    fn unknowns(&self) -> usize;
+    /// The displacement over the model's unknowns of coordinates `q` of the space a path is
+    /// solved in (what `path.states` keeps).
+    fn expand(&self, q: &[f64]) -> Vec<f64>;
 }
 
 impl StateWriter {

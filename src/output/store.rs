@@ -229,3 +229,111 @@ impl SavedRun {
         })
     }
 }
+
+/// The first 8 bytes of `critical.states`.
+pub const CRITICAL_MAGIC: &[u8; 8] = b"MCRITIC1";
+
+/// The name of the critical states file in a run's directory.
+pub const CRITICAL_FILE: &str = "critical.states";
+
+/// One saved critical point: every parameter, the state over the unknowns and the mode (in
+/// the coordinates the model keeps it in: over the unknowns of a 3-D mesh, over the kept
+/// unknowns of its block on a meridian).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedCritical {
+    /// The parameters, in the order of the run's `parameters`.
+    pub parameters: Vec<f64>,
+    /// u over the unknowns.
+    pub u: Vec<f64>,
+    /// The unit mode.
+    pub mode: Vec<f64>,
+}
+
+/// Writes `dir/critical.states`: the run's critical points (numbered from 1, as
+/// `critical_NN.vtu`), each with its parameters, state and mode, little-endian: the magic
+/// `MCRITIC1`, the count C (u64), then per point the lengths P, N, L (u64) and its P
+/// parameters, N state and L mode values (f64) — what `memstab branch` and a critical curve's
+/// `from-run` start from.
+///
+/// # Errors
+/// [`OutputError::Invalid`] for a non-finite entry (naming the point; nothing is written),
+/// [`OutputError::Io`] when the file cannot be written.
+pub fn write_critical_states(
+    dir: &Path,
+    critical: &[crate::results::CriticalPoint],
+) -> Result<PathBuf, OutputError> {
+    let path = dir.join(CRITICAL_FILE);
+    for (k, cp) in critical.iter().enumerate() {
+        let all = cp.parameters.iter().chain(&cp.state).chain(&cp.mode);
+        if let Some(v) = all.into_iter().find(|v| !v.is_finite()) {
+            return Err(OutputError::invalid(
+                &path,
+                format!("critical point {} has a non-finite entry {v}", k + 1),
+            ));
+        }
+    }
+    write_whole(&path, |w| {
+        w.write_all(CRITICAL_MAGIC)?;
+        w.write_all(&(critical.len() as u64).to_le_bytes())?;
+        for cp in critical {
+            for n in [cp.parameters.len(), cp.state.len(), cp.mode.len()] {
+                w.write_all(&(n as u64).to_le_bytes())?;
+            }
+            let mut buf = Vec::new();
+            for v in cp.parameters.iter().chain(&cp.state).chain(&cp.mode) {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+            w.write_all(&buf)?;
+        }
+        Ok(())
+    })?;
+    Ok(path)
+}
+
+/// Reads `dir/critical.states` ([`write_critical_states`]).
+pub fn read_critical_states(dir: &Path) -> Result<Vec<SavedCritical>, ReadStatesError> {
+    let path = dir.join(CRITICAL_FILE);
+    let bytes = std::fs::read(&path).map_err(|source| ReadStatesError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let invalid = |message: &str| ReadStatesError::Invalid {
+        path: path.clone(),
+        message: message.to_string(),
+    };
+    if bytes.len() < 16 || &bytes[..8] != CRITICAL_MAGIC {
+        return Err(invalid("not a critical.states file of memstab run"));
+    }
+    let mut at = 8;
+    let word = |at: &mut usize| -> Option<[u8; 8]> {
+        let w = bytes.get(*at..*at + 8)?.try_into().ok()?;
+        *at += 8;
+        Some(w)
+    };
+    let truncated = || invalid("the file is cut short");
+    let count = u64::from_le_bytes(word(&mut at).ok_or_else(truncated)?) as usize;
+    let mut out = Vec::with_capacity(count.min(1 << 16));
+    for _ in 0..count {
+        let mut lengths = [0usize; 3];
+        for l in &mut lengths {
+            *l = u64::from_le_bytes(word(&mut at).ok_or_else(truncated)?) as usize;
+        }
+        let values = |n: usize, at: &mut usize| -> Result<Vec<f64>, ReadStatesError> {
+            (0..n)
+                .map(|_| word(at).map(f64::from_le_bytes).ok_or_else(truncated))
+                .collect()
+        };
+        let parameters = values(lengths[0], &mut at)?;
+        let u = values(lengths[1], &mut at)?;
+        let mode = values(lengths[2], &mut at)?;
+        out.push(SavedCritical {
+            parameters,
+            u,
+            mode,
+        });
+    }
+    if at != bytes.len() {
+        return Err(invalid("the file is longer than its points"));
+    }
+    Ok(out)
+}

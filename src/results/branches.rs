@@ -292,6 +292,9 @@ pub fn directory(i: usize) -> String {
 /// A critical point as a finished run records it (`path.json`), without its state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordedPoint {
+    /// Its kind, as the run wrote it (`limit point`, `symmetric bifurcation`, …; empty when
+    /// the run did not).
+    pub kind: String,
     /// Its irrep.
     pub irrep: String,
     /// Every parameter.
@@ -302,6 +305,14 @@ pub struct RecordedPoint {
     pub after_step: usize,
     /// |eigenvalue|/‖K‖ there.
     pub residual_eigenvalue: f64,
+}
+
+impl RecordedPoint {
+    /// Whether the run recorded it where the path cannot fold (a symmetric bifurcation): its
+    /// singular trivial block is then a branch point, not a fold.
+    pub fn held(&self) -> bool {
+        self.kind == super::CriticalKind::SymmetricBifurcation.to_string()
+    }
 }
 
 /// What the diagram needs of the path the branches leave: the control and the index at

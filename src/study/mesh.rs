@@ -24,11 +24,14 @@ use crate::limits::Limits;
 use crate::model::constraint::Constraint;
 use crate::model::CellQuantity;
 use crate::model::{Effect, FeModel, Model, Vec3};
+use crate::output::{node_normals, Drawing};
 use crate::results::{
-    Branches, CriticalPoint, MeshInfo, RunResult, WrinkledCritical, WrinkledPoint, Wrinkling,
+    Branches, CriticalPoint, MeshInfo, RecordedPoint, RunResult, State, StateKind,
+    WrinkledCritical, WrinkledPoint, Wrinkling,
 };
 use crate::scene::{self, Scene};
 use crate::stability::{IrrepBlocks, Stability};
+use meshes::write::Fields;
 use meshes::{GroupAction, SymmetricMesh};
 use std::sync::Arc;
 use symmetry::Invariant;
@@ -652,6 +655,53 @@ impl MeshStudy {
     }
 }
 
+impl Drawing for MeshStudy {
+    fn mesh(&self) -> &meshes::Mesh {
+        &self.mesh.mesh
+    }
+
+    /// The state's positions and fields: per node the unit normal and what the model's effects
+    /// show (the pressure), per triangle what they show (stretches, thickness, tensions, where
+    /// the membrane would wrinkle, fluid and contact pressure), and a critical state's mode.
+    fn draw(&self, s: &State) -> (Vec<Vec3>, Fields) {
+        let finite = |v: &f64| if v.is_finite() { *v } else { 0.0 };
+        let x = self.model.positions(&s.u, &s.params);
+        let normals = node_normals(&x, &self.mesh.mesh.triangles);
+        let fields = self
+            .model
+            .node_fields(&s.u, &s.params)
+            .into_iter()
+            .fold(Fields::new().point_vector("normal", normals), |f, n| {
+                f.point_scalar(n.quantity.name(), n.values.iter().map(finite))
+            });
+        let mut fields = self
+            .model
+            .cell_fields(&s.u, &s.params)
+            .into_iter()
+            .fold(fields, |f, c| {
+                f.cell_scalar(c.quantity.name(), c.values.iter().map(finite))
+            });
+        if let (StateKind::Critical { .. }, Some(mode)) = (&s.kind, &s.mode) {
+            let mut moved = vec![Vec3::zeros(); self.model.reference().len()];
+            self.model.layout().add_displacements(mode, &mut moved);
+            let field: Vec<[f64; 3]> = moved.iter().map(|&v| v.into()).collect();
+            fields = fields.point_vector("critical_mode", field);
+        }
+        (x, fields)
+    }
+
+    fn unknowns(&self) -> usize {
+        self.basis.unknowns()
+    }
+
+    fn expand(&self, q: &[f64]) -> Vec<f64> {
+        let mut u = vec![0.0; self.basis.unknowns()];
+        self.basis
+            .expand(&nalgebra::DVector::from_column_slice(q), &mut u);
+        u
+    }
+}
+
 impl Study for MeshStudy {
     fn about(&self) -> &About {
         &self.about
@@ -696,13 +746,6 @@ impl Study for MeshStudy {
 
     fn coordinates(&self, u: &[f64]) -> Vec<f64> {
         self.basis.restrict(u).iter().copied().collect()
-    }
-
-    fn expand(&self, q: &[f64]) -> Vec<f64> {
-        let mut u = vec![0.0; self.basis.unknowns()];
-        self.basis
-            .expand(&nalgebra::DVector::from_column_slice(q), &mut u);
-        u
     }
 
     /// The start state, solved in the fixed-point space of the scene's group with every
@@ -852,6 +895,16 @@ impl Study for MeshStudy {
         options: BranchOptions,
     ) -> Result<Branches, String> {
         Ok(super::switching::run(self, critical, options))
+    }
+
+    fn recorded(
+        &self,
+        recorded: &[RecordedPoint],
+        n: usize,
+        state: Vec<f64>,
+        mode: Vec<f64>,
+    ) -> Result<Vec<CriticalPoint>, String> {
+        super::switching::recorded_points(self, recorded, n, state, mode)
     }
 
     fn annotate(&self, result: &mut RunResult) {

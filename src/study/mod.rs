@@ -8,6 +8,8 @@
 //! point; the writers see it only as the states it draws.
 
 pub mod block_test;
+pub mod meridian;
+mod meridian_branches;
 pub mod mesh;
 pub mod switching;
 
@@ -19,9 +21,24 @@ use crate::continuation::crossings::{Blocks, CriticalTest};
 use crate::continuation::events::States;
 use crate::continuation::{PathOptions, Problem, SolveError};
 use crate::model::{ModelError, StateDefect};
-use crate::results::{Branches, CriticalPoint, MeshInfo, PhaseTimes, RunResult};
-use crate::scene::Scene;
+use crate::results::{Branches, CriticalPoint, MeshInfo, PhaseTimes, RecordedPoint, RunResult};
+use crate::scene::{self, Scene};
 use nalgebra::DVector;
+
+/// The study of a scene: the meridian's on an axisymmetric mesh, the 3-D mesh's otherwise
+/// (within the limits of the environment, [`crate::limits::Limits::from_env`]). An error is the
+/// scene's (bad input), in one line that names the key.
+pub fn build(scene: Scene) -> Result<Box<dyn Study>, String> {
+    if let scene::MeshSpec::Axisymmetric(_) = scene.mesh {
+        let origin = scene.origin.clone();
+        return meridian::MeridianStudy::build(scene)
+            .map(|s| Box::new(s) as Box<dyn Study>)
+            .map_err(|e| format!("{origin}: {e}"));
+    }
+    mesh::MeshStudy::build(scene)
+        .map(|s| Box::new(s) as Box<dyn Study>)
+        .map_err(|e| e.to_string())
+}
 
 /// A parameter an analysis moves: its place among the scene's parameters, its name and the
 /// bounds a path in it stops at — built once from the scene by the study, handed to the driver
@@ -222,8 +239,9 @@ impl RunError {
     }
 }
 
-/// The seam: a scene made into a model that the analyses follow (module documentation).
-pub trait Study: Sync {
+/// The seam: a scene made into a model that the analyses follow (module documentation), and
+/// that the writers draw ([`crate::output::Drawing`]).
+pub trait Study: Sync + crate::output::Drawing {
     /// What every report says of it.
     fn about(&self) -> &About;
     /// The scene.
@@ -241,10 +259,8 @@ pub trait Study: Sync {
     /// The unit of the state in the arclength.
     fn state_scale(&self) -> f64;
     /// The coordinates of a state in the space the path is solved in (what `path.states`
-    /// keeps), and the state of such coordinates.
+    /// keeps; [`crate::output::Drawing::expand`] is the way back).
     fn coordinates(&self, u: &[f64]) -> Vec<f64>;
-    /// The state over the model's unknowns of coordinates `q` ([`Study::coordinates`]).
-    fn expand(&self, q: &[f64]) -> Vec<f64>;
     /// Solves the start state with every parameter at `params` and no constraint active,
     /// from `guess` (a saved state) or the scene's first guess, with the tolerances of
     /// `opts`; sets the targets of the constraints declared `"initial"` there.
@@ -268,6 +284,17 @@ pub trait Study: Sync {
         critical: &[CriticalPoint],
         options: BranchOptions,
     ) -> Result<Branches, String>;
+    /// The critical points a finished run recorded, as this study's: point `n` (1-based) with
+    /// its `state` and unit `mode` as the run saved them, the others without (they are nodes
+    /// of a branch graph, not switched at). Fails naming the block when the study has no
+    /// such block.
+    fn recorded(
+        &self,
+        recorded: &[RecordedPoint],
+        n: usize,
+        state: Vec<f64>,
+        mode: Vec<f64>,
+    ) -> Result<Vec<CriticalPoint>, String>;
     /// Labels the study adds to a finished run (the wave numbers of critical modes, where the
     /// membrane wrinkles, the scales of its axes).
     fn annotate(&self, result: &mut RunResult);

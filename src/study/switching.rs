@@ -900,7 +900,7 @@ fn branch_run(study: &MeshStudy, b: &SwitchedBranch, i: usize, save_every: usize
     let m = &study.mesh;
     let mut measure_names: Vec<String> = study.measures.iter().map(|(n, _)| n.clone()).collect();
     measure_names.push(ASYMMETRY.to_string());
-    let report = PathReport {
+    let mut report = PathReport {
         scene: study.scene.info.name.clone(),
         origin: study.scene.origin.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),
@@ -933,6 +933,7 @@ fn branch_run(study: &MeshStudy, b: &SwitchedBranch, i: usize, save_every: usize
         wave_numbers: Vec::new(),
         irreps: Vec::new(),
     };
+    report.wave_numbers = study.wave_numbers(&report.critical);
     BranchRun {
         report,
         states,
@@ -977,7 +978,7 @@ pub fn recorded_points(
             isotropy(&study.action, layout, &m)
         };
         out.push(CriticalPoint {
-            kind: CriticalKind::of(irrep.is_trivial(), irrep.dim(), false),
+            kind: CriticalKind::of(irrep.is_trivial(), irrep.dim(), c.held()),
             irrep: c.irrep.clone(),
             multiplicity: irrep.dim(),
             parameters: c.parameters.clone(),

@@ -73,12 +73,13 @@ pub use matching::{
 pub use meshes::{parse_meshes, MeshChoice};
 
 use crate::adapted::AdaptedBasis;
-use crate::axisym::run::{AxisymRunError, AxisymStudy};
 use crate::model::Model;
 use crate::results::{CriticalKind, CriticalPoint, PathReport, StopReason};
 use crate::scene::{Analysis, MeshSpec, Scene};
 use crate::stability::Stability;
+use crate::study::meridian::MeridianStudy;
 use crate::study::mesh::{MeshStudy, StudyError};
+use crate::study::Study as _;
 use crate::text::{one_line, sig_digits};
 use matching::{match_rungs, measure_distances};
 use meshes::{common_sectors, describe, resolution, variant, Common};
@@ -279,7 +280,7 @@ fn labelled(scene: &Scene) -> bool {
 /// One run of a comparison: a 3-D study or a meridian.
 enum Job {
     Solid(Box<MeshStudy>),
-    Meridian(Box<AxisymStudy>),
+    Meridian(Box<MeridianStudy>),
 }
 
 impl Job {
@@ -298,49 +299,45 @@ impl Job {
     ) -> Result<Level, CompareError> {
         match self {
             Job::Solid(s) => execute(label, *s, progress),
-            Job::Meridian(s) => execute_meridian(label, &s, label_modes, progress),
+            Job::Meridian(s) => execute_meridian(label, *s, label_modes, progress),
         }
     }
 }
 
-/// The group a meridian stands for: rotations and reflections about z.
-const MERIDIAN_GROUP: &str = "O(2)";
+use crate::axisym::blocks::MERIDIAN_GROUP;
 
 /// Runs a meridian (docs/theory.md §15) and collects its critical points: each labelled by
 /// its wave number m (unless `label_modes` is false: a comparison with unlabelled 3-D
 /// modes), irrep `m=M`, multiplicity 1 for m = 0 and 2 for m ≥ 1.
 fn execute_meridian(
     label: &str,
-    study: &AxisymStudy,
+    mut study: MeridianStudy,
     label_modes: bool,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Level, CompareError> {
     let start = Instant::now();
     let mesh = describe(&study.scene.mesh);
-    let report = crate::axisym::run::run(study, |_, _| {}).map_err(|e| {
-        let text = format!("mesh '{label}' ({mesh}): {}", one_line(&e.to_string()));
-        match e {
-            AxisymRunError::Unsupported(_) => CompareError::Input(text),
-            AxisymRunError::Start(_) => CompareError::Failure(text),
-        }
+    let result = super::run(&mut study, |_, _| {}).map_err(|e| {
+        CompareError::Failure(format!(
+            "mesh '{label}' ({mesh}): {}",
+            one_line(&e.to_string())
+        ))
     })?;
-    let control = study.control;
+    let report = &result.report;
+    let control = study.control().map(|c| c.index);
     let critical: Vec<Point> = report
         .critical
         .iter()
-        .map(|c| Point {
+        .zip(&report.wave_numbers)
+        .map(|(c, &m)| Point {
             kind: c.kind,
-            irrep: format!("m={}", c.m),
+            irrep: format!("m={m}"),
             multiplicity: c.multiplicity,
             value: control.map_or(f64::NAN, |k| c.parameters[k]),
-            m: label_modes.then_some(c.m),
-            residual_eigenvalue: c.eigenvalue.abs(),
+            m: label_modes.then_some(m),
+            residual_eigenvalue: c.residual_eigenvalue,
             precision: None,
-            isotropy: if c.m == 0 {
-                MERIDIAN_GROUP.to_string()
-            } else {
-                format!("C{}v", c.m)
-            },
+            isotropy: c.isotropy.name.clone(),
             rising: rising(
                 control.and_then(|k| {
                     let row = report.rows.iter().find(|r| r.step == c.after_step)?;
@@ -610,7 +607,7 @@ pub fn compare(
             }
             label_modes &= labelled(&s);
             let job = if let MeshSpec::Axisymmetric(_) = s.mesh {
-                let study = AxisymStudy::build(s).map_err(|e| {
+                let study = MeridianStudy::build(s).map_err(|e| {
                     CompareError::Input(one_line(&format!("mesh '{}': {e}", t.label)))
                 })?;
                 Job::Meridian(Box::new(study))
@@ -630,7 +627,7 @@ pub fn compare(
             if let MeshSpec::Axisymmetric(b) = &mut s.mesh {
                 b.elements = a.elements * 2;
             }
-            let study = AxisymStudy::build(s)
+            let study = MeridianStudy::build(s)
                 .map_err(|e| CompareError::Input(one_line(&format!("mesh '{}': {e}", t.label))))?;
             jobs.push((k, 1, Job::Meridian(Box::new(study))));
         }
