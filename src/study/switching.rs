@@ -26,7 +26,7 @@
 //! and of the branches) and the ends of branches, edges are branches.
 
 use super::mesh::MeshStudy;
-use super::{BranchOptions, SymmetricProblem};
+use super::{BranchOptions, Study, SymmetricProblem};
 use crate::adapted::labels::isotropy;
 use crate::adapted::{AdaptedBasis, SparseBasis};
 use crate::continuation::crossings::{Crossings, IndexChanges};
@@ -37,7 +37,7 @@ use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout, Model, Request};
 use crate::results::{
     directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches,
-    CriticalKind, CriticalPoint, Half, Halves, MeshInfo, Node, PathReport, PathRow, RecordedPoint,
+    CriticalKind, CriticalPoint, Half, Halves, Node, PathReport, PathRow, RecordedPoint,
     Reduced, Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow, ASYMMETRY,
 };
 use crate::stability::{IrrepBlocks, Stability};
@@ -760,7 +760,7 @@ impl Switching<'_> {
 
 /// A detector whose findings are numbered by the branch's points — the critical point the
 /// branch leaves is point 0, the driver's first point is point 1.
-struct Numbered<D>(D);
+pub(crate) struct Numbered<D>(pub(crate) D);
 
 impl<P: crate::continuation::Problem, D: Detector<P>> Detector<P> for Numbered<D> {
     fn start(&mut self, driver: &mut Continuation<P>) -> Vec<Event> {
@@ -805,7 +805,16 @@ pub fn run(study: &MeshStudy, critical: &[CriticalPoint], options: BranchOptions
         .branches
         .iter()
         .enumerate()
-        .map(|(i, b)| branch_run(study, b, i, save_every))
+        .map(|(i, b)| {
+            branch_run(
+                study,
+                &|u| asymmetry(study, u),
+                &|c| study.wave_numbers(c),
+                b,
+                i,
+                save_every,
+            )
+        })
         .collect();
     Branches {
         graph,
@@ -816,13 +825,24 @@ pub fn run(study: &MeshStudy, critical: &[CriticalPoint], options: BranchOptions
 }
 
 /// The report and states of one branch.
-fn branch_run(study: &MeshStudy, b: &SwitchedBranch, i: usize, save_every: usize) -> BranchRun {
+/// The report and states of branch `i` of `study` (its directory `branch_NN`): a row per
+/// point with the measures and the asymmetry (`asym_of` of a state: the RMS of its part
+/// outside the scene's symmetric states), every `save_every`-th state, the turning and
+/// critical points; `wave_numbers` labels the critical modes.
+pub fn branch_run(
+    study: &dyn Study,
+    asym_of: &dyn Fn(&[f64]) -> f64,
+    wave_numbers: &dyn Fn(&[CriticalPoint]) -> Vec<usize>,
+    b: &SwitchedBranch,
+    i: usize,
+    save_every: usize,
+) -> BranchRun {
     let measures = |u: &[f64], p: &[f64], asym: f64| {
         let mut m = study.measure(u, p);
         m.push(asym);
         m
     };
-    let control = |p: &[f64]| study.control.map_or(0.0, |c| p[c]);
+    let control = |p: &[f64]| study.control().map_or(0.0, |c| p[c.index]);
     let rows: Vec<PathRow> = b
         .points
         .iter()
@@ -865,17 +885,6 @@ fn branch_run(study: &MeshStudy, b: &SwitchedBranch, i: usize, save_every: usize
             });
         }
     }
-    let asym_of = |u: &[f64]| -> f64 {
-        let mut s = vec![0.0; u.len()];
-        study.basis.expand(&study.basis.restrict(u), &mut s);
-        let free = study.basis.unknowns() as f64 / 3.0;
-        s.iter()
-            .zip(u)
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            .sqrt()
-            / free.max(1.0).sqrt()
-    };
     let mut turning = Vec::new();
     for t in &b.turning {
         states.push(State {
@@ -897,28 +906,20 @@ fn branch_run(study: &MeshStudy, b: &SwitchedBranch, i: usize, save_every: usize
     for c in &mut critical {
         c.measures.push(asym_of(&c.state));
     }
-    let m = &study.mesh;
-    let mut measure_names: Vec<String> = study.measures.iter().map(|(n, _)| n.clone()).collect();
+    let about = study.about();
+    let mut measure_names = about.measures.clone();
     measure_names.push(ASYMMETRY.to_string());
     let mut report = PathReport {
-        scene: study.scene.info.name.clone(),
-        origin: study.scene.origin.clone(),
+        scene: about.scene.clone(),
+        origin: about.origin.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),
-        mesh: MeshInfo {
-            generator: study.scene.mesh.generator().to_string(),
-            nodes: m.mesh.nodes.len(),
-            elements: m.mesh.triangles.len(),
-            group: m.group().name().to_string(),
-            order: m.group().order(),
-        },
+        mesh: about.mesh.clone(),
         group: b.isotropy.clone(),
         group_order: b.elements.len(),
-        unknowns: study.basis.unknowns(),
+        unknowns: about.unknowns,
         symmetric_unknowns: b.symmetric_unknowns,
-        control: study
-            .control
-            .map_or_else(String::new, |c| study.parameters[c].clone()),
-        parameters: study.parameters.clone(),
+        control: study.control().map_or_else(String::new, |c| c.name.clone()),
+        parameters: about.parameters.clone(),
         measures: measure_names,
         rows,
         turning_points: turning,
@@ -933,7 +934,7 @@ fn branch_run(study: &MeshStudy, b: &SwitchedBranch, i: usize, save_every: usize
         wave_numbers: Vec::new(),
         irreps: Vec::new(),
     };
-    report.wave_numbers = study.wave_numbers(&report.critical);
+    report.wave_numbers = wave_numbers(&report.critical);
     BranchRun {
         report,
         states,
@@ -991,4 +992,18 @@ pub fn recorded_points(
         });
     }
     Ok(out)
+}
+
+/// The RMS over the free nodes of the part of u outside the fixed-point space of the scene's
+/// group: 0 on the path, the amplitude of the symmetry breaking on a branch.
+fn asymmetry(study: &MeshStudy, u: &[f64]) -> f64 {
+    let mut s = vec![0.0; u.len()];
+    study.basis.expand(&study.basis.restrict(u), &mut s);
+    let free = study.basis.unknowns() as f64 / 3.0;
+    s.iter()
+        .zip(u)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        .sqrt()
+        / free.max(1.0).sqrt()
 }
