@@ -94,10 +94,11 @@ mod scenes {
     //! Axisymmetric scenes (`[mesh] generator = "axisymmetric"`) through the library run and
     //! the command line.
 
-    use crate::common::{reservoir_balloon, reservoir_limit, RESERVOIR_PATH};
-    use memstab::axisym::run::{run, AxisymReport, AxisymStudy};
+    use crate::common::{
+        meridian_report, reservoir_balloon, reservoir_limit, wave_number, RESERVOIR_PATH,
+    };
     use memstab::reference::{ponding_scale, BESSEL_J2};
-    use memstab::results::{CriticalKind, Extremum, StopReason};
+    use memstab::results::{CriticalKind, Extremum, PathReport, StopReason};
     use memstab::scene::Scene;
     use std::process::Command;
 
@@ -109,9 +110,8 @@ mod scenes {
         .unwrap()
     }
 
-    fn run_scene(s: Scene) -> AxisymReport {
-        let study = AxisymStudy::build(s).unwrap();
-        run(&study, |_, _| {}).unwrap()
+    fn run_scene(s: Scene) -> PathReport {
+        meridian_report(s)
     }
 
     /// The balloon's pressure maximum and minimum (Mooney–Rivlin k = 0.1, closed form
@@ -138,10 +138,10 @@ mod scenes {
         }
         // The limit points are the m = 0 crossings of the path.
         let first = r.critical.first().expect("a critical point at the maximum");
-        assert_eq!((first.m, first.multiplicity), (0, 1));
+        assert_eq!((wave_number(first), first.multiplicity), (0, 1));
         assert_eq!(first.kind, CriticalKind::LimitPoint);
         assert!((first.parameters[0] - 1.355_106_9).abs() < 1e-5);
-        let index0 = r.rows[0].index.as_ref().unwrap();
+        let index0 = r.rows[0].negative.as_ref().unwrap();
         assert!(
             index0.iter().all(|&n| n == 0),
             "stable at the start: {index0:?}"
@@ -174,10 +174,10 @@ mod scenes {
             (5, 1),
         ] {
             let exact = scale * j2(m, k);
-            let found: Vec<_> = r.critical.iter().filter(|c| c.m == m).collect();
+            let found: Vec<_> = r.critical.iter().filter(|c| wave_number(c) == m).collect();
+            // Localised: a crossing that is not is a warning, not a critical point.
             let c = found[k - 1];
             assert_eq!(c.multiplicity, if m == 0 { 1 } else { 2 });
-            assert!(c.localised);
             let err = (c.parameters[0] - exact).abs() / exact;
             // j² is tabulated to 6 decimals; the discretisation error at 64 elements is
             // ≤ 1.3e-7 (the ladder test above).
@@ -187,7 +187,7 @@ mod scenes {
                 c.parameters[0]
             );
         }
-        let kinds_ok = r.critical.iter().all(|c| match c.m {
+        let kinds_ok = r.critical.iter().all(|c| match wave_number(c) {
             0 => c.kind == CriticalKind::SymmetricBifurcation,
             _ => c.kind == CriticalKind::MultipleBifurcation(2),
         });
@@ -225,7 +225,11 @@ mod scenes {
         assert!(head.ends_with("index_m19,index_m20"), "{head}");
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
-        assert_eq!(json["modes"], 20);
+        // The largest wave number analysed, 20: the blocks m0 … m20 of the index columns
+        // (path.json has no `modes` of its own since the meridian runs through the one
+        // report).
+        let blocks: Vec<String> = (0..=20).map(|m| format!("m{m}")).collect();
+        assert_eq!(json["irreps"], serde_json::json!(blocks));
         assert!(json["rows"].as_array().unwrap().len() > 5);
         // Turning and critical points by name, with the step before them, as in a 3-D run.
         let names = |key: &str| -> Vec<String> {
@@ -313,9 +317,12 @@ mod scenes {
             }
             let turn = r.turning_points.first().expect("a pressure maximum");
             assert_eq!(turn.kind, Extremum::Maximum);
+            // Localised: a crossing that is not is a warning, not a critical point.
             let critical = r.critical.first().expect("a critical point");
-            assert_eq!((critical.m, critical.kind), (0, CriticalKind::LimitPoint));
-            assert!(critical.localised);
+            assert_eq!(
+                (wave_number(critical), critical.kind),
+                (0, CriticalKind::LimitPoint)
+            );
             let (ep, el) = (
                 turn.parameters[kp] / exact - 1.0,
                 turn.measures[kl] / l_exact - 1.0,
@@ -325,7 +332,7 @@ mod scenes {
                 "{elements} elements: limit p = {} (error {ep:.2e}), stretch {} (error {el:.2e}), m = 0 crossing p error {ec:.2e}; closed form p = {exact}, stretch {l_exact}",
                 turn.parameters[kp], turn.measures[kl]
             );
-            let index0 = r.rows[0].index.as_ref().unwrap();
+            let index0 = r.rows[0].negative.as_ref().unwrap();
             assert!(index0.iter().all(|&n| n == 0), "{index0:?}");
             errors.push((elements, ep.abs(), ec.abs()));
         }
@@ -447,7 +454,7 @@ mod scenes {
 /// axisymmetric value to be nearer the 3-D Richardson value than the finer 3-D mesh is.
 #[test]
 fn the_upward_disc_double_is_within_its_mesh_distance_of_m_1() {
-    use memstab::axisym::run::{run, AxisymStudy};
+    use crate::common::{meridian_report, wave_number};
     use memstab::scene::Scene;
     let dir = env!("CARGO_MANIFEST_DIR");
     // The 3-D path up to past the first E1 point, no branches.
@@ -465,9 +472,10 @@ fn the_upward_disc_double_is_within_its_mesh_distance_of_m_1() {
     };
     let (h8, h16) = (e1(8), e1(16));
     let axi = Scene::load(format!("{dir}/scenes/axisymmetric/disc_upward.toml")).unwrap();
-    let r = run(&AxisymStudy::build(axi).unwrap(), |_, _| {}).unwrap();
-    let m1 = r.critical.iter().find(|c| c.m == 1).unwrap();
-    assert!(m1.localised && m1.multiplicity == 2);
+    let r = meridian_report(axi);
+    // Localised: a crossing that is not is a warning, not a critical point.
+    let m1 = r.critical.iter().find(|c| wave_number(c) == 1).unwrap();
+    assert!(m1.multiplicity == 2);
     let ha = m1.parameters[0];
     let distance = (h16 - h8).abs() / 3.0;
     let richardson = h16 + (h16 - h8) / 3.0;
@@ -487,7 +495,7 @@ fn the_upward_disc_double_is_within_its_mesh_distance_of_m_1() {
 /// divisions approaches the meridian's value at order about 2.
 #[test]
 fn the_partly_wet_pond_inflated_from_below_converges_on_the_meridian_and_in_3d() {
-    use memstab::axisym::run::{run, AxisymStudy};
+    use crate::common::{meridian_report, wave_number};
     use memstab::scene::Scene;
     let dir = env!("CARGO_MANIFEST_DIR");
     let text = std::fs::read_to_string(format!("{dir}/scenes/disc_gas_pond.toml")).unwrap();
@@ -500,16 +508,15 @@ fn the_partly_wet_pond_inflated_from_below_converges_on_the_meridian_and_in_3d()
                 "generator = \"axisymmetric\"\nshape = \"disc\"\nradius = 1.1\nelements = {elements}\nmodes = 4"
             ),
         );
-        let study = AxisymStudy::build(Scene::from_toml_str(&t, "pond").unwrap()).unwrap();
-        let apex = study
-            .measure_names()
-            .iter()
-            .position(|n| n == "apex-z")
-            .unwrap();
-        let r = run(&study, |_, _| {}).unwrap();
+        let r = meridian_report(Scene::from_toml_str(&t, "pond").unwrap());
+        // The apex (the former `apex-z`: the z of the first meridian node, the disc's
+        // centre): the bulge rises from the centre, so its z is the highest, `max_z` (the
+        // same number at the critical point, checked at 8 to 64 elements).
+        let apex = r.measures.iter().position(|n| n == "max_z").unwrap();
         assert_eq!(r.critical.len(), 1, "{:?}", r.critical);
+        // Localised: a crossing that is not is a warning, not a critical point.
         let c = &r.critical[0];
-        assert!(c.localised && c.m == 0 && c.multiplicity == 1);
+        assert!(wave_number(c) == 0 && c.multiplicity == 1);
         assert!(
             c.measures[apex] > 10.0 * level,
             "partly wet: apex {}",
@@ -547,9 +554,10 @@ fn the_partly_wet_pond_inflated_from_below_converges_on_the_meridian_and_in_3d()
 /// over-pressure p above a fixed fluid volume V = 0.5 in a closed sphere resting on a plane,
 /// lowered onto it by the held-translation start, the path in p through its maximum.
 mod paper2 {
-    use memstab::axisym::run::{run, AxisymStudy};
+    use crate::common::{meridian_report, wave_number};
     use memstab::results::{CriticalKind, Extremum};
     use memstab::scene::Scene;
+    use memstab::study::meridian::MeridianStudy;
 
     fn text(name: &str) -> String {
         std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -659,19 +667,19 @@ mod paper2 {
         let t = text("axisymmetric/paper2_gas_pressure.toml")
             .replace("elements = 64", &format!("elements = {elements}"))
             .replace("penalty = 1000.0", &format!("penalty = {penalty:?}"));
-        let study = AxisymStudy::build(Scene::from_toml_str(&t, "p2").unwrap()).unwrap();
-        let r = run(&study, |_, _| {}).unwrap();
+        let r = meridian_report(Scene::from_toml_str(&t, "p2").unwrap());
         let turns: Vec<_> = r.turning_points.iter().collect();
         assert_eq!(turns.len(), 1, "{turns:?}");
         assert_eq!(turns[0].kind, Extremum::Maximum);
         let p = r.parameters.iter().position(|n| n == "p").unwrap();
         let v = r.parameters.iter().position(|n| n == "V").unwrap();
         // Stable up to the maximum in every wave number; the fluid volume held.
-        assert!(r.rows[0].index.as_ref().unwrap().iter().all(|&n| n == 0));
+        assert!(r.rows[0].negative.as_ref().unwrap().iter().all(|&n| n == 0));
         assert!(r.rows.iter().all(|row| row.parameters[v] == 0.5));
         assert_eq!(r.critical.len(), 1, "{:?}", r.critical);
+        // Localised: a crossing that is not is a warning, not a critical point.
         let c = &r.critical[0];
-        assert!(c.localised && c.m == 0 && c.kind == CriticalKind::LimitPoint);
+        assert!(wave_number(c) == 0 && c.kind == CriticalKind::LimitPoint);
         let value = turns[0].parameters[p];
         assert!((c.parameters[p] - value).abs() < 1e-7, "{c:?} vs {value}");
         value
@@ -773,13 +781,12 @@ mod paper2 {
     #[test]
     fn the_sphere_filled_under_a_gas_amount_stays_stable() {
         let t = text("axisymmetric/paper2_sphere_on_plane.toml");
-        let study = AxisymStudy::build(Scene::from_toml_str(&t, "p2").unwrap()).unwrap();
-        let r = run(&study, |_, _| {}).unwrap();
+        let r = meridian_report(Scene::from_toml_str(&t, "p2").unwrap());
         assert!(r.critical.is_empty(), "{:?}", r.critical);
         assert!(r
             .rows
             .iter()
-            .all(|row| row.index.as_ref().unwrap().iter().all(|&n| n == 0)));
+            .all(|row| row.negative.as_ref().unwrap().iter().all(|&n| n == 0)));
         let v = r.parameters.iter().position(|n| n == "V").unwrap();
         let gp = r.measures.iter().position(|n| n == "gas_pressure").unwrap();
         let vol = r.measures.iter().position(|n| n == "volume").unwrap();
@@ -857,7 +864,7 @@ mod paper2 {
             ),
         ];
         for (scene, key) in cases {
-            let err = match AxisymStudy::build(Scene::from_toml_str(&scene, "p2").unwrap()) {
+            let err = match MeridianStudy::build(Scene::from_toml_str(&scene, "p2").unwrap()) {
                 Err(e) => e.to_string(),
                 Ok(_) => panic!("{key}: not refused"),
             };
@@ -1431,14 +1438,14 @@ mod revolve {
 /// against central differences of the gradient, the Fourier blocks at the parameters, and
 /// paths of the balloon with k a parameter, held or the control.
 mod material {
-    use memstab::axisym::run::{run, AxisymReport, AxisymStudy};
+    use crate::common::{meridian_report, wave_number};
     use memstab::axisym::{
         critical_densities_at, AxisymModel, Hydrostatic, Meridian, MeridianMaterial, Pressure,
     };
     use memstab::effects::Quantity;
     use memstab::reference::{ponding_scale, sphere_extrema, sphere_pressure, BESSEL_J2};
     use memstab::results::CriticalKind;
-    use memstab::results::{Extremum, StopReason};
+    use memstab::results::{Extremum, PathReport, StopReason};
     use memstab::scene::Scene;
     use nalgebra::DMatrix;
     use std::process::Command;
@@ -1725,9 +1732,8 @@ mod material {
         .unwrap()
     }
 
-    fn run_text(text: &str) -> AxisymReport {
-        let study = AxisymStudy::build(Scene::from_toml_str(text, "balloon-k").unwrap()).unwrap();
-        run(&study, |_, _| {}).unwrap()
+    fn run_text(text: &str) -> PathReport {
+        meridian_report(Scene::from_toml_str(text, "balloon-k").unwrap())
     }
 
     /// The bundled balloon with k the parameter "k" held at 0.1 by a `fixed` constraint, p
@@ -1753,8 +1759,14 @@ mod material {
         }
         assert_eq!(a.rows.len(), b.rows.len());
         assert_eq!(
-            a.critical.iter().map(|c| (c.m, c.kind)).collect::<Vec<_>>(),
-            b.critical.iter().map(|c| (c.m, c.kind)).collect::<Vec<_>>()
+            a.critical
+                .iter()
+                .map(|c| (wave_number(c), c.kind))
+                .collect::<Vec<_>>(),
+            b.critical
+                .iter()
+                .map(|c| (wave_number(c), c.kind))
+                .collect::<Vec<_>>()
         );
     }
 
@@ -1803,9 +1815,9 @@ mod material {
         eprintln!("turn at k = {k}: closed-form maximum there {ep:.1e} off 1.3, stretch {el:.1e}");
         assert!(ep.abs() < 1e-7, "{ep:e}");
         assert!(el.abs() < 1e-9, "{el:e}");
+        // Localised: a crossing that is not is a warning, not a critical point.
         let c = r.critical.first().expect("a critical point at the turn");
-        assert_eq!((c.m, c.kind), (0, CriticalKind::LimitPoint));
-        assert!(c.localised);
+        assert_eq!((wave_number(c), c.kind), (0, CriticalKind::LimitPoint));
         assert!((c.parameters[0] / k - 1.0).abs() < 1e-6);
     }
 

@@ -238,7 +238,8 @@ fn a_critical_curve_run_writes_its_curve() {
     let mut study = MeshStudy::build(balloon_curve_scene(4)).unwrap();
     let mut result = run(&mut study, |_, _| {}).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let written = memstab::output::write_run(&study, &mut result, dir.path()).unwrap();
+    let written =
+        memstab::output::write_run(&study, &study.scene, &mut result, dir.path()).unwrap();
     let curve = result.curve.as_ref().unwrap();
     // The path stopped at the point the curve starts from.
     assert_eq!(
@@ -587,7 +588,7 @@ fn a_curve_starts_from_a_finished_runs_critical_point() {
     let mut result = run(&mut study, |_, _| {}).unwrap();
     assert_eq!(result.report.critical[0].kind, CriticalKind::LimitPoint);
     let dir = tempfile::tempdir().unwrap();
-    memstab::output::write_run(&study, &mut result, dir.path()).unwrap();
+    memstab::output::write_run(&study, &study.scene, &mut result, dir.path()).unwrap();
     let from_run = |from: &str| {
         curve_text.replacen(
             "from = \"limit\"\n",

@@ -104,6 +104,7 @@ fn every_state_file_carries_the_fields() {
 #[test]
 fn the_node_fields_are_the_normal_and_the_pressure_of_the_loads() {
     use memstab::model::NodeQuantity;
+    use memstab::output::Drawing;
     use memstab::results::{State, StateKind};
     // The balloon: the gas pressure p at every node, normals of unit length out of the sphere.
     let text = scene_text("balloon.toml").replace("frequency = 8", "frequency = 4");
@@ -128,17 +129,14 @@ fn the_node_fields_are_the_normal_and_the_pressure_of_the_loads() {
         // On a sphere the vertex normal is the radial direction to the mesh's O(h²).
         assert!(n.dot(&xi.normalize()) > 0.99, "{n} at {xi}");
     }
-    let fields = memstab::output::state_fields(
-        &study,
-        &State {
-            step: 0,
-            kind: StateKind::Step,
-            control: params[0],
-            u: u.clone(),
-            params: params.clone(),
-            mode: None,
-        },
-    );
+    let (_, fields) = study.draw(&State {
+        step: 0,
+        kind: StateKind::Step,
+        control: params[0],
+        u: u.clone(),
+        params: params.clone(),
+        mode: None,
+    });
     let names: Vec<&str> = fields.point.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["normal", "pressure"]);
 
@@ -209,7 +207,6 @@ fn a_slack_disc_run_reports_wrinkling_from_its_first_point() {
 /// disc (pre-stretch 0.9, every triangle wrinkled at rest) against the same disc taut.
 #[test]
 fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
-    use memstab::output::wrinkled_critical;
     use memstab::results::{CriticalKind, CriticalPoint, Isotropy, Wrinkling};
     let point = |study: &MeshStudy, kind| CriticalPoint {
         kind,
@@ -235,12 +232,12 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
     let triangles = slack.mesh.mesh.triangles.len();
 
     let taut_points = [point(&taut, CriticalKind::SimpleBifurcation)];
-    assert!(wrinkled_critical(&taut, &taut_points).is_empty());
+    assert!(taut.wrinkled_critical(&taut_points).is_empty());
     let slack_points = [
         point(&slack, CriticalKind::SimpleBifurcation),
         point(&slack, CriticalKind::MultipleBifurcation(2)),
     ];
-    let flagged = wrinkled_critical(&slack, &slack_points);
+    let flagged = slack.wrinkled_critical(&slack_points);
     assert_eq!(
         flagged
             .iter()

@@ -1208,7 +1208,7 @@ fn paper3_gas_fluid(name: &str, exponent: u32, kappa: f64, edits: &[(&str, &str)
     let mut result = run(&mut s, |_, _| {}).unwrap();
     // Writing the run finds where the membrane wrinkles (from every point's state).
     let dir = tempfile::tempdir().unwrap();
-    memstab::output::write_run(&s, &mut result, dir.path()).unwrap();
+    memstab::output::write_run(&s, &s.scene, &mut result, dir.path()).unwrap();
     result.report
 }
 

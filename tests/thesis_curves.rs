@@ -420,7 +420,8 @@ fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_
 /// the Richardson value to be far nearer the meridian's than h16 is.
 #[test]
 fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
-    use memstab::axisym::run::{run as run_axisym, AxisymStudy};
+    use memstab::axisym::blocks::wave_number;
+    use memstab::study::meridian::MeridianStudy;
     let mut study =
         MeshStudy::build(bundled("thesis/paper1_disc_limit_curve_radius.toml")).unwrap();
     let curve = run(&mut study, |_, _| {})
@@ -483,15 +484,13 @@ fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
         .replacen("\nmax = 4.9\n", "\nmax = 8.0\n", 1);
     assert!(axi.contains("\nk = 0.0\n") && axi.contains("\nmax = 8.0\n"));
     assert!(axi.contains(&format!("\nradius = {radius:?}\n")));
-    let meridian = run_axisym(
-        &AxisymStudy::build(Scene::from_toml_str(&axi, "meridian").unwrap()).unwrap(),
-        |_, _| {},
-    )
-    .unwrap();
+    let mut meridian =
+        MeridianStudy::build(Scene::from_toml_str(&axi, "meridian").unwrap()).unwrap();
+    let meridian = run(&mut meridian, |_, _| {}).unwrap().report;
     let ha = meridian
         .critical
         .iter()
-        .find(|c| c.m == 0)
+        .find(|c| wave_number(&c.irrep) == Some(0))
         .unwrap_or_else(|| {
             panic!(
                 "no m = 0 limit point: {:?} {:?}",

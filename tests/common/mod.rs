@@ -165,3 +165,20 @@ pub fn reservoir_limit(n: f64) -> (f64, f64) {
     let l = 0.5 * (a + b);
     (p(l), l)
 }
+
+/// Runs an axisymmetric scene (`[mesh] generator = "axisymmetric"`) through the one study
+/// seam (`MeridianStudy` and `analysis::run`): its report.
+#[allow(dead_code)]
+pub fn meridian_report(scene: memstab::scene::Scene) -> memstab::results::PathReport {
+    let mut study = memstab::study::meridian::MeridianStudy::build(scene).unwrap();
+    memstab::analysis::run(&mut study, |_, _| {})
+        .unwrap()
+        .report
+}
+
+/// The wave number m of a critical point of the meridian (its block `m<m>`).
+#[allow(dead_code)]
+pub fn wave_number(c: &memstab::results::CriticalPoint) -> usize {
+    memstab::axisym::blocks::wave_number(&c.irrep)
+        .unwrap_or_else(|| panic!("not a block of the meridian: {}", c.irrep))
+}
