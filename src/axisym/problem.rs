@@ -1,7 +1,7 @@
 //! The axisymmetric model as a path-following problem: the residual, tangent, loads and
 //! constraint rows of the meridian in its own unknowns q, the control and the parameter a
 //! constraint frees, and more free parameters for a critical curve — what the driver follows
-//! ([`crate::study::Followed`]); its stability is [`super::blocks::MeridianBlocks`].
+//! ([`crate::continuation::Followed`]); its stability is [`super::blocks::MeridianBlocks`].
 
 use super::{AxisymError, AxisymModel};
 use crate::continuation::events::States;
@@ -300,7 +300,7 @@ impl States for AxisymProblem {
     }
 }
 
-impl crate::study::Followed for AxisymProblem {
+impl crate::continuation::Followed for AxisymProblem {
     fn coordinates(&self, u: &[f64]) -> DVector<f64> {
         DVector::from_column_slice(u)
     }

@@ -12,7 +12,9 @@
 pub mod crossings;
 mod driver;
 pub mod events;
+mod followed;
 pub mod interrupt;
 pub mod release;
 
 pub use driver::*;
+pub use followed::Followed;

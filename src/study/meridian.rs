@@ -269,7 +269,20 @@ impl MeridianStudy {
             .closed()
             .then(|| model.volume(&model.meridian.nodes) / prestretch.powi(3));
         let modes = mesh.modes;
-        let measures = measure_names(stress_free_volume.is_some(), has_gas_amount(&model));
+        // The enclosed volume of a closed meridian, or of an open one holding gas or fluid
+        // inside (closed by the plate across its edge), as a 3-D run measures it.
+        let encloses = model.meridian.closed()
+            || !scene.constraints.is_empty()
+            || scene.effects.iter().any(|e| match e {
+                Effect::Gas(_) | Effect::GasAmount(_) => true,
+                Effect::Fluid(f) => f.side == scene::FluidSide::Inside,
+                Effect::Spin(_) | Effect::Plane(_) => false,
+            });
+        let measures = measure_names(
+            encloses,
+            stress_free_volume.is_some(),
+            has_gas_amount(&model),
+        );
         let about = About {
             scene: scene.info.name.clone(),
             origin: scene.origin.clone(),
@@ -379,15 +392,17 @@ impl MeridianStudy {
 }
 
 /// The names of the measures of a meridian (those of a 3-D run: the largest displacement,
-/// the lowest and highest z, the enclosed volume; the stretch of a closed one and the gas
-/// pressure of a gas amount).
-fn measure_names(closed: bool, gas_amount: bool) -> Vec<String> {
+/// the lowest and highest z; the enclosed volume of one that encloses, the stretch of a
+/// closed one and the gas pressure of a gas amount).
+fn measure_names(encloses: bool, closed: bool, gas_amount: bool) -> Vec<String> {
     let mut n = vec![
         "max_displacement".to_string(),
         "min_z".to_string(),
         "max_z".to_string(),
-        "volume".to_string(),
     ];
+    if encloses {
+        n.push("volume".into());
+    }
     if closed {
         n.push("stretch".into());
     }
@@ -505,7 +520,10 @@ impl Study for MeridianStudy {
                 (a.min(p[1]), b.max(p[1]))
             });
         let v = self.model.volume(&x);
-        let mut out = vec![max, low, high, v];
+        let mut out = vec![max, low, high];
+        if self.about.measures.iter().any(|m| m == "volume") {
+            out.push(v);
+        }
         if let Some(v0) = self.stress_free_volume {
             out.push((v / v0).cbrt());
         }

@@ -177,7 +177,10 @@ impl<'a> Switch<'a> {
                 amplitudes[i][2]
             };
         }
-        let total: f64 = amplitudes.iter().map(|a| a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sum();
+        let total: f64 = amplitudes
+            .iter()
+            .map(|a| a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+            .sum();
         let twist: f64 = amplitudes.iter().map(|a| a[1] * a[1]).sum();
         if twist > TWIST * total || phi.norm() == 0.0 {
             return Err(
@@ -201,7 +204,9 @@ impl<'a> Switch<'a> {
         let m = q.len();
         let mut form = |q: &DVector<f64>, l: &DVector<f64>| -> Result<(f64, f64), String> {
             let lin = problem.evaluate(q, l).map_err(|e| e.to_string())?;
-            let kphi = lin.tangent.times(&nalgebra::DMatrix::from_column_slice(m, 1, phi.as_slice()));
+            let kphi =
+                lin.tangent
+                    .times(&nalgebra::DMatrix::from_column_slice(m, 1, phi.as_slice()));
             Ok((phi.dot(&kphi.column(0)), lin.tangent.amax().max(1e-300)))
         };
         let along = |s: f64| -> (DVector<f64>, DVector<f64>) {
@@ -252,7 +257,13 @@ impl<'a> Switch<'a> {
     }
 
     /// A point of the branch.
-    fn point(u: &[f64], params: &[f64], arclength: f64, iterations: usize, index: Option<usize>) -> BranchPoint {
+    fn point(
+        u: &[f64],
+        params: &[f64],
+        arclength: f64,
+        iterations: usize,
+        index: Option<usize>,
+    ) -> BranchPoint {
         BranchPoint {
             u: u.to_vec(),
             parameters: params.to_vec(),
@@ -343,7 +354,9 @@ impl<'a> Switch<'a> {
         let mut first = None;
         let mut why = None;
         for k in [self.reduced.path_per_amplitude, 0.0] {
-            if first.is_some() || (k == 0.0 && why.is_none() && self.reduced.path_per_amplitude == 0.0) {
+            if first.is_some()
+                || (k == 0.0 && why.is_none() && self.reduced.path_per_amplitude == 0.0)
+            {
                 continue;
             }
             match self.first_step(&mut *problem, half, k) {
@@ -353,7 +366,9 @@ impl<'a> Switch<'a> {
                             "the branch left along its kernel direction: the first step along \
                              the reduced equation's direction (ds/dA = {k0:.3e}) was cut below \
                              the smallest step ({})",
-                            why.as_ref().map_or_else(String::new, |w: &crate::continuation::StepError| w.to_string()),
+                            why.as_ref()
+                                .map_or_else(String::new, |w: &crate::continuation::StepError| w
+                                    .to_string()),
                             k0 = self.reduced.path_per_amplitude,
                         ));
                     }
@@ -376,10 +391,14 @@ impl<'a> Switch<'a> {
         };
         let mut driver = Continuation::new(problem, first, opts.clone());
         let measure = |u: &[f64], p: &[f64]| study.measure(u, p);
-        let mut index = study
-            .blocks()
-            .ok()
-            .map(|b| Numbered(IndexChanges::new(Crossings::new(b, &measure, Some(c), false))));
+        let mut index = study.blocks().ok().map(|b| {
+            Numbered(IndexChanges::new(Crossings::new(
+                b,
+                &measure,
+                Some(c),
+                false,
+            )))
+        });
         let followed = {
             let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
             if let Some(ix) = index.as_mut() {

@@ -37,8 +37,8 @@ use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout, Model, Request};
 use crate::results::{
     directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches,
-    CriticalKind, CriticalPoint, Half, Halves, Node, PathReport, PathRow, RecordedPoint,
-    Reduced, Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow, ASYMMETRY,
+    CriticalKind, CriticalPoint, Half, Halves, Node, PathReport, PathRow, RecordedPoint, Reduced,
+    Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow, ASYMMETRY,
 };
 use crate::stability::{IrrepBlocks, Stability};
 use meshes::GroupAction;
