@@ -326,7 +326,7 @@ pub struct Curve(pub CriticalCurveAnalysis);
 impl Curve {
     /// The settings of the curve.
     fn settings(&self) -> Settings {
-        crate::scene::Analysis::CriticalCurve(self.0.clone()).settings()
+        self.0.settings()
     }
 }
 

@@ -36,13 +36,13 @@ pub(super) fn start_driver<'a>(
 pub struct Path(pub PathAnalysis);
 
 impl Path {
-    /// Its options on `study` (as [`Analysis::options`]).
+    /// Its options on `study` (as its `options` of [`Analysis`]).
     pub fn options_of(&self, study: &dyn Study) -> PathOptions {
         self.options(study)
     }
 
     fn settings(&self) -> Settings {
-        crate::scene::Analysis::Path(self.0.clone()).settings()
+        self.0.settings()
     }
 
     /// The branch options of `[analysis.branches]` (or `branches`, overriding it), with the

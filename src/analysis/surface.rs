@@ -179,7 +179,7 @@ impl Analysis for Surface {
     /// Every path of the surface: the ranges' first bounds the paths' parameter.
     fn options(&self, study: &dyn Study) -> PathOptions {
         let a = &self.0;
-        let settings: Settings = crate::scene::Analysis::Surface(a.clone()).settings();
+        let settings: Settings = a.settings();
         let bounds = study
             .control()
             .map_or((f64::NEG_INFINITY, f64::INFINITY), |c| c.bounds());

@@ -7,7 +7,7 @@ use crate::adapted::AdaptedBasis;
 use crate::model::{Model, Request};
 use crate::reference::{P_MAX, P_MIN};
 use crate::results::{Extremum, StateKind};
-use crate::scene::{Analysis, Scene};
+use crate::scene::Scene;
 use crate::stability::{BlockEigen, Stability};
 use crate::study::mesh::MeshStudy;
 use std::time::{Duration, Instant};
@@ -180,9 +180,9 @@ pub fn balloon_level_with(
     }
     let start = Instant::now();
     let mut scene = balloon_scene(frequency)?;
-    if let (Some(n), Analysis::Path(p)) = (options.max_points, &mut scene.analysis) {
+    if let (Some(n), Some(steps)) = (options.max_points, scene.analysis.budget()) {
         // The path accepts up to `steps` steps after the start.
-        p.steps = p.steps.min(n - 1);
+        scene.analysis.set_budget(steps.min(n - 1));
     }
     let mut study = MeshStudy::build(scene).map_err(|e| e.to_string())?;
     let mut observer = SpectraObserver::default();

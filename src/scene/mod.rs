@@ -654,6 +654,20 @@ pub struct SurfaceAnalysis {
 }
 
 impl SurfaceAnalysis {
+    /// The continuation settings of every path of the surface.
+    pub fn settings(&self) -> Settings {
+        Settings {
+            steps: self.steps,
+            initial_step: self.initial_step,
+            min_step: self.min_step,
+            max_step: self.max_step,
+            tolerance: self.tolerance,
+            max_iterations: self.max_iterations,
+            direction: self.direction.sign(),
+            save_every: usize::MAX,
+        }
+    }
+
     /// The parameter of the paths.
     pub fn a(&self) -> &str {
         &self.parameters[0]
@@ -726,6 +740,23 @@ pub struct CriticalCurveAnalysis {
     /// point.
     #[serde(default = "default_watch")]
     pub watch: bool,
+}
+
+impl CriticalCurveAnalysis {
+    /// The continuation settings of the curve (its path to the point takes `path-steps` and
+    /// increases the control).
+    pub fn settings(&self) -> Settings {
+        Settings {
+            steps: self.steps,
+            initial_step: self.initial_step,
+            min_step: self.min_step,
+            max_step: self.max_step,
+            tolerance: self.tolerance,
+            max_iterations: self.max_iterations,
+            direction: self.direction.sign(),
+            save_every: usize::MAX,
+        }
+    }
 }
 
 /// `analysis.from` of a critical curve.
@@ -805,6 +836,22 @@ pub struct PathAnalysis {
     /// branches that leave them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branches: Option<BranchesAnalysis>,
+}
+
+impl PathAnalysis {
+    /// The continuation settings of the path.
+    pub fn settings(&self) -> Settings {
+        Settings {
+            steps: self.steps,
+            initial_step: self.initial_step,
+            min_step: self.min_step,
+            max_step: self.max_step,
+            tolerance: self.tolerance,
+            max_iterations: self.max_iterations,
+            direction: self.direction.sign(),
+            save_every: self.save_every,
+        }
+    }
 }
 
 /// `[analysis.branches]` of a path: at every bifurcation point of the path (or those listed
@@ -981,48 +1028,56 @@ impl Analysis {
     /// to the point takes `path-steps` instead of `steps`, and increases the control); a
     /// surface's are those of every path.
     pub fn settings(&self) -> Settings {
-        let d = Settings::default();
         match self {
-            Analysis::Path(p) => Settings {
-                steps: p.steps,
-                initial_step: p.initial_step,
-                min_step: p.min_step,
-                max_step: p.max_step,
-                tolerance: p.tolerance,
-                max_iterations: p.max_iterations,
-                direction: p.direction.sign(),
-                save_every: p.save_every,
-            },
-            Analysis::CriticalCurve(c) => Settings {
-                steps: c.steps,
-                initial_step: c.initial_step,
-                min_step: c.min_step,
-                max_step: c.max_step,
-                tolerance: c.tolerance,
-                max_iterations: c.max_iterations,
-                direction: c.direction.sign(),
-                save_every: usize::MAX,
-            },
-            Analysis::Surface(a) => Settings {
-                steps: a.steps,
-                initial_step: a.initial_step,
-                min_step: a.min_step,
-                max_step: a.max_step,
-                tolerance: a.tolerance,
-                max_iterations: a.max_iterations,
-                direction: a.direction.sign(),
-                save_every: usize::MAX,
-            },
+            Analysis::Path(p) => p.settings(),
+            Analysis::CriticalCurve(c) => c.settings(),
+            Analysis::Surface(a) => a.settings(),
             Analysis::Equilibrium(e) => Settings {
                 tolerance: e.tolerance,
                 max_iterations: e.max_iterations,
-                ..d
+                ..Settings::default()
             },
             Analysis::LinearBuckling(b) => Settings {
                 tolerance: b.tolerance,
                 max_iterations: b.max_iterations,
-                ..d
+                ..Settings::default()
             },
+        }
+    }
+
+    /// The step budget of its paths (a path's or a surface's steps, the steps of the path to
+    /// a critical curve's point, the samples of a sweep); none for an equilibrium.
+    pub fn budget(&self) -> Option<usize> {
+        match self {
+            Analysis::LinearBuckling(b) => Some(b.samples),
+            Analysis::Path(p) => Some(p.steps),
+            Analysis::CriticalCurve(c) => Some(c.path_steps),
+            Analysis::Surface(a) => Some(a.steps),
+            Analysis::Equilibrium(_) => None,
+        }
+    }
+
+    /// Sets the step budget of its paths ([`Analysis::budget`]).
+    pub fn set_budget(&mut self, n: usize) {
+        match self {
+            Analysis::LinearBuckling(b) => b.samples = n,
+            Analysis::Path(p) => p.steps = n,
+            Analysis::CriticalCurve(c) => c.path_steps = n,
+            Analysis::Surface(a) => a.steps = n,
+            Analysis::Equilibrium(_) => {}
+        }
+    }
+
+    /// Whether the start state is held while the control sweeps (linear buckling).
+    pub fn holds_state(&self) -> bool {
+        matches!(self, Analysis::LinearBuckling(_))
+    }
+
+    /// The measure the analysis names (a surface's third coordinate), if it names one.
+    pub fn measure(&self) -> Option<&str> {
+        match self {
+            Analysis::Surface(a) => a.measure.as_deref(),
+            _ => None,
         }
     }
 

@@ -283,6 +283,7 @@ impl MeridianStudy {
             stress_free_volume.is_some(),
             has_gas_amount(&model),
         );
+        super::check_measure(&scene, &measures).map_err(Unsupported)?;
         let about = About {
             scene: scene.info.name.clone(),
             origin: scene.origin.clone(),

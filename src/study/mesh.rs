@@ -386,19 +386,9 @@ impl MeshStudy {
             };
             measures.push((name, Measure::GasPressure(i)));
         }
-        if let scene::Analysis::Surface(a) = &scene.analysis {
-            if let Some(name) = &a.measure {
-                if !measures.iter().any(|(n, _)| n == name) {
-                    let names: Vec<&str> = measures.iter().map(|(n, _)| n.as_str()).collect();
-                    return Err(StudyError::Unsupported(format!(
-                        "{}: 'analysis.measure' = \"{name}\": not a measure of this scene \
-                         (it has {})",
-                        scene.origin,
-                        names.join(", ")
-                    )));
-                }
-            }
-        }
+        let names: Vec<String> = measures.iter().map(|(n, _)| n.clone()).collect();
+        super::check_measure(&scene, &names)
+            .map_err(|e| StudyError::Unsupported(format!("{}: {e}", scene.origin)))?;
         let model = FeModel::new(
             m.nodes.clone(),
             m.triangles.clone(),

@@ -39,6 +39,18 @@ pub fn build(scene: Scene) -> Result<Box<dyn Study>, String> {
         .map_err(|e| e.to_string())
 }
 
+/// Fails, naming the key, when the scene's analysis names a measure (a surface's
+/// `analysis.measure`) that is not one of the study's `measures`.
+fn check_measure(scene: &Scene, measures: &[String]) -> Result<(), String> {
+    match scene.analysis.measure() {
+        Some(name) if !measures.iter().any(|n| n == name) => Err(format!(
+            "'analysis.measure' = \"{name}\": not a measure of this scene (it has {})",
+            measures.join(", ")
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// A parameter an analysis moves: its place among the scene's parameters, its name and the
 /// bounds a path in it stops at — built once from the scene by the study, handed to the driver
 /// and on to a branch's start.

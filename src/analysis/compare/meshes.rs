@@ -1,7 +1,7 @@
 //! The meshes of a comparison: how they are named, and the scene on each.
 
 use super::CompareError;
-use crate::scene::{Analysis, Generator, MeshSpec, Scene};
+use crate::scene::{Generator, MeshSpec, Scene};
 use crate::text::one_line;
 
 /// How a mesh is named.
@@ -336,11 +336,14 @@ pub(super) fn variant(
             let old = (p.min, p.max);
             p.max = Some(max);
             // Keep the sample spacing of a linear-buckling sweep.
-            if let (Analysis::LinearBuckling(b), (Some(lo), Some(hi)), None) =
-                (&mut base.analysis, old, common.samples)
-            {
+            if let (true, Some(samples), (Some(lo), Some(hi)), None) = (
+                base.analysis.holds_state(),
+                base.analysis.budget(),
+                old,
+                common.samples,
+            ) {
                 if hi > lo && max > lo {
-                    let samples = ((b.samples as f64) * (max - lo) / (hi - lo)).ceil();
+                    let samples = ((samples as f64) * (max - lo) / (hi - lo)).ceil();
                     if samples.is_nan() || samples > MAX_SAMPLES as f64 {
                         return Err(CompareError::Input(format!(
                             "--max {}: the sweep would keep its spacing with {samples:e} \
@@ -348,19 +351,13 @@ pub(super) fn variant(
                             crate::text::num(max)
                         )));
                     }
-                    b.samples = samples.max(1.0) as usize;
+                    base.analysis.set_budget(samples.max(1.0) as usize);
                 }
             }
         }
     }
     if let Some(n) = common.samples {
-        match &mut base.analysis {
-            Analysis::LinearBuckling(b) => b.samples = n,
-            Analysis::Path(p) => p.steps = n,
-            Analysis::CriticalCurve(c) => c.path_steps = n,
-            Analysis::Surface(a) => a.steps = n,
-            Analysis::Equilibrium(_) => {}
-        }
+        base.analysis.set_budget(n);
     }
     let mut table = toml::Table::try_from(&base)
         .map_err(|e| CompareError::Failure(format!("the scene does not serialise: {e}")))?;

@@ -75,7 +75,7 @@ pub use meshes::{parse_meshes, MeshChoice};
 use crate::adapted::AdaptedBasis;
 use crate::model::Model;
 use crate::results::{CriticalKind, CriticalPoint, PathReport, StopReason};
-use crate::scene::{Analysis, MeshSpec, Scene};
+use crate::scene::{MeshSpec, Scene};
 use crate::stability::Stability;
 use crate::study::meridian::MeridianStudy;
 use crate::study::mesh::{MeshStudy, StudyError};
@@ -474,7 +474,7 @@ fn unaccounted(report: &PathReport) -> Vec<String> {
 /// the control.
 fn precisions(study: &MeshStudy, critical: &[CriticalPoint]) -> Vec<Option<f64>> {
     let none = vec![None; critical.len()];
-    let (Analysis::LinearBuckling(_), Some(c)) = (&study.scene.analysis, study.control) else {
+    let (true, Some(c)) = (study.scene.analysis.holds_state(), study.control) else {
         return none;
     };
     let Ok(adapted) = AdaptedBasis::new(&study.action, study.model.layout()) else {
@@ -684,13 +684,7 @@ pub fn compare(
     if let Some(c) = meshes.iter().position(|m| m.generator == "axisymmetric") {
         measure_distances(&meshes, &mut rung_list, c);
     }
-    let samples = match &reference_scene.analysis {
-        Analysis::LinearBuckling(b) => Some(b.samples),
-        Analysis::Path(p) => Some(p.steps),
-        Analysis::CriticalCurve(c) => Some(c.path_steps),
-        Analysis::Surface(a) => Some(a.steps),
-        Analysis::Equilibrium(_) => None,
-    };
+    let samples = reference_scene.analysis.budget();
     Ok(Comparison {
         scene: scene.info.name.clone(),
         origin: scene.origin.clone(),
