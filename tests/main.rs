@@ -21,6 +21,7 @@ mod fluid_volume;
 mod fuzz;
 mod hard_cases;
 mod lanczos_cap;
+mod layers;
 mod linalg;
 mod linear_buckling_plot;
 mod mesh_radius;
