@@ -3,8 +3,8 @@
 //!
 //! The start state is carried at fixed `a` to every grid value of `b` (Newton from the
 //! neighbouring value, the step in `b` halved where Newton fails); from each, the path in `a`
-//! is the ordinary path of the fixed-point space ([`super::path::start_driver`],
-//! [`super::path::trace`]): pseudo-arclength through its folds, the index by irrep blocks at
+//! is the ordinary path of the study (the path analysis's driver,
+//! [`crate::continuation::events::trace`]): pseudo-arclength through its folds, the index by irrep blocks at
 //! every point, every critical point where it changes localised and classified. Neighbouring
 //! paths are stitched into triangles by the fraction of their own arclength ([`stitch`]), so
 //! paths of different lengths still close the strip between them; the critical points of the

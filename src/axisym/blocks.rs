@@ -1,7 +1,7 @@
 //! The meridian's stability by wave number (docs/theory.md §15.3, §15.12), as the
 //! [`Blocks`] every analysis reads: the block of wave number m = 0..=M at a state, each
 //! standing for one (m = 0) or two (m ≥ 1, the cos/sin pair) identical copies in the full
-//! tangent, bordered by the motions the analysis holds and the constraints ([`super::held`]).
+//! tangent, bordered by the motions the analysis holds and the constraints (`axisym/held.rs`).
 //!
 //! A block's index is the inertia of one sparse LBLᵀ of the bordered block less its border
 //! (Haynsworth); its lowest eigenvalues, where a crossing is localised or a spectrum asked for,

@@ -217,8 +217,8 @@ impl<'a> Crossings<'a> {
     /// ends `a` and `b` of a step (index spectra, with or without eigenvalues, and their
     /// states), with `state(s)` giving (u, params) for s ∈ [0, s1] (s = 0 at a, s1 at b): a
     /// crossing of the k-th lowest eigenvalue of the block (k between the two counts) is
-    /// found by [`locate`] on that eigenvalue, computed at each trial point — densely or by
-    /// Lanczos, whatever the block's size ([`Stability::analyse`]). Returns the critical
+    /// found by [`locate`](super::events::locate) on that eigenvalue, computed at each trial point — densely or by
+    /// Lanczos, whatever the block's size (`Stability::analyse`). Returns the critical
     /// points sorted by the control, and the crossings that could not be localised as
     /// warnings. `control_turns` says whether the control turns between `a` and `b`: a zero
     /// of the trivial block is a limit point only there (docs/theory.md §11.3); elsewhere,

@@ -1,7 +1,7 @@
 //! Pseudo-arclength continuation in several parameters (docs/theory.md §7.3–§7.7): a stepping
 //! driver, [`Continuation`], that starts from any converged point and tangent of any
 //! [`Problem`] — here the fixed-point space of a subgroup of the scene's group
-//! ([`crate::analysis::SymmetricProblem`]) — and advances one accepted point per
+//! (the fixed-point space of a subgroup on a 3-D mesh, a meridian's unknowns) — and advances one accepted point per
 //! [`Continuation::step`]. What happens along the way (turning points, changes of stability,
 //! stops) is the business of [`crate::continuation::events`], not of the driver.
 //!

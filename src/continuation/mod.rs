@@ -1,5 +1,5 @@
 //! Following equilibria of any problem, knowing no membrane (docs/theory.md §7, §8, §11): the
-//! stepping driver ([`driver`]: pseudo-arclength continuation in several parameters from any
+//! stepping driver (`driver`: pseudo-arclength continuation in several parameters from any
 //! converged point), the one event mechanism ([`events`]: turning points, stops, the detectors
 //! every analysis runs), the changes of stability of a model whose tangent splits into blocks
 //! ([`crossings`]), the start homotopy of a free body ([`release`]) and the interrupt flag

@@ -1,8 +1,7 @@
 //! The start homotopy of a free body resting on a plane (docs/theory.md §7.8), for any
 //! [`Problem`]: the mean translation along a direction held by a uniform force, then released
-//! along an auxiliary path until that force vanishes. The 3-D start (`[start]
-//! hold-translation`, [`super::equilibrium`]) and the meridian's (`crate::axisym::run`) share
-//! it.
+//! along an auxiliary path until that force vanishes. The start solves of the 3-D mesh and of
+//! the meridian (`[start] hold-translation`) share it.
 
 use super::events::locate;
 use super::{point_at, solve_at, Continuation, Linearization, PathOptions, Problem, SolveError};

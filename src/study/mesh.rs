@@ -83,7 +83,7 @@ pub struct MeshStudy {
     pub parameters: Vec<String>,
     /// Start values, in that order.
     pub start: Vec<f64>,
-    /// Augmenting equations, in scene order (targets set by [`Study::set_targets`]).
+    /// Augmenting equations, in scene order (targets set by [`MeshStudy::set_targets`]).
     pub constraints: Vec<Box<dyn Constraint>>,
     /// Index of the control parameter (path analyses).
     pub control: Option<usize>,
@@ -132,7 +132,7 @@ impl MeshStudy {
         Self::build_within(scene, &limits)
     }
 
-    /// As [`Study::build`], refusing a scene whose group or estimated memory
+    /// As [`MeshStudy::build`], refusing a scene whose group or estimated memory
     /// ([`Scene::estimated_bytes`]) exceeds `limits` before anything is allocated.
     pub fn build_within(scene: Scene, limits: &Limits) -> Result<Self, StudyError> {
         limits.check_group(&scene.mesh.group_name())?;
@@ -469,7 +469,7 @@ impl MeshStudy {
     }
 
     /// The measures at displacement `u` and parameters `params`, in the order of
-    /// [`Study::measures`].
+    /// [`MeshStudy::measures`].
     pub fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64> {
         let x = self.model.positions(u, params);
         let tris = self.model.layout().triangles();
