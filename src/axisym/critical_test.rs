@@ -10,7 +10,6 @@
 
 use super::{AxisymModel, BlockLayout};
 use crate::continuation::crossings::{CriticalTest, TestValue};
-use crate::linalg::bordered::solve_dense;
 use crate::model::ModelError;
 use nalgebra::{DMatrix, DVector};
 
@@ -71,22 +70,10 @@ impl MeridianTest {
 
     /// σ and v from the bordered block `k`.
     fn solve(&self, k: &DMatrix<f64>) -> Result<(f64, DVector<f64>), ModelError> {
-        let n = k.nrows();
-        let mut a = DMatrix::zeros(n + 1, n + 1);
-        a.view_mut((0, 0), (n, n)).copy_from(k);
-        a.view_mut((0, n), (n, 1)).copy_from(&self.border);
-        a.view_mut((n, 0), (1, n))
-            .copy_from(&self.border.transpose());
-        let mut rhs = DVector::zeros(n + 1);
-        rhs[n] = 1.0;
-        let x = solve_dense(a, &rhs)
-            .filter(|x| x.iter().all(|v| v.is_finite()))
-            .ok_or_else(|| ModelError::Global {
-                effect: "critical block".into(),
-                what: "the bordered block is singular (its border is orthogonal to the kernel)"
-                    .into(),
-            })?;
-        Ok((x[n], x.rows(0, n).into_owned()))
+        crate::linalg::bordered::test_function(k, &self.border).ok_or_else(|| ModelError::Global {
+            effect: "critical block".into(),
+            what: "the bordered block is singular (its border is orthogonal to the kernel)".into(),
+        })
     }
 
     /// vᵀ K̃_m v at (q, params).

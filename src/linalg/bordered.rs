@@ -114,6 +114,22 @@ pub fn sparse_lu_solve(
 /// unblocked LU takes seconds there); below it by nalgebra's, which is faster on tiny ones.
 pub const BLOCKED_LU_FROM: usize = 256;
 
+/// The minimally augmented test function of a square matrix K with a border b
+/// (docs/theory.md §11.7): [[K, b], [bᵀ, 0]] [v; σ] = [0; 1], σ zero exactly where K is
+/// singular (b not orthogonal to its kernel), v its null vector there. `None` where the
+/// bordered matrix is singular.
+pub fn test_function(k: &DMatrix<f64>, border: &DVector<f64>) -> Option<(f64, DVector<f64>)> {
+    let m = k.nrows();
+    let mut a = DMatrix::zeros(m + 1, m + 1);
+    a.view_mut((0, 0), (m, m)).copy_from(k);
+    a.view_mut((0, m), (m, 1)).copy_from(border);
+    a.view_mut((m, 0), (1, m)).copy_from(&border.transpose());
+    let mut rhs = DVector::zeros(m + 1);
+    rhs[m] = 1.0;
+    let x = solve_dense(a, &rhs).filter(|x| x.iter().all(|v| v.is_finite()))?;
+    Some((x[m], x.rows(0, m).into_owned()))
+}
+
 /// A x = rhs by LU with partial pivoting; `None` for a singular A (a zero pivot, or a
 /// non-finite solution).
 pub fn solve_dense(a: DMatrix<f64>, rhs: &DVector<f64>) -> Option<DVector<f64>> {

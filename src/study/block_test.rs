@@ -222,22 +222,10 @@ impl<'a> BlockTest<'a> {
 
     /// σ and v from the bordered block `k` (the left null vector: from kᵀ).
     fn solve(&self, k: &DMatrix<f64>) -> Result<(f64, DVector<f64>), ModelError> {
-        let m = k.nrows();
-        let mut a = DMatrix::zeros(m + 1, m + 1);
-        a.view_mut((0, 0), (m, m)).copy_from(k);
-        a.view_mut((0, m), (m, 1)).copy_from(&self.border);
-        a.view_mut((m, 0), (1, m))
-            .copy_from(&self.border.transpose());
-        let mut rhs = DVector::zeros(m + 1);
-        rhs[m] = 1.0;
-        let x = crate::linalg::bordered::solve_dense(a, &rhs)
-            .filter(|x| x.iter().all(|v| v.is_finite()))
-            .ok_or_else(|| ModelError::Global {
-                effect: "critical block".into(),
-                what: "the bordered block is singular (its border is orthogonal to the kernel)"
-                    .into(),
-            })?;
-        Ok((x[m], x.rows(0, m).into_owned()))
+        crate::linalg::bordered::test_function(k, &self.border).ok_or_else(|| ModelError::Global {
+            effect: "critical block".into(),
+            what: "the bordered block is singular (its border is orthogonal to the kernel)".into(),
+        })
     }
 
     /// σ and v at (u, params); with constraints v = (v, w) over the block and the freed

@@ -301,15 +301,7 @@ impl MeridianStudy {
             parameters: parameters.clone(),
             measures,
         };
-        let control_handle = control.map(|c| {
-            let p = &scene.parameters[&parameters[c]];
-            Control {
-                index: c,
-                name: parameters[c].clone(),
-                min: p.min.unwrap_or(f64::NEG_INFINITY),
-                max: p.max.unwrap_or(f64::INFINITY),
-            }
-        });
+        let control_handle = control.map(|c| Control::of(&scene, &parameters, c));
         let revolved = revolved_mesh(&model.meridian, default_segments(modes))
             .map_err(|e| unsupported(format!("mesh: {e}")))?;
         Ok(Self {
@@ -488,13 +480,7 @@ impl Study for MeridianStudy {
     }
 
     fn parameter(&self, index: usize) -> Control {
-        let p = &self.scene.parameters[&self.parameters[index]];
-        Control {
-            index,
-            name: self.parameters[index].clone(),
-            min: p.min.unwrap_or(f64::NEG_INFINITY),
-            max: p.max.unwrap_or(f64::INFINITY),
-        }
+        Control::of(&self.scene, &self.parameters, index)
     }
 
     fn start_values(&self) -> &[f64] {

@@ -10,16 +10,15 @@
 //! every point.
 
 use super::meridian::MeridianStudy;
-use super::switching::{branch_run, Numbered};
+use super::switching::{branch_run, follow_branch};
 use super::{BranchOptions, Followed, Free, Study};
 use crate::axisym::blocks::{wave_number, MERIDIAN_GROUP};
 use crate::axisym::mode_amplitudes;
 use crate::continuation::crossings::{Crossings, IndexChanges};
-use crate::continuation::events::{trace, Detector, Event};
 use crate::continuation::{point_at, step_off, Continuation, PathOptions, PathPoint, Stalled};
 use crate::results::{
-    Bifurcation, BranchGraph, BranchPoint, BranchTurning, Branches, CriticalKind, CriticalPoint,
-    Half, Halves, Node, Reduced, Skip, StopReason, SwitchedBranch,
+    Bifurcation, BranchGraph, BranchPoint, Branches, CriticalKind, CriticalPoint, Half, Halves,
+    Node, Reduced, Skip, StopReason, SwitchedBranch,
 };
 use nalgebra::DVector;
 use petgraph::graph::NodeIndex;
@@ -391,60 +390,17 @@ impl<'a> Switch<'a> {
         };
         let mut driver = Continuation::new(problem, first, opts.clone());
         let measure = |u: &[f64], p: &[f64]| study.measure(u, p);
-        let mut index = study.blocks().ok().map(|b| {
-            Numbered(IndexChanges::new(Crossings::new(
-                b,
-                &measure,
-                Some(c),
-                false,
-            )))
-        });
-        let followed = {
-            let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
-            if let Some(ix) = index.as_mut() {
-                extra.push(ix);
-            }
-            trace(
-                &mut driver,
-                self.options.steps.saturating_sub(1),
-                |_, _| None,
-                &mut extra,
-                |_, _| {},
-            )
-        };
-        let stop = match followed.stop {
-            StopReason::StepBudget { .. } => StopReason::StepBudget {
-                steps: self.options.steps,
-            },
-            other => other,
-        };
-        let problem = driver.into_problem();
-        let indices = index.map(|ix| ix.0.indices).unwrap_or_default();
-        for (i, p) in followed.points.iter().enumerate() {
-            let u = problem.displacement(&p.q);
-            let params = problem.parameters(&p.lambda);
-            branch.points.push(Self::point(
-                &u,
-                &params,
-                p.arclength,
-                p.iterations,
-                indices.get(i).copied().flatten(),
-            ));
-        }
-        for event in followed.events {
-            match event {
-                Event::Critical(c) => branch.critical.push(c),
-                Event::Turning(t) => branch.turning.push(BranchTurning {
-                    kind: t.kind,
-                    after_step: t.after_step + 1,
-                    u: problem.displacement(&t.point.q),
-                    parameters: problem.parameters(&t.point.lambda),
-                }),
-                Event::Warning(w) => branch.warnings.push(w),
-                Event::Stop(_) => {}
-            }
-        }
-        branch.stop = stop;
+        let index = study
+            .blocks()
+            .ok()
+            .map(|b| IndexChanges::new(Crossings::new(b, &measure, Some(c), false)));
+        follow_branch(
+            &mut driver,
+            index,
+            self.options.steps,
+            &mut branch,
+            Self::point,
+        );
         branch
     }
 }

@@ -440,7 +440,7 @@ impl MeshStudy {
             parameters: parameters.clone(),
             measures: measures.iter().map(|(n, _)| n.clone()).collect(),
         };
-        let control_handle = control.map(|c| handle(&scene, &parameters, c));
+        let control_handle = control.map(|c| Control::of(&scene, &parameters, c));
         Ok(Self {
             about,
             control_handle,
@@ -544,17 +544,6 @@ impl MeshStudy {
             }
         }
         u
-    }
-}
-
-/// The handle of parameter `index` with its bounds from the scene.
-fn handle(scene: &Scene, parameters: &[String], index: usize) -> Control {
-    let p = &scene.parameters[&parameters[index]];
-    Control {
-        index,
-        name: parameters[index].clone(),
-        min: p.min.unwrap_or(f64::NEG_INFINITY),
-        max: p.max.unwrap_or(f64::INFINITY),
     }
 }
 
@@ -706,7 +695,7 @@ impl Study for MeshStudy {
     }
 
     fn parameter(&self, index: usize) -> Control {
-        handle(&self.scene, &self.parameters, index)
+        Control::of(&self.scene, &self.parameters, index)
     }
 
     fn start_values(&self) -> &[f64] {

@@ -67,6 +67,18 @@ pub struct Control {
 }
 
 impl Control {
+    /// The handle of parameter `index` of `scene` (its parameters by name, `names` in scene
+    /// order), with its bounds.
+    pub fn of(scene: &Scene, names: &[String], index: usize) -> Self {
+        let p = &scene.parameters[&names[index]];
+        Self {
+            index,
+            name: names[index].clone(),
+            min: p.min.unwrap_or(f64::NEG_INFINITY),
+            max: p.max.unwrap_or(f64::INFINITY),
+        }
+    }
+
     /// (min, max).
     pub fn bounds(&self) -> (f64, f64) {
         (self.min, self.max)

@@ -31,7 +31,7 @@ use crate::adapted::labels::isotropy;
 use crate::adapted::{AdaptedBasis, SparseBasis};
 use crate::continuation::crossings::{Crossings, IndexChanges};
 use crate::continuation::events::trace;
-use crate::continuation::events::{Detector, Event, MeasureFn};
+use crate::continuation::events::{Detector, Event, MeasureFn, States};
 use crate::continuation::{point_at, step_off, Continuation, PathOptions, PathPoint, Stalled};
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout, Model, Request};
@@ -652,54 +652,16 @@ impl Switching<'_> {
                 false,
             )
         });
-        let mut index = crossings.map(|c| Numbered(IndexChanges::new(c)));
-        let followed = {
-            let mut extra: Vec<&mut dyn Detector<SymmetricProblem>> = Vec::new();
-            if let Some(ix) = index.as_mut() {
-                extra.push(ix);
-            }
-            trace(
-                &mut driver,
-                self.options.steps.saturating_sub(1),
-                |_, _| None,
-                &mut extra,
-                |_, _| {},
-            )
-        };
-        // The budget counts the branch's points after the critical point, the first step
-        // included.
-        let stop = match followed.stop {
-            StopReason::StepBudget { .. } => StopReason::StepBudget {
-                steps: self.options.steps,
+        let index = crossings.map(IndexChanges::new);
+        follow_branch(
+            &mut driver,
+            index,
+            self.options.steps,
+            &mut branch,
+            |u, params, arclength, iterations, index| {
+                self.point(u, params, arclength, iterations, index)
             },
-            other => other,
-        };
-        let problem = driver.into_problem();
-        let indices = index.map(|ix| ix.0.indices).unwrap_or_default();
-        for (i, p) in followed.points.iter().enumerate() {
-            let u = problem.displacement(&p.q);
-            let params = problem.parameters(&p.lambda);
-            let index = indices.get(i).copied().flatten();
-            branch
-                .points
-                .push(self.point(&u, &params, p.arclength, p.iterations, index));
-        }
-        // Points of the followed path are numbered from 1 on the branch (0 is the critical
-        // point it leaves); the index detector numbers its findings so already.
-        for event in followed.events {
-            match event {
-                Event::Critical(c) => branch.critical.push(c),
-                Event::Turning(t) => branch.turning.push(BranchTurning {
-                    kind: t.kind,
-                    after_step: t.after_step + 1,
-                    u: problem.displacement(&t.point.q),
-                    parameters: problem.parameters(&t.point.lambda),
-                }),
-                Event::Warning(w) => branch.warnings.push(w),
-                Event::Stop(_) => {}
-            }
-        }
-        branch.stop = stop;
+        );
         if let Some(bad) = branch.points[1..]
             .iter()
             .position(|p| p.stabiliser != branch.elements)
@@ -758,9 +720,68 @@ impl Switching<'_> {
     }
 }
 
+/// Follows a branch from its first point with `driver` for the rest of its budget of `steps`
+/// points after the critical point, with the index by `index` (numbered by the branch's
+/// points: the critical point is point 0), into `branch`: its points (`point` of each state),
+/// critical and turning points, warnings and why it stopped.
+pub(crate) fn follow_branch<P: crate::continuation::Problem + States>(
+    driver: &mut Continuation<P>,
+    index: Option<IndexChanges<'_>>,
+    steps: usize,
+    branch: &mut SwitchedBranch,
+    point: impl Fn(&[f64], &[f64], f64, usize, Option<usize>) -> BranchPoint,
+) {
+    let mut index = index.map(Numbered);
+    let followed = {
+        let mut extra: Vec<&mut dyn Detector<P>> = Vec::new();
+        if let Some(ix) = index.as_mut() {
+            extra.push(ix);
+        }
+        trace(
+            driver,
+            steps.saturating_sub(1),
+            |_, _| None,
+            &mut extra,
+            |_, _| {},
+        )
+    };
+    // The budget counts the branch's points after the critical point, the first step
+    // included.
+    let stop = match followed.stop {
+        StopReason::StepBudget { .. } => StopReason::StepBudget { steps },
+        other => other,
+    };
+    let problem = driver.problem();
+    let indices = index.map(|ix| ix.0.indices).unwrap_or_default();
+    for (i, p) in followed.points.iter().enumerate() {
+        let u = problem.displacement(&p.q);
+        let params = problem.parameters(&p.lambda);
+        let index = indices.get(i).copied().flatten();
+        branch
+            .points
+            .push(point(&u, &params, p.arclength, p.iterations, index));
+    }
+    // Points of the followed path are numbered from 1 on the branch (0 is the critical
+    // point it leaves); the index detector numbers its findings so already.
+    for event in followed.events {
+        match event {
+            Event::Critical(c) => branch.critical.push(c),
+            Event::Turning(t) => branch.turning.push(BranchTurning {
+                kind: t.kind,
+                after_step: t.after_step + 1,
+                u: problem.displacement(&t.point.q),
+                parameters: problem.parameters(&t.point.lambda),
+            }),
+            Event::Warning(w) => branch.warnings.push(w),
+            Event::Stop(_) => {}
+        }
+    }
+    branch.stop = stop;
+}
+
 /// A detector whose findings are numbered by the branch's points — the critical point the
 /// branch leaves is point 0, the driver's first point is point 1.
-pub(crate) struct Numbered<D>(pub(crate) D);
+struct Numbered<D>(D);
 
 impl<P: crate::continuation::Problem, D: Detector<P>> Detector<P> for Numbered<D> {
     fn start(&mut self, driver: &mut Continuation<P>) -> Vec<Event> {
