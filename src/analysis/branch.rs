@@ -5,7 +5,7 @@
 
 use super::{registry, restart, RunError};
 use crate::output::FinishedRun;
-use crate::results::Branches;
+use crate::results::{Branches, Node, Skip};
 use crate::scene::BranchesAnalysis;
 use crate::study::Study;
 
@@ -65,7 +65,21 @@ pub fn from_run(
         points: Some(vec![n]),
     };
     let options = path.branch_options(study, Some(&b));
-    study
+    let branches = study
         .branches(&critical, options)
-        .map_err(BranchError::Input)
+        .map_err(BranchError::Input)?;
+    // A point whose branches leave the study's states is refused, with the model to use.
+    let refused = branches.graph.graph.node_weights().find_map(|node| match node {
+        Node::Critical {
+            on: None,
+            number,
+            skipped: Some(Skip::Elsewhere(why)),
+            ..
+        } if *number == n => Some(why.clone()),
+        _ => None,
+    });
+    match refused {
+        Some(why) => Err(BranchError::Input(why)),
+        None => Ok(branches),
+    }
 }

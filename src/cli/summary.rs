@@ -24,12 +24,11 @@ pub(super) fn print_summary(result: &RunResult, out: &Path, written: &Written) {
     if m.order == 0 {
         out!(
             "mesh: {} meridian with {} nodes, {} quadratic elements; its states keep {} \
-             (stability by wave number m = 0..{})",
+             (stability by wave number m)",
             m.generator,
             m.nodes,
             m.elements,
-            m.group,
-            report.irreps.len().saturating_sub(1)
+            m.group
         );
         out!("solved in {} unknowns", report.unknowns);
     } else {

@@ -84,6 +84,9 @@ pub enum Skip {
     NoAxialSubgroup(String),
     /// Something the switch could not do (names what).
     Failed(String),
+    /// Its branches leave the states the study follows (a mode of wave number m ≥ 1 of a
+    /// meridian): the reason names the model to switch on.
+    Elsewhere(String),
 }
 
 impl std::fmt::Display for Skip {
@@ -98,6 +101,7 @@ impl std::fmt::Display for Skip {
             ),
             Skip::NoAxialSubgroup(i) => write!(f, "irrep {i} has no axial isotropy subgroup"),
             Skip::Failed(why) => write!(f, "switching failed: {why}"),
+            Skip::Elsewhere(why) => f.write_str(why),
         }
     }
 }

@@ -45,26 +45,15 @@ pub fn refusal(number: usize, m: usize) -> String {
     )
 }
 
-/// The branches of the meridian's critical points `critical` that `options` asks for: a
-/// requested point of wave number m ≥ 1 alone (`memstab branch --critical N`) is refused with
-/// [`refusal`]; among several it is a node without branches, the refusal its reason.
+/// The branches of the meridian's critical points `critical` that `options` asks for; a point
+/// of wave number m ≥ 1 is a node without branches, [`refusal`] its reason
+/// ([`Skip::Elsewhere`]).
 pub fn switch(
     study: &MeridianStudy,
     critical: &[CriticalPoint],
     options: BranchOptions,
 ) -> Result<Branches, String> {
     let t = std::time::Instant::now();
-    if let Some(points) = &options.points {
-        if let [n] = points.as_slice() {
-            let m = critical
-                .get(n - 1)
-                .and_then(|cp| wave_number(&cp.irrep))
-                .unwrap_or(0);
-            if m >= 1 {
-                return Err(refusal(*n, m));
-            }
-        }
-    }
     let mut g = BranchGraph::default();
     for (k, cp) in critical.iter().enumerate() {
         let node = g.graph.add_node(Node::Critical {
@@ -76,7 +65,7 @@ pub fn switch(
         let requested = options.points.as_ref().is_none_or(|p| p.contains(&(k + 1)));
         let skip = match wave_number(&cp.irrep) {
             _ if !requested => Some(Skip::NotRequested),
-            Some(m) if m >= 1 => Some(Skip::Failed(refusal(k + 1, m))),
+            Some(m) if m >= 1 => Some(Skip::Elsewhere(refusal(k + 1, m))),
             _ if cp.kind == CriticalKind::LimitPoint => Some(Skip::LimitPoint),
             _ => None,
         };
