@@ -23,6 +23,7 @@ mod hard_cases;
 mod lanczos_cap;
 mod linalg;
 mod linear_buckling_plot;
+mod meridian_analyses;
 mod mesh_radius;
 mod model_derivatives;
 mod near_double;
