@@ -24,6 +24,7 @@ mod lanczos_cap;
 mod layers;
 mod linalg;
 mod linear_buckling_plot;
+mod meridian_analyses;
 mod mesh_radius;
 mod model_derivatives;
 mod near_double;
