@@ -569,8 +569,6 @@ fn meridian_m1_points_are_refused_naming_the_3d_isotropy() {
 /// A run whose `[analysis.branches] points` names the one m = 1 point lists it as skipped
 /// with the refusal, as it does among several points.
 #[test]
-#[ignore = "src bug: meridian_branches::switch refuses a one-point `points` list as if it were \
-            `memstab branch --critical N`, so this run fails (exit 1, nothing written)"]
 fn a_run_asking_for_its_one_m1_point_lists_it_as_skipped() {
     let tmp = tempfile::tempdir().unwrap();
     let bundled = std::fs::read_to_string(format!(

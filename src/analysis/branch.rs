@@ -69,15 +69,19 @@ pub fn from_run(
         .branches(&critical, options)
         .map_err(BranchError::Input)?;
     // A point whose branches leave the study's states is refused, with the model to use.
-    let refused = branches.graph.graph.node_weights().find_map(|node| match node {
-        Node::Critical {
-            on: None,
-            number,
-            skipped: Some(Skip::Elsewhere(why)),
-            ..
-        } if *number == n => Some(why.clone()),
-        _ => None,
-    });
+    let refused = branches
+        .graph
+        .graph
+        .node_weights()
+        .find_map(|node| match node {
+            Node::Critical {
+                on: None,
+                number,
+                skipped: Some(Skip::Elsewhere(why)),
+                ..
+            } if *number == n => Some(why.clone()),
+            _ => None,
+        });
     match refused {
         Some(why) => Err(BranchError::Input(why)),
         None => Ok(branches),

@@ -22,9 +22,14 @@ pub(super) fn print_summary(result: &RunResult, out: &Path, written: &Written) {
     let m = &report.mesh;
     out!("scene '{}' ({})", report.scene, report.origin);
     if m.order == 0 {
+        // The blocks are listed where the rows carry their counts (a path, a sweep).
+        let range = match report.irreps.len() {
+            0 => String::new(),
+            n => format!(" = 0..{}", n - 1),
+        };
         out!(
             "mesh: {} meridian with {} nodes, {} quadratic elements; its states keep {} \
-             (stability by wave number m)",
+             (stability by wave number m{range})",
             m.generator,
             m.nodes,
             m.elements,

@@ -1095,7 +1095,7 @@ impl Analysis {
 
 /// Why a command that needs a 3-D mesh refuses an axisymmetric one.
 pub const AXISYMMETRIC_ONLY: &str =
-    "generator \"axisymmetric\" is a meridian, not a 3-D mesh: only `memstab run` takes it";
+    "generator \"axisymmetric\" is a meridian, not a 3-D mesh: `memstab run`, `branch` and `compare` take it, `spectrum` and `export-matrix` do not";
 
 impl MeshSpec {
     /// The generator.
