@@ -1,4 +1,4 @@
-//! The outputs of branch switching ([`crate::analysis::branch`]): one directory per branch
+//! The outputs of branch switching (`memstab branch`, `[analysis.branches]`): one directory per branch
 //! with the usual path files (`branch_01/path.csv`, …), `branches.json` — the graph of
 //! critical points and branches — and `diagram.svg`, every branch in one bifurcation diagram.
 
