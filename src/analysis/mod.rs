@@ -194,16 +194,6 @@ impl Record {
         self.control.map_or(0.0, |c| params[c])
     }
 
-    /// The path's rows so far.
-    pub fn rows(&self) -> &[PathRow] {
-        &self.rows
-    }
-
-    /// The critical points so far.
-    pub fn critical(&self) -> &[CriticalPoint] {
-        &self.critical
-    }
-
     /// A row of the path table.
     #[allow(clippy::too_many_arguments)]
     fn row(

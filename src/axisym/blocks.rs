@@ -43,6 +43,24 @@ pub fn wave_number(name: &str) -> Option<usize> {
     name.strip_prefix('m')?.parse().ok()
 }
 
+/// The subgroup that keeps a mode of wave number m: every rotation and mirror about z for
+/// m = 0; for m ≥ 1 the rotations by 2π/m and the m mirrors through the crests of cos mθ,
+/// C_mv.
+pub fn isotropy(m: usize) -> Isotropy {
+    match m {
+        0 => Isotropy {
+            name: MERIDIAN_GROUP.into(),
+            order: 0,
+            elements: Vec::new(),
+        },
+        m => Isotropy {
+            name: format!("C{m}v"),
+            order: 2 * m,
+            elements: Vec::new(),
+        },
+    }
+}
+
 /// The blocks m = 0..=M of a meridian at its states.
 pub struct MeridianBlocks {
     model: AxisymModel,
@@ -272,18 +290,6 @@ impl Blocks for MeridianBlocks {
     }
 
     fn isotropy(&self, block: usize, _mode: &[f64]) -> Isotropy {
-        // cos mθ keeps the rotations by 2π/m and the m mirrors through its crests: C_mv.
-        match self.layouts[block].m {
-            0 => Isotropy {
-                name: MERIDIAN_GROUP.into(),
-                order: 0,
-                elements: Vec::new(),
-            },
-            m => Isotropy {
-                name: format!("C{m}v"),
-                order: 2 * m,
-                elements: Vec::new(),
-            },
-        }
+        isotropy(self.layouts[block].m)
     }
 }

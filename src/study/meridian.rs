@@ -654,7 +654,6 @@ impl Study for MeridianStudy {
         state: Vec<f64>,
         mode: Vec<f64>,
     ) -> Result<Vec<CriticalPoint>, String> {
-        let blocks = MeridianBlocks::new(self.model.clone(), self.modes);
         let (mut state, mut mode) = (Some(state), Some(mode));
         recorded
             .iter()
@@ -687,7 +686,7 @@ impl Study for MeridianStudy {
                     measures: c.measures.clone(),
                     after_step: c.after_step,
                     residual_eigenvalue: c.residual_eigenvalue,
-                    isotropy: blocks.isotropy(m, &v),
+                    isotropy: crate::axisym::blocks::isotropy(m),
                     mode: v,
                     state: u,
                 })
