@@ -488,7 +488,7 @@ fn depth_two_switches_at_the_branches_points() {
     let mut s = study(&upward(7, 6, None, 4.9, false));
     let critical = run(&mut s, |_, _| {}).expect("runs").report.critical;
     let scene: Scene = Scene::from_toml_str(&upward(7, 6, None, 4.9, true), "t").unwrap();
-    let memstab::scene::Analysis::Path(p) = &scene.analysis else {
+    let Some(p) = scene.analysis.get::<memstab::scene::PathAnalysis>() else {
         panic!("a path")
     };
     let mut opts = branch_options(&s, p.branches.as_ref());

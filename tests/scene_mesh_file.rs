@@ -365,9 +365,7 @@ fn the_bundled_file_scene_matches_its_generator() {
     .unwrap()
     .mesh;
     for s in [&mut scene, &mut twin] {
-        if let memstab::scene::Analysis::Path(p) = &mut s.analysis {
-            p.steps = 6;
-        }
+        s.analysis.set_budget(6);
     }
     let run_scene = |s: Scene| {
         let mut study = MeshStudy::build(s).unwrap();

@@ -2,8 +2,8 @@
 //! line naming the key path and the value; garbage never panics.
 
 use memstab::scene::{
-    Analysis, Constraint, ConstraintKind, Effect, FluidSide, MeshSpec, Quantity, Scene, SceneError,
-    Target,
+    Constraint, ConstraintKind, Effect, FluidSide, MeshSpec, PathAnalysis, Quantity, Scene,
+    SceneError, Target,
 };
 use proptest::prelude::*;
 use std::path::Path;
@@ -98,12 +98,12 @@ fn base_scene_is_valid() {
     assert_eq!(scene.effects.len(), 3);
     // Defaults.
     assert_eq!(scene.start.stretch, 1.0);
-    let Analysis::Path(path) = &scene.analysis else {
+    let Some(path) = scene.analysis.get::<PathAnalysis>() else {
         panic!("a path analysis")
     };
-    assert_eq!(path.steps, 200);
-    assert!(path.min_step <= path.initial_step && path.initial_step <= path.max_step);
-    // The plane normal is normalised; the exponent defaults to 1.
+    assert_eq!(path.settings.steps, 200);
+    let s = &path.settings;
+    assert!(s.min_step <= s.initial_step && s.initial_step <= s.max_step);
     let Effect::Plane(plane) = &scene.effects[2] else {
         panic!("effect[2] is a plane")
     };
@@ -157,6 +157,41 @@ fn unknown_keys_are_named_with_their_path() {
     rejects(
         &edit("divisions = 3", "divisions = 3\nrings = 4"),
         &["unknown key 'mesh.rings'", "generator, radius, sectors"],
+    );
+}
+
+/// The continuation keys an analysis shares with the others (steps, step sizes, direction,
+/// save-every, Newton's) are one table: read into its settings where the analysis takes them,
+/// refused with the valid keys where it does not.
+#[test]
+fn shared_continuation_keys_are_taken_where_they_apply() {
+    let path = Scene::from_toml_str(
+        &edit(
+            "control = \"rho\"",
+            "control = \"rho\"\nsteps = 7\ndirection = \"decrease\"\nsave-every = 3\ntolerance = 1e-8",
+        ),
+        "t",
+    )
+    .unwrap();
+    let settings = path.analysis.settings();
+    assert_eq!(
+        (settings.steps, settings.direction, settings.save_every, settings.tolerance),
+        (7, -1.0, 3, 1e-8)
+    );
+    // Written back as TOML and read again: the same analysis.
+    let again = Scene::from_toml_str(&path.to_toml(), "again").unwrap();
+    assert_eq!(again.analysis, path.analysis);
+    rejects(
+        &edit("type = \"path\"\ncontrol = \"rho\"", "type = \"equilibrium\"\nsteps = 5"),
+        &["unknown key 'analysis.steps'", "tolerance, max-iterations"],
+    );
+    rejects(
+        &edit("control = \"rho\"", "control = \"rho\"\ndirection = \"up\""),
+        &["'analysis.direction'", "increase", "decrease"],
+    );
+    rejects(
+        &edit("control = \"rho\"", "control = \"rho\"\nmin-step = 0.5"),
+        &["'analysis.min-step' must be <= max-step"],
     );
 }
 
@@ -527,7 +562,7 @@ fn bundled_balloon_reaches_past_the_pressure_minimum() {
     assert!(matches!(&scene.mesh, MeshSpec::Icosphere(i) if i.frequency == 8));
     assert_eq!(scene.material.k, Quantity::Value(0.1));
     assert!(scene.boundary.fixed.is_empty());
-    let Analysis::Path(path) = &scene.analysis else {
+    let Some(path) = scene.analysis.get::<PathAnalysis>() else {
         panic!("a path")
     };
     assert_eq!(path.control, "p");

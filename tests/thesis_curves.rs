@@ -84,7 +84,10 @@ fn one_hilltop(curve: &CurveReport) -> &CurveEvent {
 /// The (w2, k) of the hilltop of the spinning cap's m = 4 bifurcation curve from `from`.
 fn cap_hilltop(from: &str) -> (f64, f64) {
     let mut scene = bundled("thesis/paper4_hilltop_k.toml");
-    let memstab::scene::Analysis::CriticalCurve(analysis) = &mut scene.analysis else {
+    let Some(analysis) = scene
+        .analysis
+        .get_mut::<memstab::scene::CriticalCurveAnalysis>()
+    else {
         panic!("the hilltop scene is a critical curve")
     };
     analysis.from = memstab::scene::CurveStart::Irrep(from.to_string());
@@ -119,11 +122,14 @@ fn the_spinning_caps_m4_bifurcations_meet_the_limit_curve_at_two_close_hilltops(
     // The limit curve from the fold at k = 0.1, the fluid volume held along it: it turns in k
     // at a cusp, and on its way back meets both bifurcation curves at the same two hilltops.
     let mut scene = bundled("thesis/paper4_hilltop_k.toml");
-    let memstab::scene::Analysis::CriticalCurve(analysis) = &mut scene.analysis else {
+    let Some(analysis) = scene
+        .analysis
+        .get_mut::<memstab::scene::CriticalCurveAnalysis>()
+    else {
         panic!("the hilltop scene is a critical curve")
     };
     analysis.from = memstab::scene::CurveStart::Limit;
-    analysis.steps = 80;
+    analysis.settings.steps = 80;
     let mut study = MeshStudy::build(scene).unwrap();
     let limit = run(&mut study, |_, _| {})
         .expect("the limit curve runs")

@@ -10,10 +10,11 @@ use super::{Analysis, Context, RunError};
 use crate::continuation::crossings::End;
 use crate::continuation::crossings::Spectrum;
 use crate::continuation::events::Event;
-use crate::continuation::{PathOptions, Settings};
+use crate::continuation::PathOptions;
 use crate::results::{
     Spectra, SpectrumIrrep, SpectrumRow, StateKind, StopReason, SPECTRUM_EIGENVALUES,
 };
+use crate::scene::AnalysisSpec as _;
 use crate::scene::LinearBucklingAnalysis;
 use crate::study::Study;
 
@@ -22,11 +23,7 @@ pub struct Buckling(pub LinearBucklingAnalysis);
 
 impl Analysis for Buckling {
     fn options(&self, study: &dyn Study) -> PathOptions {
-        let settings = Settings {
-            tolerance: self.0.tolerance,
-            max_iterations: self.0.max_iterations,
-            ..Settings::default()
-        };
+        let settings = self.0.settings();
         path_options(study, &settings, Some((f64::NEG_INFINITY, f64::INFINITY)))
     }
 

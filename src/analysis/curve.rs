@@ -37,6 +37,7 @@ use crate::results::{
     CriticalKind, CriticalPoint, CurveEvent, CurveEventKind, CurveReport, CurveRow, PhaseTimes,
     StateKind, StopReason,
 };
+use crate::scene::AnalysisSpec as _;
 use crate::scene::{CriticalCurveAnalysis, CurveStart};
 use crate::study::{Followed, Free, Study};
 use nalgebra::{DMatrix, DVector};
@@ -500,7 +501,7 @@ impl Curve {
             }
             trace(
                 &mut driver,
-                analysis.steps,
+                analysis.settings.steps,
                 |_, p: &PathPoint| {
                     let c = p.lambda[last];
                     (c < control_bounds.0 || c > control_bounds.1).then_some(StopReason::Bounds)

@@ -5,6 +5,7 @@
 use super::{registry, Analysis, Context, RunError};
 use crate::continuation::{solve_at, PathOptions, Settings};
 use crate::results::{StateKind, StopReason};
+use crate::scene::AnalysisSpec as _;
 use crate::scene::EquilibriumAnalysis;
 use crate::study::{Free, Point, Start, Study};
 
@@ -57,11 +58,7 @@ pub struct Equilibrium(pub EquilibriumAnalysis);
 
 impl Equilibrium {
     fn settings(&self) -> Settings {
-        Settings {
-            tolerance: self.0.tolerance,
-            max_iterations: self.0.max_iterations,
-            ..Settings::default()
-        }
+        self.0.settings()
     }
 }
 

@@ -10,6 +10,7 @@ use crate::continuation::crossings::IndexChanges;
 use crate::continuation::events::{trace, Branch, Detector, Event};
 use crate::continuation::{Continuation, PathOptions, PathPoint, Settings};
 use crate::results::{StateKind, StopReason, TurningRow};
+use crate::scene::AnalysisSpec as _;
 use crate::scene::{BranchesAnalysis, PathAnalysis};
 use crate::study::{BranchOptions, Followed, Free, Point, Study};
 use crate::text::{num, sig_digits};
@@ -56,7 +57,7 @@ impl Path {
             study,
             &self.options(study),
             branches.or(self.0.branches.as_ref()),
-            self.0.save_every,
+            self.0.settings.save_every,
         )
     }
 }
@@ -170,7 +171,7 @@ impl Analysis for Path {
             &problem,
             &branch,
             &indices,
-            analysis.save_every,
+            analysis.settings.save_every,
         );
         let first = record.rows.len() - branch.points.len().min(record.rows.len());
         for (row, negative) in record.rows[first..].iter_mut().zip(negatives) {

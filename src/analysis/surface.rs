@@ -21,6 +21,7 @@ use crate::results::{
     CriticalKind, CriticalLine, CriticalLinePoint, CriticalPoint, StopReason, SurfacePath,
     SurfaceReport, SurfaceVertex,
 };
+use crate::scene::AnalysisSpec as _;
 use crate::scene::SurfaceAnalysis;
 use crate::study::{Followed, Free, Point, Study};
 use crate::text::num;

@@ -452,10 +452,17 @@ pub struct PathOptions {
     pub direction: f64,
 }
 
-/// The continuation settings an analysis takes from its scene (the shared keys of
-/// `[analysis]`, docs/scenes.md): steps, step sizes, the corrector's tolerance and
-/// iterations, the first step's sense and how often a state is saved.
-#[derive(Debug, Clone, PartialEq)]
+/// The continuation settings an analysis takes from its scene: the keys of `[analysis]`
+/// that every path-following analysis shares (docs/scenes.md), parsed straight into this
+/// type — steps, step sizes, the corrector's tolerance and iterations, the first step's sense
+/// (`direction = "increase"` or `"decrease"`) and how often a state is saved. A key left out
+/// takes the scene's default ([`Settings::of_scene`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(
+    default = "Settings::of_scene",
+    deny_unknown_fields,
+    rename_all = "kebab-case"
+)]
 pub struct Settings {
     /// Budget of accepted steps.
     pub steps: usize,
@@ -470,9 +477,29 @@ pub struct Settings {
     /// Newton iterations per corrector before the step is cut.
     pub max_iterations: usize,
     /// The first step's sense in the control: +1 increasing, −1 decreasing.
+    #[serde(with = "sense")]
     pub direction: f64,
     /// Save every n-th state of a path.
     pub save_every: usize,
+}
+
+/// `direction = "increase" | "decrease"` ↔ the sign +1 or −1.
+mod sense {
+    use serde::{de, Deserialize, Deserializer, Serializer};
+
+    const NAMES: &[&str] = &["increase", "decrease"];
+
+    pub fn serialize<S: Serializer>(sign: &f64, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(if *sign < 0.0 { NAMES[1] } else { NAMES[0] })
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        match String::deserialize(d)?.as_str() {
+            "increase" => Ok(1.0),
+            "decrease" => Ok(-1.0),
+            other => Err(de::Error::unknown_variant(other, NAMES)),
+        }
+    }
 }
 
 impl Default for Settings {
@@ -486,6 +513,24 @@ impl Default for Settings {
             tolerance: o.tolerance,
             max_iterations: o.max_iterations,
             direction: o.direction,
+            save_every: 10,
+        }
+    }
+}
+
+impl Settings {
+    /// The defaults of a scene's `[analysis]` (docs/scenes.md): 200 steps, arclength steps
+    /// 0.02 within [1e-6, 0.2], Newton to a relative residual of 1e-9 in at most 25
+    /// iterations, the control increasing first, every 10th state saved.
+    pub fn of_scene() -> Self {
+        Self {
+            steps: 200,
+            initial_step: 0.02,
+            min_step: 1e-6,
+            max_step: 0.2,
+            tolerance: 1e-9,
+            max_iterations: 25,
+            direction: 1.0,
             save_every: 10,
         }
     }

@@ -83,10 +83,13 @@ impl SceneError {
     }
 }
 
-/// An [`SceneError::Invalid`] before it knows its origin.
+/// An [`SceneError::Invalid`] before it knows its origin: what a check of a scene's keys
+/// returns.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Problem {
+pub struct Problem {
+    /// The key path of the offending value.
     pub key: String,
+    /// The complete message, which names `key` and the value.
     pub message: String,
 }
 

@@ -9,7 +9,7 @@
 
 use super::error::{num, Problem};
 use super::*;
-use serde::de::{self, DeserializeOwned, Deserializer, Unexpected, Visitor};
+use serde::de::{self, DeserializeOwned, Deserializer, Visitor};
 use serde::Serializer;
 use std::fmt;
 use toml::{Table, Value};
@@ -263,15 +263,11 @@ fn read_constraint(v: &Value, path: &str) -> Result<RawConstraint, Problem> {
 }
 
 fn read_analysis(v: &Value) -> Result<Analysis, Problem> {
-    let (kind, rest) = tagged(v, "analysis", "type", AnalysisKind::NAMES)?;
-    match AnalysisKind::from_name(&kind).expect("a listed analysis") {
-        AnalysisKind::Path => de(&rest, "analysis").map(Analysis::Path),
-        AnalysisKind::LinearBuckling => de(&rest, "analysis").map(Analysis::LinearBuckling),
-        AnalysisKind::Equilibrium => de(&rest, "analysis").map(Analysis::Equilibrium),
-        AnalysisKind::CriticalCurve => de(&rest, "analysis").map(Analysis::CriticalCurve),
-        AnalysisKind::Surface => de(&rest, "analysis").map(Analysis::Surface),
-    }
-    .map_err(with_tag("type"))
+    let (kind, rest) = tagged(v, "analysis", "type", &analysis_types())?;
+    let Value::Table(rest) = rest else {
+        unreachable!("a tagged section is a table")
+    };
+    Analysis::read(&kind, &rest).map_err(with_tag("type"))
 }
 
 /// The value of `key` as an array of tables (`[[key]]`).
@@ -548,45 +544,6 @@ impl<'de> Deserialize<'de> for Quantity {
             }
         }
         d.deserialize_any(V)
-    }
-}
-
-impl<'de> Deserialize<'de> for CurveStart {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl Visitor<'_> for V {
-            type Value = CurveStart;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("\"limit\", an irrep name or a critical-point index")
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<CurveStart, E> {
-                usize::try_from(v)
-                    .map(CurveStart::Index)
-                    .map_err(|_| E::invalid_value(Unexpected::Signed(v), &self))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<CurveStart, E> {
-                usize::try_from(v)
-                    .map(CurveStart::Index)
-                    .map_err(|_| E::invalid_value(Unexpected::Unsigned(v), &self))
-            }
-            fn visit_str<E: de::Error>(self, v: &str) -> Result<CurveStart, E> {
-                Ok(match v {
-                    "limit" => CurveStart::Limit,
-                    name => CurveStart::Irrep(name.to_string()),
-                })
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
-
-impl Serialize for CurveStart {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match self {
-            CurveStart::Limit => s.serialize_str("limit"),
-            CurveStart::Irrep(name) => s.serialize_str(name),
-            CurveStart::Index(i) => s.serialize_u64(*i as u64),
-        }
     }
 }
 

@@ -26,15 +26,19 @@
 //! - The mesh is the *reference* configuration X; the stress-free state is X/λ0 with λ0 =
 //!   [`Material::prestretch`]; the first Newton guess is `start.stretch · X` (see [`Start`]).
 
+mod analyses;
 mod error;
 mod load;
 mod tags;
 mod validate;
 
-pub use error::SceneError;
-pub use tags::{AnalysisKind, ConstraintKind, EffectKind, Generator};
+pub use analyses::{
+    analysis_types, Analysis, AnalysisSpec, BranchesAnalysis, CriticalCurveAnalysis, CurveStart,
+    EquilibriumAnalysis, LinearBucklingAnalysis, PathAnalysis, SurfaceAnalysis, MAX_BRANCH_DEPTH,
+};
+pub use error::{Problem, SceneError};
+pub use tags::{ConstraintKind, EffectKind, Generator};
 
-use crate::continuation::Settings;
 use meshes::generators::{self, DiscOptions, Down, IcosphereOptions, TruncatedSphereOptions};
 use meshes::{MeshError, SymmetricMesh};
 use serde::{Deserialize, Serialize};
@@ -593,323 +597,6 @@ pub struct FixedConstraint {
     pub parameter: String,
 }
 
-/// `[analysis]`, tagged by `type`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "type", rename_all = "kebab-case")]
-pub enum Analysis {
-    /// `type = "path"`: trace the equilibrium path in the control parameter.
-    Path(PathAnalysis),
-    /// `type = "equilibrium"`: one Newton solve at the start values.
-    Equilibrium(EquilibriumAnalysis),
-    /// `type = "linear-buckling"`: the start state held while the control sweeps its range.
-    LinearBuckling(LinearBucklingAnalysis),
-    /// `type = "critical-curve"`: a critical point of the path in the control, followed in
-    /// the control and a second parameter.
-    CriticalCurve(CriticalCurveAnalysis),
-    /// `type = "surface"`: the equilibrium manifold in two parameters, as a family of paths
-    /// in the first at a grid of values of the second.
-    Surface(SurfaceAnalysis),
-}
-
-/// `type = "surface"`: the two-parameter equilibrium manifold in the fixed-point space
-/// (docs/theory.md §11.10). With `parameters = [a, b]`, the start state is carried at fixed
-/// `a` to each of `paths` equally spaced values of `b` over `ranges[1]`; from each, the path
-/// in `a` is followed through its folds until `a` leaves `ranges[0]` or after `steps` steps.
-/// Neighbouring paths are stitched into triangles; every vertex carries the index by irrep
-/// blocks, and the critical points of the paths are joined across `b` into critical lines.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct SurfaceAnalysis {
-    /// `[a, b]`: the parameter of the paths and the parameter of the grid.
-    pub parameters: Vec<String>,
-    /// `[[a_min, a_max], [b_min, b_max]]`: where the paths stop, and the grid's extent.
-    pub ranges: Vec<Vec<f64>>,
-    /// Number of paths, the values of `b` (>= 2). Default 5.
-    #[serde(default = "default_paths")]
-    pub paths: usize,
-    /// The measure of the surface's third coordinate. Default the scene's first measure.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub measure: Option<String>,
-    /// The sense of every path's first step in `a`. Default `increase`.
-    #[serde(default)]
-    pub direction: Direction,
-    /// Step budget of every path (>= 1). Default 200.
-    #[serde(default = "default_steps")]
-    pub steps: usize,
-    /// First arclength step. Default 0.02.
-    #[serde(default = "default_initial_step")]
-    pub initial_step: f64,
-    /// Smallest arclength step. Default 1e-6.
-    #[serde(default = "default_min_step")]
-    pub min_step: f64,
-    /// Largest arclength step. Default 0.2.
-    #[serde(default = "default_max_step")]
-    pub max_step: f64,
-    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
-    #[serde(default = "default_tolerance")]
-    pub tolerance: f64,
-    /// Newton iterations per step before the step is cut. Default 25.
-    #[serde(default = "default_max_iterations")]
-    pub max_iterations: usize,
-}
-
-impl SurfaceAnalysis {
-    /// The continuation settings of every path of the surface.
-    pub fn settings(&self) -> Settings {
-        Settings {
-            steps: self.steps,
-            initial_step: self.initial_step,
-            min_step: self.min_step,
-            max_step: self.max_step,
-            tolerance: self.tolerance,
-            max_iterations: self.max_iterations,
-            direction: self.direction.sign(),
-            save_every: usize::MAX,
-        }
-    }
-
-    /// The parameter of the paths.
-    pub fn a(&self) -> &str {
-        &self.parameters[0]
-    }
-
-    /// The parameter of the grid.
-    pub fn b(&self) -> &str {
-        &self.parameters[1]
-    }
-
-    /// The grid's values of `b`, ascending.
-    pub fn b_values(&self) -> Vec<f64> {
-        let [lo, hi] = [self.ranges[1][0], self.ranges[1][1]];
-        let n = self.paths.max(2);
-        (0..n)
-            .map(|j| lo + (hi - lo) * j as f64 / (n - 1) as f64)
-            .collect()
-    }
-}
-
-/// `type = "critical-curve"`: the path in `control` from the start state (second parameter
-/// held at its start value) up to the critical point `from`; then that point followed as
-/// `second` varies — the equilibrium in the fixed-point space and a singular block of its
-/// irrep, in (u, control, second), with the constraints active (docs/theory.md §11.7). The
-/// curve stops when `second` or `control` leaves its `[min, max]`, or after `steps` steps.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct CriticalCurveAnalysis {
-    /// The parameter of the path that finds the point.
-    pub control: String,
-    /// The other free parameter of the curve.
-    pub second: String,
-    /// Which critical point of the path: `"limit"` (the first limit point), an irrep name
-    /// (the first critical point in that irrep's block) or an index (0: the first critical
-    /// point of any kind). Default `"limit"`. With `from-run`, the index of a critical point
-    /// of that run.
-    #[serde(default)]
-    pub from: CurveStart,
-    /// The output directory of a finished run of the same model: the curve starts from its
-    /// critical point `from` (its saved state and mode), without a path. [`Scene::load`]
-    /// resolves a relative directory against the scene file's.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub from_run: Option<PathBuf>,
-    /// The sense of the curve's first step in `second`. Default `increase`.
-    #[serde(default)]
-    pub direction: Direction,
-    /// Step budget of the curve (≥ 1). Default 200.
-    #[serde(default = "default_steps")]
-    pub steps: usize,
-    /// Step budget of the path that finds the point (≥ 1). Default 200.
-    #[serde(default = "default_steps")]
-    pub path_steps: usize,
-    /// First arclength step (of the path and of the curve). Default 0.02.
-    #[serde(default = "default_initial_step")]
-    pub initial_step: f64,
-    /// Smallest arclength step. Default 1e-6.
-    #[serde(default = "default_min_step")]
-    pub min_step: f64,
-    /// Largest arclength step. Default 0.2.
-    #[serde(default = "default_max_step")]
-    pub max_step: f64,
-    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
-    #[serde(default = "default_tolerance")]
-    pub tolerance: f64,
-    /// Newton iterations per step before the step is cut. Default 25.
-    #[serde(default = "default_max_iterations")]
-    pub max_iterations: usize,
-    /// Watch the other irrep blocks at every curve point for hilltops and changes of the
-    /// critical irrep (docs/theory.md §11.9). Default true; false saves their index at every
-    /// point.
-    #[serde(default = "default_watch")]
-    pub watch: bool,
-}
-
-impl CriticalCurveAnalysis {
-    /// The continuation settings of the curve (its path to the point takes `path-steps` and
-    /// increases the control).
-    pub fn settings(&self) -> Settings {
-        Settings {
-            steps: self.steps,
-            initial_step: self.initial_step,
-            min_step: self.min_step,
-            max_step: self.max_step,
-            tolerance: self.tolerance,
-            max_iterations: self.max_iterations,
-            direction: self.direction.sign(),
-            save_every: usize::MAX,
-        }
-    }
-}
-
-/// `analysis.from` of a critical curve.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub enum CurveStart {
-    /// The first limit point (the trivial block).
-    #[default]
-    Limit,
-    /// The first critical point in this irrep's block.
-    Irrep(String),
-    /// The critical point with this index along the path (0 the first).
-    Index(usize),
-}
-
-/// `type = "linear-buckling"`: the critical loads of the start state. The start state is solved
-/// at the start values and then held — taken as a trivial solution whose shape does not
-/// depend on the control (a flat pre-stretched disc under fluid at its rim, say) — while the
-/// control runs over `[min, max]` of its parameter in `samples` equal steps. Wherever a block's
-/// eigenvalue changes sign between two samples, the critical value is localised to round-off
-/// and classified by its irrep. Other parameters stay at their start values.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct LinearBucklingAnalysis {
-    /// The swept parameter (it needs `min` and `max`).
-    pub control: String,
-    /// Number of equal steps over `[min, max]` (≥ 1). Default 200.
-    #[serde(default = "default_steps")]
-    pub samples: usize,
-    /// Newton's convergence tolerance for the start state. Default 1e-9.
-    #[serde(default = "default_tolerance")]
-    pub tolerance: f64,
-    /// Newton iterations for the start state. Default 25.
-    #[serde(default = "default_max_iterations")]
-    pub max_iterations: usize,
-}
-
-/// `type = "path"`: pseudo-arclength continuation from the start state. The path stops at
-/// the first of: the control leaving `[min, max]` of its parameter, the stretch reaching
-/// `stop-stretch`, the largest displacement reaching `stop-displacement`, or `steps` steps.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct PathAnalysis {
-    /// The parameter that is free on the path.
-    pub control: String,
-    /// The sense of the first step in the control. Default `increase`.
-    #[serde(default)]
-    pub direction: Direction,
-    /// Step budget (≥ 1). Default 200.
-    #[serde(default = "default_steps")]
-    pub steps: usize,
-    /// First arclength step. Default 0.02.
-    #[serde(default = "default_initial_step")]
-    pub initial_step: f64,
-    /// Smallest arclength step; below it the path stops. Default 1e-6.
-    #[serde(default = "default_min_step")]
-    pub min_step: f64,
-    /// Largest arclength step. Default 0.2.
-    #[serde(default = "default_max_step")]
-    pub max_step: f64,
-    /// Write every n-th state (n ≥ 1; the first and the last are always written). Default 10.
-    #[serde(default = "default_save_every")]
-    pub save_every: usize,
-    /// Stop when the volume stretch λ = (V/V_sf)^(1/3) reaches this value (closed membranes
-    /// only; V_sf = V(mesh)/λ0³ is the stress-free enclosed volume).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub stop_stretch: Option<f64>,
-    /// Stop when the largest nodal displacement |u_i| reaches this value (> 0).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub stop_displacement: Option<f64>,
-    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
-    #[serde(default = "default_tolerance")]
-    pub tolerance: f64,
-    /// Newton iterations per step before the step is cut. Default 25.
-    #[serde(default = "default_max_iterations")]
-    pub max_iterations: usize,
-    /// `[analysis.branches]`: switch at the path's bifurcation points and follow the
-    /// branches that leave them.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub branches: Option<BranchesAnalysis>,
-}
-
-impl PathAnalysis {
-    /// The continuation settings of the path.
-    pub fn settings(&self) -> Settings {
-        Settings {
-            steps: self.steps,
-            initial_step: self.initial_step,
-            min_step: self.min_step,
-            max_step: self.max_step,
-            tolerance: self.tolerance,
-            max_iterations: self.max_iterations,
-            direction: self.direction.sign(),
-            save_every: self.save_every,
-        }
-    }
-}
-
-/// `[analysis.branches]` of a path: at every bifurcation point of the path (or those listed
-/// in `points`), one branch per conjugacy class of axial isotropy subgroups of its irrep
-/// (both halves where they are not conjugate), each followed for `steps` points in its own
-/// fixed-point space; with `depth = 2` also the branches of the branches' bifurcation points.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct BranchesAnalysis {
-    /// 1: the branches of the path's critical points; 2: also those of their critical
-    /// points; at most [`MAX_BRANCH_DEPTH`]. Default 1.
-    #[serde(default = "default_depth")]
-    pub depth: usize,
-    /// Points of each branch after the point it leaves (≥ 1). Default 40.
-    #[serde(default = "default_branch_steps")]
-    pub steps: usize,
-    /// Largest arclength step along a branch. Default: the path's `max-step`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_step: Option<f64>,
-    /// The path's critical points to switch at, numbered from 1 in the order of
-    /// `critical.json` (the `NN` of `critical_NN.vtu`). Default: every one.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub points: Option<Vec<usize>>,
-}
-
-/// The largest `analysis.branches.depth`.
-pub const MAX_BRANCH_DEPTH: usize = 3;
-
-fn default_depth() -> usize {
-    1
-}
-fn default_branch_steps() -> usize {
-    40
-}
-
-/// `analysis.direction`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Direction {
-    /// The control increases on the first step.
-    #[default]
-    Increase,
-    /// The control decreases on the first step.
-    Decrease,
-}
-
-/// `type = "equilibrium"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct EquilibriumAnalysis {
-    /// Newton's convergence tolerance on the relative residual. Default 1e-9.
-    #[serde(default = "default_tolerance")]
-    pub tolerance: f64,
-    /// Newton iterations before giving up (with step cutting). Default 25.
-    #[serde(default = "default_max_iterations")]
-    pub max_iterations: usize,
-}
-
 /// `[start]`: how the first equilibrium is found. The first Newton guess is the mesh scaled
 /// by `stretch` about the origin, x⁰ = stretch · X, with every parameter at its start value;
 /// Newton from there gives the start state. A free closed membrane (a balloon) needs
@@ -983,114 +670,6 @@ fn default_file_group() -> String {
 }
 fn default_exponent() -> u32 {
     1
-}
-fn default_steps() -> usize {
-    200
-}
-fn default_watch() -> bool {
-    true
-}
-fn default_paths() -> usize {
-    5
-}
-fn default_initial_step() -> f64 {
-    0.02
-}
-fn default_min_step() -> f64 {
-    1e-6
-}
-fn default_max_step() -> f64 {
-    0.2
-}
-fn default_save_every() -> usize {
-    10
-}
-fn default_tolerance() -> f64 {
-    1e-9
-}
-fn default_max_iterations() -> usize {
-    25
-}
-
-impl Direction {
-    /// +1 for `increase`, −1 for `decrease`.
-    pub fn sign(self) -> f64 {
-        match self {
-            Direction::Increase => 1.0,
-            Direction::Decrease => -1.0,
-        }
-    }
-}
-
-impl Analysis {
-    /// The continuation settings of this analysis: its own keys where it has them, the
-    /// driver's defaults for the others. A critical curve's are those of the curve (its path
-    /// to the point takes `path-steps` instead of `steps`, and increases the control); a
-    /// surface's are those of every path.
-    pub fn settings(&self) -> Settings {
-        match self {
-            Analysis::Path(p) => p.settings(),
-            Analysis::CriticalCurve(c) => c.settings(),
-            Analysis::Surface(a) => a.settings(),
-            Analysis::Equilibrium(e) => Settings {
-                tolerance: e.tolerance,
-                max_iterations: e.max_iterations,
-                ..Settings::default()
-            },
-            Analysis::LinearBuckling(b) => Settings {
-                tolerance: b.tolerance,
-                max_iterations: b.max_iterations,
-                ..Settings::default()
-            },
-        }
-    }
-
-    /// The step budget of its paths (a path's or a surface's steps, the steps of the path to
-    /// a critical curve's point, the samples of a sweep); none for an equilibrium.
-    pub fn budget(&self) -> Option<usize> {
-        match self {
-            Analysis::LinearBuckling(b) => Some(b.samples),
-            Analysis::Path(p) => Some(p.steps),
-            Analysis::CriticalCurve(c) => Some(c.path_steps),
-            Analysis::Surface(a) => Some(a.steps),
-            Analysis::Equilibrium(_) => None,
-        }
-    }
-
-    /// Sets the step budget of its paths ([`Analysis::budget`]).
-    pub fn set_budget(&mut self, n: usize) {
-        match self {
-            Analysis::LinearBuckling(b) => b.samples = n,
-            Analysis::Path(p) => p.steps = n,
-            Analysis::CriticalCurve(c) => c.path_steps = n,
-            Analysis::Surface(a) => a.steps = n,
-            Analysis::Equilibrium(_) => {}
-        }
-    }
-
-    /// Whether the start state is held while the control sweeps (linear buckling).
-    pub fn holds_state(&self) -> bool {
-        matches!(self, Analysis::LinearBuckling(_))
-    }
-
-    /// The measure the analysis names (a surface's third coordinate), if it names one.
-    pub fn measure(&self) -> Option<&str> {
-        match self {
-            Analysis::Surface(a) => a.measure.as_deref(),
-            _ => None,
-        }
-    }
-
-    /// The `type` of this analysis.
-    pub fn kind(&self) -> AnalysisKind {
-        match self {
-            Analysis::Path(_) => AnalysisKind::Path,
-            Analysis::Equilibrium(_) => AnalysisKind::Equilibrium,
-            Analysis::LinearBuckling(_) => AnalysisKind::LinearBuckling,
-            Analysis::CriticalCurve(_) => AnalysisKind::CriticalCurve,
-            Analysis::Surface(_) => AnalysisKind::Surface,
-        }
-    }
 }
 
 /// Why a command that needs a 3-D mesh refuses an axisymmetric one.
@@ -1368,15 +947,9 @@ impl Scene {
                 *from = path.parent().unwrap_or(Path::new("")).join(&*from);
             }
         }
-        if let Analysis::CriticalCurve(CriticalCurveAnalysis {
-            from_run: Some(dir),
-            ..
-        }) = &mut scene.analysis
-        {
-            if dir.is_relative() {
-                *dir = path.parent().unwrap_or(Path::new("")).join(&*dir);
-            }
-        }
+        scene
+            .analysis
+            .resolve(path.parent().unwrap_or(Path::new("")));
         Ok(scene)
     }
 
@@ -1390,23 +963,7 @@ impl Scene {
         let triangles = self.mesh.estimated_triangles();
         // Nodes ≈ triangles / 2; 3 unknowns a node; 8 bytes a number.
         let state = triangles.saturating_mul(12);
-        let (points, saved) = match &self.analysis {
-            Analysis::Path(p) => {
-                let points = (p.steps as u64).saturating_add(1);
-                (points, points / (p.save_every.max(1) as u64) + 2)
-            }
-            Analysis::LinearBuckling(b) => ((b.samples as u64).saturating_add(1), 1),
-            Analysis::Equilibrium(_) => (1, 1),
-            Analysis::CriticalCurve(c) => {
-                let points = (c.steps as u64).saturating_add(c.path_steps as u64);
-                (points.saturating_add(2), 2)
-            }
-            Analysis::Surface(a) => {
-                // The paths' points are kept (as rows) but only the first path's states.
-                let points = (a.steps as u64).saturating_add(1);
-                (points, 2)
-            }
-        };
+        let (points, saved) = self.analysis.spec().stored_points();
         let row = 256 + 16 * (self.parameters.len() as u64 + 8);
         self.mesh
             .estimated_bytes()
@@ -1503,13 +1060,7 @@ impl Scene {
 
     /// The control parameter of a path analysis.
     pub fn control(&self) -> Option<&str> {
-        match &self.analysis {
-            Analysis::Path(p) => Some(&p.control),
-            Analysis::LinearBuckling(b) => Some(&b.control),
-            Analysis::CriticalCurve(c) => Some(&c.control),
-            Analysis::Surface(a) => a.parameters.first().map(String::as_str),
-            Analysis::Equilibrium(_) => None,
-        }
+        self.analysis.control()
     }
 
     /// Every quantity of the scene that may be a parameter (the mesh's radius, the

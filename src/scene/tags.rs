@@ -107,19 +107,3 @@ tags! {
         Fixed = "fixed",
     }
 }
-
-tags! {
-    /// `[analysis] type = "…"`.
-    AnalysisKind {
-        /// The equilibrium path in the control.
-        Path = "path",
-        /// The start state alone.
-        Equilibrium = "equilibrium",
-        /// The start state held while the control sweeps.
-        LinearBuckling = "linear-buckling",
-        /// A critical point followed in two parameters.
-        CriticalCurve = "critical-curve",
-        /// The equilibrium manifold in two parameters.
-        Surface = "surface",
-    }
-}

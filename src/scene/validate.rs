@@ -8,7 +8,7 @@ use super::*;
 use std::collections::BTreeSet;
 
 /// Fails unless `x` is finite and > 0.
-fn positive(key: &str, x: f64) -> Result<(), Problem> {
+pub(super) fn positive(key: &str, x: f64) -> Result<(), Problem> {
     finite(key, x)?;
     if x > 0.0 {
         Ok(())
@@ -40,7 +40,7 @@ fn finite(key: &str, x: f64) -> Result<(), Problem> {
 }
 
 /// Fails unless the integer `n` is at least `min`.
-fn at_least(key: &str, n: usize, min: usize) -> Result<(), Problem> {
+pub(super) fn at_least(key: &str, n: usize, min: usize) -> Result<(), Problem> {
     if n >= min {
         Ok(())
     } else {
@@ -58,7 +58,7 @@ fn declared(parameters: &BTreeMap<String, Parameter>) -> String {
 }
 
 /// Fails unless `name` is a declared parameter; `key` is where it was referenced.
-fn known_parameter(
+pub(super) fn known_parameter(
     parameters: &BTreeMap<String, Parameter>,
     key: &str,
     name: &str,
@@ -254,7 +254,7 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     }
     check_parameter_ranges(scene)?;
     check_constraints(scene)?;
-    check_analysis(scene)?;
+    scene.analysis.check(scene)?;
     check_parameter_use(scene)?;
     positive("start.stretch", scene.start.stretch)?;
     let held = held_sets(scene);
@@ -743,218 +743,8 @@ fn check_constraints(scene: &Scene) -> Result<(), Problem> {
     Ok(())
 }
 
-/// `[analysis.branches]`: depth within [1, MAX_BRANCH_DEPTH], steps ≥ 1, a positive
-/// max-step, points numbered from 1 without repeats.
-fn check_branches(b: &super::BranchesAnalysis) -> Result<(), Problem> {
-    if b.depth < 1 || b.depth > super::MAX_BRANCH_DEPTH {
-        return Err(Problem::at(
-            "analysis.branches.depth",
-            format!(
-                "must lie within [1, {}], got {}",
-                super::MAX_BRANCH_DEPTH,
-                b.depth
-            ),
-        ));
-    }
-    at_least("analysis.branches.steps", b.steps, 1)?;
-    if let Some(m) = b.max_step {
-        positive("analysis.branches.max-step", m)?;
-    }
-    if let Some(points) = &b.points {
-        for (i, &p) in points.iter().enumerate() {
-            let key = format!("analysis.branches.points[{i}]");
-            at_least(&key, p, 1)?;
-            if points[..i].contains(&p) {
-                return Err(Problem::at(&key, format!("= {p} is listed twice")));
-            }
-        }
-    }
-    Ok(())
-}
-
-fn check_analysis(scene: &Scene) -> Result<(), Problem> {
-    match &scene.analysis {
-        Analysis::Path(a) => {
-            free_parameter(scene, "analysis.control", &a.control)?;
-            at_least("analysis.steps", a.steps, 1)?;
-            check_steps(a.initial_step, a.min_step, a.max_step)?;
-            at_least("analysis.save-every", a.save_every, 1)?;
-            if let Some(s) = a.stop_stretch {
-                positive("analysis.stop-stretch", s)?;
-            }
-            if let Some(s) = a.stop_displacement {
-                positive("analysis.stop-displacement", s)?;
-            }
-            if let Some(b) = &a.branches {
-                check_branches(b)?;
-            }
-            check_newton(a.tolerance, a.max_iterations)
-        }
-        Analysis::CriticalCurve(a) => {
-            free_parameter(scene, "analysis.control", &a.control)?;
-            free_parameter(scene, "analysis.second", &a.second)?;
-            if a.second == a.control {
-                return Err(Problem::at(
-                    "analysis.second",
-                    format!(
-                        "= \"{}\" is the control; the curve needs a second parameter",
-                        a.second
-                    ),
-                ));
-            }
-            if a.from_run.is_some() && !matches!(a.from, CurveStart::Index(_)) {
-                let from = match &a.from {
-                    CurveStart::Limit => "\"limit\"".to_string(),
-                    CurveStart::Irrep(name) => format!("\"{name}\""),
-                    CurveStart::Index(i) => i.to_string(),
-                };
-                return Err(Problem::at(
-                    "analysis.from",
-                    format!(
-                        "= {from}: with analysis.from-run it must be the index of a critical \
-                         point of that run (0 the first, as in its critical.json)"
-                    ),
-                ));
-            }
-            if let CurveStart::Irrep(name) = &a.from {
-                if name.trim().is_empty() {
-                    return Err(Problem::at(
-                        "analysis.from",
-                        "must be \"limit\", an irrep name or an index, got \"\"",
-                    ));
-                }
-            }
-            at_least("analysis.steps", a.steps, 1)?;
-            at_least("analysis.path-steps", a.path_steps, 1)?;
-            check_steps(a.initial_step, a.min_step, a.max_step)?;
-            check_newton(a.tolerance, a.max_iterations)
-        }
-        Analysis::Surface(a) => check_surface(scene, a),
-        Analysis::Equilibrium(a) => check_newton(a.tolerance, a.max_iterations),
-        Analysis::LinearBuckling(a) => {
-            known_parameter(&scene.parameters, "analysis.control", &a.control)?;
-            let p = &scene.parameters[&a.control];
-            if p.min.is_none() || p.max.is_none() {
-                return Err(Problem::at(
-                    &key_path("parameters", &a.control),
-                    "needs both min and max: linear-buckling sweeps the control over [min, max]"
-                        .to_string(),
-                ));
-            }
-            if let Some((i, c)) = scene
-                .constraints
-                .iter()
-                .enumerate()
-                .find(|(_, c)| c.kind() != ConstraintKind::Fixed)
-            {
-                return Err(Problem::at(
-                    &format!("constraint[{i}]"),
-                    format!("type = \"{}\" cannot be active in a linear-buckling analysis (the state is held)", c.kind()),
-                ));
-            }
-            at_least("analysis.samples", a.samples, 1)?;
-            check_newton(a.tolerance, a.max_iterations)
-        }
-    }
-}
-
 /// A declared parameter that no constraint governs (a path's free parameter).
-/// `[analysis] type = "surface"`: two free parameters, a finite range of each (the first
-/// holding its start value), at least two paths.
-fn check_surface(scene: &Scene, a: &SurfaceAnalysis) -> Result<(), Problem> {
-    let names = |v: &[String]| {
-        let quoted: Vec<String> = v.iter().map(|n| format!("\"{n}\"")).collect();
-        format!("[{}]", quoted.join(", "))
-    };
-    let [first, second] = a.parameters.as_slice() else {
-        return Err(Problem::at(
-            "analysis.parameters",
-            format!(
-                "= {}: needs two parameter names [a, b] (the paths' parameter, the grid's)",
-                names(&a.parameters)
-            ),
-        ));
-    };
-    free_parameter(scene, "analysis.parameters[0]", first)?;
-    free_parameter(scene, "analysis.parameters[1]", second)?;
-    if first == second {
-        return Err(Problem::at(
-            "analysis.parameters",
-            format!("= {}: the two parameters must differ", names(&a.parameters)),
-        ));
-    }
-    let show = |r: &[f64]| {
-        let v: Vec<String> = r.iter().map(|x| num(*x)).collect();
-        format!("[{}]", v.join(", "))
-    };
-    if a.ranges.len() != 2 {
-        let all: Vec<String> = a.ranges.iter().map(|r| show(r)).collect();
-        return Err(Problem::at(
-            "analysis.ranges",
-            format!(
-                "= [{}]: needs two ranges [[a_min, a_max], [b_min, b_max]]",
-                all.join(", ")
-            ),
-        ));
-    }
-    for (i, r) in a.ranges.iter().enumerate() {
-        let key = format!("analysis.ranges[{i}]");
-        let ok = r.len() == 2 && r.iter().all(|x| x.is_finite()) && r[0] < r[1];
-        if !ok {
-            return Err(Problem::at(
-                &key,
-                format!("= {}: needs [min, max] with finite min < max", show(r)),
-            ));
-        }
-    }
-    let start = scene.parameters[first].start;
-    if !(a.ranges[0][0]..=a.ranges[0][1]).contains(&start) {
-        return Err(Problem::at(
-            "analysis.ranges[0]",
-            format!(
-                "= {}: the paths start at {first} = {} (parameters.{first}.start), outside it",
-                show(&a.ranges[0]),
-                num(start)
-            ),
-        ));
-    }
-    // The grid of b inside b's own bounds, where it declares them.
-    let declared = &scene.parameters[second];
-    let (lo, hi) = (a.ranges[1][0], a.ranges[1][1]);
-    let outside = declared.min.is_some_and(|m| lo < m) || declared.max.is_some_and(|m| hi > m);
-    if outside {
-        let bound = |b: Option<f64>| b.map_or_else(|| "none".to_string(), num);
-        return Err(Problem::at(
-            "analysis.ranges[1]",
-            format!(
-                "= {}: outside [min, max] = [{}, {}] of parameters.{second}",
-                show(&a.ranges[1]),
-                bound(declared.min),
-                bound(declared.max)
-            ),
-        ));
-    }
-    at_least("analysis.paths", a.paths, 2)?;
-    if a.paths > 1000 {
-        return Err(Problem::at(
-            "analysis.paths",
-            format!("must be <= 1000, got {}", a.paths),
-        ));
-    }
-    if let Some(m) = &a.measure {
-        if m.trim().is_empty() {
-            return Err(Problem::at(
-                "analysis.measure",
-                "= \"\": needs the name of a measure (stretch, volume, max_displacement, ...)",
-            ));
-        }
-    }
-    at_least("analysis.steps", a.steps, 1)?;
-    check_steps(a.initial_step, a.min_step, a.max_step)?;
-    check_newton(a.tolerance, a.max_iterations)
-}
-
-fn free_parameter(scene: &Scene, key: &str, name: &str) -> Result<(), Problem> {
+pub(super) fn free_parameter(scene: &Scene, key: &str, name: &str) -> Result<(), Problem> {
     known_parameter(&scene.parameters, key, name)?;
     if let Some((i, c)) = scene
         .constraints
@@ -968,59 +758,6 @@ fn free_parameter(scene: &Scene, key: &str, name: &str) -> Result<(), Problem> {
                 "= \"{name}\" is governed by constraint[{i}] ({}); it must be free",
                 c.kind()
             ),
-        ));
-    }
-    Ok(())
-}
-
-/// The arclength steps: all > 0, min ≤ initial ≤ max.
-fn check_steps(initial_step: f64, min_step: f64, max_step: f64) -> Result<(), Problem> {
-    positive("analysis.min-step", min_step)?;
-    positive("analysis.max-step", max_step)?;
-    positive("analysis.initial-step", initial_step)?;
-    if min_step > max_step {
-        return Err(Problem::at(
-            "analysis.min-step",
-            format!(
-                "must be <= max-step = {}, got {}",
-                num(max_step),
-                num(min_step)
-            ),
-        ));
-    }
-    if initial_step < min_step || initial_step > max_step {
-        return Err(Problem::at(
-            "analysis.initial-step",
-            format!(
-                "must lie within [min-step, max-step] = [{}, {}], got {}",
-                num(min_step),
-                num(max_step),
-                num(initial_step)
-            ),
-        ));
-    }
-    Ok(())
-}
-
-/// Newton's relative tolerance lies in [1e-15, 1): below that no double-precision residual
-/// can meet it, and the corrector would iterate to its budget at every step; the budget is
-/// at most 1000 iterations.
-fn check_newton(tolerance: f64, max_iterations: usize) -> Result<(), Problem> {
-    positive("analysis.tolerance", tolerance)?;
-    if !(1e-15..1.0).contains(&tolerance) {
-        return Err(Problem::at(
-            "analysis.tolerance",
-            format!(
-                "must lie in [1e-15, 1) (a relative residual that double precision can meet), got {}",
-                num(tolerance)
-            ),
-        ));
-    }
-    at_least("analysis.max-iterations", max_iterations, 1)?;
-    if max_iterations > 1000 {
-        return Err(Problem::at(
-            "analysis.max-iterations",
-            format!("must be at most 1000, got {max_iterations}"),
         ));
     }
     Ok(())
@@ -1049,11 +786,8 @@ fn check_parameter_use(scene: &Scene) -> Result<(), Problem> {
                 ),
             ));
         }
-        let free: Vec<&str> = match &scene.analysis {
-            Analysis::Path(PathAnalysis { control, .. }) => vec![control],
-            Analysis::CriticalCurve(c) => vec![&c.control, &c.second],
-            Analysis::Surface(a) => a.parameters.iter().map(String::as_str).collect(),
-            Analysis::Equilibrium(_) | Analysis::LinearBuckling(_) => continue,
+        let Some(free) = scene.analysis.spec().free() else {
+            continue;
         };
         if !free.contains(&name.as_str()) && scene.governing(name).is_none() {
             let free = match free.as_slice() {
@@ -1146,21 +880,5 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
             }
         }
     }
-    if let Analysis::Path(PathAnalysis {
-        stop_stretch: Some(s),
-        ..
-    }) = &scene.analysis
-    {
-        if !topology.closed {
-            return Err(Problem::at(
-                "analysis.stop-stretch",
-                format!(
-                    "= {} needs a closed membrane (the stretch is (V/V0)^(1/3)); {the_mesh} is \
-                     open",
-                    num(*s)
-                ),
-            ));
-        }
-    }
-    Ok(())
+    scene.analysis.spec().check_mesh(topology.closed, &the_mesh)
 }

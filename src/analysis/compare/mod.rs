@@ -688,7 +688,7 @@ pub fn compare(
     Ok(Comparison {
         scene: scene.info.name.clone(),
         origin: scene.origin.clone(),
-        analysis: reference_scene.analysis.kind().name(),
+        analysis: reference_scene.analysis.kind(),
         control,
         range,
         samples,
