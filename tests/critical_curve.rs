@@ -62,7 +62,13 @@ max-step = 0.05
 fn curve_of(frequency: usize) -> (CurveReport, memstab::results::RunResult) {
     let mut study = MeshStudy::build(balloon_curve_scene(frequency)).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
-    (result.curve.clone().expect("a curve"), result)
+    (
+        result
+            .outcome::<memstab::results::CurveReport>()
+            .cloned()
+            .expect("a curve"),
+        result,
+    )
 }
 
 fn col(curve: &CurveReport, name: &str) -> usize {
@@ -238,9 +244,8 @@ fn a_critical_curve_run_writes_its_curve() {
     let mut study = MeshStudy::build(balloon_curve_scene(4)).unwrap();
     let mut result = run(&mut study, |_, _| {}).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let written =
-        memstab::output::write_run(&study, &study.scene, &mut result, dir.path()).unwrap();
-    let curve = result.curve.as_ref().unwrap();
+    let written = memstab::analysis::write(&study, &mut result, dir.path()).unwrap();
+    let curve = result.outcome::<CurveReport>().unwrap();
     // The path stopped at the point the curve starts from.
     assert_eq!(
         result.report.stop,
@@ -412,7 +417,10 @@ fn a_double_point_of_the_c7v_disc_stays_double_along_its_curve() {
     let mut study = MeshStudy::build(scene).unwrap();
     let mut states = States::default();
     let result = memstab::analysis::run_with(&mut study, &mut states).expect("the curve runs");
-    let curve = result.curve.expect("a curve");
+    let curve = result
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .expect("a curve");
     assert_eq!(curve.kind, CriticalKind::MultipleBifurcation(2));
     assert_eq!((curve.irrep.as_str(), curve.multiplicity), ("E1", 2));
     let l0 = col(&curve, "l0");
@@ -475,7 +483,10 @@ fn disc_curve(from: &str, watch: bool) -> CurveReport {
     ), None);
     let mut study = MeshStudy::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
-    result.curve.unwrap()
+    result
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .unwrap()
 }
 
 /// `watch = false`: the same limit curve of the disc, point for point, without the hilltop
@@ -608,7 +619,10 @@ fn a_curve_starts_from_a_finished_runs_critical_point() {
     // No path: the saved point is the run's one row and critical point.
     assert_eq!(resumed.report.rows.len(), 1);
     assert_eq!(resumed.report.critical.len(), 1);
-    let resumed = resumed.curve.unwrap();
+    let resumed = resumed
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .unwrap();
     let (own, _) = curve_of(4);
     assert_eq!(
         (resumed.kind, resumed.irrep.as_str()),
@@ -701,7 +715,10 @@ fn constrained_limit_curve_agrees_with_paths_at_fixed_amounts_and_the_closed_for
         Scene::from_toml_str(&reservoir_balloon_text(3, RESERVOIR_CURVE), "reservoir").unwrap();
     let mut study = MeshStudy::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the constrained curve runs");
-    let curve = result.curve.clone().expect("a curve");
+    let curve = result
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .expect("a curve");
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
     let (p, q, n) = (col(&curve, "p"), col(&curve, "q"), col(&curve, "n"));
     assert!(curve.rows.len() >= 4, "{} points", curve.rows.len());
@@ -761,7 +778,10 @@ fn a_limit_curve_with_two_constraints_keeps_both_and_agrees_with_paths() {
         MeshStudy::build(Scene::from_toml_str(&text, "two-reservoirs").unwrap()).unwrap();
     assert_eq!(study.constraints.len(), 2);
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
-    let curve = result.curve.clone().expect("a curve");
+    let curve = result
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .expect("a curve");
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
     let (p, n, r) = (col(&curve, "p"), col(&curve, "n"), col(&curve, "r"));
     let volume = curve.measures.iter().position(|m| m == "volume").unwrap();

@@ -143,7 +143,10 @@ fn meridian_curve(elements: usize) -> CurveReport {
         (wave_number(first), first.kind),
         (0, CriticalKind::LimitPoint)
     );
-    result.curve.expect("a curve")
+    result
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .expect("a curve")
 }
 
 /// The meridian balloon's limit curve in (p, k) reaches its cusp where the closed form puts
@@ -267,7 +270,8 @@ fn meridian_surface_has_its_limit_lines_on_the_closed_form_folds() {
     let mut study = MeridianStudy::build(scene).expect("the meridian builds");
     let s = run(&mut study, |_, _| {})
         .expect("the surface runs")
-        .surface
+        .outcome::<memstab::results::SurfaceReport>()
+        .cloned()
         .expect("a surface");
     let (p, k) = (s.parameter("p").unwrap(), s.parameter("k").unwrap());
     let stretch = column(&s.measures, "stretch");

@@ -73,7 +73,10 @@ stretch = 1.05
     assert_eq!(again.mesh, loaded.mesh);
     let mut study = MeshStudy::build(loaded).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
-    let curve = result.curve.expect("a curve");
+    let curve = result
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .expect("a curve");
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
     let col = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
     let (p, r) = (col("p"), col("R"));
@@ -474,7 +477,10 @@ fn a_clamped_discs_limit_pressure_scales_as_one_over_the_radius() {
                       steps = 60\npath-steps = 300\nmax-step = 0.1\n";
     let mut study = MeshStudy::build(scene(&clamped_disc("\"R\"", curve_tail))).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the curve runs");
-    let curve = result.curve.expect("a curve");
+    let curve = result
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
+        .expect("a curve");
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
     let col = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
     let (p, r) = (col("p"), col("R"));

@@ -175,14 +175,22 @@ fn shared_continuation_keys_are_taken_where_they_apply() {
     .unwrap();
     let settings = path.analysis.settings();
     assert_eq!(
-        (settings.steps, settings.direction, settings.save_every, settings.tolerance),
+        (
+            settings.steps,
+            settings.direction,
+            settings.save_every,
+            settings.tolerance
+        ),
         (7, -1.0, 3, 1e-8)
     );
     // Written back as TOML and read again: the same analysis.
     let again = Scene::from_toml_str(&path.to_toml(), "again").unwrap();
     assert_eq!(again.analysis, path.analysis);
     rejects(
-        &edit("type = \"path\"\ncontrol = \"rho\"", "type = \"equilibrium\"\nsteps = 5"),
+        &edit(
+            "type = \"path\"\ncontrol = \"rho\"",
+            "type = \"equilibrium\"\nsteps = 5",
+        ),
         &["unknown key 'analysis.steps'", "tolerance, max-iterations"],
     );
     rejects(

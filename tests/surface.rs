@@ -30,7 +30,10 @@ fn surface_of(frequency: usize) -> SurfaceReport {
     .unwrap();
     let mut study = MeshStudy::build(scene).unwrap();
     let result = run(&mut study, |_, _| {}).expect("the surface runs");
-    result.surface.expect("a surface")
+    result
+        .outcome::<memstab::results::SurfaceReport>()
+        .cloned()
+        .expect("a surface")
 }
 
 /// Every limit point the surface's paths localise lies on the closed-form fold line at its

@@ -31,7 +31,8 @@ fn the_disc_limit_point_rises_with_k_and_meets_the_first_double_point_at_one_hil
     let mut study = MeshStudy::build(bundled("thesis/paper1_disc_limit_curve_k.toml")).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
-        .curve
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
         .unwrap();
     assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
     let index = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
@@ -94,7 +95,8 @@ fn cap_hilltop(from: &str) -> (f64, f64) {
     let mut study = MeshStudy::build(scene).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
-        .curve
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
         .unwrap();
     assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
     let e = one_hilltop(&curve);
@@ -133,7 +135,8 @@ fn the_spinning_caps_m4_bifurcations_meet_the_limit_curve_at_two_close_hilltops(
     let mut study = MeshStudy::build(scene).unwrap();
     let limit = run(&mut study, |_, _| {})
         .expect("the limit curve runs")
-        .curve
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
         .unwrap();
     let ik = limit.parameters.iter().position(|p| p == "k").unwrap();
     let iw = limit.parameters.iter().position(|p| p == "w2").unwrap();
@@ -237,7 +240,8 @@ fn the_gas_pressure_fold_of_the_sphere_on_a_plane_falls_as_the_fluid_volume_grow
     let mut study = MeshStudy::build(bundled(name)).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
-        .curve
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
         .expect("a critical curve");
     assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);
     let index = |name: &str| curve.parameters.iter().position(|p| p == name).unwrap();
@@ -322,7 +326,8 @@ fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_
         MeshStudy::build(bundled("thesis/paper2_solution_surface_f8.toml")).expect("builds");
     let surface = run(&mut study, |_, _| {})
         .expect("the surface runs")
-        .surface
+        .outcome::<memstab::results::SurfaceReport>()
+        .cloned()
         .expect("a surface");
     assert!(surface.warnings.is_empty(), "{:?}", surface.warnings);
     assert_eq!(surface.paths.len(), 7);
@@ -332,7 +337,8 @@ fn the_solution_surface_of_the_sphere_on_a_plane_folds_on_the_gas_pressure_fold_
         MeshStudy::build(bundled("thesis/paper2_gas_pressure_fold_f8.toml")).expect("builds");
     let curve = run(&mut curve_study, |_, _| {})
         .expect("the curve runs")
-        .curve
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
         .expect("a critical curve");
     let (cp, cv) = (
         curve.parameters.iter().position(|n| n == "p").unwrap(),
@@ -432,7 +438,8 @@ fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
         MeshStudy::build(bundled("thesis/paper1_disc_limit_curve_radius.toml")).unwrap();
     let curve = run(&mut study, |_, _| {})
         .expect("the curve runs")
-        .curve
+        .outcome::<memstab::results::CurveReport>()
+        .cloned()
         .unwrap();
     assert_eq!(curve.kind, CriticalKind::LimitPoint);
     assert!(curve.warnings.is_empty(), "{:?}", curve.warnings);

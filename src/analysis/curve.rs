@@ -33,14 +33,18 @@ use crate::continuation::{
     Accepted, Continuation, Linearization, PathOptions, PathPoint, Problem, Settings,
 };
 use crate::model::ModelError;
+use crate::output::{self, Described, OutputError};
 use crate::results::{
-    CriticalKind, CriticalPoint, CurveEvent, CurveEventKind, CurveReport, CurveRow, PhaseTimes,
-    StateKind, StopReason,
+    CriticalKind, CriticalPoint, CurveEvent, CurveEventKind, CurveReport, CurveRow, Outcome,
+    PhaseTimes, RunResult, StateKind, StopReason,
 };
 use crate::scene::AnalysisSpec as _;
+use crate::scene::Scene;
 use crate::scene::{CriticalCurveAnalysis, CurveStart};
 use crate::study::{Followed, Free, Study};
+use crate::text::sig_digits;
 use nalgebra::{DMatrix, DVector};
+use std::path::Path;
 use std::time::Instant;
 
 /// The curve's problem: the fixed-point problem with the second parameter free, plus σ = 0.
@@ -332,6 +336,75 @@ impl Curve {
 }
 
 impl Analysis for Curve {
+    fn events<'r>(&self, result: &'r RunResult) -> &'r [CurveEvent] {
+        result
+            .outcome::<CurveReport>()
+            .map_or(&[], |c| c.events.as_slice())
+    }
+
+    /// `curve.csv`, `curve.json`, `curve.svg`.
+    fn write(
+        &self,
+        result: &RunResult,
+        scene: &Scene,
+        out: &Path,
+    ) -> Result<Vec<Described>, OutputError> {
+        let Some(curve) = result.outcome::<CurveReport>() else {
+            return Ok(Vec::new());
+        };
+        let files = output::write_curve_with(out, curve, &output::Scales::of_scene(scene))?;
+        let what = [
+            format!(
+                "{} rows: both parameters, the measures, the block's eigenvalues",
+                curve.rows.len()
+            ),
+            "the curve: its points and events".to_string(),
+            format!("{} against {}, events marked", curve.second, curve.control),
+        ];
+        Ok(files
+            .into_iter()
+            .zip(what)
+            .map(|(path, what)| Described { path, what })
+            .collect())
+    }
+
+    /// What was followed, its extent and its events.
+    fn summary(&self, result: &RunResult) -> Vec<String> {
+        let Some(curve) = result.outcome::<CurveReport>() else {
+            return Vec::new();
+        };
+        let mut lines = vec![format!(
+            "critical curve of the {} in {} x{} in ({}, {}): {} points",
+            curve.kind,
+            curve.irrep,
+            curve.multiplicity,
+            curve.control,
+            curve.second,
+            curve.rows.len()
+        )];
+        let column = |name: &str| curve.parameters.iter().position(|p| p == name);
+        let (Some(c), Some(s)) = (column(&curve.control), column(&curve.second)) else {
+            return lines;
+        };
+        for e in &curve.events {
+            let extremum = e
+                .extremum
+                .map_or_else(String::new, |x| format!(" ({x} of {})", curve.second));
+            lines.push(format!(
+                "  {:<9} {} = {}, {} = {}{extremum} (after curve step {})",
+                e.kind.to_string(),
+                curve.control,
+                sig_digits(e.parameters[c], 6),
+                curve.second,
+                sig_digits(e.parameters[s], 6),
+                e.after_step
+            ));
+        }
+        lines.push(format!("curve stopped: {}", curve.stop));
+        lines.extend(curve.warnings.iter().map(|w| format!("warning: {w}")));
+        lines
+    }
+
     fn restarts_from(&self) -> Option<(std::path::PathBuf, usize)> {
         match (&self.0.from_run, &self.0.from) {
             (Some(dir), CurveStart::Index(i)) => Some((dir.clone(), *i)),
@@ -376,7 +449,7 @@ impl Analysis for Curve {
             record.add_critical(cp.clone());
             cx.times.path = t0.elapsed();
             let curve = self.follow(study, crossings, &cp, &mut *cx.observer)?;
-            cx.record.curve = Some(curve);
+            cx.record.outcome = Some(Outcome::new(curve));
             return Ok(StopReason::CriticalPoint);
         }
         // The path in the control up to the point.
@@ -431,7 +504,7 @@ impl Analysis for Curve {
             )));
         };
         let curve = self.follow(study, crossings, &cp, &mut *cx.observer)?;
-        cx.record.curve = Some(curve);
+        cx.record.outcome = Some(Outcome::new(curve));
         Ok(branch.stop)
     }
 }

@@ -32,11 +32,14 @@ pub use crate::study::RunError;
 
 use crate::continuation::crossings::Crossings;
 use crate::continuation::PathOptions;
+use crate::output::{self, Described, OutputError, WriteRunError, Written};
 use crate::results::{
-    CriticalPoint, CurveReport, PathReport, PathRow, PointState, RunResult, RunTimes, Spectra,
-    State, StateKind, StopReason, SurfaceReport, TurningRow,
+    CriticalPoint, CurveEvent, Outcome, PathReport, PathRow, PointState, RunResult, RunTimes,
+    Spectra, State, StateKind, StopReason, TurningRow,
 };
+use crate::scene::Scene;
 use crate::study::{Point, Start, Study};
+use std::path::Path;
 use std::time::Instant;
 
 /// What a caller sees of a run while it goes: the progress, and every accepted state.
@@ -75,6 +78,49 @@ pub trait Analysis {
     /// Runs from the converged start state in `cx`, recording into it; returns why it
     /// stopped.
     fn run(&self, study: &dyn Study, cx: &mut Context<'_>) -> Result<StopReason, RunError>;
+    /// The events it adds to `critical.json` after the path's critical points (a critical
+    /// curve's cusps, folds and hilltops).
+    fn events<'r>(&self, _result: &'r RunResult) -> &'r [CurveEvent] {
+        &[]
+    }
+    /// Writes its own files into `out`, beside those of every run; returns each with what it
+    /// holds, in the order written.
+    fn write(
+        &self,
+        _result: &RunResult,
+        _scene: &Scene,
+        _out: &Path,
+    ) -> Result<Vec<Described>, OutputError> {
+        Ok(Vec::new())
+    }
+    /// Its lines of the run's summary, after the path's.
+    fn summary(&self, _result: &RunResult) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+/// Writes every file of a finished run into `out`: those of every run
+/// ([`output::write_run_with`]), with the analysis' events in `critical.json` and its own
+/// files beside them, and the manifest last.
+///
+/// # Errors
+/// The first file that could not be written, with those written before it.
+pub fn write(
+    study: &dyn Study,
+    result: &mut RunResult,
+    out: &Path,
+) -> Result<Written, WriteRunError> {
+    let analysis = registry::analysis(&study.scene().analysis);
+    let events = analysis.events(result).to_vec();
+    let own = |result: &RunResult, out: &Path| analysis.write(result, study.scene(), out);
+    output::write_run_with(study, study.scene(), result, out, &events, &own)
+}
+
+/// The analysis' own lines of a finished run's summary ([`Analysis::summary`]) and the number
+/// of events it added to `critical.json`.
+pub fn summary(scene: &Scene, result: &RunResult) -> (Vec<String>, usize) {
+    let analysis = registry::analysis(&scene.analysis);
+    (analysis.summary(result), analysis.events(result).len())
 }
 
 /// What an analysis works with: the start state, the stability by blocks (if the study has
@@ -164,10 +210,8 @@ pub struct Record {
     spectra: Spectra,
     irreps: Vec<String>,
     control: Option<usize>,
-    /// The critical curve of a `critical-curve` analysis.
-    pub curve: Option<CurveReport>,
-    /// The equilibrium surface of a `surface` analysis.
-    pub surface: Option<SurfaceReport>,
+    /// The analysis' own result beyond its path (a critical curve, a surface).
+    pub outcome: Option<Outcome>,
     /// The branches of the path's bifurcation points.
     pub branches: Option<crate::results::Branches>,
 }
@@ -184,8 +228,7 @@ impl Record {
             spectra: Spectra::default(),
             irreps: Vec::new(),
             control: study.control().map(|c| c.index),
-            curve: None,
-            surface: None,
+            outcome: None,
             branches: None,
         }
     }
@@ -287,8 +330,7 @@ impl Record {
             states: self.states,
             points: self.points,
             times,
-            curve: self.curve,
-            surface: self.surface,
+            outcome: self.outcome,
             branches: self.branches,
         }
     }

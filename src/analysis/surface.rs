@@ -17,14 +17,18 @@ use super::{Analysis, Context, RunError};
 use crate::continuation::crossings::IndexChanges;
 use crate::continuation::events::{trace, Detector, Event};
 use crate::continuation::{solve_at, PathOptions, Settings};
+use crate::output::{self, Described, OutputError};
 use crate::results::{
-    CriticalKind, CriticalLine, CriticalLinePoint, CriticalPoint, StopReason, SurfacePath,
-    SurfaceReport, SurfaceVertex,
+    CriticalKind, CriticalLine, CriticalLinePoint, CriticalPoint, Outcome, RunResult, StopReason,
+    SurfacePath, SurfaceReport, SurfaceVertex,
 };
 use crate::scene::AnalysisSpec as _;
+use crate::scene::Scene;
 use crate::scene::SurfaceAnalysis;
 use crate::study::{Followed, Free, Point, Study};
 use crate::text::num;
+use crate::text::sig_digits;
+use std::path::Path;
 use std::time::Instant;
 
 /// How often the step in `b` is halved, carrying the start state to a grid value, before that
@@ -365,7 +369,7 @@ impl Analysis for Surface {
         }
         let lines = join(&paths);
         cx.times.path = t0.elapsed();
-        cx.record.surface = Some(SurfaceReport {
+        cx.record.outcome = Some(Outcome::new(SurfaceReport {
             a: analysis.a().to_string(),
             b: analysis.b().to_string(),
             measure,
@@ -375,8 +379,97 @@ impl Analysis for Surface {
             triangles,
             lines,
             warnings,
-        });
+        }));
         Ok(stop)
+    }
+
+    /// `surface.vtu`, `surface.json`, `surface.svg`.
+    fn write(
+        &self,
+        result: &RunResult,
+        _scene: &Scene,
+        out: &Path,
+    ) -> Result<Vec<Described>, OutputError> {
+        let Some(s) = result.outcome::<SurfaceReport>() else {
+            return Ok(Vec::new());
+        };
+        let what = [
+            format!(
+                "{} vertices at ({}, {}, {}) with the index, {} triangles, {} critical lines",
+                s.vertex_count(),
+                s.a,
+                s.b,
+                s.measure,
+                s.triangles.len(),
+                s.lines.len()
+            ),
+            "the surface: its paths, critical points and lines".to_string(),
+            format!(
+                "{} against {}, coloured by index, critical lines drawn",
+                s.measure, s.a
+            ),
+        ];
+        Ok(output::write_surface(out, s)?
+            .into_iter()
+            .zip(what)
+            .map(|(path, what)| Described { path, what })
+            .collect())
+    }
+
+    /// Its paths, their index ranges and critical lines, its warnings.
+    fn summary(&self, result: &RunResult) -> Vec<String> {
+        let Some(s) = result.outcome::<SurfaceReport>() else {
+            return Vec::new();
+        };
+        let six = |x: f64| sig_digits(x, 6);
+        let mut lines = vec![format!(
+            "surface in ({}, {}): {} paths, {} vertices, {} triangles (path.csv is the first path, {} = {})",
+            s.a,
+            s.b,
+            s.paths.len(),
+            s.vertex_count(),
+            s.triangles.len(),
+            s.b,
+            s.paths.first().map_or_else(String::new, |p| six(p.b))
+        )];
+        let a = s.parameter(&s.a);
+        for p in &s.paths {
+            let indices = p.vertices.iter().filter_map(|v| v.index);
+            let range = indices.clone().min().zip(indices.max()).map_or_else(
+                || "not computed".to_string(),
+                |(lo, hi)| format!("{lo}..{hi}"),
+            );
+            lines.push(format!(
+                "  {} = {}: {} points, index {range}, {} critical points; stopped: {}",
+                s.b,
+                six(p.b),
+                p.vertices.len(),
+                p.critical.len(),
+                p.stop
+            ));
+        }
+        for l in &s.lines {
+            let ends = |i: usize| {
+                let p = &l.points[i];
+                let x = a.map_or_else(|| "?".to_string(), |a| six(p.parameters[a]));
+                format!("{} = {}", s.a, x)
+            };
+            let (first, last) = (&l.points[0], &l.points[l.points.len() - 1]);
+            lines.push(format!(
+                "  critical line: {} in {} over {} paths, from {} at {} = {} to {} at {} = {}",
+                l.kind,
+                l.irrep,
+                l.points.len(),
+                ends(0),
+                s.b,
+                six(s.paths[first.path].b),
+                ends(l.points.len() - 1),
+                s.b,
+                six(s.paths[last.path].b)
+            ));
+        }
+        lines.extend(s.warnings.iter().map(|w| format!("warning: {w}")));
+        lines
     }
 }
 

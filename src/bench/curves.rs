@@ -81,7 +81,10 @@ pub fn curve_run(label: &str, scene: Scene) -> Result<CurveRun, String> {
     let result = run(&mut study, |_, _| {}).map_err(|e| e.to_string())?;
     let total = t.elapsed();
     let path = result.times.start + result.times.adapted_basis + result.times.path;
-    let curve = result.curve.ok_or("the run made no curve")?;
+    let curve = result
+        .outcome::<CurveReport>()
+        .cloned()
+        .ok_or("the run made no curve")?;
     Ok(CurveRun {
         label: label.to_string(),
         unknowns,

@@ -281,7 +281,9 @@ pub fn scene_run(path: &Path) -> Result<SceneRun, String> {
         elements: report.mesh.elements,
         points: report.rows.len(),
         critical: report.critical.len(),
-        curve_points: result.curve.as_ref().map(|c| c.rows.len()),
+        curve_points: result
+            .outcome::<crate::results::CurveReport>()
+            .map(|c| c.rows.len()),
         wall,
     })
 }

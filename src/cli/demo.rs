@@ -24,7 +24,7 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<(), CliError> {
     let scene = memstab::demo::scene()
         .map_err(|e| CliError::Failure(format!("the bundled demo scene is broken: {e}")))?;
     let (study, result, written) = execute(scene, &args.out, args.quiet)?;
-    print_summary(&result, &args.out, &written);
+    print_summary(study.scene(), &result, &args.out, &written);
     print_closed_form(&*study, &result.report);
     interrupted(&result, &args.out)?;
     Ok(())

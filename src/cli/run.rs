@@ -17,7 +17,7 @@ use super::summary::print_summary;
 use super::CliError;
 use clap::Args;
 use memstab::analysis::run_from;
-use memstab::output::{write_run, Progress, RunSummary, Written};
+use memstab::output::{Progress, RunSummary, Written};
 use memstab::results::{RunResult, StopReason};
 use memstab::scene::Scene;
 use memstab::study::Study;
@@ -41,13 +41,13 @@ pub(crate) struct RunArgs {
 
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
-    let (_study, result, written) = execute(scene, &args.out, args.quiet)?;
+    let (study, result, written) = execute(scene, &args.out, args.quiet)?;
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
         out!("{text}");
     } else {
-        print_summary(&result, &args.out, &written);
+        print_summary(study.scene(), &result, &args.out, &written);
     }
     interrupted(&result, &args.out)
 }
@@ -94,8 +94,7 @@ pub(super) fn execute(
     };
     progress.finish(format!("stopped: {}", result.report.stop));
     let mut result = result;
-    let scene = study.scene().clone();
-    let written = write_run(&*study, &scene, &mut result, out)
+    let written = memstab::analysis::write(&*study, &mut result, out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     Ok((study, result, written))
 }

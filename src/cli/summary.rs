@@ -3,7 +3,8 @@
 //! axis), where the membrane wrinkles, the files written; and a critical curve's events.
 
 use memstab::output::{file_name, Written};
-use memstab::results::{CurveReport, PathReport, RunResult, SurfaceReport};
+use memstab::results::{PathReport, RunResult};
+use memstab::scene::Scene;
 use memstab::text::sig_digits;
 use std::path::Path;
 
@@ -17,8 +18,9 @@ fn control_index(report: &PathReport) -> Option<usize> {
     report.parameters.iter().position(|p| *p == report.control)
 }
 
-pub(super) fn print_summary(result: &RunResult, out: &Path, written: &Written) {
+pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, written: &Written) {
     let report = &result.report;
+    let (own, curve_events) = memstab::analysis::summary(scene, result);
     let m = &report.mesh;
     out!("scene '{}' ({})", report.scene, report.origin);
     if m.order == 0 {
@@ -143,11 +145,8 @@ pub(super) fn print_summary(result: &RunResult, out: &Path, written: &Written) {
     }
     print_wrinkling(report);
     out!("stopped: {}", report.stop);
-    if let Some(curve) = &result.curve {
-        print_curve(curve);
-    }
-    if let Some(surface) = &result.surface {
-        print_surface(surface);
+    for line in &own {
+        out!("{line}");
     }
     out!(
         "wrote {} files into {}:",
@@ -179,9 +178,10 @@ pub(super) fn print_summary(result: &RunResult, out: &Path, written: &Written) {
         "  {:<10} the report: metadata, path, turning points, critical points, saved states",
         file_name(&written.json)
     );
-    let events = result.curve.as_ref().map_or_else(String::new, |c| {
-        format!(" and the curve's {} events", c.events.len())
-    });
+    let events = match curve_events {
+        0 => String::new(),
+        n => format!(" and the curve's {n} events"),
+    };
     out!(
         "  {:<10} {} critical points{events}: kind, irrep, multiplicity, parameters, step",
         file_name(&written.critical),
@@ -210,39 +210,8 @@ pub(super) fn print_summary(result: &RunResult, out: &Path, written: &Written) {
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
         out!("  {}", names.join(" "));
     }
-    if let Some(curve) = &result.curve {
-        let described = [
-            format!(
-                "{} rows: both parameters, the measures, the block's eigenvalues",
-                curve.rows.len()
-            ),
-            "the curve: its points and events".to_string(),
-            format!("{} against {}, events marked", curve.second, curve.control),
-        ];
-        for (path, what) in written.curve.iter().zip(described) {
-            out!("  {:<10} {what}", file_name(path));
-        }
-    }
-    if let Some(s) = &result.surface {
-        let described = [
-            format!(
-                "{} vertices at ({}, {}, {}) with the index, {} triangles, {} critical lines",
-                s.vertex_count(),
-                s.a,
-                s.b,
-                s.measure,
-                s.triangles.len(),
-                s.lines.len()
-            ),
-            "the surface: its paths, critical points and lines".to_string(),
-            format!(
-                "{} against {}, coloured by index, critical lines drawn",
-                s.measure, s.a
-            ),
-        ];
-        for (path, what) in written.surface.iter().zip(described) {
-            out!("  {:<10} {what}", file_name(path));
-        }
+    for d in &written.own {
+        out!("  {:<10} {}", file_name(&d.path), d.what);
     }
     if let (Some(b), Some(w)) = (&result.branches, &written.branches) {
         super::branch::print_branches(b, w, &report.control);
@@ -267,94 +236,6 @@ fn print_wrinkling(report: &PathReport) {
     }
     for warning in w.warnings(&report.critical) {
         out!("warning: {warning}");
-    }
-}
-
-/// The critical curve: what was followed, its extent and its events.
-fn print_curve(curve: &CurveReport) {
-    let column = |name: &str| curve.parameters.iter().position(|p| p == name);
-    out!(
-        "critical curve of the {} in {} x{} in ({}, {}): {} points",
-        curve.kind,
-        curve.irrep,
-        curve.multiplicity,
-        curve.control,
-        curve.second,
-        curve.rows.len()
-    );
-    let (Some(c), Some(s)) = (column(&curve.control), column(&curve.second)) else {
-        return;
-    };
-    for e in &curve.events {
-        let extremum = e
-            .extremum
-            .map_or_else(String::new, |x| format!(" ({x} of {})", curve.second));
-        out!(
-            "  {:<9} {} = {}, {} = {}{extremum} (after curve step {})",
-            e.kind.to_string(),
-            curve.control,
-            sig_digits6(e.parameters[c]),
-            curve.second,
-            sig_digits6(e.parameters[s]),
-            e.after_step
-        );
-    }
-    out!("curve stopped: {}", curve.stop);
-    for w in &curve.warnings {
-        out!("warning: {w}");
-    }
-}
-
-/// The equilibrium surface: its paths, their index ranges and critical lines, its warnings.
-fn print_surface(s: &SurfaceReport) {
-    out!(
-        "surface in ({}, {}): {} paths, {} vertices, {} triangles (path.csv is the first path, {} = {})",
-        s.a,
-        s.b,
-        s.paths.len(),
-        s.vertex_count(),
-        s.triangles.len(),
-        s.b,
-        s.paths.first().map_or_else(String::new, |p| sig_digits6(p.b))
-    );
-    let a = s.parameter(&s.a);
-    for p in &s.paths {
-        let indices = p.vertices.iter().filter_map(|v| v.index);
-        let range = indices.clone().min().zip(indices.max()).map_or_else(
-            || "not computed".to_string(),
-            |(lo, hi)| format!("{lo}..{hi}"),
-        );
-        out!(
-            "  {} = {}: {} points, index {range}, {} critical points; stopped: {}",
-            s.b,
-            sig_digits6(p.b),
-            p.vertices.len(),
-            p.critical.len(),
-            p.stop
-        );
-    }
-    for l in &s.lines {
-        let ends = |i: usize| {
-            let p = &l.points[i];
-            let x = a.map_or_else(|| "?".to_string(), |a| sig_digits6(p.parameters[a]));
-            format!("{} = {}", s.a, x)
-        };
-        let (first, last) = (&l.points[0], &l.points[l.points.len() - 1]);
-        out!(
-            "  critical line: {} in {} over {} paths, from {} at {} = {} to {} at {} = {}",
-            l.kind,
-            l.irrep,
-            l.points.len(),
-            ends(0),
-            s.b,
-            sig_digits6(s.paths[first.path].b),
-            ends(l.points.len() - 1),
-            s.b,
-            sig_digits6(s.paths[last.path].b)
-        );
-    }
-    for w in &s.warnings {
-        out!("warning: {w}");
     }
 }
 

@@ -340,8 +340,7 @@ pub fn write_branches(
             points: Vec::new(),
             times: Default::default(),
             branches: None,
-            curve: None,
-            surface: None,
+            outcome: None,
         };
         match write_run(drawing, scene, &mut result, &dir) {
             Ok(w) => done.extend(w.files()),

@@ -59,8 +59,8 @@ pub use matrix_market::{
 pub use progress::Progress;
 pub use reopen::{FinishedRun, ReopenError};
 pub use run::{
-    file_name, node_normals, write_run, CriticalSummary, RunSummary, TurningSummary, WriteRunError,
-    Written, RUN_FILES,
+    file_name, node_normals, write_run, write_run_with, CriticalSummary, Described, OwnFiles,
+    RunSummary, TurningSummary, WriteRunError, Written, RUN_FILES,
 };
 pub use scales::{balloon_closed_form, Scales};
 pub use states::{Drawing, PvdTime, StateWriter, EVENTS_PVD};

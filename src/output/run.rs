@@ -2,9 +2,8 @@
 
 use super::Drawing;
 use super::{
-    default_axes, write_critical, write_csv, write_diagram_with, write_json,
-    write_spectrum_diagram_with, Diagram, Marker, MarkerKind, OutputError, PvdTime, StateWriter,
-    SPECTRUM_AXIS,
+    default_axes, write_csv, write_diagram_with, write_json, write_spectrum_diagram_with, Diagram,
+    Marker, MarkerKind, OutputError, PvdTime, StateWriter, SPECTRUM_AXIS,
 };
 use crate::results::{
     CriticalKind, Extremum, PathReport, RunResult, StateKind, StopReason, Wrinkling,
@@ -47,10 +46,9 @@ pub struct Written {
     pub points: Option<PathBuf>,
     /// The state files, in the order written.
     pub states: Vec<PathBuf>,
-    /// `curve.csv`, `curve.json`, `curve.svg` of a critical curve.
-    pub curve: Vec<PathBuf>,
-    /// `surface.vtu`, `surface.json`, `surface.svg` of an equilibrium surface.
-    pub surface: Vec<PathBuf>,
+    /// The analysis' own files (a critical curve's `curve.csv`, `curve.json`, `curve.svg`; a
+    /// surface's `surface.vtu`, `surface.json`, `surface.svg`), each with what it holds.
+    pub own: Vec<Described>,
     /// The branches' files, when the run has branches.
     pub branches: Option<super::BranchesWritten>,
     /// `manifest.json`, written last.
@@ -71,8 +69,7 @@ impl Written {
         ];
         files.extend(self.points.clone());
         files.extend(self.states.iter().cloned());
-        files.extend(self.curve.iter().cloned());
-        files.extend(self.surface.iter().cloned());
+        files.extend(self.own.iter().map(|d| d.path.clone()));
         if let Some(b) = &self.branches {
             files.extend(b.files.iter().cloned());
         }
@@ -122,6 +119,32 @@ pub fn write_run(
     scene: &Scene,
     result: &mut RunResult,
     out: &Path,
+) -> Result<Written, WriteRunError> {
+    write_run_with(drawing, scene, result, out, &[], &|_, _| Ok(Vec::new()))
+}
+
+/// A file an analysis wrote, with what it holds (for the run's summary).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Described {
+    /// The file.
+    pub path: PathBuf,
+    /// What it holds, in words.
+    pub what: String,
+}
+
+/// The writer of an analysis' own files: the finished run and the directory → the files
+/// written.
+pub type OwnFiles<'a> = dyn Fn(&RunResult, &Path) -> Result<Vec<Described>, OutputError> + 'a;
+
+/// As [`write_run`], with an analysis' `curve_events` after the path's critical points in
+/// `critical.json` and its `own` files written after the path diagram.
+pub fn write_run_with(
+    drawing: &dyn Drawing,
+    scene: &Scene,
+    result: &mut RunResult,
+    out: &Path,
+    curve_events: &[crate::results::CurveEvent],
+    own: &OwnFiles<'_>,
 ) -> Result<Written, WriteRunError> {
     let mut done: Vec<PathBuf> = Vec::new();
     super::sweep_temporaries(out);
@@ -213,10 +236,11 @@ pub fn write_run(
 
     let json = attempt!(write_json(out, &result.report));
     done.push(json.clone());
-    let critical_json = match &result.curve {
-        Some(c) => attempt!(super::write_critical_with(out, &result.report, &c.events)),
-        None => attempt!(write_critical(out, &result.report)),
-    };
+    let critical_json = attempt!(super::write_critical_with(
+        out,
+        &result.report,
+        curve_events
+    ));
     done.push(critical_json.clone());
     let critical_states = attempt!(super::store::write_critical_states(
         out,
@@ -255,20 +279,8 @@ pub fn write_run(
     };
     let svg = attempt!(svg);
     done.push(svg.clone());
-    let curve = match &result.curve {
-        Some(c) => attempt!(super::write_curve_with(
-            out,
-            c,
-            &super::Scales::of_scene(scene)
-        )),
-        None => Vec::new(),
-    };
-    done.extend(curve.iter().cloned());
-    let surface = match &result.surface {
-        Some(s) => attempt!(super::write_surface(out, s)),
-        None => Vec::new(),
-    };
-    done.extend(surface.iter().cloned());
+    let own = attempt!(own(result, out));
+    done.extend(own.iter().map(|d| d.path.clone()));
     let branches = match &result.branches {
         Some(b) => {
             let primary = crate::results::PrimaryPath::of(&result.report);
@@ -300,8 +312,7 @@ pub fn write_run(
         events,
         points,
         states,
-        curve,
-        surface,
+        own,
         branches,
         manifest,
     })

@@ -26,7 +26,7 @@ pub use path::{
     MeshInfo, PathReport, PathRow, PointState, SavedState, StatesInfo, TurningRow,
     WrinkledCritical, WrinkledPoint, Wrinkling,
 };
-pub use run::{BranchTimes, PhaseTimes, RunResult, RunTimes};
+pub use run::{BranchTimes, Outcome, PhaseTimes, RunResult, RunTimes};
 pub use spectra::{Spectra, SpectrumIrrep, SpectrumRow, SPECTRUM_EIGENVALUES};
 pub use state::{State, StateKind};
 pub use stop::{Extremum, Stalled, StopReason};

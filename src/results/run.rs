@@ -1,6 +1,9 @@
 //! A finished run and where its time went.
 
-use super::{Branches, CurveReport, PathReport, PointState, State, SurfaceReport};
+use super::{Branches, PathReport, PointState, State};
+use std::any::Any;
+use std::fmt;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// A finished run.
@@ -14,13 +17,55 @@ pub struct RunResult {
     pub points: Vec<PointState>,
     /// Where the time went.
     pub times: RunTimes,
-    /// The critical curve of a `critical-curve` analysis.
-    pub curve: Option<CurveReport>,
-    /// The equilibrium surface of a `surface` analysis.
-    pub surface: Option<SurfaceReport>,
+    /// What the analysis found beyond its path (a critical curve's
+    /// [`CurveReport`](super::CurveReport), a surface's [`SurfaceReport`](super::SurfaceReport)).
+    pub outcome: Option<Outcome>,
     /// The branches of the path's bifurcation points, when the scene asks for them
     /// (`[analysis.branches]`).
     pub branches: Option<Branches>,
+}
+
+impl RunResult {
+    /// The analysis' own result, if it is a `T`: `result.outcome::<CurveReport>()`.
+    pub fn outcome<T: 'static>(&self) -> Option<&T> {
+        self.outcome.as_ref()?.get()
+    }
+}
+
+/// An analysis' own result beyond its path: plain data of the analysis' own type, which the
+/// analysis that made it writes and summarises; [`RunResult::outcome`] reads it back as that
+/// type.
+#[derive(Clone)]
+pub struct Outcome(Arc<dyn Value>);
+
+/// Any plain result: shown in debug output, read back as its type.
+trait Value: Any + fmt::Debug + Send + Sync {
+    fn as_any(&self) -> &dyn Any;
+}
+
+impl<T: Any + fmt::Debug + Send + Sync> Value for T {
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+impl Outcome {
+    /// The result `value`.
+    pub fn new<T: Any + fmt::Debug + Send + Sync>(value: T) -> Self {
+        Outcome(Arc::new(value))
+    }
+
+    /// The result, if it is a `T`.
+    pub fn get<T: 'static>(&self) -> Option<&T> {
+        // Through the box: an `Arc` is itself a `Value`.
+        (*self.0).as_any().downcast_ref()
+    }
+}
+
+impl fmt::Debug for Outcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
 }
 
 /// Where a run's time went, by phase (what `memstab bench` reports).
@@ -80,5 +125,18 @@ impl std::ops::AddAssign for PhaseTimes {
         self.assembly += o.assembly;
         self.projection += o.projection;
         self.evaluations += o.evaluations;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Outcome;
+
+    #[test]
+    fn an_outcome_reads_back_as_its_own_type_only() {
+        let o = Outcome::new(vec![1.5_f64, 2.5]);
+        assert_eq!(o.get::<Vec<f64>>(), Some(&vec![1.5, 2.5]));
+        assert_eq!(o.get::<Vec<f32>>(), None);
+        assert_eq!(format!("{o:?}"), "[1.5, 2.5]");
     }
 }
