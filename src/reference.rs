@@ -15,6 +15,41 @@ fn sphere_slope(k: f64, l: f64) -> f64 {
     -l.powi(-2) + 7.0 * l.powi(-8) + k + 5.0 * k * l.powi(-6)
 }
 
+/// The stretches λ in (1, 20) at which the inflated sphere holds the pressure p R/(μH) =
+/// `pressure`, increasing: one below the pressure maximum's value, three between the minimum's
+/// and the maximum's (the roots deflation finds, docs/theory.md §16). Bisection to round-off on
+/// a fine bracket grid.
+pub fn sphere_stretches(k: f64, pressure: f64) -> Vec<f64> {
+    let f = |l: f64| sphere_pressure(k, l) - pressure;
+    let n = 20_000;
+    let at = |i: usize| 1.0 + 19.0 * i as f64 / n as f64;
+    let mut roots = Vec::new();
+    for i in 0..n {
+        let (mut a, mut b) = (at(i), at(i + 1));
+        if f(a) == 0.0 {
+            roots.push(a);
+            continue;
+        }
+        // A root on the grid is taken at the interval it starts.
+        if f(a) * f(b) > 0.0 || f(b) == 0.0 {
+            continue;
+        }
+        for _ in 0..200 {
+            let m = 0.5 * (a + b);
+            if m == a || m == b {
+                break;
+            }
+            if f(a) * f(m) <= 0.0 {
+                b = m;
+            } else {
+                a = m;
+            }
+        }
+        roots.push(0.5 * (a + b));
+    }
+    roots
+}
+
 /// An extremum of the sphere's pressure along its inflation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SphereExtremum {

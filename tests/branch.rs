@@ -551,7 +551,7 @@ fn branch_options(
     s: &MeshStudy,
     b: Option<&memstab::scene::BranchesAnalysis>,
 ) -> memstab::study::BranchOptions {
-    memstab::analysis::registry::path(&s.scene.analysis)
+    memstab::analysis::path_of(&s.scene.analysis)
         .expect("a path analysis")
         .branch_options(s, b)
 }

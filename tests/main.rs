@@ -15,6 +15,7 @@ mod cli_compare;
 mod cli_run;
 mod cli_spectrum;
 mod critical_curve;
+mod deflation;
 mod effects_model;
 mod export_rank_one;
 mod fluid_volume;

@@ -3,7 +3,7 @@
 //! solved again (it sets the targets of `"initial"` constraints), and the branches of that point
 //! followed with the scene's `[analysis.branches]`, as a path run follows them.
 
-use super::{registry, restart, RunError};
+use super::{path_of, restart, RunError};
 use crate::output::FinishedRun;
 use crate::results::{Branches, Node, Skip};
 use crate::scene::BranchesAnalysis;
@@ -40,7 +40,7 @@ pub fn from_run(
 ) -> Result<Branches, BranchError> {
     let input = |e: crate::output::ReopenError| BranchError::Input(e.to_string());
     restart::check(run, study).map_err(input)?;
-    let Some(path) = registry::path(&study.scene().analysis) else {
+    let Some(path) = path_of(&study.scene().analysis) else {
         unreachable!("checked: the run's analysis is a path")
     };
     let (state, mode) = restart::critical_state(run, study, n).map_err(input)?;

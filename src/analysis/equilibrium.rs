@@ -2,7 +2,7 @@
 //! with its stability — and the state a one-point command (`spectrum`, `export-matrix`)
 //! analyses.
 
-use super::{registry, Analysis, Context, RunError};
+use super::{analysis_of, Analysis, Context, RunError};
 use crate::continuation::{solve_at, PathOptions, Settings};
 use crate::results::{StateKind, StopReason};
 use crate::scene::AnalysisSpec as _;
@@ -35,7 +35,7 @@ pub fn state_at(
     overrides: &[(usize, f64)],
     start: &Start,
 ) -> Result<Point, RunError> {
-    let analysis = registry::analysis(&study.scene().analysis);
+    let analysis = analysis_of(&study.scene().analysis);
     let opts = analysis.options(study);
     let (guess, start) = match start {
         Start::From { u, params } => (Some(u.as_slice()), params.clone()),

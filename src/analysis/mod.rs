@@ -13,7 +13,7 @@
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
 //!   splits measured.
 //!
-//! Each analysis implements [`Analysis`]; [`registry::analysis`] maps a scene's
+//! Each analysis implements [`Analysis`]; [`analysis_of`] maps a scene's
 //! `[analysis]` to it — the one place that names the scene's analysis types. [`run`] solves
 //! the start state, hands the analysis a [`Context`] and collects a [`RunResult`]: the report,
 //! the states to write and where the time went.
@@ -22,9 +22,9 @@ pub mod branch;
 pub mod buckling;
 pub mod compare;
 pub mod curve;
+pub mod deflation;
 pub mod equilibrium;
 pub mod path;
-pub mod registry;
 pub mod restart;
 pub mod surface;
 
@@ -37,10 +37,39 @@ use crate::results::{
     CriticalPoint, CurveEvent, Outcome, PathReport, PathRow, PointState, RunResult, RunTimes,
     Spectra, State, StateKind, StopReason, TurningRow,
 };
-use crate::scene::Scene;
+use crate::scene::{self, Scene};
 use crate::study::{Point, Start, Study};
 use std::path::Path;
 use std::time::Instant;
+
+/// The analysis that runs the scene's `[analysis]`: the one place that maps the scene's
+/// analysis types to their runs. A new analysis is its keys (a file of `src/scene/analyses/`
+/// and one line of that module's registry) and its run (a file here implementing
+/// [`Analysis`], its `pub mod` line above and one line below).
+pub fn analysis_of(spec: &scene::Analysis) -> Box<dyn Analysis> {
+    None.or_else(|| of(spec, path::Path))
+        .or_else(|| of(spec, equilibrium::Equilibrium))
+        .or_else(|| of(spec, buckling::Buckling))
+        .or_else(|| of(spec, curve::Curve))
+        .or_else(|| of(spec, surface::Surface))
+        .or_else(|| of(spec, deflation::Deflate))
+        .unwrap_or_else(|| unreachable!("no analysis runs `type = \"{}\"`", spec.kind()))
+}
+
+/// `make` of the keys, if `spec` is of type `S`.
+fn of<S: Clone + 'static, A: Analysis + 'static>(
+    spec: &scene::Analysis,
+    make: fn(S) -> A,
+) -> Option<Box<dyn Analysis>> {
+    spec.get::<S>()
+        .map(|s| Box::new(make(s.clone())) as Box<dyn Analysis>)
+}
+
+/// The path analysis of the scene's `[analysis]`, if it is one (branches leave the critical
+/// points of a path).
+pub fn path_of(spec: &scene::Analysis) -> Option<path::Path> {
+    spec.get::<scene::PathAnalysis>().cloned().map(path::Path)
+}
 
 /// What a caller sees of a run while it goes: the progress, and every accepted state.
 pub trait Observer {
@@ -110,7 +139,7 @@ pub fn write(
     result: &mut RunResult,
     out: &Path,
 ) -> Result<Written, WriteRunError> {
-    let analysis = registry::analysis(&study.scene().analysis);
+    let analysis = analysis_of(&study.scene().analysis);
     let events = analysis.events(result).to_vec();
     let own = |result: &RunResult, out: &Path| analysis.write(result, study.scene(), out);
     output::write_run_with(study, study.scene(), result, out, &events, &own)
@@ -119,7 +148,7 @@ pub fn write(
 /// The analysis' own lines of a finished run's summary ([`Analysis::summary`]) and the number
 /// of events it added to `critical.json`.
 pub fn summary(scene: &Scene, result: &RunResult) -> (Vec<String>, usize) {
-    let analysis = registry::analysis(&scene.analysis);
+    let analysis = analysis_of(&scene.analysis);
     (analysis.summary(result), analysis.events(result).len())
 }
 
@@ -157,7 +186,7 @@ pub fn run_from(
     start: &Start,
     observer: &mut dyn Observer,
 ) -> Result<RunResult, RunError> {
-    let analysis = registry::analysis(&study.scene().analysis);
+    let analysis = analysis_of(&study.scene().analysis);
     let mut times = RunTimes::default();
     let t = Instant::now();
     let opts = analysis.options(study);

@@ -194,6 +194,8 @@ impl Analysis for Path {
                 sig_digits(hi, 6)
             ));
         }
+        // The blocks go back to the context for what follows the path.
+        cx.crossings = index.map(IndexChanges::into_crossings);
         cx.times.path = t0.elapsed();
         if analysis.branches.is_some() {
             let options = self.branch_options(study, None);

@@ -54,7 +54,7 @@ pub fn saved_start(study: &dyn Study) -> Result<Start, String> {
 /// points are not points of a path of equilibria).
 pub fn check(run: &FinishedRun, study: &dyn Study) -> Result<(), ReopenError> {
     let analysis = &study.scene().analysis;
-    if super::registry::path(analysis).is_none() {
+    if super::path_of(analysis).is_none() {
         return Err(ReopenError(format!(
             "the scene of the run in '{}' is a {} analysis: branches leave the critical points of a path (type = \"path\") only",
             run.dir.display(),
@@ -187,7 +187,7 @@ pub fn critical_state(
 /// `critical_NN.vtu`. The message of an error names `analysis.from-run` or `analysis.from`
 /// and the value.
 fn curve_start(study: &dyn Study) -> Result<Option<CriticalPoint>, String> {
-    let Some((dir, i)) = super::registry::analysis(&study.scene().analysis).restarts_from() else {
+    let Some((dir, i)) = super::analysis_of(&study.scene().analysis).restarts_from() else {
         return Ok(None);
     };
     let shown = dir.display().to_string();

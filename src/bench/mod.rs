@@ -73,7 +73,7 @@ use crate::study::mesh::MeshStudy;
 /// The start state as `run` solves it ([`crate::study::Study::solve_start`], with the
 /// options of the scene's analysis): the displacement over all unknowns.
 pub fn solve_start(study: &mut MeshStudy, params: &[f64]) -> Result<Vec<f64>, String> {
-    let opts = crate::analysis::registry::analysis(&study.scene.analysis).options(study);
+    let opts = crate::analysis::analysis_of(&study.scene.analysis).options(study);
     crate::study::Study::solve_start(study, None, params, &opts)
         .map(|p| p.u)
         .map_err(|e| e.to_string())

@@ -99,7 +99,7 @@ struct SpectrumJson {
 pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let (study, at, u, params, iterations, point) = state(args)?;
     let origin = study.scene.origin.clone();
-    let held = memstab::analysis::registry::analysis(&study.scene.analysis).held();
+    let held = memstab::analysis::analysis_of(&study.scene.analysis).held();
     let adapted = AdaptedBasis::new(&study.action, study.model.layout())
         .map_err(|e| CliError::Input(format!("scene '{origin}': {e}")))?;
     let stability = Stability::new(&study.model, &adapted);

@@ -605,19 +605,10 @@ pub fn solve_at<P: Problem + ?Sized>(
     let budget = opts.max_iterations.max(20);
     let (mut residual, mut correction) = (f64::NAN, f64::NAN);
     for it in 1..=budget {
-        let lin = problem.evaluate(&q, &lambda)?;
-        residual = lin.relative_residual(opts);
-        let c = lin.constraints.len();
-        // The arclength row becomes "control fixed".
-        let mut last = DVector::zeros(m + c + 1);
-        last[m] = 1.0;
-        let a = lin.extended(opts, &last);
-        let mut rhs = DVector::zeros(m + c + 1);
-        rhs.rows_mut(0, m).copy_from(&(-&lin.residual));
-        rhs.rows_mut(m, c).copy_from(&(-&lin.constraints));
-        let d = a
-            .solve(&rhs)
-            .ok_or(SolveError::Singular { control: lambda[0] })?;
+        let step = newton_step(problem, &q, &lambda, opts)?;
+        residual = step.residual;
+        let d = step.correction;
+        let c = lambda.len() - 1;
         correction = d.amax();
         q += d.rows(0, m) * opts.state_scale;
         for j in 1..=c {
@@ -626,7 +617,7 @@ pub fn solve_at<P: Problem + ?Sized>(
         if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
             return Err(SolveError::Diverged { control: lambda[0] });
         }
-        if lin.converged(opts) && d.amax() <= opts.tolerance {
+        if step.converged && d.amax() <= opts.tolerance {
             return Ok((q, lambda, it));
         }
     }
@@ -636,6 +627,43 @@ pub fn solve_at<P: Problem + ?Sized>(
         residual,
         correction,
         tolerance: opts.tolerance,
+    })
+}
+
+/// One Newton step at a fixed control λ_0 from (q, λ).
+pub(super) struct NewtonStep {
+    /// The scaled correction of (q, λ_0, λ_1 … λ_c), the control's 0.
+    pub correction: DVector<f64>,
+    /// Whether (q, λ) already met the residual test.
+    pub converged: bool,
+    /// Its relative residual.
+    pub residual: f64,
+}
+
+/// The Newton step of [`solve_at`] at (q, λ): the corrector's bordered system with the
+/// arclength row replaced by "control fixed".
+pub(super) fn newton_step<P: Problem + ?Sized>(
+    problem: &mut P,
+    q: &DVector<f64>,
+    lambda: &DVector<f64>,
+    opts: &PathOptions,
+) -> Result<NewtonStep, SolveError> {
+    let m = problem.dim();
+    let lin = problem.evaluate(q, lambda)?;
+    let c = lin.constraints.len();
+    let mut last = DVector::zeros(m + c + 1);
+    last[m] = 1.0;
+    let a = lin.extended(opts, &last);
+    let mut rhs = DVector::zeros(m + c + 1);
+    rhs.rows_mut(0, m).copy_from(&(-&lin.residual));
+    rhs.rows_mut(m, c).copy_from(&(-&lin.constraints));
+    let correction = a
+        .solve(&rhs)
+        .ok_or(SolveError::Singular { control: lambda[0] })?;
+    Ok(NewtonStep {
+        correction,
+        converged: lin.converged(opts),
+        residual: lin.relative_residual(opts),
     })
 }
 

@@ -2,7 +2,8 @@
 //! stepping driver (`driver`: pseudo-arclength continuation in several parameters from any
 //! converged point), the one event mechanism ([`events`]: turning points, stops, the detectors
 //! every analysis runs), the changes of stability of a model whose tangent splits into blocks
-//! ([`crossings`]), the start homotopy of a free body ([`release`]) and the interrupt flag
+//! ([`crossings`]), deflated Newton for the solutions other than the known ones
+//! ([`deflation`]), the start homotopy of a free body ([`release`]) and the interrupt flag
 //! ([`interrupt`]) the long loops check.
 //!
 //! What a model must give to be followed: a [`Problem`] (residual, tangent, loads, augmenting
@@ -10,6 +11,7 @@
 //! for its stability the [`crossings::Blocks`] of its tangent.
 
 pub mod crossings;
+pub mod deflation;
 mod driver;
 pub mod events;
 mod followed;

@@ -307,6 +307,8 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
         control: primary.control.clone(),
         lines,
         marks,
+        y_axis: super::diagram::ASYMMETRY_AXIS.to_string(),
+        file: "diagram.svg".to_string(),
     }
 }
 

@@ -56,7 +56,7 @@ pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError
 }
 
 /// A header cell: as is, or in double quotes (inner quotes doubled) when it needs them.
-fn quote(name: &str) -> String {
+pub(super) fn quote(name: &str) -> String {
     if name.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", name.replace('"', "\"\""))
     } else {

@@ -47,12 +47,16 @@ pub struct BifurcationDiagram {
     pub lines: Vec<DiagramLine>,
     /// The critical points.
     pub marks: Vec<DiagramMark>,
+    /// The y axis' title ([`ASYMMETRY_AXIS`] for branches).
+    pub y_axis: String,
+    /// The file's name in its directory (`diagram.svg` for branches).
+    pub file: String,
 }
 
 /// The y-axis title of the bifurcation diagram.
 pub const ASYMMETRY_AXIS: &str = "asymmetry (RMS of u outside Fix(G), signed by the half)";
 
-/// Writes `dir/diagram.svg` and returns its path.
+/// Writes the diagram into `dir` (as [`BifurcationDiagram::file`]) and returns its path.
 ///
 /// # Errors
 /// [`OutputError::Invalid`] if a value is not finite or a line's stability does not match its
@@ -62,7 +66,7 @@ pub fn write_bifurcation_diagram(
     dir: &Path,
     diagram: &BifurcationDiagram,
 ) -> Result<PathBuf, OutputError> {
-    let path = dir.join("diagram.svg");
+    let path = dir.join(&diagram.file);
     for (k, l) in diagram.lines.iter().enumerate() {
         if l.stable.len() != l.points.len() {
             return Err(OutputError::invalid(
@@ -150,7 +154,7 @@ fn render(diagram: &BifurcationDiagram) -> Result<String, Box<dyn Error>> {
         chart
             .configure_mesh()
             .x_desc(diagram.control.as_str())
-            .y_desc(ASYMMETRY_AXIS)
+            .y_desc(diagram.y_axis.as_str())
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 15))
             .light_line_style(RGBColor(235, 235, 235))

@@ -31,6 +31,7 @@
 mod branches;
 mod csv;
 mod curve;
+mod deflation;
 mod diagram;
 mod json;
 mod manifest;
@@ -47,6 +48,7 @@ mod svg;
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten};
 pub use csv::write_csv;
 pub use curve::{write_curve, write_curve_with};
+pub use deflation::write_deflation;
 pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };

@@ -9,6 +9,7 @@
 mod branches;
 mod critical;
 mod curve;
+pub mod deflation;
 mod path;
 mod run;
 mod spectra;

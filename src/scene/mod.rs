@@ -26,7 +26,7 @@
 //! - The mesh is the *reference* configuration X; the stress-free state is X/λ0 with λ0 =
 //!   [`Material::prestretch`]; the first Newton guess is `start.stretch · X` (see [`Start`]).
 
-mod analyses;
+pub mod analyses;
 mod error;
 mod load;
 mod tags;

@@ -563,7 +563,7 @@ impl MeshStudy {
 
     /// The number of wrinkled triangles of the state (u, Λ), or `None` when the model shows
     /// no `wrinkled` field.
-    fn wrinkled(&self, u: &[f64], params: &[f64]) -> Option<usize> {
+    fn wrinkled_triangles(&self, u: &[f64], params: &[f64]) -> Option<usize> {
         self.model
             .cell_fields(u, params)
             .into_iter()
@@ -578,7 +578,7 @@ impl MeshStudy {
             .iter()
             .enumerate()
             .filter_map(|(k, cp)| {
-                let n = self.wrinkled(&cp.state, &cp.parameters)?;
+                let n = self.wrinkled_triangles(&cp.state, &cp.parameters)?;
                 (n > 0).then_some(WrinkledCritical {
                     critical: k + 1,
                     wrinkled: n,
@@ -597,7 +597,7 @@ impl MeshStudy {
         let mut first = None;
         for (row, p) in result.report.rows.iter().zip(&result.points) {
             let u = self.expand(&p.q);
-            let n = self.wrinkled(&u, &p.parameters)?;
+            let n = self.wrinkled_triangles(&u, &p.parameters)?;
             if n > 0 {
                 first = Some(WrinkledPoint {
                     step: row.step,
@@ -884,6 +884,10 @@ impl Study for MeshStudy {
         mode: Vec<f64>,
     ) -> Result<Vec<CriticalPoint>, String> {
         super::switching::recorded_points(self, recorded, n, state, mode)
+    }
+
+    fn wrinkled(&self, u: &[f64], params: &[f64]) -> Option<usize> {
+        self.wrinkled_triangles(u, params)
     }
 
     fn annotate(&self, result: &mut RunResult) {

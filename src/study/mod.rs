@@ -273,6 +273,11 @@ pub trait Study: Sync + crate::output::Drawing {
     /// Labels the study adds to a finished run (the wave numbers of critical modes, where the
     /// membrane wrinkles, the scales of its axes).
     fn annotate(&self, result: &mut RunResult);
+    /// The number of triangles of the state (u, Λ) with a negative principal tension (where
+    /// the membrane would wrinkle), `None` where the model does not say.
+    fn wrinkled(&self, _u: &[f64], _params: &[f64]) -> Option<usize> {
+        None
+    }
 }
 
 /// Settings of branch switching: how deep, and the continuation along each branch.

@@ -11,6 +11,7 @@
 
 mod buckling;
 mod curve;
+pub mod deflation;
 mod equilibrium;
 mod path;
 mod surface;
@@ -40,6 +41,7 @@ const REGISTRY: &[Entry] = &[
     Entry::of::<LinearBucklingAnalysis>("linear-buckling", &NEWTON),
     Entry::of::<CriticalCurveAnalysis>("critical-curve", &PATHS),
     Entry::of::<SurfaceAnalysis>("surface", &PATHS),
+    Entry::of::<deflation::DeflationAnalysis>("deflation", &ALL),
 ];
 
 /// Every shared key.
