@@ -249,6 +249,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
         triangles,
         first: None,
         critical: flagged[1..].to_vec(),
+        relaxed: false,
     };
     let warnings = w.warnings(&slack_points);
     assert_eq!(warnings.len(), 1, "{warnings:?}");
@@ -268,6 +269,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
             critical: 7,
             wrinkled: 1,
         }],
+        relaxed: false,
     };
     assert!(stray.warnings(&slack_points).is_empty());
 }

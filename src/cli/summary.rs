@@ -256,7 +256,15 @@ fn print_wrinkling(report: &PathReport) {
         return;
     };
     match &w.first {
+        None if w.relaxed => out!("wrinkling: none (every triangle is taut at every path point)"),
         None => out!("wrinkling: none (every triangle is in tension at every path point)"),
+        Some(p) if w.relaxed => out!(
+            "wrinkling: first at step {} ({} of {} triangles wrinkled or slack, under the \
+             relaxed energy)",
+            p.step,
+            p.wrinkled,
+            w.triangles
+        ),
         Some(p) => out!(
             "wrinkling: first at step {} ({} of {} triangles have a negative principal \
              tension: a membrane cannot carry compression, the model is not valid there)",

@@ -642,6 +642,7 @@ impl MeshStudy {
             triangles: self.mesh.mesh.triangles.len(),
             first,
             critical,
+            relaxed: self.scene.material.relaxed_stiffness().is_some(),
         })
     }
 
