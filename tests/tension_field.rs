@@ -208,3 +208,146 @@ fn the_annulus_moves_in_proportion_to_the_residual_stiffness() {
     }
     assert!(shift[1] < 0.05 * base, "{shift:?} vs {base:e}");
 }
+
+/// The eigenvalues of the tangent at the annulus's relaxed equilibrium (flat and wrinkled
+/// everywhere): with the residual stiffness ε none is negative, and the smallest converges as
+/// ε → 0 to a positive limit, its change a tenth for each tenth of ε — the tension rays, held
+/// at both rims, leave W* no null direction here, so n₋(K_ε) = n₋(K*) = 0 and the spectrum is
+/// that of the tension field up to O(ε) (docs/theory.md §2.9). The plain energy's tangent at
+/// the same state counts its lateral compression as dozens of negative eigenvalues.
+#[test]
+fn the_index_of_the_wrinkled_annulus_stays_zero_and_converges_as_the_stiffness_vanishes() {
+    let mat = MooneyRivlin::new(1.0, 0.1, 1.0);
+    let rims = (0.1, 0.92);
+    let (nodes, triangles, inner, outer) = annulus(8, 0.25);
+    let start: Vec<Vec3> = nodes
+        .iter()
+        .map(|x| {
+            let r = x.norm();
+            x * ((rims.0 + (r - 0.25) * (rims.1 - rims.0) / 0.75) / r)
+        })
+        .collect();
+    let fixed: Vec<usize> = inner.iter().chain(&outer).copied().collect();
+    let model_with = |wrinkling: Wrinkling| {
+        let membrane = Membrane::new(&nodes, &triangles, mat, 1.0)
+            .unwrap()
+            .with_wrinkling(wrinkling);
+        let effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
+        FeModel::new(start.clone(), triangles.clone(), &fixed, effects, vec![])
+    };
+    let eigenvalues = |model: &FeModel, u: &[f64]| {
+        let mut e = model.new_evaluation();
+        model
+            .evaluate(u, &[], memstab::model::Request::ALL, &mut e)
+            .unwrap();
+        let n = model.unknowns();
+        let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let mut unit = vec![0.0; n];
+        let mut column = vec![0.0; n];
+        for j in 0..n {
+            unit[j] = 1.0;
+            model.pattern().matvec(&e.tangent, &unit, &mut column);
+            unit[j] = 0.0;
+            k.column_mut(j).copy_from_slice(&column);
+        }
+        let scale = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut values: Vec<f64> = k
+            .symmetric_eigenvalues()
+            .iter()
+            .map(|v| v / scale)
+            .collect();
+        values.sort_by(f64::total_cmp);
+        values
+    };
+    let options = NewtonOptions {
+        max_iterations: 60,
+        ..NewtonOptions::default()
+    };
+    let mut smallest = Vec::new();
+    let mut last = None;
+    for eps in [1e-3, 1e-4, 1e-5, 1e-6] {
+        let model = model_with(Wrinkling::Relaxed { stiffness: eps });
+        let sol = newton(&model, &vec![0.0; model.unknowns()], &[], &options).unwrap();
+        let values = eigenvalues(&model, &sol.u);
+        println!(
+            "ε = {eps:e}: smallest eigenvalue {:.6e} of max|K_ij| ({} unknowns)",
+            values[0],
+            values.len()
+        );
+        assert!(values[0] > 0.0, "ε = {eps}: smallest {:e}", values[0]);
+        smallest.push(values[0]);
+        last = Some(sol.u);
+    }
+    let changes: Vec<f64> = smallest.windows(2).map(|w| w[0] - w[1]).collect();
+    for w in changes.windows(2) {
+        let ratio = w[0] / w[1];
+        assert!((7.0..12.0).contains(&ratio), "{smallest:?}");
+    }
+    // The plain energy at the same (wrinkled) state.
+    let plain = model_with(Wrinkling::None);
+    let negative = eigenvalues(&plain, &last.unwrap())
+        .iter()
+        .filter(|&&v| v < 0.0)
+        .count();
+    println!("plain energy: {negative} negative eigenvalues");
+    assert!(negative > 20, "{negative}");
+}
+
+/// Paper 3's loading (a), the cap between two planes deflated by its gas pressure: the plain
+/// energy loses stability once the cap wrinkles (limit points and bifurcations near
+/// p = 0.012 on this mesh, all in wrinkled states); with the relaxed energy the index stays 0
+/// by every block down to p = 0.005 for every residual stiffness from 1e-3 to 1e-5, while
+/// the wrinkled area grows.
+#[test]
+fn the_deflated_cap_between_planes_stays_stable_under_the_relaxed_energy() {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/thesis/paper3_gas_fluid_pressure.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let run_with = |material: &str| {
+        let text = text.replace(
+            "prestretch = 1.05          # tension T(1.05) = 0.2562 mu H",
+            &format!("prestretch = 1.05\n{material}"),
+        );
+        let scene = memstab::scene::Scene::from_toml_str(&text, "cap").unwrap();
+        let mut study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
+        memstab::analysis::run(&mut study, |_, _| {}).unwrap()
+    };
+    let plain = run_with("");
+    assert!(
+        plain.report.rows.iter().any(|r| r.index.unwrap() > 0) && !plain.report.critical.is_empty(),
+        "the plain energy loses stability"
+    );
+    for eps in ["1e-3", "1e-4", "1e-5"] {
+        let relaxed = run_with(&format!(
+            "wrinkling = \"relaxed\"\nwrinkling-stiffness = {eps}"
+        ));
+        let r = &relaxed.report;
+        let p = r.parameters.iter().position(|n| n == "p").unwrap();
+        let area = r
+            .measures
+            .iter()
+            .position(|n| n == "wrinkled_area")
+            .unwrap();
+        assert!(r.critical.is_empty(), "ε = {eps}: {:?}", r.critical);
+        assert!(r.rows.iter().all(|row| row.index == Some(0)), "ε = {eps}");
+        let end = r.rows.last().unwrap();
+        assert!(
+            end.parameters[p] < 0.005,
+            "ε = {eps}: ends at p = {}",
+            end.parameters[p]
+        );
+        assert!(
+            end.measures[area] > 1.0,
+            "ε = {eps}: wrinkled area {}",
+            end.measures[area]
+        );
+        println!(
+            "ε = {eps}: {} points to p = {:.5}, wrinkled area {:.4} there",
+            r.rows.len(),
+            end.parameters[p],
+            end.measures[area]
+        );
+    }
+}
