@@ -351,3 +351,69 @@ fn the_deflated_cap_between_planes_stays_stable_under_the_relaxed_energy() {
         );
     }
 }
+
+/// Paper 2's sphere on the plane, gas above a fixed fluid volume V = 2, deflated in p: the
+/// scene with V held and a path down from p = 0.5. `material` is added to `[material]`.
+fn deflated_sphere(material: &str, steps: usize) -> memstab::results::RunResult {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/thesis/paper2_gas_pressure_fold_f8.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let (body, start) = text.split_once("[analysis]").unwrap();
+    let start = &start[start.find("[start]").unwrap()..];
+    let body = body
+        .replace(
+            "thickness = 0.01           # mu * H = 1",
+            &format!("thickness = 0.01\n{material}"),
+        )
+        .replace(
+            "start = 0.5                # the fluid volume",
+            "start = 2.0                # the fluid volume",
+        );
+    let text = format!(
+        "{body}[[constraint]]\ntype = \"fixed\"\nparameter = \"V\"\n\n[analysis]\ntype = \"path\"\n\
+         control = \"p\"\ndirection = \"decrease\"\nsteps = {steps}\n\n{start}"
+    );
+    assert!(text.contains("start = 2.0") && text.contains(material));
+    let scene = memstab::scene::Scene::from_toml_str(&text, "deflated").unwrap();
+    let mut study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
+    memstab::analysis::run(&mut study, |_, _| {}).unwrap()
+}
+
+/// A critical point in a partly wrinkled state and its value as ε → 0: the deflated sphere
+/// on the plane (1 280 triangles) meets an E1 double bifurcation just after it starts to
+/// wrinkle, at p = 0.366005, 0.365840, 0.365824 for ε = 1e-4, 1e-5, 1e-6 — changes a tenth
+/// per tenth of ε, so the point belongs to the relaxed membrane, not to ε. The plain energy
+/// has no critical point there (its index stays 0 down to p = 0.26).
+#[test]
+fn a_critical_point_in_a_wrinkled_state_converges_as_the_stiffness_vanishes() {
+    let plain = deflated_sphere("", 8);
+    assert!(plain.report.critical.is_empty());
+    assert!(plain.report.rows.iter().all(|r| r.index == Some(0)));
+    let mut values = Vec::new();
+    for eps in ["1e-4", "1e-5", "1e-6"] {
+        let run = deflated_sphere(
+            &format!("wrinkling = \"relaxed\"\nwrinkling-stiffness = {eps}"),
+            6,
+        );
+        let r = &run.report;
+        let p = r.parameters.iter().position(|n| n == "p").unwrap();
+        let first = r.critical.first().expect("a critical point");
+        assert_eq!(first.irrep, "E1", "ε = {eps}");
+        assert_eq!(first.multiplicity, 2);
+        // In a wrinkled state.
+        let w = r.wrinkling.as_ref().unwrap();
+        assert!(
+            w.relaxed
+                && w.critical
+                    .first()
+                    .is_some_and(|c| c.critical == 1 && c.wrinkled > 0)
+        );
+        println!("ε = {eps}: E1 double at p = {:.7}", first.parameters[p]);
+        values.push(first.parameters[p]);
+    }
+    let ratio = (values[0] - values[1]) / (values[1] - values[2]);
+    assert!((7.0..13.0).contains(&ratio), "{values:?}");
+    assert!((values[2] - 0.36582).abs() < 1e-4, "{values:?}");
+}
