@@ -27,6 +27,12 @@
 //! R0). The stress-free state X/λ0 = X̂ / (λ0 R0/R) is that of X̂ with the pre-stretch
 //! λ0 R0/R, so Π_el(x; R) is the energy above at that effective pre-stretch and
 //! ∂F/∂R = −(λ0/R) ∂F/∂λ0 (docs/theory.md §2.8). The unknowns stay the current positions.
+//!
+//! With [`Wrinkling::Relaxed`] each triangle takes the relaxed (tension-field) energy instead
+//! (docs/theory.md §2.9): W where taut (λ₁λ₂² ≥ 1), the uniaxial energy
+//! w(λ₁) = W(λ₁, λ₁^(−1/2)) where wrinkled, 0 where slack (λ₁ ≤ 1), plus the residual
+//! stiffness ε (c1 + c2)(t − 2); the wrinkled state's derivatives are those of the larger
+//! eigenvalue λ₁² of FᵀF ([`MooneyRivlin::relaxed_in_f`]).
 
 use super::Quantity;
 use crate::model::Local;
