@@ -276,6 +276,18 @@ fn print_wrinkling(report: &PathReport) {
     for warning in w.warnings(&report.critical) {
         out!("warning: {warning}");
     }
+    if w.relaxed
+        && report
+            .warnings
+            .iter()
+            .any(|m| m.contains("could not be localised"))
+    {
+        out!(
+            "note: under the relaxed energy the tangent jumps where a triangle turns taut, \
+             wrinkled or slack, so an eigenvalue may jump through zero there (docs/theory.md \
+             §2.9): the index changes above that could not be localised may be such jumps"
+        );
+    }
 }
 
 /// The critical curve: what was followed, its extent and its events.
