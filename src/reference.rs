@@ -1,6 +1,6 @@
 //! Closed-form reference solutions (docs/theory.md §13), shared by the tests, `memstab demo`
-//! and `memstab bench`: the inflated Mooney–Rivlin sphere and the ponding ladder of a
-//! pre-stretched clamped disc.
+//! and `memstab bench`: the inflated Mooney–Rivlin sphere, the ponding ladder of a
+//! pre-stretched clamped disc and the tension field of a wrinkled annulus.
 
 /// The over-pressure of an inflated incompressible Mooney–Rivlin sphere at equibiaxial
 /// stretch λ, as p R/(μH) with R and H the stress-free radius and thickness:
@@ -158,6 +158,138 @@ pub const BESSEL_J2: [((usize, usize), f64); 15] = [
     ((7, 1), 122.907600),
 ];
 
+/// The tension field of a flat annulus (docs/theory.md §13.5): a stress-free annulus
+/// a ≤ R ≤ b of incompressible Mooney–Rivlin (c1, c2) whose rims are held at the radii
+/// r_a < r_b, so far apart radially and so close together in hoop that it is wrinkled
+/// everywhere, the tension rays radial. The relaxed energy per stress-free volume is
+/// w(λ) = c1(λ² + 2/λ − 3) + c2(2λ + λ⁻² − 3) of the radial stretch λ = dr/dR alone, so
+/// equilibrium, d/dR (R w′(λ)) = 0, gives R w′(λ(R)) = K, and
+/// r(R) = r_a + ∫_a^R λ, with K fixed by r(b) = r_b. The radial force on either rim is 2π H K.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnnulusTensionField {
+    c1: f64,
+    c2: f64,
+    a: f64,
+    b: f64,
+    inner: f64,
+    /// K = R w′(λ(R)), the same at every radius.
+    pub constant: f64,
+}
+
+/// Five-point Gauss–Legendre nodes and weights on [−1, 1].
+const GAUSS5: [(f64, f64); 5] = [
+    (0.0, 0.568_888_888_888_888_9),
+    (-0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+    (0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+    (-0.906_179_845_938_664, 0.236_926_885_056_189_1),
+    (0.906_179_845_938_664, 0.236_926_885_056_189_1),
+];
+
+impl AnnulusTensionField {
+    /// The field of the annulus a < b with rims held at r_a < r_b; `None` unless it is
+    /// wrinkled everywhere: r_b − r_a > b − a (every radial fibre stretched) and the hoop
+    /// stretch r/R below the natural width λ^(−1/2) at every radius.
+    pub fn new(c1: f64, c2: f64, a: f64, b: f64, inner: f64, outer: f64) -> Option<Self> {
+        if !(0.0 < a && a < b && 0.0 < inner && inner < outer && outer - inner > b - a) {
+            return None;
+        }
+        let mut field = Self {
+            c1,
+            c2,
+            a,
+            b,
+            inner,
+            constant: 0.0,
+        };
+        // ∫ λ grows with K from b − a (K = 0): bracket, then bisect to round-off.
+        let gap = |f: &Self, k: f64| {
+            let g = Self { constant: k, ..*f };
+            g.radius(b) - outer
+        };
+        let mut hi = c1 + c2;
+        while gap(&field, hi) < 0.0 {
+            hi *= 2.0;
+        }
+        let mut lo = 0.0;
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if gap(&field, mid) < 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        field.constant = 0.5 * (lo + hi);
+        let wrinkled = (0..=1000).all(|i| {
+            let r = a + (b - a) * f64::from(i) / 1000.0;
+            field.radius(r) / r < 1.0 / field.stretch(r).sqrt()
+        });
+        wrinkled.then_some(field)
+    }
+
+    /// w′(λ) = 2c1(λ − λ⁻²) + 2c2(1 − λ⁻³), increasing for λ ≥ 1, and its derivative.
+    fn slope(&self, l: f64) -> (f64, f64) {
+        let (c1, c2) = (self.c1, self.c2);
+        (
+            2.0 * c1 * (l - 1.0 / (l * l)) + 2.0 * c2 * (1.0 - 1.0 / (l * l * l)),
+            2.0 * c1 * (1.0 + 2.0 / (l * l * l)) + 6.0 * c2 / (l * l * l * l),
+        )
+    }
+
+    /// The radial stretch λ(R) ≥ 1 with w′(λ) = K/R (Newton, kept in its bracket).
+    pub fn stretch(&self, radius: f64) -> f64 {
+        let target = self.constant / radius;
+        let (mut lo, mut hi) = (1.0, 2.0);
+        while self.slope(hi).0 < target {
+            hi *= 2.0;
+        }
+        let mut l = 0.5 * (lo + hi);
+        for _ in 0..100 {
+            let (f, df) = self.slope(l);
+            if f < target {
+                lo = l;
+            } else {
+                hi = l;
+            }
+            let next = l - (f - target) / df;
+            let next = if next > lo && next < hi {
+                next
+            } else {
+                0.5 * (lo + hi)
+            };
+            if (next - l).abs() <= 1e-16 * l {
+                return next;
+            }
+            l = next;
+        }
+        l
+    }
+
+    /// The current radius r(R) = r_a + ∫_a^R λ (Gauss–Legendre on 400 panels).
+    pub fn radius(&self, radius: f64) -> f64 {
+        let panels = 400;
+        let h = (radius - self.a) / f64::from(panels);
+        let mut sum = 0.0;
+        for p in 0..panels {
+            let mid = self.a + h * (f64::from(p) + 0.5);
+            for (x, w) in GAUSS5 {
+                sum += w * 0.5 * h * self.stretch(mid + 0.5 * h * x);
+            }
+        }
+        self.inner + sum
+    }
+
+    /// The radial force on either rim of an annulus of stress-free thickness H: 2π H K.
+    pub fn rim_force(&self, thickness: f64) -> f64 {
+        2.0 * std::f64::consts::PI * thickness * self.constant
+    }
+
+    /// The stress-free outer radius b.
+    pub fn outer_radius(&self) -> f64 {
+        self.b
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -237,6 +369,38 @@ mod tests {
             assert!((z * z - j2).abs() < 1e-5, "j({m},{k})² = {} vs {j2}", z * z);
         }
         assert!(BESSEL_J2.windows(2).all(|w| w[0].1 < w[1].1));
+    }
+
+    /// The annulus's field makes the relaxed energy 2πH ∫ w(r′) R dR stationary among radii
+    /// with the same rims (a difference along a bump that vanishes there), is wrinkled, and
+    /// has every fibre stretched.
+    #[test]
+    fn the_annulus_tension_field_is_an_equilibrium() {
+        let (c1, c2) = (0.5 / 1.1, 0.05 / 1.1);
+        let f = AnnulusTensionField::new(c1, c2, 0.25, 1.0, 0.1, 0.92).unwrap();
+        assert!((f.radius(1.0) - 0.92).abs() < 1e-12);
+        assert!(f.stretch(1.0) > 1.0 && f.stretch(0.25) > f.stretch(1.0));
+        let w = |l: f64| c1 * (l * l + 2.0 / l - 3.0) + c2 * (2.0 * l + 1.0 / (l * l) - 3.0);
+        let pi = std::f64::consts::PI;
+        let energy = |d: f64| {
+            let n = 4000;
+            let h = 0.75 / f64::from(n);
+            (0..n)
+                .map(|i| {
+                    let r = 0.25 + h * (f64::from(i) + 0.5);
+                    let bump = d * pi / 0.75 * (pi * (r - 0.25) / 0.75).cos();
+                    w(f.stretch(r) + bump) * r * h
+                })
+                .sum::<f64>()
+        };
+        let d = 1e-4;
+        let first = (energy(d) - energy(-d)) / (2.0 * d);
+        let second = (energy(d) - 2.0 * energy(0.0) + energy(-d)) / (d * d);
+        assert!(first.abs() < 1e-8 * second, "{first:e} vs {second:e}");
+        assert!(second > 0.0);
+        // Rims too close radially, or a hoop stretch too large: not a tension field.
+        assert!(AnnulusTensionField::new(c1, c2, 0.25, 1.0, 0.1, 0.8).is_none());
+        assert!(AnnulusTensionField::new(c1, c2, 0.25, 1.0, 0.3, 1.2).is_none());
     }
 
     #[test]

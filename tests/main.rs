@@ -43,5 +43,6 @@ mod stability;
 mod state_fields;
 mod subgroup_path;
 mod surface;
+mod tension_field;
 mod thesis;
 mod thesis_curves;

@@ -2,9 +2,10 @@
 //! terms) vs residual, symmetry, load vectors vs differences in Λ — at random states.
 
 use memstab::effects::gas::{GasAmount, GasPressure};
-use memstab::effects::membrane::{MaterialQuantities, Membrane, MooneyRivlin};
+use memstab::effects::membrane::{MaterialQuantities, Membrane, MooneyRivlin, Wrinkling};
 use memstab::effects::Quantity;
 use memstab::model::check::check_derivatives;
+use memstab::model::CellQuantity;
 use memstab::model::{Effect, FeModel, Model};
 use meshes::generators::{disc, icosphere, DiscOptions, IcosphereOptions};
 use proptest::prelude::*;
@@ -101,6 +102,11 @@ proptest! {
 /// (parameter 4); with `built_at`, generated at that radius and with its reference radius as
 /// parameter 5.
 fn parametric_sphere_model(built_at: Option<f64>) -> FeModel {
+    parametric_sphere_model_with(built_at, Wrinkling::None)
+}
+
+/// [`parametric_sphere_model`] with the plain or the relaxed energy.
+fn parametric_sphere_model_with(built_at: Option<f64>, wrinkling: Wrinkling) -> FeModel {
     let sym = icosphere(&IcosphereOptions {
         radius: built_at.unwrap_or(1.0),
         frequency: 2,
@@ -113,7 +119,9 @@ fn parametric_sphere_model(built_at: Option<f64>) -> FeModel {
         thickness: Quantity::Parameter(2),
         prestretch: Quantity::Parameter(3),
     };
-    let mut membrane = Membrane::parametric(&m.nodes, &m.triangles, material).unwrap();
+    let mut membrane = Membrane::parametric(&m.nodes, &m.triangles, material)
+        .unwrap()
+        .with_wrinkling(wrinkling);
     let mut names = vec!["mu", "k", "thickness", "prestretch", "p"];
     if let Some(r0) = built_at {
         membrane = membrane.with_reference_radius(Quantity::Parameter(5), r0);
@@ -165,6 +173,89 @@ proptest! {
         prop_assert!(e.tangent < 1e-6, "{e:?}");
         prop_assert!(e.asymmetry < 1e-13, "{e:?}");
         prop_assert!(e.loads < 1e-7, "{e:?}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, .. ProptestConfig::default() })]
+
+    /// The relaxed energy assembled, at states that mix taut, wrinkled and slack triangles:
+    /// the residual against Π, the tangent against the residual, its symmetry and the loads
+    /// of μ, k, H, λ0 and R against differences in each.
+    #[test]
+    fn relaxed_membrane_with_material_parameters(
+        seed in any::<u64>(),
+        built_at in 0.7f64..1.5,
+        k in 0.0f64..0.3,
+        prestretch in 1.0f64..1.2,
+        stretch in 0.95f64..1.15,
+        eps in 0.0f64..0.01,
+        p in -1.0f64..2.0,
+    ) {
+        let model = parametric_sphere_model_with(Some(built_at), Wrinkling::Relaxed { stiffness: eps });
+        let n = model.unknowns();
+        let mut u = random_vector(seed, n, 0.08 * built_at);
+        for (i, x) in model.reference().iter().enumerate() {
+            for c in 0..3 {
+                u[3 * i + c] += (stretch / prestretch - 1.0) * x[c];
+            }
+        }
+        let params = [1.0, k, 0.1, prestretch, p, built_at];
+        let states = model
+            .cell_fields(&u, &params)
+            .into_iter()
+            .find(|f| f.quantity == CellQuantity::MembraneState)
+            .unwrap()
+            .values;
+        let count = |code: f64| states.iter().filter(|&&s| s == code).count();
+        prop_assume!(count(0.0) > 0 && count(1.0) > 0);
+        let d = random_vector(seed ^ 0x33, n, 1.0);
+        let e = check_derivatives(&model, &u, &params, &d, 1e-6).unwrap();
+        prop_assert!(e.residual < 1e-7, "{e:?}");
+        prop_assert!(e.tangent < 1e-6, "{e:?}");
+        prop_assert!(e.asymmetry < 1e-13, "{e:?}");
+        prop_assert!(e.loads < 1e-7, "{e:?}");
+    }
+}
+
+/// On a state in tension the relaxed energy without residual stiffness is the plain one:
+/// the same energy, residual and tangent to round-off (the same sums, bit for bit), with
+/// every parameter's load.
+#[test]
+fn relaxed_is_plain_on_an_inflated_sphere() {
+    let plain = parametric_sphere_model_with(Some(1.0), Wrinkling::None);
+    let relaxed = parametric_sphere_model_with(Some(1.0), Wrinkling::Relaxed { stiffness: 0.0 });
+    let n = plain.unknowns();
+    let mut u = random_vector(7, n, 0.01);
+    for (i, x) in plain.reference().iter().enumerate() {
+        for c in 0..3 {
+            u[3 * i + c] += 0.3 * x[c];
+        }
+    }
+    let params = [1.0, 0.1, 0.1, 1.05, 1.0, 1.0];
+    let states = relaxed
+        .cell_fields(&u, &params)
+        .into_iter()
+        .find(|f| f.quantity == CellQuantity::MembraneState)
+        .unwrap()
+        .values;
+    assert!(states.iter().all(|&s| s == 0.0), "every triangle taut");
+    let (mut a, mut b) = (plain.new_evaluation(), relaxed.new_evaluation());
+    plain
+        .evaluate(&u, &params, memstab::model::Request::ALL, &mut a)
+        .unwrap();
+    relaxed
+        .evaluate(&u, &params, memstab::model::Request::ALL, &mut b)
+        .unwrap();
+    let close = |x: &[f64], y: &[f64]| {
+        let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        x.iter().zip(y).all(|(p, q)| (p - q).abs() <= 1e-13 * scale)
+    };
+    assert!((a.energy - b.energy).abs() <= 1e-14 * a.energy.abs());
+    assert!(close(&a.residual, &b.residual));
+    assert!(close(&a.tangent, &b.tangent));
+    for (la, lb) in a.loads.iter().zip(&b.loads) {
+        assert!(close(la, lb));
     }
 }
 

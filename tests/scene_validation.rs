@@ -768,3 +768,73 @@ fn critical_curve_keys_are_checked() {
     let text = edit("k = 0.1", "k = \"kk\"") + "\n[parameters.kk]\nstart = 0.1\n";
     rejects(&text, &["'parameters.kk' is neither the control"]);
 }
+
+/// `material.wrinkling` and `material.wrinkling-stiffness`: the relaxed energy is chosen by
+/// name, its stiffness lies in [0, 1] and needs it; bad values get one line naming the key.
+#[test]
+fn wrinkling_keys_are_checked() {
+    let relaxed = edit(
+        "prestretch = 1.1",
+        "prestretch = 1.1\nwrinkling = \"relaxed\"",
+    );
+    let scene = Scene::from_toml_str(&relaxed, "test.toml").unwrap();
+    assert_eq!(
+        scene.material.relaxed_stiffness(),
+        Some(memstab::scene::DEFAULT_WRINKLING_STIFFNESS)
+    );
+    let plain = Scene::from_toml_str(BASE, "test.toml").unwrap();
+    assert_eq!(plain.material.relaxed_stiffness(), None);
+    let with = |eps: &str| {
+        edit(
+            "prestretch = 1.1",
+            &format!("prestretch = 1.1\nwrinkling = \"relaxed\"\nwrinkling-stiffness = {eps}"),
+        )
+    };
+    let scene = Scene::from_toml_str(&with("0.0"), "test.toml").unwrap();
+    assert_eq!(scene.material.relaxed_stiffness(), Some(0.0));
+    rejects(
+        &edit("prestretch = 1.1", "prestretch = 1.1\nwrinkling = \"lax\""),
+        &["'material.wrinkling'", "\"lax\"", "none", "relaxed"],
+    );
+    rejects(
+        &with("-0.5"),
+        &["'material.wrinkling-stiffness'", "between 0 and 1", "-0.5"],
+    );
+    rejects(
+        &with("2.0"),
+        &["'material.wrinkling-stiffness'", "between 0 and 1", "2"],
+    );
+    rejects(
+        &with("\"e\""),
+        &["'material.wrinkling-stiffness'", "number", "\"e\""],
+    );
+    rejects(
+        &edit(
+            "prestretch = 1.1",
+            "prestretch = 1.1\nwrinkling-stiffness = 0.01",
+        ),
+        &[
+            "'material.wrinkling-stiffness'",
+            "0.01",
+            "wrinkling = \"relaxed\"",
+        ],
+    );
+    // The relaxed scene builds on a 3-D mesh, with the areas as measures; the meridian
+    // refuses it.
+    let study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
+    let names: Vec<&str> = study.measures.iter().map(|(n, _)| n.as_str()).collect();
+    assert!(
+        names.ends_with(&["wrinkled_area", "slack_area"]),
+        "{names:?}"
+    );
+    let meridian = relaxed.replace(
+        "generator = \"disc\"\nradius = 1.1\nsectors = 6\ndivisions = 3",
+        "generator = \"axisymmetric\"\nshape = \"disc\"\nradius = 1.1\nelements = 8",
+    );
+    let err = memstab::study::build(Scene::from_toml_str(&meridian, "test.toml").unwrap())
+        .err()
+        .expect("the meridian refuses the relaxed energy")
+        .to_string();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("material.wrinkling = \"relaxed\""), "{err}");
+}

@@ -249,6 +249,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
         triangles,
         first: None,
         critical: flagged[1..].to_vec(),
+        relaxed: false,
     };
     let warnings = w.warnings(&slack_points);
     assert_eq!(warnings.len(), 1, "{warnings:?}");
@@ -268,6 +269,89 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
             critical: 7,
             wrinkled: 1,
         }],
+        relaxed: false,
     };
     assert!(stray.warnings(&slack_points).is_empty());
+}
+
+/// A relaxed run writes the state of every triangle and the wrinkle direction into its state
+/// files and the wrinkled and slack areas into `path.csv`; its summary reads the wrinkled
+/// triangles as described by the energy. A plain run has none of these.
+#[test]
+fn a_relaxed_run_writes_states_directions_and_areas() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/thesis/paper3_gas_fluid_pressure.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replace(
+        "prestretch = 1.05          # tension T(1.05) = 0.2562 mu H",
+        "prestretch = 1.05\nwrinkling = \"relaxed\"",
+    );
+    assert!(text.contains("wrinkling = \"relaxed\""));
+    let path = dir.path().join("cap.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        summary.contains("wrinkled or slack, under the relaxed energy"),
+        "{summary}"
+    );
+    assert!(!summary.contains("not valid"), "{summary}");
+    let csv = std::fs::read_to_string(out.join("path.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let last: Vec<f64> = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap_or(f64::NAN))
+        .collect();
+    assert!(last[col("wrinkled_area")] > 1.0, "{csv}");
+    assert!(last[col("slack_area")] >= 0.0);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+    assert_eq!(report["wrinkling"]["relaxed"], true);
+    let last_state = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.starts_with("state_") && n.ends_with(".vtu"))
+        .max()
+        .unwrap();
+    let vtu = std::fs::read_to_string(out.join(last_state)).unwrap();
+    assert!(vtu.contains("Name=\"membrane_state\""));
+    let at = vtu
+        .find("Name=\"wrinkle_direction\"")
+        .expect("the direction field");
+    let tag = &vtu[vtu[..at].rfind('<').unwrap()..at + vtu[at..].find('>').unwrap()];
+    assert!(tag.contains("NumberOfComponents=\"3\""), "{tag}");
+    // The plain energy's state files are as before.
+    let plain = dir.path().join("plain");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            &format!("{}/scenes/balloon.toml", env!("CARGO_MANIFEST_DIR")),
+            "--out",
+            plain.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let vtu = std::fs::read_to_string(plain.join("state_0000.vtu")).unwrap();
+    assert!(!vtu.contains("membrane_state") && !vtu.contains("wrinkle_direction"));
+    let csv = std::fs::read_to_string(plain.join("path.csv")).unwrap();
+    assert!(!csv.contains("wrinkled_area"));
 }

@@ -225,7 +225,15 @@ fn print_wrinkling(report: &PathReport) {
         return;
     };
     match &w.first {
+        None if w.relaxed => out!("wrinkling: none (every triangle is taut at every path point)"),
         None => out!("wrinkling: none (every triangle is in tension at every path point)"),
+        Some(p) if w.relaxed => out!(
+            "wrinkling: first at step {} ({} of {} triangles wrinkled or slack, under the \
+             relaxed energy)",
+            p.step,
+            p.wrinkled,
+            w.triangles
+        ),
         Some(p) => out!(
             "wrinkling: first at step {} ({} of {} triangles have a negative principal \
              tension: a membrane cannot carry compression, the model is not valid there)",
@@ -236,6 +244,18 @@ fn print_wrinkling(report: &PathReport) {
     }
     for warning in w.warnings(&report.critical) {
         out!("warning: {warning}");
+    }
+    if w.relaxed
+        && report
+            .warnings
+            .iter()
+            .any(|m| m.contains("could not be localised"))
+    {
+        out!(
+            "note: under the relaxed energy the tangent jumps where a triangle turns taut, \
+             wrinkled or slack, so an eigenvalue may jump through zero there (docs/theory.md \
+             §2.9): the index changes above that could not be localised may be such jumps"
+        );
     }
 }
 

@@ -27,11 +27,17 @@
 //! R0). The stress-free state X/λ0 = X̂ / (λ0 R0/R) is that of X̂ with the pre-stretch
 //! λ0 R0/R, so Π_el(x; R) is the energy above at that effective pre-stretch and
 //! ∂F/∂R = −(λ0/R) ∂F/∂λ0 (docs/theory.md §2.8). The unknowns stay the current positions.
+//!
+//! With [`Wrinkling::Relaxed`] each triangle takes the relaxed (tension-field) energy instead
+//! (docs/theory.md §2.9): W where taut (λ₁λ₂² ≥ 1), the uniaxial energy
+//! w(λ₁) = W(λ₁, λ₁^(−1/2)) where wrinkled, 0 where slack (λ₁ ≤ 1), plus the residual
+//! stiffness ε (c1 + c2)(t − 2); the wrinkled state's derivatives are those of the larger
+//! eigenvalue λ₁² of FᵀF ([`MooneyRivlin::relaxed_in_f`]).
 
 use super::Quantity;
 use crate::model::Local;
-use crate::model::{Assembler, CellField, CellQuantity, Effect, ModelError, Vec3};
-use nalgebra::Vector3;
+use crate::model::{Assembler, CellField, CellQuantity, CellVectorField, Effect, ModelError, Vec3};
+use nalgebra::{Matrix3, Vector3};
 use symmetry::Invariant;
 
 /// Mooney-Rivlin constants and thickness.
@@ -125,6 +131,72 @@ impl MooneyRivlin {
         Some((w, p, hf))
     }
 
+    /// The relaxed (tension-field) energy W_ε = W* + ε (c1 + c2)(t − 2) with its gradient
+    /// and Hessian blocks in F = [f1 f2], as [`MooneyRivlin::energy_in_f`], and the state
+    /// that selects W* (docs/theory.md §2.9): taut (λ₁λ₂² ≥ 1) W* = W, wrinkled (λ₁ > 1,
+    /// λ₁λ₂² < 1) W* = w(λ₁) = W(λ₁, λ₁^(−1/2)), slack (λ₁ ≤ 1) W* = 0. `None` where J ≤ 0.
+    #[allow(clippy::type_complexity, clippy::needless_range_loop)]
+    pub fn relaxed_in_f(
+        &self,
+        f: &[Vector3<f64>; 2],
+        stiffness: f64,
+    ) -> Option<(f64, [Vector3<f64>; 2], [[Matrix3<f64>; 2]; 2], TensionState)> {
+        let (n1, n2) = (f[0].norm_squared(), f[1].norm_squared());
+        let j = f[0].cross(&f[1]).norm_squared();
+        if j.is_nan() || j <= 0.0 {
+            return None;
+        }
+        let spectral = Spectral::of(f);
+        let state = spectral.state(j);
+        let (mut w, mut p, mut hf) = match state {
+            TensionState::Taut => self.energy_in_f(f)?,
+            TensionState::Slack => (0.0, [Vector3::zeros(); 2], [[Matrix3::zeros(); 2]; 2]),
+            TensionState::Wrinkled => {
+                // W* = w(s), s = λ₁² the larger eigenvalue of C = FᵀF with unit eigenvector
+                // n = (n_1, n_2); u = F n, v = F n⊥, n⊥ = (−n_2, n_1). ∂s/∂f_i = 2 n_i u and
+                // ∂²s/∂f_i∂f_k = 2 n_i n_k I + 2 g_i g_kᵀ/(s − s₂), g_i = n_i v + n⊥_i u.
+                let Spectral { s, s2, n, u, v } = spectral;
+                let [w0, w1, w2] = self.uniaxial(s);
+                let np = [-n[1], n[0]];
+                let ds = [u * (2.0 * n[0]), u * (2.0 * n[1])];
+                let g = [v * n[0] + u * np[0], v * n[1] + u * np[1]];
+                let gap = s - s2;
+                let mut hf = [[Matrix3::zeros(); 2]; 2];
+                for i in 0..2 {
+                    for k in 0..2 {
+                        hf[i][k] = outer(&ds[i], &ds[k]) * w2
+                            + (Matrix3::identity() * (2.0 * n[i] * n[k])
+                                + outer(&g[i], &g[k]) * (2.0 / gap))
+                                * w1;
+                    }
+                }
+                (w0, [ds[0] * w1, ds[1] * w1], hf)
+            }
+        };
+        if stiffness != 0.0 {
+            // ε (c1 + c2)(t − 2): gradient 2ε(c1 + c2) f_i, Hessian 2ε(c1 + c2) I.
+            let e = stiffness * (self.c1 + self.c2);
+            w += e * (n1 + n2 - 2.0);
+            for i in 0..2 {
+                p[i] += f[i] * (2.0 * e);
+                hf[i][i] += Matrix3::identity() * (2.0 * e);
+            }
+        }
+        Some((w, p, hf, state))
+    }
+
+    /// The energy of uniaxial tension at the natural width ν = λ₁^(−1/2) and its first two
+    /// derivatives in s = λ₁²: w = c1(s + 2s^(−1/2) − 3) + c2(2s^(1/2) + 1/s − 3),
+    /// w' = c1(1 − s^(−3/2)) + c2(s^(−1/2) − s^(−2)), w'' = 3/2 c1 s^(−5/2) + c2(2s^(−3) − ½s^(−3/2)).
+    fn uniaxial(&self, s: f64) -> [f64; 3] {
+        let (c1, c2) = (self.c1, self.c2);
+        let r = s.sqrt();
+        let w = c1 * (s + 2.0 / r - 3.0) + c2 * (2.0 * r + 1.0 / s - 3.0);
+        let w1 = c1 * (1.0 - 1.0 / (s * r)) + c2 * (1.0 / r - 1.0 / (s * s));
+        let w2 = 1.5 * c1 / (s * s * r) + c2 * (2.0 / (s * s * s) - 0.5 / (s * r));
+        [w, w1, w2]
+    }
+
     /// W and its derivatives in (t, J): (W, W_t, W_J, W_tJ, W_JJ); W_tt = 0.
     fn strain_energy(&self, t: f64, j: f64) -> [f64; 5] {
         let (c1, c2) = (self.c1, self.c2);
@@ -134,6 +206,87 @@ impl MooneyRivlin {
         let w_tj = -c2 / (j * j);
         let w_jj = 2.0 * (c1 + c2 * t) / (j * j * j);
         [w, w_t, w_j, w_tj, w_jj]
+    }
+}
+
+/// Which energy a triangle's relaxed law uses (docs/theory.md §2.9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TensionState {
+    /// Both principal tensions non-negative: the plain energy.
+    Taut,
+    /// Tension along one direction only: uniaxial tension at the natural width.
+    Wrinkled,
+    /// No tension: zero energy.
+    Slack,
+}
+
+impl TensionState {
+    /// The value of the `membrane_state` cell field: 0 taut, 1 wrinkled, 2 slack.
+    pub fn code(self) -> f64 {
+        match self {
+            Self::Taut => 0.0,
+            Self::Wrinkled => 1.0,
+            Self::Slack => 2.0,
+        }
+    }
+}
+
+/// How the membrane carries compression.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Wrinkling {
+    /// The plain Mooney–Rivlin energy everywhere.
+    None,
+    /// The relaxed energy with the residual stiffness ε ≥ 0 (docs/theory.md §2.9).
+    Relaxed {
+        /// ε.
+        stiffness: f64,
+    },
+}
+
+/// The principal data of C = FᵀF: the larger eigenvalue s = λ₁², the smaller s₂ = λ₂², the
+/// unit eigenvector n of s in the stress-free frame, u = F n and v = F n⊥.
+#[derive(Debug, Clone, Copy)]
+struct Spectral {
+    s: f64,
+    s2: f64,
+    n: [f64; 2],
+    u: Vector3<f64>,
+    v: Vector3<f64>,
+}
+
+impl Spectral {
+    /// From F; the eigenvector from the row of C − s I that is better conditioned.
+    fn of(f: &[Vector3<f64>; 2]) -> Self {
+        let (n1, n2, c) = (f[0].norm_squared(), f[1].norm_squared(), f[0].dot(&f[1]));
+        let j = f[0].cross(&f[1]).norm_squared();
+        let root = ((n1 - n2) * (n1 - n2) + 4.0 * c * c).sqrt();
+        let s = 0.5 * (n1 + n2 + root);
+        let s2 = if s > 0.0 { j / s } else { 0.0 };
+        let (x, y) = if n1 >= n2 { (s - n2, c) } else { (c, s - n1) };
+        let len = x.hypot(y);
+        let n = if len > 0.0 {
+            [x / len, y / len]
+        } else {
+            [1.0, 0.0]
+        };
+        Self {
+            s,
+            s2,
+            n,
+            u: f[0] * n[0] + f[1] * n[1],
+            v: f[1] * n[0] - f[0] * n[1],
+        }
+    }
+
+    /// Taut when λ₁λ₂² ≥ 1 (J² ≥ s), slack when λ₁ ≤ 1, wrinkled otherwise.
+    fn state(&self, j: f64) -> TensionState {
+        if j * j >= self.s {
+            TensionState::Taut
+        } else if self.s <= 1.0 {
+            TensionState::Slack
+        } else {
+            TensionState::Wrinkled
+        }
     }
 }
 
@@ -225,10 +378,38 @@ impl ReferenceTriangle {
         mat: &MooneyRivlin,
         x: &[Vector3<f64>; 3],
     ) -> Option<Local> {
+        self.local_of(x, |f| mat.energy_in_f(f))
+    }
+
+    /// The element's relaxed energy W_ε ([`MooneyRivlin::relaxed_in_f`]) with its gradient and
+    /// Hessian at `x`, and the triangle's state. `None` if the triangle is inverted or collapsed.
+    pub fn relaxed_energy_gradient_hessian(
+        &self,
+        mat: &MooneyRivlin,
+        stiffness: f64,
+        x: &[Vector3<f64>; 3],
+    ) -> Option<(Local, TensionState)> {
+        let mut state = TensionState::Taut;
+        let local = self.local_of(x, |f| {
+            let (w, p, hf, s) = mat.relaxed_in_f(f, stiffness)?;
+            state = s;
+            Some((w, p, hf))
+        })?;
+        Some((local, state))
+    }
+
+    /// The element's energy, gradient and Hessian at `x` from the energy per stress-free
+    /// volume in F with its gradient and Hessian blocks (`law`).
+    #[allow(clippy::needless_range_loop, clippy::type_complexity)]
+    fn local_of(
+        &self,
+        x: &[Vector3<f64>; 3],
+        law: impl FnOnce(&[Vector3<f64>; 2]) -> Option<(f64, [Vector3<f64>; 2], [[Matrix3<f64>; 2]; 2])>,
+    ) -> Option<Local> {
         let (a, b) = (x[1] - x[0], x[2] - x[0]);
         let [m11, m12, m22] = self.m;
         let f = [a * m11, a * m12 + b * m22];
-        let (w, p, hf) = mat.energy_in_f(&f)?;
+        let (w, p, hf) = law(&f)?;
         let vol = self.volume;
         // f_i = Σ_e C[i][e] edge_e with edges (a, b).
         let cm = [[m11, 0.0], [m12, m22]];
@@ -281,6 +462,13 @@ impl ReferenceTriangle {
         // Symmetric to the last bit, whatever order the terms were summed in.
         local.mirror_upper();
         Some(local)
+    }
+
+    /// The in-plane deformation gradient F = [f1 f2] at `x`.
+    fn deformation(&self, x: &[Vector3<f64>; 3]) -> [Vector3<f64>; 2] {
+        let (a, b) = (x[1] - x[0], x[2] - x[0]);
+        let [m11, m12, m22] = self.m;
+        [a * m11, a * m12 + b * m22]
     }
 }
 
@@ -343,6 +531,63 @@ impl ReferenceTriangle {
     }
 }
 
+/// The principal state of one element under the relaxed energy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelaxedState {
+    /// Taut, wrinkled or slack.
+    pub state: TensionState,
+    /// The stretches of the mean surface, its material's thickness and the tensions of the
+    /// tension field W* (the residual stiffness ε left out): wrinkled, T₁ = (H/λ₂) dw/dλ₁,
+    /// T₂ = 0 and h = H/(λ₁ν) = H λ₁^(−1/2); slack, no tension and h = H.
+    pub principal: PrincipalState,
+    /// The unit tension direction F n/|F n| in the current configuration, along which the
+    /// wrinkles run, where wrinkled; zero elsewhere.
+    pub direction: Vector3<f64>,
+}
+
+impl ReferenceTriangle {
+    /// The relaxed principal state at `x` (docs/theory.md §2.9); `None` where collapsed.
+    pub fn relaxed_state(&self, mat: &MooneyRivlin, x: &[Vector3<f64>; 3]) -> Option<RelaxedState> {
+        let f = self.deformation(x);
+        let j = f[0].cross(&f[1]).norm_squared();
+        if j.is_nan() || j <= 0.0 {
+            return None;
+        }
+        let sp = Spectral::of(&f);
+        let state = sp.state(j);
+        let (l1, l2) = (sp.s.sqrt(), sp.s2.sqrt());
+        let h = mat.thickness;
+        let (principal, direction) = match state {
+            TensionState::Taut => (self.principal_state(mat, x)?, Vector3::zeros()),
+            TensionState::Wrinkled => {
+                // dw/dλ₁ = 2 λ₁ w'(s).
+                let [_, w1, _] = mat.uniaxial(sp.s);
+                (
+                    PrincipalState {
+                        stretches: [l1, l2],
+                        thickness: h / l1.sqrt(),
+                        tensions: [h * 2.0 * l1 * w1 / l2, 0.0],
+                    },
+                    sp.u / sp.u.norm(),
+                )
+            }
+            TensionState::Slack => (
+                PrincipalState {
+                    stretches: [l1, l2],
+                    thickness: h,
+                    tensions: [0.0; 2],
+                },
+                Vector3::zeros(),
+            ),
+        };
+        Some(RelaxedState {
+            state,
+            principal,
+            direction,
+        })
+    }
+}
+
 /// The membrane effect: every triangle's Mooney-Rivlin energy. μ, k, H and λ0 may be
 /// parameters; their loads ∂F/∂Λ are the gradients with the weights' derivatives
 /// ([`ReferenceTriangle::weighted_gradient`], docs/theory.md §2).
@@ -353,6 +598,8 @@ pub struct Membrane {
     radius: Option<(Quantity, f64)>,
     /// Every triangle's reference data for λ0 = 1 and H = 1 ([`ReferenceTriangle::at`]).
     elements: Vec<ReferenceTriangle>,
+    /// The plain or the relaxed energy.
+    wrinkling: Wrinkling,
 }
 
 impl Membrane {
@@ -393,7 +640,14 @@ impl Membrane {
             material,
             radius: None,
             elements,
+            wrinkling: Wrinkling::None,
         })
+    }
+
+    /// The same membrane with the plain or the relaxed energy (docs/theory.md §2.9).
+    pub fn with_wrinkling(mut self, wrinkling: Wrinkling) -> Self {
+        self.wrinkling = wrinkling;
+        self
     }
 
     /// The same membrane with its reference scaled by R/R0: `radius` is R, `built_at` the
@@ -480,6 +734,9 @@ impl Effect for Membrane {
         let want_loads = out.request().loads && slots.iter().any(Option::is_some);
         // ∂c1/∂k = −c1/(1 + k), ∂c2/∂k = c1/(1 + k).
         let (dc1, dc2) = (-mat.c1 / (1.0 + k), mat.c1 / (1.0 + k));
+        if let Wrinkling::Relaxed { stiffness } = self.wrinkling {
+            return self.assemble_relaxed(x, out, [mu, k, thickness, prestretch, scale], stiffness);
+        }
         out.add_triangles(x, slots, |t, xt, terms| {
             let elem = self.elements[t].at(effective, thickness);
             terms.local = elem
@@ -526,9 +783,35 @@ impl Effect for Membrane {
         })
     }
 
+    /// With the relaxed energy, `wrinkle_direction`: the unit tension direction where a
+    /// triangle is wrinkled, zero where it is taut or slack; nothing with the plain energy.
+    fn cell_vectors(
+        &self,
+        x: &[Vec3],
+        triangles: &[[usize; 3]],
+        params: &[f64],
+    ) -> Vec<CellVectorField> {
+        if self.wrinkling == Wrinkling::None {
+            return Vec::new();
+        }
+        let states = self.relaxed_states(x, triangles, params);
+        if states.is_empty() {
+            return Vec::new();
+        }
+        vec![CellVectorField {
+            name: "wrinkle_direction",
+            values: states.iter().map(|s| s.direction).collect(),
+        }]
+    }
+
     /// Principal stretches, thickness, principal tensions and where the membrane would
-    /// wrinkle (T₂ < 0); a collapsed element (never an accepted state) shows zeros.
+    /// wrinkle (T₂ < 0); a collapsed element (never an accepted state) shows zeros. With the
+    /// relaxed energy, those of the tension field ([`RelaxedState`]), `wrinkled` where a
+    /// triangle is not taut and its `membrane_state` (0 taut, 1 wrinkled, 2 slack).
     fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<CellField> {
+        if let Wrinkling::Relaxed { .. } = self.wrinkling {
+            return self.relaxed_fields(x, triangles, params);
+        }
         let Ok([mu, k, thickness, prestretch, scale]) = self.values(params) else {
             return Vec::new();
         };
@@ -561,6 +844,135 @@ impl Effect for Membrane {
             field(CellQuantity::Wrinkled, |s| {
                 f64::from(u8::from(s.tensions[1] < 0.0))
             }),
+        ]
+    }
+}
+
+impl Membrane {
+    /// [`Effect::assemble`] with the relaxed energy: the loads of μ and H as with the plain
+    /// one (W_ε is linear in μ, the element's in H); that of k the gradient with the constants'
+    /// derivatives in k (the states do not depend on them); that of the effective pre-stretch
+    /// λ from λ ∂g/∂λ = K_e x − g, true of any energy of F alone, since F ∝ λ and H A0 ∝ λ⁻²
+    /// (docs/theory.md §2.9).
+    fn assemble_relaxed(
+        &self,
+        x: &[Vec3],
+        out: &mut Assembler<'_>,
+        [mu, k, thickness, prestretch, scale]: [f64; 5],
+        stiffness: f64,
+    ) -> Result<(), ModelError> {
+        let effective = prestretch / scale;
+        let mat = MooneyRivlin::new(mu, k, thickness);
+        let dmat = MooneyRivlin::derivative_in_k(mu, k, thickness);
+        let m = &self.material;
+        let slots = [
+            m.mu.parameter(),
+            m.k.parameter(),
+            m.thickness.parameter(),
+            m.prestretch.parameter(),
+            self.radius.as_ref().and_then(|(r, _)| r.parameter()),
+        ];
+        let radius = scale * self.radius.as_ref().map_or(1.0, |(_, r0)| *r0);
+        let want_loads = out.request().loads && slots.iter().any(Option::is_some);
+        let inverted = || "inverted or collapsed element".to_string();
+        out.add_triangles(x, slots, |t, xt, terms| {
+            let elem = self.elements[t].at(effective, thickness);
+            terms.local = elem
+                .relaxed_energy_gradient_hessian(&mat, stiffness, xt)
+                .ok_or_else(inverted)?
+                .0;
+            if !want_loads {
+                return Ok(());
+            }
+            let grad = terms.local.grad;
+            if slots[0].is_some() {
+                terms.loads[0] = grad.map(|g| g / mu);
+            }
+            if slots[2].is_some() {
+                terms.loads[2] = grad.map(|g| g / thickness);
+            }
+            if slots[1].is_some() {
+                terms.loads[1] = elem
+                    .relaxed_energy_gradient_hessian(&dmat, stiffness, xt)
+                    .ok_or_else(inverted)?
+                    .0
+                    .grad;
+            }
+            if slots[3].is_some() || slots[4].is_some() {
+                let mut g = [0.0; 9];
+                for (r, gr) in g.iter_mut().enumerate() {
+                    let kx: f64 = (0..9)
+                        .map(|c| terms.local.hess[r][c] * xt[c / 3][c % 3])
+                        .sum();
+                    *gr = kx - grad[r];
+                }
+                if slots[3].is_some() {
+                    terms.loads[3] = g.map(|v| v / prestretch);
+                }
+                if slots[4].is_some() {
+                    terms.loads[4] = g.map(|v| -v / radius);
+                }
+            }
+            Ok(())
+        })
+    }
+
+    /// Every triangle's relaxed state at `x`; a collapsed element shows a slack state of
+    /// zero stretches.
+    fn relaxed_states(
+        &self,
+        x: &[Vec3],
+        triangles: &[[usize; 3]],
+        params: &[f64],
+    ) -> Vec<RelaxedState> {
+        let Ok([mu, k, thickness, prestretch, scale]) = self.values(params) else {
+            return Vec::new();
+        };
+        let mat = MooneyRivlin::new(mu, k, thickness);
+        self.elements
+            .iter()
+            .zip(triangles)
+            .map(|(e, &[a, b, c])| {
+                e.at(prestretch / scale, thickness)
+                    .relaxed_state(&mat, &[x[a], x[b], x[c]])
+                    .unwrap_or(RelaxedState {
+                        state: TensionState::Slack,
+                        principal: PrincipalState {
+                            stretches: [0.0; 2],
+                            thickness: 0.0,
+                            tensions: [0.0; 2],
+                        },
+                        direction: Vector3::zeros(),
+                    })
+            })
+            .collect()
+    }
+
+    /// [`Effect::cell_fields`] with the relaxed energy.
+    fn relaxed_fields(
+        &self,
+        x: &[Vec3],
+        triangles: &[[usize; 3]],
+        params: &[f64],
+    ) -> Vec<CellField> {
+        let states = self.relaxed_states(x, triangles, params);
+        if states.is_empty() {
+            return Vec::new();
+        }
+        let field = |quantity, value: fn(&RelaxedState) -> f64| CellField {
+            quantity,
+            values: states.iter().map(value).collect(),
+        };
+        vec![
+            field(CellQuantity::Stretch1, |s| s.principal.stretches[0]),
+            field(CellQuantity::Stretch2, |s| s.principal.stretches[1]),
+            field(CellQuantity::Thickness, |s| s.principal.thickness),
+            field(CellQuantity::Tension1, |s| s.principal.tensions[0]),
+            field(CellQuantity::Tension2, |s| s.principal.tensions[1]),
+            field(CellQuantity::Wrinkled, |s| {
+                f64::from(u8::from(s.state != TensionState::Taut))
+            }),
+            field(CellQuantity::MembraneState, |s| s.state.code()),
         ]
     }
 }
@@ -662,6 +1074,216 @@ mod tests {
         assert!(elem
             .energy_gradient_hessian(&mat, &[x[0], x[0], x[2]])
             .is_none());
+    }
+
+    /// A reference triangle in the plane z = 0 (λ0 = 1, H = 1) and the positions of the
+    /// homogeneous deformation with principal stretches (l1, l2) along the reference angle φ,
+    /// turned out of the plane by the rotation with axis-angle vector `turn`.
+    fn stretched(
+        l1: f64,
+        l2: f64,
+        phi: f64,
+        turn: [f64; 3],
+    ) -> (ReferenceTriangle, [Vector3<f64>; 3]) {
+        let x0 = [
+            Vector3::new(0.1, -0.2, 0.0),
+            Vector3::new(1.3, 0.1, 0.0),
+            Vector3::new(0.4, 0.9, 0.0),
+        ];
+        let elem = ReferenceTriangle::new(&x0, 1.0, 1.0).unwrap();
+        let (c, s) = (phi.cos(), phi.sin());
+        let q = nalgebra::Rotation3::new(Vector3::from(turn));
+        let x = x0.map(|p| {
+            let (a, b) = (c * p.x + s * p.y, -s * p.x + c * p.y);
+            let (a, b) = (l1 * a, l2 * b);
+            q * Vector3::new(c * a - s * b, s * a + c * b, 0.0)
+        });
+        (elem, x)
+    }
+
+    /// ∂W/∂λ₂ = 0 at λ₂ = λ₁^(−1/2) for every k (the natural width), the lateral tension is
+    /// negative below it and positive above; and the wrinkled energy there is the plain one.
+    #[test]
+    fn the_natural_width_is_the_inverse_square_root_of_the_stretch() {
+        for &k in &[0.0, 0.1, 0.5, 2.0] {
+            let mat = MooneyRivlin::new(1.0, k, 1.0);
+            for &l1 in &[1.01f64, 1.3, 2.0, 4.0] {
+                let nu = 1.0 / l1.sqrt();
+                let lateral = |l2: f64| {
+                    let (elem, x) = stretched(l1, l2, 0.3, [0.0; 3]);
+                    elem.principal_state(&mat, &x).unwrap().tensions[1]
+                };
+                assert!(lateral(nu).abs() < 1e-12, "k {k}, λ₁ {l1}: {}", lateral(nu));
+                assert!(lateral(nu * 0.99) < 0.0 && lateral(nu * 1.01) > 0.0);
+                let (elem, x) = stretched(l1, nu, 0.3, [0.0; 3]);
+                let plain = elem.energy_gradient_hessian(&mat, &x).unwrap().value;
+                let w = mat.uniaxial(l1 * l1)[0] * elem.volume;
+                assert!(
+                    (plain - w).abs() < 1e-14 * w,
+                    "k {k}, λ₁ {l1}: {plain} vs {w}"
+                );
+            }
+        }
+    }
+
+    /// On states in tension the relaxed energy (ε = 0) is the plain one, bit for bit, and its
+    /// state is taut; below the natural width it is wrinkled, below the natural length slack.
+    #[test]
+    fn relaxed_is_plain_in_tension_and_states_switch_where_the_tensions_vanish() {
+        let mat = MooneyRivlin::new(1.0, 0.2, 1.0);
+        for &(l1, l2) in &[(1.2, 1.1), (1.5, 0.9), (1.05, 1.0), (2.0, 0.75)] {
+            let (elem, x) = stretched(l1, l2, 1.1, [0.2, -0.4, 0.7]);
+            let plain = elem.energy_gradient_hessian(&mat, &x).unwrap();
+            let (relaxed, state) = elem.relaxed_energy_gradient_hessian(&mat, 0.0, &x).unwrap();
+            assert_eq!(state, TensionState::Taut, "({l1}, {l2})");
+            assert_eq!(plain, relaxed);
+        }
+        for &(l1, l2, want) in &[
+            (1.2, 0.9, TensionState::Wrinkled),
+            (2.0, 0.7, TensionState::Wrinkled),
+            (0.99, 0.5, TensionState::Slack),
+            (0.9, 0.9, TensionState::Slack),
+        ] {
+            let (elem, x) = stretched(l1, l2, 1.1, [0.2, -0.4, 0.7]);
+            let (_, state) = elem.relaxed_energy_gradient_hessian(&mat, 0.0, &x).unwrap();
+            assert_eq!(state, want, "({l1}, {l2})");
+            let r = elem.relaxed_state(&mat, &x).unwrap();
+            assert_eq!(r.state, want);
+            assert!(r.principal.tensions[1] == 0.0 && r.principal.tensions[0] >= 0.0);
+            if want == TensionState::Wrinkled {
+                // The tension runs along the current image of the major principal direction.
+                let e1 = nalgebra::Rotation3::new(Vector3::new(0.2, -0.4, 0.7))
+                    * Vector3::new(1.1f64.cos(), 1.1f64.sin(), 0.0);
+                assert!((r.direction.dot(&e1).abs() - 1.0).abs() < 1e-12);
+            }
+        }
+    }
+
+    /// W* is C¹: across the taut–wrinkled surface (λ₂ = λ₁^(−1/2)) and the wrinkled–slack
+    /// surface (λ₁ = 1) the energy and gradient change by O(δ) over a step δ, while the
+    /// Hessian jumps.
+    #[test]
+    fn relaxed_energy_is_continuously_differentiable_across_the_switching_surfaces() {
+        let mat = MooneyRivlin::new(1.0, 0.3, 1.0);
+        let delta = 1e-7;
+        let diff = |a: &Local, b: &Local| {
+            let g = (0..9).fold(0.0f64, |m, i| m.max((a.grad[i] - b.grad[i]).abs()));
+            let h = (0..81).fold(0.0f64, |m, i| {
+                m.max((a.hess[i / 9][i % 9] - b.hess[i / 9][i % 9]).abs())
+            });
+            ((a.value - b.value).abs(), g, h)
+        };
+        let at = |l1: f64, l2: f64| {
+            let (elem, x) = stretched(l1, l2, 0.4, [0.1, 0.2, 0.3]);
+            elem.relaxed_energy_gradient_hessian(&mat, 0.0, &x).unwrap()
+        };
+        // Taut–wrinkled at λ₁ = 1.4.
+        let nu = 1.4f64.powf(-0.5);
+        let ((a, sa), (b, sb)) = (at(1.4, nu * (1.0 + delta)), at(1.4, nu * (1.0 - delta)));
+        assert_eq!((sa, sb), (TensionState::Taut, TensionState::Wrinkled));
+        let (dv, dg, dh) = diff(&a, &b);
+        assert!(dv < 1e-12 && dg < 1e-6, "value {dv:e}, gradient {dg:e}");
+        assert!(dh > 1e-2, "the Hessian jumps by {dh:e}");
+        // Wrinkled–slack at λ₂ = 0.7.
+        let ((a, sa), (b, sb)) = (at(1.0 + delta, 0.7), at(1.0 - delta, 0.7));
+        assert_eq!((sa, sb), (TensionState::Wrinkled, TensionState::Slack));
+        let (dv, dg, dh) = diff(&a, &b);
+        assert!(dv < 1e-12 && dg < 1e-6, "value {dv:e}, gradient {dg:e}");
+        assert!(dh > 1e-2, "the Hessian jumps by {dh:e}");
+    }
+
+    /// The residual stiffness: a wrinkled flat element bent out of its plane across the
+    /// tension (dF = e₃ ⊗ n⊥) has the second variation 2ε(c1 + c2)|dF|² > 0 under
+    /// W* + ε(c1 + c2)(t − 2), zero under W*, and a negative one under W* + ε(W − W*): the
+    /// lateral compression of the plain energy, which the index would count as instability.
+    #[test]
+    fn the_residual_stiffness_is_positive_across_the_wrinkles() {
+        let mat = MooneyRivlin::new(1.0, 0.1, 1.0);
+        let (l1, l2, phi) = (1.5f64, 0.6f64, 0.3f64);
+        let nmaj = [phi.cos(), phi.sin()];
+        let f = [
+            Vector3::new(
+                l1 * nmaj[0] * nmaj[0] + l2 * nmaj[1] * nmaj[1],
+                (l1 - l2) * nmaj[0] * nmaj[1],
+                0.0,
+            ),
+            Vector3::new(
+                (l1 - l2) * nmaj[0] * nmaj[1],
+                l1 * nmaj[1] * nmaj[1] + l2 * nmaj[0] * nmaj[0],
+                0.0,
+            ),
+        ];
+        // dF = e₃ n⊥ᵀ: df_i = n⊥_i e₃.
+        let nperp = [-nmaj[1], nmaj[0]];
+        let second = |hf: &[[Matrix3<f64>; 2]; 2]| {
+            let e3 = Vector3::z();
+            (0..2)
+                .flat_map(|i| (0..2).map(move |k| (i, k)))
+                .map(|(i, k)| (e3 * nperp[i]).dot(&(hf[i][k] * (e3 * nperp[k]))))
+                .sum::<f64>()
+        };
+        let eps = 1e-3;
+        let (_, _, h0, state) = mat.relaxed_in_f(&f, 0.0).unwrap();
+        assert_eq!(state, TensionState::Wrinkled);
+        assert!(second(&h0).abs() < 1e-12, "{}", second(&h0));
+        let (_, _, he, _) = mat.relaxed_in_f(&f, eps).unwrap();
+        let want = 2.0 * eps * (mat.c1 + mat.c2);
+        assert!(
+            (second(&he) - want).abs() < 1e-12 * want.max(1.0),
+            "{}",
+            second(&he)
+        );
+        let (_, _, hp) = mat.energy_in_f(&f).unwrap();
+        let mixed = second(&h0) * (1.0 - eps) + second(&hp) * eps;
+        assert!(mixed < -1e-4 * eps, "{mixed}");
+    }
+
+    proptest! {
+        /// The relaxed energy's gradient and Hessian against central differences in each
+        /// state (`which`: 0 taut, 1 wrinkled, 2 slack), at random stretches, directions and
+        /// out-of-plane turns, with and without the residual stiffness; cases whose difference
+        /// steps cross a switching surface are skipped.
+        #[test]
+        fn relaxed_gradient_and_hessian_match_finite_differences(
+            which in 0usize..3,
+            a in 0.0f64..1.0,
+            b in 0.0f64..1.0,
+            phi in 0.0f64..3.2,
+            turn in proptest::array::uniform3(-2.0f64..2.0),
+            dir in proptest::array::uniform9(-1.0f64..1.0),
+            k in 0.0f64..0.5,
+            eps in prop_oneof![Just(0.0), 1e-4f64..0.1],
+        ) {
+            let (l1, l2) = match which {
+                0 => {
+                    let l1 = 1.05 + 0.95 * a;
+                    let lo = 1.02 / l1.sqrt();
+                    (l1, lo + (l1 - lo) * b)
+                }
+                1 => {
+                    let l1 = 1.02 + a;
+                    (l1, 0.3 + (0.98 / l1.sqrt() - 0.3) * b)
+                }
+                _ => {
+                    let l1 = 0.4 + 0.58 * a;
+                    (l1, l1 * (0.3 + 0.7 * b))
+                }
+            };
+            let want = [TensionState::Taut, TensionState::Wrinkled, TensionState::Slack][which];
+            let mat = MooneyRivlin::new(1.0, k, 1.0);
+            let (elem, x) = stretched(l1, l2, phi, turn);
+            let step = 1e-6;
+            let state = |s: f64| {
+                elem.relaxed_energy_gradient_hessian(&mat, eps, &perturbed(&x, &dir, s))
+                    .map(|(_, st)| st)
+            };
+            prop_assert_eq!(state(0.0), Some(want));
+            prop_assume!(state(step) == Some(want) && state(-step) == Some(want));
+            let kernel = |y: &[Vector3<f64>; 3]| {
+                elem.relaxed_energy_gradient_hessian(&mat, eps, y).map_or(Local::ZERO, |(l, _)| l)
+            };
+            check_kernel(kernel, &x, &dir, step, 1e-6).map_err(TestCaseError::fail)?;
+        }
     }
 
     proptest! {

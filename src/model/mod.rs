@@ -111,6 +111,17 @@ pub trait Effect: Send + Sync {
         Vec::new()
     }
 
+    /// The per-triangle vectors this effect can show at a state (a direction), for the state
+    /// files; none by default.
+    fn cell_vectors(
+        &self,
+        _x: &[Vec3],
+        _triangles: &[[usize; 3]],
+        _params: &[f64],
+    ) -> Vec<CellVectorField> {
+        Vec::new()
+    }
+
     /// The per-node quantities this effect can show at a state (the pressure it applies),
     /// for the state files; none by default.
     fn node_fields(
@@ -167,6 +178,8 @@ pub enum CellQuantity {
     Tension2,
     /// 1 where the smaller principal tension is negative (the membrane would wrinkle), else 0.
     Wrinkled,
+    /// With the relaxed energy: 0 where the triangle is taut, 1 wrinkled, 2 slack.
+    MembraneState,
     /// The fluid pressure ρ g (h − z)₊ at the triangle's centroid (unclipped in a filled
     /// enclosure), whichever side the fluid is on.
     FluidPressure,
@@ -185,6 +198,7 @@ impl CellQuantity {
             Self::Tension1 => "tension_1",
             Self::Tension2 => "tension_2",
             Self::Wrinkled => "wrinkled",
+            Self::MembraneState => "membrane_state",
             Self::FluidPressure => "fluid_pressure",
             Self::ContactPressure => "contact_pressure",
         }
@@ -198,6 +212,15 @@ pub struct CellField {
     pub quantity: CellQuantity,
     /// One value per triangle, in the mesh's order.
     pub values: Vec<f64>,
+}
+
+/// One 3-vector per triangle, with its name in the state files.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellVectorField {
+    /// The field's name (`wrinkle_direction`).
+    pub name: &'static str,
+    /// One vector per triangle, in the mesh's order.
+    pub values: Vec<Vec3>,
 }
 
 /// How a group element moves an effect that can be mapped onto another one: the element R
@@ -404,6 +427,15 @@ impl FeModel {
             }
         }
         fields
+    }
+
+    /// Every effect's per-triangle vectors at (u, Λ), in effect order.
+    pub fn cell_vectors(&self, u: &[f64], params: &[f64]) -> Vec<CellVectorField> {
+        let x = self.positions(u, params);
+        self.effects
+            .iter()
+            .flat_map(|e| e.cell_vectors(&x, self.layout.triangles(), params))
+            .collect()
     }
 
     /// Every effect's per-node fields at (u, Λ), in effect order (a quantity that several

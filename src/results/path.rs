@@ -146,13 +146,21 @@ pub struct Wrinkling {
     /// The critical points that lie in a wrinkled state (numbered from 1, as
     /// `critical_NN.vtu`).
     pub critical: Vec<WrinkledCritical>,
+    /// True when the membrane has the relaxed (tension-field) energy: the wrinkled
+    /// triangles are those not taut, which that energy describes (left out when false).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub relaxed: bool,
 }
 
 impl Wrinkling {
     /// A warning for every critical point of `critical` (the report's, numbered from 1) that
     /// lies in a wrinkled state: `critical point 2 (simple bifurcation in E1) lies in a
     /// wrinkled state (12 of 320 triangles): the membrane model does not describe it there`.
+    /// None with the relaxed energy, which holds wrinkled states.
     pub fn warnings(&self, critical: &[CriticalPoint]) -> Vec<String> {
+        if self.relaxed {
+            return Vec::new();
+        }
         self.critical
             .iter()
             .filter_map(|c| {

@@ -252,9 +252,46 @@ pub struct Material {
     /// stress-free state is the mesh shrunk by 1/λ0; a number or a parameter). Default 1.
     #[serde(default = "one_quantity")]
     pub prestretch: Quantity,
+    /// How compression is carried: `none` (the plain energy, the default) or `relaxed` (the
+    /// tension-field energy: taut, wrinkled or slack per triangle; docs/theory.md §2.9).
+    #[serde(default, skip_serializing_if = "Wrinkling::is_none")]
+    pub wrinkling: Wrinkling,
+    /// The residual stiffness ε of the relaxed energy, 0 ≤ ε ≤ 1 (default
+    /// [`DEFAULT_WRINKLING_STIFFNESS`]); only with `wrinkling = "relaxed"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wrinkling_stiffness: Option<f64>,
+}
+
+/// The residual stiffness ε of the relaxed energy when the scene gives none.
+pub const DEFAULT_WRINKLING_STIFFNESS: f64 = 1e-4;
+
+/// `material.wrinkling`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Wrinkling {
+    /// The plain energy everywhere.
+    #[default]
+    None,
+    /// The relaxed (tension-field) energy.
+    Relaxed,
+}
+
+impl Wrinkling {
+    /// True for the plain energy (the default, left out when a scene is written back).
+    pub fn is_none(&self) -> bool {
+        *self == Self::None
+    }
 }
 
 impl Material {
+    /// The residual stiffness ε when the relaxed energy is selected, `None` for the plain one.
+    pub fn relaxed_stiffness(&self) -> Option<f64> {
+        (self.wrinkling == Wrinkling::Relaxed).then(|| {
+            self.wrinkling_stiffness
+                .unwrap_or(DEFAULT_WRINKLING_STIFFNESS)
+        })
+    }
+
     /// The quantities with their keys and the range a value must lie in.
     pub fn ruled_quantities(&self) -> Vec<(&'static str, &Quantity, Range)> {
         vec![

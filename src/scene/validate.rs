@@ -517,6 +517,21 @@ fn check_material(m: &Material, parameters: &BTreeMap<String, Parameter>) -> Res
     for (key, q, range) in m.ruled_quantities() {
         check_quantity(&format!("material.{key}"), q, range, parameters)?;
     }
+    if let Some(eps) = m.wrinkling_stiffness {
+        let key = "material.wrinkling-stiffness";
+        if m.wrinkling != super::Wrinkling::Relaxed {
+            return Err(Problem::at(
+                key,
+                format!("= {}: needs wrinkling = \"relaxed\"", num(eps)),
+            ));
+        }
+        if !(eps.is_finite() && (0.0..=1.0).contains(&eps)) {
+            return Err(Problem::at(
+                key,
+                format!("must be between 0 and 1, got {}", num(eps)),
+            ));
+        }
+    }
     Ok(())
 }
 
@@ -588,7 +603,7 @@ fn check_effect(
 }
 
 /// The columns of `path.csv` besides the parameters: no parameter may take their names.
-const COLUMNS: [&str; 10] = [
+const COLUMNS: [&str; 12] = [
     "step",
     "arclength",
     "iterations",
@@ -599,6 +614,8 @@ const COLUMNS: [&str; 10] = [
     "volume",
     "stretch",
     "fluid_volume",
+    "wrinkled_area",
+    "slack_area",
 ];
 
 /// A parameter's name is an identifier (a letter or `_`, then letters, digits, `_` or `-`,

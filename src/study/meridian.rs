@@ -89,6 +89,11 @@ impl MeridianStudy {
         };
         // μ, k and H numbers or parameters (docs/theory.md §15.18); the pre-stretch a number.
         let m = &scene.material;
+        if m.relaxed_stiffness().is_some() {
+            return Err(unsupported(
+                "material.wrinkling = \"relaxed\": the axisymmetric model has the plain energy only; run the scene on a 3-D mesh".to_string(),
+            ));
+        }
         let material = MeridianMaterial {
             mu: index(&m.mu),
             k: index(&m.k),

@@ -15,7 +15,7 @@ use crate::continuation::crossings::{Blocks, CriticalTest};
 use crate::continuation::{solve_at, PathOptions};
 use crate::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
 use crate::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
-use crate::effects::membrane::{MaterialQuantities, Membrane};
+use crate::effects::membrane::{self, MaterialQuantities, Membrane};
 use crate::effects::plane::{PenaltyLaw, Plane};
 use crate::effects::spin::Spin;
 use crate::effects::volume::ClosingFace;
@@ -67,6 +67,10 @@ pub enum Measure {
     FluidVolume(usize),
     /// Over-pressure C/(V − V*) − P_atm of the gas-amount effect with this index among them.
     GasPressure(usize),
+    /// The current area of the wrinkled triangles (relaxed energy).
+    WrinkledArea,
+    /// The current area of the slack triangles (relaxed energy).
+    SlackArea,
 }
 
 /// A scene on a 3-D mesh, ready to solve.
@@ -215,7 +219,11 @@ impl MeshStudy {
                 prestretch: quantity(&mat.prestretch),
             },
         )
-        .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
+        .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?
+        .with_wrinkling(match mat.relaxed_stiffness() {
+            Some(stiffness) => membrane::Wrinkling::Relaxed { stiffness },
+            None => membrane::Wrinkling::None,
+        });
         // The mesh was generated at the radius parameter's start value R0.
         let radius = scene
             .mesh_radius
@@ -386,6 +394,10 @@ impl MeshStudy {
             };
             measures.push((name, Measure::GasPressure(i)));
         }
+        if mat.relaxed_stiffness().is_some() {
+            measures.push(("wrinkled_area".into(), Measure::WrinkledArea));
+            measures.push(("slack_area".into(), Measure::SlackArea));
+        }
         let names: Vec<String> = measures.iter().map(|(n, _)| n.clone()).collect();
         super::check_measure(&scene, &names)
             .map_err(|e| StudyError::Unsupported(format!("{}: {e}", scene.origin)))?;
@@ -513,8 +525,27 @@ impl MeshStudy {
                     f.fluid_volume(tris, &x, params) + plate
                 }
                 Measure::GasPressure(i) => self.gases[i].over_pressure(tris, &x, params),
+                Measure::WrinkledArea => self.area_in_state(u, params, &x, 1.0),
+                Measure::SlackArea => self.area_in_state(u, params, &x, 2.0),
             })
             .collect()
+    }
+
+    /// The current area of the triangles whose `membrane_state` is `code` (1 wrinkled,
+    /// 2 slack), at the positions `x` of (u, Λ); 0 without that field.
+    fn area_in_state(&self, u: &[f64], params: &[f64], x: &[Vec3], code: f64) -> f64 {
+        let tris = self.model.layout().triangles();
+        self.model
+            .cell_fields(u, params)
+            .into_iter()
+            .find(|f| f.quantity == CellQuantity::MembraneState)
+            .map_or(0.0, |f| {
+                tris.iter()
+                    .zip(&f.values)
+                    .filter(|(_, &v)| v == code)
+                    .map(|(&[a, b, c], _)| 0.5 * (x[b] - x[a]).cross(&(x[c] - x[a])).norm())
+                    .fold(0.0, |sum, area| sum + area)
+            })
     }
 
     /// True if the mesh is closed.
@@ -611,6 +642,7 @@ impl MeshStudy {
             triangles: self.mesh.mesh.triangles.len(),
             first,
             critical,
+            relaxed: self.scene.material.relaxed_stiffness().is_some(),
         })
     }
 
@@ -660,6 +692,16 @@ impl Drawing for MeshStudy {
             .fold(fields, |f, c| {
                 f.cell_scalar(c.quantity.name(), c.values.iter().map(finite))
             });
+        for v in self.model.cell_vectors(&s.u, &s.params) {
+            let finite3 = |p: &Vec3| -> [f64; 3] {
+                if p.iter().all(|c| c.is_finite()) {
+                    (*p).into()
+                } else {
+                    [0.0; 3]
+                }
+            };
+            fields = fields.cell_vector(v.name, v.values.iter().map(finite3));
+        }
         if let (StateKind::Critical { .. }, Some(mode)) = (&s.kind, &s.mode) {
             let mut moved = vec![Vec3::zeros(); self.model.reference().len()];
             self.model.layout().add_displacements(mode, &mut moved);
