@@ -46,3 +46,4 @@ mod surface;
 mod tension_field;
 mod thesis;
 mod thesis_curves;
+mod validity;

@@ -839,3 +839,64 @@ fn spectrum_svg_draws_the_higher_eigenvalues_that_cross_zero() {
     let svg = fs::read_to_string(dir.path().join("path.svg")).unwrap();
     assert!(!svg.contains("higher eigenvalues"));
 }
+
+/// Validity (docs/theory.md §8.10): a critical point in a wrinkled state and one whose
+/// eigenvalue was not brought to round-off are flagged, with their measures, in
+/// `critical.json`; a localised point in tension is valid. Under the relaxed energy a
+/// wrinkled state raises no flag.
+#[test]
+fn critical_points_carry_their_validity_flags() {
+    use memstab::results::validity::{Flag, LOCALISED};
+    use memstab::results::{WrinkledCritical, Wrinkling};
+    let point = |residual: f64| CriticalPoint {
+        kind: CriticalKind::LimitPoint,
+        irrep: "Ag".to_string(),
+        multiplicity: 1,
+        parameters: vec![1.3, 0.0],
+        measures: vec![1.0, 1.4, 0.4],
+        after_step: 5,
+        residual_eigenvalue: residual,
+        isotropy: Isotropy {
+            name: "Ih".to_string(),
+            order: 120,
+            elements: Vec::new(),
+        },
+        mode: Vec::new(),
+        state: Vec::new(),
+    };
+    let mut r = report();
+    r.critical = vec![point(1e-13), point(1e-13), point(1e-5)];
+    r.wrinkling = Some(Wrinkling {
+        triangles: 20,
+        first: None,
+        critical: vec![WrinkledCritical {
+            critical: 2,
+            wrinkled: 7,
+        }],
+        relaxed: false,
+    });
+    assert!(r.flags(0).is_empty());
+    assert_eq!(
+        r.flags(1),
+        vec![Flag::Wrinkled {
+            triangles: 7,
+            of: 20
+        }]
+    );
+    assert_eq!(r.flags(2), vec![Flag::NotLocalised { residual: 1e-5 }]);
+    assert!(1e-13 < LOCALISED && LOCALISED < 1e-5);
+    let dir = tempfile::tempdir().unwrap();
+    let path = memstab::output::write_critical(dir.path(), &r).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&fs::read_to_string(path).unwrap()).unwrap();
+    assert_eq!(json[0]["valid"], true);
+    assert_eq!(json[0]["flags"], serde_json::json!([]));
+    assert_eq!(json[1]["valid"], false);
+    assert_eq!(
+        json[1]["flags"],
+        serde_json::json!([{"flag": "wrinkled", "triangles": 7, "of": 20}])
+    );
+    assert_eq!(json[2]["flags"][0]["flag"], "not-localised");
+    // The relaxed energy describes wrinkled states: no flag.
+    r.wrinkling.as_mut().unwrap().relaxed = true;
+    assert!(r.flags(1).is_empty());
+}

@@ -125,14 +125,15 @@ pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, writt
             None => out!("critical points: none (no index was computed)"),
         }
     } else {
-        out!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
-        for (k, cp) in report.critical.iter().enumerate() {
+        // The valid points first; those with a flag apart, with the reasons.
+        let line = |k: usize| {
+            let cp = &report.critical[k];
             let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(cp.parameters[c]));
             let m = report
                 .wave_numbers
                 .get(k)
                 .map_or_else(String::new, |m| format!(", m = {m}"));
-            out!(
+            format!(
                 "  {:<20} in {:<4} x{} at {} = {value} (isotropy {}{m}, |eigenvalue|/|K| = {:.0e})",
                 cp.kind,
                 cp.irrep,
@@ -140,7 +141,26 @@ pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, writt
                 report.control,
                 cp.isotropy.name,
                 cp.residual_eigenvalue
+            )
+        };
+        let (valid, flagged): (Vec<usize>, Vec<usize>) =
+            (0..report.critical.len()).partition(|&k| report.flags(k).is_empty());
+        if valid.is_empty() {
+            out!("critical points: none valid");
+        } else {
+            out!("critical points (irrep of the singular block, multiplicity in K, isotropy of the mode):");
+        }
+        for &k in &valid {
+            out!("{}", line(k));
+        }
+        if !flagged.is_empty() {
+            out!(
+                "critical points flagged (not results of the model as it stands; numbered as in critical.json):"
             );
+            for &k in &flagged {
+                let why: Vec<String> = report.flags(k).iter().map(ToString::to_string).collect();
+                out!("{} — point {}: {}", line(k), k + 1, why.join("; "));
+            }
         }
     }
     print_wrinkling(report);
@@ -218,8 +238,8 @@ pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, writt
     }
 }
 
-/// Where the membrane would wrinkle: the first path point with wrinkled triangles, and a
-/// warning for every critical point in a wrinkled state.
+/// Where the membrane would wrinkle: the first path point with wrinkled triangles (the
+/// critical points in a wrinkled state are listed apart, flagged).
 fn print_wrinkling(report: &PathReport) {
     let Some(w) = &report.wrinkling else {
         return;
@@ -241,9 +261,6 @@ fn print_wrinkling(report: &PathReport) {
             p.wrinkled,
             w.triangles
         ),
-    }
-    for warning in w.warnings(&report.critical) {
-        out!("warning: {warning}");
     }
     if w.relaxed
         && report

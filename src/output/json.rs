@@ -75,6 +75,10 @@ struct CriticalJson<'a> {
     /// The mode's wave number about z, where the mesh has an axis.
     #[serde(skip_serializing_if = "Option::is_none")]
     m: Option<usize>,
+    /// No flag raised: a result of the model as it stands.
+    valid: bool,
+    /// Why it may not be ([`crate::results::validity::Flag`]).
+    flags: Vec<crate::results::validity::Flag>,
 }
 
 /// Writes `dir/critical.json`: a list of the critical points (kind, irrep, multiplicity,
@@ -127,6 +131,8 @@ pub fn write_critical_with(
             isotropy: &c.isotropy.name,
             isotropy_order: c.isotropy.order,
             m: report.wave_numbers.get(k).copied(),
+            valid: report.flags(k).is_empty(),
+            flags: report.flags(k),
         })
         .collect();
     for c in &list {

@@ -485,6 +485,10 @@ pub struct CriticalSummary {
     /// The mode's wave number about z, where the mesh has an axis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub m: Option<usize>,
+    /// No flag raised: a result of the model as it stands.
+    pub valid: bool,
+    /// Why it may not be.
+    pub flags: Vec<crate::results::validity::Flag>,
 }
 
 /// What `memstab run --json` prints: the run in one object.
@@ -555,6 +559,8 @@ impl RunSummary {
                     value: c.map_or(f64::NAN, |c| cp.parameters[c]),
                     isotropy: cp.isotropy.name.clone(),
                     m: report.wave_numbers.get(k).copied(),
+                    valid: report.flags(k).is_empty(),
+                    flags: report.flags(k),
                 })
                 .collect(),
             wrinkling: report.wrinkling.clone(),

@@ -16,6 +16,7 @@ mod spectra;
 mod state;
 mod stop;
 mod surface;
+pub mod validity;
 
 pub use branches::{
     directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches, Half,
