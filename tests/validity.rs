@@ -69,3 +69,36 @@ fn critical_points_in_a_wrinkled_state_are_listed_apart() {
     assert!(text.contains("critical points flagged"), "{text}");
     assert!(text.contains("point 1: wrinkled, "), "{text}");
 }
+
+/// `compare` matches only the valid points: the flagged ones are listed apart, unless
+/// `--include-flagged`.
+#[test]
+fn compare_lists_flagged_points_apart_unless_asked() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/thesis/paper3_gas_fluid_pressure.toml"
+    );
+    let compare = |extra: &[&str]| -> serde_json::Value {
+        let o = Command::new(env!("CARGO_BIN_EXE_memstab"))
+            .args(["compare", scene, "--meshes", "C2v", "--json", "--quiet"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let apart = compare(&[]);
+    let level = &apart["meshes"][0]["levels"][0];
+    assert_eq!(level["critical"].as_array().unwrap().len(), 0, "{level}");
+    let flagged = level["flagged"].as_array().unwrap();
+    assert!(!flagged.is_empty());
+    assert!(flagged.iter().all(|p| p["flags"][0]["flag"] == "wrinkled"));
+    let included = compare(&["--include-flagged"]);
+    let level = &included["meshes"][0]["levels"][0];
+    assert_eq!(
+        level["critical"].as_array().unwrap().len(),
+        flagged.len(),
+        "{level}"
+    );
+    assert!(level.get("flagged").is_none());
+}

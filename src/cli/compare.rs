@@ -1,6 +1,8 @@
 //! `memstab compare SCENE --meshes A,B,… [--refine] [--max X] [--divisions D] [--samples N]
-//! [--json] [--quiet]`: the same scene on meshes of different symmetry, side by side. The
-//! meshes, the matching of critical points and the measured gaps are
+//! [--include-flagged] [--json] [--quiet]`: the same scene on meshes of different symmetry,
+//! side by side (the critical points flagged as not results of the model listed apart, and
+//! matched only with `--include-flagged`). The meshes, the matching of critical points and
+//! the measured gaps are
 //! [`memstab::analysis::compare`]'s; this prints them as a table or one JSON object.
 //!
 //! Bad input (a scene that does not load or build, a mesh that is not a subgroup or does not
@@ -41,6 +43,10 @@ pub(crate) struct CompareArgs {
     /// with --max to keep the sample spacing.
     #[arg(long, value_name = "N")]
     samples: Option<usize>,
+    /// Match the critical points flagged as not results of the model (wrinkled, not
+    /// localised) too; by default they are listed apart.
+    #[arg(long)]
+    include_flagged: bool,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -61,6 +67,7 @@ pub(crate) fn run(args: &CompareArgs) -> Result<(), CliError> {
         max: args.max,
         divisions: args.divisions,
         samples: args.samples,
+        include_flagged: args.include_flagged,
     };
     let quiet = args.quiet || !std::io::stderr().is_terminal();
     let progress = |line: &str| {
@@ -163,11 +170,30 @@ fn print_table(c: &Comparison) {
             if let Some(note) = &level.note {
                 out!("  {:<lw$}  {note}", "");
             }
-            if level.critical.is_empty() {
+            if level.critical.is_empty() && level.flagged.is_empty() {
                 out!("  {:<lw$}  no critical point; stopped: {}", "", level.stop);
+            } else if level.critical.is_empty() {
+                out!(
+                    "  {:<lw$}  no valid critical point ({} flagged below); stopped: {}",
+                    "",
+                    level.flagged.len(),
+                    level.stop
+                );
             }
             for w in &level.warnings {
                 out!("  {:<lw$}  warning: {w}", "");
+            }
+            for p in &level.flagged {
+                let why: Vec<String> = p.flags.iter().map(ToString::to_string).collect();
+                out!(
+                    "  {:<lw$}  flagged, not matched: {} in {} at {} = {} ({})",
+                    "",
+                    p.kind,
+                    p.irrep,
+                    c.control,
+                    sig_digits(p.value, 6),
+                    why.join("; ")
+                );
             }
         }
     }

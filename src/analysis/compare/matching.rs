@@ -687,6 +687,7 @@ mod tests {
             precision: None,
             isotropy: "C1v".into(),
             rising: true,
+            flags: Vec::new(),
         }
     }
 
@@ -777,6 +778,7 @@ mod tests {
                 warnings: Vec::new(),
                 seconds: 0.0,
                 critical,
+                flagged: Vec::new(),
             }],
             check: None,
         }

@@ -121,6 +121,8 @@ pub struct CompareOptions {
     pub divisions: Option<usize>,
     /// Samples of a linear-buckling sweep (a path's step budget).
     pub samples: Option<usize>,
+    /// Match the flagged critical points too (by default they are listed apart).
+    pub include_flagged: bool,
 }
 
 /// A critical point as compared.
@@ -149,6 +151,10 @@ pub struct Point {
     /// arrives at it). Images lie on the same piece of the path as their rung: a point met
     /// after a turn is not the image of one met before it.
     pub rising: bool,
+    /// Why it may not be a result of the model (docs/theory.md §8.10); a flagged point is
+    /// matched only with `include_flagged`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub flags: Vec<Flag>,
 }
 
 /// Whether the control rises as a path meets the point at `value` localised after the step
@@ -188,8 +194,11 @@ pub struct Level {
     pub warnings: Vec<String>,
     /// Wall time of the run.
     pub seconds: f64,
-    /// Its critical points.
+    /// Its critical points (the valid ones, unless flagged ones are included).
     pub critical: Vec<Point>,
+    /// Its flagged critical points, listed apart and not matched.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub flagged: Vec<Point>,
 }
 
 /// One mesh's runs.
@@ -305,6 +314,7 @@ impl Job {
 }
 
 use crate::axisym::blocks::MERIDIAN_GROUP;
+use crate::results::validity::Flag;
 
 /// Runs a meridian (docs/theory.md §15) and collects its critical points: each labelled by
 /// its wave number m (unless `label_modes` is false: a comparison with unlabelled 3-D
@@ -329,7 +339,9 @@ fn execute_meridian(
         .critical
         .iter()
         .zip(&report.wave_numbers)
-        .map(|(c, &m)| Point {
+        .enumerate()
+        .map(|(k, (c, &m))| Point {
+            flags: report.flags(k),
             kind: c.kind,
             irrep: format!("m={m}"),
             multiplicity: c.multiplicity,
@@ -366,6 +378,7 @@ fn execute_meridian(
         warnings: report.warnings.clone(),
         seconds,
         critical,
+        flagged: Vec::new(),
     })
 }
 
@@ -392,23 +405,27 @@ fn execute(
         .critical
         .iter()
         .zip(precisions)
-        .map(|(cp, precision): (&CriticalPoint, Option<f64>)| Point {
-            kind: cp.kind,
-            irrep: cp.irrep.clone(),
-            multiplicity: cp.multiplicity,
-            value: control.map_or(f64::NAN, |c| cp.parameters[c]),
-            m: label_modes.then(|| wave_number(&study, &cp.mode)),
-            residual_eigenvalue: cp.residual_eigenvalue,
-            precision,
-            isotropy: cp.isotropy.name.clone(),
-            rising: rising(
-                control.and_then(|c| {
-                    let row = report.rows.iter().find(|r| r.step == cp.after_step)?;
-                    Some(row.parameters[c])
-                }),
-                control.map_or(f64::NAN, |c| cp.parameters[c]),
-            ),
-        })
+        .enumerate()
+        .map(
+            |(k, (cp, precision)): (usize, (&CriticalPoint, Option<f64>))| Point {
+                flags: report.flags(k),
+                kind: cp.kind,
+                irrep: cp.irrep.clone(),
+                multiplicity: cp.multiplicity,
+                value: control.map_or(f64::NAN, |c| cp.parameters[c]),
+                m: label_modes.then(|| wave_number(&study, &cp.mode)),
+                residual_eigenvalue: cp.residual_eigenvalue,
+                precision,
+                isotropy: cp.isotropy.name.clone(),
+                rising: rising(
+                    control.and_then(|c| {
+                        let row = report.rows.iter().find(|r| r.step == cp.after_step)?;
+                        Some(row.parameters[c])
+                    }),
+                    control.map_or(f64::NAN, |c| cp.parameters[c]),
+                ),
+            },
+        )
         .collect();
     let warnings = unaccounted(report);
     let seconds = start.elapsed().as_secs_f64();
@@ -430,6 +447,7 @@ fn execute(
         warnings,
         seconds,
         critical,
+        flagged: Vec::new(),
     })
 }
 
@@ -656,7 +674,12 @@ pub fn compare(
         .collect();
     let mut slots: Vec<Vec<Option<Level>>> = vec![vec![None; levels + 1]; typed.len()];
     for r in results {
-        let (k, l, level) = r?;
+        let (k, l, mut level) = r?;
+        // The flagged points are listed apart, unless asked for.
+        if !options.include_flagged {
+            let (valid, flagged) = level.critical.into_iter().partition(|p| p.flags.is_empty());
+            (level.critical, level.flagged) = (valid, flagged);
+        }
         slots[k][l] = Some(level);
     }
     for (k, mut s) in slots.into_iter().enumerate() {
@@ -716,6 +739,7 @@ mod tests {
             precision: None,
             isotropy: String::new(),
             rising: true,
+            flags: Vec::new(),
         }
     }
 
@@ -771,6 +795,7 @@ mod tests {
             warnings: Vec::new(),
             seconds: 0.0,
             critical,
+            flagged: Vec::new(),
         };
         let meshes = vec![
             MeshRuns {
