@@ -884,7 +884,7 @@ fn critical_points_carry_their_validity_flags() {
         }]
     );
     assert_eq!(r.flags(2), vec![Flag::NotLocalised { residual: 1e-5 }]);
-    assert!(1e-13 < LOCALISED && LOCALISED < 1e-5);
+    const { assert!(1e-13 < LOCALISED && LOCALISED < 1e-5) };
     let dir = tempfile::tempdir().unwrap();
     let path = memstab::output::write_critical(dir.path(), &r).unwrap();
     let json: serde_json::Value = serde_json::from_str(&fs::read_to_string(path).unwrap()).unwrap();
