@@ -63,7 +63,8 @@ fn deflate(text: &str) -> (DeflationReport, RunResult) {
     let mut study = memstab::study::build(scene).unwrap();
     let result = run(&mut *study, |_, _| {}).unwrap();
     let d = result
-        .outcome::<DeflationReport>()
+        .outcome::<Vec<DeflationReport>>()
+        .and_then(|s| s.first())
         .cloned()
         .expect("a deflation report");
     (d, result)
@@ -179,8 +180,8 @@ fn a_deflation_run_writes_its_files_and_bad_keys_are_refused() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("deflation.json")).unwrap())
             .unwrap();
-    assert_eq!(json["control"], "p");
-    assert!(json["solutions"][0]["distance"].is_null());
+    assert_eq!(json[0]["control"], "p");
+    assert!(json[0]["solutions"][0]["distance"].is_null());
     for (from, to, key) in [
         (
             "follow = true",
@@ -217,5 +218,33 @@ fn a_deflation_run_writes_its_files_and_bad_keys_are_refused() {
         assert!(err.contains(&format!("'{key}'")), "{key}: {err}");
         assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(!out.exists(), "{key}: something was written");
+    }
+}
+
+/// `at`: a search at every value given, each from a solution known there (the start state
+/// carried to the value when the short path does not reach it).
+#[test]
+fn deflation_searches_at_every_value_given() {
+    let text = scene(&icosphere(8), 2, false).replacen(
+        "follow = false",
+        "follow = false\nat = [1.2, 1.3]",
+        1,
+    );
+    let scene = Scene::from_toml_str(&text, "at").unwrap();
+    let mut study = memstab::study::build(scene).unwrap();
+    let result = run(&mut *study, |_, _| {}).unwrap();
+    let searches = result.outcome::<Vec<DeflationReport>>().unwrap();
+    assert_eq!(searches.len(), 2);
+    for (d, p) in searches.iter().zip([1.2, 1.3]) {
+        assert_eq!(d.value, p);
+        let exact = sphere_stretches(K, p);
+        let found = stretches(d);
+        assert_eq!(found.len(), 3, "p = {p}: {found:?}");
+        for (a, b) in found.iter().zip(&exact) {
+            assert!(
+                ((a - b) / b).abs() < 0.015,
+                "p = {p}: {found:?} against {exact:?}"
+            );
+        }
     }
 }

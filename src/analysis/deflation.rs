@@ -50,8 +50,28 @@ impl Analysis for Deflate {
     fn run(&self, study: &dyn Study, cx: &mut Context<'_>) -> Result<StopReason, RunError> {
         let stop = self.path().run(study, cx)?;
         let opts = self.options(study);
-        let report = search(&self.0, study, &opts, cx);
-        cx.record.outcome = Some(Outcome::new(report));
+        let control = study.control().map(|c| c.index);
+        let start = control.map_or(0.0, |c| cx.start.params[c]);
+        let values = if self.0.at.is_empty() {
+            vec![start]
+        } else {
+            self.0.at.clone()
+        };
+        let mut searches = Vec::new();
+        for value in values {
+            if interrupt::requested() {
+                break;
+            }
+            match known_at(study, &opts, cx, value) {
+                Ok((u, params)) => searches.push(search(&self.0, study, &opts, cx, &u, &params)),
+                Err(why) => cx.record.warnings.push(format!(
+                    "no deflation at {} = {}: {why}",
+                    study.about().parameters[control.unwrap_or(0)],
+                    sig_digits(value, 6)
+                )),
+            }
+        }
+        cx.record.outcome = Some(Outcome::new(searches));
         Ok(stop)
     }
 
@@ -62,22 +82,20 @@ impl Analysis for Deflate {
         _scene: &Scene,
         out: &FilePath,
     ) -> Result<Vec<Described>, OutputError> {
-        let Some(d) = result.outcome::<DeflationReport>() else {
+        let Some(searches) = result.outcome::<Vec<DeflationReport>>() else {
             return Ok(Vec::new());
         };
-        let files = output::write_deflation(out, d, &result.report)?;
+        let files = output::write_deflation(out, searches, &result.report)?;
         let what = [
             format!(
-                "the {} solutions at {} = {}: state, index, whether the path reaches them, their pieces",
-                d.solutions.len(),
-                d.control,
-                sig_digits(d.value, 6)
+                "the solutions of {} searches: state, index, whether the path reaches them, their pieces",
+                searches.len()
             ),
             "every piece's points: solution, parameters, measures, index".to_string(),
             format!(
                 "{} against {}: the path and every piece, stable solid",
                 output::default_axes(&result.report).0,
-                d.control
+                result.report.control
             ),
         ];
         Ok(files
@@ -88,9 +106,19 @@ impl Analysis for Deflate {
     }
 
     fn summary(&self, result: &RunResult) -> Vec<String> {
-        let Some(d) = result.outcome::<DeflationReport>() else {
+        let Some(searches) = result.outcome::<Vec<DeflationReport>>() else {
             return Vec::new();
         };
+        searches
+            .iter()
+            .flat_map(|d| summary_of(d, result))
+            .collect()
+    }
+}
+
+/// The summary lines of one search.
+fn summary_of(d: &DeflationReport, result: &RunResult) -> Vec<String> {
+    {
         let mut lines = vec![format!(
             "deflation at {} = {}: {} solutions ({} first guesses)",
             d.control,
@@ -157,17 +185,60 @@ impl Analysis for Deflate {
     }
 }
 
-/// Deflated Newton at the start's control value, from the first guesses of every known
-/// solution in turn, until `solutions` are found or every guess is spent.
+/// A solution at the control `value`: the start state at its own value; else the path's
+/// state where its step first crosses the value (solved there from the row before); else the
+/// start state carried to the value at fixed control.
+fn known_at(
+    study: &dyn Study,
+    opts: &PathOptions,
+    cx: &Context<'_>,
+    value: f64,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let Some(c) = study.control().map(|c| c.index) else {
+        return Ok((cx.start.u.clone(), cx.start.params.clone()));
+    };
+    if cx.start.params[c] == value {
+        return Ok((cx.start.u.clone(), cx.start.params.clone()));
+    }
+    let free = Free {
+        control: Some(c),
+        constraints: true,
+        ..Free::default()
+    };
+    let rows = &cx.record.rows;
+    for i in 0..rows.len().saturating_sub(1) {
+        let (a, b) = (
+            rows[i].parameters[c] - value,
+            rows[i + 1].parameters[c] - value,
+        );
+        if a * b > 0.0 {
+            continue;
+        }
+        let mut params = rows[i].parameters.clone();
+        params[c] = value;
+        let mut problem = study.problem(&params, &free);
+        let lambda = problem.free_values(&params);
+        let q = DVector::from_vec(cx.record.points[i].q.clone());
+        if let Ok((q, l, _)) = solve_at(&mut problem, &q, &lambda, opts) {
+            return Ok((problem.displacement(&q), problem.parameters(&l)));
+        }
+    }
+    super::surface::carry(study, opts, &cx.start.u, &cx.start.params, c, value)
+}
+
+/// Deflated Newton at the control value of the solution (u, params), from the first guesses
+/// of every known solution in turn, until `solutions` are found or every guess is spent.
 fn search(
     keys: &DeflationAnalysis,
     study: &dyn Study,
     opts: &PathOptions,
     cx: &mut Context<'_>,
+    u0: &[f64],
+    params0: &[f64],
 ) -> DeflationReport {
     let about = study.about();
     let control = study.control().map(|c| c.index);
-    let params0 = cx.start.params.clone();
+    let params0 = params0.to_vec();
     let value = control.map_or(0.0, |c| params0[c]);
     let free = Free {
         control,
@@ -176,12 +247,13 @@ fn search(
     };
     let mut problem = study.problem(&params0, &free);
     let lambda0 = problem.free_values(&params0);
-    let q0 = problem.coordinates(&cx.start.u);
+    let q0 = problem.coordinates(u0);
     let mut deflation = Deflation {
         roots: vec![scaled(&q0, &lambda0, opts)],
         power: keys.power,
         shift: keys.shift,
     };
+    let z0 = scaled(&q0, &lambda0, opts);
     let mut known = vec![(q0, lambda0)];
     let mut crossings = cx.crossings.take();
     let negative = |c: &mut Option<Crossings>, u: &[f64], p: &[f64]| {
@@ -191,12 +263,13 @@ fn search(
     };
     let start = Solution {
         parameters: params0.clone(),
-        measures: study.measure(&cx.start.u, &params0),
-        negative: negative(&mut crossings, &cx.start.u, &params0),
-        wrinkled: study.wrinkled(&cx.start.u, &params0),
+        measures: study.measure(u0, &params0),
+        negative: negative(&mut crossings, u0, &params0),
+        wrinkled: study.wrinkled(u0, &params0),
         iterations: 0,
         distance: None,
-        on_path: Some(0),
+        on_path: on_path(study, &cx.record, opts, &free, &z0, value)
+            .or((cx.start.u.as_slice() == u0).then_some(0)),
         piece: Vec::new(),
         piece_stop: None,
     };

@@ -128,7 +128,7 @@ pub fn join(paths: &[SurfacePath]) -> Vec<CriticalLine> {
 /// The state at parameters `params` with `b` (parameter index `b`) moved to `target`,
 /// carried from the converged (u, params) by Newton at fixed control, the step in `b` halved
 /// where Newton fails.
-fn carry(
+pub(super) fn carry(
     study: &dyn Study,
     opts: &PathOptions,
     u: &[f64],

@@ -1,5 +1,4 @@
-//! `type = "deflation"`: the solutions at the start's control value other than the start
-//! state.
+//! `type = "deflation"`: the solutions at given control values other than the known ones.
 
 use super::super::error::{num, Problem};
 use super::super::validate::{at_least, free_parameter, positive};
@@ -8,8 +7,9 @@ use crate::continuation::Settings;
 use serde::{Deserialize, Serialize};
 
 /// `type = "deflation"`: the path through the start state in `control` (as `type = "path"`
-/// follows it), then, at the start's control value, deflated Newton (docs/theory.md §16) for
-/// up to `solutions` other solutions: from first guesses that scale each known solution's
+/// follows it), then, at every value of `at` (default the start's control value) from a
+/// solution known there (the start state, the path's state at the value, or the start state
+/// carried to it), deflated Newton (docs/theory.md §16) for up to `solutions` other solutions: from first guesses that scale each known solution's
 /// displacement by 1 + a for every a in `offsets`, with every known solution deflated. Each
 /// solution found says whether the path through the start reaches it; with `follow`, the
 /// piece of path through it is followed in the control for `steps` steps — the pieces the
@@ -17,8 +17,11 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct DeflationAnalysis {
-    /// The parameter of the paths; the solutions are sought at its start value.
+    /// The parameter of the paths.
     pub control: String,
+    /// The control values where solutions are sought. Default: the start value alone.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub at: Vec<f64>,
     /// At most this many solutions besides the start state (1 to 20). Default 4.
     #[serde(default = "default_solutions")]
     pub solutions: usize,
@@ -94,14 +97,31 @@ impl AnalysisSpec for DeflationAnalysis {
                 ));
             }
         }
+        let bounds = scene.parameters.get(&self.control);
+        for (i, &v) in self.at.iter().enumerate() {
+            let key = format!("analysis.at[{i}]");
+            let outside = bounds
+                .is_some_and(|p| p.min.is_some_and(|m| v < m) || p.max.is_some_and(|m| v > m));
+            if !v.is_finite() || outside {
+                return Err(Problem::at(
+                    &key,
+                    format!(
+                        "= {}: must be a finite value of {} within its [min, max]",
+                        num(v),
+                        self.control
+                    ),
+                ));
+            }
+        }
         positive("analysis.power", self.power)?;
         positive("analysis.shift", self.shift)
     }
     /// The path through the start and every piece.
     fn stored_points(&self) -> (u64, u64) {
         let points = (self.settings.steps as u64).saturating_add(1);
+        let searches = self.at.len().max(1) as u64;
         (
-            points.saturating_mul(self.solutions as u64 + 1),
+            points.saturating_mul((self.solutions as u64 + 1).saturating_mul(searches)),
             points / (self.settings.save_every.max(1) as u64) + 2,
         )
     }
