@@ -872,6 +872,7 @@ fn critical_points_carry_their_validity_flags() {
         critical: vec![WrinkledCritical {
             critical: 2,
             wrinkled: 7,
+            mode: 0.25,
         }],
         relaxed: false,
     });
@@ -880,7 +881,8 @@ fn critical_points_carry_their_validity_flags() {
         r.flags(1),
         vec![Flag::Wrinkled {
             triangles: 7,
-            of: 20
+            of: 20,
+            mode: 0.25
         }]
     );
     assert_eq!(r.flags(2), vec![Flag::NotLocalised { residual: 1e-5 }]);
@@ -893,7 +895,7 @@ fn critical_points_carry_their_validity_flags() {
     assert_eq!(json[1]["valid"], false);
     assert_eq!(
         json[1]["flags"],
-        serde_json::json!([{"flag": "wrinkled", "triangles": 7, "of": 20}])
+        serde_json::json!([{"flag": "wrinkled", "triangles": 7, "of": 20, "mode": 0.25}])
     );
     assert_eq!(json[2]["flags"][0]["flag"], "not-localised");
     // The relaxed energy describes wrinkled states: no flag.

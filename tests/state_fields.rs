@@ -268,6 +268,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
         critical: vec![memstab::results::WrinkledCritical {
             critical: 7,
             wrinkled: 1,
+            mode: 0.5,
         }],
         relaxed: false,
     };

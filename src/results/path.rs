@@ -137,7 +137,7 @@ pub struct PathReport {
 /// Where the membrane model stops being valid along a path: the triangles whose smaller
 /// principal tension is negative (they would wrinkle; the membrane energy does not describe
 /// them).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Wrinkling {
     /// The mesh's triangles.
     pub triangles: usize,
@@ -185,12 +185,16 @@ pub struct WrinkledPoint {
 }
 
 /// A critical point in a wrinkled state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct WrinkledCritical {
     /// The critical point's number (1-based, as `critical_NN.vtu`).
     pub critical: usize,
     /// How many triangles are wrinkled there.
     pub wrinkled: usize,
+    /// The critical mode's share in the wrinkled region: Σ |φ_n|² over the nodes of the
+    /// wrinkled triangles over Σ |φ_n|² (near 1: the instability is the wrinkles' own; 0 for
+    /// a point without its mode).
+    pub mode: f64,
 }
 
 /// What `path.json` records of the file of every point's state (see `output::store`).

@@ -21,6 +21,9 @@ pub enum Flag {
         triangles: usize,
         /// The mesh's triangles.
         of: usize,
+        /// The critical mode's share on the wrinkled triangles' nodes (Σ |φ_n|² there over
+        /// Σ |φ_n|²).
+        mode: f64,
     },
     /// The critical eigenvalue was not brought to round-off: the point is where the
     /// localisation stopped, not a zero of the block.
@@ -33,9 +36,15 @@ pub enum Flag {
 impl std::fmt::Display for Flag {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Flag::Wrinkled { triangles, of } => write!(
+            Flag::Wrinkled {
+                triangles,
+                of,
+                mode,
+            } => write!(
                 f,
-                "wrinkled, {triangles} of {of} triangles with a negative principal tension"
+                "wrinkled, {triangles} of {of} triangles with a negative principal tension, \
+                 {:.0} % of the mode there",
+                100.0 * mode
             ),
             Flag::NotLocalised { residual } => write!(
                 f,
@@ -58,6 +67,7 @@ impl PathReport {
                 flags.push(Flag::Wrinkled {
                     triangles: c.wrinkled,
                     of: w.triangles,
+                    mode: c.mode,
                 });
             }
         }

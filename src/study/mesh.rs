@@ -602,6 +602,44 @@ impl MeshStudy {
             .map(|f| f.values.iter().filter(|&&w| w > 0.5).count())
     }
 
+    /// The share of `cp`'s mode (Σ |φ_n|² over nodes) on the nodes of its state's wrinkled
+    /// triangles (0 for a point without a mode over the model's unknowns).
+    fn mode_in_wrinkled(&self, cp: &CriticalPoint) -> f64 {
+        if cp.mode.len() != self.model.layout().unknowns() {
+            return 0.0;
+        }
+        let Some(field) = self
+            .model
+            .cell_fields(&cp.state, &cp.parameters)
+            .into_iter()
+            .find(|f| f.quantity == CellQuantity::Wrinkled)
+        else {
+            return 0.0;
+        };
+        let mut phi = vec![Vec3::zeros(); self.model.reference().len()];
+        self.model.layout().add_displacements(&cp.mode, &mut phi);
+        let mut inside = vec![false; phi.len()];
+        for (t, &w) in self.mesh().triangles.iter().zip(&field.values) {
+            if w > 0.5 {
+                for &n in t {
+                    inside[n] = true;
+                }
+            }
+        }
+        let total: f64 = phi.iter().map(|v| v.norm_squared()).sum();
+        let wrinkled: f64 = phi
+            .iter()
+            .zip(&inside)
+            .filter(|(_, &i)| i)
+            .map(|(v, _)| v.norm_squared())
+            .sum();
+        if total > 0.0 {
+            wrinkled / total
+        } else {
+            0.0
+        }
+    }
+
     /// The critical points (numbered from 1, as `critical_NN.vtu`) whose state has wrinkled
     /// triangles, with how many; empty when the model shows no `wrinkled` field.
     pub fn wrinkled_critical(&self, critical: &[CriticalPoint]) -> Vec<WrinkledCritical> {
@@ -610,9 +648,10 @@ impl MeshStudy {
             .enumerate()
             .filter_map(|(k, cp)| {
                 let n = self.wrinkled_triangles(&cp.state, &cp.parameters)?;
-                (n > 0).then_some(WrinkledCritical {
+                (n > 0).then(|| WrinkledCritical {
                     critical: k + 1,
                     wrinkled: n,
+                    mode: self.mode_in_wrinkled(cp),
                 })
             })
             .collect()
