@@ -1,10 +1,10 @@
-//! `type = "deflation"`: the solutions at the start's control value other than the start
-//! state (docs/theory.md §16). The path through the start is followed first, as `type =
-//! "path"` follows it; then deflated Newton ([`crate::continuation::deflation`]) is run at
-//! the start's control value from first guesses that scale each known solution's
-//! displacement, with every known solution deflated; each solution found is checked against
-//! the path (does the path through the start reach it?) and, if asked, the piece of path
-//! through it is followed.
+//! `type = "deflation"`: the solutions at chosen control values besides a known one
+//! (docs/theory.md §16). The path through the start is followed first, as `type = "path"`
+//! follows it; then, at every value of `at` (the start's control value by default), from a
+//! solution known there, deflated Newton ([`crate::continuation::deflation`]) is run from first
+//! guesses that scale each known solution's displacement, with every known solution deflated;
+//! each solution found is checked against the path (does the path through the start reach
+//! it?) and, if asked, the piece of path through it is followed.
 
 use super::path::{start_driver, Path};
 use super::{Analysis, Context, Record, RunError};
@@ -118,71 +118,69 @@ impl Analysis for Deflate {
 
 /// The summary lines of one search.
 fn summary_of(d: &DeflationReport, result: &RunResult) -> Vec<String> {
-    {
-        let mut lines = vec![format!(
-            "deflation at {} = {}: {} solutions ({} first guesses)",
-            d.control,
-            sig_digits(d.value, 6),
-            d.solutions.len(),
-            d.guesses
-        )];
-        if !d.rejected.is_empty() {
-            lines.push(format!(
-                "  set aside: {} solutions of the equations that are no state of the membrane ({})",
-                d.rejected.len(),
-                d.rejected.join("; ")
-            ));
-        }
-        // The measure of the path's diagram first.
-        let first = output::default_axes(&result.report).0;
-        let mut order: Vec<usize> = (0..d.measures.len()).collect();
-        order.sort_by_key(|&i| d.measures[i] != first);
-        for (k, s) in d.solutions.iter().enumerate() {
-            let measures: Vec<String> = order
-                .iter()
-                .take(2)
-                .map(|&i| format!("{} = {}", d.measures[i], sig_digits(s.measures[i], 6)))
-                .collect();
-            let index = s.negative.as_ref().map_or_else(
-                || "index not computed".to_string(),
-                |n| {
-                    let names: Vec<String> = d
-                        .blocks
-                        .iter()
-                        .zip(n)
-                        .filter(|(_, &c)| c > 0)
-                        .map(|(b, c)| format!("{c} in {b}"))
-                        .collect();
-                    if names.is_empty() {
-                        "stable".to_string()
-                    } else {
-                        format!("negative {}", names.join(", "))
-                    }
-                },
-            );
-            let reach = match (k, s.on_path) {
-                (0, _) => "the start state".to_string(),
-                (_, Some(row)) => format!("on the path (row {row})"),
-                (_, None) => "not reached by the path".to_string(),
-            };
-            let piece = match (&s.piece_stop, s.piece.len()) {
-                (Some(stop), n) => format!("; its piece: {n} points, stopped: {stop}"),
-                (None, _) => String::new(),
-            };
-            let wrinkled = match s.wrinkled {
-                Some(n) if n > 0 => format!(
-                    "; wrinkled ({n} triangles with a negative principal tension: the membrane energy does not describe it)"
-                ),
-                _ => String::new(),
-            };
-            lines.push(format!(
-                "  solution {k}: {}; {index}; {reach}{piece}{wrinkled}",
-                measures.join(", ")
-            ));
-        }
-        lines.extend(d.warnings.iter().map(|w| format!("warning: {w}")));
-        lines
+    let mut lines = vec![format!(
+        "deflation at {} = {}: {} solutions ({} first guesses)",
+        d.control,
+        sig_digits(d.value, 6),
+        d.solutions.len(),
+        d.guesses
+    )];
+    if !d.rejected.is_empty() {
+        lines.push(format!(
+            "  set aside: {} solutions of the equations that are no state of the membrane ({})",
+            d.rejected.len(),
+            d.rejected.join("; ")
+        ));
     }
+    // The measure of the path's diagram first.
+    let first = output::default_axes(&result.report).0;
+    let mut order: Vec<usize> = (0..d.measures.len()).collect();
+    order.sort_by_key(|&i| d.measures[i] != first);
+    for (k, s) in d.solutions.iter().enumerate() {
+        let measures: Vec<String> = order
+            .iter()
+            .take(2)
+            .map(|&i| format!("{} = {}", d.measures[i], sig_digits(s.measures[i], 6)))
+            .collect();
+        let index = s.negative.as_ref().map_or_else(
+            || "index not computed".to_string(),
+            |n| {
+                let names: Vec<String> = d
+                    .blocks
+                    .iter()
+                    .zip(n)
+                    .filter(|(_, &c)| c > 0)
+                    .map(|(b, c)| format!("{c} in {b}"))
+                    .collect();
+                if names.is_empty() {
+                    "stable".to_string()
+                } else {
+                    format!("negative {}", names.join(", "))
+                }
+            },
+        );
+        let reach = match (k, s.on_path) {
+            (0, _) => "the start state".to_string(),
+            (_, Some(row)) => format!("on the path (row {row})"),
+            (_, None) => "not reached by the path".to_string(),
+        };
+        let piece = match (&s.piece_stop, s.piece.len()) {
+            (Some(stop), n) => format!("; its piece: {n} points, stopped: {stop}"),
+            (None, _) => String::new(),
+        };
+        let wrinkled = match s.wrinkled {
+            Some(n) if n > 0 => format!(
+                "; wrinkled ({n} triangles with a negative principal tension: the membrane energy does not describe it)"
+            ),
+            _ => String::new(),
+        };
+        lines.push(format!(
+            "  solution {k}: {}; {index}; {reach}{piece}{wrinkled}",
+            measures.join(", ")
+        ));
+    }
+    lines.extend(d.warnings.iter().map(|w| format!("warning: {w}")));
+    lines
 }
 
 /// A solution at the control `value`: the start state at its own value; else the path's
