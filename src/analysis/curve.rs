@@ -361,11 +361,7 @@ impl Analysis for Curve {
             "the curve: its points and events".to_string(),
             format!("{} against {}, events marked", curve.second, curve.control),
         ];
-        Ok(files
-            .into_iter()
-            .zip(what)
-            .map(|(path, what)| Described { path, what })
-            .collect())
+        Ok(Described::each(files, what))
     }
 
     /// What was followed, its extent and its events.

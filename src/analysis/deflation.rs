@@ -98,11 +98,7 @@ impl Analysis for Deflate {
                 result.report.control
             ),
         ];
-        Ok(files
-            .into_iter()
-            .zip(what)
-            .map(|(path, what)| Described { path, what })
-            .collect())
+        Ok(Described::each(files, what))
     }
 
     fn summary(&self, result: &RunResult) -> Vec<String> {
@@ -203,23 +199,8 @@ fn known_at(
         constraints: true,
         ..Free::default()
     };
-    let rows = &cx.record.rows;
-    for i in 0..rows.len().saturating_sub(1) {
-        let (a, b) = (
-            rows[i].parameters[c] - value,
-            rows[i + 1].parameters[c] - value,
-        );
-        if a * b > 0.0 {
-            continue;
-        }
-        let mut params = rows[i].parameters.clone();
-        params[c] = value;
-        let mut problem = study.problem(&params, &free);
-        let lambda = problem.free_values(&params);
-        let q = DVector::from_vec(cx.record.points[i].q.clone());
-        if let Ok((q, l, _)) = solve_at(&mut problem, &q, &lambda, opts) {
-            return Ok((problem.displacement(&q), problem.parameters(&l)));
-        }
+    if let Some((_, problem, q, l)) = path_states_at(study, &cx.record, opts, &free, value).next() {
+        return Ok((problem.displacement(&q), problem.parameters(&l)));
     }
     super::surface::carry(study, opts, &cx.start.u, &cx.start.params, c, value)
 }
@@ -361,8 +342,38 @@ fn search(
     }
 }
 
+/// The path's states at the control `value`: for every row whose step crosses it, the row
+/// and the state there (q and the free parameters), solved at the value from the row's.
+fn path_states_at<'a>(
+    study: &'a dyn Study,
+    record: &'a Record,
+    opts: &'a PathOptions,
+    free: &'a Free,
+    value: f64,
+) -> impl Iterator<Item = (usize, Box<dyn Followed + 'a>, DVector<f64>, DVector<f64>)> + 'a {
+    let c = study.control().map(|c| c.index);
+    let rows = &record.rows;
+    (0..rows.len().saturating_sub(1)).filter_map(move |i| {
+        let c = c?;
+        let (a, b) = (
+            rows[i].parameters[c] - value,
+            rows[i + 1].parameters[c] - value,
+        );
+        if a * b > 0.0 {
+            return None;
+        }
+        let mut params = rows[i].parameters.clone();
+        params[c] = value;
+        let mut problem = study.problem(&params, free);
+        let lambda = problem.free_values(&params);
+        let q = DVector::from_vec(record.points[i].q.clone());
+        let (q, l, _) = solve_at(&mut problem, &q, &lambda, opts).ok()?;
+        Some((i, problem, q, l))
+    })
+}
+
 /// The row of the path whose step crosses the control value at the state `z`, if the path
-/// reaches it: the path's state at the value, solved from the row's, is `z`.
+/// reaches it: the path's state at the value is `z`.
 fn on_path(
     study: &dyn Study,
     record: &Record,
@@ -371,25 +382,9 @@ fn on_path(
     z: &DVector<f64>,
     value: f64,
 ) -> Option<usize> {
-    let c = study.control()?.index;
-    let rows = &record.rows;
-    (0..rows.len().saturating_sub(1)).find(|&i| {
-        let (a, b) = (
-            rows[i].parameters[c] - value,
-            rows[i + 1].parameters[c] - value,
-        );
-        if a * b > 0.0 {
-            return false;
-        }
-        let mut params = rows[i].parameters.clone();
-        params[c] = value;
-        let mut problem = study.problem(&params, free);
-        let lambda = problem.free_values(&params);
-        let q = DVector::from_vec(record.points[i].q.clone());
-        solve_at(&mut problem, &q, &lambda, opts).is_ok_and(|(q, l, _)| {
-            (scaled(&q, &l, opts) - z).norm() <= SAME.max(1e3 * opts.tolerance)
-        })
-    })
+    path_states_at(study, record, opts, free, value)
+        .find(|(_, _, q, l)| (scaled(q, l, opts) - z).norm() <= SAME.max(1e3 * opts.tolerance))
+        .map(|(row, ..)| row)
 }
 
 /// The piece of path through `point` in the control, with the index at every point.

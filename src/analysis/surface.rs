@@ -409,11 +409,7 @@ impl Analysis for Surface {
                 s.measure, s.a
             ),
         ];
-        Ok(output::write_surface(out, s)?
-            .into_iter()
-            .zip(what)
-            .map(|(path, what)| Described { path, what })
-            .collect())
+        Ok(Described::each(output::write_surface(out, s)?, what))
     }
 
     /// Its paths, their index ranges and critical lines, its warnings.

@@ -132,6 +132,17 @@ pub struct Described {
     pub what: String,
 }
 
+impl Described {
+    /// The `files` written, each with its description in `what` (in the same order).
+    pub fn each(files: Vec<PathBuf>, what: impl IntoIterator<Item = String>) -> Vec<Described> {
+        files
+            .into_iter()
+            .zip(what)
+            .map(|(path, what)| Described { path, what })
+            .collect()
+    }
+}
+
 /// The writer of an analysis' own files: the finished run and the directory → the files
 /// written.
 pub type OwnFiles<'a> = dyn Fn(&RunResult, &Path) -> Result<Vec<Described>, OutputError> + 'a;
