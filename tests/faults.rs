@@ -1,7 +1,9 @@
-//! Faults injected into whole commands: edited and older run directories. The contracts:
-//! every run lists every file it wrote by its path in the directory; the readers of a finished
-//! run refuse an edited file (exit 2, one line naming it) and read a run without a manifest
-//! with a warning.
+//! Faults injected into whole commands: runs interrupted from inside after the k-th accepted
+//! step (the test hook `MEMSTAB_INTERRUPT_AFTER_STEPS`, no timed signals), edited and older
+//! run directories, and two runs into one directory at once. The contracts: exit 130 with the
+//! outputs written, stop reason `interrupted` and a manifest that verifies; every run lists
+//! every file it wrote by its path in the directory; the readers of a finished run refuse an
+//! edited file (exit 2, one line naming it) and read a run without a manifest with a warning.
 
 use crate::common::balloon_with_k;
 use std::collections::BTreeSet;
@@ -109,6 +111,10 @@ fn balloon_scene(dir: &Path, name: &str, analysis: &str) -> String {
     std::fs::write(&path, balloon_with_k(4, analysis)).unwrap();
     path.to_string_lossy().into_owned()
 }
+
+const SURFACE: &str = "[parameters.k]\nstart = 0.1\n\n[analysis]\ntype = \"surface\"\n\
+    parameters = [\"p\", \"k\"]\nranges = [[0.0, 2.0], [0.05, 0.2]]\npaths = 3\nsteps = 60\n\
+    max-step = 0.1\n\n";
 
 const CURVE: &str = "[parameters.k]\nstart = 0.1\nmin = 0.05\nmax = 0.3\n\n[analysis]\n\
     type = \"critical-curve\"\ncontrol = \"p\"\nsecond = \"k\"\nfrom = \"limit\"\nsteps = 120\n\
@@ -291,4 +297,67 @@ fn branch_adds_its_files_to_the_runs_manifest() {
     let o = memstab(&["spectrum", out.to_str().unwrap(), "--point", "2"], None);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+}
+
+/// Exit 130, stop reason `interrupted` in the manifest, and a manifest that verifies.
+fn assert_interrupted(o: &Output, out: &Path) {
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(o));
+    assert!(stderr(o).contains("interrupted"), "{}", stderr(o));
+    assert_eq!(assert_manifest_verifies(out), "interrupted");
+}
+
+/// A signal while the branches of a finished path are followed (after the path's 32 steps)
+/// ends `run` with exit 130; the path is whole, the branches stop where they were.
+#[test]
+fn an_interrupt_while_branches_are_followed_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = run(&scene("disc_upward.toml"), &out, Some(40));
+    assert_interrupted(&o, &out);
+    assert!(out.join("branch_01").is_dir());
+    assert_eq!(json(&out.join("path.json"))["stop"], "interrupted");
+    let graph = std::fs::read_to_string(out.join("branches.json")).unwrap();
+    assert!(graph.contains("interrupted"), "{graph}");
+    // And `memstab branch` on a finished run.
+    let full = dir.path().join("full");
+    let o = run(&scene("disc_upward.toml"), &full, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let branch_out = dir.path().join("branches");
+    std::fs::create_dir(&branch_out).unwrap();
+    let o = memstab(
+        &[
+            "branch",
+            full.to_str().unwrap(),
+            "--critical",
+            "1",
+            "--out",
+            branch_out.to_str().unwrap(),
+        ],
+        Some(3),
+    );
+    assert_interrupted(&o, &branch_out);
+    assert!(branch_out.join("branches.json").is_file());
+}
+
+/// A signal in a surface's later paths, and in a critical curve's curve phase, ends the run
+/// with exit 130 and the analysis' own files written.
+#[test]
+fn an_interrupt_in_a_surface_or_a_curve_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    // The surface's first path takes 61 steps; the curve's path 24.
+    let surface = balloon_scene(dir.path(), "surface.toml", SURFACE);
+    let out = dir.path().join("surface");
+    let o = run(&surface, &out, Some(75));
+    assert_interrupted(&o, &out);
+    assert!(out.join("surface.json").is_file());
+    let curve = balloon_scene(dir.path(), "curve.toml", CURVE);
+    let out = dir.path().join("curve");
+    let o = run(&curve, &out, Some(34));
+    assert_interrupted(&o, &out);
+    assert!(out.join("curve.csv").is_file());
+    let rows = std::fs::read_to_string(out.join("curve.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert!((2..60).contains(&rows), "{rows} rows: the curve was cut short");
 }

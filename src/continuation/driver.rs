@@ -986,6 +986,7 @@ impl<P: Problem> Continuation<P> {
                         self.next_step = s * 0.7;
                     }
                     self.accepted += 1;
+                    super::interrupt::step_accepted();
                     let from = std::mem::replace(&mut self.point, next);
                     return Ok(Accepted { from, step: s });
                 }
