@@ -361,3 +361,59 @@ fn an_interrupt_in_a_surface_or_a_curve_exits_130() {
         .count();
     assert!((2..60).contains(&rows), "{rows} rows: the curve was cut short");
 }
+
+/// Two runs started at once into one directory: one takes the directory's lock, the other is
+/// refused up front (exit 2, one line naming the directory, nothing written) or runs after it;
+/// never a failure, and the directory's manifest verifies. A lock held by a running process
+/// is refused the same way; one whose process is gone is taken over.
+#[test]
+fn concurrent_runs_into_one_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let disc = scene("disc_upward.toml");
+    for _ in 0..3 {
+        let start = || {
+            Command::new(env!("CARGO_BIN_EXE_memstab"))
+                .args(["run", &disc, "--out", out.to_str().unwrap(), "--quiet"])
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (start(), start());
+        let outputs = [a.wait_with_output().unwrap(), b.wait_with_output().unwrap()];
+        let codes: Vec<Option<i32>> = outputs.iter().map(|o| o.status.code()).collect();
+        assert!(codes.contains(&Some(0)), "{codes:?}");
+        for o in &outputs {
+            match o.status.code() {
+                Some(0) => {}
+                Some(2) => {
+                    let err = stderr(o);
+                    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+                    assert!(err.contains("in use by another memstab run"), "{err}");
+                }
+                c => panic!("exit {c:?}: {}", stderr(o)),
+            }
+        }
+        assert_manifest_verifies(&out);
+        assert!(!out.join(memstab::output::LOCK).exists());
+    }
+    // A lock held by a running process (this one).
+    let held = dir.path().join("held");
+    std::fs::create_dir(&held).unwrap();
+    let lock = held.join(memstab::output::LOCK);
+    std::fs::write(&lock, format!("{}\n", std::process::id())).unwrap();
+    let o = run(&disc, &held, None);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains(&std::process::id().to_string()));
+    assert_eq!(std::fs::read_dir(&held).unwrap().count(), 1, "nothing written");
+    // The same lock of a process that is gone: taken over.
+    if Path::new("/proc/self").exists() {
+        std::fs::write(&lock, format!("{}\n", u32::MAX - 1)).unwrap();
+        let o = run(&disc, &held, None);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(!lock.exists());
+        assert_manifest_verifies(&held);
+    }
+}

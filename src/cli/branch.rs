@@ -74,6 +74,8 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
             return Err(CliError::Input(format!("--max-step {m}: must be > 0")));
         }
     }
+    // Refused up front when another run writes into the directory.
+    let _lock = super::common::lock(&out)?;
     let scene_file = args
         .scene
         .clone()

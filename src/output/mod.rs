@@ -34,6 +34,7 @@ mod curve;
 mod deflation;
 mod diagram;
 mod json;
+mod lock;
 mod manifest;
 mod matrix_market;
 mod progress;
@@ -53,6 +54,7 @@ pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };
 pub use json::{write_critical, write_critical_with, write_json};
+pub use lock::{LockError, RunLock, LOCK};
 pub use manifest::{
     add_to_manifest, remove_manifest, sha256, sweep_temporaries, verify, verify_or_warn,
     write_manifest, Verified, MANIFEST,
