@@ -34,7 +34,10 @@ fn json(path: &Path) -> serde_json::Value {
 
 /// `memstab run SCENE --out OUT --quiet`, with the hook at `k`.
 fn run(scene: &str, out: &Path, k: Option<usize>) -> Output {
-    memstab(&["run", scene, "--out", out.to_str().unwrap(), "--quiet"], k)
+    memstab(
+        &["run", scene, "--out", out.to_str().unwrap(), "--quiet"],
+        k,
+    )
 }
 
 /// Every file under `dir` but its manifest, by its `/`-separated path in `dir`.
@@ -73,7 +76,12 @@ fn assert_manifest_verifies(dir: &Path) -> String {
         .collect();
     let unique: BTreeSet<String> = listed.iter().cloned().collect();
     assert_eq!(unique.len(), listed.len(), "listed twice: {listed:?}");
-    assert_eq!(unique, files_under(dir), "the manifest of {}", dir.display());
+    assert_eq!(
+        unique,
+        files_under(dir),
+        "the manifest of {}",
+        dir.display()
+    );
     for f in manifest["files"].as_array().unwrap() {
         let path = dir.join(f["file"].as_str().unwrap());
         assert_eq!(
@@ -175,7 +183,11 @@ fn readers_refuse_an_edited_run_and_warn_on_an_unlisted_one() {
     // path.json with its control scaled.
     let edited = copy("edited_json");
     let text = std::fs::read_to_string(edited.join("path.json")).unwrap();
-    std::fs::write(edited.join("path.json"), text.replacen("\"h\"", "\"h\" ", 1)).unwrap();
+    std::fs::write(
+        edited.join("path.json"),
+        text.replacen("\"h\"", "\"h\" ", 1),
+    )
+    .unwrap();
     let e = edited.to_str().unwrap();
     let before = files_under(&edited);
     let o = memstab(&["branch", e, "--critical", "1"], None);
@@ -184,7 +196,14 @@ fn readers_refuse_an_edited_run_and_warn_on_an_unlisted_one() {
     assert_refused(&o, "path.json");
     let mtx = dir.path().join("K.mtx");
     let o = memstab(
-        &["export-matrix", e, "--point", "3", "--out", mtx.to_str().unwrap()],
+        &[
+            "export-matrix",
+            e,
+            "--point",
+            "3",
+            "--out",
+            mtx.to_str().unwrap(),
+        ],
         None,
     );
     assert_refused(&o, "path.json");
@@ -200,7 +219,10 @@ fn readers_refuse_an_edited_run_and_warn_on_an_unlisted_one() {
     let states = copy("edited_states");
     flip(&states.join("path.states"));
     let s = states.to_str().unwrap();
-    assert_refused(&memstab(&["spectrum", s, "--point", "3"], None), "path.states");
+    assert_refused(
+        &memstab(&["spectrum", s, "--point", "3"], None),
+        "path.states",
+    );
     let text = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
     assert!(!text.contains("[start]"));
     let from = format!(
@@ -215,7 +237,10 @@ fn readers_refuse_an_edited_run_and_warn_on_an_unlisted_one() {
     assert!(!out.exists(), "nothing written");
     let critical = copy("edited_critical");
     flip(&critical.join("critical.states"));
-    let o = memstab(&["branch", critical.to_str().unwrap(), "--critical", "1"], None);
+    let o = memstab(
+        &["branch", critical.to_str().unwrap(), "--critical", "1"],
+        None,
+    );
     assert_refused(&o, "critical.states");
 
     // A critical curve from a balloon run whose critical.states was edited.
@@ -237,7 +262,11 @@ fn readers_refuse_an_edited_run_and_warn_on_an_unlisted_one() {
     let curve_scene = balloon_scene(dir.path(), "curve.toml", &curve);
     let curve_out = dir.path().join("curve_out");
     let o = run(&curve_scene, &curve_out, None);
-    assert!(o.status.success(), "the pristine run restarts: {}", stderr(&o));
+    assert!(
+        o.status.success(),
+        "the pristine run restarts: {}",
+        stderr(&o)
+    );
     flip(&balloon_run.join("critical.states"));
     let o = run(&curve_scene, &dir.path().join("curve_out2"), None);
     assert_refused(&o, "critical.states");
@@ -254,7 +283,13 @@ fn readers_refuse_an_edited_run_and_warn_on_an_unlisted_one() {
         stderr(&o)
     );
     let o = memstab(
-        &["branch", older.to_str().unwrap(), "--critical", "1", "--json"],
+        &[
+            "branch",
+            older.to_str().unwrap(),
+            "--critical",
+            "1",
+            "--json",
+        ],
         None,
     );
     assert!(o.status.success(), "{}", stderr(&o));
@@ -270,8 +305,12 @@ fn branch_adds_its_files_to_the_runs_manifest() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let text = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
-    let at = text.find("\n[analysis.branches]").expect("the scene has branches");
-    let end = text[at + 1..].find("\n[").map_or(text.len(), |e| at + 1 + e);
+    let at = text
+        .find("\n[analysis.branches]")
+        .expect("the scene has branches");
+    let end = text[at + 1..]
+        .find("\n[")
+        .map_or(text.len(), |e| at + 1 + e);
     let plain = format!("{}{}", &text[..at], &text[end..]);
     let plain_scene = dir.path().join("plain.toml");
     std::fs::write(&plain_scene, plain).unwrap();
@@ -359,7 +398,10 @@ fn an_interrupt_in_a_surface_or_a_curve_exits_130() {
         .unwrap()
         .lines()
         .count();
-    assert!((2..60).contains(&rows), "{rows} rows: the curve was cut short");
+    assert!(
+        (2..60).contains(&rows),
+        "{rows} rows: the curve was cut short"
+    );
 }
 
 /// Two runs started at once into one directory: one takes the directory's lock, the other is
@@ -407,7 +449,11 @@ fn concurrent_runs_into_one_directory() {
     let o = run(&disc, &held, None);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains(&std::process::id().to_string()));
-    assert_eq!(std::fs::read_dir(&held).unwrap().count(), 1, "nothing written");
+    assert_eq!(
+        std::fs::read_dir(&held).unwrap().count(),
+        1,
+        "nothing written"
+    );
     // The same lock of a process that is gone: taken over.
     if Path::new("/proc/self").exists() {
         std::fs::write(&lock, format!("{}\n", u32::MAX - 1)).unwrap();

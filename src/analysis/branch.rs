@@ -3,9 +3,9 @@
 //! solved again (it sets the targets of `"initial"` constraints), and the branches of that point
 //! followed with the scene's `[analysis.branches]`, as a path run follows them.
 
-use crate::results::StopReason;
 use super::{path_of, restart, RunError};
 use crate::output::FinishedRun;
+use crate::results::StopReason;
 use crate::results::{Branches, Node, Skip};
 use crate::scene::BranchesAnalysis;
 use crate::study::Study;

@@ -105,10 +105,7 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
     memstab::output::add_to_manifest(&out, &written.files, stop, "branches followed")
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     if args.json {
-        let files: Vec<String> = files
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect();
+        let files: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
         let json = serde_json::json!({
             "run": args.run_dir,
             "critical": args.critical,
