@@ -646,6 +646,10 @@ pub struct Drift {
     pub correction: DVector<f64>,
 }
 
+/// What [`solve_at_or_drift`] returns: q, λ, the iterations taken, and the drift when the
+/// state was accepted at round-off.
+pub type DriftingSolve = (DVector<f64>, DVector<f64>, usize, Option<Drift>);
+
 /// As [`solve_at`], but a state whose residual stays at round-off ([`ROUND_OFF`], and the
 /// residual test met) for three iterations while the correction does not become small is
 /// accepted, with the [`Drift`] that says so, instead of a failure once the budget is used.
@@ -654,7 +658,7 @@ pub fn solve_at_or_drift<P: Problem + ?Sized>(
     q0: &DVector<f64>,
     lambda0: &DVector<f64>,
     opts: &PathOptions,
-) -> Result<(DVector<f64>, DVector<f64>, usize, Option<Drift>), SolveError> {
+) -> Result<DriftingSolve, SolveError> {
     let m = problem.dim();
     let (mut q, mut lambda) = (q0.clone(), lambda0.clone());
     let budget = opts.max_iterations.max(20);
