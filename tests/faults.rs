@@ -379,7 +379,8 @@ fn an_interrupt_while_branches_are_followed_exits_130() {
 }
 
 /// A signal in a surface's later paths, and in a critical curve's curve phase, ends the run
-/// with exit 130 and the analysis' own files written.
+/// with exit 130 and the analysis' own files written; in the curve's path phase, with the
+/// path so far.
 #[test]
 fn an_interrupt_in_a_surface_or_a_curve_exits_130() {
     let dir = tempfile::tempdir().unwrap();
@@ -402,6 +403,12 @@ fn an_interrupt_in_a_surface_or_a_curve_exits_130() {
         (2..60).contains(&rows),
         "{rows} rows: the curve was cut short"
     );
+    // In the path phase: the path so far, no curve.
+    let out = dir.path().join("curve_path");
+    let o = run(&curve, &out, Some(10));
+    assert_interrupted(&o, &out);
+    assert!(out.join("path.csv").is_file());
+    assert!(!out.join("curve.csv").exists());
 }
 
 /// Two runs started at once into one directory: one takes the directory's lock, the other is
