@@ -12,7 +12,7 @@ use super::{
 use crate::adapted::AdaptedBasis;
 use crate::adapted::SparseBasis;
 use crate::continuation::crossings::{Blocks, CriticalTest};
-use crate::continuation::{solve_at_or_drift, Drift, PathOptions};
+use crate::continuation::{solve_at, solve_at_or_drift, Drift, PathOptions};
 use crate::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
 use crate::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
 use crate::effects::membrane::{self, MaterialQuantities, Membrane};
@@ -852,9 +852,15 @@ impl Study for MeshStudy {
             }
             None => q0,
         };
-        let (q, lambda, iterations, drift) =
+        // A state at round-off along a free motion is accepted only when it is the state the
+        // path starts from: constraints are added after this solve, and a state they move
+        // must converge in the strict sense.
+        let (q, lambda, iterations, drift) = if study.constraints.is_empty() {
             solve_at_or_drift(&mut problem, &q0, &lambda, &start_opts)
-                .map_err(|e| RunError::start(study, e))?;
+        } else {
+            solve_at(&mut problem, &q0, &lambda, &start_opts).map(|(q, l, i)| (q, l, i, None))
+        }
+        .map_err(|e| RunError::start(study, e))?;
         let drifted = drift.map(|d| study.drift_warning(&d));
         let params = problem.parameters(&lambda);
         let times = problem.times;
