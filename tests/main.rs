@@ -18,6 +18,7 @@ mod critical_curve;
 mod deflation;
 mod effects_model;
 mod export_rank_one;
+mod faults;
 mod fluid_volume;
 mod fuzz;
 mod hard_cases;

@@ -702,3 +702,44 @@ fn an_inverted_mesh_file_is_oriented_by_the_fluid_side() {
 fn quoted_path(p: &Path) -> String {
     format!("path = {}", quoted(p.to_str().unwrap()))
 }
+
+/// A start state whose residual is at round-off of the force scale while Newton's correction
+/// does not vanish — a balloon with a plane it does not touch, free to translate along z in
+/// the fixed-point space of C5v — is accepted, with a warning that names the near-singular
+/// direction and what holds it, instead of "did not converge".
+#[test]
+fn a_start_at_round_off_along_a_free_translation_is_accepted_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene("balloon.toml")).unwrap();
+    let free = text
+        .replacen("frequency = 8 ", "frequency = 4 \ndown = \"vertex\"", 1)
+        .replacen(
+            "[parameters.p]",
+            "[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -2.0\n\
+             penalty = 1000.0\nexponent = 3\n\n[parameters.p]",
+            1,
+        )
+        .replacen("steps = 400", "steps = 3", 1);
+    assert!(free.contains("offset = -2.0") && free.contains("down = \"vertex\""));
+    let path = dir.path().join("free.toml");
+    std::fs::write(&path, free).unwrap();
+    let out = dir.path().join("out");
+    let o = memstab(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert!(o.status.success(), "{all}");
+    assert!(!all.contains("did not converge at"), "{all}");
+    assert!(all.contains("accepted at round-off"), "{all}");
+    assert!(all.contains("rigid translation along [0, 0, 1]"), "{all}");
+    assert!(all.contains("hold-translation = [0, 0, 1]"), "{all}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
+    assert!(
+        report["warnings"].to_string().contains("round-off"),
+        "{report}"
+    );
+}

@@ -5,6 +5,7 @@
 
 use super::{path_of, restart, RunError};
 use crate::output::FinishedRun;
+use crate::results::StopReason;
 use crate::results::{Branches, Node, Skip};
 use crate::scene::BranchesAnalysis;
 use crate::study::Study;
@@ -29,6 +30,16 @@ pub enum BranchError {
     /// The start state did not converge again.
     #[error("{0}")]
     Start(RunError),
+}
+
+/// Whether a signal stopped the following of `branches` (one of them stopped interrupted, or a
+/// stop was requested after the last).
+pub fn interrupted(branches: &Branches) -> bool {
+    crate::continuation::interrupt::requested()
+        || branches
+            .runs
+            .iter()
+            .any(|r| r.report.stop == StopReason::Interrupted)
 }
 
 /// The branches of critical point `n` (1-based) of the finished `run` of `study`.

@@ -487,6 +487,10 @@ impl Analysis for Curve {
             usize::MAX,
         );
         cx.times.path = t0.elapsed();
+        // A signal in the path phase: the path so far is the result (no curve).
+        if branch.stop == StopReason::Interrupted {
+            return Ok(StopReason::Interrupted);
+        }
         let Some(cp) = (match branch.stop {
             StopReason::CriticalPoint => branch.critical_points().last().cloned(),
             _ => None,

@@ -222,6 +222,13 @@ pub fn run_from(
         times,
     };
     let stop = analysis.run(study, &mut cx)?;
+    // A signal during a later phase (the branches of a finished path, a curve's or a
+    // surface's second parameter) ends the run as interrupted, whatever its path's stop was.
+    let stop = if crate::continuation::interrupt::requested() {
+        StopReason::Interrupted
+    } else {
+        stop
+    };
     let mut result = cx.record.finish(study, stop, stability_note, cx.times);
     study.annotate(&mut result);
     Ok(result)

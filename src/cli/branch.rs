@@ -8,7 +8,8 @@
 //! `"initial"` constraints), and the branches of point N followed
 //! ([`memstab::analysis::branch`]) with the scene's `[analysis.branches]` settings where it
 //! has them, overridden by the flags. Writes `branches.json`, `branch_NN/` and `diagram.svg`
-//! into DIR (default RUN_DIR). Bad input (no run in RUN_DIR, N out of range, a scene that does
+//! into DIR (default RUN_DIR) and adds them to its `manifest.json`. What is read of the run is
+//! checked against its manifest first (an edited file is bad input, naming it). Bad input (no run in RUN_DIR, N out of range, a scene that does
 //! not match the run, a bad flag value) is one line and exit 2, with nothing written; a start
 //! state that does not converge is exit 1.
 
@@ -17,7 +18,7 @@ use super::CliError;
 use clap::Args;
 use memstab::analysis::branch;
 use memstab::output::{write_branches, BranchesWritten, FinishedRun};
-use memstab::results::{directory, Branches, Node};
+use memstab::results::{directory, Branches, Node, StopReason};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -73,6 +74,8 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
             return Err(CliError::Input(format!("--max-step {m}: must be > 0")));
         }
     }
+    // Refused up front when another run writes into the directory.
+    let _lock = super::common::lock(&out)?;
     let scene_file = args
         .scene
         .clone()
@@ -95,12 +98,14 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
     let scene = study.scene().clone();
     let written = write_branches(&*study, &scene, &branches, &finished.path, &out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
+    let interrupted = branch::interrupted(&branches);
+    let stop = interrupted.then_some(&StopReason::Interrupted);
+    let mut files = written.files.clone();
+    files.push(out.join(memstab::output::MANIFEST));
+    memstab::output::add_to_manifest(&out, &written.files, stop, "branches followed")
+        .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     if args.json {
-        let files: Vec<String> = written
-            .files
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect();
+        let files: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
         let json = serde_json::json!({
             "run": args.run_dir,
             "critical": args.critical,
@@ -113,6 +118,12 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
         println!("{json}");
     } else {
         print_branches(&branches, &written, &finished.path.control);
+    }
+    if interrupted {
+        return Err(CliError::Interrupted(format!(
+            "the branches so far are written into {}",
+            out.display()
+        )));
     }
     Ok(())
 }

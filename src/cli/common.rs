@@ -166,31 +166,59 @@ pub(super) fn check_out(out: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-/// A run's output directory, made by [`OutDir::create`] if it was missing: a run that fails
-/// before writing removes it again with [`OutDir::failed`], so nothing is left behind.
+/// A run's output directory, made by [`OutDir::create`] if it was missing and locked for this
+/// run ([`memstab::output::RunLock`]) until it is dropped: a run that fails before writing
+/// removes it again with [`OutDir::failed`], so nothing is left behind.
 pub(super) struct OutDir<'a> {
     path: &'a Path,
     created: bool,
+    lock: Option<memstab::output::RunLock>,
+}
+
+/// The lock of a run's output directory `dir`: another run writing into it is bad input
+/// (exit 2, naming the directory and the process).
+pub(super) fn lock(dir: &Path) -> Result<memstab::output::RunLock, CliError> {
+    memstab::output::RunLock::acquire(dir).map_err(|e| match e {
+        memstab::output::LockError::Busy { .. } => {
+            CliError::Input(format!("{e}; nothing was written"))
+        }
+        memstab::output::LockError::Io { .. } => CliError::Failure(e.to_string()),
+    })
 }
 
 impl<'a> OutDir<'a> {
-    /// Creates `path` if it does not exist (its parent must: see [`check_out`]).
+    /// Creates `path` if it does not exist (its parent must: see [`check_out`]) and takes its
+    /// lock; a directory another run holds is refused (exit 2), nothing written.
     pub(super) fn create(path: &'a Path) -> Result<Self, CliError> {
-        let created = !path.exists();
-        if created {
-            std::fs::create_dir(path).map_err(|e| {
-                CliError::Failure(format!(
+        let created = match std::fs::create_dir(path) {
+            Ok(()) => true,
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && path.is_dir() => false,
+            Err(e) => {
+                return Err(CliError::Failure(format!(
                     "cannot create the output directory '{}': {e}",
                     path.display()
-                ))
-            })?;
+                )))
+            }
+        };
+        match lock(path) {
+            Ok(lock) => Ok(Self {
+                path,
+                created,
+                lock: Some(lock),
+            }),
+            Err(e) => {
+                if created {
+                    let _ = std::fs::remove_dir(path);
+                }
+                Err(e)
+            }
         }
-        Ok(Self { path, created })
     }
 
     /// The failure of a run that wrote nothing: `error` with "; nothing was written", after
     /// removing the directory if this run made it (it is still empty).
-    pub(super) fn failed(self, error: &str) -> CliError {
+    pub(super) fn failed(mut self, error: &str) -> CliError {
+        drop(self.lock.take());
         let removed = self.created && std::fs::remove_dir(self.path).is_ok();
         let left = if self.created && !removed {
             format!("; '{}' was created and is left empty", self.path.display())

@@ -630,6 +630,83 @@ pub fn solve_at<P: Problem + ?Sized>(
     })
 }
 
+/// Relative residual (of the force scale) at which an iterate is taken to be at round-off.
+pub const ROUND_OFF: f64 = 1e-11;
+
+/// A state [`solve_at_or_drift`] accepted at round-off: its residual is at round-off of the
+/// force scale, but Newton's correction did not become small — the tangent is near-singular
+/// along a direction nothing holds (a free rigid motion, a neutral mode), and round-off drives
+/// the iterates along it.
+#[derive(Debug, Clone)]
+pub struct Drift {
+    /// max |R| relative to the force scale at the accepted state.
+    pub residual: f64,
+    /// The last correction over q (in the scaled unknowns: q / state scale): the
+    /// near-singular direction.
+    pub correction: DVector<f64>,
+}
+
+/// What [`solve_at_or_drift`] returns: q, λ, the iterations taken, and the drift when the
+/// state was accepted at round-off.
+pub type DriftingSolve = (DVector<f64>, DVector<f64>, usize, Option<Drift>);
+
+/// As [`solve_at`], but a state whose residual stays at round-off ([`ROUND_OFF`], and the
+/// residual test met) for three iterations while the correction does not become small is
+/// accepted, with the [`Drift`] that says so, instead of a failure once the budget is used.
+pub fn solve_at_or_drift<P: Problem + ?Sized>(
+    problem: &mut P,
+    q0: &DVector<f64>,
+    lambda0: &DVector<f64>,
+    opts: &PathOptions,
+) -> Result<DriftingSolve, SolveError> {
+    let m = problem.dim();
+    let (mut q, mut lambda) = (q0.clone(), lambda0.clone());
+    let budget = opts.max_iterations.max(20);
+    let (mut residual, mut correction) = (f64::NAN, f64::NAN);
+    let mut at_round_off = 0usize;
+    for it in 1..=budget {
+        let step = newton_step(problem, &q, &lambda, opts)?;
+        residual = step.residual;
+        let d = step.correction;
+        let c = lambda.len() - 1;
+        correction = d.amax();
+        if step.converged && d.amax() <= opts.tolerance {
+            q += d.rows(0, m) * opts.state_scale;
+            for j in 1..=c {
+                lambda[j] += d[m + j] * opts.parameter_scale(j);
+            }
+            return Ok((q, lambda, it, None));
+        }
+        if step.converged && step.residual <= ROUND_OFF {
+            at_round_off += 1;
+            if at_round_off == 3 {
+                // (q, λ) met the residual test before this correction: keep it.
+                let drift = Drift {
+                    residual: step.residual,
+                    correction: d.rows(0, m).into_owned(),
+                };
+                return Ok((q, lambda, it, Some(drift)));
+            }
+        } else {
+            at_round_off = 0;
+        }
+        q += d.rows(0, m) * opts.state_scale;
+        for j in 1..=c {
+            lambda[j] += d[m + j] * opts.parameter_scale(j);
+        }
+        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
+            return Err(SolveError::Diverged { control: lambda[0] });
+        }
+    }
+    Err(SolveError::NotConverged {
+        control: lambda[0],
+        iterations: budget,
+        residual,
+        correction,
+        tolerance: opts.tolerance,
+    })
+}
+
 /// One Newton step at a fixed control λ_0 from (q, λ).
 pub(super) struct NewtonStep {
     /// The scaled correction of (q, λ_0, λ_1 … λ_c), the control's 0.
@@ -929,14 +1006,15 @@ impl<P: Problem> Continuation<P> {
     }
 
     /// Solves (q0, λ0) at its control value, then starts there with the tangent that moves
-    /// the control in `opts.direction`.
+    /// the control in `opts.direction`. A state at round-off along a direction nothing holds
+    /// is accepted ([`solve_at_or_drift`]; the start solve of the study warns of it).
     pub fn start(
         mut problem: P,
         q0: &DVector<f64>,
         lambda0: &DVector<f64>,
         opts: PathOptions,
     ) -> Result<Self, SolveError> {
-        let (q, lambda, iterations) = solve_at(&mut problem, q0, lambda0, &opts)?;
+        let (q, lambda, iterations, _) = solve_at_or_drift(&mut problem, q0, lambda0, &opts)?;
         let point = point_at(&mut problem, q, lambda, iterations, &opts, None)?;
         Ok(Self::new(problem, point, opts))
     }
@@ -986,6 +1064,7 @@ impl<P: Problem> Continuation<P> {
                         self.next_step = s * 0.7;
                     }
                     self.accepted += 1;
+                    super::interrupt::step_accepted();
                     let from = std::mem::replace(&mut self.point, next);
                     return Ok(Accepted { from, step: s });
                 }

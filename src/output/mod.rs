@@ -34,6 +34,7 @@ mod curve;
 mod deflation;
 mod diagram;
 mod json;
+mod lock;
 mod manifest;
 mod matrix_market;
 mod progress;
@@ -53,7 +54,11 @@ pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };
 pub use json::{write_critical, write_critical_with, write_json};
-pub use manifest::{remove_manifest, sha256, sweep_temporaries, write_manifest, MANIFEST};
+pub use lock::{LockError, RunLock, LOCK};
+pub use manifest::{
+    add_to_manifest, remove_manifest, sha256, sweep_temporaries, verify, verify_or_warn,
+    write_manifest, Verified, MANIFEST,
+};
 pub use matrix_market::{
     rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,
     RANK_ONE_FILE_TAG,

@@ -6,7 +6,8 @@
 //! at every path point, and the critical points (irrep, parameters, step); and
 //! `critical_NN.vtu` — the state of critical point NN (its points are the displaced nodes
 //! X + u) and its mode (the point field `critical_mode`). The scene itself is rebuilt from
-//! its file, and must give the same model (name, group, unknowns).
+//! its file, and must give the same model (name, group, unknowns). What is read is checked
+//! against the run's `manifest.json` first: an edited file is refused, naming it.
 
 use crate::results::{PrimaryPath, RecordedPoint};
 use serde_json::Value;
@@ -82,6 +83,7 @@ impl FinishedRun {
                 file.display()
             ))
         })?;
+        super::verify_or_warn(dir, &["path.json"]).map_err(ReopenError)?;
         let v: Value = serde_json::from_str(&data)
             .map_err(|e| ReopenError(format!("{}: not JSON: {e}", file.display())))?;
         let parameters: Vec<String> = field(&v, "parameters", &file)?

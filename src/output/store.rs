@@ -104,6 +104,9 @@ pub enum ReadStatesError {
         /// The cause.
         source: io::Error,
     },
+    /// The file does not match the run's manifest (the message names it).
+    #[error("{0}")]
+    Unverified(String),
     /// The file is not what a run writes.
     #[error("{path}: {message}")]
     Invalid {
@@ -155,7 +158,10 @@ pub fn read_states(json: &Path) -> Result<SavedRun, ReadStatesError> {
             "no 'states' entry: the run saved no states (a branch's path, or written by an older version)".into(),
         )
     })?;
-    let file = json.parent().unwrap_or(Path::new("")).join(name);
+    let dir = json.parent().unwrap_or(Path::new(""));
+    let json_name = super::file_name(json);
+    super::verify_or_warn(dir, &[json_name.as_str(), name]).map_err(ReadStatesError::Unverified)?;
+    let file = dir.join(name);
     let mut f = std::fs::File::open(&file).map_err(|e| io_err(&file, e))?;
     let mut head = [0u8; 32];
     io::Read::read_exact(&mut f, &mut head).map_err(|e| io_err(&file, e))?;
@@ -297,6 +303,7 @@ pub fn read_critical_states(dir: &Path) -> Result<Vec<SavedCritical>, ReadStates
         path: path.clone(),
         source,
     })?;
+    super::verify_or_warn(dir, &[CRITICAL_FILE]).map_err(ReadStatesError::Unverified)?;
     let invalid = |message: &str| ReadStatesError::Invalid {
         path: path.clone(),
         message: message.to_string(),

@@ -12,7 +12,7 @@ use super::{
 use crate::adapted::AdaptedBasis;
 use crate::adapted::SparseBasis;
 use crate::continuation::crossings::{Blocks, CriticalTest};
-use crate::continuation::{solve_at, PathOptions};
+use crate::continuation::{solve_at, solve_at_or_drift, Drift, PathOptions};
 use crate::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
 use crate::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
 use crate::effects::membrane::{self, MaterialQuantities, Membrane};
@@ -553,6 +553,46 @@ impl MeshStudy {
         self.closed
     }
 
+    /// The warning of a start state accepted at round-off ([`Drift`]): the near-singular
+    /// direction (a rigid translation, by the share of the correction a uniform translation
+    /// of the nodes carries, or another neutral mode) and what holds it.
+    fn drift_warning(&self, drift: &Drift) -> String {
+        let mut u = vec![0.0; self.basis.unknowns()];
+        self.basis.expand(&drift.correction, &mut u);
+        let norm2: f64 = u.iter().map(|v| v * v).sum();
+        let nodes = self.model.reference().len();
+        let mut t = [0.0; 3];
+        for i in 0..nodes {
+            for (c, tc) in t.iter_mut().enumerate() {
+                if let Some(k) = self.model.layout().dof(i, c) {
+                    *tc += u[k] / nodes as f64;
+                }
+            }
+        }
+        let t2: f64 = t.iter().map(|v| v * v).sum();
+        let direction = if norm2 > 0.0 && t2 * nodes as f64 >= 0.9 * norm2 {
+            let n = t2.sqrt();
+            let a: Vec<String> = t
+                .iter()
+                .map(|v| {
+                    let r = (v / n * 100.0).round() / 100.0;
+                    format!("{}", if r == 0.0 { 0.0 } else { r })
+                })
+                .collect();
+            format!(
+                "a rigid translation along [{}], which nothing holds (a free body, or a support it does not touch yet); hold it with [start] hold-translation = [{}] or a support it rests on (a plane it touches, fixed nodes)",
+                a.join(", "),
+                a.join(", ")
+            )
+        } else {
+            "a neutral mode that is not a rigid translation (a rotation, or a motion no effect stiffens), which nothing holds; hold it with a support (fixed nodes, a plane it touches) or a group that excludes it".to_string()
+        };
+        format!(
+            "the start state was accepted at round-off: its residual is {:.1e} of the force scale, but Newton's correction does not vanish: the tangent is near-singular in {direction}",
+            drift.residual
+        )
+    }
+
     /// Sets the targets of constraints declared `"initial"` from the state (u, params).
     pub fn set_targets(&mut self, u: &[f64], params: &[f64]) {
         let x = self.model.positions(u, params);
@@ -851,8 +891,16 @@ impl Study for MeshStudy {
             }
             None => q0,
         };
-        let (q, lambda, iterations) = solve_at(&mut problem, &q0, &lambda, &start_opts)
-            .map_err(|e| RunError::start(study, e))?;
+        // A state at round-off along a free motion is accepted only when it is the state the
+        // path starts from: constraints are added after this solve, and a state they move
+        // must converge in the strict sense.
+        let (q, lambda, iterations, drift) = if study.constraints.is_empty() {
+            solve_at_or_drift(&mut problem, &q0, &lambda, &start_opts)
+        } else {
+            solve_at(&mut problem, &q0, &lambda, &start_opts).map(|(q, l, i)| (q, l, i, None))
+        }
+        .map_err(|e| RunError::start(study, e))?;
+        let drifted = drift.map(|d| study.drift_warning(&d));
         let params = problem.parameters(&lambda);
         let times = problem.times;
         let mut u = vec![0.0; study.basis.unknowns()];
@@ -872,6 +920,11 @@ impl Study for MeshStudy {
         }
         if let Some(defect) = study.model.state_defect(&u, &params) {
             return Err(RunError::Degenerate(defect));
+        }
+        if let Some(w) = drifted {
+            if !self.warnings.contains(&w) {
+                self.warnings.push(w);
+            }
         }
         self.set_targets(&u, &params);
         Ok(Point {

@@ -1,0 +1,472 @@
+//! Faults injected into whole commands: runs interrupted from inside after the k-th accepted
+//! step (the test hook `MEMSTAB_INTERRUPT_AFTER_STEPS`, no timed signals), edited and older
+//! run directories, and two runs into one directory at once. The contracts: exit 130 with the
+//! outputs written, stop reason `interrupted` and a manifest that verifies; every run lists
+//! every file it wrote by its path in the directory; the readers of a finished run refuse an
+//! edited file (exit 2, one line naming it) and read a run without a manifest with a warning.
+
+use crate::common::balloon_with_k;
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn memstab(args: &[&str], interrupt_after: Option<usize>) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_memstab"));
+    cmd.args(args);
+    match interrupt_after {
+        Some(k) => cmd.env("MEMSTAB_INTERRUPT_AFTER_STEPS", k.to_string()),
+        None => cmd.env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS"),
+    };
+    cmd.output().expect("the binary runs")
+}
+
+fn scene(name: &str) -> String {
+    format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// `memstab run SCENE --out OUT --quiet`, with the hook at `k`.
+fn run(scene: &str, out: &Path, k: Option<usize>) -> Output {
+    memstab(
+        &["run", scene, "--out", out.to_str().unwrap(), "--quiet"],
+        k,
+    )
+}
+
+/// Every file under `dir` but its manifest, by its `/`-separated path in `dir`.
+fn files_under(dir: &Path) -> BTreeSet<String> {
+    fn walk(root: &Path, at: &Path, found: &mut BTreeSet<String>) {
+        for e in std::fs::read_dir(at).unwrap() {
+            let e = e.unwrap();
+            let path = e.path();
+            if path.is_dir() {
+                walk(root, &path, found);
+            } else {
+                let rel = path.strip_prefix(root).unwrap();
+                let rel: Vec<String> = rel
+                    .components()
+                    .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                    .collect();
+                found.insert(rel.join("/"));
+            }
+        }
+    }
+    let mut found = BTreeSet::new();
+    walk(dir, dir, &mut found);
+    found.remove("manifest.json");
+    found
+}
+
+/// The manifest of `dir` lists every file under it (but itself) once, by its path in `dir`,
+/// with its size and checksum; returns its stop reason.
+fn assert_manifest_verifies(dir: &Path) -> String {
+    let manifest = json(&dir.join("manifest.json"));
+    let listed: Vec<String> = manifest["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["file"].as_str().unwrap().to_string())
+        .collect();
+    let unique: BTreeSet<String> = listed.iter().cloned().collect();
+    assert_eq!(unique.len(), listed.len(), "listed twice: {listed:?}");
+    assert_eq!(
+        unique,
+        files_under(dir),
+        "the manifest of {}",
+        dir.display()
+    );
+    for f in manifest["files"].as_array().unwrap() {
+        let path = dir.join(f["file"].as_str().unwrap());
+        assert_eq!(
+            memstab::output::sha256(&path).unwrap(),
+            f["sha256"].as_str().unwrap(),
+            "{}",
+            path.display()
+        );
+        assert_eq!(
+            std::fs::metadata(&path).unwrap().len(),
+            f["bytes"].as_u64().unwrap()
+        );
+    }
+    if dir.join("path.json").is_file() {
+        assert_eq!(
+            memstab::output::verify(dir, &["path.json"]),
+            Ok(memstab::output::Verified::Listed)
+        );
+    }
+    manifest["stop"].as_str().unwrap().to_string()
+}
+
+/// Exit 2 and one line on stderr naming `file`.
+fn assert_refused(o: &Output, file: &str) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.contains(file), "{err:?} does not name {file}");
+    assert!(err.contains("checksum"), "{err}");
+}
+
+/// The bundled balloon at frequency 4 with the analysis `analysis` (k a parameter), in `dir`.
+fn balloon_scene(dir: &Path, name: &str, analysis: &str) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, balloon_with_k(4, analysis)).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+const SURFACE: &str = "[parameters.k]\nstart = 0.1\n\n[analysis]\ntype = \"surface\"\n\
+    parameters = [\"p\", \"k\"]\nranges = [[0.0, 2.0], [0.05, 0.2]]\npaths = 3\nsteps = 60\n\
+    max-step = 0.1\n\n";
+
+const CURVE: &str = "[parameters.k]\nstart = 0.1\nmin = 0.05\nmax = 0.3\n\n[analysis]\n\
+    type = \"critical-curve\"\ncontrol = \"p\"\nsecond = \"k\"\nfrom = \"limit\"\nsteps = 120\n\
+    path-steps = 400\nmax-step = 0.05\n\n";
+
+/// A run with branches (the disc pushed upward) lists the files of its branch directories by
+/// their paths (`branch_01/path.csv`, not `path.csv` three times), and verifies against its
+/// own manifest; so does each branch directory against its own. A second run into the same
+/// directory replaces the manifest.
+#[test]
+fn a_run_with_branches_verifies_against_its_own_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = run(&scene("disc_upward.toml"), &out, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("branch_01").is_dir());
+    assert_manifest_verifies(&out);
+    assert_manifest_verifies(&out.join("branch_01"));
+    let listed = json(&out.join("manifest.json"))["files"].to_string();
+    assert!(listed.contains("\"branch_01/path.csv\""), "{listed}");
+    assert!(listed.contains("\"branch_01/manifest.json\""), "{listed}");
+    // The meridian goes through the same writer.
+    let meridian = dir.path().join("meridian");
+    let o = run(&scene("axisymmetric/balloon.toml"), &meridian, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_manifest_verifies(&meridian);
+    // Another run into the meridian's directory: the old manifest is replaced, not extended
+    // (the meridian's files are left, unlisted).
+    let o = run(&scene("disc_upward.toml"), &meridian, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let listed = json(&meridian.join("manifest.json"))["files"].to_string();
+    assert!(listed.contains("branch_01/path.csv"));
+    assert_eq!(
+        memstab::output::verify(&meridian, &["path.json", "path.states"]),
+        Ok(memstab::output::Verified::Listed)
+    );
+}
+
+/// The readers of a finished run check what they read against its manifest: `memstab branch`,
+/// `spectrum --point`, `export-matrix --point`, `[start] from` and a critical curve's
+/// `from-run` refuse an edited file (exit 2, one line naming it, nothing written); a run
+/// without a manifest (an older version's) is read with a warning.
+#[test]
+fn readers_refuse_an_edited_run_and_warn_on_an_unlisted_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let pristine = dir.path().join("pristine");
+    let o = run(&scene("disc_upward.toml"), &pristine, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let copy = |name: &str| {
+        let to = dir.path().join(name);
+        let o = Command::new("cp")
+            .args(["-r", pristine.to_str().unwrap(), to.to_str().unwrap()])
+            .status()
+            .unwrap();
+        assert!(o.success());
+        to
+    };
+    // path.json with its control scaled.
+    let edited = copy("edited_json");
+    let text = std::fs::read_to_string(edited.join("path.json")).unwrap();
+    std::fs::write(
+        edited.join("path.json"),
+        text.replacen("\"h\"", "\"h\" ", 1),
+    )
+    .unwrap();
+    let e = edited.to_str().unwrap();
+    let before = files_under(&edited);
+    let o = memstab(&["branch", e, "--critical", "1"], None);
+    assert_refused(&o, "path.json");
+    let o = memstab(&["spectrum", e, "--point", "3"], None);
+    assert_refused(&o, "path.json");
+    let mtx = dir.path().join("K.mtx");
+    let o = memstab(
+        &[
+            "export-matrix",
+            e,
+            "--point",
+            "3",
+            "--out",
+            mtx.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert_refused(&o, "path.json");
+    assert!(!mtx.exists());
+    assert_eq!(files_under(&edited), before, "nothing was written");
+    // path.states and critical.states with one byte changed.
+    let flip = |file: &Path| {
+        let mut bytes = std::fs::read(file).unwrap();
+        let n = bytes.len() - 3;
+        bytes[n] ^= 1;
+        std::fs::write(file, bytes).unwrap();
+    };
+    let states = copy("edited_states");
+    flip(&states.join("path.states"));
+    let s = states.to_str().unwrap();
+    assert_refused(
+        &memstab(&["spectrum", s, "--point", "3"], None),
+        "path.states",
+    );
+    let text = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
+    assert!(!text.contains("[start]"));
+    let from = format!(
+        "{text}\n[start]\nfrom = \"{}\"\npoint = 3\n",
+        states.join("path.json").display()
+    );
+    let from_scene = dir.path().join("from.toml");
+    std::fs::write(&from_scene, &from).unwrap();
+    let out = dir.path().join("from_out");
+    let o = run(from_scene.to_str().unwrap(), &out, None);
+    assert_refused(&o, "path.states");
+    assert!(!out.exists(), "nothing written");
+    let critical = copy("edited_critical");
+    flip(&critical.join("critical.states"));
+    let o = memstab(
+        &["branch", critical.to_str().unwrap(), "--critical", "1"],
+        None,
+    );
+    assert_refused(&o, "critical.states");
+
+    // A critical curve from a balloon run whose critical.states was edited.
+    let path_scene = balloon_scene(
+        dir.path(),
+        "balloon_path.toml",
+        "[parameters.k]\nstart = 0.1\nmin = 0.05\nmax = 0.3\n\n\
+         [[constraint]]\ntype = \"fixed\"\nparameter = \"k\"\n\n[analysis]\ntype = \"path\"\n\
+         control = \"p\"\nsteps = 40\nmax-step = 0.05\n\n",
+    );
+    let balloon_run = dir.path().join("balloon_run");
+    let o = run(&path_scene, &balloon_run, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let curve = CURVE.replacen(
+        "from = \"limit\"\n",
+        &format!("from = 0\nfrom-run = \"{}\"\n", balloon_run.display()),
+        1,
+    );
+    let curve_scene = balloon_scene(dir.path(), "curve.toml", &curve);
+    let curve_out = dir.path().join("curve_out");
+    let o = run(&curve_scene, &curve_out, None);
+    assert!(
+        o.status.success(),
+        "the pristine run restarts: {}",
+        stderr(&o)
+    );
+    flip(&balloon_run.join("critical.states"));
+    let o = run(&curve_scene, &dir.path().join("curve_out2"), None);
+    assert_refused(&o, "critical.states");
+    assert!(!dir.path().join("curve_out2").exists());
+
+    // No manifest: read, with a warning naming the directory.
+    let older = copy("older");
+    std::fs::remove_file(older.join("manifest.json")).unwrap();
+    let o = memstab(&["spectrum", older.to_str().unwrap(), "--point", "3"], None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("warning") && stderr(&o).contains("no manifest.json"),
+        "{}",
+        stderr(&o)
+    );
+    let o = memstab(
+        &[
+            "branch",
+            older.to_str().unwrap(),
+            "--critical",
+            "1",
+            "--json",
+        ],
+        None,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no manifest.json"), "{}", stderr(&o));
+    // No partial manifest is made for it: its run's files stay readable.
+    assert!(!older.join("manifest.json").exists());
+}
+
+/// `memstab branch` adds what it wrote to the run's manifest, which still verifies; a later
+/// reader accepts the directory.
+#[test]
+fn branch_adds_its_files_to_the_runs_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let text = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
+    let at = text
+        .find("\n[analysis.branches]")
+        .expect("the scene has branches");
+    let end = text[at + 1..]
+        .find("\n[")
+        .map_or(text.len(), |e| at + 1 + e);
+    let plain = format!("{}{}", &text[..at], &text[end..]);
+    let plain_scene = dir.path().join("plain.toml");
+    std::fs::write(&plain_scene, plain).unwrap();
+    let o = run(plain_scene.to_str().unwrap(), &out, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!out.join("branch_01").exists());
+    let o = memstab(
+        &[
+            "branch",
+            out.to_str().unwrap(),
+            "--critical",
+            "1",
+            "--steps",
+            "5",
+            "--scene",
+            plain_scene.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("branch_01").is_dir());
+    assert_manifest_verifies(&out);
+    let o = memstab(&["spectrum", out.to_str().unwrap(), "--point", "2"], None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+}
+
+/// Exit 130, stop reason `interrupted` in the manifest, and a manifest that verifies.
+fn assert_interrupted(o: &Output, out: &Path) {
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(o));
+    assert!(stderr(o).contains("interrupted"), "{}", stderr(o));
+    assert_eq!(assert_manifest_verifies(out), "interrupted");
+}
+
+/// A signal while the branches of a finished path are followed (after the path's 32 steps)
+/// ends `run` with exit 130; the path is whole, the branches stop where they were.
+#[test]
+fn an_interrupt_while_branches_are_followed_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = run(&scene("disc_upward.toml"), &out, Some(40));
+    assert_interrupted(&o, &out);
+    assert!(out.join("branch_01").is_dir());
+    assert_eq!(json(&out.join("path.json"))["stop"], "interrupted");
+    let graph = std::fs::read_to_string(out.join("branches.json")).unwrap();
+    assert!(graph.contains("interrupted"), "{graph}");
+    // And `memstab branch` on a finished run.
+    let full = dir.path().join("full");
+    let o = run(&scene("disc_upward.toml"), &full, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let branch_out = dir.path().join("branches");
+    std::fs::create_dir(&branch_out).unwrap();
+    let o = memstab(
+        &[
+            "branch",
+            full.to_str().unwrap(),
+            "--critical",
+            "1",
+            "--out",
+            branch_out.to_str().unwrap(),
+        ],
+        Some(3),
+    );
+    assert_interrupted(&o, &branch_out);
+    assert!(branch_out.join("branches.json").is_file());
+}
+
+/// A signal in a surface's later paths, and in a critical curve's curve phase, ends the run
+/// with exit 130 and the analysis' own files written; in the curve's path phase, with the
+/// path so far.
+#[test]
+fn an_interrupt_in_a_surface_or_a_curve_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    // The surface's first path takes 61 steps; the curve's path 24.
+    let surface = balloon_scene(dir.path(), "surface.toml", SURFACE);
+    let out = dir.path().join("surface");
+    let o = run(&surface, &out, Some(75));
+    assert_interrupted(&o, &out);
+    assert!(out.join("surface.json").is_file());
+    let curve = balloon_scene(dir.path(), "curve.toml", CURVE);
+    let out = dir.path().join("curve");
+    let o = run(&curve, &out, Some(34));
+    assert_interrupted(&o, &out);
+    assert!(out.join("curve.csv").is_file());
+    let rows = std::fs::read_to_string(out.join("curve.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert!(
+        (2..60).contains(&rows),
+        "{rows} rows: the curve was cut short"
+    );
+    // In the path phase: the path so far, no curve.
+    let out = dir.path().join("curve_path");
+    let o = run(&curve, &out, Some(10));
+    assert_interrupted(&o, &out);
+    assert!(out.join("path.csv").is_file());
+    assert!(!out.join("curve.csv").exists());
+}
+
+/// Two runs started at once into one directory: one takes the directory's lock, the other is
+/// refused up front (exit 2, one line naming the directory, nothing written) or runs after it;
+/// never a failure, and the directory's manifest verifies. A lock held by a running process
+/// is refused the same way; one whose process is gone is taken over.
+#[test]
+fn concurrent_runs_into_one_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let disc = scene("disc_upward.toml");
+    for _ in 0..3 {
+        let start = || {
+            Command::new(env!("CARGO_BIN_EXE_memstab"))
+                .args(["run", &disc, "--out", out.to_str().unwrap(), "--quiet"])
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (start(), start());
+        let outputs = [a.wait_with_output().unwrap(), b.wait_with_output().unwrap()];
+        let codes: Vec<Option<i32>> = outputs.iter().map(|o| o.status.code()).collect();
+        assert!(codes.contains(&Some(0)), "{codes:?}");
+        for o in &outputs {
+            match o.status.code() {
+                Some(0) => {}
+                Some(2) => {
+                    let err = stderr(o);
+                    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+                    assert!(err.contains("in use by another memstab run"), "{err}");
+                }
+                c => panic!("exit {c:?}: {}", stderr(o)),
+            }
+        }
+        assert_manifest_verifies(&out);
+        assert!(!out.join(memstab::output::LOCK).exists());
+    }
+    // A lock held by a running process (this one).
+    let held = dir.path().join("held");
+    std::fs::create_dir(&held).unwrap();
+    let lock = held.join(memstab::output::LOCK);
+    std::fs::write(&lock, format!("{}\n", std::process::id())).unwrap();
+    let o = run(&disc, &held, None);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains(&std::process::id().to_string()));
+    assert_eq!(
+        std::fs::read_dir(&held).unwrap().count(),
+        1,
+        "nothing written"
+    );
+    // The same lock of a process that is gone: taken over.
+    if Path::new("/proc/self").exists() {
+        std::fs::write(&lock, format!("{}\n", u32::MAX - 1)).unwrap();
+        let o = run(&disc, &held, None);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(!lock.exists());
+        assert_manifest_verifies(&held);
+    }
+}
