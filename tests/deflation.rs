@@ -248,3 +248,47 @@ fn deflation_searches_at_every_value_given() {
         }
     }
 }
+
+/// Paper 4's spinning cap on the C2v mesh: the m = 2 double of the C8v cap is broken into a
+/// fold of the path (the thesis's "two unconnected paths"). Below the fold, deflation along
+/// the path's tangent finds a solution the connected path does not reach, unstable, whose
+/// piece runs past the connected path's fold.
+#[test]
+fn deflation_finds_the_unconnected_piece_of_the_broken_double_on_c2v() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/thesis/paper4_spinning_cap.toml"
+    ))
+    .unwrap()
+    .replace("pattern = \"C8v\"", "pattern = \"C2v\"")
+    .replace(
+        "type = \"path\"",
+        "type = \"deflation\"\nat = [16.5]\noffsets = [0.05, -0.05, 0.2, -0.2]",
+    )
+    .replace("steps = 300", "steps = 120")
+    .replace("stop-displacement = 1.2", "");
+    let (d, result) = deflate(&text);
+    let w2 = |p: &[f64]| p[d.parameters.iter().position(|n| n == "w2").unwrap()];
+    // The connected path's fold (the broken double's half that meets it).
+    let fold = result
+        .report
+        .critical
+        .iter()
+        .find(|c| c.irrep == "A1")
+        .map(|c| w2(&c.parameters))
+        .expect("the fold of the connected path");
+    assert!((16.5..17.0).contains(&fold), "fold at {fold}");
+    let apart: Vec<_> = d.solutions.iter().filter(|s| s.on_path.is_none()).collect();
+    assert_eq!(apart.len(), 1, "{d:#?}");
+    let s = apart[0];
+    assert!(s.negative.as_ref().unwrap()[0] >= 1, "{s:?}");
+    let reach = s
+        .piece
+        .iter()
+        .map(|p| w2(&p.parameters))
+        .fold(f64::MIN, f64::max);
+    assert!(
+        reach > fold + 0.5,
+        "the piece reaches w2 = {reach}, the fold is at {fold}"
+    );
+}

@@ -261,12 +261,19 @@ fn search(
     'search: while next < known.len() && solutions.len() <= keys.solutions {
         let (q, lambda) = known[next].clone();
         next += 1;
-        for &a in &keys.offsets {
+        // The first guesses: the state scaled, then moved along the path's tangent there (at a
+        // fold, its mode: where the other piece of a broken pair lies), by each offset.
+        let along = tangent_at(study, &problem, &q, &lambda, opts);
+        let size = q.norm();
+        let mut firsts: Vec<DVector<f64>> = keys.offsets.iter().map(|a| &q * (1.0 + a)).collect();
+        if let Some(t) = &along {
+            firsts.extend(keys.offsets.iter().map(|a| &q + t * (a * size)));
+        }
+        for guess in firsts {
             if solutions.len() > keys.solutions || interrupt::requested() {
                 break 'search;
             }
             guesses += 1;
-            let guess = &q * (1.0 + a);
             let Ok((q1, l1, iterations)) = deflated_solve_at(
                 &mut problem,
                 &guess,
@@ -340,6 +347,27 @@ fn search(
         rejected,
         warnings,
     }
+}
+
+/// The unit state part of the path's tangent at (q, λ) (in the problem's coordinates), if
+/// the path can be started there.
+fn tangent_at(
+    study: &dyn Study,
+    problem: &dyn Followed,
+    q: &DVector<f64>,
+    lambda: &DVector<f64>,
+    opts: &PathOptions,
+) -> Option<DVector<f64>> {
+    let point = Point {
+        u: problem.displacement(q),
+        params: problem.parameters(lambda),
+        iterations: 0,
+        times: Default::default(),
+    };
+    let driver = start_driver(study, &point, opts.clone()).ok()?;
+    let t = driver.point().tangent.rows(0, q.len()).into_owned();
+    let n = t.norm();
+    (n > 0.0 && t.len() == q.len()).then(|| t / n)
 }
 
 /// The path's states at the control `value`: for every row whose step crosses it, the row

@@ -8,7 +8,7 @@ use crate::continuation::events::States;
 use crate::continuation::{Linearization, Problem, Tangent};
 use crate::linalg::bordered::SharedFactorization;
 use crate::linalg::SymmetricPattern;
-use crate::model::ModelError;
+use crate::model::{ModelError, StateDefect};
 use crate::results::PhaseTimes;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
@@ -287,6 +287,19 @@ impl Problem for AxisymProblem {
 
     fn phase_times(&self) -> PhaseTimes {
         self.times
+    }
+
+    /// A closed meridian (both ends on the axis) turned inside out: its enclosed volume of
+    /// the opposite sign of the reference's, as the 3-D model's check (docs/theory.md §7.5).
+    fn defect(&self, q: &DVector<f64>, _lambda: &DVector<f64>) -> Option<StateDefect> {
+        let nodes = &self.model.meridian.nodes;
+        let on_axis = |p: &[f64; 2]| p[0].abs() <= 1e-12 * (p[0].abs() + p[1].abs() + 1.0);
+        if !(nodes.first().is_some_and(on_axis) && nodes.last().is_some_and(on_axis)) {
+            return None;
+        }
+        let v0 = self.model.volume(nodes);
+        let v = self.model.volume(&self.model.positions(q.as_slice()));
+        (v0 != 0.0 && v * v0.signum() <= 0.0).then_some(StateDefect::InsideOut { volume: v })
     }
 }
 

@@ -7,13 +7,14 @@ use crate::continuation::Settings;
 use serde::{Deserialize, Serialize};
 
 /// `type = "deflation"`: the path through the start state in `control` (as `type = "path"`
-/// follows it), then, at every value of `at` (default the start's control value) from a
+/// follows it), then, at every value of `at` (default the start's control value), from a
 /// solution known there (the start state, the path's state at the value, or the start state
-/// carried to it), deflated Newton (docs/theory.md §16) for up to `solutions` other solutions: from first guesses that scale each known solution's
-/// displacement by 1 + a for every a in `offsets`, with every known solution deflated. Each
-/// solution found says whether the path through the start reaches it; with `follow`, the
-/// piece of path through it is followed in the control for `steps` steps — the pieces the
-/// start's path does not reach (disconnected paths, isolas).
+/// carried to it), deflated Newton (docs/theory.md §16) for up to `solutions` other
+/// solutions, from first guesses that scale each known solution's state by 1 + a for every a
+/// in `offsets` and move it along the path's tangent by a times its size, with every known
+/// solution deflated. Each solution found says whether the path through the start reaches
+/// it; with `follow`, the piece of path through it is followed in the control for `steps`
+/// steps — the pieces the start's path does not reach (disconnected paths, isolas).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct DeflationAnalysis {
@@ -25,8 +26,8 @@ pub struct DeflationAnalysis {
     /// At most this many solutions besides the start state (1 to 20). Default 4.
     #[serde(default = "default_solutions")]
     pub solutions: usize,
-    /// The first guesses' offsets: each known solution's displacement scaled by 1 + a.
-    /// Default [0.5, 2, -0.5].
+    /// The first guesses' offsets: each known solution's state scaled by 1 + a, then moved
+    /// along the path's tangent there by a times its size. Default [0.5, 2, -0.5].
     #[serde(default = "default_offsets")]
     pub offsets: Vec<f64>,
     /// Follow the piece of path through every solution found. Default true.
