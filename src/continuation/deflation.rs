@@ -92,26 +92,22 @@ pub fn deflated_solve_at<P: Problem + ?Sized>(
         let d = newton.correction;
         correction = d.amax();
         let m = q.len();
-        let c = lambda.len() - 1;
-        // d holds the scaled corrections of (q, λ_1 … λ_c) and that of the fixed control (0).
-        let delta = DVector::from_fn(m + c, |i, _| if i < m { d[i] } else { d[i + 1] });
-        let z = scaled(&q, &lambda, opts);
-        let tau = deflation.factor(&z, &delta);
-        let mut step = delta * tau;
-        let length = step.norm();
+        // d holds the scaled corrections of (q, λ_0, λ_1 … λ_c), the fixed control's 0.
+        let delta = DVector::from_fn(
+            m + lambda.len() - 1,
+            |i, _| if i < m { d[i] } else { d[i + 1] },
+        );
+        let tau = deflation.factor(&scaled(&q, &lambda, opts), &delta);
+        let length = (tau * delta.norm()).abs();
         if !length.is_finite() {
             return Err(SolveError::Diverged { control: lambda[0] });
         }
-        if length > max_step {
-            step *= max_step / length;
-        }
-        q += step.rows(0, m) * opts.state_scale;
-        for j in 1..=c {
-            lambda[j] += step[m + j - 1] * opts.parameter_scale(j);
-        }
-        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
-            return Err(SolveError::Diverged { control: lambda[0] });
-        }
+        let cut = if length > max_step {
+            max_step / length
+        } else {
+            1.0
+        };
+        super::driver::apply_correction(&mut q, &mut lambda, &(d * (tau * cut)), opts)?;
         if newton.converged && correction <= opts.tolerance {
             return Ok((q, lambda, it));
         }

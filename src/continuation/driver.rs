@@ -600,7 +600,6 @@ pub fn solve_at<P: Problem + ?Sized>(
     lambda0: &DVector<f64>,
     opts: &PathOptions,
 ) -> Result<(DVector<f64>, DVector<f64>, usize), SolveError> {
-    let m = problem.dim();
     let (mut q, mut lambda) = (q0.clone(), lambda0.clone());
     let budget = opts.max_iterations.max(20);
     let (mut residual, mut correction) = (f64::NAN, f64::NAN);
@@ -608,15 +607,8 @@ pub fn solve_at<P: Problem + ?Sized>(
         let step = newton_step(problem, &q, &lambda, opts)?;
         residual = step.residual;
         let d = step.correction;
-        let c = lambda.len() - 1;
         correction = d.amax();
-        q += d.rows(0, m) * opts.state_scale;
-        for j in 1..=c {
-            lambda[j] += d[m + j] * opts.parameter_scale(j);
-        }
-        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
-            return Err(SolveError::Diverged { control: lambda[0] });
-        }
+        apply_correction(&mut q, &mut lambda, &d, opts)?;
         if step.converged && d.amax() <= opts.tolerance {
             return Ok((q, lambda, it));
         }
@@ -668,13 +660,9 @@ pub fn solve_at_or_drift<P: Problem + ?Sized>(
         let step = newton_step(problem, &q, &lambda, opts)?;
         residual = step.residual;
         let d = step.correction;
-        let c = lambda.len() - 1;
         correction = d.amax();
         if step.converged && d.amax() <= opts.tolerance {
-            q += d.rows(0, m) * opts.state_scale;
-            for j in 1..=c {
-                lambda[j] += d[m + j] * opts.parameter_scale(j);
-            }
+            apply_correction(&mut q, &mut lambda, &d, opts)?;
             return Ok((q, lambda, it, None));
         }
         if step.converged && step.residual <= ROUND_OFF {
@@ -690,13 +678,7 @@ pub fn solve_at_or_drift<P: Problem + ?Sized>(
         } else {
             at_round_off = 0;
         }
-        q += d.rows(0, m) * opts.state_scale;
-        for j in 1..=c {
-            lambda[j] += d[m + j] * opts.parameter_scale(j);
-        }
-        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
-            return Err(SolveError::Diverged { control: lambda[0] });
-        }
+        apply_correction(&mut q, &mut lambda, &d, opts)?;
     }
     Err(SolveError::NotConverged {
         control: lambda[0],
@@ -705,6 +687,26 @@ pub fn solve_at_or_drift<P: Problem + ?Sized>(
         correction,
         tolerance: opts.tolerance,
     })
+}
+
+/// Adds the scaled correction `d` of (q, λ_0, λ_1 … λ_c) (the control's entry unused) to
+/// (q, λ): the update of every Newton solve at a fixed control. Fails when the iterates
+/// leave the finite numbers.
+pub(super) fn apply_correction(
+    q: &mut DVector<f64>,
+    lambda: &mut DVector<f64>,
+    d: &DVector<f64>,
+    opts: &PathOptions,
+) -> Result<(), SolveError> {
+    let m = q.len();
+    *q += d.rows(0, m) * opts.state_scale;
+    for j in 1..lambda.len() {
+        lambda[j] += d[m + j] * opts.parameter_scale(j);
+    }
+    if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
+        return Err(SolveError::Diverged { control: lambda[0] });
+    }
+    Ok(())
 }
 
 /// One Newton step at a fixed control λ_0 from (q, λ).
