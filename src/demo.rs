@@ -4,7 +4,7 @@
 
 use crate::reference::{sphere_extrema, sphere_pressure, SphereExtremum};
 use crate::results::{Extremum, PathReport};
-use crate::scene::{Effect, MeshSpec, Scene, SceneError};
+use crate::scene::{GasEffect, MeshSpec, Scene, SceneError};
 
 /// The demo scene's text, bundled so that `memstab demo` works from anywhere.
 pub const SCENE: &str = include_str!("../scenes/demo.toml");
@@ -77,9 +77,10 @@ pub fn closed_form_check(
         .iter()
         .position(|p| *p == report.control)?;
     let s = report.measures.iter().position(|m| m == "stretch")?;
-    let pressure_control = scene.effects.iter().any(
-        |e| matches!(e, Effect::Gas(g) if g.pressure.parameter() == Some(report.control.as_str())),
-    );
+    let pressure_control = scene.effects.iter().any(|e| {
+        e.get::<GasEffect>()
+            .is_some_and(|g| g.pressure.parameter() == Some(report.control.as_str()))
+    });
     if !pressure_control || scene.effects.len() != 1 {
         return None;
     }

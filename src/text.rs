@@ -37,6 +37,16 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// A key's value as a scene error quotes it: plain when of moderate size, else in exponent
+/// form.
+pub fn key_value(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// `x` with `digits` significant digits, plain for moderate sizes (`1.35511`, `0.000123457`),
 /// else in exponent form (`1.23457e7`).
 pub fn sig_digits(x: f64, digits: usize) -> String {

@@ -2,8 +2,8 @@
 //! line naming the key path and the value; garbage never panics.
 
 use memstab::scene::{
-    Constraint, ConstraintKind, Effect, FluidSide, MeshSpec, PathAnalysis, Quantity, Scene,
-    SceneError, Target,
+    Constraint, ConstraintKind, FluidEffect, FluidSide, MeshSpec, PathAnalysis, PlaneEffect,
+    Quantity, Scene, SceneError, Target,
 };
 use proptest::prelude::*;
 use std::path::Path;
@@ -104,12 +104,12 @@ fn base_scene_is_valid() {
     assert_eq!(path.settings.steps, 200);
     let s = &path.settings;
     assert!(s.min_step <= s.initial_step && s.initial_step <= s.max_step);
-    let Effect::Plane(plane) = &scene.effects[2] else {
+    let Some(plane) = scene.effects[2].get::<PlaneEffect>() else {
         panic!("effect[2] is a plane")
     };
     assert_eq!(plane.normal, [0.0, 0.0, 1.0]);
     assert_eq!(plane.exponent, 1);
-    let Effect::Fluid(fluid) = &scene.effects[0] else {
+    let Some(fluid) = scene.effects[0].get::<FluidEffect>() else {
         panic!("effect[0] is a fluid")
     };
     assert_eq!(fluid.side, FluidSide::Above);

@@ -13,8 +13,12 @@
 //! For an open membrane the plate closing it is part of V ([`ClosingFace`]): a constant for a
 //! fixed rim, a function of the rim nodes for a rim sliding in the plate's plane.
 
+use super::spec::{
+    self, Build, Built, EffectSpec, Measured, MeridianLoad, Natural, Range, Refusal, Scale,
+};
 use super::volume::{volume, ClosingFace};
 use super::Quantity;
+use crate::axisym::Pressure;
 use crate::model::constraint::{gather, Constraint, ConstraintValue};
 use crate::model::{Assembler, Effect, Layout, ModelError, NodeField, NodeQuantity, Vec3};
 use std::sync::Arc;
@@ -259,5 +263,94 @@ impl Constraint for GasAmountConstraint {
             grad_u,
             grad_params,
         }
+    }
+}
+
+/// `[[effect]] type = "gas"`: gas at a fixed over-pressure, Π = −p V.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct GasEffect {
+    /// Over-pressure p (inside minus outside); positive inflates.
+    pub pressure: spec::Quantity,
+}
+
+impl EffectSpec for GasEffect {
+    fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
+        vec![("pressure", &self.pressure, Range::Finite)]
+    }
+    fn measures_enclosure(&self) -> bool {
+        true
+    }
+    /// `p a/(μH)`.
+    fn scales(&self, n: &Natural) -> Vec<Scale> {
+        let (Some(p), Some(mu_h), Some(a)) = (self.pressure.parameter(), n.tension, n.length)
+        else {
+            return Vec::new();
+        };
+        let l = n.symbol;
+        vec![Scale {
+            parameter: p.to_string(),
+            group: format!("p {l}/(μH)"),
+            values: vec![("μH".into(), mu_h), (l.into(), a)],
+            factor: a / mu_h,
+        }]
+    }
+    fn build(&self, cx: &Build) -> Built {
+        Built {
+            effect: Box::new(GasPressure {
+                pressure: (cx.quantity)(&self.pressure),
+                closing: cx.closing.clone(),
+            }),
+            measured: None,
+        }
+    }
+    fn meridian(&self, cx: &Build) -> Result<MeridianLoad, Refusal> {
+        Ok(MeridianLoad::Pressure(Pressure::Gas {
+            pressure: (cx.quantity)(&self.pressure),
+        }))
+    }
+}
+
+/// `[[effect]] type = "gas-amount"`: a fixed amount of gas (isothermal),
+/// Π = −C ln V + P_atm V.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct GasAmountEffect {
+    /// Amount C > 0 (absolute pressure × volume, P = C/V).
+    pub amount: spec::Quantity,
+    /// Ambient (absolute) pressure P_atm ≥ 0; over-pressure p = C/V − P_atm.
+    pub ambient_pressure: f64,
+}
+
+impl EffectSpec for GasAmountEffect {
+    fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
+        vec![("amount", &self.amount, Range::Positive)]
+    }
+    fn check(&mut self) -> Result<(), Refusal> {
+        spec::non_negative("ambient-pressure", self.ambient_pressure)
+    }
+    fn measures_enclosure(&self) -> bool {
+        true
+    }
+    fn build(&self, cx: &Build) -> Built {
+        let gas = GasAmount {
+            amount: (cx.quantity)(&self.amount),
+            ambient: self.ambient_pressure,
+            closing: cx.closing.clone(),
+            fluid: cx.fluid_amount,
+        };
+        Built {
+            effect: Box::new(gas.clone()),
+            measured: Some(Measured::GasPressure(gas)),
+        }
+    }
+    /// The fluid's amount a fluid-volume constraint holds is what the gas leaves out of the
+    /// enclosure.
+    fn meridian(&self, cx: &Build) -> Result<MeridianLoad, Refusal> {
+        Ok(MeridianLoad::Pressure(Pressure::GasAmount {
+            amount: (cx.quantity)(&self.amount),
+            ambient: self.ambient_pressure,
+            fluid: cx.fluid_amount,
+        }))
     }
 }

@@ -111,8 +111,12 @@
 //! Archimedes' buoyancy (0, 0, +V_f) acting at the centre of buoyancy.
 
 use super::local::{area_vector, area_vector_gradient, area_vector_hessian};
+use super::spec::{
+    self, Build, Built, EffectSpec, Measured, MeridianLoad, Natural, Range, Refusal, Scale,
+};
 use super::volume::ClosingFace;
 use super::Quantity;
+use crate::axisym::Pressure;
 use crate::model::constraint::{gather, Constraint, ConstraintValue};
 use crate::model::Local;
 use crate::model::{
@@ -1134,5 +1138,144 @@ mod tests {
             );
             assert!((moment - c.cross(&Vector3::new(0.0, 0.0, vsub))).norm() < 1e-12);
         }
+    }
+}
+
+/// `[[effect]] type = "fluid"`: fluid under gravity (along −z) up to a level.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct FluidEffect {
+    /// Density ρ ≥ 0.
+    pub density: spec::Quantity,
+    /// Gravitational acceleration g > 0 (gravity acts along −z; a number or a parameter).
+    pub gravity: spec::Quantity,
+    /// Height h of the free surface; the pressure is ρ g (h − z)₊.
+    pub level: spec::Quantity,
+    /// Where the fluid is.
+    pub side: Side,
+    /// The enclosure is completely filled (`side = "inside"` only): the pressure is
+    /// ρ g (h − z) everywhere, not clipped at zero, and h is a pressure head. Default false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub filled: bool,
+}
+
+/// `side` of a fluid effect: where the fluid is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Side {
+    /// In the enclosed region: inside a closed membrane, or between an open membrane with a
+    /// fixed rim and the (fixed) surface spanning its rim, i.e. on the side opposite to the
+    /// mesh normals (a truncated sphere on a plate).
+    Inside,
+    /// Below an open membrane with a fixed rim, pushing it up (a container under it, full up
+    /// to `level`).
+    Below,
+    /// Above an open membrane with a fixed rim, which is the floor of a container; it pushes
+    /// the membrane down.
+    Above,
+}
+
+impl FluidEffect {
+    /// The fluid in the 3-D model (the closing plate only for a fluid inside).
+    pub fn fluid(&self, cx: &Build) -> Fluid {
+        Fluid {
+            density: (cx.quantity)(&self.density),
+            gravity: (cx.quantity)(&self.gravity),
+            level: (cx.quantity)(&self.level),
+            side: match self.side {
+                Side::Inside | Side::Below => FluidSide::Behind,
+                Side::Above => FluidSide::Front,
+            },
+            filled: self.filled,
+            closing: cx.closing.clone().filter(|_| self.side == Side::Inside),
+        }
+    }
+}
+
+impl EffectSpec for FluidEffect {
+    fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
+        vec![
+            ("density", &self.density, Range::NonNegative),
+            ("level", &self.level, Range::Finite),
+            ("gravity", &self.gravity, Range::Positive),
+        ]
+    }
+    fn check(&mut self) -> Result<(), Refusal> {
+        if self.filled && self.side != Side::Inside {
+            return Err(Refusal::at(
+                "filled",
+                "= true needs side = \"inside\" (a completely filled enclosure)",
+            ));
+        }
+        Ok(())
+    }
+    fn check_mesh(&self, closed: bool, the_mesh: &str) -> Result<(), Refusal> {
+        if closed && self.side != Side::Inside {
+            let side = if self.side == Side::Below {
+                "below"
+            } else {
+                "above"
+            };
+            return Err(Refusal::at(
+                "side",
+                format!(
+                    "= \"{side}\" needs an open membrane; {the_mesh} is closed (use \"inside\")"
+                ),
+            ));
+        }
+        Ok(())
+    }
+    fn measures_enclosure(&self) -> bool {
+        self.side == Side::Inside
+    }
+    /// `ρ g a²/(μH)` for the density or the gravity, `h/a` for the level.
+    fn scales(&self, n: &Natural) -> Vec<Scale> {
+        let (Some(mu_h), Some(a)) = (n.tension, n.length) else {
+            return Vec::new();
+        };
+        let l = n.symbol;
+        let mut out = Vec::new();
+        let group = format!("ρ g {l}²/(μH)");
+        if let (Some(rho), Some(g)) = (self.density.parameter(), self.gravity.number()) {
+            out.push(Scale {
+                parameter: rho.to_string(),
+                group: group.clone(),
+                values: vec![("g".into(), g), ("μH".into(), mu_h), (l.into(), a)],
+                factor: g * a * a / mu_h,
+            });
+        }
+        if let (Some(g), Some(rho)) = (self.gravity.parameter(), self.density.number()) {
+            out.push(Scale {
+                parameter: g.to_string(),
+                group,
+                values: vec![("ρ".into(), rho), ("μH".into(), mu_h), (l.into(), a)],
+                factor: rho * a * a / mu_h,
+            });
+        }
+        if let Some(h) = self.level.parameter() {
+            out.push(Scale {
+                parameter: h.to_string(),
+                group: format!("h/{l}"),
+                values: vec![(l.into(), a)],
+                factor: 1.0 / a,
+            });
+        }
+        out
+    }
+    fn build(&self, cx: &Build) -> Built {
+        let fluid = self.fluid(cx);
+        Built {
+            effect: Box::new(fluid.clone()),
+            measured: Some(Measured::FluidVolume(fluid)),
+        }
+    }
+    fn meridian(&self, cx: &Build) -> Result<MeridianLoad, Refusal> {
+        Ok(MeridianLoad::Pressure(Pressure::Fluid {
+            filled: self.filled,
+            density: (cx.quantity)(&self.density),
+            gravity: (cx.quantity)(&self.gravity),
+            level: (cx.quantity)(&self.level),
+            front: self.side == Side::Above,
+        }))
     }
 }

@@ -13,8 +13,11 @@
 //! C² at first touch, smoother fold lines). Only nodes are tested, so a coarse mesh can
 //! press an edge through the plane; that is the usual node-to-surface penalty.
 
+use super::spec::{self, Build, Built, EffectSpec, MeridianLoad, Natural, Range, Refusal, Scale};
 use super::Quantity;
+use crate::axisym::FloorPlane;
 use crate::model::{Assembler, CellField, CellQuantity, Effect, ModelError, Placement, Vec3};
+use crate::text::key_value;
 use symmetry::Invariant;
 
 /// The penalty exponent q.
@@ -213,5 +216,107 @@ mod tests {
                 .iter()
                 .all(|v| *v == 0.0));
         }
+    }
+}
+
+/// `[[effect]] type = "plane"`: the half-space n·x ≥ d is allowed; node i penetrating by
+/// δ = d − n·x_i > 0 costs κ/(q+1) δ^(q+1).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct PlaneEffect {
+    /// Normal n (normalised on loading), pointing to the allowed side.
+    pub normal: [f64; 3],
+    /// Offset d: the plane is n·x = d.
+    pub offset: spec::Quantity,
+    /// Penalty κ > 0 (a number or a parameter).
+    pub penalty: spec::Quantity,
+    /// Exponent q: 1 (force linear in penetration) or 3 (cubic). Default 1.
+    #[serde(default = "linear")]
+    pub exponent: u32,
+}
+
+fn linear() -> u32 {
+    1
+}
+
+impl EffectSpec for PlaneEffect {
+    fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
+        vec![
+            ("offset", &self.offset, Range::Finite),
+            ("penalty", &self.penalty, Range::Positive),
+        ]
+    }
+    /// A finite non-zero normal (made a unit vector) and an exponent of 1 or 3.
+    fn check(&mut self) -> Result<(), Refusal> {
+        let n = self.normal;
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if !(len.is_finite() && len > 0.0) {
+            return Err(Refusal::at(
+                "normal",
+                format!(
+                    "must be a finite non-zero vector, got [{}, {}, {}]",
+                    key_value(n[0]),
+                    key_value(n[1]),
+                    key_value(n[2])
+                ),
+            ));
+        }
+        self.normal = [n[0] / len, n[1] / len, n[2] / len];
+        if self.exponent != 1 && self.exponent != 3 {
+            return Err(Refusal::at(
+                "exponent",
+                format!("must be 1 or 3, got {}", self.exponent),
+            ));
+        }
+        Ok(())
+    }
+    fn needs_enclosure(&self) -> bool {
+        false
+    }
+    /// `d/a`.
+    fn scales(&self, n: &Natural) -> Vec<Scale> {
+        let (Some(d), Some(a)) = (self.offset.parameter(), n.length) else {
+            return Vec::new();
+        };
+        let l = n.symbol;
+        vec![Scale {
+            parameter: d.to_string(),
+            group: format!("d/{l}"),
+            values: vec![(l.into(), a)],
+            factor: 1.0 / a,
+        }]
+    }
+    fn build(&self, cx: &Build) -> Built {
+        Built {
+            effect: Box::new(Plane {
+                normal: Vec3::from(self.normal),
+                offset: (cx.quantity)(&self.offset),
+                penalty: (cx.quantity)(&self.penalty),
+                law: if self.exponent == 3 {
+                    PenaltyLaw::Cubic
+                } else {
+                    PenaltyLaw::Linear
+                },
+            }),
+            measured: None,
+        }
+    }
+    /// A plane normal to the axis only.
+    fn meridian(&self, cx: &Build) -> Result<MeridianLoad, Refusal> {
+        let n = self.normal;
+        if n[0].hypot(n[1]) > 1e-12 {
+            return Err(Refusal::at(
+                "normal",
+                format!(
+                    "= {n:?}: the axisymmetric model takes a plane normal to the axis only (normal = [0, 0, ±1])"
+                ),
+            ));
+        }
+        Ok(MeridianLoad::Plane(FloorPlane {
+            normal_z: n[2].signum(),
+            offset: (cx.quantity)(&self.offset),
+            penalty: (cx.quantity)(&self.penalty),
+            exponent: self.exponent,
+        }))
     }
 }

@@ -38,7 +38,9 @@
 
 use super::hydrostatic::FluidSide;
 use super::local::{area_vector, area_vector_gradient, area_vector_hessian};
+use super::spec::{self, Build, Built, EffectSpec, MeridianLoad, Natural, Range, Refusal, Scale};
 use super::Quantity;
+use crate::axisym::Pressure;
 use crate::model::Local;
 use crate::model::{Assembler, Effect, ModelError, Vec3};
 use nalgebra::Vector3;
@@ -246,5 +248,60 @@ mod tests {
             same_local(&children, &parent, 1e-12 * (1.0 + scale(&parent, 0.0)))
                 .map_err(TestCaseError::fail)?;
         }
+    }
+}
+
+/// `[[effect]] type = "spin"`: the fluid in the enclosed region spins about the z-axis with
+/// angular speed ω; Π = −(ρω²/2) ∫Ω (x² + y²) dV.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct SpinEffect {
+    /// Density ρ ≥ 0 of the spinning fluid.
+    pub density: spec::Quantity,
+    /// ω² ≥ 0 (the potential is linear in it).
+    pub omega2: spec::Quantity,
+}
+
+impl EffectSpec for SpinEffect {
+    fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
+        vec![
+            ("density", &self.density, Range::NonNegative),
+            ("omega2", &self.omega2, Range::NonNegative),
+        ]
+    }
+    /// `ρ ω² a³/(μH)`.
+    fn scales(&self, n: &Natural) -> Vec<Scale> {
+        let (Some(mu_h), Some(a), Some(w2), Some(rho)) = (
+            n.tension,
+            n.length,
+            self.omega2.parameter(),
+            self.density.number(),
+        ) else {
+            return Vec::new();
+        };
+        let l = n.symbol;
+        vec![Scale {
+            parameter: w2.to_string(),
+            group: format!("ρ ω² {l}³/(μH)"),
+            values: vec![("ρ".into(), rho), ("μH".into(), mu_h), (l.into(), a)],
+            factor: rho * a.powi(3) / mu_h,
+        }]
+    }
+    fn build(&self, cx: &Build) -> Built {
+        Built {
+            effect: Box::new(Spin {
+                density: (cx.quantity)(&self.density),
+                omega2: (cx.quantity)(&self.omega2),
+                side: FluidSide::Behind,
+            }),
+            measured: None,
+        }
+    }
+    /// The fluid spinning behind the membrane, as the 3-D effect takes it.
+    fn meridian(&self, cx: &Build) -> Result<MeridianLoad, Refusal> {
+        Ok(MeridianLoad::Pressure(Pressure::Spin {
+            density: (cx.quantity)(&self.density),
+            omega2: (cx.quantity)(&self.omega2),
+        }))
     }
 }

@@ -437,15 +437,16 @@ fn diagram(scene: &Scene, report: &PathReport, axes: &(String, String)) -> Diagr
 /// True for a ponding floor: a disc under fluid whose density is the control, where the
 /// k-th critical point of wave number m is the rung j_{m,k} of the ladder.
 fn ponding_floor(scene: &Scene, report: &PathReport) -> bool {
-    use crate::scene::{Effect, MeshSpec};
+    use crate::scene::{FluidEffect, MeshSpec};
     let disc = match &scene.mesh {
         MeshSpec::Disc(_) => true,
         MeshSpec::Axisymmetric(a) => a.shape == crate::scene::AxisymShape::Disc,
         _ => false,
     };
-    disc && scene.effects.iter().any(
-        |e| matches!(e, Effect::Fluid(f) if f.density.parameter() == Some(report.control.as_str())),
-    )
+    disc && scene.effects.iter().any(|e| {
+        e.get::<FluidEffect>()
+            .is_some_and(|f| f.density.parameter() == Some(report.control.as_str()))
+    })
 }
 
 /// The diagram's axes: [`default_axes`], except that an equilibrium analysis (no control)

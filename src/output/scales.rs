@@ -11,8 +11,9 @@
 //! the parameter's name and its values.
 
 use super::svg::{short, AxisScale, ReferenceCurve};
+use crate::effects::spec::Natural;
 use crate::results::PathReport;
-use crate::scene::{Effect, MeshSpec, Quantity, Scene};
+use crate::scene::{GasEffect, MeshSpec, Quantity, Scene};
 
 /// The scales of a scene's quantities, by name.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -61,52 +62,16 @@ impl Scales {
         if let Some(p) = m.prestretch.parameter() {
             s.add(p, "λ0 (prestretch)".into(), 1.0);
         }
+        let n = Natural {
+            length: a,
+            tension: mu_h,
+            symbol: l,
+        };
         for e in &scene.effects {
-            match e {
-                Effect::Gas(g) => {
-                    if let (Some(p), Some(mu_h), Some(a)) = (g.pressure.parameter(), mu_h, a) {
-                        let label = with(&format!("p {l}/(μH)"), &[("μH", mu_h), (l, a)]);
-                        s.add(p, label, a / mu_h);
-                    }
-                }
-                Effect::Fluid(f) => {
-                    let (Some(mu_h), Some(a)) = (mu_h, a) else {
-                        continue;
-                    };
-                    if let (Some(rho), Some(g)) = (f.density.parameter(), number(&f.gravity)) {
-                        let label =
-                            with(&format!("ρ g {l}²/(μH)"), &[("g", g), ("μH", mu_h), (l, a)]);
-                        s.add(rho, label, g * a * a / mu_h);
-                    }
-                    if let (Some(g), Some(rho)) = (f.gravity.parameter(), number(&f.density)) {
-                        let label = with(
-                            &format!("ρ g {l}²/(μH)"),
-                            &[("ρ", rho), ("μH", mu_h), (l, a)],
-                        );
-                        s.add(g, label, rho * a * a / mu_h);
-                    }
-                    if let Some(h) = f.level.parameter() {
-                        s.add(h, with(&format!("h/{l}"), &[(l, a)]), 1.0 / a);
-                    }
-                }
-                Effect::Spin(sp) => {
-                    let (Some(mu_h), Some(a)) = (mu_h, a) else {
-                        continue;
-                    };
-                    if let (Some(w2), Some(rho)) = (sp.omega2.parameter(), number(&sp.density)) {
-                        let label = with(
-                            &format!("ρ ω² {l}³/(μH)"),
-                            &[("ρ", rho), ("μH", mu_h), (l, a)],
-                        );
-                        s.add(w2, label, rho * a.powi(3) / mu_h);
-                    }
-                }
-                Effect::Plane(pl) => {
-                    if let (Some(d), Some(a)) = (pl.offset.parameter(), a) {
-                        s.add(d, with(&format!("d/{l}"), &[(l, a)]), 1.0 / a);
-                    }
-                }
-                Effect::GasAmount(_) => {}
+            for scale in e.spec().scales(&n) {
+                let parts: Vec<(&str, f64)> =
+                    scale.values.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+                s.add(&scale.parameter, with(&scale.group, &parts), scale.factor);
             }
         }
         s
@@ -206,9 +171,10 @@ pub fn balloon_closed_form(scene: &Scene, report: &PathReport) -> Option<Referen
     let MeshSpec::Icosphere(ico) = &scene.mesh else {
         return None;
     };
-    let [Effect::Gas(gas)] = scene.effects.as_slice() else {
+    let [effect] = scene.effects.as_slice() else {
         return None;
     };
+    let gas = effect.get::<GasEffect>()?;
     if gas.pressure.parameter() != Some(report.control.as_str())
         || !scene.boundary.fixed.is_empty()
         || !scene.boundary.slide.is_empty()

@@ -125,11 +125,4 @@ impl From<Problem> for SceneError {
     }
 }
 
-/// A number as it appears in messages: plain when of moderate size, else in exponent form.
-pub(crate) fn num(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() || (1e-4..1e7).contains(&x.abs()) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
-}
+pub(crate) use crate::text::key_value as num;

@@ -9,6 +9,7 @@
 
 use super::error::{num, Problem};
 use super::*;
+use crate::effects::REGISTRY;
 use serde::de::{self, DeserializeOwned, Deserializer, Visitor};
 use serde::Serializer;
 use std::fmt;
@@ -238,15 +239,15 @@ fn read_mesh(v: &Value) -> Result<MeshSpec, Problem> {
 }
 
 fn read_effect(v: &Value, path: &str) -> Result<Effect, Problem> {
-    let (kind, rest) = tagged(v, path, "type", EffectKind::NAMES)?;
-    match EffectKind::from_name(&kind).expect("a listed effect") {
-        EffectKind::Gas => de(&rest, path).map(Effect::Gas),
-        EffectKind::GasAmount => de(&rest, path).map(Effect::GasAmount),
-        EffectKind::Fluid => de(&rest, path).map(Effect::Fluid),
-        EffectKind::Spin => de(&rest, path).map(Effect::Spin),
-        EffectKind::Plane => de(&rest, path).map(Effect::Plane),
-    }
-    .map_err(with_tag("type"))
+    let names: Vec<&str> = REGISTRY.iter().map(|e| e.kind).collect();
+    let (kind, rest) = tagged(v, path, "type", &names)?;
+    let entry = REGISTRY
+        .iter()
+        .find(|e| e.kind == kind)
+        .expect("the tag was checked against the registry");
+    de_with(&rest, path, entry.read)
+        .map(|spec| Effect::new(entry.kind, spec))
+        .map_err(with_tag("type"))
 }
 
 fn read_constraint(v: &Value, path: &str) -> Result<RawConstraint, Problem> {
@@ -370,6 +371,16 @@ fn join(prefix: &str, segs: &[Seg]) -> String {
 /// Deserialises `v` (found at key path `prefix`) into `T`, turning serde's error into a
 /// one-line problem with the full key path.
 pub(super) fn de<T: DeserializeOwned>(v: &Value, prefix: &str) -> Result<T, Problem> {
+    de_with(v, prefix, serde_path_to_error::deserialize::<_, T>)
+}
+
+/// Reads the table `v` at `prefix` with `read` (a deserializer that tracks the path to the
+/// offending key), rephrasing its error as a [`Problem`].
+fn de_with<T>(
+    v: &Value,
+    prefix: &str,
+    read: impl FnOnce(Value) -> Result<T, serde_path_to_error::Error<toml::de::Error>>,
+) -> Result<T, Problem> {
     // Every section is a table; serde would read an array positionally into a struct.
     if !v.is_table() {
         return Err(Problem::new(
@@ -377,7 +388,7 @@ pub(super) fn de<T: DeserializeOwned>(v: &Value, prefix: &str) -> Result<T, Prob
             format!("'{prefix}': expected a table, got {}", show(v)),
         ));
     }
-    serde_path_to_error::deserialize::<_, T>(v.clone()).map_err(|e| {
+    read(v.clone()).map_err(|e| {
         let segs: Vec<Seg> = e
             .path()
             .iter()
@@ -519,31 +530,6 @@ pub(super) fn show(v: &Value) -> String {
             }
         }
         Value::Table(_) => "a table".into(),
-    }
-}
-
-impl<'de> Deserialize<'de> for Quantity {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl Visitor<'_> for V {
-            type Value = Quantity;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number or a parameter name")
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Quantity, E> {
-                Ok(Quantity::Value(v as f64))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Quantity, E> {
-                Ok(Quantity::Value(v as f64))
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Quantity, E> {
-                Ok(Quantity::Value(v))
-            }
-            fn visit_str<E: de::Error>(self, v: &str) -> Result<Quantity, E> {
-                Ok(Quantity::Parameter(v.to_string()))
-            }
-        }
-        d.deserialize_any(V)
     }
 }
 

@@ -32,12 +32,17 @@ mod load;
 mod tags;
 mod validate;
 
+pub use crate::effects::gas::{GasAmountEffect, GasEffect};
+pub use crate::effects::hydrostatic::{FluidEffect, Side as FluidSide};
+pub use crate::effects::plane::PlaneEffect;
+pub use crate::effects::spec::{EffectSpec, Quantity, Range};
+pub use crate::effects::spin::SpinEffect;
 pub use analyses::{
     analysis_types, Analysis, AnalysisSpec, BranchesAnalysis, CriticalCurveAnalysis, CurveStart,
     EquilibriumAnalysis, LinearBucklingAnalysis, PathAnalysis, SurfaceAnalysis, MAX_BRANCH_DEPTH,
 };
 pub use error::{Problem, SceneError};
-pub use tags::{ConstraintKind, EffectKind, Generator};
+pub use tags::{ConstraintKind, Generator};
 
 use meshes::generators::{self, DiscOptions, Down, IcosphereOptions, TruncatedSphereOptions};
 use meshes::{MeshError, SymmetricMesh};
@@ -312,61 +317,38 @@ pub enum MaterialModel {
     MooneyRivlin,
 }
 
-/// A numeric load quantity: a fixed number, or the name of a declared parameter (its value
-/// on the path). In TOML: `pressure = 0.5` or `pressure = "p"`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(untagged)]
-pub enum Quantity {
-    /// A fixed number.
-    Value(f64),
-    /// The name of a parameter in `[parameters]`.
-    Parameter(String),
-}
-
-impl Quantity {
-    /// The parameter this quantity follows, if any.
-    pub fn parameter(&self) -> Option<&str> {
-        match self {
-            Quantity::Value(_) => None,
-            Quantity::Parameter(name) => Some(name),
-        }
-    }
-
-    /// The value, looking parameters up in `values` (`None` for a missing parameter).
-    pub fn value(&self, values: &BTreeMap<String, f64>) -> Option<f64> {
-        match self {
-            Quantity::Value(v) => Some(*v),
-            Quantity::Parameter(name) => values.get(name).copied(),
-        }
-    }
-}
-
-/// `[[effect]]`, tagged by `type`: one load, with its potential (docs/theory.md §1).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "type", rename_all = "kebab-case")]
-pub enum Effect {
-    /// `type = "gas"`: fixed over-pressure p, Π = −p V.
-    Gas(GasEffect),
-    /// `type = "gas-amount"`: fixed amount of gas (isothermal), Π = −C ln V + P_atm V.
-    GasAmount(GasAmountEffect),
-    /// `type = "fluid"`: fluid under gravity (along −z) up to a level.
-    Fluid(FluidEffect),
-    /// `type = "spin"`: the enclosed fluid spinning about the z-axis (rotating frame).
-    Spin(SpinEffect),
-    /// `type = "plane"`: a rigid frictionless plane, penalty contact.
-    Plane(PlaneEffect),
+/// `[[effect]]`: one load, with its potential (docs/theory.md §1). Its keys are the struct of
+/// its `type` in `src/effects/` ([`EffectSpec`]), read through [`crate::effects::REGISTRY`].
+#[derive(Debug)]
+pub struct Effect {
+    kind: &'static str,
+    spec: Box<dyn EffectSpec>,
 }
 
 impl Effect {
+    /// The effect of `type` `kind` with the keys `spec`.
+    pub fn new(kind: &'static str, spec: Box<dyn EffectSpec>) -> Self {
+        Effect { kind, spec }
+    }
+
     /// The `type` of this effect.
-    pub fn kind(&self) -> EffectKind {
-        match self {
-            Effect::Gas(_) => EffectKind::Gas,
-            Effect::GasAmount(_) => EffectKind::GasAmount,
-            Effect::Fluid(_) => EffectKind::Fluid,
-            Effect::Spin(_) => EffectKind::Spin,
-            Effect::Plane(_) => EffectKind::Plane,
-        }
+    pub fn kind(&self) -> &'static str {
+        self.kind
+    }
+
+    /// Its keys.
+    pub fn spec(&self) -> &dyn EffectSpec {
+        self.spec.as_ref()
+    }
+
+    /// Its keys, to normalise while checking them.
+    pub(crate) fn spec_mut(&mut self) -> &mut dyn EffectSpec {
+        self.spec.as_mut()
+    }
+
+    /// Its keys as their concrete type `T`, if it is one of that type.
+    pub fn get<T: 'static>(&self) -> Option<&T> {
+        self.spec.as_any().downcast_ref::<T>()
     }
 
     /// The quantities of this effect with their keys, in declaration order.
@@ -379,23 +361,7 @@ impl Effect {
 
     /// The quantities with their keys and the range a literal value must lie in.
     pub fn ruled_quantities(&self) -> Vec<(&'static str, &Quantity, Range)> {
-        match self {
-            Effect::Gas(e) => vec![("pressure", &e.pressure, Range::Finite)],
-            Effect::GasAmount(e) => vec![("amount", &e.amount, Range::Positive)],
-            Effect::Fluid(e) => vec![
-                ("density", &e.density, Range::NonNegative),
-                ("level", &e.level, Range::Finite),
-                ("gravity", &e.gravity, Range::Positive),
-            ],
-            Effect::Spin(e) => vec![
-                ("density", &e.density, Range::NonNegative),
-                ("omega2", &e.omega2, Range::NonNegative),
-            ],
-            Effect::Plane(e) => vec![
-                ("offset", &e.offset, Range::Finite),
-                ("penalty", &e.penalty, Range::Positive),
-            ],
-        }
+        self.spec.quantities()
     }
 
     /// The parameters this effect depends on.
@@ -409,98 +375,36 @@ impl Effect {
     /// True for the effects that load the enclosed region (gas, fluid, spin): they need a
     /// closed membrane or an open one whose whole rim is fixed.
     pub fn encloses(&self) -> bool {
-        !matches!(self, Effect::Plane(_))
+        self.spec.needs_enclosure()
     }
 }
 
-/// What a literal value of a quantity must be.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Range {
-    /// Any finite number.
-    Finite,
-    /// Finite and ≥ 0.
-    NonNegative,
-    /// Finite and > 0.
-    Positive,
+impl Clone for Effect {
+    fn clone(&self) -> Self {
+        Effect {
+            kind: self.kind,
+            spec: self.spec.clone_box(),
+        }
+    }
 }
 
-/// `type = "gas"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct GasEffect {
-    /// Over-pressure p (inside minus outside); positive inflates.
-    pub pressure: Quantity,
+impl PartialEq for Effect {
+    fn eq(&self, other: &Self) -> bool {
+        self.kind == other.kind && self.spec.eq_dyn(other.spec.as_ref())
+    }
 }
 
-/// `type = "gas-amount"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct GasAmountEffect {
-    /// Amount C > 0 (absolute pressure × volume, P = C/V).
-    pub amount: Quantity,
-    /// Ambient (absolute) pressure P_atm ≥ 0; over-pressure p = C/V − P_atm.
-    pub ambient_pressure: f64,
-}
-
-/// `type = "fluid"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct FluidEffect {
-    /// Density ρ ≥ 0.
-    pub density: Quantity,
-    /// Gravitational acceleration g > 0 (gravity acts along −z; a number or a parameter).
-    pub gravity: Quantity,
-    /// Height h of the free surface; the pressure is ρ g (h − z)₊.
-    pub level: Quantity,
-    /// Where the fluid is.
-    pub side: FluidSide,
-    /// The enclosure is completely filled (`side = "inside"` only): the pressure is
-    /// ρ g (h − z) everywhere, not clipped at zero, and h is a pressure head. Default false.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub filled: bool,
-}
-
-/// `side` of a fluid effect.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum FluidSide {
-    /// In the enclosed region: inside a closed membrane, or between an open membrane with a
-    /// fixed rim and the (fixed) surface spanning its rim, i.e. on the side opposite to the
-    /// mesh normals (a truncated sphere on a plate).
-    Inside,
-    /// Below an open membrane with a fixed rim, pushing it up (a container under it, full up
-    /// to `level`).
-    Below,
-    /// Above an open membrane with a fixed rim, which is the floor of a container; it pushes
-    /// the membrane down.
-    Above,
-}
-
-/// `type = "spin"`: the fluid in the enclosed region spins about the z-axis with angular
-/// speed ω; Π = −(ρω²/2) ∫Ω (x² + y²) dV.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct SpinEffect {
-    /// Density ρ ≥ 0 of the spinning fluid.
-    pub density: Quantity,
-    /// ω² ≥ 0 (the potential is linear in it).
-    pub omega2: Quantity,
-}
-
-/// `type = "plane"`: the half-space n·x ≥ d is allowed; node i penetrating by
-/// δ = d − n·x_i > 0 costs κ/(q+1) δ^(q+1).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
-pub struct PlaneEffect {
-    /// Normal n (normalised on loading), pointing to the allowed side.
-    pub normal: [f64; 3],
-    /// Offset d: the plane is n·x = d.
-    pub offset: Quantity,
-    /// Penalty κ > 0 (a number or a parameter).
-    pub penalty: Quantity,
-    /// Exponent q: 1 (force linear in penetration) or 3 (cubic). Default 1.
-    #[serde(default = "default_exponent")]
-    pub exponent: u32,
+impl Serialize for Effect {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let table = self.spec.table();
+        let mut map = s.serialize_map(Some(table.len() + 1))?;
+        map.serialize_entry("type", self.kind)?;
+        for (k, v) in &table {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
 }
 
 /// `[boundary]`.
@@ -704,9 +608,6 @@ fn default_axisym_modes() -> usize {
 }
 fn default_file_group() -> String {
     "C1".to_string()
-}
-fn default_exponent() -> u32 {
-    1
 }
 
 /// Why a command that needs a 3-D mesh refuses an axisymmetric one.

@@ -1,5 +1,4 @@
-//! The tags a scene names its parts by — `generator`, effect and constraint `type`, analysis
-//! `type` — each an enum with its one list of names. Parsing turns the string into the enum
+//! The tags a scene names its parts by — `generator` and constraint `type` — each an enum with its one list of names. Parsing turns the string into the enum
 //! and then matches it exhaustively, so adding a tag here makes the compiler list every place
 //! that has to handle it.
 
@@ -77,22 +76,6 @@ impl Generator {
             Generator::Axisymmetric => Some("elements"),
             Generator::File => None,
         }
-    }
-}
-
-tags! {
-    /// `[[effect]] type = "…"`.
-    EffectKind {
-        /// Gas at a fixed over-pressure.
-        Gas = "gas",
-        /// A fixed amount of gas.
-        GasAmount = "gas-amount",
-        /// Fluid under gravity.
-        Fluid = "fluid",
-        /// Fluid spinning about z.
-        Spin = "spin",
-        /// A rigid frictionless plane.
-        Plane = "plane",
     }
 }
 

@@ -101,11 +101,10 @@ pub(super) fn resolve_constraints(
         .map(|c| match c {
             RawConstraint::FluidVolume(r, path) => {
                 known_target(&path, &r.value)?;
-                let effect =
-                    pick_effect(effects, &path, "fluid-volume", EffectKind::Fluid, r.effect)?;
-                let Effect::Fluid(fluid) = &effects[effect] else {
-                    unreachable!("pick_effect returns a fluid effect")
-                };
+                let effect = pick_effect(effects, &path, "fluid-volume", "fluid", r.effect)?;
+                let fluid = effects[effect]
+                    .get::<FluidEffect>()
+                    .expect("pick_effect returns a fluid effect");
                 let level = governed(&path, "fluid-volume", effect, "level", &fluid.level)?;
                 check_target(&path, &r.value, false)?;
                 Ok(Constraint::FluidVolume(FluidVolumeConstraint {
@@ -116,10 +115,10 @@ pub(super) fn resolve_constraints(
             }
             RawConstraint::GasAmount(r, path) => {
                 known_target(&path, &r.value)?;
-                let effect = pick_effect(effects, &path, "gas-amount", EffectKind::Gas, r.effect)?;
-                let Effect::Gas(gas) = &effects[effect] else {
-                    unreachable!("pick_effect returns a gas effect")
-                };
+                let effect = pick_effect(effects, &path, "gas-amount", "gas", r.effect)?;
+                let gas = effects[effect]
+                    .get::<GasEffect>()
+                    .expect("pick_effect returns a gas effect");
                 let pressure = governed(&path, "gas-amount", effect, "pressure", &gas.pressure)?;
                 check_target(&path, &r.value, true)?;
                 non_negative(&format!("{path}.ambient-pressure"), r.ambient_pressure)?;
@@ -141,7 +140,7 @@ fn pick_effect(
     effects: &[Effect],
     path: &str,
     constraint: &str,
-    kind: EffectKind,
+    kind: &str,
     given: Option<usize>,
 ) -> Result<usize, Problem> {
     let candidates: Vec<usize> = (0..effects.len())
@@ -361,7 +360,7 @@ fn check_enclosure(scene: &Scene) -> Result<(), Problem> {
     let gas = scene
         .effects
         .iter()
-        .position(|e| matches!(e, Effect::GasAmount(_)))
+        .position(|e| e.get::<GasAmountEffect>().is_some())
         .map(|i| format!("effect[{i}] (gas-amount)"))
         .or_else(|| {
             scene
@@ -374,9 +373,10 @@ fn check_enclosure(scene: &Scene) -> Result<(), Problem> {
         .effects
         .iter()
         .enumerate()
-        .filter_map(|(i, e)| match e {
-            Effect::Fluid(f) if f.side == FluidSide::Inside => Some((i, f)),
-            _ => None,
+        .filter_map(|(i, e)| {
+            e.get::<FluidEffect>()
+                .filter(|f| f.side == FluidSide::Inside)
+                .map(|f| (i, f))
         })
         .collect();
     let Some(gas) = gas else {
@@ -561,45 +561,10 @@ fn check_effect(
     for (key, q, range) in effect.ruled_quantities() {
         check_quantity(&format!("{path}.{key}"), q, range, parameters)?;
     }
-    match effect {
-        Effect::GasAmount(g) => {
-            non_negative(&format!("{path}.ambient-pressure"), g.ambient_pressure)
-        }
-        Effect::Fluid(f) => {
-            if f.filled && f.side != FluidSide::Inside {
-                return Err(Problem::at(
-                    &format!("{path}.filled"),
-                    "= true needs side = \"inside\" (a completely filled enclosure)".to_string(),
-                ));
-            }
-            Ok(())
-        }
-        Effect::Plane(p) => {
-            let key = format!("{path}.normal");
-            let n = p.normal;
-            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            if !(len.is_finite() && len > 0.0) {
-                return Err(Problem::at(
-                    &key,
-                    format!(
-                        "must be a finite non-zero vector, got [{}, {}, {}]",
-                        num(n[0]),
-                        num(n[1]),
-                        num(n[2])
-                    ),
-                ));
-            }
-            p.normal = [n[0] / len, n[1] / len, n[2] / len];
-            if p.exponent != 1 && p.exponent != 3 {
-                return Err(Problem::at(
-                    &format!("{path}.exponent"),
-                    format!("must be 1 or 3, got {}", p.exponent),
-                ));
-            }
-            Ok(())
-        }
-        Effect::Gas(_) | Effect::Spin(_) => Ok(()),
-    }
+    effect
+        .spec_mut()
+        .check()
+        .map_err(|r| Problem::at(&format!("{path}.{}", r.key), r.what))
 }
 
 /// The columns of `path.csv` besides the parameters: no parameter may take their names.
@@ -864,11 +829,8 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
     let rim: BTreeSet<usize> = topology.boundary_loops.iter().flatten().copied().collect();
     let loose = rim.difference(&fixed).count();
     for (i, effect) in scene.effects.iter().enumerate() {
-        if !effect.encloses() {
-            continue;
-        }
         let path = format!("effect[{i}]");
-        if !topology.closed && loose > 0 {
+        if effect.encloses() && !topology.closed && loose > 0 {
             return Err(Problem::new(
                 &path,
                 format!(
@@ -879,23 +841,10 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
                 ),
             ));
         }
-        if let Effect::Fluid(f) = effect {
-            if topology.closed && f.side != FluidSide::Inside {
-                let key = format!("{path}.side");
-                let side = if f.side == FluidSide::Below {
-                    "below"
-                } else {
-                    "above"
-                };
-                return Err(Problem::new(
-                    &key,
-                    format!(
-                        "'{key}' = \"{side}\" needs an open membrane; {the_mesh} is closed \
-                         (use \"inside\")"
-                    ),
-                ));
-            }
-        }
+        effect
+            .spec()
+            .check_mesh(topology.closed, &the_mesh)
+            .map_err(|r| Problem::at(&format!("{path}.{}", r.key), r.what))?;
     }
     scene.analysis.spec().check_mesh(topology.closed, &the_mesh)
 }

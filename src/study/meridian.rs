@@ -12,17 +12,18 @@ use crate::axisym::blocks::{wave_number, MeridianBlocks, MERIDIAN_GROUP};
 use crate::axisym::critical_test::MeridianTest;
 use crate::axisym::{default_segments, revolved_mesh, revolved_mode, revolved_positions};
 use crate::axisym::{
-    AxisymModel, AxisymProblem, FloorPlane, GasAmountBorder, GasTarget, Meridian, MeridianMaterial,
-    Pressure, VolumeTarget,
+    AxisymModel, AxisymProblem, GasAmountBorder, GasTarget, Meridian, MeridianMaterial, Pressure,
+    VolumeTarget,
 };
 use crate::continuation::crossings::{Blocks, CriticalTest};
 use crate::continuation::{solve_at, PathOptions, SolveError};
+use crate::effects::spec::{Build, MeridianLoad};
 use crate::effects::Quantity;
 use crate::output::{node_normals, Drawing};
 use crate::results::{
     Branches, CriticalPoint, MeshInfo, RecordedPoint, RunResult, State, StateKind,
 };
-use crate::scene::{self, AxisymShape, Effect, MeshSpec, Scene};
+use crate::scene::{self, AxisymShape, FluidEffect, MeshSpec, Scene, SpinEffect};
 use meshes::write::Fields;
 use nalgebra::DVector;
 
@@ -178,8 +179,8 @@ impl MeridianStudy {
                 // start value.
                 scene::Constraint::Fixed(_) => continue,
             };
-            match scene.effects.get(v.effect) {
-                Some(Effect::Fluid(f)) if f.side == scene::FluidSide::Inside => {}
+            match scene.effects.get(v.effect).and_then(|e| e.get::<FluidEffect>()) {
+                Some(f) if f.side == scene::FluidSide::Inside => {}
                 _ => {
                     return Err(unsupported(format!(
                         "constraint[{i}].effect = {}: the axisymmetric model holds the volume of a fluid inside the membrane only",
@@ -195,53 +196,22 @@ impl MeridianStudy {
         }
         let mut pressures = Vec::new();
         let mut planes = Vec::new();
+        // The fluid's amount a fluid-volume constraint holds is what a gas of fixed amount
+        // leaves out of the enclosure (a number or a parameter: validated).
+        let build = Build {
+            quantity: &index,
+            closing: None,
+            fluid_amount: volume.as_ref().and_then(|v| match &v.2 {
+                scene::Target::Value(x) => Some(Quantity::Value(*x)),
+                scene::Target::Parameter(n) => Some(index(&scene::Quantity::Parameter(n.clone()))),
+                scene::Target::Initial => None,
+            }),
+        };
         for (i, e) in scene.effects.iter().enumerate() {
-            match e {
-                Effect::Gas(g) => pressures.push(Pressure::Gas {
-                    pressure: index(&g.pressure),
-                }),
-                Effect::Fluid(f) => pressures.push(Pressure::Fluid {
-                    filled: f.filled,
-                    density: index(&f.density),
-                    gravity: index(&f.gravity),
-                    level: index(&f.level),
-                    front: match f.side {
-                        scene::FluidSide::Above => true,
-                        scene::FluidSide::Below | scene::FluidSide::Inside => false,
-                    },
-                }),
-                // The fluid spinning behind the membrane, as the 3-D effect takes it.
-                Effect::Spin(s) => pressures.push(Pressure::Spin {
-                    density: index(&s.density),
-                    omega2: index(&s.omega2),
-                }),
-                Effect::Plane(p) => {
-                    if p.normal[0].hypot(p.normal[1]) > 1e-12 {
-                        return Err(unsupported(format!(
-                            "effect[{i}].normal = {:?}: the axisymmetric model takes a plane normal to the axis only (normal = [0, 0, ±1])",
-                            p.normal
-                        )));
-                    }
-                    planes.push(FloorPlane {
-                        normal_z: p.normal[2].signum(),
-                        offset: index(&p.offset),
-                        penalty: index(&p.penalty),
-                        exponent: p.exponent,
-                    });
-                }
-                // The fluid's amount a fluid-volume constraint holds is what the gas leaves
-                // out of the enclosure (a number or a parameter: validated).
-                Effect::GasAmount(g) => pressures.push(Pressure::GasAmount {
-                    amount: index(&g.amount),
-                    ambient: g.ambient_pressure,
-                    fluid: volume.as_ref().and_then(|v| match &v.2 {
-                        scene::Target::Value(x) => Some(Quantity::Value(*x)),
-                        scene::Target::Parameter(n) => {
-                            Some(index(&scene::Quantity::Parameter(n.clone())))
-                        }
-                        scene::Target::Initial => None,
-                    }),
-                }),
+            match e.spec().meridian(&build) {
+                Ok(MeridianLoad::Pressure(p)) => pressures.push(p),
+                Ok(MeridianLoad::Plane(p)) => planes.push(p),
+                Err(r) => return Err(unsupported(format!("effect[{i}].{} {}", r.key, r.what))),
             }
         }
         let hold = match scene.start.hold_translation {
@@ -278,11 +248,7 @@ impl MeridianStudy {
         // inside (closed by the plate across its edge), as a 3-D run measures it.
         let encloses = model.meridian.closed()
             || !scene.constraints.is_empty()
-            || scene.effects.iter().any(|e| match e {
-                Effect::Gas(_) | Effect::GasAmount(_) => true,
-                Effect::Fluid(f) => f.side == scene::FluidSide::Inside,
-                Effect::Spin(_) | Effect::Plane(_) => false,
-            });
+            || scene.effects.iter().any(|e| e.spec().measures_enclosure());
         let measures = measure_names(
             encloses,
             stress_free_volume.is_some(),
@@ -336,9 +302,12 @@ impl MeridianStudy {
             .held_fluid(&self.model.positions(q), params)
             .expect("a fluid-volume constraint has its fluid")
             .volume;
-        let Some(Effect::Fluid(f)) = self.scene.effects.get(*effect) else {
-            unreachable!("a validated fluid-volume constraint")
-        };
+        let f = self
+            .scene
+            .effects
+            .get(*effect)
+            .and_then(|e| e.get::<FluidEffect>())
+            .expect("a validated fluid-volume constraint");
         let position = |n: &str| {
             self.parameters
                 .iter()
@@ -721,7 +690,7 @@ fn gas_amount_constraint(
     if let Some(k) = scene
         .effects
         .iter()
-        .position(|e| matches!(e, Effect::Fluid(_) | Effect::Spin(_)))
+        .position(|e| e.get::<FluidEffect>().is_some() || e.get::<SpinEffect>().is_some())
     {
         return Err(unsupported(format!(
             "constraint[{i}].effect = {}: the axisymmetric model holds the amount of a gas alone in the membrane (effect[{k}] is a {}); use a 3-D mesh",

@@ -13,11 +13,10 @@ use crate::adapted::AdaptedBasis;
 use crate::adapted::SparseBasis;
 use crate::continuation::crossings::{Blocks, CriticalTest};
 use crate::continuation::{solve_at, solve_at_or_drift, Drift, PathOptions};
-use crate::effects::gas::{GasAmount, GasAmountConstraint, GasPressure};
+use crate::effects::gas::{GasAmount, GasAmountConstraint};
 use crate::effects::hydrostatic::{Fluid, FluidSide, FluidVolumeConstraint};
 use crate::effects::membrane::{self, MaterialQuantities, Membrane};
-use crate::effects::plane::{PenaltyLaw, Plane};
-use crate::effects::spin::Spin;
+use crate::effects::spec::{Build, Measured};
 use crate::effects::volume::ClosingFace;
 use crate::effects::Quantity;
 use crate::limits::Limits;
@@ -120,15 +119,6 @@ pub struct MeshStudy {
     targets_from_start: Vec<bool>,
 }
 
-fn side(s: scene::FluidSide) -> FluidSide {
-    match s {
-        // Open meshes are oriented with their normals up (`orient_up`): fluid below is
-        // behind them.
-        scene::FluidSide::Inside | scene::FluidSide::Below => FluidSide::Behind,
-        scene::FluidSide::Above => FluidSide::Front,
-    }
-}
-
 impl MeshStudy {
     /// Builds mesh, effects, model, constraints and basis from a validated scene.
     pub fn build(scene: Scene) -> Result<Self, StudyError> {
@@ -191,22 +181,15 @@ impl MeshStudy {
                 _ => None,
             })
         };
-        let inside_fluid = scene.effects.iter().position(
-            |e| matches!(e, scene::Effect::Fluid(f) if f.side == scene::FluidSide::Inside),
-        );
-        let gas_fluid = inside_fluid.and_then(fluid_amount);
-        let fluid_of = |f: &scene::FluidEffect| {
-            let side = side(f.side);
-            Fluid {
-                density: quantity(&f.density),
-                gravity: quantity(&f.gravity),
-                level: quantity(&f.level),
-                side,
-                filled: f.filled,
-                closing: closing
-                    .clone()
-                    .filter(|_| f.side == scene::FluidSide::Inside),
-            }
+        // The fluid inside the enclosure, whose amount a gas of fixed amount leaves out.
+        let inside_fluid = scene.effects.iter().position(|e| {
+            e.get::<scene::FluidEffect>()
+                .is_some_and(|f| f.side == scene::FluidSide::Inside)
+        });
+        let build = Build {
+            quantity: &quantity,
+            closing: closing.clone(),
+            fluid_amount: inside_fluid.and_then(fluid_amount),
         };
         let mat = &scene.material;
         let membrane = Membrane::parametric(
@@ -230,10 +213,7 @@ impl MeshStudy {
             .as_ref()
             .map(|q| (quantity(q), scene.start_value(q)));
         // A plate closing the rim off the origin's plane would have to move with the radius.
-        let encloses = scene.effects.iter().any(|e| match e {
-            scene::Effect::Gas(_) | scene::Effect::GasAmount(_) | scene::Effect::Fluid(_) => true,
-            scene::Effect::Spin(_) | scene::Effect::Plane(_) => false,
-        });
+        let encloses = scene.effects.iter().any(|e| e.spec().measures_enclosure());
         if let (Some(c), Some((Quantity::Parameter(_), _)), true) = (&closing, &radius, encloses) {
             if c.z.abs() > 1e-12 * m.size().max(1e-300) {
                 return Err(StudyError::Unsupported(format!(
@@ -256,42 +236,13 @@ impl MeshStudy {
         let mut fluids = Vec::new();
         let mut gases = Vec::new();
         for e in &scene.effects {
-            effects.push(match e {
-                scene::Effect::Gas(g) => Box::new(GasPressure {
-                    pressure: quantity(&g.pressure),
-                    closing: closing.clone(),
-                }),
-                scene::Effect::GasAmount(g) => {
-                    let gas = GasAmount {
-                        amount: quantity(&g.amount),
-                        ambient: g.ambient_pressure,
-                        closing: closing.clone(),
-                        fluid: gas_fluid,
-                    };
-                    gases.push(gas.clone());
-                    Box::new(gas)
-                }
-                scene::Effect::Fluid(f) => {
-                    let fluid = fluid_of(f);
-                    fluids.push(fluid.clone());
-                    Box::new(fluid)
-                }
-                scene::Effect::Spin(s) => Box::new(Spin {
-                    density: quantity(&s.density),
-                    omega2: quantity(&s.omega2),
-                    side: FluidSide::Behind,
-                }),
-                scene::Effect::Plane(p) => Box::new(Plane {
-                    normal: Vec3::from(p.normal),
-                    offset: quantity(&p.offset),
-                    penalty: quantity(&p.penalty),
-                    law: if p.exponent == 3 {
-                        PenaltyLaw::Cubic
-                    } else {
-                        PenaltyLaw::Linear
-                    },
-                }),
-            });
+            let built = e.spec().build(&build);
+            match built.measured {
+                Some(Measured::FluidVolume(f)) => fluids.push(f),
+                Some(Measured::GasPressure(g)) => gases.push(g),
+                None => {}
+            }
+            effects.push(built.effect);
         }
         let held: Vec<Invariant> =
             sliding
@@ -314,10 +265,10 @@ impl MeshStudy {
                             "a fluid-volume constraint needs a closed membrane, or an open one whose rim is fixed in a horizontal plane (closed by a flat plate)".into(),
                         ));
                     }
-                    let fluid = match &scene.effects[fv.effect] {
-                        scene::Effect::Fluid(f) => fluid_of(f),
-                        _ => unreachable!("validated: the constraint names a fluid effect"),
-                    };
+                    let fluid = scene.effects[fv.effect]
+                        .get::<scene::FluidEffect>()
+                        .expect("validated: the constraint names a fluid effect")
+                        .fluid(&build);
                     let (target, initial, target_parameter) = target(&fv.value, &index);
                     (
                         Box::new(FluidVolumeConstraint {
@@ -339,7 +290,7 @@ impl MeshStudy {
                             target,
                             target_parameter,
                             closing: closing.clone(),
-                            fluid: gas_fluid,
+                            fluid: build.fluid_amount,
                         }),
                         initial,
                     )
