@@ -7,11 +7,12 @@ use memstab::analysis::run;
 use memstab::bench::branching::{ih_branches, ih_problem, IH_COEFFICIENTS};
 use memstab::model::Model;
 use memstab::results::{
-    Bifurcation, Branches, CriticalPoint, Half, Halves, Node, Skip, SwitchedBranch,
+    Bifurcation, Branches, CriticalPoint, Half, Halves, Node, Skip, StopReason, SwitchedBranch,
 };
 use memstab::scene::Scene;
 use memstab::study::mesh::MeshStudy;
 use nalgebra::DVector;
+use petgraph::graph::NodeIndex;
 
 fn study(text: &str) -> MeshStudy {
     let scene = Scene::from_toml_str(text, "test").expect("scene");
@@ -209,6 +210,55 @@ fn abstract_hg_potential_has_the_d5d_and_d3d_branches_in_closed_form() {
             );
             assert!(b.points[k].index.is_some(), "stability along the branch");
         }
+    }
+    // The normal form of each half: λ − 1 = c A (A = a/σ along the kernel direction φ,
+    // which is +v on the + half and −v on the − half), c = 3 (c₃ I₃ + c₃' J₃)(φ) σ exactly
+    // (the closed form is linear plus quadratic in a, so one Richardson step is exact); its
+    // first point gives c + 4 c₄ σ² A; the half that goes to λ > 1, where the trivial path is
+    // unstable in Hg, is stable in its mode.
+    let sigma = 12f64.sqrt();
+    for b in branches {
+        let nf = b.normal_form.as_ref().expect("a normal form");
+        let v = {
+            let x = problem
+                .model
+                .positions(&b.points[1].u, &b.points[1].parameters);
+            problem
+                .potential
+                .project(&problem.potential.radial(&x))
+                .normalize()
+        };
+        let (i3, j3) = problem.potential.cubics(&v);
+        let expected = 3.0 * (c3 * i3 + c3t * j3) * sigma * b.half.sign();
+        assert_eq!(nf.power, 1, "{} {}", b.isotropy, b.half);
+        assert!(
+            (nf.coefficient - expected).abs() < 1e-6 * expected.abs()
+                && nf.error < 1e-3 * expected.abs(),
+            "{} {}: c = {} ± {}, closed form {expected}",
+            b.isotropy,
+            b.half,
+            nf.coefficient,
+            nf.error
+        );
+        let (observed, a) = (
+            nf.observed.expect("observed"),
+            nf.observed_amplitude.unwrap(),
+        );
+        let first = expected + 4.0 * c4 * sigma * sigma * a;
+        assert!(
+            (observed - first).abs() < 1e-6 * first.abs(),
+            "{} {}: the first point gives {observed}, closed form {first}",
+            b.isotropy,
+            b.half
+        );
+        assert_eq!(nf.criticality, None, "transcritical");
+        assert_eq!(
+            nf.mode_stable,
+            Some(control(b, 1) > 1.0),
+            "{} {}: stable in its mode where λ > 1",
+            b.isotropy,
+            b.half
+        );
     }
     // Transcritical: the two halves of a class leave on opposite sides of λ = 1.
     for class in ["D5d", "D3d"] {
@@ -504,6 +554,7 @@ fn depth_two_switches_at_the_branches_points() {
         .collect();
     assert_eq!(primary.len(), 2);
     let mut secondary = 0;
+    let mut connected = 0;
     for n in b.graph.graph.node_indices() {
         let Node::Critical {
             on: Some(parent),
@@ -516,9 +567,27 @@ fn depth_two_switches_at_the_branches_points() {
         };
         let out = b.graph.leaving(n);
         if b.graph.branches[*parent].parent.is_some() {
-            // On a branch of depth 2: not switched again.
+            // On a branch of depth 2: not switched again — or the point is, up to
+            // symmetry, a critical point of another branch already followed, where this one
+            // ends, connected to it.
             assert!(out.is_empty());
-            assert!(matches!(skipped, Some(Skip::LimitPoint | Skip::Depth)));
+            match skipped {
+                Some(Skip::LimitPoint | Skip::Depth) => {}
+                Some(Skip::Connection { on: Some(k), .. }) => {
+                    assert_ne!(*k, *parent, "another branch");
+                    assert!(
+                        b.graph.branches[*k].elements.len()
+                            >= b.graph.branches[*parent].elements.len(),
+                        "at least as symmetric"
+                    );
+                    assert!(matches!(
+                        b.graph.branches[*parent].stop,
+                        StopReason::Connected { .. }
+                    ));
+                    connected += 1;
+                }
+                other => panic!("{other:?}"),
+            }
             continue;
         }
         match point.irrep.as_str() {
@@ -543,6 +612,7 @@ fn depth_two_switches_at_the_branches_points() {
         }
     }
     assert!(secondary >= 1, "some A2 point on the C1v branches");
+    eprintln!("depth 2: {connected} connections");
 }
 
 /// The branch options of a study's path analysis with `[analysis.branches]` `b` (the defaults
@@ -554,4 +624,152 @@ fn branch_options(
     memstab::analysis::path_of(&s.scene.analysis)
         .expect("a path analysis")
         .branch_options(s, b)
+}
+
+/// Without the cubic terms the Hg point is a pitchfork on every axial line: λ = 1 + 4 c₄ a²,
+/// so the normal form is λ − 1 ≈ 4 c₄ σ² A² on both halves of both classes, supercritical
+/// (the branch at λ > 1, stable in its mode, where the trivial path is unstable) for c₄ > 0
+/// and subcritical for c₄ < 0.
+#[test]
+fn hg_pitchfork_normal_form_is_the_closed_form_and_says_which_side() {
+    use memstab::results::Criticality;
+    let sigma2 = 12.0;
+    for (c4, criticality) in [
+        (0.5, Criticality::Supercritical),
+        (-0.5, Criticality::Subcritical),
+    ] {
+        let problem = ih_problem([0.0, 0.0, c4]).expect("problem");
+        let run = ih_branches(&problem, 4).expect("switched");
+        let branches = &run.graph.branches;
+        assert!(!branches.is_empty(), "branches for c4 = {c4}");
+        for b in branches {
+            assert_eq!(b.reduced.bifurcation, Bifurcation::Pitchfork);
+            let nf = b.normal_form.as_ref().expect("a normal form");
+            let expected = 4.0 * c4 * sigma2;
+            assert_eq!(nf.power, 2);
+            assert!(
+                (nf.coefficient - expected).abs() < 1e-6 * expected.abs(),
+                "c4 = {c4}, {} {}: c = {} ± {}, closed form {expected}",
+                b.isotropy,
+                b.half,
+                nf.coefficient,
+                nf.error
+            );
+            assert_eq!(nf.criticality, Some(criticality), "c4 = {c4}");
+            assert_eq!(
+                nf.mode_stable,
+                Some(criticality == Criticality::Supercritical)
+            );
+            let observed = nf.observed.expect("observed");
+            assert!(
+                (observed - expected).abs() < 1e-6 * expected.abs(),
+                "c4 = {c4}: the first point gives {observed}, closed form {expected}"
+            );
+            assert_eq!(
+                (control(b, 1) - 1.0).signum(),
+                c4.signum(),
+                "the branch on the predicted side"
+            );
+        }
+    }
+}
+
+/// With f(λ) = λ − μ λ², μ = 2/9, the trivial path of the abstract potential has two Hg points,
+/// at λ = 3/2 and 3, and every axial branch is a closed curve f(λ) = 1 + κ a + 4 c₄ a² through
+/// both (κ = 3 (c₃ I₃ + c₃' J₃)(v)). The two halves of each class leave the first point and
+/// trace the curve in opposite senses; each ends where it reaches the second point, a
+/// connection: the closed circuit of two branches between two bifurcation points. At the
+/// second point every half the lemma predicts arrived along one of them, so none is followed
+/// again: four branches, not eight, and none goes around twice.
+#[test]
+fn branches_joining_two_points_form_a_closed_circuit_followed_once() {
+    use memstab::bench::branching::{ih_branches_over, ih_problem_curved};
+    let mu = 2.0 / 9.0;
+    let problem = ih_problem_curved(IH_COEFFICIENTS, mu).expect("problem");
+    let run = ih_branches_over(&problem, 160, (0.5, 3.6), 0.52).expect("switched");
+    let at: Vec<f64> = run.critical.iter().map(|c| c.parameters[0]).collect();
+    assert_eq!(
+        at.len(),
+        2,
+        "two critical points on the trivial path: {at:?}"
+    );
+    assert!(
+        (at[0] - 1.5).abs() < 1e-8 && (at[1] - 3.0).abs() < 1e-8,
+        "{at:?}"
+    );
+    let g = &run.graph;
+    let path = [g.path_point(1).unwrap(), g.path_point(2).unwrap()];
+    let classes: Vec<(String, Half, NodeIndex)> = g
+        .branches
+        .iter()
+        .map(|b| (b.isotropy.clone(), b.half, b.from))
+        .collect();
+    assert_eq!(
+        classes,
+        vec![
+            ("D5d".to_string(), Half::Plus, path[0]),
+            ("D5d".to_string(), Half::Minus, path[0]),
+            ("D3d".to_string(), Half::Plus, path[0]),
+            ("D3d".to_string(), Half::Minus, path[0]),
+        ],
+        "both halves of each class from the first point, none from the second"
+    );
+    let [c3, c3t, c4] = IH_COEFFICIENTS;
+    for (i, b) in g.branches.iter().enumerate() {
+        // On the closed curve (or, where a last step was drawn onto it, on the path u = 0).
+        let z = |k: usize| {
+            let x = problem
+                .model
+                .positions(&b.points[k].u, &b.points[k].parameters);
+            problem.potential.project(&problem.potential.radial(&x))
+        };
+        let v = z(1).normalize();
+        let (i3, j3) = problem.potential.cubics(&v);
+        for k in 1..b.points.len() {
+            let a = z(k).dot(&v);
+            let l = b.points[k].parameters[0];
+            let f = l - mu * l * l;
+            let exact = 1.0 + 3.0 * (c3 * i3 + c3t * j3) * a + 4.0 * c4 * a * a;
+            assert!(
+                (f - exact).abs() < 1e-8 || z(k).norm() < 1e-8,
+                "{} {}: f(λ) = {f}, closed form {exact}",
+                b.isotropy,
+                b.half
+            );
+        }
+        // It ends at the second point, connected to it.
+        assert!(
+            matches!(b.stop, StopReason::Connected { .. }),
+            "{} {}: {}",
+            b.isotropy,
+            b.half,
+            b.stop
+        );
+        let last = b.points.last().unwrap();
+        assert!(
+            (last.parameters[0] - 3.0).abs() < 1e-6,
+            "ends at λ = {}",
+            last.parameters[0]
+        );
+        let to: Vec<NodeIndex> = g
+            .connections
+            .iter()
+            .filter(|c| c.branch == i)
+            .map(|c| c.to)
+            .collect();
+        assert!(
+            !to.is_empty() && to.iter().all(|&n| n == path[1]),
+            "{} {}: connects to {to:?}",
+            b.isotropy,
+            b.half
+        );
+    }
+    assert!(g.leaving(path[1]).is_empty());
+    match &g.graph[path[1]] {
+        Node::Critical {
+            skipped: Some(Skip::Known(b)),
+            ..
+        } => assert_eq!(b.len(), 4, "{b:?}"),
+        other => panic!("the second point: {other:?}"),
+    }
 }

@@ -14,7 +14,7 @@ use crate::common::{fold_k, wave_number};
 use memstab::analysis::run;
 use memstab::output::Drawing;
 use memstab::reference::{ponding_scale, sphere_extrema, sphere_pressure, BESSEL_J2, SPHERE_CUSP};
-use memstab::results::{CriticalKind, CurveEventKind, CurveReport, StopReason};
+use memstab::results::{CriticalKind, Criticality, CurveEventKind, CurveReport, StopReason};
 use memstab::scene::Scene;
 use memstab::study::meridian::MeridianStudy;
 use serde_json::Value;
@@ -423,6 +423,27 @@ fn meridian_ponding_bifurcation_switches_to_the_sagging_branch() {
     }
     assert!(rows.last().unwrap().measures[b_min] < -0.1);
     assert!(rows[1..].iter().all(|r| r.index == Some(0)), "stable");
+    // Its normal form, before it was followed: the fluid level at the membrane leaves no
+    // linear term, so ρ − ρ_c ≈ c A² with c > 0 on the side it went; stable in its mode
+    // (supercritical), as the followed branch is.
+    let sag = branches
+        .graph
+        .branches
+        .iter()
+        .zip(&branches.runs)
+        .find(|(_, r)| std::ptr::eq(*r, sagging[0]))
+        .map(|(b, _)| b)
+        .expect("the sagging branch");
+    let nf = sag.normal_form.as_ref().expect("a normal form");
+    eprintln!("sagging branch's normal form: {}", nf.describe("rho"));
+    assert_eq!(nf.power, 2);
+    assert!(
+        nf.coefficient > 0.0 && nf.error < 1e-2 * nf.coefficient,
+        "{nf:?}"
+    );
+    assert_eq!(nf.criticality, Some(Criticality::Supercritical));
+    assert_eq!(nf.mode_stable, Some(true));
+    assert!(nf.observed.is_some_and(|o| o > 0.0), "{nf:?}");
     let other = &other[0].report;
     let o_max = column(&other.measures, "max_z");
     assert!(

@@ -41,12 +41,19 @@ pub struct IhProblem {
 /// The icosahedron with Π = ½|u|² − ½ λ |z|² + c₃ I₃ + c₃' J₃ + c₄ |z|⁴ on the Hg part z of
 /// its radial fields.
 pub fn ih_problem(coefficients: [f64; 3]) -> Result<IhProblem, String> {
+    ih_problem_curved(coefficients, 0.0)
+}
+
+/// The same with −½ f(λ) |z|², f(λ) = λ − μ λ² (`mu` = μ): two Hg points on the trivial
+/// path, joined by every axial branch (docs/theory.md §14.6).
+pub fn ih_problem_curved(coefficients: [f64; 3], mu: f64) -> Result<IhProblem, String> {
     let mesh = icosphere(&IcosphereOptions {
         frequency: 1,
         radius: 1.0,
     })
     .map_err(|e| e.to_string())?;
-    let potential = IrrepPotential::new(&mesh.action, &mesh.mesh.nodes, "Hg", 0, coefficients)?;
+    let potential = IrrepPotential::new(&mesh.action, &mesh.mesh.nodes, "Hg", 0, coefficients)?
+        .with_curvature(mu);
     let model = FeModel::new(
         mesh.mesh.nodes.clone(),
         mesh.mesh.triangles.clone(),
@@ -80,6 +87,17 @@ pub struct Switched {
 /// λ = 1, between two path points) and every branch of its critical points, `steps` points
 /// each.
 pub fn ih_branches(problem: &IhProblem, steps: usize) -> Result<Switched, String> {
+    ih_branches_over(problem, steps, (0.5, 1.5), 0.52)
+}
+
+/// The trivial path of the abstract problem from λ = `start` within `bounds` and every
+/// branch of its critical points, `steps` points each.
+pub fn ih_branches_over(
+    problem: &IhProblem,
+    steps: usize,
+    bounds: (f64, f64),
+    start: f64,
+) -> Result<Switched, String> {
     let t = Instant::now();
     let model = &problem.model;
     let layout = model.layout();
@@ -89,13 +107,13 @@ pub fn ih_branches(problem: &IhProblem, steps: usize) -> Result<Switched, String
     let opts = PathOptions {
         initial_step: 0.05,
         max_step: 0.05,
-        bounds: (0.5, 1.5),
+        bounds,
         state_scale: (layout.nodes() as f64).sqrt(),
         ..PathOptions::default()
     };
-    let p = SymmetricProblem::new(model, &top.basis, &[], vec![0.52], Some(0));
+    let p = SymmetricProblem::new(model, &top.basis, &[], vec![start], Some(0));
     let q0 = DVector::zeros(top.basis.dim());
-    let mut driver = Continuation::start(p, &q0, &DVector::from_element(1, 0.52), opts.clone())
+    let mut driver = Continuation::start(p, &q0, &DVector::from_element(1, start), opts.clone())
         .map_err(|e| e.to_string())?;
     let crossings = Crossings::new(
         Box::new(IrrepBlocks::new(

@@ -205,6 +205,9 @@ pub(crate) fn print_branches(b: &Branches, written: &BranchesWritten, control: &
                 if br.isotropy_exact() { "exact" } else { "NOT exact" },
                 br.stop
             );
+            if let Some(nf) = &br.normal_form {
+                println!("      normal form: {}", nf.describe(control));
+            }
             for w in &br.warnings {
                 println!("      warning: {w}");
             }

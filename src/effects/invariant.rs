@@ -7,7 +7,7 @@
 //! projector of the node permutation representation). With the parameter λ,
 //!
 //! ```text
-//!   Π(u; λ) = ½ |u|² − ½ λ |z|² + c₃ I₃(z) + c₃' J₃(z) + c₄ |z|⁴,      z = P w,
+//!   Π(u; λ) = ½ |u|² − ½ f(λ) |z|² + c₃ I₃(z) + c₃' J₃(z) + c₄ |z|⁴,      z = P w,
 //!   I₃(z) = Σ_i z_i³,   J₃(z) = tr Q(z)³,   Q(z) = Σ_i z_i (n_i n_iᵀ − I/3).
 //! ```
 //!
@@ -15,10 +15,12 @@
 //! Q(Π_g z) = R_g Q(z) R_gᵀ because R_g n_i = n_{π_g(i)}, and the trace of its cube is
 //! invariant under any rotation. (Two cubics, because one alone may vanish on some axial
 //! line: I₃ does on the D3d lines of the icosahedron's Hg.) u = 0 is an equilibrium for
-//! every λ; its tangent is I − λ N P Nᵀ (N: w ↦ u, u_i = w_i n_i, an isometry), so the
-//! eigenvalue 1 − λ of the fields in range(P) crosses zero at λ = 1 in irrep μ, d-fold. On an
-//! axial line z = a v (v ∈ Fix(Σ) ∩ range(P), |v| = 1) the equilibrium equations reduce to
-//! the closed form λ = 1 + 3 (c₃ I₃(v) + c₃' J₃(v)) a + 4 c₄ a² (docs/theory.md §14.6).
+//! every λ; with f(λ) = λ (the default) its tangent is I − λ N P Nᵀ (N: w ↦ u, u_i = w_i n_i,
+//! an isometry), so the eigenvalue 1 − λ of the fields in range(P) crosses zero at λ = 1 in
+//! irrep μ, d-fold. On an axial line z = a v (v ∈ Fix(Σ) ∩ range(P), |v| = 1) the
+//! equilibrium equations reduce to the closed form f(λ) = 1 + 3 (c₃ I₃(v) + c₃' J₃(v)) a +
+//! 4 c₄ a² (docs/theory.md §14.6). With f(λ) = λ − μ λ² ([`IrrepPotential::with_curvature`])
+//! the eigenvalue 1 − f(λ) vanishes at two values of λ and each axial branch joins them.
 //!
 //! The Hessian of the z-terms has rank d: it is handed over as d rank-one terms c a aᵀ, from
 //! the eigen-decomposition of its d × d restriction to an orthonormal basis of range(P).
@@ -39,6 +41,8 @@ pub struct IrrepPotential {
     parameter: usize,
     /// c₃, c₃', c₄.
     coefficients: [f64; 3],
+    /// μ in f(λ) = λ − μ λ² (0: f = λ).
+    curvature: f64,
 }
 
 impl IrrepPotential {
@@ -88,7 +92,16 @@ impl IrrepPotential {
             range: DMatrix::from_columns(&columns),
             parameter,
             coefficients,
+            curvature: 0.0,
         })
+    }
+
+    /// The same potential with −½ f(λ) |z|², f(λ) = λ − μ λ², in place of −½ λ |z|²: the
+    /// trivial path's eigenvalue 1 − f(λ) in the irrep then vanishes twice (at the roots of
+    /// μ λ² − λ + 1 for 0 < μ < ¼), and every axial branch joins the two points (§14.6).
+    pub fn with_curvature(mut self, mu: f64) -> Self {
+        self.curvature = mu;
+        self
     }
 
     /// d·m: the dimension of range(P) (the irrep's dimension times its multiplicity in the
@@ -150,7 +163,10 @@ impl Effect for IrrepPotential {
         params: &[f64],
         out: &mut Assembler<'_>,
     ) -> Result<(), ModelError> {
-        let lambda = params[self.parameter];
+        // f(λ) = λ − μ λ², which multiplies |z|²/2 (§14.6).
+        let l = params[self.parameter];
+        let lambda = l - self.curvature * l * l;
+        let rate = 1.0 - 2.0 * self.curvature * l;
         let [c3, c3t, c4] = self.coefficients;
         let z = self.project(&self.radial(x));
         let zz = z.norm_squared();
@@ -174,7 +190,7 @@ impl Effect for IrrepPotential {
             let g = u + n * grad[i];
             t.grad = [g.x, g.y, g.z];
             t.hess = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-            t.loads[0] = [-z[i] * n.x, -z[i] * n.y, -z[i] * n.z];
+            t.loads[0] = [-rate * z[i] * n.x, -rate * z[i] * n.y, -rate * z[i] * n.z];
             Ok(())
         })?;
         if out.request().tangent {

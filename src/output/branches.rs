@@ -5,7 +5,8 @@
 use super::diagram::{write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark};
 use super::{write_run, write_whole, OutputError, WriteRunError};
 use crate::results::{
-    Branches, CriticalKind, Node, PathReport, PrimaryPath, RunResult, StopReason, ASYMMETRY,
+    Branches, CriticalKind, Node, NormalForm, PathReport, PrimaryPath, RunResult, StopReason,
+    ASYMMETRY,
 };
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -72,6 +73,8 @@ struct BranchJson<'a> {
     bifurcation: String,
     path_slope: f64,
     mode_slope: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    normal_form: Option<NormalFormJson>,
     points: usize,
     symmetric_unknowns: usize,
     isotropy_of_states: String,
@@ -86,6 +89,52 @@ struct BranchJson<'a> {
     warnings: Vec<&'a str>,
 }
 
+/// λ − λ_c ≈ c A^k at the branch's critical point, and what it predicts.
+#[derive(Serialize)]
+struct NormalFormJson {
+    power: u32,
+    coefficient: f64,
+    error: f64,
+    amplitudes: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    criticality: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mode_stable: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    observed: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    observed_amplitude: Option<f64>,
+}
+
+impl NormalFormJson {
+    fn of(nf: &NormalForm) -> Option<Self> {
+        let finite = [nf.coefficient, nf.error]
+            .into_iter()
+            .chain(nf.amplitudes)
+            .chain(nf.observed)
+            .chain(nf.observed_amplitude)
+            .all(f64::is_finite);
+        finite.then(|| NormalFormJson {
+            power: nf.power,
+            coefficient: nf.coefficient,
+            error: nf.error,
+            amplitudes: nf.amplitudes,
+            criticality: nf.criticality.map(|c| c.to_string()),
+            mode_stable: nf.mode_stable,
+            observed: nf.observed,
+            observed_amplitude: nf.observed_amplitude,
+        })
+    }
+}
+
+/// A branch reaching a point already in the graph: its own node there and that point's.
+#[derive(Serialize)]
+struct ConnectionJson {
+    branch: String,
+    at: usize,
+    to: usize,
+}
+
 #[derive(Serialize)]
 struct GraphJson<'a> {
     scene: &'a str,
@@ -93,6 +142,8 @@ struct GraphJson<'a> {
     control: &'a str,
     depth: usize,
     nodes: Vec<NodeJson<'a>>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    connections: Vec<ConnectionJson>,
     branches: Vec<BranchJson<'a>>,
 }
 
@@ -205,6 +256,7 @@ pub fn write_branch_graph(
             bifurcation: b.reduced.bifurcation.to_string(),
             path_slope: b.reduced.path_slope,
             mode_slope: b.reduced.mode_slope,
+            normal_form: b.normal_form.as_ref().and_then(NormalFormJson::of),
             points: b.points.len(),
             symmetric_unknowns: b.symmetric_unknowns,
             isotropy_of_states: of_states,
@@ -235,6 +287,15 @@ pub fn write_branch_graph(
         control: &primary.control,
         depth: branches.depth,
         nodes,
+        connections: g
+            .connections
+            .iter()
+            .map(|c| ConnectionJson {
+                branch: crate::results::directory(c.branch),
+                at: c.at.index(),
+                to: c.to.index(),
+            })
+            .collect(),
         branches: list,
     };
     write_whole(&path, |w| {

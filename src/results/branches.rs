@@ -87,6 +87,17 @@ pub enum Skip {
     /// Its branches leave the states the study follows (a mode of wave number m ≥ 1 of a
     /// meridian): the reason names the model to switch on.
     Elsewhere(String),
+    /// The same point, up to symmetry, as a critical point already in the graph (the
+    /// branch it lies on connects to it): switched at there, not again.
+    Connection {
+        /// The path it lies on (`None`: the primary path).
+        on: Option<usize>,
+        /// Its number among that path's critical points.
+        number: usize,
+    },
+    /// Every branch the lemma predicts here is one already followed, up to symmetry: a
+    /// branch that passed through this point along the same direction (by index).
+    Known(Vec<usize>),
 }
 
 impl std::fmt::Display for Skip {
@@ -102,6 +113,16 @@ impl std::fmt::Display for Skip {
             Skip::NoAxialSubgroup(i) => write!(f, "irrep {i} has no axial isotropy subgroup"),
             Skip::Failed(why) => write!(f, "switching failed: {why}"),
             Skip::Elsewhere(why) => f.write_str(why),
+            Skip::Connection { on, number } => write!(
+                f,
+                "the same point, up to symmetry, as critical point {number} of {}: a connection",
+                on.map_or_else(|| "the path".to_string(), directory)
+            ),
+            Skip::Known(b) => write!(
+                f,
+                "its branches are already followed: {}",
+                b.iter().map(|&i| directory(i)).collect::<Vec<_>>().join(", ")
+            ),
         }
     }
 }
@@ -121,6 +142,78 @@ pub struct Reduced {
     /// ds/dA at the point (A the scaled amplitude): −mode_slope/(2 path_slope), 0 for a
     /// pitchfork.
     pub path_per_amplitude: f64,
+}
+
+/// Whether a pitchfork's branch leaves toward the side where the path has lost stability in
+/// the critical mode (supercritical: the branch is stable in that mode) or toward the side
+/// where it is still stable (subcritical: the branch is unstable in it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Criticality {
+    /// The branch is stable in the critical mode near the point.
+    Supercritical,
+    /// The branch is unstable in the critical mode near the point.
+    Subcritical,
+}
+
+impl std::fmt::Display for Criticality {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Criticality::Supercritical => "supercritical",
+            Criticality::Subcritical => "subcritical",
+        })
+    }
+}
+
+/// The normal form of one half of a branch at its critical point (docs/theory.md §14.7):
+/// the control along the branch, λ − λ_c ≈ c A^k with A = a/σ the scaled amplitude along the
+/// critical mode φ (k = 1 transcritical, k = 2 pitchfork), measured by three solves at fixed
+/// amplitude and extrapolated, and what it predicts of the branch's stability.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalForm {
+    /// k: 1 (transcritical) or 2 (pitchfork).
+    pub power: u32,
+    /// c, control units per A^k.
+    pub coefficient: f64,
+    /// The estimated error of c: the difference of the extrapolations from the larger and
+    /// the smaller pair of amplitudes.
+    pub error: f64,
+    /// The amplitudes A of the three solves.
+    pub amplitudes: [f64; 3],
+    /// A pitchfork's criticality (none for a transcritical point, whose halves go to either
+    /// side, or where the crossing is not transversal).
+    pub criticality: Option<Criticality>,
+    /// Whether the half is stable in the critical mode near the point (its eigenvalue along
+    /// φ is −b s for a transcritical point and −2 b s for a pitchfork, s the path's arclength
+    /// at the branch's control): none where the crossing is not transversal.
+    pub mode_stable: Option<bool>,
+    /// c as the followed branch's first point gives it (Δλ/A^k there), if it has one.
+    pub observed: Option<f64>,
+    /// The amplitude A of that point.
+    pub observed_amplitude: Option<f64>,
+}
+
+impl NormalForm {
+    /// One line: `supercritical: p − p_c ≈ 0.1234 A² (± 2e-5), stable in its mode; its first
+    /// point gives 0.1229`.
+    pub fn describe(&self, control: &str) -> String {
+        let power = if self.power == 1 { "" } else { "²" };
+        let kind = self
+            .criticality
+            .map_or_else(String::new, |c| format!("{c}: "));
+        let stability = match self.mode_stable {
+            Some(true) => ", stable in its mode",
+            Some(false) => ", unstable in its mode",
+            None => "",
+        };
+        let observed = self.observed.map_or_else(String::new, |o| {
+            format!("; its first point gives {}", crate::text::sig_digits(o, 4))
+        });
+        format!(
+            "{kind}{control} − {control}_c ≈ {} A{power} (± {}){stability}{observed}",
+            crate::text::sig_digits(self.coefficient, 6),
+            crate::text::sci(self.error),
+        )
+    }
 }
 
 /// One point of a branch.
@@ -180,6 +273,8 @@ pub struct SwitchedBranch {
     pub halves: Halves,
     /// The reduced equation at the critical point.
     pub reduced: Reduced,
+    /// The normal form of this half, if it could be computed.
+    pub normal_form: Option<NormalForm>,
     /// Unknowns of Fix(Σ).
     pub symmetric_unknowns: usize,
     /// The points, the critical point first.
@@ -233,6 +328,18 @@ pub enum Node {
     },
 }
 
+/// A branch reaching a critical point already in the graph (up to symmetry): the thesis's
+/// "branch connecting path", and how a closed circuit or a loop shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Connection {
+    /// The branch.
+    pub branch: usize,
+    /// Its critical point there (a node of its own).
+    pub at: NodeIndex,
+    /// The critical point it is (a path's or an earlier branch's).
+    pub to: NodeIndex,
+}
+
 /// The branches and how they connect: nodes are critical points and branch ends, edge
 /// weights index [`BranchGraph::branches`].
 #[derive(Debug, Clone, Default)]
@@ -241,6 +348,8 @@ pub struct BranchGraph {
     pub graph: DiGraph<Node, usize>,
     /// The branches, in the order followed.
     pub branches: Vec<SwitchedBranch>,
+    /// Where branches reach critical points already in the graph.
+    pub connections: Vec<Connection>,
 }
 
 impl BranchGraph {

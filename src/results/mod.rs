@@ -19,8 +19,9 @@ mod surface;
 pub mod validity;
 
 pub use branches::{
-    directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches, Half,
-    Halves, Node, PrimaryPath, RecordedPoint, Reduced, Skip, SwitchedBranch, ASYMMETRY,
+    directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches,
+    Connection, Criticality, Half, Halves, Node, NormalForm, PrimaryPath, RecordedPoint, Reduced,
+    Skip, SwitchedBranch, ASYMMETRY,
 };
 pub use critical::{CriticalKind, CriticalPoint, Isotropy};
 pub use curve::{CurveEvent, CurveEventKind, CurveReport, CurveRow};

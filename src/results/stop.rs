@@ -68,6 +68,12 @@ pub enum StopReason {
     NoControl,
     /// A stop was requested (SIGINT, SIGTERM): the path ends at its last point.
     Interrupted,
+    /// A branch reached a critical point already computed (up to symmetry): it ends there,
+    /// connected to it.
+    Connected {
+        /// Where: `the path` or a branch's directory, and the point's number on it.
+        to: String,
+    },
 }
 
 impl std::fmt::Display for StopReason {
@@ -95,6 +101,7 @@ impl std::fmt::Display for StopReason {
             }
             Self::NoControl => f.write_str("no control parameter"),
             Self::Interrupted => f.write_str("interrupted"),
+            Self::Connected { to } => write!(f, "it reached {to}, already computed: a connection"),
         }
     }
 }

@@ -10,6 +10,7 @@
 //! every point.
 
 use super::meridian::MeridianStudy;
+use super::normal_form::{normal_form, observe};
 use super::switching::{branch_run, follow_branch};
 use super::{BranchOptions, Followed, Free, Study};
 use crate::axisym::blocks::{wave_number, MERIDIAN_GROUP};
@@ -264,16 +265,15 @@ impl<'a> Switch<'a> {
         }
     }
 
-    /// The branch's first point on `half` with ds/dA = `k` (its tangent φ + k t_path):
-    /// the step leaves the point on the plane of fixed amplitude along φ, which the path does
-    /// not meet (docs/theory.md §14.4), halved down to the smallest step.
-    fn first_step(
+    /// Where the branch on `half` with ds/dA = `k` leaves from: the critical point, the
+    /// tangent φ + k t_path (normalised) and the plane of fixed amplitude along φ.
+    fn departure(
         &self,
         problem: &mut dyn Followed,
         half: Half,
         k: f64,
-    ) -> Result<PathPoint, crate::continuation::StepError> {
-        let (cp, opts) = (self.cp, &self.options.path);
+    ) -> (PathPoint, DVector<f64>, DVector<f64>) {
+        let cp = self.cp;
         let m = self.phi.len();
         let mut tangent = DVector::zeros(self.path.len());
         tangent
@@ -292,6 +292,20 @@ impl<'a> Switch<'a> {
         };
         let mut plane = DVector::zeros(tangent.len());
         plane.rows_mut(0, m).copy_from(&(&self.phi * half.sign()));
+        (start, tangent, plane)
+    }
+
+    /// The branch's first point on `half` with ds/dA = `k` (its tangent φ + k t_path):
+    /// the step leaves the point on the plane of fixed amplitude along φ, which the path does
+    /// not meet (docs/theory.md §14.4), halved down to the smallest step.
+    fn first_step(
+        &self,
+        problem: &mut dyn Followed,
+        half: Half,
+        k: f64,
+    ) -> Result<PathPoint, crate::continuation::StepError> {
+        let opts = &self.options.path;
+        let (start, tangent, plane) = self.departure(problem, half, k);
         let mut s = opts.initial_step;
         loop {
             match step_off(problem, &start, &tangent, &plane, s, opts) {
@@ -319,6 +333,7 @@ impl<'a> Switch<'a> {
             half,
             halves: Halves::Distinct,
             reduced: self.reduced,
+            normal_form: None,
             symmetric_unknowns: study.model.dim(),
             points: vec![Self::point(&cp.state, &cp.parameters, 0.0, 0, None)],
             turning: Vec::new(),
@@ -361,6 +376,20 @@ impl<'a> Switch<'a> {
                         ));
                     }
                     first = Some(p);
+                    // The normal form along the direction the branch could leave by.
+                    let (start, tangent, plane) = self.departure(&mut *problem, half, k);
+                    match normal_form(
+                        &mut *problem,
+                        &start,
+                        &tangent,
+                        &plane,
+                        &self.phi,
+                        &self.reduced,
+                        opts,
+                    ) {
+                        Ok(nf) => branch.normal_form = Some(nf),
+                        Err(e) => branch.warnings.push(format!("no normal form: {e}")),
+                    }
                 }
                 Err(e) => why = Some(e),
             }
@@ -390,6 +419,7 @@ impl<'a> Switch<'a> {
             &mut branch,
             Self::point,
         );
+        observe(&mut branch, c, self.phi.as_slice(), opts.state_scale);
         branch
     }
 }

@@ -11,6 +11,7 @@ pub mod block_test;
 pub mod meridian;
 mod meridian_branches;
 pub mod mesh;
+pub mod normal_form;
 pub mod switching;
 
 mod symmetric;

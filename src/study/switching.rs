@@ -26,6 +26,7 @@
 //! and of the branches) and the ends of branches, edges are branches.
 
 use super::mesh::MeshStudy;
+use super::normal_form::{normal_form, observe};
 use super::{BranchOptions, Study, SymmetricProblem};
 use crate::adapted::labels::isotropy;
 use crate::adapted::{AdaptedBasis, SparseBasis};
@@ -37,8 +38,9 @@ use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Layout, Model, Request};
 use crate::results::{
     directory, Bifurcation, BranchGraph, BranchPoint, BranchRun, BranchTurning, Branches,
-    CriticalKind, CriticalPoint, Half, Halves, Node, PathReport, PathRow, RecordedPoint, Reduced,
-    Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow, ASYMMETRY,
+    Connection, CriticalKind, CriticalPoint, Half, Halves, Node, PathReport, PathRow,
+    RecordedPoint, Reduced, Skip, State, StateKind, StopReason, SwitchedBranch, TurningRow,
+    ASYMMETRY,
 };
 use crate::stability::{IrrepBlocks, Stability};
 use meshes::GroupAction;
@@ -58,6 +60,14 @@ const QUADRATIC_ZERO: f64 = 1e-9;
 const TRANSVERSAL_ZERO: f64 = 1e-10;
 /// Tolerance of the checks that a kernel direction is what the representation theory says.
 const DIRECTION_TOL: f64 = 1e-6;
+/// Two critical points are one (up to symmetry) when their controls and a group image of
+/// one state and the other differ by at most this, relative to the path's scales (their
+/// localisation is to 10⁻¹⁰ of the arclength).
+const SAME_POINT: f64 = 1e-6;
+/// A branch leaves a point along a known branch's direction when the cosine of the two is
+/// above this (the known branch's points next to the point are a step away, so its chord
+/// is not its tangent).
+const SAME_DIRECTION: f64 = 0.9;
 
 /// A group acting on the model, with what switching at a critical point of a path in its
 /// fixed-point space needs: the fixed-point basis, the symmetry-adapted basis (for stability
@@ -299,13 +309,22 @@ impl Switching<'_> {
     /// found) and, to the options' depth, at the critical points of the branches.
     pub fn run(&self, critical: &[CriticalPoint]) -> BranchGraph {
         let mut g = BranchGraph::default();
+        // Every point of the path first, so that a branch reaching one of them is known to
+        // connect to it.
+        let nodes: Vec<NodeIndex> = critical
+            .iter()
+            .enumerate()
+            .map(|(k, cp)| {
+                g.graph.add_node(Node::Critical {
+                    on: None,
+                    number: k + 1,
+                    point: Box::new(cp.clone()),
+                    skipped: None,
+                })
+            })
+            .collect();
         for (k, cp) in critical.iter().enumerate() {
-            let node = g.graph.add_node(Node::Critical {
-                on: None,
-                number: k + 1,
-                point: Box::new(cp.clone()),
-                skipped: None,
-            });
+            let node = nodes[k];
             let requested = self
                 .options
                 .points
@@ -342,6 +361,7 @@ impl Switching<'_> {
                 return;
             }
         };
+        let mut known = Vec::new();
         for dir in &dirs {
             let t0 = std::time::Instant::now();
             let group = level.action.group();
@@ -378,11 +398,19 @@ impl Switching<'_> {
                 Halves::Conjugate => vec![Half::Plus],
                 Halves::Distinct => vec![Half::Plus, Half::Minus],
             };
+            let class = self.class_of(&child);
             // The set-up (Σ's action and bases, the reduced equation) is shared by the halves.
             let setup = t0.elapsed() / halves.len() as u32;
             for half in halves {
+                // A half along which a branch of the same class already passed through this
+                // point (up to symmetry, an earlier half's included) is that branch.
+                if let Some(b) = self.known_half(g, node, cp, &class, &dir.field, half) {
+                    known.push(b);
+                    continue;
+                }
                 let t1 = std::time::Instant::now();
                 let mut branch = self.follow(level, &child, cp, dir, &reduced, half);
+                self.connect(g, &mut branch);
                 branch.from = node;
                 branch.parent = parent;
                 branch.sign = sign * half.sign();
@@ -397,13 +425,23 @@ impl Switching<'_> {
                 let branch_sign = branch.sign;
                 g.branches.push(branch);
                 for (k, c) in found.iter().enumerate() {
+                    let same = self.same_as(g, c, g.branches[id].elements.len());
                     let n = g.graph.add_node(Node::Critical {
                         on: Some(id),
                         number: k + 1,
                         point: Box::new(c.clone()),
                         skipped: None,
                     });
-                    if depth < self.options.depth {
+                    if let Some(to) = same {
+                        if let Node::Critical { on, number, .. } = g.graph[to] {
+                            set_skip(g, n, Skip::Connection { on, number });
+                        }
+                        g.connections.push(Connection {
+                            branch: id,
+                            at: n,
+                            to,
+                        });
+                    } else if depth < self.options.depth {
                         self.switch_at(&child, Some(id), n, c, depth + 1, branch_sign, g);
                     } else if c.kind == CriticalKind::LimitPoint {
                         set_skip(g, n, Skip::LimitPoint);
@@ -413,6 +451,146 @@ impl Switching<'_> {
                 }
             }
         }
+        if !known.is_empty() {
+            known.dedup();
+            set_skip(g, node, Skip::Known(known));
+        }
+    }
+
+    /// Ends `branch` at its first critical point that is one already in the graph (up to
+    /// symmetry): past it the branch would retrace what is known (the path, or a branch
+    /// through that point). Its points up to the crossing, then the point itself; its
+    /// critical points there (every block singular at it) kept, the later ones dropped.
+    fn connect(&self, g: &BranchGraph, branch: &mut SwitchedBranch) {
+        let order = branch.elements.len();
+        let Some((first, to)) = branch
+            .critical
+            .iter()
+            .enumerate()
+            .find_map(|(k, c)| self.same_as(g, c, order).map(|n| (k, n)))
+        else {
+            return;
+        };
+        let c = branch.critical[first].clone();
+        let keep = branch.critical[first..]
+            .iter()
+            .take_while(|d| self.same_as(g, d, order) == Some(to))
+            .count();
+        branch.critical.truncate(first + keep);
+        let j = c.after_step.min(branch.points.len() - 1);
+        let arclength = branch.points[j].arclength;
+        branch.points.truncate(j + 1);
+        branch
+            .points
+            .push(self.point(&c.state, &c.parameters, arclength, 0, None));
+        branch.turning.retain(|t| t.after_step < j);
+        let Node::Critical { on, number, .. } = &g.graph[to] else {
+            return;
+        };
+        branch.stop = StopReason::Connected {
+            to: format!(
+                "critical point {number} of {}",
+                on.map_or_else(|| "the path".to_string(), directory)
+            ),
+        };
+    }
+
+    /// The class of a level's group in the scene group's lattice.
+    fn class_of(&self, level: &Level) -> String {
+        self.top
+            .lattice
+            .class_of(&level.top_index)
+            .map(|c| self.top.lattice.classes()[c].name.clone())
+            .unwrap_or_default()
+    }
+
+    /// The node of a critical point already in the graph that `c` is, up to the scene's
+    /// symmetry: the same control and a state that is a group image of its state, both to
+    /// [`SAME_POINT`] of the path's scales.
+    ///
+    /// Only points on paths at least as symmetric as `order` (the order of the isotropy of
+    /// the branch `c` lies on) count: a branch crossing a point of a less symmetric one goes
+    /// on into states nothing has followed.
+    fn same_as(&self, g: &BranchGraph, c: &CriticalPoint, order: usize) -> Option<NodeIndex> {
+        let control = self.control?;
+        let opts = &self.options.path;
+        let layout = self.model.layout();
+        let group = self.top.action.group().order();
+        g.graph.node_indices().find(|&n| {
+            let Node::Critical { point, on, .. } = &g.graph[n] else {
+                return false;
+            };
+            let symmetry = on.map_or(group, |k| g.branches[k].elements.len());
+            if symmetry < order {
+                return false;
+            }
+            let dl =
+                (point.parameters[control] - c.parameters[control]).abs() / opts.parameter_scale(0);
+            dl <= SAME_POINT
+                && (0..group).any(|e| {
+                    let image = act(&self.top.action, layout, e, &c.state);
+                    let d: f64 = image
+                        .iter()
+                        .zip(&point.state)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f64>()
+                        .sqrt();
+                    d <= SAME_POINT * opts.state_scale
+                })
+        })
+    }
+
+    /// The branch already in the graph that the half `half` of the branch along `phi` from
+    /// `cp` (at `node`) is, up to symmetry: one of the same isotropy class that passed
+    /// through this point (a connection to it) leaving along the same direction — the
+    /// non-symmetric part of its step next to the point within [`SAME_DIRECTION`] of a group
+    /// image of ±φ.
+    fn known_half(
+        &self,
+        g: &BranchGraph,
+        node: NodeIndex,
+        cp: &CriticalPoint,
+        class: &str,
+        phi: &[f64],
+        half: Half,
+    ) -> Option<usize> {
+        let layout = self.model.layout();
+        let top = self.top;
+        let order = top.action.group().order();
+        let along: Vec<f64> = phi.iter().map(|f| f * half.sign()).collect();
+        g.connections
+            .iter()
+            .filter(|c| c.to == node && g.branches[c.branch].isotropy == class)
+            .find_map(|c| {
+                let b = &g.branches[c.branch];
+                let Node::Critical { point, .. } = &g.graph[c.at] else {
+                    return None;
+                };
+                // The branch's last points before the connection (it ends there): the
+                // direction it arrived along, from the nearest one off the symmetric states
+                // (a branch may be drawn onto the path in its last step).
+                let j = point.after_step.min(b.points.len().saturating_sub(1));
+                let floor = SAME_POINT * self.options.path.state_scale;
+                let matches = (j.saturating_sub(2)..=j).rev().any(|k| {
+                    let d: Vec<f64> = b.points[k]
+                        .u
+                        .iter()
+                        .zip(&cp.state)
+                        .map(|(a, b)| a - b)
+                        .collect();
+                    let mut sym = vec![0.0; d.len()];
+                    top.basis.expand(&top.basis.restrict(&d), &mut sym);
+                    let asym: Vec<f64> = d.iter().zip(&sym).map(|(a, s)| a - s).collect();
+                    let n = norm(&asym);
+                    n > floor
+                        && (0..order).any(|e| {
+                            let image = act(&top.action, layout, e, &along);
+                            image.iter().zip(&asym).map(|(a, b)| a * b).sum::<f64>() / n
+                                > SAME_DIRECTION
+                        })
+                });
+                matches.then_some(c.branch)
+            })
     }
 
     /// The reduced equation along `dir` at `cp` (docs/theory.md §14.3): b from φᵀKφ at the
@@ -573,6 +751,7 @@ impl Switching<'_> {
             half,
             halves: dir.halves,
             reduced: *reduced,
+            normal_form: None,
             symmetric_unknowns: child.basis.dim(),
             points: vec![self.point(&cp.state, &cp.parameters, 0.0, 0, None)],
             turning: Vec::new(),
@@ -617,6 +796,20 @@ impl Switching<'_> {
             .rows_mut(0, m)
             .copy_from(&(child.basis.restrict(&dir.field) * half.sign()));
         let opts = &self.options.path;
+        if self.control.is_some() {
+            match normal_form(
+                &mut problem,
+                &start,
+                &tangent,
+                &plane,
+                &child.basis.restrict(&dir.field),
+                reduced,
+                opts,
+            ) {
+                Ok(nf) => branch.normal_form = Some(nf),
+                Err(e) => branch.warnings.push(format!("no normal form: {e}")),
+            }
+        }
         let mut s = opts.initial_step;
         let first = loop {
             match step_off(&mut problem, &start, &tangent, &plane, s, opts) {
@@ -662,6 +855,9 @@ impl Switching<'_> {
                 self.point(u, params, arclength, iterations, index)
             },
         );
+        if let Some(c) = self.control {
+            observe(&mut branch, c, &dir.field, opts.state_scale);
+        }
         if let Some(bad) = branch.points[1..]
             .iter()
             .position(|p| p.stabiliser != branch.elements)
