@@ -16,12 +16,14 @@
 use super::summary::print_summary;
 use super::CliError;
 use clap::Args;
+use memstab::analysis::compare::{CompareError, RefineOptions, Refiner};
 use memstab::analysis::run_from;
 use memstab::output::{Progress, RunSummary, Written};
 use memstab::results::{RunResult, StopReason};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use memstab::text::one_line;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
@@ -37,11 +39,25 @@ pub(crate) struct RunArgs {
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     json: bool,
+    /// Also run the scene on its mesh at twice the divisions (N = 2: and four times) and give
+    /// every critical and turning point its value per level, observed order, Richardson value
+    /// and error estimate (refine.json; a point the finer mesh lacks is flagged not
+    /// mesh-converged).
+    #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "1")]
+    refine: Option<usize>,
+    /// With --refine: also run the scene's meridian and give every point the continuum value
+    /// and its distance from it.
+    #[arg(long, requires = "refine")]
+    continuum: bool,
 }
 
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
-    let (study, result, written) = execute(scene, &args.out, args.quiet)?;
+    let refine = args.refine.map(|levels| RefineOptions {
+        levels,
+        continuum: args.continuum,
+    });
+    let (study, result, written) = execute_refined(scene, &args.out, args.quiet, refine)?;
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
@@ -69,11 +85,36 @@ pub(super) fn execute(
     out: &Path,
     quiet: bool,
 ) -> Result<(Box<dyn Study>, RunResult, Written), CliError> {
+    execute_refined(scene, out, quiet, None)
+}
+
+/// As [`execute`], and with `refine` the scene's refined runs (built and checked before
+/// anything is written) after its own, their findings in the report and `refine.json`.
+fn execute_refined(
+    scene: Scene,
+    out: &Path,
+    quiet: bool,
+    refine: Option<RefineOptions>,
+) -> Result<(Box<dyn Study>, RunResult, Written), CliError> {
     super::common::check_out(out)?;
+    let compare_error = |e: CompareError| match e {
+        CompareError::Input(m) => CliError::Input(m),
+        CompareError::Failure(m) => CliError::Failure(m),
+    };
+    let refiner = match &refine {
+        Some(options) => {
+            if out.is_dir() {
+                super::common::check_out_file("--out", &out.join(memstab::output::REFINE_JSON))?;
+            }
+            Some(Refiner::new(&scene, options).map_err(compare_error)?)
+        }
+        None => None,
+    };
     let mut study = memstab::study::build(scene).map_err(|e| CliError::Input(one_line(&e)))?;
     let start = memstab::analysis::restart::start_of(&*study)
         .map_err(|e| CliError::Input(one_line(&format!("{}: {e}", study.about().origin))))?;
     let dir = super::common::OutDir::create(out)?;
+    let clock = std::time::Instant::now();
     let handle = study.control();
     let control = handle.map_or_else(|| "control".to_string(), |c| c.name.clone());
     let range = handle
@@ -94,6 +135,21 @@ pub(super) fn execute(
     };
     progress.finish(format!("stopped: {}", result.report.stop));
     let mut result = result;
+    if let Some(refiner) = refiner {
+        let seconds = clock.elapsed().as_secs_f64();
+        let lines = !quiet && std::io::stderr().is_terminal();
+        let progress = |line: &str| {
+            if lines {
+                eprintln!("refine: {line}");
+            }
+        };
+        match refiner.run(&result.report, seconds, &progress) {
+            Ok(r) => result.report.refinement = Some(r),
+            Err(CompareError::Input(m) | CompareError::Failure(m)) => {
+                return Err(dir.failed(&format!("--refine: {m}")))
+            }
+        }
+    }
     let written = memstab::analysis::write(&*study, &mut result, out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     Ok((study, result, written))
