@@ -238,3 +238,39 @@ fn bad_refinements_are_refused_before_anything_is_written() {
         assert!(!out.exists(), "{all:?} wrote {}", out.display());
     }
 }
+
+#[test]
+fn a_signal_during_the_refinement_writes_the_run_without_it() {
+    // The balloon's own path takes 24 steps; the hook stops the first refined run after 6 of
+    // its own.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = balloon(dir.path(), &[]);
+    let out = dir.path().join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            &scene,
+            "--out",
+            out.to_str().unwrap(),
+            "--refine",
+            "--quiet",
+        ])
+        .env("MEMSTAB_INTERRUPT_AFTER_STEPS", "30")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("refinement was interrupted"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert!(!out.join("refine.json").exists());
+    let path = json(&out.join("path.json"));
+    assert_eq!(path["stop"], "the stretch reached 4", "{}", path["stop"]);
+    assert!(json(&out.join("critical.json"))
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|c| c["valid"] == true));
+    assert!(out.join("manifest.json").exists());
+}

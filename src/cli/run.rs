@@ -1,4 +1,5 @@
-//! `memstab run SCENE --out DIR [--quiet] [--json]` (and the run behind `memstab demo`).
+//! `memstab run SCENE --out DIR [--quiet] [--json] [--refine [N]] [--continuum]` (and the run
+//! behind `memstab demo`).
 //!
 //! Loads and validates a scene, builds the study (mesh, the scene's group, effects, model),
 //! follows its path with a progress bar and writes into DIR: `path.csv`, `path.json`,
@@ -12,6 +13,12 @@
 //! even DIR). A start state that does not converge is exit code 1; DIR is then removed again if
 //! this run created it, so nothing is left behind. A path that stops early (the step was cut
 //! too small) is not a failure: its outputs are written and the reason printed.
+//!
+//! With `--refine` the refined runs ([`Refiner`]) are built and checked before anything is
+//! written (a mesh file, `--refine 3`: exit 2) and run after the scene's own, and their
+//! findings go into the report (the not-mesh-converged flags) and `refine.json`; a refined run
+//! that fails is exit 1 with nothing written, a signal during them writes the run without its
+//! refinement (exit 130).
 
 use super::summary::print_summary;
 use super::CliError;
@@ -65,7 +72,14 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     } else {
         print_summary(study.scene(), &result, &args.out, &written);
     }
-    interrupted(&result, &args.out)
+    interrupted(&result, &args.out)?;
+    if args.refine.is_some() && result.report.refinement.is_none() {
+        return Err(CliError::Interrupted(format!(
+            "the run is written into {}; its refinement was interrupted and is not",
+            args.out.display()
+        )));
+    }
+    Ok(())
 }
 
 /// Exit code 130 after a run that a signal stopped (its outputs are written).
@@ -135,7 +149,8 @@ fn execute_refined(
     };
     progress.finish(format!("stopped: {}", result.report.stop));
     let mut result = result;
-    if let Some(refiner) = refiner {
+    // A run cut short by a signal is written as it is, without its refinement.
+    if let Some(refiner) = refiner.filter(|_| result.report.stop != StopReason::Interrupted) {
         let seconds = clock.elapsed().as_secs_f64();
         let lines = !quiet && std::io::stderr().is_terminal();
         let progress = |line: &str| {
@@ -144,7 +159,7 @@ fn execute_refined(
             }
         };
         match refiner.run(&result.report, seconds, &progress) {
-            Ok(r) => result.report.refinement = Some(r),
+            Ok(r) => result.report.refinement = r,
             Err(CompareError::Input(m) | CompareError::Failure(m)) => {
                 return Err(dir.failed(&format!("--refine: {m}")))
             }

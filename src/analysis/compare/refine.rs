@@ -161,13 +161,15 @@ impl Refiner {
 
     /// Runs the refined meshes one after the other (so that each wall time is its own), and
     /// the meridian with `continuum`, and follows the points of `base`, the scene's own run
-    /// that took `seconds`, through them. `progress` hears of each run as it ends.
+    /// that took `seconds`, through them. `progress` hears of each run as it ends. `None`
+    /// when a signal interrupted a run: its points would be missing for that reason alone.
     pub fn run(
         self,
         base: &PathReport,
         seconds: f64,
         progress: &(dyn Fn(&str) + Sync),
-    ) -> Result<Refinement, CompareError> {
+    ) -> Result<Option<Refinement>, CompareError> {
+        let interrupted = crate::continuation::interrupt::requested;
         let control = base.parameters.iter().position(|p| *p == base.control);
         let critical = (0..base.critical.len())
             .map(|k| {
@@ -207,11 +209,17 @@ impl Refiner {
         for (l, job) in self.levels.into_iter().enumerate() {
             let label = format!("refinement {}", l + 1);
             levels.push(job.execute(&label, self.label_modes, progress)?);
+            if interrupted() {
+                return Ok(None);
+            }
         }
         let continuum = match self.continuum {
             Some((coarse, fine)) => {
                 let coarse = coarse.execute("meridian", self.label_modes, progress)?;
                 let fine = fine.execute("meridian check", self.label_modes, progress)?;
+                if interrupted() {
+                    return Ok(None);
+                }
                 Some((coarse, fine))
             }
             None => None,
@@ -273,7 +281,7 @@ impl Refiner {
             .filter(|r| r.found_at == base_resolution)
             .map(|r| refined(r, true, &finer))
             .collect();
-        Ok(Refinement {
+        Ok(Some(Refinement {
             control: self.control,
             assumed_order: ASSUMED_ORDER,
             order_tolerance: ORDER_TOLERANCE,
@@ -298,7 +306,7 @@ impl Refiner {
             critical,
             turning,
             new_on_finer,
-        })
+        }))
     }
 }
 
