@@ -274,3 +274,31 @@ fn a_signal_during_the_refinement_writes_the_run_without_it() {
         .all(|c| c["valid"] == true));
     assert!(out.join("manifest.json").exists());
 }
+
+#[test]
+fn a_meridian_assumes_the_order_of_its_quadratic_elements() {
+    // The balloon's meridian at 64 and 128 elements: order 4 assumed, and the Richardson
+    // value of its maximum is the closed form.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/axisymmetric/balloon.toml"
+    );
+    let out = dir.path().join("out");
+    let stdout = run(&[
+        "run",
+        scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--refine",
+        "--quiet",
+        "--json",
+    ]);
+    let summary: Value = serde_json::from_str(&stdout).unwrap();
+    let refinement = &summary["refinement"];
+    assert_eq!(refinement["assumed_order"], 4.0, "{refinement}");
+    let max = &refinement["critical"][0];
+    assert_eq!(max["estimate"]["basis"], "richardson", "{max}");
+    let r = max["richardson"].as_f64().unwrap();
+    assert!((r - P_MAX).abs() < 1e-6, "{max}");
+}

@@ -5,12 +5,15 @@
 use super::StopReason;
 use serde::Serialize;
 
-/// The order of convergence the error estimate assumes: the linear triangles (and the
-/// meridian's quadratic elements measured in their nodes' spacing) converge at O(h²) in the
-/// critical values.
+/// The order of convergence the error estimate assumes on a 3-D mesh: its linear triangles
+/// converge at O(h²) in the critical values (docs/theory.md §13.4).
 pub const ASSUMED_ORDER: f64 = 2.0;
 
-/// How far the observed order may be from [`ASSUMED_ORDER`] for the values to be taken as in
+/// The order it assumes on a meridian: its quadratic elements converge at O(h⁴) (2p for
+/// degree p = 2, docs/theory.md §15.3).
+pub const MERIDIAN_ORDER: f64 = 4.0;
+
+/// How far the observed order may be from the assumed one for the values to be taken as in
 /// the asymptotic range (and extrapolated).
 pub const ORDER_TOLERANCE: f64 = 0.5;
 
@@ -19,7 +22,8 @@ pub const ORDER_TOLERANCE: f64 = 0.5;
 pub struct Refinement {
     /// The control parameter the values are of.
     pub control: String,
-    /// The order the estimate assumes ([`ASSUMED_ORDER`]).
+    /// The order the estimate assumes ([`ASSUMED_ORDER`] on a 3-D mesh, [`MERIDIAN_ORDER`] on
+    /// a meridian).
     pub assumed_order: f64,
     /// The largest |observed − assumed| order taken as asymptotic ([`ORDER_TOLERANCE`]).
     pub order_tolerance: f64,

@@ -16,7 +16,7 @@ use super::{
 };
 use crate::results::refine::{
     ContinuumRun, Estimate, NewPoint, PointRefinement, RefinedLevel, Refinement, ASSUMED_ORDER,
-    ORDER_TOLERANCE,
+    MERIDIAN_ORDER, ORDER_TOLERANCE,
 };
 use crate::results::PathReport;
 use crate::scene::{MeshSpec, Scene};
@@ -225,6 +225,11 @@ impl Refiner {
             None => None,
         };
         let finer: Vec<String> = levels.iter().map(|l| l.mesh.clone()).collect();
+        let order = if self.meridian {
+            MERIDIAN_ORDER
+        } else {
+            ASSUMED_ORDER
+        };
         // The critical points, with the meridian as a second mesh.
         let mut meshes = vec![MeshRuns {
             label: "run".into(),
@@ -248,7 +253,10 @@ impl Refiner {
         let (own, new): (Vec<Rung>, Vec<Rung>) = rungs
             .into_iter()
             .partition(|r| r.found_at == base_resolution);
-        let critical = own.iter().map(|r| refined(r, false, &finer)).collect();
+        let critical = own
+            .iter()
+            .map(|r| refined(r, false, &finer, order))
+            .collect();
         let new_on_finer = new
             .iter()
             .map(|r| NewPoint {
@@ -279,11 +287,11 @@ impl Refiner {
         let turning = turning_rungs
             .iter()
             .filter(|r| r.found_at == base_resolution)
-            .map(|r| refined(r, true, &finer))
+            .map(|r| refined(r, true, &finer, order))
             .collect();
         Ok(Some(Refinement {
             control: self.control,
-            assumed_order: ASSUMED_ORDER,
+            assumed_order: order,
             order_tolerance: ORDER_TOLERANCE,
             levels: levels
                 .iter()
@@ -312,7 +320,7 @@ impl Refiner {
 
 /// A rung of the run's own level, followed through the levels (its images on the first
 /// mesh), with its estimate; a turning point's kind is its irrep (`maximum`, `minimum`).
-fn refined(rung: &Rung, turning: bool, finer: &[String]) -> PointRefinement {
+fn refined(rung: &Rung, turning: bool, finer: &[String], order: f64) -> PointRefinement {
     let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     let values: Vec<Option<f64>> = rung.images[0]
         .levels
@@ -324,7 +332,7 @@ fn refined(rung: &Rung, turning: bool, finer: &[String]) -> PointRefinement {
         .iter()
         .map(|i| i + 1)
         .collect();
-    let (observed_order, richardson, errors, estimate) = estimate(&values, finer);
+    let (observed_order, richardson, errors, estimate) = estimate(&values, finer, order);
     let distances = match rung.continuum {
         Some(c) => values.iter().map(|v| v.map(|v| v - c)).collect(),
         None => Vec::new(),
@@ -367,12 +375,14 @@ pub fn richardson(coarse: f64, fine: f64, order: f64) -> f64 {
     fine + (fine - coarse) / (2f64.powf(order) - 1.0)
 }
 
-/// The estimate of values on levels of halved h (the first level's value present): the
-/// observed order with three levels, the Richardson value and each level's error, unless a
-/// refined level has no value (`finer` names each level's mesh).
+/// The estimate of values on levels of halved h (the first level's value present), assuming
+/// the order `assumed`: the observed order with three levels, the Richardson value and each
+/// level's error, unless a refined level has no value (`finer` names each level's mesh) or
+/// the observed order is more than [`ORDER_TOLERANCE`] from `assumed`.
 pub fn estimate(
     values: &[Option<f64>],
     finer: &[String],
+    assumed: f64,
 ) -> (Option<f64>, Option<f64>, Vec<Option<f64>>, Estimate) {
     let none = vec![None; values.len()];
     if let Some(l) = values.iter().position(Option::is_none) {
@@ -399,7 +409,7 @@ pub fn estimate(
     let asymptotic = match (order, v.as_slice()) {
         (None, _) => true,
         (Some(Some(p)), [.., a, b, c]) => {
-            (a - b) * (b - c) > 0.0 && (p - ASSUMED_ORDER).abs() <= ORDER_TOLERANCE
+            (a - b) * (b - c) > 0.0 && (p - assumed).abs() <= ORDER_TOLERANCE
         }
         (Some(_), _) => false,
     };
@@ -413,7 +423,7 @@ pub fn estimate(
         );
     }
     let n = v.len();
-    let r = richardson(v[n - 2], v[n - 1], ASSUMED_ORDER);
+    let r = richardson(v[n - 2], v[n - 1], assumed);
     let errors = v.iter().map(|x| Some((x - r).abs())).collect();
     (
         observed,
@@ -433,14 +443,14 @@ mod tests {
     fn second_order_values_are_extrapolated_and_their_errors_estimated() {
         // v(h) = 1 + h² at h = 1, 1/2, 1/4.
         let values = [Some(2.0), Some(1.25), Some(1.0625)];
-        let (order, r, errors, basis) = estimate(&values, &[]);
+        let (order, r, errors, basis) = estimate(&values, &[], 2.0);
         assert!((order.unwrap() - 2.0).abs() < 1e-12);
         assert!((r.unwrap() - 1.0).abs() < 1e-12);
         assert!((errors[0].unwrap() - 1.0).abs() < 1e-12);
         assert!((errors[2].unwrap() - 0.0625).abs() < 1e-12);
         assert_eq!(basis, Estimate::Richardson { observed: true });
         // Two levels: the order is assumed.
-        let (order, r, _, basis) = estimate(&values[..2], &[]);
+        let (order, r, _, basis) = estimate(&values[..2], &[], 2.0);
         assert_eq!(order, None);
         assert!((r.unwrap() - 1.0).abs() < 1e-12);
         assert_eq!(basis, Estimate::Richardson { observed: false });
@@ -450,15 +460,26 @@ mod tests {
     fn an_order_far_from_two_is_said_not_extrapolated() {
         // v(h) = 1 + h^0.7.
         let v = |h: f64| Some(1.0 + h.powf(0.7));
-        let (order, r, errors, basis) = estimate(&[v(1.0), v(0.5), v(0.25)], &[]);
+        let (order, r, errors, basis) = estimate(&[v(1.0), v(0.5), v(0.25)], &[], 2.0);
         assert!((order.unwrap() - 0.7).abs() < 1e-9);
         assert_eq!(r, None);
         assert!(errors.iter().all(Option::is_none));
         assert!(
             matches!(basis, Estimate::NotAsymptotic { order: Some(p) } if (p - 0.7).abs() < 1e-9)
         );
+        // A fourth-order sequence is asymptotic for elements of that order only.
+        let w = |h: f64| Some(1.0 + h.powi(4));
+        let quartic = [w(1.0), w(0.5), w(0.25)];
+        assert!(matches!(
+            estimate(&quartic, &[], 2.0).3,
+            Estimate::NotAsymptotic { .. }
+        ));
+        let (_, r, errors, basis) = estimate(&quartic, &[], 4.0);
+        assert!((r.unwrap() - 1.0).abs() < 1e-12);
+        assert!((errors[0].unwrap() - 1.0).abs() < 1e-12);
+        assert_eq!(basis, Estimate::Richardson { observed: true });
         // Changes of alternating sign are not in the asymptotic range either.
-        let (_, r, _, basis) = estimate(&[Some(1.0), Some(1.4), Some(1.3)], &[]);
+        let (_, r, _, basis) = estimate(&[Some(1.0), Some(1.4), Some(1.3)], &[], 2.0);
         assert_eq!(r, None);
         assert!(matches!(basis, Estimate::NotAsymptotic { .. }));
     }
@@ -466,10 +487,10 @@ mod tests {
     #[test]
     fn a_point_without_a_counterpart_is_not_mesh_converged() {
         let finer = ["a".to_string(), "b".to_string(), "c".to_string()];
-        let (_, r, _, basis) = estimate(&[Some(1.0), Some(1.1), None], &finer);
+        let (_, r, _, basis) = estimate(&[Some(1.0), Some(1.1), None], &finer, 2.0);
         assert_eq!(r, None);
         assert_eq!(basis, Estimate::NotMeshConverged { finer: "c".into() });
-        let (_, _, _, basis) = estimate(&[Some(1.0), Some(1.0)], &finer);
+        let (_, _, _, basis) = estimate(&[Some(1.0), Some(1.0)], &finer, 2.0);
         assert_eq!(basis, Estimate::Unchanged);
     }
 }
