@@ -63,6 +63,13 @@
 //! Bad input (a mesh that is not a subgroup or does not parse, an equilibrium analysis, a bad
 //! `max`) is a [`CompareError::Input`] before anything runs; a start state that does not
 //! converge is a [`CompareError::Failure`].
+//!
+//! # One run on refined meshes
+//!
+//! [`Refiner`] (`memstab run --refine`) uses the same runs and the same matching for one
+//! scene on its own mesh at two or three resolutions: every critical and turning point of a
+//! finished run is a rung, its images on the refined meshes give its value per level, and
+//! [`estimate`] the observed order, the Richardson value and the error per level.
 
 mod matching;
 mod meshes;
