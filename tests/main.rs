@@ -34,6 +34,7 @@ mod newton;
 mod one_point;
 mod output;
 mod ponding;
+mod refine;
 mod reliability;
 mod saved_point;
 mod scene_mesh_file;

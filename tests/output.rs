@@ -92,6 +92,7 @@ fn report() -> PathReport {
         states: None,
         wrinkling: None,
         wave_numbers: Vec::new(),
+        refinement: None,
         irreps: vec!["Ag".to_string(), "Hg".to_string()],
     }
 }

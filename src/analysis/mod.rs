@@ -359,6 +359,7 @@ impl Record {
             states: None,
             wrinkling: None,
             wave_numbers: Vec::new(),
+            refinement: None,
             irreps: self.irreps,
         };
         RunResult {

@@ -86,7 +86,7 @@ pub fn observed_order(coarse: f64, fine: f64) -> f64 {
 
 /// Richardson extrapolation assuming order 2 with h halved: (4 p_fine − p_coarse) / 3.
 pub fn richardson(coarse: f64, fine: f64) -> f64 {
-    (4.0 * fine - coarse) / 3.0
+    crate::analysis::compare::richardson(coarse, fine, 2.0)
 }
 
 /// The full tangent K as a dense matrix (sparse part plus rank-one terms).

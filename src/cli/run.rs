@@ -1,4 +1,5 @@
-//! `memstab run SCENE --out DIR [--quiet] [--json]` (and the run behind `memstab demo`).
+//! `memstab run SCENE --out DIR [--quiet] [--json] [--refine [N]] [--continuum]` (and the run
+//! behind `memstab demo`).
 //!
 //! Loads and validates a scene, builds the study (mesh, the scene's group, effects, model),
 //! follows its path with a progress bar and writes into DIR: `path.csv`, `path.json`,
@@ -12,16 +13,24 @@
 //! even DIR). A start state that does not converge is exit code 1; DIR is then removed again if
 //! this run created it, so nothing is left behind. A path that stops early (the step was cut
 //! too small) is not a failure: its outputs are written and the reason printed.
+//!
+//! With `--refine` the refined runs ([`Refiner`]) are built and checked before anything is
+//! written (a mesh file, `--refine 3`: exit 2) and run after the scene's own, and their
+//! findings go into the report (the not-mesh-converged flags) and `refine.json`; a refined run
+//! that fails is exit 1 with nothing written, a signal during them writes the run without its
+//! refinement (exit 130).
 
 use super::summary::print_summary;
 use super::CliError;
 use clap::Args;
+use memstab::analysis::compare::{CompareError, RefineOptions, Refiner};
 use memstab::analysis::run_from;
 use memstab::output::{Progress, RunSummary, Written};
 use memstab::results::{RunResult, StopReason};
 use memstab::scene::Scene;
 use memstab::study::Study;
 use memstab::text::one_line;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
@@ -37,11 +46,25 @@ pub(crate) struct RunArgs {
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     json: bool,
+    /// Also run the scene on its mesh at twice the divisions (N = 2: and four times) and give
+    /// every critical and turning point its value per level, observed order, Richardson value
+    /// and error estimate (refine.json; a point the finer mesh lacks is flagged not
+    /// mesh-converged).
+    #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "1")]
+    refine: Option<usize>,
+    /// With --refine: also run the scene's meridian and give every point the continuum value
+    /// and its distance from it.
+    #[arg(long, requires = "refine")]
+    continuum: bool,
 }
 
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
-    let (study, result, written) = execute(scene, &args.out, args.quiet)?;
+    let refine = args.refine.map(|levels| RefineOptions {
+        levels,
+        continuum: args.continuum,
+    });
+    let (study, result, written) = execute_refined(scene, &args.out, args.quiet, refine)?;
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
         let text = serde_json::to_string(&json).map_err(|e| CliError::Failure(e.to_string()))?;
@@ -49,7 +72,14 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     } else {
         print_summary(study.scene(), &result, &args.out, &written);
     }
-    interrupted(&result, &args.out)
+    interrupted(&result, &args.out)?;
+    if args.refine.is_some() && result.report.refinement.is_none() {
+        return Err(CliError::Interrupted(format!(
+            "the run is written into {}; its refinement was interrupted and is not",
+            args.out.display()
+        )));
+    }
+    Ok(())
 }
 
 /// Exit code 130 after a run that a signal stopped (its outputs are written).
@@ -69,11 +99,36 @@ pub(super) fn execute(
     out: &Path,
     quiet: bool,
 ) -> Result<(Box<dyn Study>, RunResult, Written), CliError> {
+    execute_refined(scene, out, quiet, None)
+}
+
+/// As [`execute`], and with `refine` the scene's refined runs (built and checked before
+/// anything is written) after its own, their findings in the report and `refine.json`.
+fn execute_refined(
+    scene: Scene,
+    out: &Path,
+    quiet: bool,
+    refine: Option<RefineOptions>,
+) -> Result<(Box<dyn Study>, RunResult, Written), CliError> {
     super::common::check_out(out)?;
+    let compare_error = |e: CompareError| match e {
+        CompareError::Input(m) => CliError::Input(m),
+        CompareError::Failure(m) => CliError::Failure(m),
+    };
+    let refiner = match &refine {
+        Some(options) => {
+            if out.is_dir() {
+                super::common::check_out_file("--out", &out.join(memstab::output::REFINE_JSON))?;
+            }
+            Some(Refiner::new(&scene, options).map_err(compare_error)?)
+        }
+        None => None,
+    };
     let mut study = memstab::study::build(scene).map_err(|e| CliError::Input(one_line(&e)))?;
     let start = memstab::analysis::restart::start_of(&*study)
         .map_err(|e| CliError::Input(one_line(&format!("{}: {e}", study.about().origin))))?;
     let dir = super::common::OutDir::create(out)?;
+    let clock = std::time::Instant::now();
     let handle = study.control();
     let control = handle.map_or_else(|| "control".to_string(), |c| c.name.clone());
     let range = handle
@@ -94,6 +149,22 @@ pub(super) fn execute(
     };
     progress.finish(format!("stopped: {}", result.report.stop));
     let mut result = result;
+    // A run cut short by a signal is written as it is, without its refinement.
+    if let Some(refiner) = refiner.filter(|_| result.report.stop != StopReason::Interrupted) {
+        let seconds = clock.elapsed().as_secs_f64();
+        let lines = !quiet && std::io::stderr().is_terminal();
+        let progress = |line: &str| {
+            if lines {
+                eprintln!("refine: {line}");
+            }
+        };
+        match refiner.run(&result.report, seconds, &progress) {
+            Ok(r) => result.report.refinement = r,
+            Err(CompareError::Input(m) | CompareError::Failure(m)) => {
+                return Err(dir.failed(&format!("--refine: {m}")))
+            }
+        }
+    }
     let written = memstab::analysis::write(&*study, &mut result, out)
         .map_err(|e| CliError::Failure(one_line(&e.to_string())))?;
     Ok((study, result, written))

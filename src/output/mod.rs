@@ -13,6 +13,7 @@
 //! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
 //! | `branches.json` | [`write_branch_graph`] | the graph of critical points and branches |
 //! | `diagram.svg` | [`write_bifurcation_diagram`] | the path and every branch in one bifurcation diagram |
+//! | `refine.json` | [`write_refine`] | with `--refine`: every critical and turning point on the refined meshes, with its error per level |
 //!
 //! [`write_run`] writes all of them for a finished run.
 //!
@@ -38,6 +39,7 @@ mod lock;
 mod manifest;
 mod matrix_market;
 mod progress;
+mod refine;
 mod reopen;
 mod run;
 mod scales;
@@ -64,6 +66,7 @@ pub use matrix_market::{
     RANK_ONE_FILE_TAG,
 };
 pub use progress::Progress;
+pub use refine::{write_refine, REFINE_JSON};
 pub use reopen::{FinishedRun, ReopenError};
 pub use run::{
     file_name, node_normals, write_run, write_run_with, CriticalSummary, Described, OwnFiles,

@@ -290,7 +290,19 @@ pub fn write_run_with(
     };
     let svg = attempt!(svg);
     done.push(svg.clone());
-    let own = attempt!(own(result, out));
+    let mut own = attempt!(own(result, out));
+    if let Some(r) = &result.report.refinement {
+        let path = attempt!(super::write_refine(out, r));
+        let levels: Vec<String> = r.levels.iter().map(|l| l.resolution.to_string()).collect();
+        own.push(Described {
+            path,
+            what: format!(
+                "the critical and turning points at resolution {}: values, order, Richardson, \
+                 error and wall time per level",
+                levels.join(", ")
+            ),
+        });
+    }
     done.extend(own.iter().map(|d| d.path.clone()));
     let branches = match &result.branches {
         Some(b) => {
@@ -536,6 +548,10 @@ pub struct RunSummary {
     /// The number of branches followed, with `[analysis.branches]` (left out otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub branches: Option<usize>,
+    /// The points on the refined meshes, with `--refine` (left out otherwise; as
+    /// `refine.json`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<crate::results::refine::Refinement>,
 }
 
 impl RunSummary {
@@ -582,6 +598,7 @@ impl RunSummary {
             symmetric_unknowns: report.symmetric_unknowns,
             unknowns: report.unknowns,
             branches: written.branches.as_ref().map(|b| b.directories.len()),
+            refinement: report.refinement.clone(),
         }
     }
 }

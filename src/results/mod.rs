@@ -11,6 +11,7 @@ mod critical;
 mod curve;
 pub mod deflation;
 mod path;
+pub mod refine;
 mod run;
 mod spectra;
 mod state;

@@ -132,6 +132,11 @@ pub struct PathReport {
     /// `critical.json` as each point's `m`.
     #[serde(skip)]
     pub wave_numbers: Vec<usize>,
+    /// The critical and turning points on refined meshes (`memstab run --refine`), written
+    /// into `refine.json`; a point without a counterpart there is flagged not mesh-converged
+    /// ([`PathReport::flags`]).
+    #[serde(skip)]
+    pub refinement: Option<super::refine::Refinement>,
 }
 
 /// Where the membrane model stops being valid along a path: the triangles whose smaller
@@ -277,6 +282,7 @@ mod tests {
             wrinkling: None,
             wave_numbers: Vec::new(),
             irreps: Vec::new(),
+            refinement: None,
         };
         assert_eq!(r.index_range(), Some((0, 1)));
         r.rows = vec![row(0, Some(2)), row(1, None), row(2, Some(2))];

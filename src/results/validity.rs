@@ -1,5 +1,6 @@
-//! Whether a critical point is a result of the model as it stands (docs/theory.md §8.10): a
-//! small set of typed flags, each with its measure. A point with no flag is *valid*.
+//! Whether a critical point is a result of the model as it stands (docs/theory.md §8.10), and
+//! of the mesh (§8.11, with `--refine`): a small set of typed flags, each with its measure. A
+//! point with no flag is *valid*.
 
 use super::PathReport;
 use serde::Serialize;
@@ -31,6 +32,12 @@ pub enum Flag {
         /// |eigenvalue| / ‖K‖ at the point.
         residual: f64,
     },
+    /// A refined mesh has no counterpart of the point (matched by irrep, wave number and
+    /// value as `memstab compare` matches): the point is not mesh-converged.
+    NotMeshConverged {
+        /// That mesh, as one line (e.g. `icosphere frequency=8`).
+        finer: String,
+    },
 }
 
 impl std::fmt::Display for Flag {
@@ -50,6 +57,9 @@ impl std::fmt::Display for Flag {
                 f,
                 "not localised, |eigenvalue|/|K| = {residual:.0e} > {LOCALISED:.0e}"
             ),
+            Flag::NotMeshConverged { finer } => {
+                write!(f, "not mesh-converged, no counterpart on {finer}")
+            }
         }
     }
 }
@@ -75,6 +85,15 @@ impl PathReport {
             flags.push(Flag::NotLocalised {
                 residual: cp.residual_eigenvalue,
             });
+        }
+        if let Some(r) = &self.refinement {
+            for p in r.critical.iter().filter(|p| p.points.contains(&(k + 1))) {
+                if let super::refine::Estimate::NotMeshConverged { finer } = &p.estimate {
+                    flags.push(Flag::NotMeshConverged {
+                        finer: finer.clone(),
+                    });
+                }
+            }
         }
         flags
     }

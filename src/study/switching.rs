@@ -1149,6 +1149,7 @@ pub fn branch_run(
         states: None,
         wrinkling: None,
         wave_numbers: Vec::new(),
+        refinement: None,
         irreps: Vec::new(),
     };
     report.wave_numbers = wave_numbers(&report.critical);

@@ -779,6 +779,7 @@ mod tests {
                 seconds: 0.0,
                 critical,
                 flagged: Vec::new(),
+                turning: Vec::new(),
             }],
             check: None,
         }

@@ -63,14 +63,23 @@
 //! Bad input (a mesh that is not a subgroup or does not parse, an equilibrium analysis, a bad
 //! `max`) is a [`CompareError::Input`] before anything runs; a start state that does not
 //! converge is a [`CompareError::Failure`].
+//!
+//! # One run on refined meshes
+//!
+//! [`Refiner`] (`memstab run --refine`) uses the same runs and the same matching for one
+//! scene on its own mesh at two or three resolutions: every critical and turning point of a
+//! finished run is a rung, its images on the refined meshes give its value per level, and
+//! [`estimate`] the observed order, the Richardson value and the error per level.
 
 mod matching;
 mod meshes;
+mod refine;
 
 pub use matching::{
     DistanceOrder, Image, MeshImages, Missing, Rung, RungKind, Verdict, VerdictKind,
 };
 pub use meshes::{parse_meshes, MeshChoice};
+pub use refine::{estimate, observed_order, richardson, RefineOptions, Refiner};
 
 use crate::adapted::AdaptedBasis;
 use crate::model::Model;
@@ -199,6 +208,10 @@ pub struct Level {
     /// Its flagged critical points, listed apart and not matched.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub flagged: Vec<Point>,
+    /// Its turning points of the control, as limit points whose irrep is `maximum` or
+    /// `minimum` (what `run --refine` matches across meshes; not part of the comparison).
+    #[serde(skip)]
+    pub turning: Vec<Point>,
 }
 
 /// One mesh's runs.
@@ -340,23 +353,15 @@ fn execute_meridian(
         .iter()
         .zip(&report.wave_numbers)
         .enumerate()
-        .map(|(k, (c, &m))| Point {
-            flags: report.flags(k),
-            kind: c.kind,
-            irrep: format!("m={m}"),
-            multiplicity: c.multiplicity,
-            value: control.map_or(f64::NAN, |k| c.parameters[k]),
-            m: label_modes.then_some(m),
-            residual_eigenvalue: c.residual_eigenvalue,
-            precision: None,
-            isotropy: c.isotropy.name.clone(),
-            rising: rising(
-                control.and_then(|k| {
-                    let row = report.rows.iter().find(|r| r.step == c.after_step)?;
-                    Some(row.parameters[k])
-                }),
-                control.map_or(f64::NAN, |k| c.parameters[k]),
-            ),
+        .map(|(k, (_, &m))| {
+            point_of(
+                report,
+                control,
+                k,
+                format!("m={m}"),
+                label_modes.then_some(m),
+                None,
+            )
         })
         .collect();
     let seconds = start.elapsed().as_secs_f64();
@@ -379,7 +384,73 @@ fn execute_meridian(
         seconds,
         critical,
         flagged: Vec::new(),
+        turning: turning_of(report, control),
     })
+}
+
+/// Multiplies the resolution of `mesh` by `factor`: a disc's or truncated sphere's divisions,
+/// an icosphere's frequency, a meridian's elements. False for a mesh file, which cannot be
+/// refined.
+fn refine_mesh(mesh: &mut MeshSpec, factor: usize) -> bool {
+    match mesh {
+        MeshSpec::Disc(d) => d.divisions *= factor,
+        MeshSpec::Icosphere(i) => i.frequency *= factor,
+        MeshSpec::TruncatedSphere(t) => t.divisions = Some(t.divisions_or_default() * factor),
+        MeshSpec::Axisymmetric(a) => a.elements *= factor,
+        MeshSpec::File(_) => return false,
+    }
+    true
+}
+
+/// Critical point `k` of `report` as compared, with its irrep, wave number and precision.
+fn point_of(
+    report: &PathReport,
+    control: Option<usize>,
+    k: usize,
+    irrep: String,
+    m: Option<usize>,
+    precision: Option<f64>,
+) -> Point {
+    let cp = &report.critical[k];
+    Point {
+        flags: report.flags(k),
+        kind: cp.kind,
+        irrep,
+        multiplicity: cp.multiplicity,
+        value: control.map_or(f64::NAN, |c| cp.parameters[c]),
+        m,
+        residual_eigenvalue: cp.residual_eigenvalue,
+        precision,
+        isotropy: cp.isotropy.name.clone(),
+        rising: rising(
+            control.and_then(|c| {
+                let row = report.rows.iter().find(|r| r.step == cp.after_step)?;
+                Some(row.parameters[c])
+            }),
+            control.map_or(f64::NAN, |c| cp.parameters[c]),
+        ),
+    }
+}
+
+/// The turning points of `report` as limit points with the irrep `maximum` or `minimum`
+/// (met as the control rises or falls), unlabelled: matched by value alone.
+fn turning_of(report: &PathReport, control: Option<usize>) -> Vec<Point> {
+    report
+        .turning_points
+        .iter()
+        .map(|t| Point {
+            kind: CriticalKind::LimitPoint,
+            irrep: t.kind.to_string(),
+            multiplicity: 1,
+            value: control.map_or(f64::NAN, |c| t.parameters[c]),
+            m: None,
+            residual_eigenvalue: 0.0,
+            precision: None,
+            isotropy: String::new(),
+            rising: t.kind == crate::results::Extremum::Maximum,
+            flags: Vec::new(),
+        })
+        .collect()
 }
 
 /// Runs one variant and collects its critical points.
@@ -407,23 +478,9 @@ fn execute(
         .zip(precisions)
         .enumerate()
         .map(
-            |(k, (cp, precision)): (usize, (&CriticalPoint, Option<f64>))| Point {
-                flags: report.flags(k),
-                kind: cp.kind,
-                irrep: cp.irrep.clone(),
-                multiplicity: cp.multiplicity,
-                value: control.map_or(f64::NAN, |c| cp.parameters[c]),
-                m: label_modes.then(|| wave_number(&study, &cp.mode)),
-                residual_eigenvalue: cp.residual_eigenvalue,
-                precision,
-                isotropy: cp.isotropy.name.clone(),
-                rising: rising(
-                    control.and_then(|c| {
-                        let row = report.rows.iter().find(|r| r.step == cp.after_step)?;
-                        Some(row.parameters[c])
-                    }),
-                    control.map_or(f64::NAN, |c| cp.parameters[c]),
-                ),
+            |(k, (cp, precision)): (usize, (&CriticalPoint, Option<f64>))| {
+                let m = label_modes.then(|| wave_number(&study, &cp.mode));
+                point_of(report, control, k, cp.irrep.clone(), m, precision)
             },
         )
         .collect();
@@ -448,6 +505,7 @@ fn execute(
         seconds,
         critical,
         flagged: Vec::new(),
+        turning: turning_of(report, control),
     })
 }
 
@@ -540,6 +598,20 @@ fn precisions(study: &MeshStudy, critical: &[CriticalPoint]) -> Vec<Option<f64>>
         .collect()
 }
 
+/// The control's `[min, max]`, when the scene bounds it on both sides.
+fn range_of(scene: &Scene, control: &str) -> Option<[f64; 2]> {
+    let p = scene.parameters.get(control)?;
+    match (p.min, p.max) {
+        (Some(lo), Some(hi)) => Some([lo, hi]),
+        _ => None,
+    }
+}
+
+/// The absolute slack of the matching tolerances: a thousandth of the control's range.
+fn floor_of(range: Option<[f64; 2]>) -> f64 {
+    range.map_or(1e-12, |[lo, hi]| 1e-3 * (hi - lo).abs())
+}
+
 /// Runs `scene` on every mesh of `options` (in parallel; `progress` hears of each run as it
 /// ends), matches their critical points to the reference's rungs and measures the gaps.
 pub fn compare(
@@ -600,21 +672,11 @@ pub fn compare(
         let coarse = variant(scene, t, &common)?;
         for l in 0..levels {
             let mut s = coarse.clone();
-            if l == 1 {
-                match &mut s.mesh {
-                    MeshSpec::Disc(d) => d.divisions *= 2,
-                    MeshSpec::Icosphere(i) => i.frequency *= 2,
-                    MeshSpec::TruncatedSphere(t) => {
-                        t.divisions = Some(t.divisions_or_default() * 2)
-                    }
-                    MeshSpec::Axisymmetric(a) => a.elements *= 2,
-                    MeshSpec::File(_) => {
-                        return Err(CompareError::Input(format!(
-                            "mesh '{}': --refine cannot refine a mesh file",
-                            t.label
-                        )))
-                    }
-                }
+            if l == 1 && !refine_mesh(&mut s.mesh, 2) {
+                return Err(CompareError::Input(format!(
+                    "mesh '{}': --refine cannot refine a mesh file",
+                    t.label
+                )));
             }
             if s.start.from.is_some() {
                 return Err(CompareError::Input(
@@ -697,12 +759,8 @@ pub fn compare(
             .unwrap_or("")
             .to_string();
     }
-    let p = &reference_scene.parameters[&control];
-    let range = match (p.min, p.max) {
-        (Some(lo), Some(hi)) => Some([lo, hi]),
-        _ => None,
-    };
-    let floor = range.map_or(1e-12, |[lo, hi]| 1e-3 * (hi - lo).abs());
+    let range = range_of(&reference_scene, &control);
+    let floor = floor_of(range);
     let (mut rung_list, unmatched) = match_rungs(&meshes, floor);
     if let Some(c) = meshes.iter().position(|m| m.generator == "axisymmetric") {
         measure_distances(&meshes, &mut rung_list, c);
@@ -796,6 +854,7 @@ mod tests {
             seconds: 0.0,
             critical,
             flagged: Vec::new(),
+            turning: Vec::new(),
         };
         let meshes = vec![
             MeshRuns {

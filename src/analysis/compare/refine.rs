@@ -1,0 +1,496 @@
+//! A run's critical and turning points on refined meshes (`memstab run --refine`,
+//! docs/theory.md §8.11): the scene runs again with the mesh's resolution doubled (once, or
+//! twice), every point of the run is matched to its counterparts there as [`super::compare`]
+//! matches a rung's images (by irrep or wave number, the piece of the path and value), and
+//! gets its value on every level, the observed order, the Richardson value and an error
+//! estimate per level. A point with no counterpart on a refined mesh is not mesh-converged
+//! ([`crate::results::validity::Flag::NotMeshConverged`]). With `continuum` the scene also
+//! runs on its meridian, as `compare` runs `axisymmetric`, and every point gets the
+//! meridian's value and its distance from it.
+
+use super::matching::{match_rungs, measure_distances, Rung};
+use super::meshes::{describe, resolution, variant, Common};
+use super::{
+    floor_of, labelled, parse_meshes, point_of, range_of, refine_mesh, turning_of, CompareError,
+    Job, Level, MeshRuns,
+};
+use crate::results::refine::{
+    ContinuumRun, Estimate, NewPoint, PointRefinement, RefinedLevel, Refinement, ASSUMED_ORDER,
+    MERIDIAN_ORDER, ORDER_TOLERANCE,
+};
+use crate::results::PathReport;
+use crate::scene::{MeshSpec, Scene};
+use crate::study::meridian::MeridianStudy;
+use crate::study::mesh::MeshStudy;
+use crate::text::one_line;
+
+/// What `run --refine` asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RefineOptions {
+    /// Refinements: 1 (the resolution doubled) or 2 (doubled and quadrupled).
+    pub levels: usize,
+    /// Also run the scene's meridian.
+    pub continuum: bool,
+}
+
+/// The refined runs of a scene, built (and checked) before its own run.
+pub struct Refiner {
+    control: String,
+    base_mesh: String,
+    base_resolution: usize,
+    meridian: bool,
+    label_modes: bool,
+    floor: f64,
+    levels: Vec<Job>,
+    continuum: Option<(Job, Job)>,
+}
+
+impl std::fmt::Debug for Refiner {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Refiner")
+            .field("base_mesh", &self.base_mesh)
+            .field("levels", &self.levels.len())
+            .field("continuum", &self.continuum.is_some())
+            .finish()
+    }
+}
+
+/// A 3-D study or a meridian of `scene`; what cannot be built is bad input, named by `what`.
+fn job(scene: Scene, what: &str) -> Result<Job, CompareError> {
+    let bad = |e: String| CompareError::Input(one_line(&format!("{what}: {e}")));
+    if let MeshSpec::Axisymmetric(_) = scene.mesh {
+        Ok(Job::Meridian(Box::new(
+            MeridianStudy::build(scene).map_err(|e| bad(e.to_string()))?,
+        )))
+    } else {
+        Ok(Job::Solid(Box::new(
+            MeshStudy::build(scene).map_err(|e| bad(e.to_string()))?,
+        )))
+    }
+}
+
+impl Refiner {
+    /// Builds the refined scenes' studies (and, with `continuum`, the meridian's at N and 2N
+    /// elements). Bad input, naming the option and its value: `levels` not 1 or 2, a scene
+    /// without a control, a mesh file, a saved or restarted start (whose state does not fit
+    /// another mesh), a scene without an axisymmetric counterpart, a refined mesh over a limit.
+    pub fn new(scene: &Scene, options: &RefineOptions) -> Result<Self, CompareError> {
+        let flag = format!("--refine {}", options.levels);
+        let input = |what: String| CompareError::Input(format!("{flag}: {what}"));
+        if !(1..=2).contains(&options.levels) {
+            return Err(input(
+                "must be 1 (the mesh at twice the divisions) or 2 (at twice and four times)".into(),
+            ));
+        }
+        let Some(control) = scene.control().map(str::to_string) else {
+            return Err(input(format!(
+                "a {} analysis has no control to follow critical points in",
+                scene.analysis.kind()
+            )));
+        };
+        if let MeshSpec::File(f) = &scene.mesh {
+            return Err(input(format!(
+                "the scene's mesh is the file '{}', which cannot be refined; only a generated \
+                 mesh can (docs/scenes.md)",
+                f.path.display()
+            )));
+        }
+        if scene.start.from.is_some() {
+            return Err(input(
+                "the scene starts from a saved state ([start] from), which does not fit a \
+                 refined mesh; remove [start] from"
+                    .into(),
+            ));
+        }
+        if super::super::analysis_of(&scene.analysis)
+            .restarts_from()
+            .is_some()
+        {
+            return Err(input(
+                "the scene's analysis starts from a finished run's critical point (from-run), \
+                 whose state does not fit a refined mesh"
+                    .into(),
+            ));
+        }
+        let mut levels = Vec::new();
+        for l in 1..=options.levels {
+            let mut s = scene.clone();
+            refine_mesh(&mut s.mesh, 1 << l);
+            let what = format!("{flag}: mesh '{}'", describe(&s.mesh));
+            levels.push(job(s, &what)?);
+        }
+        let continuum = if options.continuum {
+            if let MeshSpec::Axisymmetric(_) = scene.mesh {
+                return Err(CompareError::Input(
+                    "--continuum: the scene is on a meridian already; it is its own \
+                     axisymmetric counterpart"
+                        .into(),
+                ));
+            }
+            let choice = parse_meshes(&["axisymmetric".into()])?;
+            let common = Common {
+                control: control.clone(),
+                max: None,
+                samples: None,
+                divisions: None,
+                sectors: 0,
+            };
+            let coarse = variant(scene, &choice[0], &common).map_err(|e| {
+                CompareError::Input(format!(
+                    "--continuum: the scene has no axisymmetric counterpart: {e}"
+                ))
+            })?;
+            let mut fine = coarse.clone();
+            refine_mesh(&mut fine.mesh, 2);
+            let what = "--continuum: the scene's meridian";
+            Some((job(coarse, what)?, job(fine, what)?))
+        } else {
+            None
+        };
+        Ok(Refiner {
+            floor: floor_of(range_of(scene, &control)),
+            control,
+            base_mesh: describe(&scene.mesh),
+            base_resolution: resolution(&scene.mesh),
+            meridian: matches!(scene.mesh, MeshSpec::Axisymmetric(_)),
+            label_modes: labelled(scene),
+            levels,
+            continuum,
+        })
+    }
+
+    /// Runs the refined meshes one after the other (so that each wall time is its own), and
+    /// the meridian with `continuum`, and follows the points of `base`, the scene's own run
+    /// that took `seconds`, through them. `progress` hears of each run as it ends. `None`
+    /// when a signal interrupted a run: its points would be missing for that reason alone.
+    pub fn run(
+        self,
+        base: &PathReport,
+        seconds: f64,
+        progress: &(dyn Fn(&str) + Sync),
+    ) -> Result<Option<Refinement>, CompareError> {
+        let interrupted = crate::continuation::interrupt::requested;
+        let control = base.parameters.iter().position(|p| *p == base.control);
+        let critical = (0..base.critical.len())
+            .map(|k| {
+                let m = base.wave_numbers.get(k).copied();
+                let irrep = match (self.meridian, m) {
+                    (true, Some(m)) => format!("m={m}"),
+                    _ => base.critical[k].irrep.clone(),
+                };
+                point_of(
+                    base,
+                    control,
+                    k,
+                    irrep,
+                    m.filter(|_| self.label_modes),
+                    None,
+                )
+            })
+            .collect();
+        let own = Level {
+            mesh: self.base_mesh.clone(),
+            resolution: self.base_resolution,
+            nodes: base.mesh.nodes,
+            triangles: base.mesh.elements,
+            group: base.group.clone(),
+            order: base.group_order,
+            unknowns: base.unknowns,
+            symmetric_unknowns: base.symmetric_unknowns,
+            stop: base.stop.clone(),
+            note: base.stability_note.clone(),
+            warnings: Vec::new(),
+            seconds,
+            critical,
+            flagged: Vec::new(),
+            turning: turning_of(base, control),
+        };
+        let mut levels = vec![own];
+        for (l, job) in self.levels.into_iter().enumerate() {
+            let label = format!("refinement {}", l + 1);
+            levels.push(job.execute(&label, self.label_modes, progress)?);
+            if interrupted() {
+                return Ok(None);
+            }
+        }
+        let continuum = match self.continuum {
+            Some((coarse, fine)) => {
+                let coarse = coarse.execute("meridian", self.label_modes, progress)?;
+                let fine = fine.execute("meridian check", self.label_modes, progress)?;
+                if interrupted() {
+                    return Ok(None);
+                }
+                Some((coarse, fine))
+            }
+            None => None,
+        };
+        let finer: Vec<String> = levels.iter().map(|l| l.mesh.clone()).collect();
+        let order = if self.meridian {
+            MERIDIAN_ORDER
+        } else {
+            ASSUMED_ORDER
+        };
+        // The critical points, with the meridian as a second mesh.
+        let mut meshes = vec![MeshRuns {
+            label: "run".into(),
+            generator: String::new(),
+            levels: levels.clone(),
+            check: None,
+        }];
+        if let Some((coarse, fine)) = &continuum {
+            meshes.push(MeshRuns {
+                label: "axisymmetric".into(),
+                generator: "axisymmetric".into(),
+                levels: vec![coarse.clone()],
+                check: Some(fine.clone()),
+            });
+        }
+        let (mut rungs, _) = match_rungs(&meshes, self.floor);
+        if continuum.is_some() {
+            measure_distances(&meshes, &mut rungs, 1);
+        }
+        let base_resolution = self.base_resolution;
+        let (own, new): (Vec<Rung>, Vec<Rung>) = rungs
+            .into_iter()
+            .partition(|r| r.found_at == base_resolution);
+        let critical = own
+            .iter()
+            .map(|r| refined(r, false, &finer, order))
+            .collect();
+        let new_on_finer = new
+            .iter()
+            .map(|r| NewPoint {
+                level: levels
+                    .iter()
+                    .position(|l| l.resolution == r.found_at)
+                    .unwrap_or(0),
+                irrep: r.irreps.join("+"),
+                value: r.values.iter().sum::<f64>() / r.values.len().max(1) as f64,
+                m: r.m,
+            })
+            .collect();
+        // The turning points, on their own.
+        let turning_levels = levels
+            .iter()
+            .map(|l| Level {
+                critical: l.turning.clone(),
+                ..l.clone()
+            })
+            .collect();
+        let turning_runs = [MeshRuns {
+            label: "run".into(),
+            generator: String::new(),
+            levels: turning_levels,
+            check: None,
+        }];
+        let (turning_rungs, _) = match_rungs(&turning_runs, self.floor);
+        let turning = turning_rungs
+            .iter()
+            .filter(|r| r.found_at == base_resolution)
+            .map(|r| refined(r, true, &finer, order))
+            .collect();
+        Ok(Some(Refinement {
+            control: self.control,
+            assumed_order: order,
+            order_tolerance: ORDER_TOLERANCE,
+            levels: levels
+                .iter()
+                .map(|l| RefinedLevel {
+                    mesh: l.mesh.clone(),
+                    resolution: l.resolution,
+                    nodes: l.nodes,
+                    unknowns: l.unknowns,
+                    seconds: l.seconds,
+                    stop: l.stop.clone(),
+                    critical: l.critical.len(),
+                    turning: l.turning.len(),
+                })
+                .collect(),
+            continuum: continuum.map(|(coarse, fine)| ContinuumRun {
+                mesh: coarse.mesh.clone(),
+                resolution: coarse.resolution,
+                seconds: coarse.seconds + fine.seconds,
+            }),
+            critical,
+            turning,
+            new_on_finer,
+        }))
+    }
+}
+
+/// A rung of the run's own level, followed through the levels (its images on the first
+/// mesh), with its estimate; a turning point's kind is its irrep (`maximum`, `minimum`).
+fn refined(rung: &Rung, turning: bool, finer: &[String], order: f64) -> PointRefinement {
+    let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+    let values: Vec<Option<f64>> = rung.images[0]
+        .levels
+        .iter()
+        .map(|l| mean(&l.values))
+        .collect();
+    let points = rung.images[0].levels[0]
+        .points
+        .iter()
+        .map(|i| i + 1)
+        .collect();
+    let (observed_order, richardson, errors, estimate) = estimate(&values, finer, order);
+    let distances = match rung.continuum {
+        Some(c) => values.iter().map(|v| v.map(|v| v - c)).collect(),
+        None => Vec::new(),
+    };
+    PointRefinement {
+        points,
+        kind: if turning {
+            rung.irreps.first().cloned().unwrap_or_default()
+        } else {
+            rung.kind.to_string()
+        },
+        irreps: if turning {
+            Vec::new()
+        } else {
+            rung.irreps.clone()
+        },
+        m: rung.m,
+        values,
+        observed_order,
+        richardson,
+        errors,
+        estimate,
+        continuum: rung.continuum,
+        continuum_error: rung.continuum_error,
+        distances,
+    }
+}
+
+/// The observed order of three values on meshes halved each time: log2(|v₀ − v₁| / |v₁ − v₂|),
+/// `None` when a difference is zero or not finite.
+pub fn observed_order(v0: f64, v1: f64, v2: f64) -> Option<f64> {
+    let (a, b) = ((v0 - v1).abs(), (v1 - v2).abs());
+    let p = (a / b).log2();
+    (a > 0.0 && b > 0.0 && p.is_finite()).then_some(p)
+}
+
+/// Richardson extrapolation of the values on a mesh and on the mesh with h halved, assuming
+/// order `order`: v_f + (v_f − v_c) / (2^order − 1).
+pub fn richardson(coarse: f64, fine: f64, order: f64) -> f64 {
+    fine + (fine - coarse) / (2f64.powf(order) - 1.0)
+}
+
+/// The estimate of values on levels of halved h (the first level's value present), assuming
+/// the order `assumed`: the observed order with three levels, the Richardson value and each
+/// level's error, unless a refined level has no value (`finer` names each level's mesh) or
+/// the observed order is more than [`ORDER_TOLERANCE`] from `assumed`.
+pub fn estimate(
+    values: &[Option<f64>],
+    finer: &[String],
+    assumed: f64,
+) -> (Option<f64>, Option<f64>, Vec<Option<f64>>, Estimate) {
+    let none = vec![None; values.len()];
+    if let Some(l) = values.iter().position(Option::is_none) {
+        let finer = finer.get(l).cloned().unwrap_or_default();
+        return (None, None, none, Estimate::NotMeshConverged { finer });
+    }
+    let v: Vec<f64> = values.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+    if v.len() < 2 {
+        return (None, None, none, Estimate::NotAsymptotic { order: None });
+    }
+    if v.windows(2).all(|w| w[0] == w[1]) {
+        return (
+            None,
+            Some(v[0]),
+            vec![Some(0.0); v.len()],
+            Estimate::Unchanged,
+        );
+    }
+    let order = match v.as_slice() {
+        [.., a, b, c] => Some(observed_order(*a, *b, *c)),
+        _ => None,
+    };
+    // Three levels must agree in sign of the change and in order with the assumed one.
+    let asymptotic = match (order, v.as_slice()) {
+        (None, _) => true,
+        (Some(Some(p)), [.., a, b, c]) => {
+            (a - b) * (b - c) > 0.0 && (p - assumed).abs() <= ORDER_TOLERANCE
+        }
+        (Some(_), _) => false,
+    };
+    let observed = order.flatten();
+    if !asymptotic {
+        return (
+            observed,
+            None,
+            none,
+            Estimate::NotAsymptotic { order: observed },
+        );
+    }
+    let n = v.len();
+    let r = richardson(v[n - 2], v[n - 1], assumed);
+    let errors = v.iter().map(|x| Some((x - r).abs())).collect();
+    (
+        observed,
+        Some(r),
+        errors,
+        Estimate::Richardson {
+            observed: order.is_some(),
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn second_order_values_are_extrapolated_and_their_errors_estimated() {
+        // v(h) = 1 + h² at h = 1, 1/2, 1/4.
+        let values = [Some(2.0), Some(1.25), Some(1.0625)];
+        let (order, r, errors, basis) = estimate(&values, &[], 2.0);
+        assert!((order.unwrap() - 2.0).abs() < 1e-12);
+        assert!((r.unwrap() - 1.0).abs() < 1e-12);
+        assert!((errors[0].unwrap() - 1.0).abs() < 1e-12);
+        assert!((errors[2].unwrap() - 0.0625).abs() < 1e-12);
+        assert_eq!(basis, Estimate::Richardson { observed: true });
+        // Two levels: the order is assumed.
+        let (order, r, _, basis) = estimate(&values[..2], &[], 2.0);
+        assert_eq!(order, None);
+        assert!((r.unwrap() - 1.0).abs() < 1e-12);
+        assert_eq!(basis, Estimate::Richardson { observed: false });
+    }
+
+    #[test]
+    fn an_order_far_from_two_is_said_not_extrapolated() {
+        // v(h) = 1 + h^0.7.
+        let v = |h: f64| Some(1.0 + h.powf(0.7));
+        let (order, r, errors, basis) = estimate(&[v(1.0), v(0.5), v(0.25)], &[], 2.0);
+        assert!((order.unwrap() - 0.7).abs() < 1e-9);
+        assert_eq!(r, None);
+        assert!(errors.iter().all(Option::is_none));
+        assert!(
+            matches!(basis, Estimate::NotAsymptotic { order: Some(p) } if (p - 0.7).abs() < 1e-9)
+        );
+        // A fourth-order sequence is asymptotic for elements of that order only.
+        let w = |h: f64| Some(1.0 + h.powi(4));
+        let quartic = [w(1.0), w(0.5), w(0.25)];
+        assert!(matches!(
+            estimate(&quartic, &[], 2.0).3,
+            Estimate::NotAsymptotic { .. }
+        ));
+        let (_, r, errors, basis) = estimate(&quartic, &[], 4.0);
+        assert!((r.unwrap() - 1.0).abs() < 1e-12);
+        assert!((errors[0].unwrap() - 1.0).abs() < 1e-12);
+        assert_eq!(basis, Estimate::Richardson { observed: true });
+        // Changes of alternating sign are not in the asymptotic range either.
+        let (_, r, _, basis) = estimate(&[Some(1.0), Some(1.4), Some(1.3)], &[], 2.0);
+        assert_eq!(r, None);
+        assert!(matches!(basis, Estimate::NotAsymptotic { .. }));
+    }
+
+    #[test]
+    fn a_point_without_a_counterpart_is_not_mesh_converged() {
+        let finer = ["a".to_string(), "b".to_string(), "c".to_string()];
+        let (_, r, _, basis) = estimate(&[Some(1.0), Some(1.1), None], &finer, 2.0);
+        assert_eq!(r, None);
+        assert_eq!(basis, Estimate::NotMeshConverged { finer: "c".into() });
+        let (_, _, _, basis) = estimate(&[Some(1.0), Some(1.0)], &finer, 2.0);
+        assert_eq!(basis, Estimate::Unchanged);
+    }
+}

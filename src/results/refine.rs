@@ -1,0 +1,160 @@
+//! A run's critical and turning points on refined meshes (docs/theory.md §8.11): each point's
+//! value on every level, the observed order, the Richardson value and an error estimate per
+//! level beside that level's wall time, as plain data (`memstab run --refine`, `refine.json`).
+
+use super::StopReason;
+use serde::Serialize;
+
+/// The order of convergence the error estimate assumes on a 3-D mesh: its linear triangles
+/// converge at O(h²) in the critical values (docs/theory.md §13.4).
+pub const ASSUMED_ORDER: f64 = 2.0;
+
+/// The order it assumes on a meridian: its quadratic elements converge at O(h⁴) (2p for
+/// degree p = 2, docs/theory.md §15.3).
+pub const MERIDIAN_ORDER: f64 = 4.0;
+
+/// How far the observed order may be from the assumed one for the values to be taken as in
+/// the asymptotic range (and extrapolated).
+pub const ORDER_TOLERANCE: f64 = 0.5;
+
+/// A run and its refinements, point by point.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refinement {
+    /// The control parameter the values are of.
+    pub control: String,
+    /// The order the estimate assumes ([`ASSUMED_ORDER`] on a 3-D mesh, [`MERIDIAN_ORDER`] on
+    /// a meridian).
+    pub assumed_order: f64,
+    /// The largest |observed − assumed| order taken as asymptotic ([`ORDER_TOLERANCE`]).
+    pub order_tolerance: f64,
+    /// The run's own mesh first, then each refinement (the resolution doubled each time).
+    pub levels: Vec<RefinedLevel>,
+    /// The meridian's run, with `--continuum`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuum: Option<ContinuumRun>,
+    /// The run's critical points, one entry per rung (a point, or the split halves of a
+    /// double the mesh breaks), in the order of `critical.json`.
+    pub critical: Vec<PointRefinement>,
+    /// The run's turning points of the control, in path order.
+    pub turning: Vec<PointRefinement>,
+    /// Critical points of the refined meshes with no counterpart on the run's own mesh.
+    pub new_on_finer: Vec<NewPoint>,
+}
+
+/// One mesh of the refinement.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RefinedLevel {
+    /// The mesh options as one line, e.g. `icosphere frequency=8`.
+    pub mesh: String,
+    /// Its divisions (an icosphere's frequency, a meridian's elements).
+    pub resolution: usize,
+    /// Nodes.
+    pub nodes: usize,
+    /// Unknowns of the model.
+    pub unknowns: usize,
+    /// Wall time of its run.
+    pub seconds: f64,
+    /// Why its path ended.
+    pub stop: StopReason,
+    /// Its critical points.
+    pub critical: usize,
+    /// Its turning points.
+    pub turning: usize,
+}
+
+/// The meridian's run (`--continuum`): the scene's axisymmetric counterpart.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContinuumRun {
+    /// The meridian's options as one line.
+    pub mesh: String,
+    /// Its elements.
+    pub resolution: usize,
+    /// Wall time of its run and of its check run at twice the elements.
+    pub seconds: f64,
+}
+
+/// One critical point (or turning point) of the run, followed through the refinements.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PointRefinement {
+    /// The points of the run it stands for, numbered from 1 as in `critical.json` (turning
+    /// points in path order).
+    pub points: Vec<usize>,
+    /// Its kind (`limit point`, `double bifurcation`, …, or `maximum`, `minimum`).
+    pub kind: String,
+    /// Its irreps on the run's mesh.
+    pub irreps: Vec<String>,
+    /// The wave number of its mode about z, where the mesh has an axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
+    /// Its value on every level (the mean of a split pair's halves); `null` where the level
+    /// has no counterpart.
+    pub values: Vec<Option<f64>>,
+    /// The observed order log2(|v₀ − v₁| / |v₁ − v₂|), with three levels.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observed_order: Option<f64>,
+    /// The Richardson value v_f + (v_f − v_c)/(2^p − 1) of the two finest levels, p the
+    /// assumed order; only in the asymptotic range.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub richardson: Option<f64>,
+    /// Each level's error estimate |v − Richardson|; `null` where there is none.
+    pub errors: Vec<Option<f64>>,
+    /// What the estimate rests on.
+    pub estimate: Estimate,
+    /// The meridian's value, with `--continuum`, when it has a counterpart.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuum: Option<f64>,
+    /// The meridian value's own error: |value(2N) − value(N)| of its runs at N and 2N
+    /// elements.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuum_error: Option<f64>,
+    /// Each level's distance from the meridian's value (value − continuum).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub distances: Vec<Option<f64>>,
+}
+
+impl PointRefinement {
+    /// True when every refined mesh has a counterpart.
+    pub fn converged(&self) -> bool {
+        !matches!(self.estimate, Estimate::NotMeshConverged { .. })
+    }
+}
+
+/// What a point's error estimate rests on.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "basis", rename_all = "kebab-case")]
+pub enum Estimate {
+    /// Richardson extrapolation of the two finest levels with the assumed order: confirmed by
+    /// the observed order of three levels (`observed`), or assumed with two.
+    Richardson {
+        /// Whether three levels confirmed the order.
+        observed: bool,
+    },
+    /// The observed order is far from the assumed one: the values are not in the asymptotic
+    /// range, and are not extrapolated.
+    NotAsymptotic {
+        /// The observed order (`null` when it is not defined: one difference is zero, or the
+        /// differences change sign and size at once).
+        order: Option<f64>,
+    },
+    /// The values do not change on refinement (a value the symmetry or the load fixes).
+    Unchanged,
+    /// A refined mesh has no counterpart: the point is not mesh-converged.
+    NotMeshConverged {
+        /// That mesh, as one line.
+        finer: String,
+    },
+}
+
+/// A critical point of a refined mesh with no counterpart on the run's mesh.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NewPoint {
+    /// The level (1 for the first refinement).
+    pub level: usize,
+    /// Its irrep.
+    pub irrep: String,
+    /// Its value.
+    pub value: f64,
+    /// Its wave number about z.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
+}

@@ -1,0 +1,304 @@
+//! `memstab run --refine` end to end (docs/theory.md §8.11): on the balloon (an icosphere of
+//! frequency 4, refined to 8 and 16) every limit point's error estimate brackets its true
+//! error against the closed form, and the meridian's value (`--continuum`) is the closed form;
+//! a minimum of the pressure that the finer mesh does not reach (its path leaves the
+//! pressure's range first) is flagged not mesh-converged; bad requests write nothing.
+
+use memstab::reference::{P_MAX, P_MIN};
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn memstab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(args)
+        .output()
+        .expect("the memstab binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The bundled balloon at frequency 4, with `edits` (old, new) to its lines.
+fn balloon(dir: &Path, edits: &[(&str, &str)]) -> String {
+    let mut text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/balloon.toml"))
+            .unwrap()
+            .replace("frequency = 8 ", "frequency = 4 ");
+    for (old, new) in edits {
+        assert!(text.contains(old), "{old}");
+        text = text.replace(old, new);
+    }
+    let path = dir.join("balloon.toml");
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+fn run(args: &[&str]) -> String {
+    let out = memstab(args);
+    assert!(
+        out.status.success(),
+        "{:?}: {}{}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    text(&out.stdout)
+}
+
+#[test]
+fn the_balloons_error_estimates_bracket_the_true_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = balloon(dir.path(), &[]);
+    let out = dir.path().join("out");
+    let stdout = run(&[
+        "run",
+        &scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--refine",
+        "2",
+        "--continuum",
+        "--quiet",
+        "--json",
+    ]);
+    let summary: Value = serde_json::from_str(&stdout).unwrap();
+    let refinement = &summary["refinement"];
+    // refine.json holds what --json prints, and the manifest lists it.
+    assert_eq!(&json(&out.join("refine.json")), refinement);
+    let manifest = json(&out.join("manifest.json"));
+    assert!(
+        manifest["files"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|f| f["file"] == "refine.json"),
+        "{manifest}"
+    );
+    let levels = refinement["levels"].as_array().unwrap();
+    let resolutions: Vec<u64> = levels
+        .iter()
+        .map(|l| l["resolution"].as_u64().unwrap())
+        .collect();
+    assert_eq!(resolutions, [4, 8, 16]);
+    assert!(levels.iter().all(|l| l["seconds"].as_f64().unwrap() > 0.0));
+    let points = refinement["critical"].as_array().unwrap();
+    assert_eq!(points.len(), 2, "{refinement}");
+    let turning = refinement["turning"].as_array().unwrap();
+    assert_eq!(turning.len(), 2, "{refinement}");
+    for (p, exact) in points
+        .iter()
+        .zip([P_MAX, P_MIN])
+        .chain(turning.iter().zip([P_MAX, P_MIN]))
+    {
+        assert_eq!(p["estimate"]["basis"], "richardson", "{p}");
+        assert_eq!(p["estimate"]["observed"], true, "{p}");
+        let order = p["observed_order"].as_f64().unwrap();
+        assert!((order - 2.0).abs() < 0.1, "{p}");
+        for (v, e) in p["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(p["errors"].as_array().unwrap())
+        {
+            let (v, e) = (v.as_f64().unwrap(), e.as_f64().unwrap());
+            let truth = (v - exact).abs();
+            // The estimate brackets the true error: within a factor 1.5 either way.
+            assert!(
+                truth <= 1.5 * e && truth >= e / 1.5,
+                "value {v}: true error {truth}, estimated {e}: {p}"
+            );
+        }
+        // Richardson is better than the finest level by far.
+        let r = p["richardson"].as_f64().unwrap();
+        let finest = p["values"][2].as_f64().unwrap();
+        assert!(
+            (r - exact).abs() < 0.01 * (finest - exact).abs(),
+            "{r} against {exact}: {p}"
+        );
+    }
+    // The meridian's value is the closed form, and each level's distance from it its error.
+    for (p, exact) in points.iter().zip([P_MAX, P_MIN]) {
+        let c = p["continuum"].as_f64().unwrap();
+        assert!((c - exact).abs() < 1e-6, "{p}");
+        let d = p["distances"][0].as_f64().unwrap();
+        let v = p["values"][0].as_f64().unwrap();
+        assert!((d - (v - c)).abs() < 1e-12, "{p}");
+    }
+    assert!(summary["critical"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|c| c["valid"] == true));
+    // Without --refine: no refine.json, no refinement in the summary.
+    let plain = dir.path().join("plain");
+    let stdout = run(&["run", &scene, "--out", plain.to_str().unwrap(), "--quiet"]);
+    assert!(!plain.join("refine.json").exists());
+    assert!(!stdout.contains("mesh refinement"), "{stdout}");
+    assert!(!json(&plain.join("manifest.json"))
+        .to_string()
+        .contains("refine"));
+    // The run's own files are the same with and without --refine.
+    for file in ["path.csv", "path.json", "critical.json"] {
+        let a = std::fs::read_to_string(out.join(file)).unwrap();
+        let b = std::fs::read_to_string(plain.join(file)).unwrap();
+        assert_eq!(
+            a.replace(out.to_str().unwrap(), ""),
+            b.replace(plain.to_str().unwrap(), ""),
+            "{file}"
+        );
+    }
+}
+
+#[test]
+fn a_minimum_the_finer_mesh_does_not_reach_is_not_mesh_converged() {
+    // Started above the pressure minimum of the closed form (1.1487) with the lower bound
+    // 1.16 between the minima of frequency 4 (1.1665) and 8 (1.1532): the coarse path turns
+    // at its minimum, the finer one leaves the range before it.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = balloon(
+        dir.path(),
+        &[
+            ("start = 0.4879036", "start = 1.2409396 #"),
+            ("min = 0.0", "min = 1.16"),
+            ("stretch = 1.05 ", "stretch = 1.25 #"),
+        ],
+    );
+    let out = dir.path().join("out");
+    let summary = run(&[
+        "run",
+        &scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--refine",
+        "--quiet",
+    ]);
+    let critical = json(&out.join("critical.json"));
+    let critical = critical.as_array().unwrap();
+    assert_eq!(critical.len(), 2, "{critical:?}");
+    assert_eq!(critical[0]["valid"], true, "{:?}", critical[0]);
+    assert_eq!(critical[1]["valid"], false, "{:?}", critical[1]);
+    assert_eq!(critical[1]["flags"][0]["flag"], "not-mesh-converged");
+    assert_eq!(critical[1]["flags"][0]["finer"], "icosphere frequency=8");
+    let refinement = json(&out.join("refine.json"));
+    assert_eq!(
+        refinement["critical"][1]["estimate"]["basis"],
+        "not-mesh-converged"
+    );
+    assert_eq!(refinement["critical"][1]["values"][1], Value::Null);
+    assert_eq!(
+        refinement["turning"][1]["estimate"]["basis"],
+        "not-mesh-converged"
+    );
+    assert_eq!(refinement["critical"][0]["estimate"]["basis"], "richardson");
+    // The summary lists it apart, with the reason.
+    let flagged = summary
+        .split("critical points flagged")
+        .nth(1)
+        .expect("a flagged list");
+    assert!(
+        flagged
+            .lines()
+            .any(|l| l
+                .contains("point 2: not mesh-converged, no counterpart on icosphere frequency=8")),
+        "{summary}"
+    );
+}
+
+#[test]
+fn bad_refinements_are_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = balloon(dir.path(), &[]);
+    let file_scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/disc_file.toml");
+    for (args, expect) in [
+        (vec![scene.as_str(), "--refine", "3"], "--refine 3"),
+        (
+            vec![file_scene, "--refine"],
+            "--refine 1: the scene's mesh is the file",
+        ),
+        (
+            vec![file_scene, "--refine", "2"],
+            "--refine 2: the scene's mesh is the file",
+        ),
+    ] {
+        let out = dir.path().join("out");
+        let mut all = vec!["run"];
+        all.extend(args);
+        all.extend(["--out", out.to_str().unwrap()]);
+        let o = memstab(&all);
+        assert_eq!(o.status.code(), Some(2), "{all:?}");
+        let err = text(&o.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(expect), "{err}");
+        assert!(!out.exists(), "{all:?} wrote {}", out.display());
+    }
+}
+
+#[test]
+fn a_signal_during_the_refinement_writes_the_run_without_it() {
+    // The balloon's own path takes 24 steps; the hook stops the first refined run after 6 of
+    // its own.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = balloon(dir.path(), &[]);
+    let out = dir.path().join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args([
+            "run",
+            &scene,
+            "--out",
+            out.to_str().unwrap(),
+            "--refine",
+            "--quiet",
+        ])
+        .env("MEMSTAB_INTERRUPT_AFTER_STEPS", "30")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("refinement was interrupted"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert!(!out.join("refine.json").exists());
+    let path = json(&out.join("path.json"));
+    assert_eq!(path["stop"], "the stretch reached 4", "{}", path["stop"]);
+    assert!(json(&out.join("critical.json"))
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|c| c["valid"] == true));
+    assert!(out.join("manifest.json").exists());
+}
+
+#[test]
+fn a_meridian_assumes_the_order_of_its_quadratic_elements() {
+    // The balloon's meridian at 64 and 128 elements: order 4 assumed, and the Richardson
+    // value of its maximum is the closed form.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/axisymmetric/balloon.toml"
+    );
+    let out = dir.path().join("out");
+    let stdout = run(&[
+        "run",
+        scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--refine",
+        "--quiet",
+        "--json",
+    ]);
+    let summary: Value = serde_json::from_str(&stdout).unwrap();
+    let refinement = &summary["refinement"];
+    assert_eq!(refinement["assumed_order"], 4.0, "{refinement}");
+    let max = &refinement["critical"][0];
+    assert_eq!(max["estimate"]["basis"], "richardson", "{max}");
+    let r = max["richardson"].as_f64().unwrap();
+    assert!((r - P_MAX).abs() < 1e-6, "{max}");
+}
