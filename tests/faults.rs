@@ -470,3 +470,114 @@ fn concurrent_runs_into_one_directory() {
         assert_manifest_verifies(&held);
     }
 }
+
+/// `memstab CMD ARGS` with the Newton-iteration hook at `k`.
+fn memstab_iterations(args: &[&str], k: usize) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_memstab"));
+    cmd.args(args)
+        .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+        .env("MEMSTAB_INTERRUPT_AFTER_ITERATIONS", k.to_string());
+    cmd.output().expect("the binary runs")
+}
+
+/// A meridian's linear-buckling sweep stops at the sample after the signal: exit 130, the
+/// samples so far written with stop reason `interrupted`, a manifest that verifies, and the
+/// crossing it had no time to localise named in a warning.
+#[test]
+fn an_interrupt_in_a_meridian_buckling_sweep_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ponding");
+    let o = run(&scene("axisymmetric/ponding.toml"), &out, Some(5));
+    assert_interrupted(&o, &out);
+    let rows = std::fs::read_to_string(out.join("path.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert_eq!(rows, 1 + 6, "the header and samples 0..=5");
+    assert_eq!(json(&out.join("path.json"))["stop"], "interrupted");
+}
+
+/// A start solve stops between its Newton iterations — the 3-D balloon's, and a meridian's
+/// held-translation start (a sphere lowered onto its plane) —: exit 130, one line saying so,
+/// nothing written (the directory this run made is removed again). `spectrum` and
+/// `export-matrix`, which solve a start state too, exit 130 the same way.
+#[test]
+fn an_interrupt_in_a_start_solve_exits_130_with_nothing_written() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, k) in [
+        ("balloon.toml", 1),
+        ("axisymmetric/paper2_sphere_on_plane.toml", 2),
+    ] {
+        let out = dir.path().join(name.replace('/', "_"));
+        let o = memstab_iterations(
+            &[
+                "run",
+                &scene(name),
+                "--out",
+                out.to_str().unwrap(),
+                "--quiet",
+            ],
+            k,
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(130), "{name}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains("start solve"), "{err}");
+        assert!(!out.exists(), "{name}: nothing written");
+    }
+    let o = memstab_iterations(&["spectrum", &scene("balloon.toml")], 1);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(o.stdout.is_empty());
+    let mtx = dir.path().join("K.mtx");
+    let o = memstab_iterations(
+        &[
+            "export-matrix",
+            &scene("balloon.toml"),
+            "--out",
+            mtx.to_str().unwrap(),
+        ],
+        1,
+    );
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(!mtx.exists());
+}
+
+/// `compare` stops its runs under way at their next point and starts no other: exit 130, and
+/// what it has — the runs so far, their stop `interrupted` — printed; or, stopped before every
+/// mesh had a run, one line saying so.
+#[test]
+fn an_interrupt_in_compare_exits_130_with_the_runs_so_far() {
+    for k in [3, 30] {
+        let o = memstab(
+            &[
+                "compare",
+                &scene("ponding.toml"),
+                "--meshes",
+                "C8v,C2v",
+                "--divisions",
+                "6",
+                "--max",
+                "10.5",
+                "--json",
+                "--quiet",
+            ],
+            Some(k),
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(130), "{err}");
+        assert!(err.contains("interrupted"), "{err}");
+        if err.contains("nothing to compare") {
+            assert!(o.stdout.is_empty());
+            continue;
+        }
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+        let stops: Vec<&str> = v["meshes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|m| m["levels"].as_array().unwrap())
+            .map(|l| l["stop"].as_str().unwrap())
+            .collect();
+        assert!(stops.contains(&"interrupted"), "k = {k}: {stops:?}");
+    }
+}

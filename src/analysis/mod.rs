@@ -221,13 +221,16 @@ pub fn run_from(
         observer,
         times,
     };
-    let stop = analysis.run(study, &mut cx)?;
     // A signal during a later phase (the branches of a finished path, a curve's or a
-    // surface's second parameter) ends the run as interrupted, whatever its path's stop was.
-    let stop = if crate::continuation::interrupt::requested() {
-        StopReason::Interrupted
-    } else {
-        stop
+    // surface's second parameter) ends the run as interrupted, whatever its path's stop was;
+    // a solve it cut short ends it so too, with what was found before (none: the error).
+    let stop = match analysis.run(study, &mut cx) {
+        _ if crate::continuation::interrupt::requested() && !cx.record.rows.is_empty() => {
+            StopReason::Interrupted
+        }
+        Ok(_) if crate::continuation::interrupt::requested() => StopReason::Interrupted,
+        Ok(stop) => stop,
+        Err(e) => return Err(e),
     };
     let mut result = cx.record.finish(study, stop, stability_note, cx.times);
     study.annotate(&mut result);

@@ -60,6 +60,7 @@ pub(crate) fn run(args: &CompareArgs) -> Result<(), CliError> {
     let error = |e: CompareError| match e {
         CompareError::Input(m) => CliError::Input(m),
         CompareError::Failure(m) => CliError::Failure(m),
+        CompareError::Interrupted(m) => CliError::Interrupted(m),
     };
     let options = CompareOptions {
         meshes: parse_meshes(&args.meshes).map_err(error)?,

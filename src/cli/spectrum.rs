@@ -349,6 +349,9 @@ fn state(
 /// start exists (past a turning point of the control), so a saved point is the way there.
 pub(super) fn not_converged(e: &memstab::analysis::RunError, at: &[(usize, f64)]) -> CliError {
     let message = one_line(&e.to_string());
+    if e.interrupted() {
+        return CliError::Interrupted(format!("{message}; nothing was printed or written"));
+    }
     if at.is_empty() || !matches!(e, memstab::analysis::RunError::Start { .. }) {
         return CliError::Failure(message);
     }

@@ -176,8 +176,8 @@ impl Free {
 /// Why a run failed before it produced a path.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RunError {
-    /// Newton did not converge at the start.
-    #[error("the start state did not converge: {}", .error.describe(.control.as_deref()))]
+    /// Newton did not converge at the start (or a signal stopped it).
+    #[error("{}", start_message(.error, .control.as_deref()))]
     Start {
         /// Why.
         error: SolveError,
@@ -204,7 +204,28 @@ pub enum RunError {
     Degenerate(StateDefect),
 }
 
+/// The message of [`RunError::Start`].
+fn start_message(error: &SolveError, control: Option<&str>) -> String {
+    match error {
+        SolveError::Interrupted => {
+            "a signal stopped the start solve between its Newton iterations".into()
+        }
+        e => format!("the start state did not converge: {}", e.describe(control)),
+    }
+}
+
 impl RunError {
+    /// Whether a signal stopped the run before it found anything.
+    pub fn interrupted(&self) -> bool {
+        matches!(
+            self,
+            Self::Start {
+                error: SolveError::Interrupted,
+                ..
+            }
+        )
+    }
+
     /// A start failure of `study`'s solve, naming its control parameter.
     pub fn start(study: &(impl Study + ?Sized), error: SolveError) -> Self {
         Self::Start {
