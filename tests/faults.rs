@@ -581,3 +581,108 @@ fn an_interrupt_in_compare_exits_130_with_the_runs_so_far() {
         assert!(stops.contains(&"interrupted"), "k = {k}: {stops:?}");
     }
 }
+
+/// Exit 2, one line naming every one of `needles`, and nothing written into `out`.
+fn assert_refused_up_front(o: &Output, out: &Path, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{err:?} does not name {n}");
+    }
+    assert!(!out.exists(), "nothing written: {}", out.display());
+}
+
+/// Refused before any work (exit 2, one line naming the key or option and its value, nothing
+/// written): a mesh whose every node is fixed, a bound whose range overflows the arithmetic of
+/// a sweep, a radius at which the mesh's elements are degenerate in floating point (3-D and
+/// meridian), and an `--out` that cannot be written.
+#[test]
+fn hopeless_requests_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let with = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    // Every node fixed: the bundled mesh-file scene on its disc with all nodes in `rim`.
+    let disc = std::fs::read_to_string(scene("disc_file.toml")).unwrap();
+    let spec = memstab::scene::Scene::load(Path::new(&scene("disc_file.toml"))).unwrap();
+    let mut mesh = spec.build_mesh().unwrap().mesh;
+    let all: Vec<usize> = (0..mesh.nodes.len()).collect();
+    mesh.boundaries.insert("rim".into(), all);
+    let msh = dir.path().join("all_fixed.msh");
+    meshes::write::write_mesh(
+        &msh,
+        &mesh,
+        &meshes::write::Fields::new(),
+        meshes::write::Format::from_path(&msh, false).unwrap(),
+    )
+    .unwrap();
+    assert!(disc.contains("path = \"meshes/disc_c7v.msh\""));
+    let text = disc.replacen(
+        "path = \"meshes/disc_c7v.msh\"",
+        &format!("path = '{}'", msh.display()),
+        1,
+    );
+    let s = with("all_fixed.toml", text);
+    let o = run(&s, &out, None);
+    assert_refused_up_front(&o, &out, &["boundary.fixed", "\"rim\"", "every one of the"]);
+
+    // A bound whose range overflows: the sweep's samples were infinite.
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    assert!(ponding.contains("max = 46.0"));
+    let s = with(
+        "max.toml",
+        ponding.replacen("max = 46.0", "max = 1.7e308", 1),
+    );
+    let o = run(&s, &out, None);
+    assert_refused_up_front(&o, &out, &["parameters.rho.max", "1.7e308"]);
+
+    // A radius at which the elements are degenerate, on a 3-D mesh and on a meridian.
+    for (name, radius) in [
+        ("disc_upward.toml", "radius = 1.1"),
+        ("axisymmetric/balloon.toml", "radius = 1.0"),
+    ] {
+        let text = std::fs::read_to_string(scene(name)).unwrap();
+        assert!(text.contains(radius), "{name}");
+        let s = with("radius.toml", text.replacen(radius, "radius = 1e100", 1));
+        let o = run(&s, &out, None);
+        assert_refused_up_front(&o, &out, &["mesh.radius", "1e100", "degenerate"]);
+    }
+
+    // An --out that cannot be written: refused before the analysis, not after it.
+    let o = run(&scene("balloon.toml"), Path::new("/proc"), None);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--out '/proc'") && err.contains("cannot write"),
+        "{err}"
+    );
+    #[cfg(unix)]
+    if !is_root() {
+        use std::os::unix::fs::PermissionsExt;
+        let locked = dir.path().join("locked");
+        std::fs::create_dir(&locked).unwrap();
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+        let o = run(&scene("balloon.toml"), &locked, None);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("cannot write"), "{}", stderr(&o));
+        assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+}
+
+/// Whether this process runs as root (whom permission bits do not stop).
+#[cfg(unix)]
+fn is_root() -> bool {
+    std::fs::read_to_string("/proc/self/status")
+        .map(|s| {
+            s.lines()
+                .find(|l| l.starts_with("Uid:"))
+                .and_then(|l| l.split_whitespace().nth(1).map(|u| u == "0"))
+                .unwrap_or(false)
+        })
+        .unwrap_or(false)
+}

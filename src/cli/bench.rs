@@ -150,7 +150,8 @@ fn prepare_out(out: &Path) -> Result<(), CliError> {
             out.display()
         )));
     }
-    Ok(())
+    let dir = if out.is_dir() { out } else { parent.as_path() };
+    super::common::check_writable("--out", out, dir)
 }
 
 /// Tells on stderr what the bench starts.

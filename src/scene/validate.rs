@@ -438,8 +438,28 @@ fn check_mesh_radius(scene: &Scene) -> Result<(), Problem> {
     }
 }
 
+/// The range of a generated mesh's radius: beyond it a triangle's area (a product of two
+/// lengths, normed through their squares) or an enclosed volume leaves the floating-point
+/// numbers, and the reference triangles are degenerate.
+pub const RADIUS_RANGE: (f64, f64) = (1e-50, 1e50);
+
 fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
-    let radius_rule = |r: f64| positive("mesh.radius", r);
+    let radius_rule = |r: f64| {
+        positive("mesh.radius", r)?;
+        let (lo, hi) = RADIUS_RANGE;
+        if r < lo || r > hi {
+            return Err(Problem::at(
+                "mesh.radius",
+                format!(
+                    "must lie within [{}, {}]: at {} the mesh's elements are degenerate in floating point (their areas and volumes over- or underflow)",
+                    num(lo),
+                    num(hi),
+                    num(r)
+                ),
+            ));
+        }
+        Ok(())
+    };
     match mesh {
         MeshSpec::Disc(d) => {
             radius_rule(d.radius)?;
@@ -678,13 +698,26 @@ fn check_parameter_ranges(scene: &Scene) -> Result<(), Problem> {
     Ok(())
 }
 
+/// The largest magnitude of a parameter's bound: beyond it the arithmetic of a sweep or a
+/// step over the range (its width times a fraction, squared in a norm) overflows.
+pub const MAX_BOUND: f64 = 1e150;
+
 fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
     finite(&format!("{key}.start"), p.start)?;
-    if let Some(min) = p.min {
-        finite(&format!("{key}.min"), min)?;
-    }
-    if let Some(max) = p.max {
-        finite(&format!("{key}.max"), max)?;
+    for (field, bound) in [("min", p.min), ("max", p.max)] {
+        let Some(b) = bound else { continue };
+        let k = format!("{key}.{field}");
+        finite(&k, b)?;
+        if b.abs() > MAX_BOUND {
+            return Err(Problem::at(
+                &k,
+                format!(
+                    "must lie within [-{m}, {m}] (the arithmetic over the range overflows beyond), got {}",
+                    num(b),
+                    m = num(MAX_BOUND)
+                ),
+            ));
+        }
     }
     if let (Some(min), Some(max)) = (p.min, p.max) {
         if !(max - min).is_finite() {
@@ -860,6 +893,22 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
         .topology()
         .map_err(|e| Problem::new("mesh", format!("'mesh' ({}): {e}", scene.mesh.generator())))?;
     let mut fixed: BTreeSet<usize> = scene.fixed_nodes(sym).into_iter().collect();
+    if !mesh.nodes.is_empty() && fixed.len() == mesh.nodes.len() {
+        let names: Vec<String> = scene
+            .boundary
+            .fixed
+            .iter()
+            .map(|n| format!("\"{n}\""))
+            .collect();
+        return Err(Problem::new(
+            "boundary.fixed",
+            format!(
+                "'boundary.fixed' = [{}] fixes every one of the {} nodes of {the_mesh}: no unknown is left to solve for; fix only the supported nodes",
+                names.join(", "),
+                mesh.nodes.len()
+            ),
+        ));
+    }
     fixed.extend(scene.sliding_nodes(sym).into_iter().map(|(i, _)| i));
     let rim: BTreeSet<usize> = topology.boundary_loops.iter().flatten().copied().collect();
     let loose = rim.difference(&fixed).count();

@@ -702,7 +702,7 @@ pub fn compare(
         .unwrap_or(0);
     if levels == 0 {
         return Err(CompareError::Interrupted(format!(
-            "a signal stopped the comparison before every mesh had run ({} of {} runs ended);              nothing to compare",
+            "a signal stopped the comparison before every mesh had run ({} of {} runs ended); nothing to compare",
             slots.iter().flatten().filter(|l| l.is_some()).count(),
             total
         )));
