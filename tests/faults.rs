@@ -686,3 +686,72 @@ fn is_root() -> bool {
         })
         .unwrap_or(false)
 }
+
+/// A start solve that does not converge says which known cause fits and what to try: a fluid
+/// level past the fold (no equilibrium near the start), a sphere whose plane it does not touch
+/// yet (`[start] hold-translation`) — on the 3-D mesh and on the meridian —; a flat disc
+/// without pre-stretch is refused on both models alike (exit 2, naming the key).
+#[test]
+fn non_convergence_names_its_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let write = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    let failed = |s: &str, needles: &[&str]| {
+        let o = run(s, &out, None);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        for n in needles {
+            assert!(err.contains(n), "{err:?} does not name {n}");
+        }
+        assert!(!err.contains(" … ("), "cut: {err}");
+        assert!(!out.exists());
+    };
+    // The level far above the fold of the fluid-pushed disc.
+    let below = std::fs::read_to_string(scene("disc_fluid_below.toml")).unwrap();
+    assert!(below.contains("start = 0.0 ") && below.contains("max = 4.0"));
+    let past =
+        below
+            .replacen("start = 0.0 ", "start = 6.0 ", 1)
+            .replacen("max = 4.0", "max = 7.0", 1);
+    failed(
+        &write("past_fold.toml", past),
+        &["no equilibrium near the start", "smaller load"],
+    );
+    // A sphere above its plane without the held translation: a plane it does not touch.
+    for name in [
+        "thesis/paper2_sphere_on_plane_f8.toml",
+        "axisymmetric/paper2_sphere_on_plane.toml",
+    ] {
+        let text = std::fs::read_to_string(scene(name)).unwrap();
+        let free: String = text
+            .lines()
+            .filter(|l| !l.starts_with("hold-translation"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_ne!(free, text, "{name}");
+        failed(
+            &write("untouched.toml", free),
+            &["does not touch", "[start] hold-translation"],
+        );
+    }
+    // Pre-stretch exactly 1 on a flat disc: refused up front on both models.
+    for name in ["ponding.toml", "axisymmetric/ponding.toml"] {
+        let text = std::fs::read_to_string(scene(name)).unwrap();
+        assert!(text.contains("prestretch = 1.1"), "{name}");
+        let s = write(
+            "unstretched.toml",
+            text.replacen("prestretch = 1.1", "prestretch = 1.0", 1),
+        );
+        let o = run(&s, &out, None);
+        assert_refused_up_front(
+            &o,
+            &out,
+            &["material.prestretch", "= 1 ", "pre-stretch > 1"],
+        );
+    }
+}

@@ -352,9 +352,21 @@ pub(super) fn not_converged(e: &memstab::analysis::RunError, at: &[(usize, f64)]
     if e.interrupted() {
         return CliError::Interrupted(format!("{message}; nothing was printed or written"));
     }
-    if at.is_empty() || !matches!(e, memstab::analysis::RunError::Start { .. }) {
+    let memstab::analysis::RunError::Start { error, control, .. } = e else {
+        return CliError::Failure(message);
+    };
+    if at.is_empty() {
         return CliError::Failure(message);
     }
+    // With --at, the cause is said below, for the values given.
+    let message = one_line(
+        &memstab::analysis::RunError::Start {
+            error: error.clone(),
+            control: control.clone(),
+            cause: None,
+        }
+        .to_string(),
+    );
     CliError::Failure(format!(
         "{message}; with --at the state is solved afresh from the start guess, and no \
          equilibrium may exist there (past a turning point of the control the path does not \

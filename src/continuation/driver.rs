@@ -248,9 +248,9 @@ impl SolveError {
                 correction,
                 tolerance,
             } => format!(
-                "Newton did not converge {} in {iterations} iterations (the limit of this \
-                 solve; residual {residual:.1e} of the force scale, last correction \
-                 {correction:.1e} of the state scale, tolerance {tolerance:.0e})",
+                "Newton did not converge {} in {iterations} iterations (residual \
+                 {residual:.1e} of the force scale, last correction {correction:.1e} of the \
+                 state scale, tolerance {tolerance:.0e})",
                 at(*control)
             ),
             Self::SingularTangent => "singular tangent at the start".to_string(),

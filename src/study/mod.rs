@@ -177,12 +177,14 @@ impl Free {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RunError {
     /// Newton did not converge at the start (or a signal stopped it).
-    #[error("{}", start_message(.error, .control.as_deref()))]
+    #[error("{}", start_message(.error, .control.as_deref(), .cause.as_deref()))]
     Start {
         /// Why.
         error: SolveError,
         /// The control parameter's name (none for a single equilibrium).
         control: Option<String>,
+        /// Which known cause fits, and what to try ([`start_cause`]).
+        cause: Option<String>,
     },
     /// Newton converged to a membrane turned inside out.
     #[error("the start state did not converge: Newton converged to an inside-out membrane (enclosed volume {volume:e}); start closer to the intended state (start.stretch, the start values)")]
@@ -205,13 +207,65 @@ pub enum RunError {
 }
 
 /// The message of [`RunError::Start`].
-fn start_message(error: &SolveError, control: Option<&str>) -> String {
+fn start_message(error: &SolveError, control: Option<&str>, cause: Option<&str>) -> String {
     match error {
         SolveError::Interrupted => {
             "a signal stopped the start solve between its Newton iterations".into()
         }
-        e => format!("the start state did not converge: {}", e.describe(control)),
+        e => format!(
+            "the start state did not converge: {}{}",
+            e.describe(control),
+            cause.map_or_else(String::new, |c| format!("; {c}"))
+        ),
     }
+}
+
+/// Which of the known causes of a failed start solve fits `error` in `scene`, and what to
+/// try: no equilibrium near the start (a load past its fold), a motion nothing holds (a free
+/// body, a plane it does not touch yet), a singular tangent, iterates that ran off, a held
+/// translation that met no support.
+pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
+    let planes = scene
+        .effects
+        .iter()
+        .any(|e| matches!(e, scene::Effect::Plane(_)));
+    let held = scene.start.hold_translation.is_some();
+    let supported = !scene.boundary.fixed.is_empty() || !scene.boundary.slide.is_empty();
+    let unheld = if planes && !held {
+        "a plane the body does not touch yet holds nothing; lower it onto the plane with \
+         `[start] hold-translation` (toward the plane) or move the plane to touch it"
+    } else if !supported && !held {
+        "a free body nothing holds; add a support (`boundary.fixed`, a plane it rests on) or \
+         `[start] hold-translation`"
+    } else {
+        "a motion nothing holds (a rigid motion the supports leave free, a neutral mode); hold \
+         it with a support"
+    };
+    let cause = match error {
+        SolveError::NotConverged {
+            residual,
+            tolerance,
+            ..
+        } if *residual <= *tolerance => format!("likely cause: {unheld}"),
+        SolveError::NotConverged { .. } | SolveError::Diverged { .. } => "likely cause: no \
+             equilibrium near the start (a load past its fold, e.g. a fluid level above the \
+             highest one held); start at a smaller load and follow a path, or `[start] from`"
+            .to_string(),
+        SolveError::Singular { .. } | SolveError::SingularTangent => {
+            if scene.start_value(&scene.material.prestretch) == 1.0 && !planes {
+                "likely cause: material.prestretch = 1 (an unstretched flat part carries no \
+                 load normal to it; give a pre-stretch > 1), or a free motion nothing holds"
+                    .to_string()
+            } else {
+                format!("likely cause: {unheld}")
+            }
+        }
+        SolveError::NotReleased { .. } => "likely cause: the held body met no support along \
+             `[start] hold-translation`; point it toward the plane it should rest on"
+            .to_string(),
+        SolveError::Model(_) | SolveError::Interrupted => return None,
+    };
+    Some(cause)
 }
 
 impl RunError {
@@ -229,6 +283,7 @@ impl RunError {
     /// A start failure of `study`'s solve, naming its control parameter.
     pub fn start(study: &(impl Study + ?Sized), error: SolveError) -> Self {
         Self::Start {
+            cause: start_cause(study.scene(), &error),
             error,
             control: study.control().map(|c| c.name.clone()),
         }
