@@ -755,3 +755,42 @@ fn non_convergence_names_its_cause() {
         );
     }
 }
+
+/// A full file system, as a sink that fails part-way (every file above a size limit fails with
+/// "File too large": the process's file-size limit, its signal ignored): the meridian
+/// balloon's run writes its path and first states, then fails on a critical state; the
+/// message (exit 1, one line) names the file that failed and every file it left — the
+/// collections rewritten after each state included —, and no temporary file is left.
+#[cfg(unix)]
+#[test]
+fn a_failing_sink_names_every_file_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("full");
+    // 16000 blocks of 512 bytes: above a state of the 64-element meridian revolved (7.5 MB),
+    // below a critical state with its mode (8.8 MB).
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f 16000 && exec '{}' run '{}' --out '{}' --quiet",
+            env!("CARGO_BIN_EXE_memstab"),
+            scene("axisymmetric/balloon.toml"),
+            out.display()
+        ))
+        .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+        .output()
+        .expect("sh runs");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("critical_01.vtu") && err.contains("already written: "),
+        "{err}"
+    );
+    let named = err.split("already written: ").nth(1).unwrap().trim_end();
+    let named: BTreeSet<String> = named.split(", ").map(str::to_string).collect();
+    let left = files_under(&out);
+    assert!(left.len() >= 4, "{left:?}");
+    assert!(left.contains("path.pvd"), "{left:?}");
+    assert_eq!(named, left, "the message names every file left");
+    assert!(!out.join("manifest.json").exists());
+}
