@@ -794,3 +794,19 @@ fn a_failing_sink_names_every_file_left() {
     assert_eq!(named, left, "the message names every file left");
     assert!(!out.join("manifest.json").exists());
 }
+
+/// `bench` stops at a signal — in the path of its first study, or before its next study —
+/// with exit 130 and one line saying so.
+#[test]
+fn an_interrupt_in_bench_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let o = memstab(
+        &["bench", "--quick", "--out", out.to_str().unwrap()],
+        Some(5),
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    let last = err.trim_end().lines().last().unwrap_or_default();
+    assert!(last.contains("a signal stopped the bench"), "{err}");
+}
