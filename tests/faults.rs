@@ -810,3 +810,29 @@ fn an_interrupt_in_bench_exits_130() {
     let last = err.trim_end().lines().last().unwrap_or_default();
     assert!(last.contains("a signal stopped the bench"), "{err}");
 }
+
+/// A path that cannot leave its start (a balloon above a plane it does not touch: its start is
+/// accepted at round-off, every step fails) is a result, and its summary says which known
+/// cause fits and what to try.
+#[test]
+fn a_path_stuck_at_its_start_names_the_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene("balloon.toml")).unwrap();
+    let at = text.find("\n[parameters").unwrap();
+    let plane = "\n[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -2.0\n\
+                 penalty = 1000.0\nexponent = 3\n";
+    let path = dir.path().join("plane.toml");
+    std::fs::write(&path, format!("{}{plane}{}", &text[..at], &text[at..])).unwrap();
+    let out = dir.path().join("out");
+    let o = run(path.to_str().unwrap(), &out, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = String::from_utf8_lossy(&o.stdout);
+    let line = summary
+        .lines()
+        .find(|l| l.contains("could not leave its start"))
+        .unwrap_or_else(|| panic!("{summary}"));
+    assert!(
+        line.contains("does not touch yet") && line.contains("[start] hold-translation"),
+        "{line}"
+    );
+}

@@ -232,6 +232,18 @@ pub fn run_from(
         Ok(stop) => stop,
         Err(e) => return Err(e),
     };
+    // A path that could not leave its start: say which known cause fits.
+    if let StopReason::Stalled(s) = &stop {
+        if s.after == 0 {
+            cx.record.warnings.push(format!(
+                "the path could not leave its start point (every step failed: {}); likely \
+                 cause (its tangent is singular there): {}; or a parameter at a degenerate \
+                 value",
+                s.why,
+                crate::study::unheld(study.scene())
+            ));
+        }
+    }
     let mut result = cx.record.finish(study, stop, stability_note, cx.times);
     study.annotate(&mut result);
     Ok(result)

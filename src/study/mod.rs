@@ -229,18 +229,7 @@ pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
         .effects
         .iter()
         .any(|e| matches!(e, scene::Effect::Plane(_)));
-    let held = scene.start.hold_translation.is_some();
-    let supported = !scene.boundary.fixed.is_empty() || !scene.boundary.slide.is_empty();
-    let unheld = if planes && !held {
-        "a plane the body does not touch yet holds nothing; lower it onto the plane with \
-         `[start] hold-translation` (toward the plane) or move the plane to touch it"
-    } else if !supported && !held {
-        "a free body nothing holds; add a support (`boundary.fixed`, a plane it rests on) or \
-         `[start] hold-translation`"
-    } else {
-        "a motion nothing holds (a rigid motion the supports leave free, a neutral mode); hold \
-         it with a support"
-    };
+    let unheld = unheld(scene);
     let cause = match error {
         SolveError::NotConverged {
             residual,
@@ -252,7 +241,12 @@ pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
              highest one held); start at a smaller load and follow a path, or `[start] from`"
             .to_string(),
         SolveError::Singular { .. } | SolveError::SingularTangent => {
-            if scene.start_value(&scene.material.prestretch) == 1.0 && !planes {
+            let flat = match &scene.mesh {
+                scene::MeshSpec::Disc(_) => true,
+                scene::MeshSpec::Axisymmetric(a) => a.shape == scene::AxisymShape::Disc,
+                _ => false,
+            };
+            if flat && scene.start_value(&scene.material.prestretch) == 1.0 && !planes {
                 "likely cause: material.prestretch = 1 (an unstretched flat part carries no \
                  load normal to it; give a pre-stretch > 1), or a free motion nothing holds"
                     .to_string()
@@ -266,6 +260,27 @@ pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
         SolveError::Model(_) | SolveError::Interrupted => return None,
     };
     Some(cause)
+}
+
+/// What a singular direction at the start of `scene` most likely is, and what holds it: a
+/// plane the body does not touch yet, a free body, or another motion nothing holds.
+pub fn unheld(scene: &Scene) -> &'static str {
+    let planes = scene
+        .effects
+        .iter()
+        .any(|e| matches!(e, scene::Effect::Plane(_)));
+    let held = scene.start.hold_translation.is_some();
+    let supported = !scene.boundary.fixed.is_empty() || !scene.boundary.slide.is_empty();
+    if planes && !held {
+        "a plane the body does not touch yet, which holds nothing; lower the body onto it with \
+         `[start] hold-translation` (toward the plane) or move the plane to touch it"
+    } else if !supported && !held {
+        "a free body nothing holds; add a support (`boundary.fixed`, a plane it rests on) or \
+         `[start] hold-translation`"
+    } else {
+        "a motion nothing holds (a rigid motion the supports leave free, a neutral mode); hold \
+         it with a support"
+    }
 }
 
 impl RunError {
