@@ -255,7 +255,7 @@ pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
             }
         }
         SolveError::NotReleased { .. } => "likely cause: the held body met no support along \
-             `[start] hold-translation`; point it toward the plane it should rest on"
+             `[start] hold-translation`; give the direction along which it meets its plane"
             .to_string(),
         SolveError::Model(_) | SolveError::Interrupted => return None,
     };
@@ -272,8 +272,8 @@ pub fn unheld(scene: &Scene) -> &'static str {
     let held = scene.start.hold_translation.is_some();
     let supported = !scene.boundary.fixed.is_empty() || !scene.boundary.slide.is_empty();
     if planes && !held {
-        "a plane the body does not touch yet, which holds nothing; lower the body onto it with \
-         `[start] hold-translation` (toward the plane) or move the plane to touch it"
+        "a plane the body does not touch yet, which holds nothing; bring the body onto it with \
+         `[start] hold-translation` (its free direction, e.g. [0, 0, 1]) or move the plane"
     } else if !supported && !held {
         "a free body nothing holds; add a support (`boundary.fixed`, a plane it rests on) or \
          `[start] hold-translation`"
