@@ -470,3 +470,369 @@ fn concurrent_runs_into_one_directory() {
         assert_manifest_verifies(&held);
     }
 }
+
+/// `memstab CMD ARGS` with the Newton-iteration hook at `k`.
+fn memstab_iterations(args: &[&str], k: usize) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_memstab"));
+    cmd.args(args)
+        .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+        .env("MEMSTAB_INTERRUPT_AFTER_ITERATIONS", k.to_string());
+    cmd.output().expect("the binary runs")
+}
+
+/// A meridian's linear-buckling sweep stops at the sample after the signal: exit 130, the
+/// samples so far written with stop reason `interrupted`, a manifest that verifies, and the
+/// crossing it had no time to localise named in a warning.
+#[test]
+fn an_interrupt_in_a_meridian_buckling_sweep_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ponding");
+    let o = run(&scene("axisymmetric/ponding.toml"), &out, Some(5));
+    assert_interrupted(&o, &out);
+    let rows = std::fs::read_to_string(out.join("path.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert_eq!(rows, 1 + 6, "the header and samples 0..=5");
+    assert_eq!(json(&out.join("path.json"))["stop"], "interrupted");
+}
+
+/// A start solve stops between its Newton iterations — the 3-D balloon's, and a meridian's
+/// held-translation start (a sphere lowered onto its plane) —: exit 130, one line saying so,
+/// nothing written (the directory this run made is removed again). `spectrum` and
+/// `export-matrix`, which solve a start state too, exit 130 the same way.
+#[test]
+fn an_interrupt_in_a_start_solve_exits_130_with_nothing_written() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, k) in [
+        ("balloon.toml", 1),
+        ("axisymmetric/paper2_sphere_on_plane.toml", 2),
+    ] {
+        let out = dir.path().join(name.replace('/', "_"));
+        let o = memstab_iterations(
+            &[
+                "run",
+                &scene(name),
+                "--out",
+                out.to_str().unwrap(),
+                "--quiet",
+            ],
+            k,
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(130), "{name}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains("start solve"), "{err}");
+        assert!(!out.exists(), "{name}: nothing written");
+    }
+    let o = memstab_iterations(&["spectrum", &scene("balloon.toml")], 1);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(o.stdout.is_empty());
+    let mtx = dir.path().join("K.mtx");
+    let o = memstab_iterations(
+        &[
+            "export-matrix",
+            &scene("balloon.toml"),
+            "--out",
+            mtx.to_str().unwrap(),
+        ],
+        1,
+    );
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(!mtx.exists());
+}
+
+/// `compare` stops its runs under way at their next point and starts no other: exit 130, and
+/// what it has — the runs so far, their stop `interrupted` — printed; or, stopped before every
+/// mesh had a run, one line saying so.
+#[test]
+fn an_interrupt_in_compare_exits_130_with_the_runs_so_far() {
+    for k in [3, 30] {
+        let o = memstab(
+            &[
+                "compare",
+                &scene("ponding.toml"),
+                "--meshes",
+                "C8v,C2v",
+                "--divisions",
+                "6",
+                "--max",
+                "10.5",
+                "--json",
+                "--quiet",
+            ],
+            Some(k),
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(130), "{err}");
+        assert!(err.contains("interrupted"), "{err}");
+        if err.contains("nothing to compare") {
+            assert!(o.stdout.is_empty());
+            continue;
+        }
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+        let stops: Vec<&str> = v["meshes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|m| m["levels"].as_array().unwrap())
+            .map(|l| l["stop"].as_str().unwrap())
+            .collect();
+        assert!(stops.contains(&"interrupted"), "k = {k}: {stops:?}");
+    }
+}
+
+/// Exit 2, one line naming every one of `needles`, and nothing written into `out`.
+fn assert_refused_up_front(o: &Output, out: &Path, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{err:?} does not name {n}");
+    }
+    assert!(!out.exists(), "nothing written: {}", out.display());
+}
+
+/// Refused before any work (exit 2, one line naming the key or option and its value, nothing
+/// written): a mesh whose every node is fixed, a bound whose range overflows the arithmetic of
+/// a sweep, a radius at which the mesh's elements are degenerate in floating point (3-D and
+/// meridian), and an `--out` that cannot be written.
+#[test]
+fn hopeless_requests_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let with = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    // Every node fixed: the bundled mesh-file scene on its disc with all nodes in `rim`.
+    let disc = std::fs::read_to_string(scene("disc_file.toml")).unwrap();
+    let spec = memstab::scene::Scene::load(Path::new(&scene("disc_file.toml"))).unwrap();
+    let mut mesh = spec.build_mesh().unwrap().mesh;
+    let all: Vec<usize> = (0..mesh.nodes.len()).collect();
+    mesh.boundaries.insert("rim".into(), all);
+    let msh = dir.path().join("all_fixed.msh");
+    meshes::write::write_mesh(
+        &msh,
+        &mesh,
+        &meshes::write::Fields::new(),
+        meshes::write::Format::from_path(&msh, false).unwrap(),
+    )
+    .unwrap();
+    assert!(disc.contains("path = \"meshes/disc_c7v.msh\""));
+    let text = disc.replacen(
+        "path = \"meshes/disc_c7v.msh\"",
+        &format!("path = '{}'", msh.display()),
+        1,
+    );
+    let s = with("all_fixed.toml", text);
+    let o = run(&s, &out, None);
+    assert_refused_up_front(&o, &out, &["boundary.fixed", "\"rim\"", "every one of the"]);
+
+    // A bound whose range overflows: the sweep's samples were infinite.
+    let ponding = std::fs::read_to_string(scene("ponding.toml")).unwrap();
+    assert!(ponding.contains("max = 46.0"));
+    let s = with(
+        "max.toml",
+        ponding.replacen("max = 46.0", "max = 1.7e308", 1),
+    );
+    let o = run(&s, &out, None);
+    assert_refused_up_front(&o, &out, &["parameters.rho.max", "1.7e308"]);
+
+    // A radius at which the elements are degenerate, on a 3-D mesh and on a meridian.
+    for (name, radius) in [
+        ("disc_upward.toml", "radius = 1.1"),
+        ("axisymmetric/balloon.toml", "radius = 1.0"),
+    ] {
+        let text = std::fs::read_to_string(scene(name)).unwrap();
+        assert!(text.contains(radius), "{name}");
+        let s = with("radius.toml", text.replacen(radius, "radius = 1e100", 1));
+        let o = run(&s, &out, None);
+        assert_refused_up_front(&o, &out, &["mesh.radius", "1e100", "degenerate"]);
+    }
+
+    // An --out that cannot be written: refused before the analysis, not after it.
+    let o = run(&scene("balloon.toml"), Path::new("/proc"), None);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--out '/proc'") && err.contains("cannot write"),
+        "{err}"
+    );
+    #[cfg(unix)]
+    if !is_root() {
+        use std::os::unix::fs::PermissionsExt;
+        let locked = dir.path().join("locked");
+        std::fs::create_dir(&locked).unwrap();
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+        let o = run(&scene("balloon.toml"), &locked, None);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("cannot write"), "{}", stderr(&o));
+        assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+}
+
+/// Whether this process runs as root (whom permission bits do not stop).
+#[cfg(unix)]
+fn is_root() -> bool {
+    std::fs::read_to_string("/proc/self/status")
+        .map(|s| {
+            s.lines()
+                .find(|l| l.starts_with("Uid:"))
+                .and_then(|l| l.split_whitespace().nth(1).map(|u| u == "0"))
+                .unwrap_or(false)
+        })
+        .unwrap_or(false)
+}
+
+/// A start solve that does not converge says which known cause fits and what to try: a fluid
+/// level past the fold (no equilibrium near the start), a sphere whose plane it does not touch
+/// yet (`[start] hold-translation`) — on the 3-D mesh and on the meridian —; a flat disc
+/// without pre-stretch is refused on both models alike (exit 2, naming the key).
+#[test]
+fn non_convergence_names_its_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let write = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    let failed = |s: &str, needles: &[&str]| {
+        let o = run(s, &out, None);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        for n in needles {
+            assert!(err.contains(n), "{err:?} does not name {n}");
+        }
+        assert!(!err.contains(" … ("), "cut: {err}");
+        assert!(!out.exists());
+    };
+    // The level far above the fold of the fluid-pushed disc.
+    let below = std::fs::read_to_string(scene("disc_fluid_below.toml")).unwrap();
+    assert!(below.contains("start = 0.0 ") && below.contains("max = 4.0"));
+    let past =
+        below
+            .replacen("start = 0.0 ", "start = 6.0 ", 1)
+            .replacen("max = 4.0", "max = 7.0", 1);
+    failed(
+        &write("past_fold.toml", past),
+        &["no equilibrium near the start", "smaller load"],
+    );
+    // A sphere above its plane without the held translation: a plane it does not touch.
+    for name in [
+        "thesis/paper2_sphere_on_plane_f8.toml",
+        "axisymmetric/paper2_sphere_on_plane.toml",
+    ] {
+        let text = std::fs::read_to_string(scene(name)).unwrap();
+        let free: String = text
+            .lines()
+            .filter(|l| !l.starts_with("hold-translation"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_ne!(free, text, "{name}");
+        failed(
+            &write("untouched.toml", free),
+            &["does not touch", "[start] hold-translation"],
+        );
+    }
+    // Pre-stretch exactly 1 on a flat disc: refused up front on both models.
+    for name in ["ponding.toml", "axisymmetric/ponding.toml"] {
+        let text = std::fs::read_to_string(scene(name)).unwrap();
+        assert!(text.contains("prestretch = 1.1"), "{name}");
+        let s = write(
+            "unstretched.toml",
+            text.replacen("prestretch = 1.1", "prestretch = 1.0", 1),
+        );
+        let o = run(&s, &out, None);
+        assert_refused_up_front(
+            &o,
+            &out,
+            &["material.prestretch", "= 1 ", "pre-stretch > 1"],
+        );
+    }
+}
+
+/// A full file system, as a sink that fails part-way (every file above a size limit fails with
+/// "File too large": the process's file-size limit, its signal ignored): the meridian
+/// balloon's run writes its path and first states, then fails on a critical state; the
+/// message (exit 1, one line) names the file that failed and every file it left — the
+/// collections rewritten after each state included —, and no temporary file is left.
+#[cfg(unix)]
+#[test]
+fn a_failing_sink_names_every_file_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("full");
+    // 16000 blocks of 512 bytes: above a state of the 64-element meridian revolved (7.5 MB),
+    // below a critical state with its mode (8.8 MB).
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f 16000 && exec '{}' run '{}' --out '{}' --quiet",
+            env!("CARGO_BIN_EXE_memstab"),
+            scene("axisymmetric/balloon.toml"),
+            out.display()
+        ))
+        .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+        .output()
+        .expect("sh runs");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("critical_01.vtu") && err.contains("already written: "),
+        "{err}"
+    );
+    let named = err.split("already written: ").nth(1).unwrap().trim_end();
+    let named: BTreeSet<String> = named.split(", ").map(str::to_string).collect();
+    let left = files_under(&out);
+    assert!(left.len() >= 4, "{left:?}");
+    assert!(left.contains("path.pvd"), "{left:?}");
+    assert_eq!(named, left, "the message names every file left");
+    assert!(!out.join("manifest.json").exists());
+}
+
+/// `bench` stops at a signal — in the path of its first study, or before its next study —
+/// with exit 130 and one line saying so.
+#[test]
+fn an_interrupt_in_bench_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let o = memstab(
+        &["bench", "--quick", "--out", out.to_str().unwrap()],
+        Some(5),
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    let last = err.trim_end().lines().last().unwrap_or_default();
+    assert!(last.contains("a signal stopped the bench"), "{err}");
+}
+
+/// A path that cannot leave its start (a balloon above a plane it does not touch: its start is
+/// accepted at round-off, every step fails) is a result, and its summary says which known
+/// cause fits and what to try.
+#[test]
+fn a_path_stuck_at_its_start_names_the_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene("balloon.toml")).unwrap();
+    let at = text.find("\n[parameters").unwrap();
+    let plane = "\n[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -2.0\n\
+                 penalty = 1000.0\nexponent = 3\n";
+    let path = dir.path().join("plane.toml");
+    std::fs::write(&path, format!("{}{plane}{}", &text[..at], &text[at..])).unwrap();
+    let out = dir.path().join("out");
+    let o = run(path.to_str().unwrap(), &out, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = String::from_utf8_lossy(&o.stdout);
+    let line = summary
+        .lines()
+        .find(|l| l.contains("could not leave its start"))
+        .unwrap_or_else(|| panic!("{summary}"));
+    assert!(
+        line.contains("does not touch yet") && line.contains("[start] hold-translation"),
+        "{line}"
+    );
+}

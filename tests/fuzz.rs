@@ -3,11 +3,16 @@
 //! stray characters inserted — are loaded, validated and built into a study as `run` does
 //! before it solves. Whatever the mutation, that must return a study or an error whose
 //! message, as printed, is one bounded line; never panic, hang or exhaust memory (the
-//! limits are set low). `MEMSTAB_FUZZ_CASES` sets the number of cases of each target
-//! (default 160 scenes and 96 mesh files, a few seconds).
+//! limits are set low). The corpus holds every analysis and both models: the bundled scenes
+//! (a path with branches among them), the meridian's (`scenes/axisymmetric/`), and the
+//! balloon as a surface and as a critical curve. `MEMSTAB_FUZZ_CASES` sets the number of
+//! cases of each target (default 160 scenes, 96 meridian scenes and 96 mesh files, a few
+//! seconds).
 
+use crate::common::balloon_with_k;
 use memstab::limits::Limits;
-use memstab::scene::Scene;
+use memstab::scene::{MeshSpec, Scene};
+use memstab::study::meridian::MeridianStudy;
 use memstab::study::mesh::MeshStudy;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
@@ -54,8 +59,9 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
 
-fn corpus() -> Vec<String> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(root())
+/// The scene files of `dir`, in name order.
+fn scenes_in(dir: &Path) -> Vec<String> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
@@ -65,6 +71,26 @@ fn corpus() -> Vec<String> {
         .iter()
         .map(|p| std::fs::read_to_string(p).unwrap())
         .collect()
+}
+
+/// The balloon (frequency 4, k a parameter) as a surface in (p, k) and as the critical curve
+/// of its pressure maximum in (p, k).
+fn surface_and_curve() -> Vec<String> {
+    let surface = "[parameters.k]\nstart = 0.1\n\n[analysis]\ntype = \"surface\"\n\
+        parameters = [\"p\", \"k\"]\nranges = [[0.0, 2.0], [0.05, 0.2]]\npaths = 3\n\
+        steps = 60\nmax-step = 0.1\n\n";
+    let curve = "[parameters.k]\nstart = 0.1\nmin = 0.05\nmax = 0.3\n\n[analysis]\n\
+        type = \"critical-curve\"\ncontrol = \"p\"\nsecond = \"k\"\nfrom = \"limit\"\n\
+        steps = 120\npath-steps = 400\nmax-step = 0.05\n\n";
+    vec![balloon_with_k(4, surface), balloon_with_k(4, curve)]
+}
+
+/// Every 3-D scene: the bundled ones (a path with branches, linear buckling, deflation …),
+/// and the balloon's surface and critical curve.
+fn corpus() -> Vec<String> {
+    let mut all = scenes_in(&root());
+    all.extend(surface_and_curve());
+    all
 }
 
 /// One mutation of a text, by line.
@@ -142,11 +168,12 @@ fn mutate(text: &str, mutations: &[Mutation]) -> String {
     lines.join("\n")
 }
 
-/// Low limits: no mutated scene may take the machine (a group of order ≤ 96, 512 MiB).
+/// Low limits: no mutated scene may take the machine (a group of order ≤ 120 — Ih, the
+/// balloon's —, 512 MiB).
 fn limits() -> Limits {
     Limits {
         memory: 512 << 20,
-        group_order: 96,
+        group_order: 120,
         scene_bytes: 1 << 20,
     }
 }
@@ -156,10 +183,14 @@ fn limits() -> Limits {
 fn load_and_build(path: &Path) -> Result<(), TestCaseError> {
     let outcome = Scene::load(path)
         .map_err(|e| e.to_string())
-        .and_then(|scene| {
-            MeshStudy::build_within(scene, &limits())
+        .and_then(|scene| match scene.mesh {
+            // A meridian's size is bounded by its own keys (elements, modes).
+            MeshSpec::Axisymmetric(_) => MeridianStudy::build(scene)
                 .map(|_| ())
-                .map_err(|e| e.to_string())
+                .map_err(|e| e.to_string()),
+            _ => MeshStudy::build_within(scene, &limits())
+                .map(|_| ())
+                .map_err(|e| e.to_string()),
         });
     if let Err(e) = outcome {
         let printed = memstab::text::message(&e);
@@ -197,6 +228,31 @@ fn mutated_scenes_load_or_say_why_in_one_line() {
     let path = dir.path().join("scene.toml");
     let config = ProptestConfig {
         cases: cases(160),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    };
+    proptest!(config, |(
+        which in 0..corpus.len(),
+        mutations in proptest::collection::vec(mutation(), 1..4),
+    )| {
+        std::fs::write(&path, mutate(&corpus[which], &mutations)).unwrap();
+        load_and_build(&path)?;
+    });
+}
+
+/// The meridian's scenes (every shape, gas, fluid, spin, planes, a held translation, linear
+/// buckling), mutated: a study or one bounded line, as on the 3-D mesh.
+#[test]
+fn mutated_meridian_scenes_load_or_say_why_in_one_line() {
+    let corpus = scenes_in(&root().join("axisymmetric"));
+    assert!(
+        corpus.len() >= 5,
+        "the bundled meridian scenes are the corpus"
+    );
+    let dir = workspace();
+    let path = dir.path().join("scene.toml");
+    let config = ProptestConfig {
+        cases: cases(96),
         failure_persistence: None,
         ..ProptestConfig::default()
     };
@@ -268,4 +324,29 @@ fn a_huge_declared_group_is_refused_by_name() {
         .err()
         .expect("refused by the limits");
     assert!(err.to_string().contains("C3000v"), "{err}");
+}
+
+/// The corpus is valid before it is mutated: each scene loads and builds under the harness's
+/// limits (so that the mutants explore every analysis and both models).
+#[test]
+fn the_corpus_loads_and_builds() {
+    let dir = workspace();
+    let path = dir.path().join("scene.toml");
+    let mut all = corpus();
+    all.extend(scenes_in(&root().join("axisymmetric")));
+    for text in &all {
+        std::fs::write(&path, text).unwrap();
+        let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let built = match scene.mesh {
+            MeshSpec::Axisymmetric(_) => MeridianStudy::build(scene)
+                .map(|_| ())
+                .err()
+                .map(|e| e.to_string()),
+            _ => MeshStudy::build_within(scene, &limits())
+                .map(|_| ())
+                .err()
+                .map(|e| e.to_string()),
+        };
+        assert_eq!(built, None);
+    }
 }

@@ -73,7 +73,11 @@ fn sweep(
             stop = StopReason::Interrupted;
             break;
         }
-        let value = lo + (hi - lo) * i as f64 / samples as f64;
+        let value = lo + (hi - lo) * (i as f64 / samples as f64);
+        if i > 0 {
+            // A sample is the sweep's step (the test hook counts it).
+            crate::continuation::interrupt::step_accepted();
+        }
         observer.progress(i, value);
         let params = at(value);
         observer.state(u, &params);

@@ -221,14 +221,29 @@ pub fn run_from(
         observer,
         times,
     };
-    let stop = analysis.run(study, &mut cx)?;
     // A signal during a later phase (the branches of a finished path, a curve's or a
-    // surface's second parameter) ends the run as interrupted, whatever its path's stop was.
-    let stop = if crate::continuation::interrupt::requested() {
-        StopReason::Interrupted
-    } else {
-        stop
+    // surface's second parameter) ends the run as interrupted, whatever its path's stop was;
+    // a solve it cut short ends it so too, with what was found before (none: the error).
+    let stop = match analysis.run(study, &mut cx) {
+        _ if crate::continuation::interrupt::requested() && !cx.record.rows.is_empty() => {
+            StopReason::Interrupted
+        }
+        Ok(_) if crate::continuation::interrupt::requested() => StopReason::Interrupted,
+        Ok(stop) => stop,
+        Err(e) => return Err(e),
     };
+    // A path that could not leave its start: say which known cause fits.
+    if let StopReason::Stalled(s) = &stop {
+        if s.after == 0 {
+            cx.record.warnings.push(format!(
+                "the path could not leave its start point (every step failed: {}); likely \
+                 cause (its tangent is singular there): {}; or a parameter at a degenerate \
+                 value",
+                s.why,
+                crate::study::unheld(study.scene())
+            ));
+        }
+    }
     let mut result = cx.record.finish(study, stop, stability_note, cx.times);
     study.annotate(&mut result);
     Ok(result)

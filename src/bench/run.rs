@@ -56,6 +56,19 @@ fn write_text(out: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
     Ok(path)
 }
 
+/// Tells `progress` of the next study, unless a signal asked to stop: then the bench ends
+/// there, its files so far written.
+fn stage(progress: &mut dyn FnMut(&str), what: &str) -> Result<(), String> {
+    if crate::continuation::interrupt::requested() {
+        return Err(format!(
+            "a signal stopped the bench before {}; the files written so far are left",
+            what.trim_end_matches(" …")
+        ));
+    }
+    progress(what);
+    Ok(())
+}
+
 fn create_dir(out: &Path) -> Result<(), String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))
 }
@@ -94,7 +107,7 @@ pub fn run_accuracy(
     let mut cases: Vec<PayoffCase> = Vec::new();
     let mut paths: Vec<(usize, FullPathStability)> = Vec::new();
     for &f in &freqs {
-        progress(&format!("balloon f = {f} …"));
+        stage(progress, &format!("balloon f = {f} …"))?;
         let stability = f <= 32;
         let options = LevelOptions {
             stability,
@@ -108,7 +121,7 @@ pub fn run_accuracy(
             return Err(failure("the path did not reach both turning points"));
         }
         if f == payoff_f {
-            progress(&format!("symmetry payoff at f = {f} …"));
+            stage(progress, &format!("symmetry payoff at f = {f} …"))?;
             let (u, p) = level
                 .at_max
                 .as_ref()
@@ -126,9 +139,10 @@ pub fn run_accuracy(
             });
         }
         if !level.states.is_empty() {
-            progress(&format!(
-                "stability along the path without symmetry at f = {f} …"
-            ));
+            stage(
+                progress,
+                &format!("stability along the path without symmetry at f = {f} …"),
+            )?;
             let full = full_path_stability(&study, &level.states, 20, f <= dense_path_max_f)
                 .map_err(|e| failure(&format!("stability without symmetry: {e}")))?;
             level.states = Vec::new();
@@ -136,9 +150,10 @@ pub fn run_accuracy(
         }
         levels.push(level);
     }
-    progress(&format!(
-        "symmetry payoff on a C8v disc with {disc_divisions} divisions …"
-    ));
+    stage(
+        progress,
+        &format!("symmetry payoff on a C8v disc with {disc_divisions} divisions …"),
+    )?;
     let mut c8v = c8v_payoff(disc_divisions, true, true, 20).map_err(|e| {
         format!(
             "C8v payoff (disc, {disc_divisions} divisions): {}",
@@ -165,13 +180,16 @@ pub fn run_accuracy(
     let divisions: [usize; 2] = if quick { [4, 8] } else { [8, 16] };
     let mut ponding = Vec::new();
     for d in divisions {
-        progress(&format!("ponding, C7v disc with {d} divisions …"));
+        stage(progress, &format!("ponding, C7v disc with {d} divisions …"))?;
         ponding.push(ponding_level(d).map_err(|e| format!("ponding d = {d}: {}", one_line(&e)))?);
     }
     md += &report::ponding_table(&ponding);
     // The same ladder on the chiral C7 disc of the finest level: complex-type E_k blocks.
     let d = divisions[1];
-    progress(&format!("ponding, chiral C7 disc with {d} divisions …"));
+    stage(
+        progress,
+        &format!("ponding, chiral C7 disc with {d} divisions …"),
+    )?;
     let chiral = ponding_level_in(d, Some("C7"))
         .map_err(|e| format!("ponding on C7, d = {d}: {}", one_line(&e)))?;
     if let Some(reference) = ponding.last() {
@@ -180,9 +198,9 @@ pub fn run_accuracy(
 
     // 5. Branch switching.
     let branch_divisions = if quick { 8 } else { 16 };
-    progress(&format!(
+    stage(progress, &format!(
         "branch switching: the abstract Hg problem, the upward disc with {branch_divisions} divisions …"
-    ));
+    ))?;
     md += &super::branching::branching_section(branch_divisions)
         .map_err(|e| format!("branch switching: {}", one_line(&e)))?;
     md += &report::total_time("bench", started.elapsed());
@@ -209,9 +227,12 @@ pub fn run_branching(
     create_dir(out)?;
     let started = Instant::now();
     let divisions = if quick { 8 } else { 16 };
-    progress(&format!(
+    stage(
+        progress,
+        &format!(
         "branch switching: the abstract Hg problem, the upward disc with {divisions} divisions …"
-    ));
+    ),
+    )?;
     let mut md = "# memstab bench: branch switching\n".to_string();
     md += &super::branching::branching_section(divisions)
         .map_err(|e| format!("branch switching: {}", one_line(&e)))?;
@@ -233,9 +254,10 @@ pub fn run_axisym(
     create_dir(out)?;
     let started = Instant::now();
     let levels: &[usize] = if quick { &[64] } else { &[64, 200] };
-    progress(&format!(
-        "axisymmetric balloon with modes 0..20 at every point, {levels:?} elements …"
-    ));
+    stage(
+        progress,
+        &format!("axisymmetric balloon with modes 0..20 at every point, {levels:?} elements …"),
+    )?;
     let mut md = "# memstab bench: the axisymmetric model
 "
     .to_string();
@@ -244,9 +266,10 @@ pub fn run_axisym(
             .map_err(|err| format!("axisymmetric balloon: {}", one_line(&err)))?;
     }
     let caps: &[usize] = if quick { &[128] } else { &[128, 256] };
-    progress(&format!(
-        "axisymmetric Paper 4 cap with modes 0..8 at every point, {caps:?} elements …"
-    ));
+    stage(
+        progress,
+        &format!("axisymmetric Paper 4 cap with modes 0..8 at every point, {caps:?} elements …"),
+    )?;
     md += &super::axisym::paper4_section(caps)
         .map_err(|err| format!("axisymmetric Paper 4 cap: {}", one_line(&err)))?;
     md += &report::total_time("study", started.elapsed());
@@ -273,9 +296,10 @@ pub fn run_scaling(
     let started = Instant::now();
     let mut levels = Vec::new();
     for &f in &freqs {
-        progress(&format!(
-            "scaling, balloon f = {f}, {points} points with stability …"
-        ));
+        stage(
+            progress,
+            &format!("scaling, balloon f = {f}, {points} points with stability …"),
+        )?;
         levels.push(
             scaling_level(f, points).map_err(|e| format!("scaling f = {f}: {}", one_line(&e)))?,
         );
@@ -321,7 +345,10 @@ pub fn run_thesis(
     let steps = 8;
     let mut runs = Vec::new();
     for pattern in ["C8v", "C4v", "C2v", "C1v", "C1"] {
-        progress(&format!("thesis cap, {pattern}, {divisions} divisions …"));
+        stage(
+            progress,
+            &format!("thesis cap, {pattern}, {divisions} divisions …"),
+        )?;
         let peer = (pattern == "C2v").then_some(out.as_path());
         runs.push(
             thesis_run(pattern, divisions, steps, true, peer)
@@ -330,15 +357,16 @@ pub fn run_thesis(
     }
     // On C1v the path turns at the fold of the broken m = 1 pair and meets the mirror-breaking
     // bifurcations on the way back: three times the points to reach them.
-    progress(&format!(
-        "thesis cap, C1v through its fold, {divisions} divisions …"
-    ));
+    stage(
+        progress,
+        &format!("thesis cap, C1v through its fold, {divisions} divisions …"),
+    )?;
     runs.push(
         thesis_run("C1v", divisions, 3 * steps, true, None)
             .map_err(|e| format!("thesis cap C1v, {} steps: {}", 3 * steps, one_line(&e)))?,
     );
     if let Some(d) = finest {
-        progress(&format!("thesis cap, C2v, {d} divisions …"));
+        stage(progress, &format!("thesis cap, C2v, {d} divisions …"))?;
         runs.push(
             thesis_run("C2v", d, steps, false, None)
                 .map_err(|e| format!("thesis cap C2v, {d} divisions: {}", one_line(&e)))?,
@@ -381,7 +409,7 @@ fn thesis_scenes(progress: &mut dyn FnMut(&str)) -> Result<String, String> {
     files.sort();
     let mut runs = Vec::new();
     for f in &files {
-        progress(&format!("thesis scene {} …", f.display()));
+        stage(progress, &format!("thesis scene {} …", f.display()))?;
         runs.push(scene_run(f).map_err(|e| format!("{}: {}", f.display(), one_line(&e)))?);
     }
     Ok(scenes_table(&runs))
@@ -400,21 +428,25 @@ pub fn run_curves(
     create_dir(out)?;
     let started = Instant::now();
     let (frequency, divisions) = if options.quick { (8, 8) } else { (16, 16) };
-    progress(&format!("balloon fold line, f = {frequency} …"));
+    stage(progress, &format!("balloon fold line, f = {frequency} …"))?;
     let fold = curve_run(
         &format!("balloon fold line in (p, k), f = {frequency}"),
         fold_line_scene(frequency, 199, 0.012, true)?,
     )
     .map_err(|e| format!("balloon fold line: {}", one_line(&e)))?;
-    progress(&format!(
-        "balloon fold line, f = {frequency}, watch = false …"
-    ));
+    stage(
+        progress,
+        &format!("balloon fold line, f = {frequency}, watch = false …"),
+    )?;
     let unwatched = curve_run(
         &format!("balloon fold line in (p, k), f = {frequency}, watch = false"),
         fold_line_scene(frequency, 199, 0.012, false)?,
     )
     .map_err(|e| format!("balloon fold line (watch = false): {}", one_line(&e)))?;
-    progress(&format!("C7v disc double curve, {divisions} divisions …"));
+    stage(
+        progress,
+        &format!("C7v disc double curve, {divisions} divisions …"),
+    )?;
     let double = curve_run(
         &format!("C7v disc E1 double point in (h, prestretch), {divisions} divisions"),
         double_curve_scene(divisions, 40)?,

@@ -150,7 +150,22 @@ fn prepare_out(out: &Path) -> Result<(), CliError> {
             out.display()
         )));
     }
-    Ok(())
+    let dir = if out.is_dir() { out } else { parent.as_path() };
+    super::common::check_writable("--out", out, dir)
+}
+
+/// A study that failed, or that a signal cut short (its path stopped early): the files
+/// written so far are left.
+fn failed(e: String) -> CliError {
+    if e.starts_with("a signal stopped") {
+        CliError::Interrupted(e)
+    } else if memstab::continuation::interrupt::requested() {
+        CliError::Interrupted(format!(
+            "a signal stopped the bench ({e}); the files written so far are left"
+        ))
+    } else {
+        CliError::Failure(e)
+    }
 }
 
 /// Tells on stderr what the bench starts.
@@ -183,7 +198,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
             quick: args.quick,
         };
         let study = if args.curves { run_curves } else { run_thesis };
-        let files = study(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
+        let files = study(&options, &mut |m| progress(m)).map_err(failed)?;
         print(&files);
         return Ok(());
     }
@@ -194,8 +209,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
         } else {
             memstab::bench::run_branching
         };
-        let files =
-            study(&args.out, args.quick, &mut |m| progress(m)).map_err(CliError::Failure)?;
+        let files = study(&args.out, args.quick, &mut |m| progress(m)).map_err(failed)?;
         print(&files);
         return Ok(());
     }
@@ -212,7 +226,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<(), CliError> {
         quick: args.quick,
         frequencies: args.frequencies.clone(),
     };
-    let files = run_accuracy(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
+    let files = run_accuracy(&options, &mut |m| progress(m)).map_err(failed)?;
     print(&files);
     Ok(())
 }
@@ -242,7 +256,7 @@ fn scaling(args: &BenchArgs, freqs: &[usize]) -> Result<(), CliError> {
         frequencies: freqs.to_vec(),
         points: args.scaling_points,
     };
-    let files = run_scaling(&options, &mut |m| progress(m)).map_err(CliError::Failure)?;
+    let files = run_scaling(&options, &mut |m| progress(m)).map_err(failed)?;
     print(&files);
     Ok(())
 }

@@ -74,6 +74,7 @@ pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
             return Err(CliError::Input(format!("--max-step {m}: must be > 0")));
         }
     }
+    super::common::check_writable("--out", &out, &out)?;
     // Refused up front when another run writes into the directory.
     let _lock = super::common::lock(&out)?;
     let scene_file = args

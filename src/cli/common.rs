@@ -132,14 +132,38 @@ pub(super) fn check_out_file(flag: &str, path: &Path) -> Result<(), CliError> {
 
 pub(super) use memstab::text::{one_line, sci, sig_digits};
 
-/// `--out` must be a directory or not exist yet, and its parent must exist.
+/// Fails unless a file can be made in the directory `dir` (a probe file, created and removed
+/// at once): an `--out` that cannot be written is bad input found before any work, not a
+/// failure after it.
+pub(super) fn check_writable(flag: &str, out: &Path, dir: &Path) -> Result<(), CliError> {
+    let probe = dir.join(format!(".memstab-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(CliError::Input(format!(
+            "{flag} '{}': cannot write into '{}' ({}); nothing was written",
+            out.display(),
+            dir.display(),
+            e
+        ))),
+    }
+}
+
+/// `--out` must be a directory that can be written or not exist yet, and its parent must
+/// exist and be writable.
 pub(super) fn check_out(out: &Path) -> Result<(), CliError> {
     if out.exists() {
         if out.is_dir() {
             for name in memstab::output::RUN_FILES {
                 check_out_file("--out", &out.join(name))?;
             }
-            return Ok(());
+            return check_writable("--out", out, out);
         }
         return Err(CliError::Input(format!(
             "--out '{}' exists and is not a directory",
@@ -163,7 +187,7 @@ pub(super) fn check_out(out: &Path) -> Result<(), CliError> {
             parent.display()
         )));
     }
-    Ok(())
+    check_writable("--out", out, parent)
 }
 
 /// A run's output directory, made by [`OutDir::create`] if it was missing and locked for this

@@ -60,6 +60,7 @@ pub(crate) fn run(args: &CompareArgs) -> Result<(), CliError> {
     let error = |e: CompareError| match e {
         CompareError::Input(m) => CliError::Input(m),
         CompareError::Failure(m) => CliError::Failure(m),
+        CompareError::Interrupted(m) => CliError::Interrupted(m),
     };
     let options = CompareOptions {
         meshes: parse_meshes(&args.meshes).map_err(error)?,
@@ -172,6 +173,11 @@ fn print_table(c: &Comparison) {
             }
             if level.critical.is_empty() && level.flagged.is_empty() {
                 out!("  {:<lw$}  no critical point; stopped: {}", "", level.stop);
+            } else if level.stop == memstab::results::StopReason::Interrupted {
+                out!(
+                    "  {:<lw$}  stopped: interrupted (points past its last one are not found)",
+                    ""
+                );
             } else if level.critical.is_empty() {
                 out!(
                     "  {:<lw$}  no valid critical point ({} flagged below); stopped: {}",

@@ -142,6 +142,17 @@ pub(crate) fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::ExportMatrix(args) => export::run(&args),
     };
+    // A command that a signal stopped (its work cut short at the next safe point, or a
+    // solve it ended) exits 130, whatever it returned; bad input stays bad input.
+    let result = match result {
+        Ok(()) | Err(CliError::Failure(_)) if memstab::continuation::interrupt::requested() => {
+            Err(CliError::Interrupted(match result {
+                Err(CliError::Failure(m)) => m,
+                _ => "stopped at a signal; what was found is printed or written".into(),
+            }))
+        }
+        other => other,
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(CliError::Input(m)) => {

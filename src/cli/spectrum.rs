@@ -349,9 +349,24 @@ fn state(
 /// start exists (past a turning point of the control), so a saved point is the way there.
 pub(super) fn not_converged(e: &memstab::analysis::RunError, at: &[(usize, f64)]) -> CliError {
     let message = one_line(&e.to_string());
-    if at.is_empty() || !matches!(e, memstab::analysis::RunError::Start { .. }) {
+    if e.interrupted() {
+        return CliError::Interrupted(format!("{message}; nothing was printed or written"));
+    }
+    let memstab::analysis::RunError::Start { error, control, .. } = e else {
+        return CliError::Failure(message);
+    };
+    if at.is_empty() {
         return CliError::Failure(message);
     }
+    // With --at, the cause is said below, for the values given.
+    let message = one_line(
+        &memstab::analysis::RunError::Start {
+            error: error.clone(),
+            control: control.clone(),
+            cause: None,
+        }
+        .to_string(),
+    );
     CliError::Failure(format!(
         "{message}; with --at the state is solved afresh from the start guess, and no \
          equilibrium may exist there (past a turning point of the control the path does not \

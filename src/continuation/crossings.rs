@@ -251,6 +251,13 @@ impl<'a> Crossings<'a> {
                     n1 as i64 - n0 as i64,
                 )
             };
+            // A signal ends the localisation between trial points: the crossings found so
+            // far are kept, the others are named as not localised.
+            let stopped = "a signal stopped its localisation";
+            if super::interrupt::requested() {
+                warnings.push(not_localised(stopped));
+                continue;
+            }
             // The eigenvalues k = min(n0, n1) … max(n0, n1) − 1 at both ends.
             let needed = n0.max(n1) + 1;
             let mut ends: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
@@ -279,6 +286,10 @@ impl<'a> Crossings<'a> {
                 continue;
             }
             for k in n0.min(n1)..n0.max(n1) {
+                if super::interrupt::requested() {
+                    warnings.push(not_localised(stopped));
+                    break;
+                }
                 let g0 = ends[0].get(k).copied().unwrap_or(0.0);
                 let g1 = ends[1].get(k).copied().unwrap_or(0.0);
                 let tol = self.blocks.zero_eigenvalue() * a.spectrum.scale;
@@ -287,6 +298,9 @@ impl<'a> Crossings<'a> {
                 let mut trials: Vec<(f64, f64, Option<f64>)> = Vec::new();
                 let located = locate_within(
                     |s| {
+                        if super::interrupt::requested() {
+                            return None;
+                        }
                         let Some((u, p)) = state(s) else {
                             failure = Some(format!(
                                 "the state at {:.3} of the step did not converge",
@@ -313,6 +327,10 @@ impl<'a> Crossings<'a> {
                     tol,
                     LOCATE_WIDTH,
                 );
+                if super::interrupt::requested() {
+                    warnings.push(not_localised(stopped));
+                    break;
+                }
                 let Some((s_best, g_best)) = located else {
                     warnings.push(not_localised(
                         failure

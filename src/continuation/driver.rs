@@ -216,6 +216,9 @@ pub enum SolveError {
     /// No tangent could be computed at the converged point.
     #[error("singular tangent at the start")]
     SingularTangent,
+    /// A signal asked to stop (checked between iterations).
+    #[error("interrupted")]
+    Interrupted,
     /// The start homotopy's holding force did not vanish along its auxiliary path.
     #[error("the held translation was not released in {steps} steps (holding force {force:e})")]
     NotReleased {
@@ -245,13 +248,13 @@ impl SolveError {
                 correction,
                 tolerance,
             } => format!(
-                "Newton did not converge {} in {iterations} iterations (the limit of this \
-                 solve; residual {residual:.1e} of the force scale, last correction \
-                 {correction:.1e} of the state scale, tolerance {tolerance:.0e})",
+                "Newton did not converge {} in {iterations} iterations (residual \
+                 {residual:.1e} of the force scale, last correction {correction:.1e} of the \
+                 state scale, tolerance {tolerance:.0e})",
                 at(*control)
             ),
             Self::SingularTangent => "singular tangent at the start".to_string(),
-            Self::NotReleased { .. } => self.to_string(),
+            Self::NotReleased { .. } | Self::Interrupted => self.to_string(),
         }
     }
 }
@@ -727,6 +730,11 @@ pub(super) fn newton_step<P: Problem + ?Sized>(
     lambda: &DVector<f64>,
     opts: &PathOptions,
 ) -> Result<NewtonStep, SolveError> {
+    // A signal stops every solve at a fixed control between its iterations (not inside a
+    // factorisation).
+    if super::interrupt::requested() {
+        return Err(SolveError::Interrupted);
+    }
     let m = problem.dim();
     let lin = problem.evaluate(q, lambda)?;
     let c = lin.constraints.len();
@@ -739,6 +747,7 @@ pub(super) fn newton_step<P: Problem + ?Sized>(
     let correction = a
         .solve(&rhs)
         .ok_or(SolveError::Singular { control: lambda[0] })?;
+    super::interrupt::iteration_done();
     Ok(NewtonStep {
         correction,
         converged: lin.converged(opts),

@@ -135,6 +135,9 @@ pub fn released<P: Problem>(
     };
     let mut driver = Continuation::new(held, point, release_opts);
     for _ in 0..RELEASE_STEPS {
+        if super::interrupt::requested() {
+            return Err(SolveError::Interrupted);
+        }
         let Ok(step) = driver.step() else { break };
         let (f0, f1) = (force(&step.from.lambda), force(&driver.point().lambda));
         if f0.signum() == f1.signum() {
@@ -150,16 +153,29 @@ pub fn released<P: Problem>(
             f1,
             tol,
         )
-        .ok_or(SolveError::SingularTangent)?;
+        .ok_or_else(|| interrupted_or(SolveError::SingularTangent))?;
         return driver
             .step_from(&from, s)
             .map(|p| (p.q, inner(&p.lambda)))
-            .map_err(|_| SolveError::SingularTangent);
+            .map_err(|_| interrupted_or(SolveError::SingularTangent));
+    }
+    if super::interrupt::requested() {
+        return Err(SolveError::Interrupted);
     }
     Err(SolveError::NotReleased {
         steps: RELEASE_STEPS,
         force: force(&driver.point().lambda),
     })
+}
+
+/// [`SolveError::Interrupted`] when a signal asked to stop (a failed step may be its doing),
+/// else `error`.
+fn interrupted_or(error: SolveError) -> SolveError {
+    if super::interrupt::requested() {
+        SolveError::Interrupted
+    } else {
+        error
+    }
 }
 
 /// Steps the release of a held translation may take.

@@ -394,6 +394,7 @@ pub fn write_branches(
                 return Err(WriteRunError {
                     error: OutputError::Io { path: dir, source },
                     done,
+                    dir: out.to_path_buf(),
                 });
             }
         }
@@ -412,6 +413,7 @@ pub fn write_branches(
                 return Err(WriteRunError {
                     error: e.error,
                     done,
+                    dir: out.to_path_buf(),
                 });
             }
         }
@@ -419,7 +421,13 @@ pub fn write_branches(
     }
     let json = match write_branch_graph(out, branches, primary) {
         Ok(p) => p,
-        Err(error) => return Err(WriteRunError { error, done }),
+        Err(error) => {
+            return Err(WriteRunError {
+                error,
+                done,
+                dir: out.to_path_buf(),
+            })
+        }
     };
     done.push(json.clone());
     let mut picture = diagram(branches, primary);
@@ -435,7 +443,13 @@ pub fn write_branches(
     }
     let diagram = match write_bifurcation_diagram(out, &picture) {
         Ok(p) => p,
-        Err(error) => return Err(WriteRunError { error, done }),
+        Err(error) => {
+            return Err(WriteRunError {
+                error,
+                done,
+                dir: out.to_path_buf(),
+            })
+        }
     };
     done.push(diagram.clone());
     Ok(BranchesWritten {

@@ -99,7 +99,7 @@ pub fn write_manifest(
 }
 
 /// The path of `file` relative to `dir`, `/`-separated (its file name when it lies elsewhere).
-fn relative(dir: &Path, file: &Path) -> String {
+pub(super) fn relative(dir: &Path, file: &Path) -> String {
     match file.strip_prefix(dir) {
         Ok(rel) if rel.components().next().is_some() => rel
             .components()

@@ -80,20 +80,71 @@ impl Written {
 
 /// Why writing a run's outputs stopped: the error, and the files already written.
 #[derive(Debug, thiserror::Error)]
-#[error("{error}; {}", already(.done))]
+#[error("{error}; {}", already(.dir, .done))]
 pub struct WriteRunError {
     /// What failed (it names the file).
     pub error: OutputError,
-    /// The files written before it.
+    /// The files written before it (every file the writing left in `dir`).
     pub done: Vec<PathBuf>,
+    /// The directory written into: the files are named by their paths in it.
+    pub dir: PathBuf,
 }
 
-fn already(done: &[PathBuf]) -> String {
+fn already(dir: &Path, done: &[PathBuf]) -> String {
     if done.is_empty() {
         "nothing else was written".to_string()
     } else {
-        let names: Vec<String> = done.iter().map(|p| file_name(p)).collect();
+        let names: Vec<String> = done
+            .iter()
+            .map(|p| super::manifest::relative(dir, p))
+            .collect();
         format!("already written: {}", names.join(", "))
+    }
+}
+
+/// The error of a run's writing into `out` that stopped at `error`: the files written before
+/// it (`done`), and every other file under `out` that the writing changed since `since` — a
+/// collection rewritten after each state (`path.pvd`), the files of an analysis' own writer
+/// or of a branch directory written before the one that failed —, so that the message names
+/// every file it left. Its own temporary and lock files are not named.
+fn left_behind(
+    error: OutputError,
+    mut done: Vec<PathBuf>,
+    out: &Path,
+    since: std::time::SystemTime,
+) -> WriteRunError {
+    fn walk(dir: &Path, depth: usize, since: std::time::SystemTime, found: &mut Vec<PathBuf>) {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let path = e.path();
+            let Ok(meta) = e.metadata() else { continue };
+            if meta.is_dir() {
+                if depth > 0 {
+                    walk(&path, depth - 1, since, found);
+                }
+                continue;
+            }
+            let ours = e.file_name().to_string_lossy().starts_with(".memstab");
+            if !ours && meta.is_file() && meta.modified().is_ok_and(|m| m >= since) {
+                found.push(path);
+            }
+        }
+    }
+    let mut found = Vec::new();
+    // Branch directories (branch_NN/) lie one level down, their own branches one more.
+    walk(out, 3, since, &mut found);
+    found.sort();
+    for f in found {
+        if !done.contains(&f) && f != error.path() {
+            done.push(f);
+        }
+    }
+    WriteRunError {
+        error,
+        done,
+        dir: out.to_path_buf(),
     }
 }
 
@@ -159,11 +210,13 @@ pub fn write_run_with(
 ) -> Result<Written, WriteRunError> {
     let mut done: Vec<PathBuf> = Vec::new();
     super::sweep_temporaries(out);
+    // A second back, for file systems whose times are coarser than the clock.
+    let since = std::time::SystemTime::now() - std::time::Duration::from_secs(1);
     macro_rules! attempt {
         ($e:expr) => {
             match $e {
                 Ok(v) => v,
-                Err(error) => return Err(WriteRunError { error, done }),
+                Err(error) => return Err(left_behind(error, done, out, since)),
             }
         };
     }
@@ -314,10 +367,7 @@ pub fn write_run_with(
                 }
                 Err(mut e) => {
                     done.append(&mut e.done);
-                    return Err(WriteRunError {
-                        error: e.error,
-                        done,
-                    });
+                    return Err(left_behind(e.error, done, out, since));
                 }
             }
         }

@@ -255,6 +255,7 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     check_constraints(scene)?;
     scene.analysis.check(scene)?;
     check_parameter_use(scene)?;
+    check_flat_unstretched(scene)?;
     positive("start.stretch", scene.start.stretch)?;
     let held = held_sets(scene);
     if scene.start.stretch != 1.0 && !held.is_empty() {
@@ -438,8 +439,28 @@ fn check_mesh_radius(scene: &Scene) -> Result<(), Problem> {
     }
 }
 
+/// The range of a generated mesh's radius: beyond it a triangle's area (a product of two
+/// lengths, normed through their squares) or an enclosed volume leaves the floating-point
+/// numbers, and the reference triangles are degenerate.
+pub const RADIUS_RANGE: (f64, f64) = (1e-75, 1e75);
+
 fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
-    let radius_rule = |r: f64| positive("mesh.radius", r);
+    let radius_rule = |r: f64| {
+        positive("mesh.radius", r)?;
+        let (lo, hi) = RADIUS_RANGE;
+        if r < lo || r > hi {
+            return Err(Problem::at(
+                "mesh.radius",
+                format!(
+                    "must lie within [{}, {}]: at {} the mesh's elements are degenerate in floating point (their areas and volumes over- or underflow)",
+                    num(lo),
+                    num(hi),
+                    num(r)
+                ),
+            ));
+        }
+        Ok(())
+    };
     match mesh {
         MeshSpec::Disc(d) => {
             radius_rule(d.radius)?;
@@ -643,6 +664,44 @@ fn check_parameter_ranges(scene: &Scene) -> Result<(), Problem> {
     Ok(())
 }
 
+/// A flat disc (3-D or a meridian) without pre-stretch under a load normal to it (gas or
+/// fluid): its tangent is singular at the flat start, which carries no such load — refused
+/// on both models alike, unless the start is a saved state.
+fn check_flat_unstretched(scene: &Scene) -> Result<(), Problem> {
+    let flat = match &scene.mesh {
+        MeshSpec::Disc(_) => true,
+        MeshSpec::Axisymmetric(a) => a.shape == AxisymShape::Disc,
+        _ => false,
+    };
+    let normal = scene
+        .effects
+        .iter()
+        .any(|e| matches!(e, Effect::Gas(_) | Effect::GasAmount(_) | Effect::Fluid(_)));
+    if !flat || !normal || scene.start.from.is_some() {
+        return Ok(());
+    }
+    let stretch = scene.start_value(&scene.material.prestretch);
+    if stretch != 1.0 {
+        return Ok(());
+    }
+    let value = match &scene.material.prestretch {
+        Quantity::Value(_) => "1".to_string(),
+        Quantity::Parameter(n) => format!("\"{n}\" (start 1)"),
+    };
+    Err(Problem::new(
+        "material.prestretch",
+        format!(
+            "'material.prestretch' = {value} on a flat disc: without pre-stretch a flat \
+             membrane has no stiffness against the pressure normal to it (its tangent is \
+             singular at the flat start); give a pre-stretch > 1 (e.g. 1.1)"
+        ),
+    ))
+}
+
+/// The largest magnitude of a parameter's bound: beyond it the arithmetic of a sweep or a
+/// step over the range (its width times a fraction, squared in a norm) overflows.
+pub const MAX_BOUND: f64 = 1e150;
+
 fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
     finite(&format!("{key}.start"), p.start)?;
     if let Some(min) = p.min {
@@ -662,6 +721,22 @@ fn check_parameter(key: &str, p: &Parameter) -> Result<(), Problem> {
                 ),
             ));
         }
+    }
+    for (field, bound) in [("min", p.min), ("max", p.max)] {
+        let Some(b) = bound else { continue };
+        let k = format!("{key}.{field}");
+        if b.abs() > MAX_BOUND {
+            return Err(Problem::at(
+                &k,
+                format!(
+                    "must lie within [-{m}, {m}] (the arithmetic over the range overflows beyond), got {}",
+                    num(b),
+                    m = num(MAX_BOUND)
+                ),
+            ));
+        }
+    }
+    if let (Some(min), Some(max)) = (p.min, p.max) {
         if min >= max {
             return Err(Problem::at(
                 &format!("{key}.min"),
@@ -825,6 +900,22 @@ pub(super) fn check_mesh(scene: &Scene, sym: &SymmetricMesh) -> Result<(), Probl
         .topology()
         .map_err(|e| Problem::new("mesh", format!("'mesh' ({}): {e}", scene.mesh.generator())))?;
     let mut fixed: BTreeSet<usize> = scene.fixed_nodes(sym).into_iter().collect();
+    if !mesh.nodes.is_empty() && fixed.len() == mesh.nodes.len() {
+        let names: Vec<String> = scene
+            .boundary
+            .fixed
+            .iter()
+            .map(|n| format!("\"{n}\""))
+            .collect();
+        return Err(Problem::new(
+            "boundary.fixed",
+            format!(
+                "'boundary.fixed' = [{}] fixes every one of the {} nodes of {the_mesh}: no unknown is left to solve for; fix only the supported nodes",
+                names.join(", "),
+                mesh.nodes.len()
+            ),
+        ));
+    }
     fixed.extend(scene.sliding_nodes(sym).into_iter().map(|(i, _)| i));
     let rim: BTreeSet<usize> = topology.boundary_loops.iter().flatten().copied().collect();
     let loose = rim.difference(&fixed).count();

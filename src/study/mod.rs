@@ -177,13 +177,15 @@ impl Free {
 /// Why a run failed before it produced a path.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RunError {
-    /// Newton did not converge at the start.
-    #[error("the start state did not converge: {}", .error.describe(.control.as_deref()))]
+    /// Newton did not converge at the start (or a signal stopped it).
+    #[error("{}", start_message(.error, .control.as_deref(), .cause.as_deref()))]
     Start {
         /// Why.
         error: SolveError,
         /// The control parameter's name (none for a single equilibrium).
         control: Option<String>,
+        /// Which known cause fits, and what to try ([`start_cause`]).
+        cause: Option<String>,
     },
     /// Newton converged to a membrane turned inside out.
     #[error("the start state did not converge: Newton converged to an inside-out membrane (enclosed volume {volume:e}); start closer to the intended state (start.stretch, the start values)")]
@@ -205,10 +207,99 @@ pub enum RunError {
     Degenerate(StateDefect),
 }
 
+/// The message of [`RunError::Start`].
+fn start_message(error: &SolveError, control: Option<&str>, cause: Option<&str>) -> String {
+    match error {
+        SolveError::Interrupted => {
+            "a signal stopped the start solve between its Newton iterations".into()
+        }
+        e => format!(
+            "the start state did not converge: {}{}",
+            e.describe(control),
+            cause.map_or_else(String::new, |c| format!("; {c}"))
+        ),
+    }
+}
+
+/// Which of the known causes of a failed start solve fits `error` in `scene`, and what to
+/// try: no equilibrium near the start (a load past its fold), a motion nothing holds (a free
+/// body, a plane it does not touch yet), a singular tangent, iterates that ran off, a held
+/// translation that met no support.
+pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
+    let planes = scene
+        .effects
+        .iter()
+        .any(|e| matches!(e, scene::Effect::Plane(_)));
+    let unheld = unheld(scene);
+    let cause = match error {
+        SolveError::NotConverged {
+            residual,
+            tolerance,
+            ..
+        } if *residual <= *tolerance => format!("likely cause: {unheld}"),
+        SolveError::NotConverged { .. } | SolveError::Diverged { .. } => "likely cause: no \
+             equilibrium near the start (a load past its fold, e.g. a fluid level above the \
+             highest one held); start at a smaller load and follow a path, or `[start] from`"
+            .to_string(),
+        SolveError::Singular { .. } | SolveError::SingularTangent => {
+            let flat = match &scene.mesh {
+                scene::MeshSpec::Disc(_) => true,
+                scene::MeshSpec::Axisymmetric(a) => a.shape == scene::AxisymShape::Disc,
+                _ => false,
+            };
+            if flat && scene.start_value(&scene.material.prestretch) == 1.0 && !planes {
+                "likely cause: material.prestretch = 1 (an unstretched flat part carries no \
+                 load normal to it; give a pre-stretch > 1), or a free motion nothing holds"
+                    .to_string()
+            } else {
+                format!("likely cause: {unheld}")
+            }
+        }
+        SolveError::NotReleased { .. } => "likely cause: the held body met no support along \
+             `[start] hold-translation`; give the direction along which it meets its plane"
+            .to_string(),
+        SolveError::Model(_) | SolveError::Interrupted => return None,
+    };
+    Some(cause)
+}
+
+/// What a singular direction at the start of `scene` most likely is, and what holds it: a
+/// plane the body does not touch yet, a free body, or another motion nothing holds.
+pub fn unheld(scene: &Scene) -> &'static str {
+    let planes = scene
+        .effects
+        .iter()
+        .any(|e| matches!(e, scene::Effect::Plane(_)));
+    let held = scene.start.hold_translation.is_some();
+    let supported = !scene.boundary.fixed.is_empty() || !scene.boundary.slide.is_empty();
+    if planes && !held {
+        "a plane the body does not touch yet, which holds nothing; bring the body onto it with \
+         `[start] hold-translation` (its free direction, e.g. [0, 0, 1]) or move the plane"
+    } else if !supported && !held {
+        "a free body nothing holds; add a support (`boundary.fixed`, a plane it rests on) or \
+         `[start] hold-translation`"
+    } else {
+        "a motion nothing holds (a rigid motion the supports leave free, a neutral mode); hold \
+         it with a support"
+    }
+}
+
 impl RunError {
+    /// Whether a signal stopped the run before it found anything.
+    pub fn interrupted(&self) -> bool {
+        matches!(
+            self,
+            Self::Start {
+                error: SolveError::Interrupted,
+                ..
+            }
+        )
+    }
+
     /// A start failure of `study`'s solve, naming its control parameter.
     pub fn start(study: &(impl Study + ?Sized), error: SolveError) -> Self {
         Self::Start {
+            cause: start_cause(study.scene(), &error),
             error,
             control: study.control().map(|c| c.name.clone()),
         }

@@ -114,6 +114,9 @@ pub enum CompareError {
     /// A run failed (a start state did not converge).
     #[error("{0}")]
     Failure(String),
+    /// A signal stopped the comparison before every mesh had a run to compare.
+    #[error("{0}")]
+    Interrupted(String),
 }
 
 /// What to compare, besides the scene.
@@ -718,11 +721,20 @@ pub fn compare(
     let reference_scene = first_scene.expect("at least one mesh");
     // The largest meshes first, so that the parallel runs end together.
     jobs.sort_by_key(|(_, _, s)| std::cmp::Reverse(s.unknowns()));
+    // A signal stops the runs under way at their next point and skips those not started (a
+    // run its signal cut short before its start converged counts as not run).
+    let interrupted = crate::continuation::interrupt::requested;
+    let total = jobs.len();
     let results: Vec<Result<(usize, usize, Level), CompareError>> = jobs
         .into_par_iter()
-        .map(|(k, l, job)| {
-            job.execute(&typed[k].label, label_modes, progress)
-                .map(|r| (k, l, r))
+        .filter_map(|(k, l, job)| {
+            if interrupted() {
+                return None;
+            }
+            match job.execute(&typed[k].label, label_modes, progress) {
+                Err(_) if interrupted() => None,
+                r => Some(r.map(|r| (k, l, r))),
+            }
         })
         .collect();
     let mut meshes: Vec<MeshRuns> = typed
@@ -744,13 +756,26 @@ pub fn compare(
         }
         slots[k][l] = Some(level);
     }
+    // Interrupted: the levels every mesh has (the coarse ones, or none).
+    let levels = slots
+        .iter()
+        .map(|s| s.iter().take(levels).take_while(|l| l.is_some()).count())
+        .min()
+        .unwrap_or(0);
+    if levels == 0 {
+        return Err(CompareError::Interrupted(format!(
+            "a signal stopped the comparison before every mesh had run ({} of {} runs ended); nothing to compare",
+            slots.iter().flatten().filter(|l| l.is_some()).count(),
+            total
+        )));
+    }
     for (k, mut s) in slots.into_iter().enumerate() {
         // Slot `levels` is the meridian's check run, when there is one.
         meshes[k].check = if levels == 1 { s[1].take() } else { None };
         meshes[k].levels = s
             .into_iter()
             .take(levels)
-            .map(|l| l.expect("every job ran"))
+            .map(|l| l.expect("every mesh has its first `levels` runs"))
             .collect();
         meshes[k].generator = meshes[k].levels[0]
             .mesh
@@ -774,7 +799,7 @@ pub fn compare(
         range,
         samples,
         label: label_modes.then_some("m"),
-        refine: options.refine,
+        refine: options.refine && levels == 2,
         reference: typed[0].label.clone(),
         meshes,
         rungs: rung_list,
