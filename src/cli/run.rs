@@ -114,6 +114,7 @@ fn execute_refined(
     let compare_error = |e: CompareError| match e {
         CompareError::Input(m) => CliError::Input(m),
         CompareError::Failure(m) => CliError::Failure(m),
+        CompareError::Interrupted(m) => CliError::Interrupted(m),
     };
     let refiner = match &refine {
         Some(options) => {
@@ -163,6 +164,8 @@ fn execute_refined(
             Err(CompareError::Input(m) | CompareError::Failure(m)) => {
                 return Err(dir.failed(&format!("--refine: {m}")))
             }
+            // A signal during the refined runs: the base run is written as it is.
+            Err(CompareError::Interrupted(_)) => {}
         }
     }
     let written = memstab::analysis::write(&*study, &mut result, out)

@@ -275,6 +275,9 @@ pub struct GasEffect {
 }
 
 impl EffectSpec for GasEffect {
+    fn presses_normally(&self) -> bool {
+        true
+    }
     fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
         vec![("pressure", &self.pressure, Range::Finite)]
     }
@@ -323,6 +326,9 @@ pub struct GasAmountEffect {
 }
 
 impl EffectSpec for GasAmountEffect {
+    fn presses_normally(&self) -> bool {
+        true
+    }
     fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
         vec![("amount", &self.amount, Range::Positive)]
     }

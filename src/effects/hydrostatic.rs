@@ -1193,6 +1193,9 @@ impl FluidEffect {
 }
 
 impl EffectSpec for FluidEffect {
+    fn presses_normally(&self) -> bool {
+        true
+    }
     fn quantities(&self) -> Vec<(&'static str, &spec::Quantity, Range)> {
         vec![
             ("density", &self.density, Range::NonNegative),

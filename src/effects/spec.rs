@@ -195,6 +195,11 @@ pub trait EffectSpec: fmt::Debug + Send + Sync + Erased {
     fn needs_enclosure(&self) -> bool {
         true
     }
+    /// True if it loads the membrane by a pressure normal to it (a gas, a fluid), which a
+    /// flat membrane without pre-stretch cannot carry at its start.
+    fn presses_normally(&self) -> bool {
+        false
+    }
     /// True if it acts on the enclosed volume itself (a gas, a fluid inside), so the path
     /// measures that volume.
     fn measures_enclosure(&self) -> bool {

@@ -673,10 +673,7 @@ fn check_flat_unstretched(scene: &Scene) -> Result<(), Problem> {
         MeshSpec::Axisymmetric(a) => a.shape == AxisymShape::Disc,
         _ => false,
     };
-    let normal = scene
-        .effects
-        .iter()
-        .any(|e| matches!(e, Effect::Gas(_) | Effect::GasAmount(_) | Effect::Fluid(_)));
+    let normal = scene.effects.iter().any(|e| e.spec().presses_normally());
     if !flat || !normal || scene.start.from.is_some() {
         return Ok(());
     }

@@ -229,7 +229,7 @@ pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
     let planes = scene
         .effects
         .iter()
-        .any(|e| matches!(e, scene::Effect::Plane(_)));
+        .any(|e| e.get::<scene::PlaneEffect>().is_some());
     let unheld = unheld(scene);
     let cause = match error {
         SolveError::NotConverged {
@@ -269,7 +269,7 @@ pub fn unheld(scene: &Scene) -> &'static str {
     let planes = scene
         .effects
         .iter()
-        .any(|e| matches!(e, scene::Effect::Plane(_)));
+        .any(|e| e.get::<scene::PlaneEffect>().is_some());
     let held = scene.start.hold_translation.is_some();
     let supported = !scene.boundary.fixed.is_empty() || !scene.boundary.slide.is_empty();
     if planes && !held {
