@@ -224,10 +224,16 @@ fn workspace() -> tempfile::TempDir {
 fn mutated_scenes_load_or_say_why_in_one_line() {
     let corpus = corpus();
     assert!(corpus.len() >= 5, "the bundled scenes are the corpus");
+    mutants_load_or_say_why(&corpus, cases(160));
+}
+
+/// `cases` mutants of the scenes of `corpus` (one to three mutations each): each loads and
+/// builds, or says why in one bounded line.
+fn mutants_load_or_say_why(corpus: &[String], cases: u32) {
     let dir = workspace();
     let path = dir.path().join("scene.toml");
     let config = ProptestConfig {
-        cases: cases(160),
+        cases,
         failure_persistence: None,
         ..ProptestConfig::default()
     };
@@ -249,20 +255,7 @@ fn mutated_meridian_scenes_load_or_say_why_in_one_line() {
         corpus.len() >= 5,
         "the bundled meridian scenes are the corpus"
     );
-    let dir = workspace();
-    let path = dir.path().join("scene.toml");
-    let config = ProptestConfig {
-        cases: cases(96),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    };
-    proptest!(config, |(
-        which in 0..corpus.len(),
-        mutations in proptest::collection::vec(mutation(), 1..4),
-    )| {
-        std::fs::write(&path, mutate(&corpus[which], &mutations)).unwrap();
-        load_and_build(&path)?;
-    });
+    mutants_load_or_say_why(&corpus, cases(96));
 }
 
 #[test]

@@ -56,8 +56,16 @@ pub fn normal_form<P: Problem + ?Sized>(
         }
         Ok((a, dl))
     };
-    let s = FRACTION * opts.initial_step;
-    let samples = [sample(s)?, sample(0.5 * s)?, sample(0.25 * s)?];
+    // Smaller amplitudes where the larger ones do not converge (a branch leaving close to
+    // another point), down to the smallest step.
+    let mut s = FRACTION * opts.initial_step;
+    let samples = loop {
+        match (|| Ok::<_, String>([sample(s)?, sample(0.5 * s)?, sample(0.25 * s)?]))() {
+            Ok(samples) => break samples,
+            Err(e) if 0.125 * s < opts.min_step => return Err(e),
+            Err(_) => s *= 0.25,
+        }
+    };
     // c(A) = c + O(A), the amplitudes in the ratio 2: one Richardson step on each pair; the
     // two extrapolations differ by the error of the first, O(A²).
     let fit = |power: u32| {
