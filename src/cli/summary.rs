@@ -3,10 +3,10 @@
 //! axis), where the membrane wrinkles, the files written; and a critical curve's events.
 
 use memstab::output::{file_name, Written};
-use memstab::results::refine::{Estimate, PointRefinement, Refinement};
+use memstab::results::refine::Refinement;
 use memstab::results::{PathReport, RunResult};
 use memstab::scene::Scene;
-use memstab::text::{sci, sig_digits};
+use memstab::text::sig_digits;
 use std::path::Path;
 
 /// The index of the measure `stretch`, if the report has it.
@@ -280,124 +280,10 @@ fn print_wrinkling(report: &PathReport) {
     }
 }
 
-/// The critical and turning points on the refined meshes: each level's value, error estimate
-/// and wall time, the observed order and the Richardson value (or why there is none), the
-/// continuum's value and distance.
+/// The refinement's lines of the summary ([`memstab::results::refine::summary`]).
 fn print_refinement(r: &Refinement) {
-    out!(
-        "mesh refinement (errors estimated by Richardson extrapolation, which assumes the \
-         asymptotic range at order {}; docs/theory.md §8.11):",
-        r.assumed_order
-    );
-    for (l, level) in r.levels.iter().enumerate() {
-        out!(
-            "  level {l}: {}, {} unknowns, {:.2} s, stopped: {}",
-            level.mesh,
-            level.unknowns,
-            level.seconds,
-            level.stop
-        );
-    }
-    if let Some(c) = &r.continuum {
-        out!(
-            "  continuum: {} (and twice its elements), {:.2} s",
-            c.mesh,
-            c.seconds
-        );
-    }
-    let block = |title: String, p: &PointRefinement| {
-        let m = p.m.map_or_else(String::new, |m| format!(", m = {m}"));
-        let status = match &p.estimate {
-            Estimate::NotMeshConverged { finer } => {
-                format!(": not mesh-converged, no counterpart on {finer}")
-            }
-            _ => String::new(),
-        };
-        out!("  {title}{m}{status}");
-        for (l, (v, e)) in p.values.iter().zip(&p.errors).enumerate() {
-            let value = v.map_or_else(|| "-".to_string(), |v| sig_digits(v, 8));
-            let error = e.map_or_else(String::new, |e| format!("  error {}", sci(e)));
-            out!(
-                "    level {l}: {} = {value}{error}  ({:.2} s)",
-                r.control,
-                r.levels[l].seconds
-            );
-        }
-        let changes = || {
-            let v: Vec<f64> = p.values.iter().flatten().copied().collect();
-            v.windows(2)
-                .map(|w| sci(w[1] - w[0]))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let mut tail = match (&p.estimate, p.richardson) {
-            (Estimate::Richardson { observed: true }, Some(x)) => format!(
-                "observed order {:.2}; Richardson {}",
-                p.observed_order.unwrap_or(f64::NAN),
-                sig_digits(x, 8)
-            ),
-            (Estimate::Richardson { .. }, Some(x)) => format!(
-                "order {} assumed (two levels do not observe it); Richardson {}",
-                r.assumed_order,
-                sig_digits(x, 8)
-            ),
-            (Estimate::Unchanged, _) => "the value does not change on refinement".to_string(),
-            (Estimate::NotAsymptotic { order }, _) => format!(
-                "observed order {}, far from {}: not in the asymptotic range, not \
-                 extrapolated and no error estimated (the value changes by {})",
-                order.map_or_else(|| "undefined".to_string(), |p| format!("{p:.2}")),
-                r.assumed_order,
-                changes()
-            ),
-            _ => String::new(),
-        };
-        if let Some(c) = p.continuum {
-            let e = p
-                .continuum_error
-                .map_or_else(String::new, |e| format!(" +-{}", sci(e)));
-            let d = p
-                .distances
-                .iter()
-                .rev()
-                .flatten()
-                .next()
-                .map_or_else(String::new, |d| {
-                    format!(", distance of the finest {}", sci(*d))
-                });
-            if !tail.is_empty() {
-                tail.push_str("; ");
-            }
-            tail.push_str(&format!("continuum {}{e}{d}", sig_digits(c, 8)));
-        }
-        if !tail.is_empty() {
-            out!("    {tail}");
-        }
-    };
-    for p in &r.critical {
-        let numbers: Vec<String> = p.points.iter().map(ToString::to_string).collect();
-        block(
-            format!(
-                "critical {}: {} in {}",
-                numbers.join(" + "),
-                p.kind,
-                p.irreps.join(" + ")
-            ),
-            p,
-        );
-    }
-    for (k, p) in r.turning.iter().enumerate() {
-        block(format!("turning {}: {}", k + 1, p.kind), p);
-    }
-    for n in &r.new_on_finer {
-        let m = n.m.map_or_else(String::new, |m| format!(", m = {m}"));
-        out!(
-            "  new on level {}: a critical point in {} at {} = {}{m}, with no counterpart on \
-             this run's mesh",
-            n.level,
-            n.irrep,
-            r.control,
-            sig_digits(n.value, 8)
-        );
+    for line in memstab::results::refine::summary(r) {
+        out!("{line}");
     }
 }
 
