@@ -1,16 +1,9 @@
 //! The command line end to end: `memstab group` and `memstab mesh`, their JSON, and the
 //! handling of bad input (one line naming the value, exit code 2, no file written).
 
+use crate::common::memstab;
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn memstab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_memstab"))
-        .args(args)
-        .output()
-        .expect("the memstab binary runs")
-}
 
 fn json(args: &[&str]) -> Value {
     let out = memstab(args);

@@ -4,21 +4,11 @@
 //! a minimum of the pressure that the finer mesh does not reach (its path leaves the
 //! pressure's range first) is flagged not mesh-converged; bad requests write nothing.
 
+use crate::common::{memstab, text};
 use memstab::reference::{P_MAX, P_MIN};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn memstab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_memstab"))
-        .args(args)
-        .output()
-        .expect("the memstab binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use std::process::Command;
 
 fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

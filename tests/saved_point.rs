@@ -5,20 +5,9 @@
 //! `--point`; `events.pvd` lists the turning and critical states in path order, named with
 //! their irrep; `path.csv` has the index of every point.
 
+use crate::common::{memstab, text};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn memstab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_memstab"))
-        .args(args)
-        .output()
-        .expect("the memstab binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
 
 /// The balloon at icosphere frequency 4 run through both turning points into `dir/out`.
 fn balloon_run(dir: &Path) -> std::path::PathBuf {

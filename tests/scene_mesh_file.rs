@@ -4,6 +4,7 @@
 //! bad files, groups and keys are one-line errors naming the key, and `memstab run` exits
 //! with code 2 without writing anything.
 
+use crate::common::memstab;
 use memstab::analysis::run;
 use memstab::results::PathReport;
 use memstab::scene::{MeshSpec, Scene};
@@ -11,7 +12,6 @@ use memstab::study::mesh::MeshStudy;
 use meshes::write::{write_mesh, Fields, Format};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 const SCENE: &str = include_str!("../scenes/disc_fluid_below.toml");
 
@@ -279,13 +279,6 @@ fn bad_files_groups_and_keys_are_one_line_errors() {
             "bare.vtu' has no node sets)",
         ],
     );
-}
-
-fn memstab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_memstab"))
-        .args(args)
-        .output()
-        .expect("the memstab binary runs")
 }
 
 #[test]

@@ -537,6 +537,24 @@ impl Settings {
             save_every: 10,
         }
     }
+
+    /// Only Newton's tolerance and iterations of these, the driver's defaults for the rest:
+    /// what an analysis with one Newton solve and no path runs with.
+    pub fn newton_only(&self) -> Self {
+        Self {
+            tolerance: self.tolerance,
+            max_iterations: self.max_iterations,
+            ..Self::default()
+        }
+    }
+
+    /// These with no state saved along the way (`save_every` never reached).
+    pub fn saving_no_states(&self) -> Self {
+        Self {
+            save_every: usize::MAX,
+            ..self.clone()
+        }
+    }
 }
 
 impl PathOptions {

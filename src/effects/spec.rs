@@ -94,6 +94,23 @@ pub enum Range {
     Positive,
 }
 
+impl Range {
+    /// `Ok` if `x` lies in the range, else what is wrong with it, to follow the key in a
+    /// message (`must be >= 0, got -1`): the one wording of every range check of a scene.
+    pub fn check(self, x: f64) -> Result<(), String> {
+        if !x.is_finite() {
+            return Err(format!("must be a finite number, got {}", key_value(x)));
+        }
+        match self {
+            Range::Finite => Ok(()),
+            Range::NonNegative if x >= 0.0 => Ok(()),
+            Range::NonNegative => Err(format!("must be >= 0, got {}", key_value(x))),
+            Range::Positive if x > 0.0 => Ok(()),
+            Range::Positive => Err(format!("must be > 0, got {}", key_value(x))),
+        }
+    }
+}
+
 /// An effect's key refused: the scene reports `'effect[i].<key>' <what>`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Refusal {
@@ -278,27 +295,9 @@ fn read<T: EffectSpec + serde::de::DeserializeOwned + 'static>(
     serde_path_to_error::deserialize::<_, T>(v).map(|t| Box::new(t) as Box<dyn EffectSpec>)
 }
 
-/// Refuses `x` unless it is finite.
-pub fn finite(key: &'static str, x: f64) -> Result<(), Refusal> {
-    if x.is_finite() {
-        Ok(())
-    } else {
-        Err(Refusal::at(
-            key,
-            format!("must be a finite number, got {}", key_value(x)),
-        ))
-    }
-}
-
 /// Refuses `x` unless it is finite and ≥ 0.
 pub fn non_negative(key: &'static str, x: f64) -> Result<(), Refusal> {
-    finite(key, x)?;
-    if x >= 0.0 {
-        Ok(())
-    } else {
-        Err(Refusal::at(
-            key,
-            format!("must be >= 0, got {}", key_value(x)),
-        ))
-    }
+    Range::NonNegative
+        .check(x)
+        .map_err(|what| Refusal::at(key, what))
 }

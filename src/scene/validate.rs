@@ -9,34 +9,22 @@ use std::collections::BTreeSet;
 
 /// Fails unless `x` is finite and > 0.
 pub(super) fn positive(key: &str, x: f64) -> Result<(), Problem> {
-    finite(key, x)?;
-    if x > 0.0 {
-        Ok(())
-    } else {
-        Err(Problem::at(key, format!("must be > 0, got {}", num(x))))
-    }
+    in_range(key, x, Range::Positive)
 }
 
 /// Fails unless `x` is finite and ≥ 0.
 fn non_negative(key: &str, x: f64) -> Result<(), Problem> {
-    finite(key, x)?;
-    if x >= 0.0 {
-        Ok(())
-    } else {
-        Err(Problem::at(key, format!("must be >= 0, got {}", num(x))))
-    }
+    in_range(key, x, Range::NonNegative)
 }
 
 /// Fails unless `x` is finite.
 fn finite(key: &str, x: f64) -> Result<(), Problem> {
-    if x.is_finite() {
-        Ok(())
-    } else {
-        Err(Problem::at(
-            key,
-            format!("must be a finite number, got {}", num(x)),
-        ))
-    }
+    in_range(key, x, Range::Finite)
+}
+
+/// Fails unless `x` lies in `range` ([`Range::check`]'s wording).
+fn in_range(key: &str, x: f64, range: Range) -> Result<(), Problem> {
+    range.check(x).map_err(|what| Problem::at(key, what))
 }
 
 /// Fails unless the integer `n` is at least `min`.
@@ -565,11 +553,7 @@ fn check_quantity(
 ) -> Result<(), Problem> {
     match q {
         Quantity::Parameter(name) => known_parameter(parameters, key_path, name),
-        Quantity::Value(v) => match range {
-            Range::Finite => finite(key_path, *v),
-            Range::NonNegative => non_negative(key_path, *v),
-            Range::Positive => positive(key_path, *v),
-        },
+        Quantity::Value(v) => in_range(key_path, *v, range),
     }
 }
 

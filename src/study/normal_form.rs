@@ -60,7 +60,11 @@ pub fn normal_form<P: Problem + ?Sized>(
     // another point), down to the smallest step.
     let mut s = FRACTION * opts.initial_step;
     let samples = loop {
-        match (|| Ok::<_, String>([sample(s)?, sample(0.5 * s)?, sample(0.25 * s)?]))() {
+        let tried: Result<Vec<(f64, f64)>, String> = [s, 0.5 * s, 0.25 * s]
+            .into_iter()
+            .map(&mut sample)
+            .collect();
+        match tried {
             Ok(samples) => break samples,
             Err(e) if 0.125 * s < opts.min_step => return Err(e),
             Err(_) => s *= 0.25,

@@ -101,6 +101,13 @@ impl Level {
         }
     }
 
+    /// The part of `u` outside Fix(group): u less its orthogonal projection on Fix(group).
+    pub fn asymmetric_part(&self, u: &[f64]) -> Vec<f64> {
+        let mut sym = vec![0.0; u.len()];
+        self.basis.expand(&self.basis.restrict(u), &mut sym);
+        u.iter().zip(&sym).map(|(v, s)| v - s).collect()
+    }
+
     /// The scene's group itself.
     pub fn top(action: &GroupAction, layout: &Layout) -> Self {
         let n = action.group().order();
@@ -410,7 +417,7 @@ impl Switching<'_> {
                 }
                 let t1 = std::time::Instant::now();
                 let mut branch = self.follow(level, &child, cp, dir, &reduced, half);
-                self.connect(g, &mut branch);
+                let same = self.connect(g, &mut branch);
                 branch.from = node;
                 branch.parent = parent;
                 branch.sign = sign * half.sign();
@@ -425,7 +432,7 @@ impl Switching<'_> {
                 let branch_sign = branch.sign;
                 g.branches.push(branch);
                 for (k, c) in found.iter().enumerate() {
-                    let same = self.same_as(g, c, g.branches[id].elements.len());
+                    let same = same.get(k).copied().flatten();
                     let n = g.graph.add_node(Node::Critical {
                         on: Some(id),
                         number: k + 1,
@@ -461,38 +468,44 @@ impl Switching<'_> {
     /// symmetry): past it the branch would retrace what is known (the path, or a branch
     /// through that point). Its points up to the crossing, then the point itself; its
     /// critical points there (every block singular at it) kept, the later ones dropped.
-    fn connect(&self, g: &BranchGraph, branch: &mut SwitchedBranch) {
+    /// Returns, for each critical point kept, the known point it is.
+    fn connect(&self, g: &BranchGraph, branch: &mut SwitchedBranch) -> Vec<Option<NodeIndex>> {
         let order = branch.elements.len();
-        let Some((first, to)) = branch
-            .critical
-            .iter()
-            .enumerate()
-            .find_map(|(k, c)| self.same_as(g, c, order).map(|n| (k, n)))
-        else {
-            return;
+        let mut same: Vec<Option<NodeIndex>> = Vec::new();
+        for c in &branch.critical {
+            let known = self.same_as(g, c, order);
+            // The first connection ends the branch, with its other blocks singular there.
+            if same
+                .iter()
+                .flatten()
+                .next()
+                .is_some_and(|&to| known != Some(to))
+            {
+                break;
+            }
+            same.push(known);
+        }
+        let Some(first) = same.iter().position(Option::is_some) else {
+            return same;
         };
-        let c = branch.critical[first].clone();
-        let keep = branch.critical[first..]
-            .iter()
-            .take_while(|d| self.same_as(g, d, order) == Some(to))
-            .count();
-        branch.critical.truncate(first + keep);
+        let to = same[first].expect("a connection");
+        branch.critical.truncate(same.len());
+        let c = &branch.critical[first];
         let j = c.after_step.min(branch.points.len() - 1);
         let arclength = branch.points[j].arclength;
         branch.points.truncate(j + 1);
-        branch
-            .points
-            .push(self.point(&c.state, &c.parameters, arclength, 0, None));
+        let end = self.point(&c.state, &c.parameters, arclength, 0, None);
+        branch.points.push(end);
         branch.turning.retain(|t| t.after_step < j);
-        let Node::Critical { on, number, .. } = &g.graph[to] else {
-            return;
-        };
-        branch.stop = StopReason::Connected {
-            to: format!(
-                "critical point {number} of {}",
-                on.map_or_else(|| "the path".to_string(), directory)
-            ),
-        };
+        if let Node::Critical { on, number, .. } = &g.graph[to] {
+            branch.stop = StopReason::Connected {
+                to: format!(
+                    "critical point {number} of {}",
+                    on.map_or_else(|| "the path".to_string(), directory)
+                ),
+            };
+        }
+        same
     }
 
     /// The class of a level's group in the scene group's lattice.
@@ -578,9 +591,7 @@ impl Switching<'_> {
                         .zip(&cp.state)
                         .map(|(a, b)| a - b)
                         .collect();
-                    let mut sym = vec![0.0; d.len()];
-                    top.basis.expand(&top.basis.restrict(&d), &mut sym);
-                    let asym: Vec<f64> = d.iter().zip(&sym).map(|(a, s)| a - s).collect();
+                    let asym = top.asymmetric_part(&d);
                     let n = norm(&asym);
                     n > floor
                         && (0..order).any(|e| {
@@ -884,19 +895,11 @@ impl Switching<'_> {
     ) -> BranchPoint {
         let layout = self.model.layout();
         let top = self.top;
-        let mut sym = vec![0.0; u.len()];
-        top.basis.expand(&top.basis.restrict(u), &mut sym);
         let free = (0..layout.nodes())
             .filter(|&i| layout.dof(i, 0).is_some())
             .count()
             .max(1);
-        let asym = sym
-            .iter()
-            .zip(u)
-            .map(|(s, v)| (v - s) * (v - s))
-            .sum::<f64>()
-            .sqrt()
-            / (free as f64).sqrt();
+        let asym = norm(&top.asymmetric_part(u)) / (free as f64).sqrt();
         let stab = isotropy(&top.action, layout, u);
         let stabiliser_class = top
             .lattice

@@ -182,3 +182,16 @@ pub fn wave_number(c: &memstab::results::CriticalPoint) -> usize {
     memstab::axisym::blocks::wave_number(&c.irrep)
         .unwrap_or_else(|| panic!("not a block of the meridian: {}", c.irrep))
 }
+
+/// Runs the memstab binary with `args`.
+pub fn memstab(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(args)
+        .output()
+        .expect("the memstab binary runs")
+}
+
+/// A process's output as text.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}

@@ -40,11 +40,7 @@ impl AnalysisSpec for LinearBucklingAnalysis {
     }
     /// Newton's tolerance and iterations; the driver's defaults for the rest.
     fn settings(&self) -> Settings {
-        Settings {
-            tolerance: self.settings.tolerance,
-            max_iterations: self.settings.max_iterations,
-            ..Settings::default()
-        }
+        self.settings.newton_only()
     }
     fn budget(&self) -> Option<usize> {
         Some(self.samples)

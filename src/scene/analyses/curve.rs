@@ -75,10 +75,7 @@ impl AnalysisSpec for CriticalCurveAnalysis {
     }
     /// The curve's settings; it saves no states along the way.
     fn settings(&self) -> Settings {
-        Settings {
-            save_every: usize::MAX,
-            ..self.settings.clone()
-        }
+        self.settings.saving_no_states()
     }
     /// The steps of the path that finds the point.
     fn budget(&self) -> Option<usize> {

@@ -66,10 +66,7 @@ impl AnalysisSpec for SurfaceAnalysis {
     }
     /// Every path's settings; the paths save no states along the way.
     fn settings(&self) -> Settings {
-        Settings {
-            save_every: usize::MAX,
-            ..self.settings.clone()
-        }
+        self.settings.saving_no_states()
     }
     fn measure(&self) -> Option<&str> {
         self.measure.as_deref()
