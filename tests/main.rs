@@ -16,6 +16,7 @@ mod cli_run;
 mod cli_spectrum;
 mod critical_curve;
 mod deflation;
+mod diagram;
 mod effects_model;
 mod export_rank_one;
 mod faults;

@@ -346,6 +346,7 @@ impl Analysis for Curve {
     fn write(
         &self,
         result: &RunResult,
+        _drawing: &dyn crate::output::Drawing,
         scene: &Scene,
         out: &Path,
     ) -> Result<Vec<Described>, OutputError> {

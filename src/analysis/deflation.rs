@@ -7,14 +7,14 @@
 //! it?) and, if asked, the piece of path through it is followed.
 
 use super::path::{start_driver, Path};
-use super::{Analysis, Context, Record, RunError};
+use super::{Analysis, Context, RunError};
 use crate::continuation::crossings::{Crossings, IndexChanges};
 use crate::continuation::deflation::{deflated_solve_at, scaled, Deflation};
 use crate::continuation::events::{trace, Detector};
 use crate::continuation::{interrupt, solve_at, PathOptions};
 use crate::output::{self, Described, OutputError};
 use crate::results::deflation::{DeflationReport, PiecePoint, Solution};
-use crate::results::{Outcome, RunResult, StopReason};
+use crate::results::{Outcome, PathRow, PointState, RunResult, StopReason};
 use crate::scene::analyses::deflation::DeflationAnalysis;
 use crate::scene::{PathAnalysis, Scene};
 use crate::study::{Followed, Free, Point, Study};
@@ -79,6 +79,7 @@ impl Analysis for Deflate {
     fn write(
         &self,
         result: &RunResult,
+        _drawing: &dyn crate::output::Drawing,
         _scene: &Scene,
         out: &FilePath,
     ) -> Result<Vec<Described>, OutputError> {
@@ -199,7 +200,9 @@ fn known_at(
         constraints: true,
         ..Free::default()
     };
-    if let Some((_, problem, q, l)) = path_states_at(study, &cx.record, opts, &free, value).next() {
+    if let Some((_, problem, q, l)) =
+        path_states_at(study, cx.record.path(), opts, &free, value).next()
+    {
         return Ok((problem.displacement(&q), problem.parameters(&l)));
     }
     super::surface::carry(study, opts, &cx.start.u, &cx.start.params, c, value)
@@ -247,8 +250,12 @@ fn search(
         wrinkled: study.wrinkled(u0, &params0),
         iterations: 0,
         distance: None,
-        on_path: on_path(study, &cx.record, opts, &free, &z0, value)
-            .or((cx.start.u.as_slice() == u0).then_some(0)),
+        on_path: on_path(study, cx.record.path(), opts, &free, &z0, value).or((cx
+            .start
+            .u
+            .as_slice()
+            == u0)
+            .then_some(0)),
         piece: Vec::new(),
         piece_stop: None,
     };
@@ -305,7 +312,7 @@ fn search(
                 wrinkled: study.wrinkled(&u, &params),
                 iterations,
                 distance: Some(distance),
-                on_path: on_path(study, &cx.record, opts, &free, &z, value),
+                on_path: on_path(study, cx.record.path(), opts, &free, &z, value),
                 parameters: params,
                 piece: Vec::new(),
                 piece_stop: None,
@@ -374,13 +381,12 @@ fn tangent_at(
 /// and the state there (q and the free parameters), solved at the value from the row's.
 fn path_states_at<'a>(
     study: &'a dyn Study,
-    record: &'a Record,
+    (rows, points): (&'a [PathRow], &'a [PointState]),
     opts: &'a PathOptions,
     free: &'a Free,
     value: f64,
 ) -> impl Iterator<Item = (usize, Box<dyn Followed + 'a>, DVector<f64>, DVector<f64>)> + 'a {
     let c = study.control().map(|c| c.index);
-    let rows = &record.rows;
     (0..rows.len().saturating_sub(1)).filter_map(move |i| {
         let c = c?;
         let (a, b) = (
@@ -394,7 +400,7 @@ fn path_states_at<'a>(
         params[c] = value;
         let mut problem = study.problem(&params, free);
         let lambda = problem.free_values(&params);
-        let q = DVector::from_vec(record.points[i].q.clone());
+        let q = DVector::from_vec(points.get(i)?.q.clone());
         let (q, l, _) = solve_at(&mut problem, &q, &lambda, opts).ok()?;
         Some((i, problem, q, l))
     })
@@ -402,15 +408,15 @@ fn path_states_at<'a>(
 
 /// The row of the path whose step crosses the control value at the state `z`, if the path
 /// reaches it: the path's state at the value is `z`.
-fn on_path(
+pub(super) fn on_path(
     study: &dyn Study,
-    record: &Record,
+    path: (&[PathRow], &[PointState]),
     opts: &PathOptions,
     free: &Free,
     z: &DVector<f64>,
     value: f64,
 ) -> Option<usize> {
-    path_states_at(study, record, opts, free, value)
+    path_states_at(study, path, opts, free, value)
         .find(|(_, _, q, l)| (scaled(q, l, opts) - z).norm() <= SAME.max(1e3 * opts.tolerance))
         .map(|(row, ..)| row)
 }

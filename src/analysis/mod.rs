@@ -8,6 +8,8 @@
 //!   bifurcation points (`[analysis.branches]`);
 //! - [`buckling`]: the start state held while the control sweeps its range;
 //! - [`curve`]: a critical point followed in two parameters (cusps of limit-point curves);
+//! - [`diagram`]: the path, the branches of its bifurcation points to a depth and the
+//!   second pieces beside its folds ([`partner`]);
 //! - [`surface`]: the equilibrium manifold in two parameters, a family of paths stitched
 //!   into triangles, with its critical lines;
 //! - [`compare`]: one scene on meshes of different symmetry, critical points matched and
@@ -23,7 +25,9 @@ pub mod buckling;
 pub mod compare;
 pub mod curve;
 pub mod deflation;
+pub mod diagram;
 pub mod equilibrium;
+pub mod partner;
 pub mod path;
 pub mod restart;
 pub mod surface;
@@ -53,6 +57,7 @@ pub fn analysis_of(spec: &scene::Analysis) -> Box<dyn Analysis> {
         .or_else(|| of(spec, curve::Curve))
         .or_else(|| of(spec, surface::Surface))
         .or_else(|| of(spec, deflation::Deflate))
+        .or_else(|| of(spec, diagram::Diagram))
         .unwrap_or_else(|| unreachable!("no analysis runs `type = \"{}\"`", spec.kind()))
 }
 
@@ -68,7 +73,10 @@ fn of<S: Clone + 'static, A: Analysis + 'static>(
 /// The path analysis of the scene's `[analysis]`, if it is one (branches leave the critical
 /// points of a path).
 pub fn path_of(spec: &scene::Analysis) -> Option<path::Path> {
-    spec.get::<scene::PathAnalysis>().cloned().map(path::Path)
+    spec.get::<scene::PathAnalysis>()
+        .cloned()
+        .or_else(|| spec.get::<scene::DiagramAnalysis>().map(|d| d.path()))
+        .map(path::Path)
 }
 
 /// What a caller sees of a run while it goes: the progress, and every accepted state.
@@ -117,6 +125,7 @@ pub trait Analysis {
     fn write(
         &self,
         _result: &RunResult,
+        _drawing: &dyn crate::output::Drawing,
         _scene: &Scene,
         _out: &Path,
     ) -> Result<Vec<Described>, OutputError> {
@@ -141,7 +150,7 @@ pub fn write(
 ) -> Result<Written, WriteRunError> {
     let analysis = analysis_of(&study.scene().analysis);
     let events = analysis.events(result).to_vec();
-    let own = |result: &RunResult, out: &Path| analysis.write(result, study.scene(), out);
+    let own = |result: &RunResult, out: &Path| analysis.write(result, study, study.scene(), out);
     output::write_run_with(study, study.scene(), result, out, &events, &own)
 }
 
@@ -282,6 +291,16 @@ impl Record {
             outcome: None,
             branches: None,
         }
+    }
+
+    /// The critical points found so far.
+    pub fn critical(&self) -> &[CriticalPoint] {
+        &self.critical
+    }
+
+    /// The path so far: its rows and every row's state.
+    pub fn path(&self) -> (&[PathRow], &[PointState]) {
+        (&self.rows, &self.points)
     }
 
     fn control_of(&self, params: &[f64]) -> f64 {

@@ -46,6 +46,28 @@ impl Path {
         self.0.settings()
     }
 
+    /// Its stops on a measure (`stop-stretch`, `stop-displacement`): the measure's index in
+    /// the study's measures, the target and the stop reason there.
+    pub fn limits(&self, study: &dyn Study) -> Vec<(usize, f64, StopReason)> {
+        let measures = &study.about().measures;
+        let at = |name: &str| measures.iter().position(|m| m == name);
+        let stretch = self
+            .0
+            .stop_stretch
+            .map(|target| (target, StopReason::Stretch { target }));
+        let displacement = self
+            .0
+            .stop_displacement
+            .map(|target| (target, StopReason::Displacement { target }));
+        [
+            (at("stretch"), stretch),
+            (at("max_displacement"), displacement),
+        ]
+        .into_iter()
+        .filter_map(|(k, stop)| k.zip(stop).map(|(k, (t, r))| (k, t, r)))
+        .collect()
+    }
+
     /// The branch options of `[analysis.branches]` (or `branches`, overriding it), with the
     /// path's continuation settings where the branches give none.
     pub fn branch_options(

@@ -387,6 +387,7 @@ impl Analysis for Surface {
     fn write(
         &self,
         result: &RunResult,
+        _drawing: &dyn crate::output::Drawing,
         _scene: &Scene,
         out: &Path,
     ) -> Result<Vec<Described>, OutputError> {

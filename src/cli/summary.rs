@@ -234,8 +234,16 @@ pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, writt
         let names: Vec<String> = chunk.iter().map(|p| file_name(p)).collect();
         out!("  {}", names.join(" "));
     }
-    for d in &written.own {
-        out!("  {:<10} {}", file_name(&d.path), d.what);
+    // A file of a subdirectory (a second piece's) is named by its directory, once.
+    let dir = written.csv.parent();
+    for d in written.own.iter().filter(|d| !d.what.is_empty()) {
+        let name = match (dir, d.path.parent()) {
+            (Some(a), Some(b)) if a != b => {
+                format!("{}/", b.file_name().unwrap_or_default().to_string_lossy())
+            }
+            _ => file_name(&d.path),
+        };
+        out!("  {:<10} {}", name, d.what);
     }
     if let (Some(b), Some(w)) = (&result.branches, &written.branches) {
         super::branch::print_branches(b, w, &report.control);

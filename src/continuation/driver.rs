@@ -886,6 +886,22 @@ pub fn step_off<P: Problem + ?Sized>(
     step_on_plane(problem, from, direction, plane, value, s, opts, true)
 }
 
+/// A solve on the plane `planeᵀ (y − y_from) = planeᵀ direction · s` from the predictor
+/// y_from + s·direction, without the branch-jump guard (its `tangent` is `direction`): with
+/// `plane` a critical mode and no control component, the state at a fixed amplitude along the
+/// mode, the control free — wherever it lies, also on another piece of solutions.
+pub fn solve_on_plane<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    direction: &DVector<f64>,
+    plane: &DVector<f64>,
+    s: f64,
+    opts: &PathOptions,
+) -> Result<PathPoint, StepError> {
+    let value = plane.dot(direction) * s;
+    step_on_plane(problem, from, direction, plane, value, s, opts, false)
+}
+
 /// Predictor y_from + s·direction, corrector on R = 0, g = 0, planeᵀ (y − y_from) = value
 /// (scaled variables; the extended Jacobian's last row is `plane`); when `guarded`, the
 /// tangent oriented along `direction` and the branch-jump guard against the predictor and

@@ -182,6 +182,47 @@ pub fn write_branch_graph(
     primary: &PrimaryPath,
 ) -> Result<PathBuf, OutputError> {
     let path = out.join("branches.json");
+    let json = graph_json(&path, branches, primary)?;
+    write_whole(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &json).map_err(io::Error::other)?;
+        writeln!(w)
+    })?;
+    Ok(path)
+}
+
+/// Writes `out/diagram.json`: the graph of `branches.json` with `partners`, the second
+/// pieces beside the path's folds; returns its path.
+///
+/// # Errors
+/// As [`write_branch_graph`].
+pub fn write_diagram_graph<T: Serialize>(
+    out: &Path,
+    branches: &Branches,
+    primary: &PrimaryPath,
+    partners: &T,
+) -> Result<PathBuf, OutputError> {
+    #[derive(Serialize)]
+    struct DiagramJson<'a, T> {
+        #[serde(flatten)]
+        graph: GraphJson<'a>,
+        partners: &'a T,
+    }
+    let path = out.join("diagram.json");
+    let graph = graph_json(&path, branches, primary)?;
+    write_whole(&path, |w| {
+        let json = DiagramJson { graph, partners };
+        serde_json::to_writer_pretty(&mut *w, &json).map_err(io::Error::other)?;
+        writeln!(w)
+    })?;
+    Ok(path)
+}
+
+/// The graph as written, checked: every number finite (else an error naming `path`).
+fn graph_json<'a>(
+    path: &Path,
+    branches: &'a Branches,
+    primary: &'a PrimaryPath,
+) -> Result<GraphJson<'a>, OutputError> {
     let g = &branches.graph;
     let by_name = |values: &[f64]| -> BTreeMap<&str, f64> {
         primary
@@ -276,7 +317,7 @@ pub fn write_branch_graph(
             .find(|(_, v)| !v.is_finite());
         if let Some((name, v)) = bad {
             return Err(OutputError::invalid(
-                &path,
+                path,
                 format!("branch {}: {name} is {v} (not finite)", b.id),
             ));
         }
@@ -298,11 +339,7 @@ pub fn write_branch_graph(
             .collect(),
         branches: list,
     };
-    write_whole(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &json).map_err(io::Error::other)?;
-        writeln!(w)
-    })?;
-    Ok(path)
+    Ok(json)
 }
 
 /// The bifurcation diagram of the path and its branches.

@@ -163,9 +163,18 @@ fn render(diagram: &BifurcationDiagram) -> Result<String, Box<dyn Error>> {
         for l in &diagram.lines {
             let c = if l.path { BLACK } else { colour(&l.class) };
             let width = if l.path { 2 } else { 3 };
+            // Stretches of one stability drawn whole, so that a dash pattern runs across
+            // short steps instead of restarting (and looking solid) at every point.
+            let mut runs: Vec<(bool, Vec<(f64, f64)>)> = Vec::new();
             for (k, w) in l.points.windows(2).enumerate() {
                 let stable = l.stable[k + 1].or(l.stable[k]).unwrap_or(true);
-                let pts = w.iter().copied();
+                match runs.last_mut() {
+                    Some((s, pts)) if *s == stable => pts.push(w[1]),
+                    _ => runs.push((stable, vec![w[0], w[1]])),
+                }
+            }
+            for (stable, pts) in runs {
+                let pts = pts.into_iter();
                 let series = if stable {
                     chart.draw_series(LineSeries::new(pts, c.stroke_width(width)))?
                 } else {

@@ -38,6 +38,7 @@ mod json;
 mod lock;
 mod manifest;
 mod matrix_market;
+mod partners;
 mod progress;
 mod refine;
 mod reopen;
@@ -65,6 +66,7 @@ pub use matrix_market::{
     rank_one_path, write_atomic, write_matrix_market, MatrixFiles, RANK_ONE_COEFFICIENTS_TAG,
     RANK_ONE_FILE_TAG,
 };
+pub use partners::write_partners;
 pub use progress::Progress;
 pub use refine::{write_refine, REFINE_JSON};
 pub use reopen::{FinishedRun, ReopenError};

@@ -382,7 +382,7 @@ pub struct BranchRun {
 }
 
 /// The branches of a run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Branches {
     /// The graph of critical points and branches.
     pub graph: BranchGraph,

@@ -1,6 +1,7 @@
 //! What the analyses find, as plain data: the path with its parameters and measures, the
 //! turning and critical points, why a path stopped, the states to write, spectra, critical
-//! curves, equilibrium surfaces, the branches of bifurcation points, and where a run's time
+//! curves, equilibrium surfaces, the branches of bifurcation points, the second pieces of
+//! broken bifurcations, and where a run's time
 //! went. Writers (see [`crate::output`]) turn it into CSV, JSON, VTU + PVD and SVG diagrams.
 //!
 //! Nothing here computes beyond simple accessors. Every layer may use it; it uses none of
@@ -10,6 +11,7 @@ mod branches;
 mod critical;
 mod curve;
 pub mod deflation;
+pub mod partner;
 mod path;
 pub mod refine;
 mod run;

@@ -161,6 +161,11 @@ pub struct Verdict {
     /// The images lie on the other side of a turn of the path than the rung
     /// (the matching's second pass).
     pub across_turn: bool,
+    /// The images lie on a second piece, beside an imperfect fold, that the path does not
+    /// reach (docs/theory.md §16.4).
+    pub on_piece: bool,
+    /// For an imperfect fold, the RMS distance of its second piece, where one was found.
+    pub piece_gap: Option<f64>,
 }
 
 /// The measurement of a rung's images.
@@ -226,6 +231,12 @@ impl std::fmt::Display for Verdict {
         if self.across_turn {
             f.write_str("; met on the other side of the path's turn")?;
         }
+        if let Some(gap) = self.piece_gap {
+            write!(f, "; a second piece beside it at RMS distance {}", sci(gap))?;
+        }
+        if self.on_piece {
+            f.write_str("; on the second piece beside the imperfect fold")?;
+        }
         Ok(())
     }
 }
@@ -242,6 +253,7 @@ fn measure(
     (target, folds): (usize, bool),
     resolution: usize,
 ) -> Image {
+    let found_on = found.clone();
     let values: Vec<f64> = found.iter().map(|&j| points[j].value).collect();
     let irreps: Vec<String> = found.iter().map(|&j| points[j].irrep.clone()).collect();
     let multiplicity: usize = found.iter().map(|&j| points[j].multiplicity).sum();
@@ -314,9 +326,16 @@ fn measure(
             kind,
             missing,
             across_turn: false,
+            on_piece: on_piece(points, &found_on),
+            piece_gap: None,
         },
         distances: Vec::new(),
     }
+}
+
+/// Whether any of the points `found` lies on a second piece.
+fn on_piece(points: &[Point], found: &[usize]) -> bool {
+    found.iter().any(|&j| points[j].piece.is_some())
 }
 
 /// A rung's images on one mesh, at each resolution, and the observed order of the gap.
@@ -326,7 +345,8 @@ pub struct MeshImages {
     pub mesh: String,
     /// One per resolution.
     pub levels: Vec<Image>,
-    /// log2(gap_coarse / gap_fine) when both resolutions split the rung.
+    /// log2(gap_coarse / gap_fine) when both resolutions split the rung; for an imperfect
+    /// fold, of its second piece's distance ([`Verdict::piece_gap`]) when both found one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub order: Option<f64>,
 }
@@ -482,16 +502,21 @@ fn rung(
                     floor,
                 )
             };
-            levels.push(measure(
+            let mut image = measure(
                 &level.critical,
                 found,
                 (target, fold(first)),
                 level.resolution,
-            ));
+            );
+            if let VerdictKind::Imperfect { .. } = image.verdict.kind {
+                let at = image.values[0];
+                image.verdict.piece_gap = level.pieces.iter().find(|p| p.fold == at).map(|p| p.gap);
+            }
+            levels.push(image);
         }
         all.push(MeshImages {
             mesh: mesh.label.clone(),
-            order: gap_order(&levels),
+            order: order_of(&levels),
             levels,
         });
     }
@@ -508,6 +533,24 @@ fn rung(
         continuum_coarse: false,
         orders: Vec::new(),
         rising: first.rising,
+    }
+}
+
+/// The observed order of a rung's images on one mesh: of the gap ([`gap_order`]), or of an
+/// imperfect fold's second piece's distance ([`piece_gap_order`]).
+fn order_of(levels: &[Image]) -> Option<f64> {
+    gap_order(levels).or_else(|| piece_gap_order(levels))
+}
+
+/// log2(gap_coarse / gap_fine) of an imperfect fold's second piece, when both resolutions
+/// found one.
+fn piece_gap_order(levels: &[Image]) -> Option<f64> {
+    match levels {
+        [a, b] => match (a.verdict.piece_gap, b.verdict.piece_gap) {
+            (Some(ga), Some(gb)) if ga > 0.0 && gb > 0.0 => Some((ga / gb).log2()),
+            _ => None,
+        },
+        _ => None,
     }
 }
 
@@ -603,7 +646,7 @@ fn across_turns(meshes: &[MeshRuns], used: &mut [Vec<Vec<bool>>], rungs: &mut [R
                 image.verdict.across_turn = true;
                 images_k.levels[l] = image;
             }
-            images_k.order = gap_order(&images_k.levels);
+            images_k.order = order_of(&images_k.levels);
         }
     }
 }
@@ -688,6 +731,7 @@ mod tests {
             isotropy: "C1v".into(),
             rising: true,
             flags: Vec::new(),
+            piece: None,
         }
     }
 
@@ -739,6 +783,59 @@ mod tests {
     }
 
     #[test]
+    fn an_imperfect_folds_second_piece_is_named_with_its_distance_and_order() {
+        // The reference's m = 2 double; on the other mesh, at two resolutions, the imperfect
+        // fold with a second piece beside it (RMS distances 0.08 and 0.02: order 2), and an
+        // m = 1 pair met on that piece.
+        let double = point(CriticalKind::MultipleBifurcation(2), "E2", 16.76, 2);
+        let e1 = point(CriticalKind::MultipleBifurcation(2), "E1", 18.10, 1);
+        let on_piece = |irrep: &str, v: f64| {
+            let mut p = point(CriticalKind::SimpleBifurcation, irrep, v, 1);
+            p.piece = Some(1);
+            p
+        };
+        let mut reference = runs("C8v", vec![double.clone(), e1.clone()]);
+        reference.levels[0].critical[0].multiplicity = 2;
+        reference.levels[0].critical[1].multiplicity = 2;
+        reference.levels.push(reference.levels[0].clone());
+        let mut other = runs(
+            "C2v",
+            vec![
+                point(CriticalKind::LimitPoint, "A1", 16.70, 2),
+                on_piece("B1", 18.08),
+                on_piece("B2", 18.12),
+            ],
+        );
+        other.levels.push(other.levels[0].clone());
+        for (level, gap) in other.levels.iter_mut().zip([0.08, 0.02]) {
+            level.pieces.push(super::super::Piece {
+                fold: 16.70,
+                m: Some(2),
+                gap,
+                points: 10,
+                stop: crate::results::StopReason::Bounds,
+            });
+        }
+        let (rungs, _) = match_rungs(&[reference, other], 0.0);
+        let m2 = &rungs[0].images[1];
+        assert_eq!(m2.levels[0].verdict.piece_gap, Some(0.08));
+        assert!(m2.levels[0]
+            .verdict
+            .to_string()
+            .ends_with("a second piece beside it at RMS distance 8.000e-2"));
+        assert_eq!(m2.order, Some(2.0));
+        let m1 = &rungs[1].images[1].levels[0];
+        assert_eq!(m1.points.len(), 2);
+        assert!(m1.verdict.on_piece);
+        assert!(m1
+            .verdict
+            .to_string()
+            .ends_with("on the second piece beside the imperfect fold"));
+        // The fold itself lies on the path.
+        assert!(!m2.levels[0].verdict.on_piece);
+    }
+
+    #[test]
     fn a_point_met_after_a_turn_is_not_the_image_of_one_met_before() {
         // A rung met while the control rises; on the other mesh the path turns at a fold
         // before it and meets a point of the same m, nearer the rung's value than the
@@ -780,6 +877,7 @@ mod tests {
                 critical,
                 flagged: Vec::new(),
                 turning: Vec::new(),
+                pieces: Vec::new(),
             }],
             check: None,
         }

@@ -73,6 +73,7 @@
 
 mod matching;
 mod meshes;
+mod pieces;
 mod refine;
 
 pub use matching::{
@@ -167,6 +168,29 @@ pub struct Point {
     /// matched only with `include_flagged`.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub flags: Vec<Flag>,
+    /// The second piece it lies on (numbered from 1 in [`Level::pieces`]); `None`: on the
+    /// path.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub piece: Option<usize>,
+}
+
+/// The second piece beside an imperfect fold of one run (docs/theory.md §16.4): a fold whose
+/// mode has a wave number m ≥ 1 is the image of a bifurcation that the mesh does not protect,
+/// and the solutions beyond it lie on a piece the path does not reach.
+#[derive(Debug, Clone, Serialize)]
+pub struct Piece {
+    /// The fold's control value.
+    pub fold: f64,
+    /// The fold mode's wave number.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
+    /// The RMS distance over the nodes between the fold's state and the piece's state at the
+    /// fold's control value.
+    pub gap: f64,
+    /// Its points, from the fold's control value on beyond it.
+    pub points: usize,
+    /// Why it ended.
+    pub stop: StopReason,
 }
 
 /// Whether the control rises as a path meets the point at `value` localised after the step
@@ -215,6 +239,10 @@ pub struct Level {
     /// `minimum` (what `run --refine` matches across meshes; not part of the comparison).
     #[serde(skip)]
     pub turning: Vec<Point>,
+    /// The second pieces beside its imperfect folds; their critical points are among
+    /// `critical`, each with its `piece`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pieces: Vec<Piece>,
 }
 
 /// One mesh's runs.
@@ -316,14 +344,15 @@ impl Job {
         }
     }
 
+    /// Runs it; `pieces`: also the second pieces of its imperfect folds.
     fn execute(
         self,
         label: &str,
-        label_modes: bool,
+        (label_modes, pieces): (bool, bool),
         progress: &(dyn Fn(&str) + Sync),
     ) -> Result<Level, CompareError> {
         match self {
-            Job::Solid(s) => execute(label, *s, progress),
+            Job::Solid(s) => execute(label, *s, pieces, progress),
             Job::Meridian(s) => execute_meridian(label, *s, label_modes, progress),
         }
     }
@@ -388,6 +417,7 @@ fn execute_meridian(
         critical,
         flagged: Vec::new(),
         turning: turning_of(report, control),
+        pieces: Vec::new(),
     })
 }
 
@@ -432,6 +462,7 @@ fn point_of(
             }),
             control.map_or(f64::NAN, |c| cp.parameters[c]),
         ),
+        piece: None,
     }
 }
 
@@ -452,6 +483,7 @@ fn turning_of(report: &PathReport, control: Option<usize>) -> Vec<Point> {
             isotropy: String::new(),
             rising: t.kind == crate::results::Extremum::Maximum,
             flags: Vec::new(),
+            piece: None,
         })
         .collect()
 }
@@ -460,6 +492,7 @@ fn turning_of(report: &PathReport, control: Option<usize>) -> Vec<Point> {
 fn execute(
     label: &str,
     mut study: MeshStudy,
+    seek_pieces: bool,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Level, CompareError> {
     let start = Instant::now();
@@ -487,6 +520,13 @@ fn execute(
             },
         )
         .collect();
+    let (pieces, on_pieces) = if seek_pieces {
+        pieces::second_pieces(&study, &result, &critical, label_modes)
+    } else {
+        Default::default()
+    };
+    let mut critical = critical;
+    critical.extend(on_pieces);
     let warnings = unaccounted(report);
     let seconds = start.elapsed().as_secs_f64();
     progress(&format!(
@@ -509,6 +549,7 @@ fn execute(
         critical,
         flagged: Vec::new(),
         turning: turning_of(report, control),
+        pieces,
     })
 }
 
@@ -731,7 +772,7 @@ pub fn compare(
             if interrupted() {
                 return None;
             }
-            match job.execute(&typed[k].label, label_modes, progress) {
+            match job.execute(&typed[k].label, (label_modes, true), progress) {
                 Err(_) if interrupted() => None,
                 r => Some(r.map(|r| (k, l, r))),
             }
@@ -823,6 +864,7 @@ mod tests {
             isotropy: String::new(),
             rising: true,
             flags: Vec::new(),
+            piece: None,
         }
     }
 
@@ -880,6 +922,7 @@ mod tests {
             critical,
             flagged: Vec::new(),
             turning: Vec::new(),
+            pieces: Vec::new(),
         };
         let meshes = vec![
             MeshRuns {

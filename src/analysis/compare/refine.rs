@@ -204,19 +204,20 @@ impl Refiner {
             critical,
             flagged: Vec::new(),
             turning: turning_of(base, control),
+            pieces: Vec::new(),
         };
         let mut levels = vec![own];
         for (l, job) in self.levels.into_iter().enumerate() {
             let label = format!("refinement {}", l + 1);
-            levels.push(job.execute(&label, self.label_modes, progress)?);
+            levels.push(job.execute(&label, (self.label_modes, false), progress)?);
             if interrupted() {
                 return Ok(None);
             }
         }
         let continuum = match self.continuum {
             Some((coarse, fine)) => {
-                let coarse = coarse.execute("meridian", self.label_modes, progress)?;
-                let fine = fine.execute("meridian check", self.label_modes, progress)?;
+                let coarse = coarse.execute("meridian", (self.label_modes, false), progress)?;
+                let fine = fine.execute("meridian check", (self.label_modes, false), progress)?;
                 if interrupted() {
                     return Ok(None);
                 }

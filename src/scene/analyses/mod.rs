@@ -12,12 +12,14 @@
 mod buckling;
 mod curve;
 pub mod deflation;
+mod diagram;
 mod equilibrium;
 mod path;
 mod surface;
 
 pub use buckling::LinearBucklingAnalysis;
 pub use curve::{CriticalCurveAnalysis, CurveStart};
+pub use diagram::DiagramAnalysis;
 pub use equilibrium::EquilibriumAnalysis;
 pub use path::{BranchesAnalysis, PathAnalysis, MAX_BRANCH_DEPTH};
 pub use surface::SurfaceAnalysis;
@@ -42,6 +44,7 @@ const REGISTRY: &[Entry] = &[
     Entry::of::<CriticalCurveAnalysis>("critical-curve", &PATHS),
     Entry::of::<SurfaceAnalysis>("surface", &PATHS),
     Entry::of::<deflation::DeflationAnalysis>("deflation", &ALL),
+    Entry::of::<DiagramAnalysis>("diagram", &ALL),
 ];
 
 /// Every shared key.

@@ -1,0 +1,224 @@
+//! The global diagram (`type = "diagram"`, docs/theory.md §16.4): beside a fold of the path
+//! that a mesh of less symmetry made out of a bifurcation, the second piece — which the path
+//! never reaches — is found, measured (its gap) and followed, with its index and its
+//! critical points; a fold of the path alone has none. `compare` lists the second piece's
+//! points as the images of the symmetric mesh's doubles.
+
+use crate::common::{memstab, text};
+use memstab::analysis::run;
+use memstab::results::partner::Partner;
+use memstab::results::{CriticalKind, RunResult};
+use memstab::scene::Scene;
+
+fn bundled(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+/// Runs the scene `text`; the diagram's search beside each fold and the run.
+fn diagram(text: &str) -> (Vec<Partner>, RunResult) {
+    let scene = Scene::from_toml_str(text, "diagram").unwrap();
+    let mut study = memstab::study::build(scene).unwrap();
+    let result = run(&mut *study, |_, _| {}).unwrap();
+    let partners = result
+        .outcome::<Vec<Partner>>()
+        .cloned()
+        .expect("the diagram's search beside the folds");
+    (partners, result)
+}
+
+/// Paper 4's spinning cap on the C2v mesh, as a diagram: the path, the branches of its
+/// bifurcation points (`depth = 1`, a few steps) and the second pieces.
+fn c2v_cap(partner_steps: usize) -> String {
+    bundled("thesis/paper4_spinning_cap.toml")
+        .replace("pattern = \"C8v\"", "pattern = \"C2v\"")
+        .replace(
+            "type = \"path\"",
+            &format!(
+                "type = \"diagram\"\ndepth = 1\nbranch-steps = 2\npartner-steps = {partner_steps}"
+            ),
+        )
+        .replace("steps = 300", "steps = 100")
+}
+
+fn w2(result: &RunResult, parameters: &[f64]) -> f64 {
+    let c = result.report.parameters.iter().position(|n| n == "w2");
+    parameters[c.unwrap()]
+}
+
+/// cos 2θ lies in A1 of C2v: the cap's m = 2 double becomes a fold of the path (16.697 at
+/// 12 divisions, below the C8v double at 16.761). Beyond it the connected path never goes;
+/// the diagram finds the second piece at the fold's control value, apart from the fold's
+/// state, unstable (the other half of the broken pitchfork), and follows it to the C8v
+/// cap's m = 1 double, which C2v splits into two simple points in B1 and B2.
+#[test]
+fn the_second_piece_of_the_c2v_caps_broken_double_carries_the_m1_pair() {
+    let (partners, result) = diagram(&c2v_cap(35));
+    let report = &result.report;
+    let folds: Vec<_> = report
+        .critical
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.kind == CriticalKind::LimitPoint)
+        .collect();
+    assert_eq!(folds.len(), 1, "{:?}", report.critical);
+    let (k, fold) = folds[0];
+    assert_eq!(report.wave_numbers[k], 2);
+    let at = w2(&result, &fold.parameters);
+    assert!((16.6..16.76).contains(&at), "the fold at w2 = {at}");
+    // The connected path stays on its side of the fold.
+    let reach = report
+        .rows
+        .iter()
+        .map(|r| w2(&result, &r.parameters))
+        .fold(f64::MIN, f64::max);
+    assert!(reach <= at * (1.0 + 1e-12), "the path reaches {reach}");
+
+    assert_eq!(partners.len(), 1);
+    let p = &partners[0];
+    assert_eq!((p.fold, p.value), (k + 1, at));
+    let piece = p.piece.as_ref().unwrap_or_else(|| panic!("{p:?}"));
+    assert!(
+        piece.gap > 1e-3 && piece.gap.is_finite(),
+        "gap {}",
+        piece.gap
+    );
+    let r = &piece.run.report;
+    // It starts at the fold's control value, unstable, and goes on beyond the fold.
+    assert_eq!(w2(&result, &r.rows[0].parameters), at);
+    assert!(r.rows[0].index.unwrap() >= 1, "{:?}", r.rows[0]);
+    let beyond = r
+        .rows
+        .iter()
+        .map(|row| w2(&result, &row.parameters))
+        .fold(f64::MIN, f64::max);
+    assert!(beyond > at + 1.0, "the piece reaches only {beyond}");
+    // The m = 1 pair of the C8v cap (18.095), split by the C2v mesh into B1 and B2.
+    let m1: Vec<(&str, f64)> = r
+        .critical
+        .iter()
+        .zip(&r.wave_numbers)
+        .filter(|(c, &m)| m == 1 && c.kind == CriticalKind::SimpleBifurcation)
+        .map(|(c, _)| (c.irrep.as_str(), w2(&result, &c.parameters)))
+        .collect();
+    assert_eq!(m1.len(), 2, "{m1:?}");
+    let mut irreps: Vec<&str> = m1.iter().map(|x| x.0).collect();
+    irreps.sort_unstable();
+    assert_eq!(irreps, ["B1", "B2"]);
+    for (_, v) in &m1 {
+        assert!((17.9..18.3).contains(v), "{m1:?}");
+    }
+}
+
+/// The balloon's pressure maximum and minimum are folds of the path alone: beside neither
+/// is there a second piece (every fixed-amplitude solve meets the path's own piece).
+#[test]
+fn a_fold_of_the_path_alone_has_no_second_piece() {
+    let text = bundled("balloon.toml")
+        .replace("type = \"path\"", "type = \"diagram\"\ndepth = 1")
+        .replace("frequency = 8", "frequency = 4");
+    let (partners, result) = diagram(&text);
+    assert_eq!(result.report.turning_points.len(), 2);
+    assert_eq!(partners.len(), 2, "{partners:?}");
+    for p in &partners {
+        assert!(p.piece.is_none(), "{p:?}");
+        assert!(p.tried > 0);
+        assert!(p.note.as_deref().unwrap().contains("no second piece"));
+    }
+}
+
+/// The files: `diagram.json` with the graph and the search beside each fold, the piece's
+/// directory with the files of a path, `partners.svg`; the summary names the gap.
+#[test]
+fn a_diagram_run_writes_the_second_piece_and_its_graph() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("cap.toml");
+    std::fs::write(&scene, c2v_cap(4)).unwrap();
+    let out = dir.path().join("out");
+    let o = memstab(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    assert!(
+        stdout.contains("second pieces: 1 of the path's 1 folds"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("partner_01/"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("diagram.json")).unwrap()).unwrap();
+    assert!(json["nodes"].is_array() && json["branches"].is_array());
+    let p = &json["partners"][0];
+    assert_eq!(p["found"], true);
+    assert_eq!(p["directory"], "partner_01");
+    assert!(p["gap"].as_f64().unwrap() > 0.0);
+    assert_eq!(p["points"], 5);
+    for f in ["path.csv", "path.json", "critical.json", "manifest.json"] {
+        assert!(out.join("partner_01").join(f).is_file(), "{f}");
+    }
+    assert!(out.join("partners.svg").is_file());
+    // The run's manifest lists the piece's files: the run verifies.
+    let manifest = std::fs::read_to_string(out.join("manifest.json")).unwrap();
+    assert!(manifest.contains("partner_01/path.csv"), "{manifest}");
+}
+
+/// `compare` seeks the second piece beside a fold that is the image of a double (a fold
+/// whose mode has m ≥ 1) and matches the points on it: the C8v cap's m = 1 double is found
+/// split on the C2v cap's second piece, and the fold names its second piece's distance.
+#[test]
+fn compare_matches_the_c8v_doubles_on_the_c2v_caps_second_piece() {
+    let path = format!(
+        "{}/scenes/thesis/paper4_spinning_cap.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let o = memstab(&["compare", &path, "--meshes", "C8v,C2v", "--quiet", "--json"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let c: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rung = |m: u64| {
+        c["rungs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["m"] == m)
+            .unwrap_or_else(|| panic!("no rung m = {m}"))
+            .clone()
+    };
+    let c2v = |r: &serde_json::Value| r["images"][1]["levels"][0].clone();
+    let m2 = c2v(&rung(2));
+    let verdict = m2["verdict"].as_str().unwrap();
+    assert!(verdict.starts_with("imperfect"), "{verdict}");
+    assert!(
+        verdict.contains("a second piece beside it at RMS distance"),
+        "{verdict}"
+    );
+    let m1 = c2v(&rung(1));
+    assert_eq!(m1["points"].as_array().unwrap().len(), 2, "{m1}");
+    let verdict = m1["verdict"].as_str().unwrap();
+    assert!(verdict.starts_with("split"), "{verdict}");
+    assert!(verdict.contains("on the second piece"), "{verdict}");
+    let pieces = &c["meshes"][1]["levels"][0]["pieces"];
+    assert_eq!(pieces.as_array().unwrap().len(), 1, "{pieces}");
+    assert_eq!(pieces[0]["m"], 2);
+}
+
+/// A diagram's own keys are checked like every key: one line naming it.
+#[test]
+fn a_diagrams_bad_keys_are_refused_naming_them() {
+    let base = bundled("balloon.toml").replace("type = \"path\"", "type = \"diagram\"");
+    for (key, value, words) in [
+        ("depth", "0", "analysis.depth"),
+        ("depth", "4", "analysis.depth"),
+        ("partner-steps", "0", "analysis.partner-steps"),
+        ("branch-steps", "0", "analysis.branch-steps"),
+        ("branch-max-step", "-1.0", "analysis.branch-max-step"),
+    ] {
+        let text = base.replace(
+            "type = \"diagram\"",
+            &format!("type = \"diagram\"\n{key} = {value}"),
+        );
+        let e = Scene::from_toml_str(&text, "bad").unwrap_err().to_string();
+        assert!(e.contains(words), "{key} = {value}: {e}");
+    }
+}
