@@ -222,3 +222,60 @@ fn a_diagrams_bad_keys_are_refused_naming_them() {
         assert!(e.contains(words), "{key} = {value}: {e}");
     }
 }
+
+/// Paper 1's disc from below at k = 0.1, where the symmetric mesh meets its E1 double before
+/// the fold. On the irregular mesh (no symmetry) the path avoids the bifurcation point: it
+/// turns at a fold just below the symmetric double, stable up to it. Beside the fold lies the
+/// independent piece, unstable in the double's two modes, which runs on to the symmetric
+/// disc's fold (`scenes/thesis/paper1_disc_irregular_diagram.toml`).
+#[test]
+fn the_irregular_disc_avoids_the_double_and_has_an_independent_piece_beside_it() {
+    // The symmetric disc: its E1 double and its fold.
+    let symmetric = bundled("disc_fluid_below.toml")
+        .replace("k = 0.0", "k = 0.1")
+        .replace("max = 4.0", "max = 40.0")
+        .replace("steps = 400", "steps = 36");
+    let mut study =
+        memstab::study::build(Scene::from_toml_str(&symmetric, "symmetric").unwrap()).unwrap();
+    let sym = run(&mut *study, |_, _| {}).unwrap().report;
+    let value = |k: CriticalKind| {
+        sym.critical
+            .iter()
+            .find(|c| c.kind == k)
+            .map(|c| c.parameters[0])
+            .unwrap_or_else(|| panic!("no {k:?} in {:?}", sym.critical))
+    };
+    let (double, fold) = (
+        value(CriticalKind::MultipleBifurcation(2)),
+        value(CriticalKind::LimitPoint),
+    );
+    assert!(double < fold, "{double} {fold}");
+
+    let path = format!(
+        "{}/scenes/thesis/paper1_disc_irregular_diagram.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut study = memstab::study::build(Scene::load(&path).unwrap()).unwrap();
+    let result = run(&mut *study, |_, _| {}).unwrap();
+    let report = &result.report;
+    let turn = &report.critical[0];
+    assert_eq!(turn.kind, CriticalKind::LimitPoint);
+    let at = turn.parameters[0];
+    // Just below the symmetric double, stable up to it.
+    assert!(at < double && at > 0.99 * double, "{at} against {double}");
+    assert!(report.rows[..=turn.after_step]
+        .iter()
+        .all(|r| r.index == Some(0)));
+    let partners = result.outcome::<Vec<Partner>>().unwrap();
+    let piece = partners[0].piece.as_ref().expect("the independent piece");
+    let r = &piece.run.report;
+    assert_eq!(r.rows[0].parameters[0], at);
+    assert_eq!(r.rows[0].index, Some(2), "{:?}", r.rows[0]);
+    let own = r
+        .critical
+        .iter()
+        .find(|c| c.kind == CriticalKind::LimitPoint)
+        .map(|c| c.parameters[0])
+        .expect("the piece's fold");
+    assert!(((own - fold) / fold).abs() < 0.02, "{own} against {fold}");
+}

@@ -120,9 +120,9 @@ impl Analysis for Diagram {
                 points.join(", ")
             };
             lines.push(format!(
-                "{at}: a second piece at distance {} from the fold at the same {control} \
-                 (the gap), not reached by the path; {}: {} points beyond the fold, {critical}; \
-                 stopped: {}",
+                "{at}: a second piece, not reached by the path, at an RMS distance {} from \
+                 the fold's state at the same {control} (the gap); {}: {} points beyond the \
+                 fold, {critical}; stopped: {}",
                 sig_digits(piece.gap, 4),
                 piece.run.directory,
                 r.rows.len(),
