@@ -235,6 +235,17 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     }
     check_slides(&mut scene.boundary)?;
     check_start(scene)?;
+    if let Some(r) = &scene.refine {
+        if !(1..=2).contains(&r.levels) {
+            return Err(Problem::at(
+                "refine.levels",
+                format!(
+                    "must be 1 (the mesh at twice the divisions) or 2 (at twice and four times), got {}",
+                    r.levels
+                ),
+            ));
+        }
+    }
     for (name, p) in &scene.parameters {
         check_parameter_name(name)?;
         check_parameter(&key_path("parameters", name), p)?;
