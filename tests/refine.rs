@@ -429,3 +429,53 @@ fn a_bad_refine_section_is_refused_naming_the_key() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn a_refined_level_that_fails_is_recorded_and_the_run_reports_the_others() {
+    // Started at p = 1.368, between the pressure maxima of frequency 4 (1.3760) and 8
+    // (1.3603): the coarse balloon has an equilibrium there, the finer one has none, and its
+    // start solve fails.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = balloon(
+        dir.path(),
+        &[
+            ("start = 0.4879036", "start = 1.368 #"),
+            ("stretch = 1.05 ", "stretch = 1.35 #"),
+            ("stop-stretch = 4.0 ", "stop-stretch = 2.0 #"),
+        ],
+    );
+    let out = dir.path().join("out");
+    let summary = run(&[
+        "run",
+        &scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--refine",
+        "2",
+        "--quiet",
+    ]);
+    let refinement = json(&out.join("refine.json"));
+    let failed = refinement["failed"].as_array().unwrap();
+    assert_eq!(failed.len(), 2, "{refinement}");
+    assert_eq!(failed[0]["run"], "level 1");
+    assert_eq!(failed[0]["mesh"], "icosphere frequency=8");
+    let reason = failed[0]["reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("the start state did not converge"),
+        "{reason}"
+    );
+    assert_eq!(failed[1]["run"], "level 2");
+    assert_eq!(failed[1]["reason"], "not run: level 1 failed");
+    // The run's own level is reported, its point without an estimate and not flagged.
+    assert_eq!(refinement["levels"].as_array().unwrap().len(), 1);
+    let point = &refinement["critical"][0];
+    assert_eq!(point["estimate"]["basis"], "not-refined", "{point}");
+    assert_eq!(point["values"].as_array().unwrap().len(), 1);
+    assert_eq!(json(&out.join("critical.json"))[0]["valid"], true);
+    assert!(
+        summary
+            .contains("level 1 (icosphere frequency=8) failed: the start state did not converge"),
+        "{summary}"
+    );
+    assert!(summary.contains("no refined level ran"), "{summary}");
+}

@@ -17,8 +17,8 @@
 //! With `--refine` (or the scene's `[refine]`, which the flag overrides) the refined runs ([`Refiner`]) are built and checked before anything is
 //! written (a mesh file, `--refine 3`: exit 2) and run after the scene's own, and their
 //! findings go into the report (the not-mesh-converged flags) and `refine.json`; a refined run
-//! that fails is exit 1 with nothing written, a signal during them writes the run without its
-//! refinement (exit 130).
+//! that fails is recorded there (which, and why) with the levels that worked, a signal during
+//! them writes the run without its refinement (exit 130).
 
 use super::summary::print_summary;
 use super::CliError;

@@ -15,8 +15,8 @@ use super::{
     Job, Level, MeshRuns,
 };
 use crate::results::refine::{
-    ContinuumRun, Estimate, NewPoint, PointRefinement, RefinedLevel, Refinement, ASSUMED_ORDER,
-    MERIDIAN_ORDER, ORDER_TOLERANCE,
+    ContinuumRun, Estimate, FailedRun, NewPoint, PointRefinement, RefinedLevel, Refinement,
+    ASSUMED_ORDER, MERIDIAN_ORDER, ORDER_TOLERANCE,
 };
 use crate::results::PathReport;
 use crate::scene::{MeshSpec, Scene};
@@ -257,21 +257,46 @@ impl Refiner {
             turning: turning_of(base, control),
         };
         let mut levels = vec![own];
+        let mut failed: Vec<FailedRun> = Vec::new();
         for (l, job) in self.levels.into_iter().enumerate() {
+            let run = format!("level {}", l + 1);
+            let mesh = job.mesh();
+            if !failed.is_empty() {
+                failed.push(FailedRun {
+                    run,
+                    mesh,
+                    reason: format!("not run: {} failed", failed[0].run),
+                });
+                continue;
+            }
             let label = format!("refinement {}", l + 1);
-            levels.push(job.execute(&label, self.label_modes, progress)?);
+            match execute_or_fail(job, &label, self.label_modes, progress)? {
+                Ok(level) => levels.push(level),
+                Err(reason) => failed.push(FailedRun { run, mesh, reason }),
+            }
             if interrupted() {
                 return Ok(None);
             }
         }
         let continuum = match self.continuum {
             Some((coarse, fine)) => {
-                let coarse = coarse.execute("meridian", self.label_modes, progress)?;
-                let fine = fine.execute("meridian check", self.label_modes, progress)?;
+                let mesh = coarse.mesh();
+                let coarse = execute_or_fail(coarse, "meridian", self.label_modes, progress)?;
+                let fine = execute_or_fail(fine, "meridian check", self.label_modes, progress)?;
                 if interrupted() {
                     return Ok(None);
                 }
-                Some((coarse, fine))
+                match (coarse, fine) {
+                    (Ok(coarse), Ok(fine)) => Some((coarse, fine)),
+                    (Err(reason), _) | (_, Err(reason)) => {
+                        failed.push(FailedRun {
+                            run: "continuum".into(),
+                            mesh,
+                            reason,
+                        });
+                        None
+                    }
+                }
             }
             None => None,
         };
@@ -365,7 +390,27 @@ impl Refiner {
             critical,
             turning,
             new_on_finer,
+            failed,
         }))
+    }
+}
+
+/// Runs `job`: its level, or why it failed (the run's failure in one line, without the
+/// label and mesh that [`FailedRun`] gives); bad input and a signal are errors.
+fn execute_or_fail(
+    job: Job,
+    label: &str,
+    label_modes: bool,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Result<Level, String>, CompareError> {
+    let prefix = format!("mesh '{label}' ({}): ", job.mesh());
+    match job.execute(label, label_modes, progress) {
+        Ok(level) => Ok(Ok(level)),
+        Err(CompareError::Failure(m)) => {
+            progress(&format!("{label}: failed"));
+            Ok(Err(m.strip_prefix(&prefix).unwrap_or(&m).to_string()))
+        }
+        Err(e) => Err(e),
     }
 }
 
@@ -436,14 +481,14 @@ pub fn estimate(
     assumed: f64,
 ) -> (Option<f64>, Option<f64>, Vec<Option<f64>>, Estimate) {
     let none = vec![None; values.len()];
+    if values.len() < 2 {
+        return (None, None, none, Estimate::NotRefined);
+    }
     if let Some(l) = values.iter().position(Option::is_none) {
         let finer = finer.get(l).cloned().unwrap_or_default();
         return (None, None, none, Estimate::NotMeshConverged { finer });
     }
     let v: Vec<f64> = values.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
-    if v.len() < 2 {
-        return (None, None, none, Estimate::NotAsymptotic { order: None });
-    }
     if v.windows(2).all(|w| w[0] == w[1]) {
         return (
             None,
