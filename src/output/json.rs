@@ -22,6 +22,17 @@ pub fn write_json(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputErro
     let mut value =
         serde_json::to_value(report).map_err(|e| OutputError::invalid(&path, e.to_string()))?;
     named_points(&mut value, &report.parameters, &report.measures);
+    if let Some(points) = value
+        .get_mut("turning_points")
+        .and_then(|v| v.as_array_mut())
+    {
+        for (k, p) in points.iter_mut().enumerate() {
+            let flags = report.turning_flags(k);
+            p["valid"] = serde_json::json!(flags.is_empty());
+            p["flags"] = serde_json::to_value(flags)
+                .map_err(|e| OutputError::invalid(&path, e.to_string()))?;
+        }
+    }
     write_whole(&path, |w| {
         serde_json::to_writer_pretty(&mut *w, &value).map_err(io::Error::other)?;
         writeln!(w)
