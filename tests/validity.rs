@@ -332,3 +332,49 @@ fn a_contact_change_within_a_points_bracket_is_flagged() {
     // The other points keep no flag.
     assert!(result.report.flags(1).is_empty());
 }
+
+#[test]
+fn deflations_solutions_carry_their_states_flags() {
+    // The three spheres that hold p = 1.25 (and a wrinkled one): with max-stretch = 2.5 the
+    // largest is flagged, the stretch of each the rule's; the wrinkled one is flagged so.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/balloon_deflation.toml"
+    ))
+    .unwrap()
+    .replace("thickness = 0.01 ", "thickness = 0.01\nmax-stretch = 2.5 #");
+    let scene = dir.path().join("deflation.toml");
+    std::fs::write(&scene, text).unwrap();
+    let (summary, out) = run(scene.to_str().unwrap(), dir.path(), false);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("deflation.json")).unwrap())
+            .unwrap();
+    let names: Vec<String> = json[0]["measures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap().to_string())
+        .collect();
+    let s = names.iter().position(|n| n == "stretch").unwrap();
+    let solutions = json[0]["solutions"].as_array().unwrap();
+    assert!(solutions.len() >= 3, "{json}");
+    let (mut beyond, mut wrinkled) = (0, 0);
+    for sol in solutions {
+        let stretch = sol["measures"][s].as_f64().unwrap();
+        let flags: Vec<&str> = sol["flags"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["flag"].as_str().unwrap())
+            .collect();
+        assert_eq!(flags.contains(&"stretch"), stretch > 2.6, "{sol}");
+        assert!(stretch < 2.4 || stretch > 2.6, "{sol}");
+        let n = sol["wrinkled"].as_u64().unwrap();
+        assert_eq!(flags.contains(&"wrinkled"), n > 0, "{sol}");
+        beyond += usize::from(stretch > 2.6);
+        wrinkled += usize::from(n > 0);
+    }
+    assert!(beyond >= 1 && wrinkled >= 1, "{json}");
+    assert!(summary.contains("flagged: stretch"), "{summary}");
+}

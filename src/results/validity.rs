@@ -158,7 +158,7 @@ pub struct ContactChange {
 impl Checks {
     /// The flags a state's measures raise: `wrinkled` (under the plain energy; `mode` the
     /// critical mode's share there, if any) and `stretch`.
-    fn state_flags(&self, check: &StateCheck, mode: Option<f64>) -> Vec<Flag> {
+    pub fn state_flags(&self, check: &StateCheck, mode: Option<f64>) -> Vec<Flag> {
         let mut flags = Vec::new();
         if let Some(n) = check.wrinkled.filter(|&n| n > 0 && !self.relaxed) {
             flags.push(Flag::Wrinkled {

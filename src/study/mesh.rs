@@ -1070,6 +1070,16 @@ impl Study for MeshStudy {
         self.wrinkled_triangles(u, params)
     }
 
+    fn state_flags(&self, u: &[f64], params: &[f64]) -> Vec<crate::results::validity::Flag> {
+        let checks = Checks {
+            max_stretch: self.scene.material.max_stretch,
+            triangles: self.mesh.mesh.triangles.len(),
+            relaxed: self.scene.material.relaxed_stiffness().is_some(),
+            ..Checks::default()
+        };
+        checks.state_flags(&self.state_check(u, params), None)
+    }
+
     fn annotate(&self, result: &mut RunResult) {
         let checks = self.checks(result);
         result.report.wrinkling = self.wrinkling(result, &checks);
