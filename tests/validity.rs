@@ -378,3 +378,56 @@ fn deflations_solutions_carry_their_states_flags() {
     assert!(beyond >= 1 && wrinkled >= 1, "{json}");
     assert!(summary.contains("flagged: stretch"), "{summary}");
 }
+
+#[test]
+fn a_critical_curves_events_carry_their_states_flags() {
+    // The balloon's pressure maximum followed in (p, k) from k = 0.1 (λ = 1.48) to its cusp
+    // (λ = 1.84) and on down to k = 0.05 (λ = 4.5): with max-stretch = 1.6 the start is
+    // valid, the cusp and the end are flagged.
+    let dir = tempfile::tempdir().unwrap();
+    let text = crate::common::balloon_with_k(
+        4,
+        "[parameters.k]\nstart = 0.1\nmin = 0.05\nmax = 0.3\n\n[analysis]\ntype = \
+         \"critical-curve\"\ncontrol = \"p\"\nsecond = \"k\"\nfrom = \"limit\"\nsteps = 120\n\
+         path-steps = 400\nmax-step = 0.05\n\n",
+    )
+    .replace("thickness = 0.01 ", "thickness = 0.01\nmax-stretch = 1.6 #");
+    let scene = dir.path().join("curve.toml");
+    std::fs::write(&scene, text).unwrap();
+    let (summary, out) = run(scene.to_str().unwrap(), dir.path(), false);
+    let curve: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("curve.json")).unwrap()).unwrap();
+    let names: Vec<&str> = curve["measures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    let s = names.iter().position(|n| *n == "stretch").unwrap();
+    let events = curve["events"].as_array().unwrap();
+    let kinds: Vec<&str> = events.iter().map(|e| e["kind"].as_str().unwrap()).collect();
+    assert_eq!(kinds, ["start", "cusp", "end"], "{curve}");
+    for e in events {
+        let stretch = e["measures"][s].as_f64().unwrap();
+        let flagged = e["flags"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|f| f["flag"] == "stretch");
+        assert_eq!(flagged, stretch > 1.6, "{e}");
+    }
+    assert!(events[0]["flags"].as_array().unwrap().is_empty());
+    assert!(events[1]["flags"][0]["stretch"].as_f64().unwrap() > 1.6);
+    // critical.json's events say the same, with `valid`.
+    let listed: Vec<serde_json::Value> = critical(&out)
+        .into_iter()
+        .filter(|c| c["curve"] == true)
+        .collect();
+    assert_eq!(listed.len(), 3);
+    let valid: Vec<bool> = listed.iter().map(|e| e["valid"] == true).collect();
+    assert_eq!(valid, [true, false, false]);
+    assert!(
+        summary.contains("cusp") && summary.contains("— flagged: stretch"),
+        "{summary}"
+    );
+}

@@ -105,7 +105,7 @@ pub fn write_critical(dir: &Path, report: &PathReport) -> Result<PathBuf, Output
 /// As [`write_critical`], with the `events` of a critical curve after the path's critical
 /// points: each `{"kind": "start" | "cusp" | "fold" | "hilltop" | "irrep change" | "end",
 /// "curve": true, "extremum", "irrep", "residual_eigenvalue", "parameters", "measures",
-/// "step"}` with parameters and measures by name, `step` the curve step before the event
+/// "step", "valid", "flags"}` with parameters and measures by name, `step` the curve step before the event
 /// (`extremum` for a cusp or fold; `irrep`, the other singular block, and its eigenvalue for
 /// a hilltop or irrep change).
 ///
@@ -192,6 +192,8 @@ pub fn write_critical_with(
             "parameters": named(&report.parameters, &e.parameters),
             "measures": named(&report.measures, &e.measures),
             "step": e.after_step,
+            "valid": e.flags.is_empty(),
+            "flags": e.flags,
         });
         if let Some(x) = e.extremum {
             event["extremum"] = serde_json::json!(x.to_string());
