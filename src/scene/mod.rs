@@ -287,9 +287,9 @@ pub struct Material {
     /// [`DEFAULT_WRINKLING_STIFFNESS`]); only with `wrinkling = "relaxed"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wrinkling_stiffness: Option<f64>,
-    /// The largest principal stretch (from the stress-free state) the material is stated for,
-    /// > 1; a state stretched beyond it is flagged `stretch` (docs/theory.md §8.10). None:
-    /// no range stated, no flag.
+    /// The largest principal stretch (from the stress-free state) the material is stated
+    /// for, above 1; a state stretched beyond it is flagged `stretch` (docs/theory.md §8.10).
+    /// None: no range stated, no flag.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_stretch: Option<f64>,
 }
