@@ -222,7 +222,7 @@ mod scenes {
         );
         let csv = std::fs::read_to_string(out.join("path.csv")).unwrap();
         let head = csv.lines().next().unwrap();
-        assert!(head.ends_with("index_m19,index_m20"), "{head}");
+        assert!(head.ends_with("index_m19,index_m20,flags"), "{head}");
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
         // The largest wave number analysed, 20: the blocks m0 … m20 of the index columns

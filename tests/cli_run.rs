@@ -50,12 +50,23 @@ fn check_outputs(dir: &Path) -> usize {
     assert_eq!(lines.len(), rows + 1, "path.csv lines");
     assert!(lines[0].starts_with("step,arclength,"), "{}", lines[0]);
     let columns = lines[0].split(',').count();
+    // The last column names each row's flags; every other is a number.
+    assert!(lines[0].ends_with(",flags"), "{}", lines[0]);
     for line in &lines[1..] {
         assert_eq!(line.split(',').count(), columns, "row {line}");
-        for cell in line.split(',') {
+        let cells: Vec<&str> = line.split(',').collect();
+        for cell in &cells[..columns - 1] {
             let v: f64 = cell.parse().unwrap_or_else(|_| panic!("cell {cell:?}"));
             assert!(v.is_finite(), "non-finite cell {cell:?} in {line}");
         }
+        let flags = cells[columns - 1];
+        assert!(
+            flags.is_empty()
+                || flags
+                    .split(';')
+                    .all(|f| ["wrinkled", "stretch"].contains(&f)),
+            "flags {flags:?} in {line}"
+        );
     }
     assert!(!csv.to_lowercase().contains("nan"), "NaN in path.csv");
     assert!(!csv.to_lowercase().contains("inf"), "inf in path.csv");

@@ -175,15 +175,18 @@ fn cli_run(scene: &std::path::Path) -> (serde_json::Value, Vec<String>, Vec<Vec<
     let lower = csv.to_lowercase();
     assert!(!lower.contains("nan") && !lower.contains("inf"), "{csv}");
     let mut lines = csv.lines();
-    let header: Vec<String> = lines
+    let mut header: Vec<String> = lines
         .next()
         .expect("a header")
         .split(',')
         .map(String::from)
         .collect();
+    // The numbers, without the last column (the flags' names).
+    assert_eq!(header.pop().as_deref(), Some("flags"));
     let rows: Vec<Vec<f64>> = lines
         .map(|line| {
-            let row: Vec<f64> = line
+            let (numbers, _flags) = line.rsplit_once(',').expect("a flags column");
+            let row: Vec<f64> = numbers
                 .split(',')
                 .map(|c| c.parse().unwrap_or_else(|_| panic!("cell {c:?} in {line}")))
                 .collect();

@@ -93,6 +93,7 @@ fn report() -> PathReport {
         wrinkling: None,
         wave_numbers: Vec::new(),
         refinement: None,
+        checks: None,
         irreps: vec!["Ag".to_string(), "Hg".to_string()],
     }
 }
@@ -126,17 +127,19 @@ fn csv_has_the_header_and_exact_numbers() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "step,arclength,p,g,volume,stretch,max_displacement,iterations,index,index_Ag,index_Hg"
+        "step,arclength,p,g,volume,stretch,max_displacement,iterations,index,index_Ag,index_Hg,flags"
     );
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), r.rows.len());
     for (line, row) in rows.iter().zip(&r.rows) {
         let cells: Vec<&str> = line.split(',').collect();
-        assert_eq!(cells.len(), 11, "{line}");
+        assert_eq!(cells.len(), 12, "{line}");
+        // Nothing measured of the states: no flags.
+        assert_eq!(cells[11], "", "{line}");
         assert_eq!(cells[0].parse::<usize>().unwrap(), row.step);
         assert_eq!(cells[7].parse::<usize>().unwrap(), row.iterations);
         assert_eq!(cells[8].parse::<usize>().ok(), row.index, "{line}");
-        let negative: Vec<usize> = cells[9..].iter().map(|c| c.parse().unwrap()).collect();
+        let negative: Vec<usize> = cells[9..11].iter().map(|c| c.parse().unwrap()).collect();
         assert_eq!(Some(negative), row.negative, "{line}");
         let numbers: Vec<f64> = cells[1..7].iter().map(|c| c.parse().unwrap()).collect();
         let expected: Vec<f64> = std::iter::once(row.arclength)
@@ -495,6 +498,7 @@ fn sweep() -> PathReport {
         },
         mode: Vec::new(),
         state: Vec::new(),
+        bracket: None,
     };
     r.critical = vec![
         critical(CriticalKind::SymmetricBifurcation, "A1", 1, 2.5),
@@ -864,6 +868,7 @@ fn critical_points_carry_their_validity_flags() {
         },
         mode: Vec::new(),
         state: Vec::new(),
+        bracket: None,
     };
     let mut r = report();
     r.critical = vec![point(1e-13), point(1e-13), point(1e-5)];
@@ -883,10 +888,31 @@ fn critical_points_carry_their_validity_flags() {
         vec![Flag::Wrinkled {
             triangles: 7,
             of: 20,
-            mode: 0.25
+            mode: Some(0.25)
         }]
     );
-    assert_eq!(r.flags(2), vec![Flag::NotLocalised { residual: 1e-5 }]);
+    assert_eq!(
+        r.flags(2),
+        vec![Flag::NotLocalised {
+            residual: 1e-5,
+            bracket: None
+        }]
+    );
+    // A point localised in a step carries its last bracket's width.
+    r.critical[2].bracket = Some(memstab::results::Bracket {
+        width: 3e-4,
+        ends: [(Vec::new(), Vec::new()), (Vec::new(), Vec::new())],
+    });
+    assert_eq!(
+        r.flags(2),
+        vec![Flag::NotLocalised {
+            residual: 1e-5,
+            bracket: Some(3e-4)
+        }]
+    );
+    assert!(r.flags(2)[0]
+        .to_string()
+        .contains("in a bracket of 3e-4 of the step"));
     const { assert!(1e-13 < LOCALISED && LOCALISED < 1e-5) };
     let dir = tempfile::tempdir().unwrap();
     let path = memstab::output::write_critical(dir.path(), &r).unwrap();
@@ -899,6 +925,7 @@ fn critical_points_carry_their_validity_flags() {
         serde_json::json!([{"flag": "wrinkled", "triangles": 7, "of": 20, "mode": 0.25}])
     );
     assert_eq!(json[2]["flags"][0]["flag"], "not-localised");
+    assert_eq!(json[2]["flags"][0]["bracket"], 3e-4);
     // The relaxed energy describes wrinkled states: no flag.
     r.wrinkling.as_mut().unwrap().relaxed = true;
     assert!(r.flags(1).is_empty());

@@ -292,3 +292,190 @@ fn a_meridian_assumes_the_order_of_its_quadratic_elements() {
     let r = max["richardson"].as_f64().unwrap();
     assert!((r - P_MAX).abs() < 1e-6, "{max}");
 }
+
+/// refine.json without the wall times, which differ from run to run.
+fn without_seconds(mut v: Value) -> Value {
+    for level in v["levels"].as_array_mut().unwrap() {
+        level.as_object_mut().unwrap().remove("seconds");
+    }
+    v
+}
+
+#[test]
+fn the_scenes_refine_section_is_the_flag_and_the_flag_overrides_it() {
+    // The balloon at frequency 4 to its pressure maximum (stretch 2), refined once.
+    let dir = tempfile::tempdir().unwrap();
+    let short = ("stop-stretch = 4.0 ", "stop-stretch = 2.0 #");
+    let by_key = balloon(
+        dir.path(),
+        &[short, ("[start]", "[refine]\nlevels = 1\n\n[start]")],
+    );
+    let a = dir.path().join("a");
+    run(&["run", &by_key, "--out", a.to_str().unwrap(), "--quiet"]);
+    let b = dir.path().join("b");
+    let by_flag = dir.path().join("flag.toml");
+    std::fs::write(
+        &by_flag,
+        std::fs::read_to_string(&by_key)
+            .unwrap()
+            .replace("[refine]\nlevels = 1\n", ""),
+    )
+    .unwrap();
+    let by_flag = by_flag.to_str().unwrap();
+    run(&[
+        "run",
+        by_flag,
+        "--out",
+        b.to_str().unwrap(),
+        "--quiet",
+        "--refine",
+    ]);
+    let (ra, rb) = (json(&a.join("refine.json")), json(&b.join("refine.json")));
+    assert_eq!(ra["levels"].as_array().unwrap().len(), 2, "{ra}");
+    assert_eq!(without_seconds(ra), without_seconds(rb.clone()));
+    // The flag overrides the section: two levels asked in the scene, one on the command line.
+    let two = dir.path().join("two.toml");
+    std::fs::write(
+        &two,
+        std::fs::read_to_string(&by_key)
+            .unwrap()
+            .replace("levels = 1", "levels = 2"),
+    )
+    .unwrap();
+    let c = dir.path().join("c");
+    run(&[
+        "run",
+        two.to_str().unwrap(),
+        "--out",
+        c.to_str().unwrap(),
+        "--quiet",
+        "--refine",
+        "1",
+    ]);
+    assert_eq!(
+        without_seconds(json(&c.join("refine.json"))),
+        without_seconds(rb)
+    );
+}
+
+#[test]
+fn a_bad_refine_section_is_refused_naming_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let file_scene = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/disc_file.toml"
+    ))
+    .unwrap()
+    .replace(
+        "path = \"",
+        &format!("path = \"{}/scenes/", env!("CARGO_MANIFEST_DIR")),
+    );
+    for (scene, expect) in [
+        (
+            {
+                let d = dir.path().join("0");
+                std::fs::create_dir(&d).unwrap();
+                balloon(&d, &[("[start]", "[refine]\nlevels = 3\n\n[start]")])
+            },
+            "'refine.levels' must be 1 (the mesh at twice the divisions) or 2 (at twice and four times), got 3",
+        ),
+        (
+            {
+                let d = dir.path().join("1");
+                std::fs::create_dir(&d).unwrap();
+                balloon(&d, &[("[start]", "[refine]\nlevel = 1\n\n[start]")])
+            },
+            "unknown key 'refine.level'",
+        ),
+        (
+            {
+                let d = dir.path().join("2");
+                std::fs::create_dir(&d).unwrap();
+                balloon(&d, &[("[start]", "[refine]\ncontinuum = \"yes\"\n\n[start]")])
+            },
+            "'refine.continuum'",
+        ),
+        (
+            {
+                let path = dir.path().join("file.toml");
+                std::fs::write(&path, format!("{file_scene}\n[refine]\nlevels = 2\n")).unwrap();
+                path.to_str().unwrap().to_string()
+            },
+            "'refine.levels' = 2: the scene's mesh is the file",
+        ),
+    ] {
+        let out = dir.path().join("out");
+        let o = memstab(&["run", &scene, "--out", out.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{scene}");
+        let err = text(&o.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(expect), "{err}");
+        assert!(!out.exists(), "{scene} wrote {}", out.display());
+    }
+    // --continuum needs a refinement to add the meridian to.
+    let out = dir.path().join("out");
+    let o = memstab(&[
+        "run",
+        &balloon(dir.path(), &[]),
+        "--out",
+        out.to_str().unwrap(),
+        "--continuum",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("--continuum: needs --refine"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_refined_level_that_fails_is_recorded_and_the_run_reports_the_others() {
+    // Started at p = 1.368, between the pressure maxima of frequency 4 (1.3760) and 8
+    // (1.3603): the coarse balloon has an equilibrium there, the finer one has none, and its
+    // start solve fails.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = balloon(
+        dir.path(),
+        &[
+            ("start = 0.4879036", "start = 1.368 #"),
+            ("stretch = 1.05 ", "stretch = 1.35 #"),
+            ("stop-stretch = 4.0 ", "stop-stretch = 2.0 #"),
+        ],
+    );
+    let out = dir.path().join("out");
+    let summary = run(&[
+        "run",
+        &scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--refine",
+        "2",
+        "--quiet",
+    ]);
+    let refinement = json(&out.join("refine.json"));
+    let failed = refinement["failed"].as_array().unwrap();
+    assert_eq!(failed.len(), 2, "{refinement}");
+    assert_eq!(failed[0]["run"], "level 1");
+    assert_eq!(failed[0]["mesh"], "icosphere frequency=8");
+    let reason = failed[0]["reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("the start state did not converge"),
+        "{reason}"
+    );
+    assert_eq!(failed[1]["run"], "level 2");
+    assert_eq!(failed[1]["reason"], "not run: level 1 failed");
+    // The run's own level is reported, its point without an estimate and not flagged.
+    assert_eq!(refinement["levels"].as_array().unwrap().len(), 1);
+    let point = &refinement["critical"][0];
+    assert_eq!(point["estimate"]["basis"], "not-refined", "{point}");
+    assert_eq!(point["values"].as_array().unwrap().len(), 1);
+    assert_eq!(json(&out.join("critical.json"))[0]["valid"], true);
+    assert!(
+        summary
+            .contains("level 1 (icosphere frequency=8) failed: the start state did not converge"),
+        "{summary}"
+    );
+    assert!(summary.contains("no refined level ran"), "{summary}");
+}

@@ -64,8 +64,10 @@ fn a_saved_unstable_point_reports_the_runs_index_and_exports_its_tangent() {
         .collect();
     assert!(irreps.len() > 1, "{irreps:?}");
     let columns: Vec<String> = irreps.iter().map(|i| format!("index_{i}")).collect();
+    // And last the flags of each row's state.
+    assert_eq!(header.last(), Some(&"flags"));
     assert_eq!(
-        header[ic + 1..],
+        header[ic + 1..header.len() - 1],
         columns.iter().map(String::as_str).collect::<Vec<_>>()[..]
     );
     for (line, row) in lines.zip(rows) {
@@ -75,7 +77,10 @@ fn a_saved_unstable_point_reports_the_runs_index_and_exports_its_tangent() {
             row["index"].as_u64(),
             "{line}"
         );
-        let negative: Vec<u64> = cells[ic + 1..].iter().map(|c| c.parse().unwrap()).collect();
+        let negative: Vec<u64> = cells[ic + 1..cells.len() - 1]
+            .iter()
+            .map(|c| c.parse().unwrap())
+            .collect();
         let recorded: Vec<u64> = row["negative"]
             .as_array()
             .unwrap()

@@ -223,6 +223,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
         },
         mode: Vec::new(),
         state: vec![0.0; study.model.layout().unknowns()],
+        bracket: None,
     };
     let taut = scene_text("disc_fluid_below.toml");
     let slack = taut.replace("prestretch = 1.1", "prestretch = 0.9");
@@ -322,6 +323,9 @@ fn a_relaxed_run_writes_states_directions_and_areas() {
         .collect();
     assert!(last[col("wrinkled_area")] > 1.0, "{csv}");
     assert!(last[col("slack_area")] >= 0.0);
+    // The relaxed energy describes the wrinkled rows: none is flagged.
+    assert_eq!(col("flags"), header.len() - 1);
+    assert!(csv.lines().skip(1).all(|l| l.ends_with(',')), "{csv}");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("path.json")).unwrap()).unwrap();
     assert_eq!(report["wrinkling"]["relaxed"], true);

@@ -387,8 +387,14 @@ impl Analysis for Curve {
             let extremum = e
                 .extremum
                 .map_or_else(String::new, |x| format!(" ({x} of {})", curve.second));
+            let why: Vec<String> = e.flags.iter().map(ToString::to_string).collect();
+            let flagged = if why.is_empty() {
+                String::new()
+            } else {
+                format!(" — flagged: {}", why.join("; "))
+            };
             lines.push(format!(
-                "  {:<9} {} = {}, {} = {}{extremum} (after curve step {})",
+                "  {:<9} {} = {}, {} = {}{extremum} (after curve step {}){flagged}",
                 e.kind.to_string(),
                 curve.control,
                 sig_digits(e.parameters[c], 6),
@@ -639,6 +645,7 @@ impl Curve {
                 residual_eigenvalue: None,
                 after_step,
                 measures: study.measure(&u, &params),
+                flags: study.state_flags(&u, &params),
                 parameters: params,
             }
         };
@@ -661,7 +668,15 @@ impl Curve {
                 .block(&other.irrep)
                 .expect("the crossing's block is one of the study's");
             let kind = crossing_kind(mu, nu);
+            let mut flags = study.state_flags(&other.state, &other.parameters);
+            if other.residual_eigenvalue > crate::results::validity::LOCALISED {
+                flags.push(crate::results::validity::Flag::NotLocalised {
+                    residual: other.residual_eigenvalue,
+                    bracket: other.bracket.as_ref().map(|b| b.width),
+                });
+            }
             report.events.push(CurveEvent {
+                flags,
                 kind,
                 extremum: None,
                 irrep: Some(other.irrep.clone()),

@@ -171,8 +171,14 @@ fn summary_of(d: &DeflationReport, result: &RunResult) -> Vec<String> {
             ),
             _ => String::new(),
         };
+        let stretch: String = s
+            .flags
+            .iter()
+            .filter(|f| f.name() == "stretch")
+            .map(|f| format!("; flagged: {f}"))
+            .collect();
         lines.push(format!(
-            "  solution {k}: {}; {index}; {reach}{piece}{wrinkled}",
+            "  solution {k}: {}; {index}; {reach}{piece}{wrinkled}{stretch}",
             measures.join(", ")
         ));
     }
@@ -248,6 +254,7 @@ fn search(
         measures: study.measure(u0, &params0),
         negative: negative(&mut crossings, u0, &params0),
         wrinkled: study.wrinkled(u0, &params0),
+        flags: study.state_flags(u0, &params0),
         iterations: 0,
         distance: None,
         on_path: on_path(study, cx.record.path(), opts, &free, &z0, value).or((cx
@@ -310,6 +317,7 @@ fn search(
                 measures: study.measure(&u, &params),
                 negative: negative(&mut crossings, &u, &params),
                 wrinkled: study.wrinkled(&u, &params),
+                flags: study.state_flags(&u, &params),
                 iterations,
                 distance: Some(distance),
                 on_path: on_path(study, cx.record.path(), opts, &free, &z, value),

@@ -394,6 +394,7 @@ impl Record {
             wrinkling: None,
             wave_numbers: Vec::new(),
             refinement: None,
+            checks: None,
             irreps: self.irreps,
         };
         RunResult {

@@ -14,11 +14,11 @@
 //! this run created it, so nothing is left behind. A path that stops early (the step was cut
 //! too small) is not a failure: its outputs are written and the reason printed.
 //!
-//! With `--refine` the refined runs ([`Refiner`]) are built and checked before anything is
+//! With `--refine` (or the scene's `[refine]`, which the flag overrides) the refined runs ([`Refiner`]) are built and checked before anything is
 //! written (a mesh file, `--refine 3`: exit 2) and run after the scene's own, and their
 //! findings go into the report (the not-mesh-converged flags) and `refine.json`; a refined run
-//! that fails is exit 1 with nothing written, a signal during them writes the run without its
-//! refinement (exit 130).
+//! that fails is recorded there (which, and why) with the levels that worked, a signal during
+//! them writes the run without its refinement (exit 130).
 
 use super::summary::print_summary;
 use super::CliError;
@@ -52,18 +52,21 @@ pub(crate) struct RunArgs {
     /// mesh-converged).
     #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "1")]
     refine: Option<usize>,
-    /// With --refine: also run the scene's meridian and give every point the continuum value
-    /// and its distance from it.
-    #[arg(long, requires = "refine")]
+    /// With --refine (or the scene's [refine]): also run the scene's meridian and give every
+    /// point the continuum value and its distance from it.
+    #[arg(long)]
     continuum: bool,
 }
 
 pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
     let scene = Scene::load(&args.scene).map_err(|e| CliError::Input(e.to_string()))?;
-    let refine = args.refine.map(|levels| RefineOptions {
-        levels,
-        continuum: args.continuum,
-    });
+    let refine =
+        RefineOptions::resolve(args.refine, args.continuum, &scene).map_err(|e| match e {
+            CompareError::Input(m) | CompareError::Failure(m) | CompareError::Interrupted(m) => {
+                CliError::Input(m)
+            }
+        })?;
+    let refined = refine.is_some();
     let (study, result, written) = execute_refined(scene, &args.out, args.quiet, refine)?;
     if args.json {
         let json = RunSummary::new(&result.report, &args.out, &written);
@@ -73,7 +76,7 @@ pub(crate) fn run(args: &RunArgs) -> Result<(), CliError> {
         print_summary(study.scene(), &result, &args.out, &written);
     }
     interrupted(&result, &args.out)?;
-    if args.refine.is_some() && result.report.refinement.is_none() {
+    if refined && result.report.refinement.is_none() {
         return Err(CliError::Interrupted(format!(
             "the run is written into {}; its refinement was interrupted and is not",
             args.out.display()

@@ -98,13 +98,23 @@ pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, writt
         }
     } else {
         out!("turning points of {}:", report.control);
-        for t in &report.turning_points {
+        for (k, t) in report.turning_points.iter().enumerate() {
             let value = c.map_or_else(|| "?".to_string(), |c| sig_digits6(t.parameters[c]));
             let stretch = s.map_or_else(String::new, |s| {
                 format!(" at stretch {}", sig_digits6(t.measures[s]))
             });
+            let why: Vec<String> = report
+                .turning_flags(k)
+                .iter()
+                .map(ToString::to_string)
+                .collect();
+            let flagged = if why.is_empty() {
+                String::new()
+            } else {
+                format!(" — flagged: {}", why.join("; "))
+            };
             out!(
-                "  {:<7} {} = {value}{stretch} (after step {})",
+                "  {:<7} {} = {value}{stretch} (after step {}){flagged}",
                 t.kind,
                 report.control,
                 t.after_step
@@ -194,7 +204,7 @@ pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, writt
         )
     };
     out!(
-        "  {:<10} {} rows: step, arclength, {header}, iterations, index{blocks}",
+        "  {:<10} {} rows: step, arclength, {header}, iterations, index{blocks}, flags",
         file_name(&written.csv),
         report.rows.len()
     );

@@ -11,7 +11,7 @@ use super::events::{
 };
 use crate::linalg::eigen::EigenError;
 use crate::model::ModelError;
-use crate::results::{CriticalKind, CriticalPoint, Isotropy};
+use crate::results::{Bracket, CriticalKind, CriticalPoint, Isotropy};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -296,6 +296,12 @@ impl<'a> Crossings<'a> {
                 let mut failure = None;
                 // Every evaluated (s, eigenvalue, control), to tell a jump from a crossing.
                 let mut trials: Vec<(f64, f64, Option<f64>)> = Vec::new();
+                // The bracket's ends as the localisation narrows it (the side of g0, the
+                // side of g1), with their states.
+                let mut sides = [
+                    (0.0, a.u.to_vec(), a.params.to_vec()),
+                    (s1, b.u.to_vec(), b.params.to_vec()),
+                ];
                 let located = locate_within(
                     |s| {
                         if super::interrupt::requested() {
@@ -312,6 +318,9 @@ impl<'a> Crossings<'a> {
                         let value = sp.blocks[mu].eigenvalues.get(k).copied();
                         if let Some(g) = value {
                             trials.push((s, g, control.and_then(|c| p.get(c).copied())));
+                            // As `locate_within` moves its ends.
+                            let side = usize::from(g.signum() == g1.signum());
+                            sides[side] = (s, u, p);
                         }
                         if value.is_none() {
                             failure = Some(sp.blocks[mu].eigen_error.as_ref().map_or_else(
@@ -394,6 +403,13 @@ impl<'a> Crossings<'a> {
                     isotropy: self.blocks.isotropy(mu, &mode),
                     mode,
                     state: u,
+                    bracket: Some(Bracket {
+                        width: (sides[1].0 - sides[0].0).abs() / s1.abs().max(f64::MIN_POSITIVE),
+                        ends: [
+                            (sides[0].1.clone(), sides[0].2.clone()),
+                            (sides[1].1.clone(), sides[1].2.clone()),
+                        ],
+                    }),
                 });
             }
         }

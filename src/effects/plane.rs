@@ -120,6 +120,16 @@ impl Effect for Plane {
         )
     }
 
+    /// ⟨−δ_i⟩ = max(d − n·x_i, 0) at every node.
+    fn penetrations(&self, x: &[Vec3], params: &[f64]) -> Option<Vec<f64>> {
+        let d = self.offset.value(params);
+        Some(
+            x.iter()
+                .map(|xi| (d - self.normal.dot(xi)).max(0.0))
+                .collect(),
+        )
+    }
+
     /// The contact pressure: each node's penalty force κ⟨−δ⟩^q over its tributary area (a
     /// third of its triangles' current areas), averaged over each triangle's nodes.
     fn cell_fields(&self, x: &[Vec3], triangles: &[[usize; 3]], params: &[f64]) -> Vec<CellField> {

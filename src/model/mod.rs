@@ -111,6 +111,13 @@ pub trait Effect: Send + Sync {
         Vec::new()
     }
 
+    /// For a contact effect (a rigid plane): every node's penetration ⟨−δ_i⟩ ≥ 0 at the
+    /// positions `x` (0 off contact), which says which nodes are in contact; `None` for an
+    /// effect that makes no contact (the default).
+    fn penetrations(&self, _x: &[Vec3], _params: &[f64]) -> Option<Vec<f64>> {
+        None
+    }
+
     /// The per-triangle vectors this effect can show at a state (a direction), for the state
     /// files; none by default.
     fn cell_vectors(
@@ -407,6 +414,24 @@ pub struct FeModel {
 }
 
 impl FeModel {
+    /// Every node's deepest penetration into the contact effects (the rigid planes) at
+    /// (u, Λ), with the positions: `None` when no effect makes contact.
+    pub fn penetrations(&self, u: &[f64], params: &[f64]) -> Option<(Vec<f64>, Vec<Vec3>)> {
+        let x = self.positions(u, params);
+        let mut deepest: Option<Vec<f64>> = None;
+        for p in self
+            .effects
+            .iter()
+            .filter_map(|e| e.penetrations(&x, params))
+        {
+            match &mut deepest {
+                Some(d) => d.iter_mut().zip(&p).for_each(|(d, p)| *d = d.max(*p)),
+                None => deepest = Some(p),
+            }
+        }
+        deepest.map(|d| (d, x))
+    }
+
     /// Every effect's per-triangle fields at (u, Λ), in effect order (a quantity that two
     /// effects show, such as two fluids' pressures, is summed).
     pub fn cell_fields(&self, u: &[f64], params: &[f64]) -> Vec<CellField> {

@@ -6,13 +6,15 @@ use std::path::{Path, PathBuf};
 
 /// Writes `dir/path.csv` and returns its path.
 ///
-/// The header is `step,arclength,<each parameter>,<each measure>,iterations,index` and, when
-/// the rows have their blocks' negative counts, `index_<irrep>` for every irrep of
+/// The header is `step,arclength,<each parameter>,<each measure>,iterations,index`, when
+/// the rows have their blocks' negative counts `index_<irrep>` for every irrep of
 /// [`PathReport::irreps`] (names quoted as in RFC 4180 if they contain a comma, a quote or a
-/// line break), followed by one row per [`PathRow`](crate::results::PathRow); `index` is the
+/// line break), and `flags`, followed by one row per [`PathRow`](crate::results::PathRow); `index` is the
 /// instability index Σ d·neg at the point and `index_<irrep>` the negative count neg of that
 /// irrep's block (each such eigenvalue is d-fold in K), empty where it was not computed (no
-/// stability analysis, a singular block). Numbers are printed with the fewest digits that parse
+/// stability analysis, a singular block). The last column, `flags`, names the flags of the
+/// row's state (`wrinkled`, `stretch`; docs/theory.md §8.10) separated by `;`, empty where the
+/// state is valid or was not measured. Numbers are printed with the fewest digits that parse
 /// back to the same `f64` (`1.5`, `-0`, `2.5e-7`), so the table is exact. Lines end in `\n`.
 ///
 /// # Errors
@@ -30,10 +32,11 @@ pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError
             .chain(["iterations", "index"])
             .map(str::to_string)
             .chain(report.irreps.iter().map(|i| format!("index_{i}")))
+            .chain(["flags".to_string()])
             .map(|n| quote(&n))
             .collect::<Vec<_>>();
         writeln!(w, "{}", names.join(","))?;
-        for row in &report.rows {
+        for (i, row) in report.rows.iter().enumerate() {
             write!(w, "{},{}", row.step, Num(row.arclength))?;
             for &v in row.parameters.iter().chain(&row.measures) {
                 write!(w, ",{}", Num(v))?;
@@ -48,7 +51,7 @@ pub fn write_csv(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputError
                     None => write!(w, ",")?,
                 }
             }
-            writeln!(w)?;
+            writeln!(w, ",{}", report.row_flags(i).join(";"))?;
         }
         Ok(())
     })?;

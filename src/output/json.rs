@@ -22,6 +22,17 @@ pub fn write_json(dir: &Path, report: &PathReport) -> Result<PathBuf, OutputErro
     let mut value =
         serde_json::to_value(report).map_err(|e| OutputError::invalid(&path, e.to_string()))?;
     named_points(&mut value, &report.parameters, &report.measures);
+    if let Some(points) = value
+        .get_mut("turning_points")
+        .and_then(|v| v.as_array_mut())
+    {
+        for (k, p) in points.iter_mut().enumerate() {
+            let flags = report.turning_flags(k);
+            p["valid"] = serde_json::json!(flags.is_empty());
+            p["flags"] = serde_json::to_value(flags)
+                .map_err(|e| OutputError::invalid(&path, e.to_string()))?;
+        }
+    }
     write_whole(&path, |w| {
         serde_json::to_writer_pretty(&mut *w, &value).map_err(io::Error::other)?;
         writeln!(w)
@@ -94,7 +105,7 @@ pub fn write_critical(dir: &Path, report: &PathReport) -> Result<PathBuf, Output
 /// As [`write_critical`], with the `events` of a critical curve after the path's critical
 /// points: each `{"kind": "start" | "cusp" | "fold" | "hilltop" | "irrep change" | "end",
 /// "curve": true, "extremum", "irrep", "residual_eigenvalue", "parameters", "measures",
-/// "step"}` with parameters and measures by name, `step` the curve step before the event
+/// "step", "valid", "flags"}` with parameters and measures by name, `step` the curve step before the event
 /// (`extremum` for a cusp or fold; `irrep`, the other singular block, and its eigenvalue for
 /// a hilltop or irrep change).
 ///
@@ -181,6 +192,8 @@ pub fn write_critical_with(
             "parameters": named(&report.parameters, &e.parameters),
             "measures": named(&report.measures, &e.measures),
             "step": e.after_step,
+            "valid": e.flags.is_empty(),
+            "flags": e.flags,
         });
         if let Some(x) = e.extremum {
             event["extremum"] = serde_json::json!(x.to_string());

@@ -539,6 +539,10 @@ pub struct TurningSummary {
     /// The stretch there (closed membranes).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stretch: Option<f64>,
+    /// No flag raised.
+    pub valid: bool,
+    /// Why it may not be a result of the model or the mesh.
+    pub flags: Vec<crate::results::validity::Flag>,
 }
 
 /// A critical point in [`RunSummary`].
@@ -618,11 +622,14 @@ impl RunSummary {
             turning_points: report
                 .turning_points
                 .iter()
-                .map(|t| TurningSummary {
+                .enumerate()
+                .map(|(k, t)| TurningSummary {
                     kind: t.kind,
                     step: t.after_step,
                     value: c.map_or(f64::NAN, |c| t.parameters[c]),
                     stretch: s.map(|s| t.measures[s]),
+                    valid: report.turning_flags(k).is_empty(),
+                    flags: report.turning_flags(k),
                 })
                 .collect(),
             critical: report

@@ -569,6 +569,18 @@ fn render(report: &PathReport, diagram: &Diagram, d: &Drawn) -> Result<String, B
     indices.dedup();
     let mut entries: Vec<String> = indices.iter().map(|&i| index_legend(i)).collect();
     entries.extend(diagram.reference.as_ref().map(|r| r.label.clone()));
+    // The stretches of the path between rows of which one has a flag, and the flags' names.
+    let row_flags: Vec<Vec<&str>> = (0..path.len()).map(|i| report.row_flags(i)).collect();
+    let flagged: Vec<usize> = (1..path.len())
+        .filter(|&i| !row_flags[i - 1].is_empty() || !row_flags[i].is_empty())
+        .collect();
+    let mut names: Vec<&str> = row_flags.iter().flatten().copied().collect();
+    names.sort_unstable();
+    names.dedup();
+    let flagged_legend = format!("flagged: {}", names.join(", "));
+    if !flagged.is_empty() {
+        entries.push(flagged_legend.clone());
+    }
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, diagram.size).into_drawing_area();
@@ -589,6 +601,16 @@ fn render(report: &PathReport, diagram: &Diagram, d: &Drawn) -> Result<String, B
                 .legend(move |(x, y)| {
                     PathElement::new([(x, y), (x + 20, y)], grey.stroke_width(1))
                 });
+        }
+        // Under the path: its flagged stretches, wide and translucent orange.
+        let band = RGBAColor(255, 150, 0, 0.45).stroke_width(11);
+        for (k, &i) in flagged.iter().enumerate() {
+            let series = chart.draw_series(LineSeries::new([path[i - 1], path[i]], band))?;
+            if k == 0 {
+                series
+                    .label(flagged_legend.clone())
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], band));
+            }
         }
         if diagram.by_index {
             let mut legend_done: Vec<Option<usize>> = Vec::new();

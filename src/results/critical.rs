@@ -98,6 +98,20 @@ pub struct CriticalPoint {
     /// The state over the unknowns.
     #[serde(skip)]
     pub state: Vec<f64>,
+    /// The localisation's last bracket (`None` for a point not localised in a step: one
+    /// read back from a finished run, or found on a branch's start).
+    #[serde(skip)]
+    pub bracket: Option<Bracket>,
+}
+
+/// The last bracket of a crossing's localisation (docs/theory.md §11.2): the nearest states on
+/// either side of the eigenvalue's change of sign, between which the point lies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bracket {
+    /// Its width, as a share of the step's arclength (1e-10 at the narrowest).
+    pub width: f64,
+    /// Its ends, each (the state over the unknowns, every parameter).
+    pub ends: [(Vec<f64>, Vec<f64>); 2],
 }
 
 #[cfg(test)]

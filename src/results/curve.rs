@@ -63,6 +63,10 @@ pub struct CurveEvent {
     pub parameters: Vec<f64>,
     /// Every measure there.
     pub measures: Vec<f64>,
+    /// The flags of its state (docs/theory.md §8.10: `wrinkled` under the plain energy,
+    /// `stretch`; for a hilltop or an irrep change also the other block's `not-localised`):
+    /// empty where it is valid or the model does not measure it.
+    pub flags: Vec<super::validity::Flag>,
 }
 
 /// One point of a critical curve.

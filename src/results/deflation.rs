@@ -42,6 +42,9 @@ pub struct Solution {
     /// The triangles with a negative principal tension (where the membrane would wrinkle:
     /// the membrane energy does not describe the state there), where the model says.
     pub wrinkled: Option<usize>,
+    /// The flags of its state (`wrinkled` under the plain energy, `stretch`; docs/theory.md
+    /// §8.10): empty where it is valid or the model does not measure it.
+    pub flags: Vec<super::validity::Flag>,
     /// Deflated Newton's iterations (0 for the start state).
     pub iterations: usize,
     /// The distance to the nearest solution known before it, in the corrector's scaled

@@ -26,7 +26,7 @@ pub use branches::{
     Connection, Criticality, Half, Halves, Node, NormalForm, PrimaryPath, RecordedPoint, Reduced,
     Skip, SwitchedBranch, ASYMMETRY,
 };
-pub use critical::{CriticalKind, CriticalPoint, Isotropy};
+pub use critical::{Bracket, CriticalKind, CriticalPoint, Isotropy};
 pub use curve::{CurveEvent, CurveEventKind, CurveReport, CurveRow};
 pub use path::{
     MeshInfo, PathReport, PathRow, PointState, SavedState, StatesInfo, TurningRow,

@@ -137,6 +137,11 @@ pub struct PathReport {
     /// ([`PathReport::flags`]).
     #[serde(skip)]
     pub refinement: Option<super::refine::Refinement>,
+    /// What the study measured of every row's, turning and critical point's state for their
+    /// validity (the `stretch` and `contact-jump` flags, `path.csv`'s `flags`); `None` where
+    /// it measured nothing.
+    #[serde(skip)]
+    pub checks: Option<super::validity::Checks>,
 }
 
 /// Where the membrane model stops being valid along a path: the triangles whose smaller
@@ -283,6 +288,7 @@ mod tests {
             wave_numbers: Vec::new(),
             irreps: Vec::new(),
             refinement: None,
+            checks: None,
         };
         assert_eq!(r.index_range(), Some((0, 1)));
         r.rows = vec![row(0, Some(2)), row(1, None), row(2, Some(2))];

@@ -40,6 +40,20 @@ pub struct Refinement {
     pub turning: Vec<PointRefinement>,
     /// Critical points of the refined meshes with no counterpart on the run's own mesh.
     pub new_on_finer: Vec<NewPoint>,
+    /// The refined runs that failed (and those not run after a failed one): `levels` and the
+    /// estimates hold the runs that worked.
+    pub failed: Vec<FailedRun>,
+}
+
+/// A refined run that failed, or was not run because a coarser one had failed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FailedRun {
+    /// Which: `level 1`, `level 2`, `continuum`.
+    pub run: String,
+    /// Its mesh, as one line.
+    pub mesh: String,
+    /// Why, in one line.
+    pub reason: String,
 }
 
 /// One mesh of the refinement.
@@ -139,6 +153,8 @@ pub enum Estimate {
     },
     /// The values do not change on refinement (a value the symmetry or the load fixes).
     Unchanged,
+    /// No refined level ran (each failed; `failed` says why): no estimate.
+    NotRefined,
     /// A refined mesh has no counterpart: the point is not mesh-converged.
     NotMeshConverged {
         /// That mesh, as one line.
@@ -182,6 +198,9 @@ pub fn summary(r: &Refinement) -> Vec<String> {
             c.mesh, c.seconds
         ));
     }
+    for f in &r.failed {
+        lines.push(format!("  {} ({}) failed: {}", f.run, f.mesh, f.reason));
+    }
     let block = |lines: &mut Vec<String>, title: String, p: &PointRefinement| {
         let m = p.m.map_or_else(String::new, |m| format!(", m = {m}"));
         let status = match &p.estimate {
@@ -218,6 +237,7 @@ pub fn summary(r: &Refinement) -> Vec<String> {
                 sig_digits(x, 8)
             ),
             (Estimate::Unchanged, _) => "the value does not change on refinement".to_string(),
+            (Estimate::NotRefined, _) => "no refined level ran: no error estimated".to_string(),
             (Estimate::NotAsymptotic { order }, _) => format!(
                 "observed order {}, far from {}: not in the asymptotic range, not \
                  extrapolated and no error estimated (the value changes by {})",

@@ -16,7 +16,7 @@ use std::fmt;
 use toml::{Table, Value};
 
 /// The top-level keys, in the order they are read.
-const SECTIONS: [&str; 9] = [
+const SECTIONS: [&str; 10] = [
     "scene",
     "mesh",
     "material",
@@ -26,6 +26,7 @@ const SECTIONS: [&str; 9] = [
     "constraint",
     "analysis",
     "start",
+    "refine",
 ];
 
 pub(super) fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
@@ -126,6 +127,10 @@ fn read(doc: &Table) -> Result<Scene, Problem> {
         None => Start::default(),
         Some(v) => de(v, "start")?,
     };
+    let refine: Option<Refine> = match doc.get("refine") {
+        None => None,
+        Some(v) => Some(de(v, "refine")?),
+    };
     let constraints = super::validate::resolve_constraints(&effects, &parameters, raw_constraints)?;
     Ok(Scene {
         origin: String::new(),
@@ -139,6 +144,7 @@ fn read(doc: &Table) -> Result<Scene, Problem> {
         constraints,
         analysis,
         start,
+        refine,
     })
 }
 

@@ -86,6 +86,28 @@ pub struct Scene {
     pub analysis: Analysis,
     /// `[start]`: how the first state is found.
     pub start: Start,
+    /// `[refine]`: the run again on refined meshes, as `memstab run --refine` (the flag
+    /// overrides it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refine: Option<Refine>,
+}
+
+/// `[refine]`: every critical and turning point of a run followed on the mesh at twice (and
+/// four times) its resolution, with its error estimate (docs/theory.md §8.11); what `memstab
+/// run --refine [N] [--continuum]` asks for, which overrides it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct Refine {
+    /// Refinements: 1 (the resolution doubled) or 2 (doubled and quadrupled). Default 1.
+    #[serde(default = "one_level")]
+    pub levels: usize,
+    /// Also run the scene's meridian. Default false.
+    #[serde(default)]
+    pub continuum: bool,
+}
+
+fn one_level() -> usize {
+    1
 }
 
 /// `[scene]`.
@@ -266,6 +288,11 @@ pub struct Material {
     /// [`DEFAULT_WRINKLING_STIFFNESS`]); only with `wrinkling = "relaxed"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wrinkling_stiffness: Option<f64>,
+    /// The largest principal stretch (from the stress-free state) the material is stated
+    /// for, above 1; a state stretched beyond it is flagged `stretch` (docs/theory.md §8.10).
+    /// None: no range stated, no flag.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_stretch: Option<f64>,
 }
 
 /// The residual stiffness ε of the relaxed energy when the scene gives none.

@@ -221,6 +221,16 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     check_mesh_options(&scene.mesh)?;
     check_mesh_radius(scene)?;
     check_material(&scene.material, &scene.parameters)?;
+    if let (Some(max), MeshSpec::Axisymmetric(_)) = (scene.material.max_stretch, &scene.mesh) {
+        return Err(Problem::at(
+            "material.max-stretch",
+            format!(
+                "= {}: the axisymmetric model does not measure its states' principal stretches; \
+                 run the scene on a 3-D mesh",
+                num(max)
+            ),
+        ));
+    }
     for (i, effect) in scene.effects.iter_mut().enumerate() {
         check_effect(i, effect, &scene.parameters)?;
     }
@@ -235,6 +245,17 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     }
     check_slides(&mut scene.boundary)?;
     check_start(scene)?;
+    if let Some(r) = &scene.refine {
+        if !(1..=2).contains(&r.levels) {
+            return Err(Problem::at(
+                "refine.levels",
+                format!(
+                    "must be 1 (the mesh at twice the divisions) or 2 (at twice and four times), got {}",
+                    r.levels
+                ),
+            ));
+        }
+    }
     for (name, p) in &scene.parameters {
         check_parameter_name(name)?;
         check_parameter(&key_path("parameters", name), p)?;
@@ -525,6 +546,14 @@ fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
 fn check_material(m: &Material, parameters: &BTreeMap<String, Parameter>) -> Result<(), Problem> {
     for (key, q, range) in m.ruled_quantities() {
         check_quantity(&format!("material.{key}"), q, range, parameters)?;
+    }
+    if let Some(max) = m.max_stretch {
+        if !(max.is_finite() && max > 1.0) {
+            return Err(Problem::at(
+                "material.max-stretch",
+                format!("must be a finite number > 1, got {}", num(max)),
+            ));
+        }
     }
     if let Some(eps) = m.wrinkling_stiffness {
         let key = "material.wrinkling-stiffness";

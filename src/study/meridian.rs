@@ -663,6 +663,7 @@ impl Study for MeridianStudy {
                     isotropy: crate::axisym::blocks::isotropy(m),
                     mode: v,
                     state: u,
+                    bracket: None,
                 })
             })
             .collect()

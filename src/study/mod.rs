@@ -370,6 +370,12 @@ pub trait Study: Sync + crate::output::Drawing {
     fn wrinkled(&self, _u: &[f64], _params: &[f64]) -> Option<usize> {
         None
     }
+    /// The validity flags of the state (u, Λ) (`wrinkled` under the plain energy, `stretch`
+    /// beyond `material.max-stretch`; docs/theory.md §8.10), empty where the model does not
+    /// measure them.
+    fn state_flags(&self, _u: &[f64], _params: &[f64]) -> Vec<crate::results::validity::Flag> {
+        Vec::new()
+    }
 }
 
 /// Settings of branch switching: how deep, and the continuation along each branch.

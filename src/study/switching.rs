@@ -1153,6 +1153,7 @@ pub fn branch_run(
         wrinkling: None,
         wave_numbers: Vec::new(),
         refinement: None,
+        checks: None,
         irreps: Vec::new(),
     };
     report.wave_numbers = wave_numbers(&report.critical);
@@ -1210,6 +1211,7 @@ pub fn recorded_points(
             isotropy: iso,
             mode: m,
             state: u,
+            bracket: None,
         });
     }
     Ok(out)

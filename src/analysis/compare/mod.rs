@@ -337,6 +337,14 @@ enum Job {
 }
 
 impl Job {
+    /// Its mesh, as one line.
+    fn mesh(&self) -> String {
+        match self {
+            Job::Solid(s) => describe(&s.scene.mesh),
+            Job::Meridian(s) => describe(&s.scene.mesh),
+        }
+    }
+
     fn unknowns(&self) -> usize {
         match self {
             Job::Solid(s) => s.basis.unknowns(),

@@ -15,8 +15,8 @@ use super::{
     Job, Level, MeshRuns,
 };
 use crate::results::refine::{
-    ContinuumRun, Estimate, NewPoint, PointRefinement, RefinedLevel, Refinement, ASSUMED_ORDER,
-    MERIDIAN_ORDER, ORDER_TOLERANCE,
+    ContinuumRun, Estimate, FailedRun, NewPoint, PointRefinement, RefinedLevel, Refinement,
+    ASSUMED_ORDER, MERIDIAN_ORDER, ORDER_TOLERANCE,
 };
 use crate::results::PathReport;
 use crate::scene::{MeshSpec, Scene};
@@ -24,13 +24,63 @@ use crate::study::meridian::MeridianStudy;
 use crate::study::mesh::MeshStudy;
 use crate::text::one_line;
 
-/// What `run --refine` asks for.
+/// What `run --refine` (or the scene's `[refine]`) asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RefineOptions {
     /// Refinements: 1 (the resolution doubled) or 2 (doubled and quadrupled).
     pub levels: usize,
     /// Also run the scene's meridian.
     pub continuum: bool,
+    /// Whether the scene's `[refine]` asked for it (messages then name its keys), not the
+    /// command line.
+    pub from_scene: bool,
+}
+
+impl RefineOptions {
+    /// What a run of `scene` refines: the command line's `--refine N` (`levels`, with
+    /// `--continuum` as `continuum`) overrides the scene's `[refine]`; without it the scene's
+    /// section, `--continuum` adding the meridian to it. `None`: no refinement. A
+    /// `--continuum` without either is bad input, in one line.
+    pub fn resolve(
+        levels: Option<usize>,
+        continuum: bool,
+        scene: &Scene,
+    ) -> Result<Option<Self>, CompareError> {
+        match (levels, scene.refine) {
+            (Some(levels), _) => Ok(Some(Self {
+                levels,
+                continuum,
+                from_scene: false,
+            })),
+            (None, Some(r)) => Ok(Some(Self {
+                levels: r.levels,
+                continuum: r.continuum || continuum,
+                from_scene: true,
+            })),
+            (None, None) if continuum => Err(CompareError::Input(
+                "--continuum: needs --refine or the scene's [refine]".into(),
+            )),
+            (None, None) => Ok(None),
+        }
+    }
+
+    /// The option that asked for the refinement, with its value, as messages name it.
+    fn named(&self, scene: &Scene) -> String {
+        if self.from_scene {
+            format!("{}: 'refine.levels' = {}", scene.origin, self.levels)
+        } else {
+            format!("--refine {}", self.levels)
+        }
+    }
+
+    /// The option that asked for the meridian, as messages name it.
+    fn continuum_named(&self, scene: &Scene) -> String {
+        if self.from_scene && scene.refine.is_some_and(|r| r.continuum) {
+            format!("{}: 'refine.continuum' = true", scene.origin)
+        } else {
+            "--continuum".into()
+        }
+    }
 }
 
 /// The refined runs of a scene, built (and checked) before its own run.
@@ -75,7 +125,7 @@ impl Refiner {
     /// without a control, a mesh file, a saved or restarted start (whose state does not fit
     /// another mesh), a scene without an axisymmetric counterpart, a refined mesh over a limit.
     pub fn new(scene: &Scene, options: &RefineOptions) -> Result<Self, CompareError> {
-        let flag = format!("--refine {}", options.levels);
+        let flag = options.named(scene);
         let input = |what: String| CompareError::Input(format!("{flag}: {what}"));
         if !(1..=2).contains(&options.levels) {
             return Err(input(
@@ -121,11 +171,11 @@ impl Refiner {
         }
         let continuum = if options.continuum {
             if let MeshSpec::Axisymmetric(_) = scene.mesh {
-                return Err(CompareError::Input(
-                    "--continuum: the scene is on a meridian already; it is its own \
-                     axisymmetric counterpart"
-                        .into(),
-                ));
+                return Err(CompareError::Input(format!(
+                    "{}: the scene is on a meridian already; it is its own axisymmetric \
+                     counterpart",
+                    options.continuum_named(scene)
+                )));
             }
             let choice = parse_meshes(&["axisymmetric".into()])?;
             let common = Common {
@@ -135,15 +185,16 @@ impl Refiner {
                 divisions: None,
                 sectors: 0,
             };
+            let named = options.continuum_named(scene);
             let coarse = variant(scene, &choice[0], &common).map_err(|e| {
                 CompareError::Input(format!(
-                    "--continuum: the scene has no axisymmetric counterpart: {e}"
+                    "{named}: the scene has no axisymmetric counterpart: {e}"
                 ))
             })?;
             let mut fine = coarse.clone();
             refine_mesh(&mut fine.mesh, 2);
-            let what = "--continuum: the scene's meridian";
-            Some((job(coarse, what)?, job(fine, what)?))
+            let what = format!("{named}: the scene's meridian");
+            Some((job(coarse, &what)?, job(fine, &what)?))
         } else {
             None
         };
@@ -207,21 +258,46 @@ impl Refiner {
             pieces: Vec::new(),
         };
         let mut levels = vec![own];
+        let mut failed: Vec<FailedRun> = Vec::new();
         for (l, job) in self.levels.into_iter().enumerate() {
+            let run = format!("level {}", l + 1);
+            let mesh = job.mesh();
+            if !failed.is_empty() {
+                failed.push(FailedRun {
+                    run,
+                    mesh,
+                    reason: format!("not run: {} failed", failed[0].run),
+                });
+                continue;
+            }
             let label = format!("refinement {}", l + 1);
-            levels.push(job.execute(&label, (self.label_modes, false), progress)?);
+            match execute_or_fail(job, &label, self.label_modes, progress)? {
+                Ok(level) => levels.push(level),
+                Err(reason) => failed.push(FailedRun { run, mesh, reason }),
+            }
             if interrupted() {
                 return Ok(None);
             }
         }
         let continuum = match self.continuum {
             Some((coarse, fine)) => {
-                let coarse = coarse.execute("meridian", (self.label_modes, false), progress)?;
-                let fine = fine.execute("meridian check", (self.label_modes, false), progress)?;
+                let mesh = coarse.mesh();
+                let coarse = execute_or_fail(coarse, "meridian", self.label_modes, progress)?;
+                let fine = execute_or_fail(fine, "meridian check", self.label_modes, progress)?;
                 if interrupted() {
                     return Ok(None);
                 }
-                Some((coarse, fine))
+                match (coarse, fine) {
+                    (Ok(coarse), Ok(fine)) => Some((coarse, fine)),
+                    (Err(reason), _) | (_, Err(reason)) => {
+                        failed.push(FailedRun {
+                            run: "continuum".into(),
+                            mesh,
+                            reason,
+                        });
+                        None
+                    }
+                }
             }
             None => None,
         };
@@ -315,7 +391,28 @@ impl Refiner {
             critical,
             turning,
             new_on_finer,
+            failed,
         }))
+    }
+}
+
+/// Runs `job`: its level, or why it failed (the run's failure in one line, without the
+/// label and mesh that [`FailedRun`] gives); bad input and a signal are errors.
+fn execute_or_fail(
+    job: Job,
+    label: &str,
+    label_modes: bool,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Result<Level, String>, CompareError> {
+    let prefix = format!("mesh '{label}' ({}): ", job.mesh());
+    // A refined level is one run of the scene's own mesh: no second pieces sought.
+    match job.execute(label, (label_modes, false), progress) {
+        Ok(level) => Ok(Ok(level)),
+        Err(CompareError::Failure(m)) => {
+            progress(&format!("{label}: failed"));
+            Ok(Err(m.strip_prefix(&prefix).unwrap_or(&m).to_string()))
+        }
+        Err(e) => Err(e),
     }
 }
 
@@ -386,14 +483,14 @@ pub fn estimate(
     assumed: f64,
 ) -> (Option<f64>, Option<f64>, Vec<Option<f64>>, Estimate) {
     let none = vec![None; values.len()];
+    if values.len() < 2 {
+        return (None, None, none, Estimate::NotRefined);
+    }
     if let Some(l) = values.iter().position(Option::is_none) {
         let finer = finer.get(l).cloned().unwrap_or_default();
         return (None, None, none, Estimate::NotMeshConverged { finer });
     }
     let v: Vec<f64> = values.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
-    if v.len() < 2 {
-        return (None, None, none, Estimate::NotAsymptotic { order: None });
-    }
     if v.windows(2).all(|w| w[0] == w[1]) {
         return (
             None,
