@@ -87,7 +87,8 @@ pub fn bordered_solve(
             .chain(d.iter())
             .fold(0.0f64, |a, v| a.max(v.abs()));
         let error = residual_of(&sol).amax() / (norm * sol.amax() + rhs.amax()).max(1e-300);
-        if !(error <= NEAR_SINGULAR_BACKWARD_ERROR) {
+        // NaN (a non-finite solution) is refused too.
+        if error.is_nan() || error > NEAR_SINGULAR_BACKWARD_ERROR {
             return None;
         }
     }
