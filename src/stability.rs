@@ -42,6 +42,7 @@ use crate::continuation::crossings::{BlockSpectrum, Blocks, Spectrum};
 use crate::linalg::bordered_block::{
     bordered_pattern, partner_in_place, with_partners, BorderedBlock, Complement,
 };
+use crate::linalg::eigen::{Bordered, Operator};
 use crate::linalg::SymmetricFactorization;
 use crate::model::constraint::Constraint;
 use crate::model::{Evaluation, Model, ModelError, Request};
@@ -241,7 +242,22 @@ fn constraint_border(
     (l, cc)
 }
 
-/// ‖t + ω × X_i‖ over the free nodes at the reference positions X (the norm of a held field).
+/// max|K_ij| of an evaluation (with its rank-one terms c a aᵀ): the scale of "zero" for a
+/// block's eigenvalues.
+fn tangent_scale(eval: &Evaluation) -> f64 {
+    eval.tangent
+        .iter()
+        .fold(0.0f64, |a, b| a.max(b.abs()))
+        .max(
+            eval.rank_one
+                .iter()
+                .map(|(c, a)| c.abs() * a.iter().fold(0.0f64, |m, v| m.max(v * v)))
+                .fold(0.0, f64::max),
+        )
+        .max(1e-300)
+}
+
+/// ‖t + ω × X_i‖ over the free nodes at the positions X (the norm of a rigid or held field).
 fn reference_norms(motion: &[f64; 6], x: &[meshes::Vec3], layout: &crate::model::Layout) -> f64 {
     let t = nalgebra::Vector3::new(motion[0], motion[1], motion[2]);
     let w = nalgebra::Vector3::new(motion[3], motion[4], motion[5]);
@@ -538,6 +554,161 @@ impl<'a> Stability<'a> {
         Some(spectrum)
     }
 
+    /// ‖t + ω × x_i‖ over the free nodes at positions `x` for every rigid motion: the norm of
+    /// each rigid field, without building it (unit rigid fields project onto a block as
+    /// vectors of order one or round-off).
+    fn rigid_norms(&self, x: &[meshes::Vec3]) -> Vec<f64> {
+        let layout = self.model.layout();
+        self.motions
+            .iter()
+            .map(|m| reference_norms(m, x, layout))
+            .collect()
+    }
+
+    /// What block `ib` deflates at positions `x`: its rigid modes' restricted fields (unit
+    /// fields, `rigid_norms` their norms) followed by the held mean motions' (at the
+    /// reference positions), the number of rigid modes in it (complex-type: the complex
+    /// span of r and J r, each pair one mode), and the rigid fields alone.
+    fn deflated(
+        &self,
+        ib: &crate::adapted::IrrepBasis,
+        x: &[meshes::Vec3],
+        rigid_norms: &[f64],
+    ) -> (DMatrix<f64>, usize, DMatrix<f64>) {
+        let (model, layout, b) = (self.model, self.model.layout(), ib.first());
+        let m = b.dim();
+        let r = if self.motions.is_empty() {
+            DMatrix::zeros(m, 0)
+        } else {
+            DMatrix::from_columns(
+                &self
+                    .motions
+                    .iter()
+                    .zip(rigid_norms)
+                    .map(|(motion, n)| b.restrict_rigid(motion, x, layout) / *n)
+                    .collect::<Vec<DVector<f64>>>(),
+            )
+        };
+        let rigid_modes = if ib.complex {
+            Complement::of(&with_partners(&r), 1e-12).rank() / 2
+        } else {
+            Complement::of(&r, 1e-12).rank()
+        };
+        let r_rigid = r.clone();
+        let r = if self.holds.is_empty() {
+            r
+        } else {
+            let reference = model.reference();
+            let held = self.holds.iter().map(|motion| {
+                let v = b.restrict_rigid(motion, reference, layout);
+                &v / reference_norms(motion, reference, layout)
+            });
+            DMatrix::from_columns(
+                &r.column_iter()
+                    .map(|c| c.into_owned())
+                    .chain(held)
+                    .collect::<Vec<_>>(),
+            )
+        };
+        (r, rigid_modes, r_rigid)
+    }
+
+    /// The minimally augmented test function of block `mu` at (u, params) (docs/theory.md
+    /// §11.2): with S the block's matrix on the complement of its border (the matrix whose
+    /// eigenvalues [`Stability::analyse`] gives) and a border vector b, τ = 1/(bᵀ S⁻¹ b) =
+    /// −σ, σ the last component of the solution of [[S, b], [bᵀ, 0]] [v; σ] = [0; 1]; zero
+    /// exactly where S is singular (b not orthogonal to its kernel), of the sign of the
+    /// eigenvalue nearest zero when b is near its eigenvector. S⁻¹ b comes from one sparse LBLᵀ of the bordered block M_μ at σ = 0
+    /// (§8.8: its leading rows of M_μ⁻¹ [b; 0] are Z S⁻¹ Zᵀ b). Without `border` the border
+    /// is a fixed start vector; `iterations` steps of inverse iteration (b ← S⁻¹ b / ‖·‖)
+    /// then turn it towards the eigenvector of the eigenvalue nearest zero before σ is
+    /// taken. Returns τ and the border used (unit, block coordinates); τ = 0 where the
+    /// factorisation finds the block singular to round-off. `None` for a block without
+    /// orbit-local form or a failed factorisation. `eval` may assemble only around the
+    /// orbit representatives ([`Stability::new_evaluation`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn test_function(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        constraints: &[Box<dyn Constraint>],
+        eval: &mut Evaluation,
+        mu: usize,
+        border: Option<&[f64]>,
+        iterations: usize,
+    ) -> Result<Option<(f64, Vec<f64>)>, ModelError> {
+        let (model, layout) = (self.model, self.model.layout());
+        let Some(ib) = self.basis.irreps.get(mu) else {
+            return Ok(None);
+        };
+        model.evaluate(u, params, Request::ALL, eval)?;
+        let scale = tangent_scale(eval);
+        let x = model.positions(u, params);
+        let rigid_norms = self.rigid_norms(&x);
+        let (r, rigid_modes, _) = self.deflated(ib, &x, &rigid_norms);
+        let b = ib.first();
+        let constraint = (mu == 0 && !constraints.is_empty())
+            .then(|| constraint_border(b, layout, &x, params, constraints, eval));
+        let eval: &Evaluation = eval;
+        let Some(sparse) = self.bordered_block(
+            mu,
+            b,
+            layout,
+            eval,
+            (&r, rigid_modes),
+            constraint.as_ref(),
+            scale,
+        ) else {
+            return Ok(None);
+        };
+        let block = &sparse.bordered;
+        let Ok(mut guard) = self.factorizations[mu].lock() else {
+            return Ok(None);
+        };
+        let Some((_, fact)) = guard.as_mut() else {
+            return Ok(None);
+        };
+        let m = block.m;
+        let op = Bordered::new(fact, m, &block.constrained);
+        let mut v: Vec<f64> = match border {
+            Some(v) if v.len() == m => v.to_vec(),
+            _ => (0..m)
+                .map(|i| 1.0 + ((i as f64) * 0.618_034).fract())
+                .collect(),
+        };
+        op.project(&mut v);
+        let unit = |v: &mut Vec<f64>| -> bool {
+            let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            v.iter_mut().for_each(|x| *x /= n.max(1e-300));
+            n > 0.0 && n.is_finite()
+        };
+        if !unit(&mut v) {
+            return Ok(None);
+        }
+        match fact.factorize(&block.values) {
+            Ok(()) => {}
+            Err(crate::linalg::FactorError::Singular { .. }) => return Ok(Some((0.0, v))),
+            Err(_) => return Ok(None),
+        }
+        let op = Bordered::new(fact, m, &block.constrained);
+        for _ in 0..iterations {
+            let mut w = v.clone();
+            if op.apply(&mut w).is_err() || !unit(&mut w) {
+                return Ok(None);
+            }
+            v = w;
+        }
+        let mut w = v.clone();
+        if op.apply(&mut w).is_err() {
+            return Ok(None);
+        }
+        let btw: f64 = v.iter().zip(&w).map(|(a, b)| a * b).sum();
+        if !btw.is_finite() || btw == 0.0 {
+            return Ok(None);
+        }
+        Ok(Some((1.0 / btw, v)))
+    }
+
     /// The basis by irrep.
     pub fn basis(&self) -> &'a AdaptedBasis {
         self.basis
@@ -623,36 +794,9 @@ impl<'a> Stability<'a> {
         let model = self.model;
         let layout = model.layout();
         model.evaluate(u, params, Request::ALL, eval)?;
-        let scale = eval
-            .tangent
-            .iter()
-            .fold(0.0f64, |a, b| a.max(b.abs()))
-            .max(
-                eval.rank_one
-                    .iter()
-                    .map(|(c, a)| c.abs() * a.iter().fold(0.0f64, |m, v| m.max(v * v)))
-                    .fold(0.0, f64::max),
-            )
-            .max(1e-300);
+        let scale = tangent_scale(eval);
         let x = model.positions(u, params);
-        // Unit rigid fields: their projections onto a block are of order one or round-off.
-        // ‖t + ω × x_i‖ over the free nodes: the norm of each rigid field, without building it.
-        let rigid_norms: Vec<f64> = self
-            .motions
-            .iter()
-            .map(|m| {
-                let (t, w) = (
-                    nalgebra::Vector3::new(m[0], m[1], m[2]),
-                    nalgebra::Vector3::new(m[3], m[4], m[5]),
-                );
-                (0..x.len())
-                    .filter(|&i| layout.dof(i, 0).is_some())
-                    .map(|i| (t + w.cross(&x[i])).norm_squared())
-                    .sum::<f64>()
-                    .sqrt()
-                    .max(1e-300)
-            })
-            .collect();
+        let rigid_norms = self.rigid_norms(&x);
         let eval: &Evaluation = eval;
         // The constraints' border of the trivial block, before the blocks go parallel.
         let border0 = match self.basis.irreps.first() {
@@ -679,43 +823,7 @@ impl<'a> Stability<'a> {
                     vectors: DMatrix::zeros(m, 0),
                 };
             }
-            // Rigid modes in this block, deflated.
-            let r = if self.motions.is_empty() {
-                DMatrix::zeros(m, 0)
-            } else {
-                DMatrix::from_columns(
-                    &self
-                        .motions
-                        .iter()
-                        .zip(&rigid_norms)
-                        .map(|(motion, n)| b.restrict_rigid(motion, &x, layout) / *n)
-                        .collect::<Vec<DVector<f64>>>(),
-                )
-            };
-            // A complex-type block deflates the complex span of the rigid modes: r and J r,
-            // each pair one mode.
-            let rigid_modes = if ib.complex {
-                Complement::of(&with_partners(&r), 1e-12).rank() / 2
-            } else {
-                Complement::of(&r, 1e-12).rank()
-            };
-            // Held mean motions, at the reference positions, deflated with them.
-            let r_rigid = r.clone();
-            let r = if self.holds.is_empty() {
-                r
-            } else {
-                let reference = model.reference();
-                let held = self.holds.iter().map(|motion| {
-                    let v = b.restrict_rigid(motion, reference, layout);
-                    &v / reference_norms(motion, reference, layout)
-                });
-                DMatrix::from_columns(
-                    &r.column_iter()
-                        .map(|c| c.into_owned())
-                        .chain(held)
-                        .collect::<Vec<_>>(),
-                )
-            };
+            let (r, rigid_modes, r_rigid) = self.deflated(ib, &x, &rigid_norms);
             let border = if mu == 0 { border0.clone() } else { None };
             // The sparse bordered block first, unless the dense solve is certain.
             const ALWAYS_DENSE: usize = 64;
@@ -933,6 +1041,28 @@ impl Blocks for IrrepBlocks<'_> {
                 detail,
             )
             .ok()
+    }
+
+    fn test_function(
+        &mut self,
+        u: &[f64],
+        params: &[f64],
+        block: usize,
+        border: Option<&[f64]>,
+        iterations: usize,
+    ) -> Option<(f64, Vec<f64>)> {
+        self.stability
+            .test_function(
+                u,
+                params,
+                self.constraints,
+                &mut self.local,
+                block,
+                border,
+                iterations,
+            )
+            .ok()
+            .flatten()
     }
 
     fn mode(&self, block: usize, v: &[f64]) -> Vec<f64> {

@@ -30,6 +30,10 @@ const JUMP_EIGENVALUE: f64 = 1e-8;
 /// 1/64 of the step resolves. Shorter steps are not rejected until the path has passed the
 /// place.
 const MAX_REJECTIONS: usize = 3;
+/// Steps of inverse iteration that turn the test function's border towards the crossing
+/// eigenvector at the earlier end of a step (docs/theory.md §11.2): σ's zero does not depend
+/// on the border, only how nearly linear σ is along the step.
+const INVERSE_ITERATIONS: usize = 4;
 
 /// The spectrum of one block (an irrep's, a wave number's).
 #[derive(Debug, Clone, Serialize)]
@@ -110,6 +114,25 @@ pub trait Blocks {
         lowest: usize,
         vectors: bool,
     ) -> Option<Spectrum>;
+    /// The minimally augmented test function of block `block` at (u, params)
+    /// (docs/theory.md §11.2): τ = 1/(bᵀ S⁻¹ b) for the block's matrix S and a unit border
+    /// b (−σ of the bordered system [[S, b], [bᵀ, 0]] [v; σ] = [0; 1]), zero exactly where S
+    /// is singular, of the sign of the crossing eigenvalue near its zero, from one
+    /// factorisation of the block; with
+    /// `border` `None` a start vector, turned by `iterations` steps of inverse iteration
+    /// towards the eigenvector of the eigenvalue nearest zero. Returns τ and the border
+    /// used. `None` (the default) where the blocks do not provide it: their crossings are
+    /// then localised on the eigenvalue alone.
+    fn test_function(
+        &mut self,
+        _u: &[f64],
+        _params: &[f64],
+        _block: usize,
+        _border: Option<&[f64]>,
+        _iterations: usize,
+    ) -> Option<(f64, Vec<f64>)> {
+        None
+    }
     /// The mode of block `block`'s eigenvector `v` (its coordinates in the block), in the
     /// coordinates a critical point carries it in (not yet normalised).
     fn mode(&self, block: usize, v: &[f64]) -> Vec<f64>;
@@ -258,6 +281,26 @@ impl<'a> Crossings<'a> {
                 warnings.push(not_localised(stopped));
                 continue;
             }
+            // One eigenvalue crosses: first on the block's test function, which needs one
+            // factorisation per trial point instead of an eigenvalue solve.
+            if n0.abs_diff(n1) == 1 {
+                let k = n0.min(n1);
+                if let Some((u, p, sp, g, bracket)) =
+                    self.by_test_function(&a, &b, mu, k, s1, &mut state)
+                {
+                    let at = (u, p, &sp, g);
+                    match self.critical_point(mu, k, at, bracket, after_step, control_turns) {
+                        Ok(point) => {
+                            found.push(point);
+                            continue;
+                        }
+                        Err(why) => {
+                            warnings.push(not_localised(why));
+                            continue;
+                        }
+                    }
+                }
+            }
             // The eigenvalues k = min(n0, n1) … max(n0, n1) − 1 at both ends.
             let needed = n0.max(n1) + 1;
             let mut ends: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
@@ -382,35 +425,18 @@ impl<'a> Crossings<'a> {
                     warnings.push(not_localised("the best point could not be evaluated"));
                     continue;
                 };
-                let block = &sp.blocks[mu];
-                if block.vectors.ncols() <= k {
-                    warnings.push(not_localised("no eigenvector at the best point"));
-                    continue;
+                let bracket = Bracket {
+                    width: (sides[1].0 - sides[0].0).abs() / s1.abs().max(f64::MIN_POSITIVE),
+                    ends: [
+                        (sides[0].1.clone(), sides[0].2.clone()),
+                        (sides[1].1.clone(), sides[1].2.clone()),
+                    ],
+                };
+                let at = (u, p, &sp, g_best);
+                match self.critical_point(mu, k, at, bracket, after_step, control_turns) {
+                    Ok(point) => found.push(point),
+                    Err(why) => warnings.push(not_localised(why)),
                 }
-                let v: Vec<f64> = block.vectors.column(k).iter().copied().collect();
-                let mut mode = self.blocks.mode(mu, &v);
-                let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
-                mode.iter_mut().for_each(|x| *x /= norm);
-                let dim = block.dim;
-                found.push(CriticalPoint {
-                    kind: CriticalKind::of(mu == 0, dim, self.held || !control_turns),
-                    irrep: block.irrep.clone(),
-                    multiplicity: dim,
-                    measures: (self.measure)(&u, &p),
-                    parameters: p,
-                    after_step,
-                    residual_eigenvalue: g_best.abs() / sp.scale,
-                    isotropy: self.blocks.isotropy(mu, &mode),
-                    mode,
-                    state: u,
-                    bracket: Some(Bracket {
-                        width: (sides[1].0 - sides[0].0).abs() / s1.abs().max(f64::MIN_POSITIVE),
-                        ends: [
-                            (sides[0].1.clone(), sides[0].2.clone()),
-                            (sides[1].1.clone(), sides[1].2.clone()),
-                        ],
-                    }),
-                });
             }
         }
         let control = |p: &CriticalPoint| self.control.map_or(0.0, |c| p.parameters[c]);
@@ -420,6 +446,117 @@ impl<'a> Crossings<'a> {
             .map(Event::Warning)
             .chain(found.into_iter().map(Event::Critical))
             .collect()
+    }
+}
+
+impl Crossings<'_> {
+    /// The crossing of the `k`-th eigenvalue of block `mu` between the ends `a` and `b` (s = 0
+    /// and s1; the block's count changes by one), localised on the block's test function σ
+    /// (docs/theory.md §11.2): its border b from inverse iteration at `a`, σ at both ends of
+    /// opposite signs (that of the crossing eigenvalue), the same regula falsi on s as on
+    /// the eigenvalue, each trial one state and one factorisation of the block; then the
+    /// eigenvalues and eigenvectors at the best state, accepted when the `k`-th is zero to
+    /// the same tolerance as the eigenvalue's own localisation. `None` where any of this
+    /// fails: the caller then localises on the eigenvalue itself.
+    fn by_test_function(
+        &mut self,
+        a: &End<'_>,
+        b: &End<'_>,
+        mu: usize,
+        k: usize,
+        s1: f64,
+        state: &mut dyn FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
+    ) -> Option<(Vec<f64>, Vec<f64>, Spectrum, f64, Bracket)> {
+        let tol = self.blocks.zero_eigenvalue() * a.spectrum.scale;
+        if tol <= 0.0 {
+            return None;
+        }
+        // The crossing eigenvalue is positive at the end with fewer negatives.
+        let rising = b.spectrum.blocks[mu].negative > a.spectrum.blocks[mu].negative;
+        let (g0, border) =
+            self.blocks
+                .test_function(a.u, a.params, mu, None, INVERSE_ITERATIONS)?;
+        let (g1, _) = self
+            .blocks
+            .test_function(b.u, b.params, mu, Some(&border), 0)?;
+        if (g0 > 0.0) != rising || g1 == 0.0 || (g1 > 0.0) == rising {
+            return None;
+        }
+        // The best trial's state, kept for the eigenvalues there.
+        let mut best: Option<(f64, f64, Vec<f64>, Vec<f64>)> = None;
+        // The bracket's ends as the search narrows it (the side of g0, the side of g1).
+        let mut sides = [
+            (0.0, a.u.to_vec(), a.params.to_vec()),
+            (s1, b.u.to_vec(), b.params.to_vec()),
+        ];
+        let blocks = &mut self.blocks;
+        let (s_best, _) = locate_within(
+            |s| {
+                if super::interrupt::requested() {
+                    return None;
+                }
+                let (u, p) = state(s)?;
+                let (g, _) = blocks.test_function(&u, &p, mu, Some(&border), 0)?;
+                sides[usize::from((g > 0.0) == (g1 > 0.0))] = (s, u.clone(), p.clone());
+                if best.as_ref().is_none_or(|t| g.abs() < t.1.abs()) {
+                    best = Some((s, g, u, p));
+                }
+                Some(g)
+            },
+            g0,
+            s1,
+            g1,
+            tol,
+            LOCATE_WIDTH,
+        )?;
+        let (u, p) = match best {
+            Some((s, _, u, p)) if s == s_best => (u, p),
+            _ => return None,
+        };
+        let sp = self.block_eigen(&u, &p, mu, k + 1, true)?;
+        let g = *sp.blocks[mu].eigenvalues.get(k)?;
+        let [(s0, u0, p0), (s2, u2, p2)] = sides;
+        let bracket = Bracket {
+            width: (s2 - s0).abs() / s1.abs().max(f64::MIN_POSITIVE),
+            ends: [(u0, p0), (u2, p2)],
+        };
+        (g.abs() <= tol).then_some((u, p, sp, g, bracket))
+    }
+
+    /// The critical point of the `k`-th eigenvalue `g` of block `mu` at the state (u, p),
+    /// whose block spectrum `sp` has its eigenvectors, localised within `bracket`: its kind,
+    /// mode and isotropy, or why it has none.
+    fn critical_point(
+        &self,
+        mu: usize,
+        k: usize,
+        (u, p, sp, g): (Vec<f64>, Vec<f64>, &Spectrum, f64),
+        bracket: Bracket,
+        after_step: usize,
+        control_turns: bool,
+    ) -> Result<CriticalPoint, &'static str> {
+        let block = &sp.blocks[mu];
+        if block.vectors.ncols() <= k {
+            return Err("no eigenvector at the best point");
+        }
+        let v: Vec<f64> = block.vectors.column(k).iter().copied().collect();
+        let mut mode = self.blocks.mode(mu, &v);
+        let norm = mode.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-300);
+        mode.iter_mut().for_each(|x| *x /= norm);
+        let dim = block.dim;
+        Ok(CriticalPoint {
+            kind: CriticalKind::of(mu == 0, dim, self.held || !control_turns),
+            irrep: block.irrep.clone(),
+            multiplicity: dim,
+            measures: (self.measure)(&u, &p),
+            parameters: p,
+            after_step,
+            residual_eigenvalue: g.abs() / sp.scale,
+            isotropy: self.blocks.isotropy(mu, &mode),
+            mode,
+            state: u,
+            bracket: Some(bracket),
+        })
     }
 }
 

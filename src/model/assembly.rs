@@ -29,6 +29,9 @@ pub struct Layout {
     slide: Vec<Option<Vec3>>,
     /// Held coordinates that move with a parameter ([`Layout::with_held_motion`]).
     held: Option<HeldMotion>,
+    /// Whether the triangles form a closed surface (every edge in two of them), found once:
+    /// every state's validity check asks ([`super::validity::state_defect_of`]).
+    closed: bool,
 }
 
 /// Held coordinates that move with a parameter Λ_p: node i sits at X_i + (Λ_p − Λ_p⁰) r_i,
@@ -100,6 +103,7 @@ impl Layout {
             .map(|d| std::array::from_fn(|k| slot(d[k / 3], d[k % 3])))
             .collect();
         Self {
+            closed: super::validity::is_closed(&triangles),
             triangles,
             dof_of,
             unknowns,
@@ -225,6 +229,11 @@ impl Layout {
     /// Triangles (node indices).
     pub fn triangles(&self) -> &[[usize; 3]] {
         &self.triangles
+    }
+
+    /// Whether the triangles form a closed surface ([`super::validity::is_closed`]).
+    pub fn is_closed(&self) -> bool {
+        self.closed
     }
 
     /// The unknown of coordinate `k` of node `i`, or `None` for a fixed node.

@@ -397,10 +397,11 @@ pub trait Model: Sync {
     /// Why the displacement `u` is not a membrane state (collapsed, torn, inside out or not
     /// finite; [`validity`]), or `None`.
     fn state_defect(&self, u: &[f64], params: &[f64]) -> Option<StateDefect> {
-        validity::state_defect(
+        validity::state_defect_of(
             self.reference(),
             self.layout().triangles(),
             &self.positions(u, params),
+            self.layout().is_closed(),
         )
     }
 }

@@ -94,6 +94,17 @@ pub fn state_defect(
     triangles: &[[usize; 3]],
     x: &[Vec3],
 ) -> Option<StateDefect> {
+    state_defect_of(reference, triangles, x, is_closed(triangles))
+}
+
+/// As [`state_defect`], with whether the mesh is closed known ([`is_closed`]; the layout
+/// keeps it): an inside-out state is tested only on a closed mesh.
+pub fn state_defect_of(
+    reference: &[Vec3],
+    triangles: &[[usize; 3]],
+    x: &[Vec3],
+    closed: bool,
+) -> Option<StateDefect> {
     if let Some(node) = x.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
         return Some(StateDefect::NotFinite { node });
     }
@@ -115,7 +126,7 @@ pub fn state_defect(
             });
         }
     }
-    if is_closed(triangles) {
+    if closed {
         let (v0, v) = (
             enclosed_volume(triangles, reference),
             enclosed_volume(triangles, x),
