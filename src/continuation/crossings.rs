@@ -449,6 +449,11 @@ impl<'a> Crossings<'a> {
     }
 }
 
+/// A crossing located on the test function: the state (u, every parameter), the block's
+/// spectrum there with its eigenvectors, the crossing eigenvalue, and the bracket it was found
+/// in.
+type Located = (Vec<f64>, Vec<f64>, Spectrum, f64, Bracket);
+
 impl Crossings<'_> {
     /// The crossing of the `k`-th eigenvalue of block `mu` between the ends `a` and `b` (s = 0
     /// and s1; the block's count changes by one), localised on the block's test function σ
@@ -466,7 +471,7 @@ impl Crossings<'_> {
         k: usize,
         s1: f64,
         state: &mut dyn FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
-    ) -> Option<(Vec<f64>, Vec<f64>, Spectrum, f64, Bracket)> {
+    ) -> Option<Located> {
         let tol = self.blocks.zero_eigenvalue() * a.spectrum.scale;
         if tol <= 0.0 {
             return None;
