@@ -836,3 +836,66 @@ fn a_path_stuck_at_its_start_names_the_cause() {
         "{line}"
     );
 }
+
+/// `memstab CMD ARGS` with the test hook `var` at `k`, the others removed, and the blocks of a
+/// spectrum analysed one at a time (so that the blocks after the k-th have not started).
+fn memstab_hook(args: &[&str], var: &str, k: usize) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_memstab"));
+    cmd.args(args);
+    for v in [
+        "MEMSTAB_INTERRUPT_AFTER_STEPS",
+        "MEMSTAB_INTERRUPT_AFTER_ITERATIONS",
+        "MEMSTAB_INTERRUPT_AFTER_BLOCKS",
+    ] {
+        cmd.env_remove(v);
+    }
+    cmd.env(var, k.to_string()).env("RAYON_NUM_THREADS", "1");
+    cmd.output().expect("the binary runs")
+}
+
+/// A signal while `spectrum` analyses its blocks (the balloon's 10 irreps of Ih) stops it
+/// before the next block: exit 130, one line saying so, no part of the spectrum printed (with
+/// or without `--json`). A signal after `export-matrix`'s solve, before its write: exit 130,
+/// no file.
+#[test]
+fn an_interrupt_between_spectrum_blocks_exits_130_with_nothing_printed() {
+    let balloon = scene("balloon.toml");
+    for json in [false, true] {
+        let mut args = vec!["spectrum", balloon.as_str()];
+        if json {
+            args.push("--json");
+        }
+        for k in [1, 4] {
+            let o = memstab_hook(&args, "MEMSTAB_INTERRUPT_AFTER_BLOCKS", k);
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(130), "{err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+            assert!(err.contains("between the tangent's 10 blocks"), "{err}");
+            assert!(
+                o.stdout.is_empty(),
+                "{}",
+                String::from_utf8_lossy(&o.stdout)
+            );
+        }
+    }
+    // Past the last block the hook never fires: the whole spectrum.
+    let o = memstab_hook(
+        &["spectrum", &balloon, "--json"],
+        "MEMSTAB_INTERRUPT_AFTER_BLOCKS",
+        11,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let spectrum: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(spectrum["irreps"].as_array().unwrap().len(), 10);
+    // export-matrix: the signal right after the start solve's last iteration.
+    let n = spectrum["iterations"].as_u64().unwrap() as usize;
+    let dir = tempfile::tempdir().unwrap();
+    let mtx = dir.path().join("K.mtx");
+    let args = ["export-matrix", &balloon, "--out", mtx.to_str().unwrap()];
+    let o = memstab_hook(&args, "MEMSTAB_INTERRUPT_AFTER_ITERATIONS", n);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("nothing was written"), "{err}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
