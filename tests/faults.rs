@@ -899,3 +899,98 @@ fn an_interrupt_between_spectrum_blocks_exits_130_with_nothing_printed() {
     assert!(err.contains("nothing was written"), "{err}");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// A path that stalls after some points says which known cause fits its last failure and what
+/// to try, in one line of the summary and in path.json: the corrector's budget of two
+/// iterations (the demo with `max-iterations = 2`, which stalls after point 2).
+#[test]
+fn a_path_that_stalls_names_the_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    assert_eq!(text.matches("\nstop-stretch = 4.0").count(), 1);
+    let path = dir.path().join("short.toml");
+    std::fs::write(
+        &path,
+        text.replacen(
+            "\nstop-stretch = 4.0",
+            "\nstop-stretch = 4.0\nmax-iterations = 2\nmin-step = 0.015",
+            1,
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = run(path.to_str().unwrap(), &out, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = String::from_utf8_lossy(&o.stdout);
+    assert!(summary.contains("stopped: step cut below"), "{summary}");
+    let hints: Vec<&str> = summary
+        .lines()
+        .filter(|l| l.contains("likely cause"))
+        .collect();
+    assert_eq!(hints.len(), 1, "{summary}");
+    let line = hints[0];
+    assert!(
+        line.starts_with("warning: the path stopped after point "),
+        "{line}"
+    );
+    assert!(
+        line.contains("`max-iterations` = 2") && line.contains("smaller `max-step`"),
+        "{line}"
+    );
+    let report = json(&out.join("path.json"));
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("`max-iterations` = 2"), "{warnings}");
+}
+
+/// Each kind of failed step has its own cause and remedy: the branch-jump guard a smaller
+/// `max-step`, a corrector that does not converge beside a plane the cubic penalty, a singular
+/// system or an inadmissible state a bound on the control.
+#[test]
+fn each_kind_of_stall_has_its_hint() {
+    use memstab::results::{Stalled, StepFailure};
+    let text = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    let plain = memstab::scene::Scene::from_toml_str(&text, "demo").unwrap();
+    let at = text.find("\n[parameters").unwrap();
+    let plane = "\n[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -2.0\n\
+                 penalty = 1000.0\nexponent = 1\n";
+    let with_plane = format!("{}{plane}{}", &text[..at], &text[at..]);
+    let contact = memstab::scene::Scene::from_toml_str(&with_plane, "plane").unwrap();
+    let opts = memstab::continuation::PathOptions {
+        max_step: 0.25,
+        max_iterations: 12,
+        ..Default::default()
+    };
+    let hint = |scene: &memstab::scene::Scene, kind: StepFailure| {
+        let stalled = Stalled {
+            min_step: 1e-6,
+            after: 7,
+            control: 0.5,
+            why: "the last failure".into(),
+            kind,
+        };
+        let line = memstab::analysis::stall_hint(scene, &stalled, "p", &opts);
+        assert!(!line.contains('\n'), "{line}");
+        assert!(
+            line.starts_with("the path stopped after point 7 (p = 0.5): likely cause: "),
+            "{line}"
+        );
+        line
+    };
+    let jump = hint(&plain, StepFailure::BranchJump);
+    assert!(jump.contains("sharp turn") && jump.contains("`max-step` in [analysis] (now 0.25)"));
+    let stuck = hint(&plain, StepFailure::NotConverged);
+    assert!(stuck.contains("`max-iterations` = 12"), "{stuck}");
+    let touching = hint(&contact, StepFailure::NotConverged);
+    assert!(
+        touching.contains("contact change") && touching.contains("`exponent = 3`"),
+        "{touching}"
+    );
+    for kind in [
+        StepFailure::Singular,
+        StepFailure::Degenerate,
+        StepFailure::Model,
+    ] {
+        let line = hint(&plain, kind);
+        assert!(line.contains("`[parameters.p] min`/`max`"), "{line}");
+    }
+}
