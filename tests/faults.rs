@@ -994,3 +994,42 @@ fn each_kind_of_stall_has_its_hint() {
         assert!(line.contains("`[parameters.p] min`/`max`"), "{line}");
     }
 }
+
+/// Twenty runs of the demo started at once into one directory: each either completes or is
+/// refused up front with the lock's message (exit 2, one line); nothing else. The directory's
+/// manifest verifies, and no lock is left.
+#[test]
+fn twenty_concurrent_runs_into_one_directory_complete_or_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let demo = scene("demo.toml");
+    let children: Vec<std::process::Child> = (0..20)
+        .map(|_| {
+            Command::new(env!("CARGO_BIN_EXE_memstab"))
+                .args(["run", &demo, "--out", out.to_str().unwrap(), "--quiet"])
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_ITERATIONS")
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_BLOCKS")
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut completed = 0;
+    for child in children {
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        match o.status.code() {
+            Some(0) => completed += 1,
+            Some(2) => {
+                assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+                assert!(err.contains("in use by another memstab run"), "{err}");
+            }
+            c => panic!("exit {c:?}: {err}"),
+        }
+    }
+    assert!(completed >= 1, "no run completed");
+    assert_eq!(assert_manifest_verifies(&out), "the stretch reached 4");
+    assert!(!out.join(memstab::output::LOCK).exists());
+}
