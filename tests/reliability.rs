@@ -842,3 +842,39 @@ fn a_scene_or_a_file_it_names_that_is_a_fifo_is_refused_before_it_is_opened() {
     assert_rejected(&o, &["start.from", "path.json", "a FIFO"]);
     assert!(!out.exists(), "nothing written");
 }
+
+/// A finished run whose `path.json`, `path.states` or `manifest.json` has been replaced by a
+/// FIFO: `spectrum RUN_DIR --point N` refuses it in one line saying so (exit 2) instead of
+/// waiting for a writer. Skipped where `mkfifo` is missing.
+#[cfg(unix)]
+#[test]
+fn a_run_directory_file_that_is_a_fifo_is_refused_before_it_is_opened() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let o = memstab(&[
+        "run",
+        &scene("demo.toml"),
+        "--out",
+        run.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in ["path.json", "path.states", "manifest.json"] {
+        let file = run.join(name);
+        let kept = std::fs::read(&file).unwrap();
+        std::fs::remove_file(&file).unwrap();
+        match Command::new("mkfifo").arg(&file).status() {
+            Ok(s) if s.success() => {}
+            _ => {
+                eprintln!("skipped: mkfifo is missing or failed");
+                return;
+            }
+        }
+        let o = memstab_bounded(&["spectrum", run.to_str().unwrap(), "--point", "2"]);
+        assert_rejected(&o, &[name, "a FIFO, not a regular file"]);
+        std::fs::remove_file(&file).unwrap();
+        std::fs::write(&file, kept).unwrap();
+    }
+    let o = memstab_bounded(&["spectrum", run.to_str().unwrap(), "--point", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
