@@ -153,6 +153,8 @@ pub struct Stability<'a> {
     holds: Vec<[f64; 6]>,
     /// How block eigenvalues are computed.
     method: BlockEigen,
+    /// Whether a stop request skips the blocks not started yet ([`Stability::interruptible`]).
+    interruptible: bool,
     /// Per block, the sparse factorisation of its bordered matrix and its border size.
     factorizations: Vec<Mutex<Option<(usize, SymmetricFactorization)>>>,
 }
@@ -328,6 +330,7 @@ impl<'a> Stability<'a> {
             motions: model.rigid_motions(),
             holds: model.held_motions(),
             method: BlockEigen::ByCost,
+            interruptible: false,
             factorizations: basis.irreps.iter().map(|_| Mutex::new(None)).collect(),
         }
     }
@@ -338,6 +341,17 @@ impl<'a> Stability<'a> {
     /// `usize::MAX` every block gets its full dense spectrum. (`BlockEigen::DenseUpTo`.)
     pub fn with_dense_limit(mut self, limit: usize) -> Self {
         self.method = BlockEigen::DenseUpTo(limit);
+        self
+    }
+
+    /// A stop request ([`interrupt::requested`](crate::continuation::interrupt::requested))
+    /// skips the blocks not started yet: their spectra come back empty and incomplete, so the
+    /// caller must check the request before it uses the result. For a one-point spectrum (a
+    /// large mesh has many blocks, each a long eigenvalue solve); a path's index at every point
+    /// is never cut short this way. Each block done counts for the test hook
+    /// [`AFTER_BLOCKS`](crate::continuation::interrupt::AFTER_BLOCKS).
+    pub fn interruptible(mut self) -> Self {
+        self.interruptible = true;
         self
     }
 
@@ -808,7 +822,8 @@ impl<'a> Stability<'a> {
         let block = |(mu, ib): (usize, &crate::adapted::IrrepBasis)| -> BlockSpectrum {
             let b = ib.first();
             let m = b.dim();
-            if only.is_some_and(|o| o != mu) {
+            let skipped = self.interruptible && crate::continuation::interrupt::requested();
+            if skipped || only.is_some_and(|o| o != mu) {
                 return BlockSpectrum {
                     irrep: ib.name.clone(),
                     dim: ib.dim,
@@ -942,7 +957,13 @@ impl<'a> Stability<'a> {
             .irreps
             .par_iter()
             .enumerate()
-            .map(block)
+            .map(|item| {
+                let done = block(item);
+                if self.interruptible {
+                    crate::continuation::interrupt::block_done();
+                }
+                done
+            })
             .collect();
         let index = blocks.iter().map(|b| b.dim * b.negative).sum();
         Ok(Spectrum {

@@ -836,3 +836,200 @@ fn a_path_stuck_at_its_start_names_the_cause() {
         "{line}"
     );
 }
+
+/// `memstab CMD ARGS` with the test hook `var` at `k`, the others removed, and the blocks of a
+/// spectrum analysed one at a time (so that the blocks after the k-th have not started).
+fn memstab_hook(args: &[&str], var: &str, k: usize) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_memstab"));
+    cmd.args(args);
+    for v in [
+        "MEMSTAB_INTERRUPT_AFTER_STEPS",
+        "MEMSTAB_INTERRUPT_AFTER_ITERATIONS",
+        "MEMSTAB_INTERRUPT_AFTER_BLOCKS",
+    ] {
+        cmd.env_remove(v);
+    }
+    cmd.env(var, k.to_string()).env("RAYON_NUM_THREADS", "1");
+    cmd.output().expect("the binary runs")
+}
+
+/// A signal while `spectrum` analyses its blocks (the balloon's 10 irreps of Ih) stops it
+/// before the next block: exit 130, one line saying so, no part of the spectrum printed (with
+/// or without `--json`). A signal after `export-matrix`'s solve, before its write: exit 130,
+/// no file.
+#[test]
+fn an_interrupt_between_spectrum_blocks_exits_130_with_nothing_printed() {
+    let balloon = scene("balloon.toml");
+    for json in [false, true] {
+        let mut args = vec!["spectrum", balloon.as_str()];
+        if json {
+            args.push("--json");
+        }
+        for k in [1, 4] {
+            let o = memstab_hook(&args, "MEMSTAB_INTERRUPT_AFTER_BLOCKS", k);
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(130), "{err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+            assert!(err.contains("between the tangent's 10 blocks"), "{err}");
+            assert!(
+                o.stdout.is_empty(),
+                "{}",
+                String::from_utf8_lossy(&o.stdout)
+            );
+        }
+    }
+    // Past the last block the hook never fires: the whole spectrum.
+    let o = memstab_hook(
+        &["spectrum", &balloon, "--json"],
+        "MEMSTAB_INTERRUPT_AFTER_BLOCKS",
+        11,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let spectrum: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(spectrum["irreps"].as_array().unwrap().len(), 10);
+    // export-matrix: the signal right after the start solve's last iteration.
+    let n = spectrum["iterations"].as_u64().unwrap() as usize;
+    let dir = tempfile::tempdir().unwrap();
+    let mtx = dir.path().join("K.mtx");
+    let args = ["export-matrix", &balloon, "--out", mtx.to_str().unwrap()];
+    let o = memstab_hook(&args, "MEMSTAB_INTERRUPT_AFTER_ITERATIONS", n);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("nothing was written"), "{err}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+/// A path that stalls after some points says which known cause fits its last failure and what
+/// to try, in one line of the summary and in path.json: the corrector's budget of two
+/// iterations (the demo with `max-iterations = 2`, which stalls after point 2).
+#[test]
+fn a_path_that_stalls_names_the_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    assert_eq!(text.matches("\nstop-stretch = 4.0").count(), 1);
+    let path = dir.path().join("short.toml");
+    std::fs::write(
+        &path,
+        text.replacen(
+            "\nstop-stretch = 4.0",
+            "\nstop-stretch = 4.0\nmax-iterations = 2\nmin-step = 0.015",
+            1,
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = run(path.to_str().unwrap(), &out, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = String::from_utf8_lossy(&o.stdout);
+    assert!(summary.contains("stopped: step cut below"), "{summary}");
+    let hints: Vec<&str> = summary
+        .lines()
+        .filter(|l| l.contains("likely cause"))
+        .collect();
+    assert_eq!(hints.len(), 1, "{summary}");
+    let line = hints[0];
+    assert!(
+        line.starts_with("warning: the path stopped after point "),
+        "{line}"
+    );
+    assert!(
+        line.contains("`max-iterations` = 2") && line.contains("smaller `max-step`"),
+        "{line}"
+    );
+    let report = json(&out.join("path.json"));
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("`max-iterations` = 2"), "{warnings}");
+}
+
+/// Each kind of failed step has its own cause and remedy: the branch-jump guard a smaller
+/// `max-step`, a corrector that does not converge beside a plane the cubic penalty, a singular
+/// system or an inadmissible state a bound on the control.
+#[test]
+fn each_kind_of_stall_has_its_hint() {
+    use memstab::results::{Stalled, StepFailure};
+    let text = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    let plain = memstab::scene::Scene::from_toml_str(&text, "demo").unwrap();
+    let at = text.find("\n[parameters").unwrap();
+    let plane = "\n[[effect]]\ntype = \"plane\"\nnormal = [0.0, 0.0, 1.0]\noffset = -2.0\n\
+                 penalty = 1000.0\nexponent = 1\n";
+    let with_plane = format!("{}{plane}{}", &text[..at], &text[at..]);
+    let contact = memstab::scene::Scene::from_toml_str(&with_plane, "plane").unwrap();
+    let opts = memstab::continuation::PathOptions {
+        max_step: 0.25,
+        max_iterations: 12,
+        ..Default::default()
+    };
+    let hint = |scene: &memstab::scene::Scene, kind: StepFailure| {
+        let stalled = Stalled {
+            min_step: 1e-6,
+            after: 7,
+            control: 0.5,
+            why: "the last failure".into(),
+            kind,
+        };
+        let line = memstab::analysis::stall_hint(scene, &stalled, "p", &opts);
+        assert!(!line.contains('\n'), "{line}");
+        assert!(
+            line.starts_with("the path stopped after point 7 (p = 0.5): likely cause: "),
+            "{line}"
+        );
+        line
+    };
+    let jump = hint(&plain, StepFailure::BranchJump);
+    assert!(jump.contains("sharp turn") && jump.contains("`max-step` in [analysis] (now 0.25)"));
+    let stuck = hint(&plain, StepFailure::NotConverged);
+    assert!(stuck.contains("`max-iterations` = 12"), "{stuck}");
+    let touching = hint(&contact, StepFailure::NotConverged);
+    assert!(
+        touching.contains("contact change") && touching.contains("`exponent = 3`"),
+        "{touching}"
+    );
+    for kind in [
+        StepFailure::Singular,
+        StepFailure::Degenerate,
+        StepFailure::Model,
+    ] {
+        let line = hint(&plain, kind);
+        assert!(line.contains("`[parameters.p] min`/`max`"), "{line}");
+    }
+}
+
+/// Twenty runs of the demo started at once into one directory: each either completes or is
+/// refused up front with the lock's message (exit 2, one line); nothing else. The directory's
+/// manifest verifies, and no lock is left.
+#[test]
+fn twenty_concurrent_runs_into_one_directory_complete_or_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let demo = scene("demo.toml");
+    let children: Vec<std::process::Child> = (0..20)
+        .map(|_| {
+            Command::new(env!("CARGO_BIN_EXE_memstab"))
+                .args(["run", &demo, "--out", out.to_str().unwrap(), "--quiet"])
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_STEPS")
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_ITERATIONS")
+                .env_remove("MEMSTAB_INTERRUPT_AFTER_BLOCKS")
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut completed = 0;
+    for child in children {
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        match o.status.code() {
+            Some(0) => completed += 1,
+            Some(2) => {
+                assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+                assert!(err.contains("in use by another memstab run"), "{err}");
+            }
+            c => panic!("exit {c:?}: {err}"),
+        }
+    }
+    assert!(completed >= 1, "no run completed");
+    assert_eq!(assert_manifest_verifies(&out), "the stretch reached 4");
+    assert!(!out.join(memstab::output::LOCK).exists());
+}

@@ -147,7 +147,7 @@ fn requests_over_the_limits_are_refused_before_they_start() {
     }
     assert_rejected(
         &memstab(&["run", "/dev/zero", "--out", out]),
-        &["/dev/zero", "larger than"],
+        &["/dev/zero", "a device, not a regular file"],
     );
     assert_rejected(
         &memstab(&["group", "C800v"]),
@@ -742,4 +742,139 @@ fn a_start_at_round_off_along_a_free_translation_is_accepted_with_a_warning() {
         report["warnings"].to_string().contains("round-off"),
         "{report}"
     );
+}
+
+/// `memstab ARGS`, ended (and the test failed) if it has not exited within a minute: a read
+/// that blocks forever must fail the test, not hang it.
+#[cfg(unix)]
+fn memstab_bounded(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(60) {
+            child.kill().unwrap();
+            let _ = child.wait();
+            panic!("memstab {args:?} still runs after a minute: blocked");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A scene that is a FIFO, and a mesh file or a `[start] from` a scene names that is one, is
+/// refused before it is opened (opening a FIFO waits for a writer, and no signal ends that
+/// wait): exit 2, one line naming the path (and the key), nothing written. A directory is
+/// refused the same way. Skipped where `mkfifo` is missing.
+#[cfg(unix)]
+#[test]
+fn a_scene_or_a_file_it_names_that_is_a_fifo_is_refused_before_it_is_opened() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipe = dir.path().join("pipe.toml");
+    match Command::new("mkfifo").arg(&pipe).status() {
+        Ok(s) if s.success() => {}
+        _ => {
+            eprintln!("skipped: mkfifo is missing or failed");
+            return;
+        }
+    }
+    let out = dir.path().join("out");
+    let out_s = out.to_str().unwrap();
+    let p = pipe.to_str().unwrap();
+    for args in [
+        vec!["run", p, "--out", out_s, "--quiet"],
+        vec!["spectrum", p],
+        vec!["export-matrix", p, "--out", &format!("{out_s}.mtx")],
+    ] {
+        let o = memstab_bounded(&args);
+        assert_rejected(&o, &[p, "a FIFO, not a regular file"]);
+    }
+    let d = dir.path().to_str().unwrap();
+    assert_rejected(
+        &memstab_bounded(&["run", d, "--out", out_s]),
+        &[d, "a directory, not a regular file"],
+    );
+    // A mesh file that is a FIFO.
+    let disc = std::fs::read_to_string(scene("disc_file.toml")).unwrap();
+    assert!(disc.contains("path = \"meshes/disc_c7v.msh\""));
+    let mesh_pipe = dir.path().join("pipe.msh");
+    assert!(Command::new("mkfifo")
+        .arg(&mesh_pipe)
+        .status()
+        .unwrap()
+        .success());
+    let s = dir.path().join("mesh.toml");
+    std::fs::write(
+        &s,
+        disc.replacen(
+            "path = \"meshes/disc_c7v.msh\"",
+            &format!("path = '{}'", mesh_pipe.display()),
+            1,
+        ),
+    )
+    .unwrap();
+    let o = memstab_bounded(&["run", s.to_str().unwrap(), "--out", out_s]);
+    assert_rejected(&o, &["mesh.path", "pipe.msh", "a FIFO"]);
+    // A `[start] from` that is a FIFO.
+    let demo = std::fs::read_to_string(scene("demo.toml")).unwrap();
+    assert!(demo.contains("[start]\nstretch = 1.05\n"));
+    let from_pipe = dir.path().join("path.json");
+    assert!(Command::new("mkfifo")
+        .arg(&from_pipe)
+        .status()
+        .unwrap()
+        .success());
+    let s = dir.path().join("from.toml");
+    std::fs::write(
+        &s,
+        demo.replacen(
+            "[start]\nstretch = 1.05\n",
+            &format!("[start]\nfrom = '{}'\npoint = 3\n", from_pipe.display()),
+            1,
+        ),
+    )
+    .unwrap();
+    let o = memstab_bounded(&["run", s.to_str().unwrap(), "--out", out_s]);
+    assert_rejected(&o, &["start.from", "path.json", "a FIFO"]);
+    assert!(!out.exists(), "nothing written");
+}
+
+/// A finished run whose `path.json`, `path.states` or `manifest.json` has been replaced by a
+/// FIFO: `spectrum RUN_DIR --point N` refuses it in one line saying so (exit 2) instead of
+/// waiting for a writer. Skipped where `mkfifo` is missing.
+#[cfg(unix)]
+#[test]
+fn a_run_directory_file_that_is_a_fifo_is_refused_before_it_is_opened() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let o = memstab(&[
+        "run",
+        &scene("demo.toml"),
+        "--out",
+        run.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in ["path.json", "path.states", "manifest.json"] {
+        let file = run.join(name);
+        let kept = std::fs::read(&file).unwrap();
+        std::fs::remove_file(&file).unwrap();
+        match Command::new("mkfifo").arg(&file).status() {
+            Ok(s) if s.success() => {}
+            _ => {
+                eprintln!("skipped: mkfifo is missing or failed");
+                return;
+            }
+        }
+        let o = memstab_bounded(&["spectrum", run.to_str().unwrap(), "--point", "2"]);
+        assert_rejected(&o, &[name, "a FIFO, not a regular file"]);
+        std::fs::remove_file(&file).unwrap();
+        std::fs::write(&file, kept).unwrap();
+    }
+    let o = memstab_bounded(&["spectrum", run.to_str().unwrap(), "--point", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }

@@ -97,6 +97,13 @@ pub(crate) fn run(args: &ExportArgs) -> Result<(), CliError> {
         .model
         .evaluate(&u, &params, Request::ALL, &mut eval)
         .map_err(|e| CliError::Failure(format!("evaluating the tangent: {e}")))?;
+    // A signal after the solve: nothing is written (a started write finishes whole).
+    if memstab::continuation::interrupt::requested() {
+        return Err(CliError::Interrupted(format!(
+            "stopped before {} was written; nothing was written",
+            args.out.display()
+        )));
+    }
     let comment = format!(
         "memstab {} export-matrix: tangent K of scene '{}' at {}",
         env!("CARGO_PKG_VERSION"),

@@ -102,7 +102,7 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let held = memstab::analysis::analysis_of(&study.scene.analysis).held();
     let adapted = AdaptedBasis::new(&study.action, study.model.layout())
         .map_err(|e| CliError::Input(format!("scene '{origin}': {e}")))?;
-    let stability = Stability::new(&study.model, &adapted);
+    let stability = Stability::new(&study.model, &adapted).interruptible();
     let mut eval = study.model.new_evaluation();
     let spectrum = stability
         .analyse(
@@ -119,6 +119,14 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
                 one_line(&e.to_string())
             ))
         })?;
+    // A signal while the blocks were analysed: the blocks not started were skipped, so no
+    // part of the spectrum is printed.
+    if memstab::continuation::interrupt::requested() {
+        return Err(CliError::Interrupted(format!(
+            "stopped between the tangent's {} blocks; nothing was printed",
+            spectrum.blocks.len()
+        )));
+    }
     let scale = spectrum.scale;
     let rel = |v: &f64| v / scale;
     if args.json {

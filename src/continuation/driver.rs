@@ -1010,7 +1010,23 @@ impl From<Stalled> for crate::results::Stalled {
             min_step: s.min_step,
             after: s.after,
             control: s.control,
+            kind: s.why.failure(),
             why: s.why.to_string(),
+        }
+    }
+}
+
+impl StepError {
+    /// Its kind, as plain data.
+    pub fn failure(&self) -> crate::results::StepFailure {
+        use crate::results::StepFailure as F;
+        match self {
+            Self::Model(_) => F::Model,
+            Self::Singular | Self::SingularTangent => F::Singular,
+            Self::Diverged => F::Diverged,
+            Self::BranchJump { .. } => F::BranchJump,
+            Self::Degenerate(_) => F::Degenerate,
+            Self::NotConverged { .. } => F::NotConverged,
         }
     }
 }

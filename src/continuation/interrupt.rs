@@ -12,8 +12,9 @@
 //! inside the process right after the k-th step accepted (counted over the whole process: a
 //! path's steps, then its branches', a curve's or a surface's, a linear-buckling sweep's
 //! samples), and with `MEMSTAB_INTERRUPT_AFTER_ITERATIONS=k` right after the k-th Newton
-//! iteration at a fixed control (a start solve's), as a signal arriving at that moment would
-//! make it. They let the tests interrupt a command at a chosen point of its work without timing
+//! iteration at a fixed control (a start solve's), and with `MEMSTAB_INTERRUPT_AFTER_BLOCKS=k`
+//! right after the k-th block of a one-point spectrum (`memstab spectrum`) is done, as a signal
+//! arriving at that moment would make it. They let the tests interrupt a command at a chosen point of its work without timing
 //! a signal.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -22,11 +23,14 @@ use std::sync::OnceLock;
 static REQUESTED: AtomicBool = AtomicBool::new(false);
 static ACCEPTED: AtomicUsize = AtomicUsize::new(0);
 static ITERATIONS: AtomicUsize = AtomicUsize::new(0);
+static BLOCKS: AtomicUsize = AtomicUsize::new(0);
 
 /// The environment variable of the test hook counting accepted steps.
 pub const AFTER_STEPS: &str = "MEMSTAB_INTERRUPT_AFTER_STEPS";
 /// The environment variable of the test hook counting Newton iterations at a fixed control.
 pub const AFTER_ITERATIONS: &str = "MEMSTAB_INTERRUPT_AFTER_ITERATIONS";
+/// The environment variable of the test hook counting the blocks of a one-point spectrum.
+pub const AFTER_BLOCKS: &str = "MEMSTAB_INTERRUPT_AFTER_BLOCKS";
 
 /// Asks every running analysis to stop at its next point (safe from a signal handler).
 pub fn request() {
@@ -50,6 +54,13 @@ pub fn step_accepted() {
 pub fn iteration_done() {
     static AFTER: OnceLock<Option<usize>> = OnceLock::new();
     count(&AFTER, AFTER_ITERATIONS, &ITERATIONS);
+}
+
+/// Counts one block of a one-point spectrum done; makes the request after the k-th when the
+/// test hook [`AFTER_BLOCKS`] asks for it.
+pub fn block_done() {
+    static AFTER: OnceLock<Option<usize>> = OnceLock::new();
+    count(&AFTER, AFTER_BLOCKS, &BLOCKS);
 }
 
 /// Counts one event in `counter`; requests a stop at the k-th when `var` is k.

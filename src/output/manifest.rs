@@ -46,7 +46,7 @@ pub fn sha256(path: &Path) -> Result<String, OutputError> {
         path: path.to_path_buf(),
         source,
     };
-    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut file = super::open_regular(path).map_err(io)?;
     let mut hasher = Sha256::new();
     let mut buf = vec![0u8; 1 << 16];
     loop {
@@ -122,7 +122,7 @@ pub fn add_to_manifest(
     default: &str,
 ) -> Result<PathBuf, OutputError> {
     let path = dir.join(MANIFEST);
-    let old: Option<serde_json::Value> = std::fs::read_to_string(&path)
+    let old: Option<serde_json::Value> = super::read_regular_string(&path)
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok());
     if old.is_none() && dir.join("path.json").is_file() {
@@ -181,7 +181,7 @@ pub enum Verified {
 /// readable).
 pub fn verify(dir: &Path, names: &[&str]) -> Result<Verified, String> {
     let path = dir.join(MANIFEST);
-    let text = match std::fs::read_to_string(&path) {
+    let text = match super::read_regular_string(&path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return Ok(Verified::NoManifest(format!(
@@ -216,6 +216,13 @@ pub fn verify(dir: &Path, names: &[&str]) -> Result<Verified, String> {
                 path.display()
             )
         };
+        if let Some(what) = crate::scene::not_regular(&file) {
+            return Err(format!(
+                "cannot read {}: it is {what}, not a regular file (replaced after the run); run \
+                 the scene again",
+                file.display()
+            ));
+        }
         let bytes = std::fs::metadata(&file)
             .map_err(|e| format!("cannot read {}: {e}", file.display()))?
             .len();

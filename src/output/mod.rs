@@ -181,6 +181,32 @@ fn write_whole(
     meshes::write::write_whole(path, fill).map_err(|e| OutputError::from_mesh(path, e))
 }
 
+/// Opens `path` for reading when it is a regular file; a FIFO, a device or a directory is an
+/// error of kind `InvalidInput` saying what it is, found from its metadata before it is opened
+/// (opening a FIFO waits for a writer, and a signal does not end that wait).
+pub fn open_regular(path: &Path) -> io::Result<std::fs::File> {
+    if let Some(what) = crate::scene::not_regular(path) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("it is {what}, not a regular file"),
+        ));
+    }
+    std::fs::File::open(path)
+}
+
+/// The bytes of the regular file `path` ([`open_regular`]).
+pub fn read_regular(path: &Path) -> io::Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    io::Read::read_to_end(&mut open_regular(path)?, &mut bytes)?;
+    Ok(bytes)
+}
+
+/// The text of the regular file `path` ([`open_regular`]).
+pub fn read_regular_string(path: &Path) -> io::Result<String> {
+    String::from_utf8(read_regular(path)?)
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
+}
+
 /// Fails with [`OutputError::NotRegular`] when `path` exists and is not a regular file: what
 /// every writer refuses to replace, for commands to check before they start work.
 pub fn check_target(path: &Path) -> Result<(), OutputError> {

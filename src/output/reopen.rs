@@ -76,7 +76,7 @@ impl FinishedRun {
     /// Reads `dir/path.json`.
     pub fn read(dir: &Path) -> Result<Self, ReopenError> {
         let file = dir.join("path.json");
-        let data = std::fs::read_to_string(&file).map_err(|e| {
+        let data = super::read_regular_string(&file).map_err(|e| {
             ReopenError(format!(
                 "'{}': cannot read {}: {e} (RUN_DIR must be the output directory of memstab run)",
                 dir.display(),

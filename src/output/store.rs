@@ -141,7 +141,7 @@ pub fn read_states(json: &Path) -> Result<SavedRun, ReadStatesError> {
         path: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(json).map_err(|e| io_err(json, e))?;
+    let text = super::read_regular_string(json).map_err(|e| io_err(json, e))?;
     let doc: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| invalid(json, format!("not JSON: {e}")))?;
     let parameters: Vec<String> = doc["parameters"]
@@ -162,7 +162,7 @@ pub fn read_states(json: &Path) -> Result<SavedRun, ReadStatesError> {
     let json_name = super::file_name(json);
     super::verify_or_warn(dir, &[json_name.as_str(), name]).map_err(ReadStatesError::Unverified)?;
     let file = dir.join(name);
-    let mut f = std::fs::File::open(&file).map_err(|e| io_err(&file, e))?;
+    let mut f = super::open_regular(&file).map_err(|e| io_err(&file, e))?;
     let mut head = [0u8; 32];
     io::Read::read_exact(&mut f, &mut head).map_err(|e| io_err(&file, e))?;
     if &head[..8] != STATES_MAGIC {
@@ -211,7 +211,7 @@ impl SavedRun {
         }
         let p = self.parameters.len();
         let record = 8 * (p + self.unknowns);
-        let mut f = std::fs::File::open(&self.file).map_err(|source| ReadStatesError::Io {
+        let mut f = super::open_regular(&self.file).map_err(|source| ReadStatesError::Io {
             path: self.file.clone(),
             source,
         })?;
@@ -299,7 +299,7 @@ pub fn write_critical_states(
 /// Reads `dir/critical.states` ([`write_critical_states`]).
 pub fn read_critical_states(dir: &Path) -> Result<Vec<SavedCritical>, ReadStatesError> {
     let path = dir.join(CRITICAL_FILE);
-    let bytes = std::fs::read(&path).map_err(|source| ReadStatesError::Io {
+    let bytes = super::read_regular(&path).map_err(|source| ReadStatesError::Io {
         path: path.clone(),
         source,
     })?;

@@ -35,5 +35,5 @@ pub use path::{
 pub use run::{BranchTimes, Outcome, PhaseTimes, RunResult, RunTimes};
 pub use spectra::{Spectra, SpectrumIrrep, SpectrumRow, SPECTRUM_EIGENVALUES};
 pub use state::{State, StateKind};
-pub use stop::{Extremum, Stalled, StopReason};
+pub use stop::{Extremum, Stalled, StepFailure, StopReason};
 pub use surface::{CriticalLine, CriticalLinePoint, SurfacePath, SurfaceReport, SurfaceVertex};

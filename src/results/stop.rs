@@ -125,6 +125,26 @@ pub struct Stalled {
     pub control: f64,
     /// Why the last attempt failed, in words.
     pub why: String,
+    /// The kind of that failure, for the cause a summary names.
+    pub kind: StepFailure,
+}
+
+/// The kind of a failed continuation step, as plain data (the driver's `StepError` without
+/// its numbers): what a stall's hint is chosen by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepFailure {
+    /// The model could not be evaluated (an element or a global quantity left its domain).
+    Model,
+    /// The extended Jacobian, or the tangent system, was singular.
+    Singular,
+    /// The corrector left the finite numbers.
+    Diverged,
+    /// The branch-jump guard refused the step (far from the predictor, a sharp turn).
+    BranchJump,
+    /// The corrector converged to an inadmissible state (collapsed, torn, inside out).
+    Degenerate,
+    /// The corrector used its iteration budget.
+    NotConverged,
 }
 
 impl std::fmt::Display for Stalled {

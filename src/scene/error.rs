@@ -15,6 +15,15 @@ pub enum SceneError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The path names no regular file (a FIFO, a device, a directory): refused before it is
+    /// opened, since opening a FIFO waits for a writer.
+    #[error("{}: the scene file is {what}, not a regular file; give the path of a scene's TOML file", path.display())]
+    NotRegular {
+        /// The path.
+        path: PathBuf,
+        /// What it is (`a FIFO`, `a directory` …).
+        what: &'static str,
+    },
     /// The file is larger than a scene may be (`MEMSTAB_MAX_SCENE_BYTES`).
     #[error("{}: the scene file is larger than {} (MEMSTAB_MAX_SCENE_BYTES); a scene is a short text", path.display(), crate::limits::bytes(*limit))]
     TooLarge {

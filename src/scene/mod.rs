@@ -852,6 +852,34 @@ impl TruncatedSphereMesh {
     }
 }
 
+/// What `path` is when it exists and is not a regular file (`a FIFO`, `a directory` …),
+/// by its metadata, without opening it (opening a FIFO waits for a writer); `None` for a
+/// regular file (a symbolic link to one included) and for a path that does not exist (its
+/// read says so).
+pub fn not_regular(path: &Path) -> Option<&'static str> {
+    let t = std::fs::metadata(path).ok()?.file_type();
+    if t.is_file() {
+        return None;
+    }
+    if t.is_dir() {
+        return Some("a directory");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return Some("a FIFO");
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return Some("a device");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("a special file")
+}
+
 impl Scene {
     /// Parses and validates a scene from TOML text; `origin` (a file name or a label) prefixes
     /// error messages. Checks everything that does not need the mesh; call
@@ -870,7 +898,15 @@ impl Scene {
             path: path.to_path_buf(),
             source,
         };
-        // A bounded read: a device or a FIFO (`/dev/zero`) must not fill the memory.
+        // Only a regular file is opened: opening a FIFO waits for a writer, and a signal does
+        // not end that wait.
+        if let Some(what) = not_regular(path) {
+            return Err(SceneError::NotRegular {
+                path: path.to_path_buf(),
+                what,
+            });
+        }
+        // A bounded read: a file that grows while it is read must not fill the memory.
         let mut bytes = Vec::new();
         std::io::Read::read_to_end(
             &mut std::io::Read::take(std::fs::File::open(path).map_err(read)?, limit + 1),
@@ -911,6 +947,26 @@ impl Scene {
         if let Some(from) = &mut scene.start.from {
             if from.is_relative() {
                 *from = path.parent().unwrap_or(Path::new("")).join(&*from);
+            }
+        }
+        // The files the scene names, checked as the scene file is, before anything opens them.
+        let named = [
+            match &scene.mesh {
+                MeshSpec::File(f) => Some(("mesh.path", f.path.as_path())),
+                _ => None,
+            },
+            scene.start.from.as_deref().map(|p| ("start.from", p)),
+        ];
+        for (key, file) in named.into_iter().flatten() {
+            if let Some(what) = not_regular(file) {
+                return Err(error::Problem::at(
+                    key,
+                    format!(
+                        "= '{}' is {what}, not a regular file; give the path of a file",
+                        file.display()
+                    ),
+                )
+                .into_error(&origin));
             }
         }
         scene
