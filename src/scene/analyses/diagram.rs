@@ -1,9 +1,9 @@
 //! `type = "diagram"`: the global bifurcation diagram — the path, the branches of its
 //! bifurcation points to a depth, and the second pieces beside its folds.
 
-use super::super::error::{num, Problem};
+use super::super::error::Problem;
 use super::super::validate::{at_least, free_parameter, positive};
-use super::path::MAX_BRANCH_DEPTH;
+use super::path::{check_stops, check_stretch_needs_closed, MAX_BRANCH_DEPTH};
 use super::{AnalysisSpec, BranchesAnalysis, PathAnalysis, Scene};
 use crate::continuation::Settings;
 use serde::{Deserialize, Serialize};
@@ -88,12 +88,7 @@ impl AnalysisSpec for DiagramAnalysis {
     }
     fn check(&self, scene: &Scene) -> Result<(), Problem> {
         free_parameter(scene, "analysis.control", &self.control)?;
-        if let Some(s) = self.stop_stretch {
-            positive("analysis.stop-stretch", s)?;
-        }
-        if let Some(s) = self.stop_displacement {
-            positive("analysis.stop-displacement", s)?;
-        }
+        check_stops(self.stop_stretch, self.stop_displacement)?;
         if self.depth < 1 || self.depth > MAX_BRANCH_DEPTH {
             return Err(Problem::at(
                 "analysis.depth",
@@ -111,17 +106,7 @@ impl AnalysisSpec for DiagramAnalysis {
         Ok(())
     }
     fn check_mesh(&self, closed: bool, the_mesh: &str) -> Result<(), Problem> {
-        match self.stop_stretch {
-            Some(s) if !closed => Err(Problem::at(
-                "analysis.stop-stretch",
-                format!(
-                    "= {} needs a closed membrane (the stretch is (V/V0)^(1/3)); {the_mesh} is \
-                     open",
-                    num(s)
-                ),
-            )),
-            _ => Ok(()),
-        }
+        check_stretch_needs_closed(self.stop_stretch, closed, the_mesh)
     }
     /// The path, then each second piece (a branch keeps only its own points).
     fn stored_points(&self) -> (u64, u64) {

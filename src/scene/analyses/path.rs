@@ -76,29 +76,14 @@ impl AnalysisSpec for PathAnalysis {
     }
     fn check(&self, scene: &Scene) -> Result<(), Problem> {
         free_parameter(scene, "analysis.control", &self.control)?;
-        if let Some(s) = self.stop_stretch {
-            positive("analysis.stop-stretch", s)?;
-        }
-        if let Some(s) = self.stop_displacement {
-            positive("analysis.stop-displacement", s)?;
-        }
+        check_stops(self.stop_stretch, self.stop_displacement)?;
         if let Some(b) = &self.branches {
             check_branches(b)?;
         }
         Ok(())
     }
     fn check_mesh(&self, closed: bool, the_mesh: &str) -> Result<(), Problem> {
-        match self.stop_stretch {
-            Some(s) if !closed => Err(Problem::at(
-                "analysis.stop-stretch",
-                format!(
-                    "= {} needs a closed membrane (the stretch is (V/V0)^(1/3)); {the_mesh} is \
-                     open",
-                    num(s)
-                ),
-            )),
-            _ => Ok(()),
-        }
+        check_stretch_needs_closed(self.stop_stretch, closed, the_mesh)
     }
     fn stored_points(&self) -> (u64, u64) {
         let points = (self.settings.steps as u64).saturating_add(1);
@@ -106,6 +91,35 @@ impl AnalysisSpec for PathAnalysis {
             points,
             points / (self.settings.save_every.max(1) as u64) + 2,
         )
+    }
+}
+
+/// A path's stops: `stop-stretch` and `stop-displacement` positive where given.
+pub(super) fn check_stops(stretch: Option<f64>, displacement: Option<f64>) -> Result<(), Problem> {
+    if let Some(s) = stretch {
+        positive("analysis.stop-stretch", s)?;
+    }
+    if let Some(s) = displacement {
+        positive("analysis.stop-displacement", s)?;
+    }
+    Ok(())
+}
+
+/// `stop-stretch` needs a closed membrane (the stretch is (V/V0)^(1/3)).
+pub(super) fn check_stretch_needs_closed(
+    stretch: Option<f64>,
+    closed: bool,
+    the_mesh: &str,
+) -> Result<(), Problem> {
+    match stretch {
+        Some(s) if !closed => Err(Problem::at(
+            "analysis.stop-stretch",
+            format!(
+                "= {} needs a closed membrane (the stretch is (V/V0)^(1/3)); {the_mesh} is open",
+                num(s)
+            ),
+        )),
+        _ => Ok(()),
     }
 }
 
