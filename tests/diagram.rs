@@ -155,6 +155,10 @@ fn a_diagram_run_writes_the_second_piece_and_its_graph() {
     assert_eq!(p["directory"], "partner_01");
     assert!(p["gap"].as_f64().unwrap() > 0.0);
     assert_eq!(p["points"], 5);
+    // The piece's points carry their validity, as critical.json's do.
+    for c in p["critical"].as_array().unwrap() {
+        assert!(c["valid"].is_boolean(), "{c}");
+    }
     for f in ["path.csv", "path.json", "critical.json", "manifest.json"] {
         assert!(out.join("partner_01").join(f).is_file(), "{f}");
     }

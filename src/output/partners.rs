@@ -7,6 +7,7 @@ use super::diagram::{write_bifurcation_diagram, BifurcationDiagram, DiagramLine,
 use super::states::Drawing;
 use super::{write_run, OutputError};
 use crate::results::partner::Partner;
+use crate::results::validity::Flag;
 use crate::results::{Branches, CriticalKind, PathReport, PrimaryPath, RunResult, StopReason};
 use crate::scene::Scene;
 use serde::Serialize;
@@ -24,6 +25,11 @@ struct PieceCritical<'a> {
     /// The wave number of its mode, where the mesh has one.
     #[serde(skip_serializing_if = "Option::is_none")]
     m: Option<usize>,
+    /// Whether no flag is raised (docs/theory.md §8.10).
+    valid: bool,
+    /// Why it may not be a result of the model.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    flags: Vec<Flag>,
 }
 
 /// One fold's search, as `diagram.json` lists it.
@@ -74,12 +80,17 @@ fn json_of(p: &Partner) -> PartnerJson<'_> {
         r.critical
             .iter()
             .enumerate()
-            .map(|(k, cp)| PieceCritical {
-                kind: cp.kind,
-                irrep: &cp.irrep,
-                multiplicity: cp.multiplicity,
-                value: c.map_or(0.0, |c| cp.parameters[c]),
-                m: r.wave_numbers.get(k).copied(),
+            .map(|(k, cp)| {
+                let flags = r.flags(k);
+                PieceCritical {
+                    kind: cp.kind,
+                    irrep: &cp.irrep,
+                    multiplicity: cp.multiplicity,
+                    value: c.map_or(0.0, |c| cp.parameters[c]),
+                    m: r.wave_numbers.get(k).copied(),
+                    valid: flags.is_empty(),
+                    flags,
+                }
             })
             .collect()
     });
