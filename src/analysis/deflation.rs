@@ -6,11 +6,10 @@
 //! each solution found is checked against the path (does the path through the start reach
 //! it?) and, if asked, the piece of path through it is followed.
 
-use super::path::{start_driver, Path};
+use super::path::{start_driver, trace_indexed, Path};
 use super::{Analysis, Context, RunError};
-use crate::continuation::crossings::{Crossings, IndexChanges};
+use crate::continuation::crossings::Crossings;
 use crate::continuation::deflation::{deflated_solve_at, scaled, Deflation};
-use crate::continuation::events::{trace, Detector};
 use crate::continuation::{interrupt, solve_at, PathOptions};
 use crate::output::{self, Described, OutputError};
 use crate::results::deflation::{DeflationReport, PiecePoint, Solution};
@@ -437,24 +436,14 @@ fn piece(
     crossings: &mut Option<Crossings<'_>>,
 ) -> Result<(Vec<PiecePoint>, StopReason), RunError> {
     let mut driver = start_driver(study, point, opts.clone())?;
-    let mut watch = crossings.take().map(IndexChanges::new);
-    let branch = {
-        let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
-        if let Some(w) = watch.as_mut() {
-            extra.push(w);
-        }
-        trace(
-            &mut driver,
-            opts.max_steps,
-            |_, _| None,
-            &mut extra,
-            |_, _| {},
-        )
-    };
-    let indices = watch
-        .as_ref()
-        .map_or_else(|| vec![None; branch.points.len()], |w| w.indices.clone());
-    *crossings = watch.map(IndexChanges::into_crossings);
+    let (branch, index) = trace_indexed(
+        &mut driver,
+        crossings,
+        opts.max_steps,
+        |_, _| None,
+        |_, _| {},
+    );
+    let indices = index.map_or_else(|| vec![None; branch.points.len()], |ix| ix.indices);
     let problem = driver.into_problem();
     let points = branch
         .points

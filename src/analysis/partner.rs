@@ -15,17 +15,16 @@
 //! and its critical points, as the path is.
 
 use super::deflation::on_path;
-use super::path::{record_branch, start_driver};
+use super::path::{measure_stops, record_branch, start_driver, trace_indexed};
 use super::{Record, RunError};
-use crate::continuation::crossings::{Crossings, IndexChanges};
+use crate::continuation::crossings::Crossings;
 use crate::continuation::deflation::{deflated_solve_at, scaled, Deflation};
-use crate::continuation::events::{trace, Detector};
 use crate::continuation::{interrupt, solve_on_plane, PathOptions};
 use crate::results::partner::{Partner, PartnerPiece};
 use crate::results::{
     BranchRun, CriticalKind, CriticalPoint, PathRow, PointState, RunResult, RunTimes, StopReason,
 };
-use crate::study::{Followed, Free, Point, Study};
+use crate::study::{Free, Point, Study};
 use nalgebra::DVector;
 
 /// The fixed amplitudes tried on each side of a fold: h·2^k for k in [`FIRST`]..=[`LAST`],
@@ -262,37 +261,16 @@ impl Search<'_> {
             ..self.opts.clone()
         };
         let mut driver = start_driver(study, start, o)?;
-        let mut watch = crossings.take().map(IndexChanges::new);
-        let branch = {
-            let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
-            if let Some(w) = watch.as_mut() {
-                extra.push(w);
-            }
-            let first = study.measure(&start.u, &start.params);
-            // The driver's problem is boxed: the stop sees it as the driver holds it.
-            #[allow(clippy::borrowed_box)]
-            let stops = |problem: &Box<dyn Followed + '_>, p: &crate::continuation::PathPoint| {
-                if self.follow.limits.is_empty() {
-                    return None;
-                }
-                let u = problem.displacement(&p.q);
-                let now = study.measure(&u, &problem.parameters(&p.lambda));
-                self.follow.limits.iter().find_map(|(k, target, stop)| {
-                    let side = (first[*k] - target).signum();
-                    ((now[*k] - target) * side <= 0.0).then(|| stop.clone())
-                })
-            };
-            trace(&mut driver, steps, stops, &mut extra, |_, _| {})
-        };
+        let stops = measure_stops(study, &self.follow.limits, start);
+        let (branch, index) = trace_indexed(&mut driver, crossings, steps, stops, |_, _| {});
         let mut record = Record::new(study);
-        let (indices, negatives) = match &watch {
-            Some(w) => {
-                record.irreps.clone_from(&w.irreps);
-                (w.indices.clone(), w.negatives.clone())
+        let (indices, negatives) = match index {
+            Some(ix) => {
+                record.irreps = ix.irreps;
+                (ix.indices, ix.negatives)
             }
             None => (vec![None; branch.points.len()], Vec::new()),
         };
-        *crossings = watch.map(IndexChanges::into_crossings);
         let problem = driver.into_problem();
         record_branch(
             study,

@@ -6,7 +6,7 @@
 
 use super::equilibrium::path_options;
 use super::{Analysis, Context, Record, RunError};
-use crate::continuation::crossings::IndexChanges;
+use crate::continuation::crossings::{Crossings, IndexChanges};
 use crate::continuation::events::{trace, Branch, Detector, Event};
 use crate::continuation::{Continuation, PathOptions, PathPoint, Settings};
 use crate::results::{StateKind, StopReason, TurningRow};
@@ -129,61 +129,32 @@ impl Analysis for Path {
         let opts = self.options(study);
         let max_steps = opts.max_steps;
         let mut driver = start_driver(study, &cx.start, opts)?;
-        let measures = &study.about().measures;
-        let stretch = measures.iter().position(|m| m == "stretch");
-        let displacement = measures.iter().position(|m| m == "max_displacement");
-        // A stop is reached where its measure passes the target from the start's side.
-        let start_measures = study.measure(&cx.start.u, &cx.start.params);
-        let side = |target: f64, k: usize| (target, k, (start_measures[k] - target).signum());
-        let stop_stretch = analysis.stop_stretch.zip(stretch).map(|(t, k)| side(t, k));
-        let stop_displacement = analysis
-            .stop_displacement
-            .zip(displacement)
-            .map(|(t, k)| side(t, k));
-        // The driver's problem is boxed: the stop sees it as the driver holds it.
-        #[allow(clippy::borrowed_box)]
-        let stops = |problem: &Box<dyn Followed + '_>, p: &PathPoint| {
-            if stop_stretch.is_none() && stop_displacement.is_none() {
-                return None;
-            }
-            let u = problem.displacement(&p.q);
-            let now = study.measure(&u, &problem.parameters(&p.lambda));
-            let passed = |stop: Option<(f64, usize, f64)>| {
-                stop.and_then(|(target, k, side)| {
-                    ((now[k] - target) * side <= 0.0).then_some(target)
-                })
-            };
-            passed(stop_stretch)
-                .map(|target| StopReason::Stretch { target })
-                .or_else(|| {
-                    passed(stop_displacement).map(|target| StopReason::Displacement { target })
-                })
-        };
-        let mut index = cx.crossings.take().map(IndexChanges::new);
+        let limits = self.limits(study);
+        let stops = measure_stops(study, &limits, &cx.start);
         let mut count = 0usize;
         let observer = &mut *cx.observer;
-        let branch = {
-            let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
-            if let Some(index) = index.as_mut() {
-                extra.push(index);
-            }
-            trace(&mut driver, max_steps, stops, &mut extra, |problem, p| {
+        let (branch, index) = trace_indexed(
+            &mut driver,
+            &mut cx.crossings,
+            max_steps,
+            stops,
+            |problem, p| {
                 observer.progress(count, p.lambda[0]);
                 observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
                 count += 1;
-            })
-        };
+            },
+        );
         let mut problem = driver.into_problem();
         cx.times.steps = branch.times;
         if let Some(w) = held_force_warning(study, &self.options(study), &mut problem, &branch) {
             cx.record.warnings.push(w);
         }
         let record = &mut cx.record;
-        let (indices, negatives) = match &index {
+        let (indices, negatives) = match index {
             Some(ix) => {
-                cx.times.index = ix.index_time;
-                record.irreps.clone_from(&ix.irreps);
-                (ix.indices.clone(), ix.negatives.clone())
+                cx.times.index = ix.time;
+                record.irreps = ix.irreps;
+                (ix.indices, ix.negatives)
             }
             None => (vec![None; branch.points.len()], Vec::new()),
         };
@@ -199,10 +170,12 @@ impl Analysis for Path {
         for (row, negative) in record.rows[first..].iter_mut().zip(negatives) {
             row.negative = negative;
         }
-        if let (Some((target, k, _)), false) = (
-            stop_stretch,
-            matches!(branch.stop, StopReason::Stretch { .. }),
-        ) {
+        let stretch = limits.iter().find_map(|(k, target, stop)| {
+            matches!(stop, StopReason::Stretch { .. }).then_some((*target, *k))
+        });
+        if let (Some((target, k)), false) =
+            (stretch, matches!(branch.stop, StopReason::Stretch { .. }))
+        {
             let (lo, hi) = record
                 .rows
                 .iter()
@@ -216,8 +189,6 @@ impl Analysis for Path {
                 sig_digits(hi, 6)
             ));
         }
-        // The blocks go back to the context for what follows the path.
-        cx.crossings = index.map(IndexChanges::into_crossings);
         cx.times.path = t0.elapsed();
         if analysis.branches.is_some() {
             let options = self.branch_options(study, None);
@@ -230,6 +201,69 @@ impl Analysis for Path {
         }
         Ok(branch.stop)
     }
+}
+
+/// The stops of a path on its measures ([`Path::limits`]): the first whose measure passes
+/// its target from the side of the `start` state.
+pub(super) fn measure_stops<'s>(
+    study: &'s dyn Study,
+    limits: &'s [(usize, f64, StopReason)],
+    start: &Point,
+) -> impl FnMut(&Box<dyn Followed + '_>, &PathPoint) -> Option<StopReason> + 's {
+    let first = study.measure(&start.u, &start.params);
+    // The driver's problem is boxed: the stop sees it as the driver holds it.
+    #[allow(clippy::borrowed_box)]
+    move |problem: &Box<dyn Followed + '_>, p: &PathPoint| {
+        if limits.is_empty() {
+            return None;
+        }
+        let u = problem.displacement(&p.q);
+        let now = study.measure(&u, &problem.parameters(&p.lambda));
+        limits.iter().find_map(|(k, target, stop)| {
+            let side = (first[*k] - target).signum();
+            ((now[*k] - target) * side <= 0.0).then(|| stop.clone())
+        })
+    }
+}
+
+/// The index by blocks along a branch traced by [`trace_indexed`].
+pub(super) struct Indexed {
+    /// The instability index at every point.
+    pub indices: Vec<Option<usize>>,
+    /// The negative count of every block at every point.
+    pub negatives: Vec<Option<Vec<usize>>>,
+    /// The blocks' irreps.
+    pub irreps: Vec<String>,
+    /// Time spent on the index.
+    pub time: std::time::Duration,
+}
+
+/// Traces `driver` for at most `max_steps` steps with `stop` and `progress` ([`trace`]),
+/// with the index by blocks at every point where `crossings` has them (taken for the
+/// trace and handed back).
+pub(super) fn trace_indexed<'a>(
+    driver: &mut Continuation<Box<dyn Followed + 'a>>,
+    crossings: &mut Option<Crossings<'_>>,
+    max_steps: usize,
+    stop: impl FnMut(&Box<dyn Followed + 'a>, &PathPoint) -> Option<StopReason>,
+    progress: impl FnMut(&Box<dyn Followed + 'a>, &PathPoint),
+) -> (Branch, Option<Indexed>) {
+    let mut watch = crossings.take().map(IndexChanges::new);
+    let branch = {
+        let mut extra: Vec<&mut dyn Detector<Box<dyn Followed + 'a>>> = Vec::new();
+        if let Some(w) = watch.as_mut() {
+            extra.push(w);
+        }
+        trace(driver, max_steps, stop, &mut extra, progress)
+    };
+    let indexed = watch.as_ref().map(|w| Indexed {
+        indices: w.indices.clone(),
+        negatives: w.negatives.clone(),
+        irreps: w.irreps.clone(),
+        time: w.index_time,
+    });
+    *crossings = watch.map(IndexChanges::into_crossings);
+    (branch, indexed)
 }
 
 /// Largest force, relative to the residual's scale, that may hold the neutral motions at a

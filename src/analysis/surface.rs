@@ -12,10 +12,9 @@
 //! folds over the (a, b) plane, and the index of its vertices changes there.
 
 use super::equilibrium::path_options;
-use super::path::{record_branch, start_driver};
+use super::path::{record_branch, start_driver, trace_indexed};
 use super::{Analysis, Context, RunError};
-use crate::continuation::crossings::IndexChanges;
-use crate::continuation::events::{trace, Detector, Event};
+use crate::continuation::events::Event;
 use crate::continuation::{solve_at, PathOptions, Settings};
 use crate::output::{self, Described, OutputError};
 use crate::results::{
@@ -267,34 +266,26 @@ impl Analysis for Surface {
                     continue;
                 }
             };
-            let mut watch = crossings.take().map(IndexChanges::new);
             let observer = &mut *cx.observer;
-            let branch = {
-                let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = Vec::new();
-                if let Some(w) = watch.as_mut() {
-                    extra.push(w);
-                }
-                trace(
-                    &mut driver,
-                    max_steps,
-                    |_, _| None,
-                    &mut extra,
-                    |problem, p| {
-                        observer.progress(count, p.lambda[0]);
-                        observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
-                        count += 1;
-                    },
-                )
-            };
+            let (branch, index) = trace_indexed(
+                &mut driver,
+                &mut crossings,
+                max_steps,
+                |_, _| None,
+                |problem, p| {
+                    observer.progress(count, p.lambda[0]);
+                    observer.state(&problem.displacement(&p.q), &problem.parameters(&p.lambda));
+                    count += 1;
+                },
+            );
             let problem = driver.into_problem();
-            let indices = match &watch {
-                Some(w) => {
-                    cx.times.index += w.index_time;
-                    w.indices.clone()
+            let indices = match index {
+                Some(ix) => {
+                    cx.times.index += ix.time;
+                    ix.indices
                 }
                 None => vec![None; branch.points.len()],
             };
-            crossings = watch.map(IndexChanges::into_crossings);
             cx.times.steps.steps += branch.times.steps;
             cx.times.steps.events += branch.times.events;
             cx.times.steps.progress += branch.times.progress;
