@@ -1011,6 +1011,12 @@ impl<'a> IrrepBlocks<'a> {
 }
 
 impl Blocks for IrrepBlocks<'_> {
+    fn switched(&self, a: (&[f64], &[f64]), b: (&[f64], &[f64])) -> Option<usize> {
+        let before = self.model.switches(a.0, a.1)?;
+        let after = self.model.switches(b.0, b.1)?;
+        Some(before.iter().zip(&after).filter(|(x, y)| x != y).count())
+    }
+
     fn names(&self) -> Vec<String> {
         self.stability
             .basis()

@@ -304,3 +304,90 @@ fn the_irregular_disc_avoids_the_double_and_has_an_independent_piece_beside_it()
         .expect("the piece's fold");
     assert!(((own - fold) / fold).abs() < 0.02, "{own} against {fold}");
 }
+
+/// Paper 3's linear-penalty squeeze as a diagram, to a = 0.105
+/// (`scenes/thesis/paper3_gas_fluid_squeeze_linear_diagram.toml`): past the smooth B1 point at
+/// a = 0.10981 the path's B1 (and A2) eigenvalue jumps across zero where four nodes enter or
+/// leave contact; that is reported as a point at the jump, flagged, and nothing is switched to
+/// there. The B1 branch of the smooth point returns to the path's states and ends on the jump
+/// point: one connection between two B1 points of the path, the thesis's penalty-induced
+/// closed circuit — not a branch running on along the path.
+#[test]
+fn the_linear_penalty_squeeze_closes_a_circuit_between_two_b1_points_of_its_path() {
+    use memstab::results::validity::Flag;
+    use memstab::results::{Node, Skip};
+    let text = bundled("thesis/paper3_gas_fluid_squeeze_linear_diagram.toml");
+    let scene = Scene::from_toml_str(&text, "squeeze").unwrap();
+    let mut study = memstab::study::build(scene).unwrap();
+    let result = run(&mut *study, |_, _| {}).unwrap();
+    let report = &result.report;
+    let d = |p: &[f64]| p[report.parameters.iter().position(|n| n == "d").unwrap()];
+    let b1: Vec<(usize, f64)> = report
+        .critical
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.irrep == "B1")
+        .map(|(k, c)| (k, d(&c.parameters)))
+        .collect();
+    assert_eq!(b1.len(), 3, "{:?}", report.critical);
+    // The jump: flagged contact-jump and not-localised, past the smooth pair.
+    let (jump, at) = b1[2];
+    assert!((-0.1080..-0.1070).contains(&at), "{at}");
+    let flags = report.flags(jump);
+    assert!(
+        flags
+            .iter()
+            .any(|f| matches!(f, Flag::ContactJump { nodes, .. } if *nodes > 0)),
+        "{flags:?}"
+    );
+    assert!(
+        flags.iter().any(|f| matches!(f, Flag::NotLocalised { .. })),
+        "{flags:?}"
+    );
+    // The smooth points are not flagged.
+    for &(k, _) in &b1[..2] {
+        assert!(report.flags(k).is_empty(), "{:?}", report.flags(k));
+    }
+    let branches = result.branches.as_ref().expect("the diagram's branches");
+    let g = &branches.graph;
+    let path_node = |k: usize| {
+        g.graph
+            .node_indices()
+            .find(|&n| matches!(&g.graph[n], Node::Critical { on: None, number, .. } if *number == k + 1))
+            .unwrap()
+    };
+    // Nothing is switched to at the jump.
+    assert!(matches!(
+        &g.graph[path_node(jump)],
+        Node::Critical {
+            skipped: Some(Skip::Jump(_)),
+            ..
+        }
+    ));
+    // One connection, from the branch of the second smooth B1 point to the jump.
+    let to_jump: Vec<_> = g
+        .connections
+        .iter()
+        .filter(|c| c.to == path_node(jump))
+        .collect();
+    assert_eq!(to_jump.len(), 1, "{:?}", g.connections);
+    let branch = &g.branches[to_jump[0].branch];
+    assert_eq!(branch.from, path_node(b1[1].0));
+    assert_eq!(branch.irrep, "B1");
+    assert!(branch.isotropy_exact());
+    // It leaves and returns: off the path's states in between, on them at both ends.
+    let asym: Vec<f64> = branch.points.iter().map(|p| p.asymmetry).collect();
+    let peak = asym.iter().copied().fold(0.0, f64::max);
+    assert!(peak > 1e-3, "{asym:?}");
+    assert!(
+        asym[0] < 1e-12 * peak.max(1.0) && *asym.last().unwrap() < 1e-9,
+        "{asym:?}"
+    );
+    let last = branch.points.last().unwrap();
+    assert!((d(&last.parameters) - at).abs() < 1e-12);
+    // The first B1 point's branch is no part of the circuit: it does not connect.
+    assert!(g
+        .connections
+        .iter()
+        .all(|c| g.branches[c.branch].from != path_node(b1[0].0)));
+}

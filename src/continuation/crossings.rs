@@ -138,6 +138,12 @@ pub trait Blocks {
     fn mode(&self, block: usize, v: &[f64]) -> Vec<f64>;
     /// The subgroup that keeps the (unit) mode of block `block`.
     fn isotropy(&self, block: usize, mode: &[f64]) -> Isotropy;
+    /// How many of the model's switches ([`crate::model::Model::switches`]: nodes in
+    /// contact …) differ between two states (u, params): where the tangent may jump. `None`
+    /// (the default) for a smooth model.
+    fn switched(&self, _a: (&[f64], &[f64]), _b: (&[f64], &[f64])) -> Option<usize> {
+        None
+    }
     /// The size, relative to the spectrum's scale, below which a localised eigenvalue counts
     /// as zero: a crossing is localised until its eigenvalue is that small (or its bracket
     /// at round-off). Models whose block evaluations are cheap localise to round-off (0).
@@ -391,6 +397,56 @@ impl<'a> Crossings<'a> {
                     ));
                     continue;
                 };
+                let width = (sides[1].0 - sides[0].0).abs() / s1.abs().max(f64::MIN_POSITIVE);
+                let switched = self.blocks.switched(
+                    (sides[0].1.as_slice(), sides[0].2.as_slice()),
+                    (sides[1].1.as_slice(), sides[1].2.as_slice()),
+                );
+                if g_best.abs() > JUMP_EIGENVALUE * a.spectrum.scale
+                    && switched.is_some_and(|n| n > 0)
+                {
+                    // The eigenvalue jumps across zero where the model's switches change (a
+                    // node enters or leaves contact): the stability changes there, at the
+                    // jump itself. It is reported at the side whose eigenvalue is nearer
+                    // zero, with the jump's two states as its bracket; its residual
+                    // eigenvalue says that it is not a smooth zero.
+                    let evaluated: Vec<(Vec<f64>, Vec<f64>, Spectrum, f64)> = sides
+                        .iter()
+                        .filter_map(|(_, u, p)| {
+                            let sp = self.block_eigen(u, p, mu, k + 1, true)?;
+                            let g = sp.blocks[mu].eigenvalues.get(k).copied()?;
+                            Some((u.clone(), p.clone(), sp, g))
+                        })
+                        .collect();
+                    let Some((u, p, sp, g)) = evaluated
+                        .into_iter()
+                        .min_by(|x, y| x.3.abs().total_cmp(&y.3.abs()))
+                    else {
+                        warnings.push(not_localised(
+                            "the states of the jump could not be evaluated",
+                        ));
+                        continue;
+                    };
+                    let bracket = Bracket {
+                        width,
+                        ends: [
+                            (sides[0].1.clone(), sides[0].2.clone()),
+                            (sides[1].1.clone(), sides[1].2.clone()),
+                        ],
+                    };
+                    match self.critical_point(
+                        mu,
+                        k,
+                        (u, p, &sp, g),
+                        bracket,
+                        after_step,
+                        control_turns,
+                    ) {
+                        Ok(point) => found.push(point),
+                        Err(why) => warnings.push(not_localised(why)),
+                    }
+                    continue;
+                }
                 if g_best.abs() > JUMP_EIGENVALUE * a.spectrum.scale {
                     // No zero: the eigenvalue jumps between two neighbouring states.
                     let side = |positive: bool| {
@@ -426,7 +482,7 @@ impl<'a> Crossings<'a> {
                     continue;
                 };
                 let bracket = Bracket {
-                    width: (sides[1].0 - sides[0].0).abs() / s1.abs().max(f64::MIN_POSITIVE),
+                    width,
                     ends: [
                         (sides[0].1.clone(), sides[0].2.clone()),
                         (sides[1].1.clone(), sides[1].2.clone()),

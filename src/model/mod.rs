@@ -394,6 +394,12 @@ pub trait Model: Sync {
     ) -> Result<(), ModelError>;
     /// A fresh evaluation buffer sized for this model.
     fn new_evaluation(&self) -> Evaluation;
+    /// Where Π is only piecewise smooth (a penalty that acts on one side of a plane): which
+    /// piece each of its switches is on at (u, Λ), one flag per switch (a node in contact or
+    /// not). The tangent may jump where a switch changes; `None` (the default) for a smooth Π.
+    fn switches(&self, _u: &[f64], _params: &[f64]) -> Option<Vec<bool>> {
+        None
+    }
     /// Why the displacement `u` is not a membrane state (collapsed, torn, inside out or not
     /// finite; [`validity`]), or `None`.
     fn state_defect(&self, u: &[f64], params: &[f64]) -> Option<StateDefect> {
@@ -608,6 +614,12 @@ impl FeModel {
 impl Model for FeModel {
     fn layout(&self) -> &Layout {
         &self.layout
+    }
+
+    /// Every node in contact with a penalty plane or not.
+    fn switches(&self, u: &[f64], params: &[f64]) -> Option<Vec<bool>> {
+        let (depth, _) = self.penetrations(u, params)?;
+        Some(depth.iter().map(|&d| d > 0.0).collect())
     }
 
     fn reference(&self) -> &[Vec3] {

@@ -95,6 +95,11 @@ pub enum Skip {
         /// Its number among that path's critical points.
         number: usize,
     },
+    /// The eigenvalue jumps across zero here (where the model's switches change: a node
+    /// enters or leaves contact) instead of crossing it smoothly, |eigenvalue|/|K| at the
+    /// point given: no reduced equation holds at a jump, so nothing is switched to; a branch
+    /// may still reach the point from elsewhere, as a connection.
+    Jump(f64),
     /// Every branch the lemma predicts here is one already followed, up to symmetry: a
     /// branch that passed through this point along the same direction (by index).
     Known(Vec<usize>),
@@ -117,6 +122,10 @@ impl std::fmt::Display for Skip {
                 f,
                 "the same point, up to symmetry, as critical point {number} of {}: a connection",
                 on.map_or_else(|| "the path".to_string(), directory)
+            ),
+            Skip::Jump(r) => write!(
+                f,
+                "its eigenvalue jumps across zero (|eigenvalue|/|K| = {r:.0e} at the point): no branch is switched to at a jump"
             ),
             Skip::Known(b) => write!(
                 f,
@@ -298,8 +307,13 @@ pub struct SwitchedBranch {
 impl SwitchedBranch {
     /// True when every point after the critical point has exactly Σ as its stabiliser.
     pub fn isotropy_exact(&self) -> bool {
-        self.points.len() > 1
-            && self.points[1..]
+        // A connection's last point is the known point it reached, on its own path.
+        let end = match self.stop {
+            StopReason::Connected { .. } => self.points.len().saturating_sub(1),
+            _ => self.points.len(),
+        };
+        end > 1
+            && self.points[1..end]
                 .iter()
                 .all(|p| p.stabiliser == self.elements)
     }

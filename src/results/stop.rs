@@ -74,6 +74,14 @@ pub enum StopReason {
         /// Where: `the path` or a branch's directory, and the point's number on it.
         to: String,
     },
+    /// A branch returned to the states of the path it left, where no critical point of that
+    /// path is known: it ends at its last state off it.
+    Rejoined {
+        /// The control at its last state off the parent and at its first one back on it.
+        between: [f64; 2],
+        /// Where its amplitude's law through its last states reaches zero.
+        estimate: f64,
+    },
 }
 
 impl std::fmt::Display for StopReason {
@@ -102,6 +110,11 @@ impl std::fmt::Display for StopReason {
             Self::NoControl => f.write_str("no control parameter"),
             Self::Interrupted => f.write_str("interrupted"),
             Self::Connected { to } => write!(f, "it reached {to}, already computed: a connection"),
+            Self::Rejoined { between, estimate } => write!(
+                f,
+                "it returned to the states of the path it left between {:.6} and {:.6} (its amplitude vanishing at about {estimate:.6}), where that path has no known critical point",
+                between[0], between[1]
+            ),
         }
     }
 }

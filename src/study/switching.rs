@@ -360,6 +360,10 @@ impl Switching<'_> {
         sign: f64,
         g: &mut BranchGraph,
     ) {
+        if cp.residual_eigenvalue > crate::results::validity::LOCALISED {
+            set_skip(g, node, Skip::Jump(cp.residual_eigenvalue));
+            return;
+        }
         let layout = self.model.layout();
         let dirs = match kernel_directions(level, layout, cp) {
             Ok(d) => d,
@@ -417,9 +421,9 @@ impl Switching<'_> {
                 }
                 let t1 = std::time::Instant::now();
                 let mut branch = self.follow(level, &child, cp, dir, &reduced, half);
-                let same = self.connect(g, &mut branch);
                 branch.from = node;
                 branch.parent = parent;
+                let same = self.connect(g, &mut branch);
                 branch.sign = sign * half.sign();
                 branch.time = setup + t1.elapsed();
                 let id = g.branches.len();
@@ -485,6 +489,18 @@ impl Switching<'_> {
             }
             same.push(known);
         }
+        if !same.iter().any(Option::is_some) {
+            if let Some(to) = self.rejoined_at(g, branch) {
+                // The branch ends on the known point it returned to: its junction with the
+                // path it left, a closed circuit.
+                if let Node::Critical { point, .. } = &g.graph[to] {
+                    let mut c = (**point).clone();
+                    c.after_step = branch.points.len() - 1;
+                    branch.critical.push(c);
+                    same.push(Some(to));
+                }
+            }
+        }
         let Some(first) = same.iter().position(Option::is_some) else {
             return same;
         };
@@ -498,14 +514,51 @@ impl Switching<'_> {
         branch.points.push(end);
         branch.turning.retain(|t| t.after_step < j);
         if let Node::Critical { on, number, .. } = &g.graph[to] {
+            let returned = match branch.stop {
+                StopReason::Rejoined { between, estimate } => format!(
+                    " (it returned to that path's states between {:.6} and {:.6}, its amplitude vanishing at about {estimate:.6})",
+                    between[0], between[1]
+                ),
+                _ => String::new(),
+            };
             branch.stop = StopReason::Connected {
                 to: format!(
-                    "critical point {number} of {}",
+                    "critical point {number} of {}{returned}",
                     on.map_or_else(|| "the path".to_string(), directory)
                 ),
             };
         }
         same
+    }
+
+    /// The critical point of the path `branch` left that it returned to
+    /// ([`StopReason::Rejoined`]): one of that path's with the irrep of the point the branch
+    /// left, other than that point, within half a step of the control interval where it
+    /// rejoined (the one nearest the estimate).
+    fn rejoined_at(&self, g: &BranchGraph, branch: &SwitchedBranch) -> Option<NodeIndex> {
+        let control = self.control?;
+        let StopReason::Rejoined { between, estimate } = branch.stop else {
+            return None;
+        };
+        let half = 0.5 * (between[1] - between[0]).abs();
+        let (lo, hi) = (
+            between[0].min(between[1]) - half,
+            between[0].max(between[1]) + half,
+        );
+        g.graph
+            .node_indices()
+            .filter(|&n| n != branch.from)
+            .filter_map(|n| match &g.graph[n] {
+                Node::Critical { on, point, .. }
+                    if *on == branch.parent && point.irrep == branch.irrep =>
+                {
+                    let x = point.parameters[control];
+                    (lo..=hi).contains(&x).then_some((n, (x - estimate).abs()))
+                }
+                _ => None,
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(n, _)| n)
     }
 
     /// The class of a level's group in the scene group's lattice.
@@ -869,6 +922,9 @@ impl Switching<'_> {
         if let Some(c) = self.control {
             observe(&mut branch, c, &dir.field, opts.state_scale);
         }
+        if let Some(c) = self.control {
+            rejoin(&mut branch, c, level.top_index.len());
+        }
         if let Some(bad) = branch.points[1..]
             .iter()
             .position(|p| p.stabiliser != branch.elements)
@@ -917,6 +973,49 @@ impl Switching<'_> {
             stabiliser_class,
         }
     }
+}
+
+/// Ends `branch` where it returns to the states of the path it left (the stabiliser of its
+/// states grows back to the parent's group, of order `parent_order`, with its asymmetry
+/// going to zero): a branch that leaves its parent at one bifurcation point and rejoins it
+/// at another, a closed circuit (docs/theory.md §16.7). Its points and findings up to the
+/// last state off the parent are kept; its stop says where it rejoined — the control
+/// between that state and the first one back on the parent, and the estimate where the
+/// amplitude's law (A² linear in the control at a pitchfork, A at a transcritical point)
+/// through its last two states off the parent reaches zero.
+fn rejoin(branch: &mut SwitchedBranch, control: usize, parent_order: usize) {
+    let own = branch.elements.len();
+    let Some(k) = branch.points.iter().skip(2).position(|p| {
+        p.stabiliser.len() > own
+            && p.stabiliser.len() <= parent_order
+            && branch.elements.iter().all(|e| p.stabiliser.contains(e))
+    }) else {
+        return;
+    };
+    let k = k + 2;
+    let (last, back) = (&branch.points[k - 1], &branch.points[k]);
+    if last.stabiliser != branch.elements {
+        return;
+    }
+    let (x1, x2) = (last.parameters[control], back.parameters[control]);
+    let prev = &branch.points[k - 2];
+    let power = match branch.halves {
+        Halves::Conjugate => 2,
+        Halves::Distinct => 1,
+    };
+    let (a0, a1) = (prev.asymmetry.powi(power), last.asymmetry.powi(power));
+    let x0 = prev.parameters[control];
+    let fitted = (a0 > a1 && prev.stabiliser == branch.elements)
+        .then(|| x1 + a1 * (x1 - x0) / (a0 - a1))
+        .filter(|x| x.is_finite() && (x - x1) * (x - x2) <= 0.0);
+    let estimate = fitted.unwrap_or(0.5 * (x1 + x2));
+    branch.points.truncate(k);
+    branch.critical.retain(|c| c.after_step + 1 < k);
+    branch.turning.retain(|t| t.after_step + 1 < k);
+    branch.stop = StopReason::Rejoined {
+        between: [x1, x2],
+        estimate,
+    };
 }
 
 /// Follows a branch from its first point with `driver` for the rest of its budget of `steps`
