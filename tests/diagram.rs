@@ -311,7 +311,7 @@ fn the_irregular_disc_avoids_the_double_and_has_an_independent_piece_beside_it()
 /// leave contact; that is reported as a point at the jump, flagged, and nothing is switched to
 /// there. The B1 branch of the smooth point returns to the path's states and ends on the jump
 /// point: one connection between two B1 points of the path, the thesis's penalty-induced
-/// closed circuit — not a branch running on along the path.
+/// closed circuit — not a branch running on along the path. The A2 branch does the same.
 #[test]
 fn the_linear_penalty_squeeze_closes_a_circuit_between_two_b1_points_of_its_path() {
     use memstab::results::validity::Flag;
@@ -390,4 +390,26 @@ fn the_linear_penalty_squeeze_closes_a_circuit_between_two_b1_points_of_its_path
         .connections
         .iter()
         .all(|c| g.branches[c.branch].from != path_node(b1[0].0)));
+    // The same in A2, whose branch (isotropy C2) holds the relabelling about z: from the
+    // smooth A2 point to the A2 jump.
+    let a2: Vec<usize> = report
+        .critical
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.irrep == "A2")
+        .map(|(k, _)| k)
+        .collect();
+    assert_eq!(a2.len(), 2, "{:?}", report.critical);
+    assert!(report.critical[a2[0]].residual_eigenvalue < 1e-10);
+    assert!((d(&report.critical[a2[1]].parameters) - at).abs() < 1e-9);
+    let to_a2_jump: Vec<_> = g
+        .connections
+        .iter()
+        .filter(|c| c.to == path_node(a2[1]))
+        .collect();
+    assert_eq!(to_a2_jump.len(), 1, "{:?}", g.connections);
+    let branch = &g.branches[to_a2_jump[0].branch];
+    assert_eq!(branch.from, path_node(a2[0]));
+    assert!(branch.isotropy_exact());
+    assert_eq!(g.connections.len(), 2, "{:?}", g.connections);
 }

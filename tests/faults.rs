@@ -837,6 +837,32 @@ fn a_path_stuck_at_its_start_names_the_cause() {
     );
 }
 
+/// A path stuck at a start that converged in the strict sense (no motion left free) is not
+/// blamed on a free body: with one Newton iteration per step the balloon cannot leave its
+/// start, and the hint names the corrector's budget.
+#[test]
+fn a_path_stuck_at_a_regular_start_names_the_budget_not_a_free_body() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scene("demo.toml"))
+        .unwrap()
+        .replace(
+            "[analysis]",
+            "[analysis]\nmax-iterations = 1\nmin-step = 0.01",
+        );
+    let path = dir.path().join("budget.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("out");
+    let o = run(path.to_str().unwrap(), &out, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = String::from_utf8_lossy(&o.stdout);
+    let line = summary
+        .lines()
+        .find(|l| l.contains("could not leave its start"))
+        .unwrap_or_else(|| panic!("{summary}"));
+    assert!(line.contains("`max-iterations` = 1"), "{line}");
+    assert!(!line.contains("free body"), "{line}");
+}
+
 /// `memstab CMD ARGS` with the test hook `var` at `k`, the others removed, and the blocks of a
 /// spectrum analysed one at a time (so that the blocks after the k-th have not started).
 fn memstab_hook(args: &[&str], var: &str, k: usize) -> Output {

@@ -241,29 +241,34 @@ pub fn run_from(
         Ok(stop) => stop,
         Err(e) => return Err(e),
     };
-    // A path that could not leave its start: say which known cause fits.
+    // A path that stalled: say which known cause fits.
     if let StopReason::Stalled(s) = &stop {
-        if s.after == 0 {
-            cx.record.warnings.push(format!(
-                "the path could not leave its start point (every step failed: {}); likely \
-                 cause (its tangent is singular there): {}; or a parameter at a degenerate \
-                 value",
-                s.why,
-                crate::study::unheld(study.scene())
-            ));
+        let control = study.control().map_or("the control", |c| c.name.as_str());
+        let hint = if s.after == 0 && study.start_drifted() {
+            stall_hint_unheld(study.scene(), s, control)
         } else {
-            let control = study.control().map_or("the control", |c| c.name.as_str());
-            cx.record
-                .warnings
-                .push(stall_hint(study.scene(), s, control, &opts));
-        }
+            stall_hint(study.scene(), s, control, &opts)
+        };
+        cx.record.warnings.push(hint);
     }
     let mut result = cx.record.finish(study, stop, stability_note, cx.times);
     study.annotate(&mut result);
     Ok(result)
 }
 
-/// The one line a path that stalled after some points gets: which known cause fits the kind
+/// The one line a path stuck at a start accepted at round-off along a near-singular direction
+/// gets: a motion nothing holds, whatever the kind of its failed steps.
+fn stall_hint_unheld(scene: &Scene, stalled: &crate::results::Stalled, control: &str) -> String {
+    format!(
+        "the path could not leave its start point ({control} = {}; every step failed: {}): \
+         likely cause (the start was accepted at round-off, its tangent near-singular): {}",
+        crate::text::num(stalled.control),
+        stalled.why,
+        crate::study::unheld(scene)
+    )
+}
+
+/// The one line a path that stalled gets: which known cause fits the kind
 /// of its last failure, and what to try (`opts`: the options the path ran with; `control`:
 /// the control's name).
 pub fn stall_hint(
@@ -273,11 +278,19 @@ pub fn stall_hint(
     opts: &PathOptions,
 ) -> String {
     use crate::results::StepFailure as F;
-    let at = format!(
-        "the path stopped after point {} ({control} = {})",
-        stalled.after,
-        crate::text::num(stalled.control)
-    );
+    let at = if stalled.after == 0 {
+        format!(
+            "the path could not leave its start point ({control} = {}; every step failed: {})",
+            crate::text::num(stalled.control),
+            stalled.why
+        )
+    } else {
+        format!(
+            "the path stopped after point {} ({control} = {})",
+            stalled.after,
+            crate::text::num(stalled.control)
+        )
+    };
     let step = crate::text::num(opts.max_step);
     let planes: Vec<&scene::PlaneEffect> = scene
         .effects
@@ -311,6 +324,11 @@ pub fn stall_hint(
         F::Diverged => format!(
             "likely cause: a step too long for the corrector here; try a smaller `max-step` in \
              [analysis] (now {step})"
+        ),
+        F::Singular if stalled.after == 0 => format!(
+            "likely cause (its tangent is singular there): {}; or a parameter at a degenerate \
+             value",
+            crate::study::unheld(scene)
         ),
         F::Singular => format!(
             "likely cause: {control} reached a degenerate value, where the path's system is \

@@ -366,6 +366,14 @@ pub trait Model: Sync {
     fn held_motions(&self) -> Vec<[f64; 6]> {
         Vec::new()
     }
+    /// The held motions that are exact invariances of Π in the continuum (the relabellings of
+    /// a spherical reference, docs/theory.md §8.5), as fields t + ω × X_i at the reference
+    /// positions: a path holds them in every fixed-point space that contains them, as it holds
+    /// the rigid motions (§7.9), since the mesh alone gives them their tiny stiffness. Empty
+    /// by default.
+    fn gauge_motions(&self) -> Vec<[f64; 6]> {
+        Vec::new()
+    }
     /// Number of unknowns N.
     fn unknowns(&self) -> usize {
         self.layout().unknowns()
@@ -714,6 +722,14 @@ impl Model for FeModel {
             .filter(|&k| svd.singular_values[k] > 1e-9)
             .map(|k| std::array::from_fn(|i| u[(i, k)]))
             .collect()
+    }
+
+    fn gauge_motions(&self) -> Vec<[f64; 6]> {
+        let n = self.reference.len();
+        if n < 4 || self.layout.unknowns() < 3 * n {
+            return Vec::new();
+        }
+        self.relabellings()
     }
 
     fn parameters(&self) -> &[String] {

@@ -118,6 +118,9 @@ pub struct MeshStudy {
     /// The reference radius R as a parameter and the radius R0 the mesh was generated at.
     radius: Option<(Quantity, f64)>,
     targets_from_start: Vec<bool>,
+    /// Whether the last start solve was accepted at round-off along a near-singular
+    /// direction (a motion nothing holds).
+    start_drifted: bool,
 }
 
 impl MeshStudy {
@@ -429,6 +432,7 @@ impl MeshStudy {
             prestretch,
             radius,
             targets_from_start,
+            start_drifted: false,
         })
     }
 
@@ -873,6 +877,10 @@ impl Study for MeshStudy {
         &self.warnings
     }
 
+    fn start_drifted(&self) -> bool {
+        self.start_drifted
+    }
+
     fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64> {
         MeshStudy::measure(self, u, params)
     }
@@ -967,6 +975,7 @@ impl Study for MeshStudy {
         if let Some(defect) = study.model.state_defect(&u, &params) {
             return Err(RunError::Degenerate(defect));
         }
+        self.start_drifted = drifted.is_some();
         if let Some(w) = drifted {
             if !self.warnings.contains(&w) {
                 self.warnings.push(w);

@@ -321,6 +321,11 @@ pub trait Study: Sync + crate::output::Drawing {
     fn start_values(&self) -> &[f64];
     /// What the set-up found that a run should report.
     fn warnings(&self) -> &[String];
+    /// Whether the last start solve was accepted at round-off along a near-singular direction
+    /// (a motion nothing holds): what a path stuck at its start most likely meets.
+    fn start_drifted(&self) -> bool {
+        false
+    }
     /// The measures of a state, in the order of [`About::measures`].
     fn measure(&self, u: &[f64], params: &[f64]) -> Vec<f64>;
     /// The unit of the state in the arclength.

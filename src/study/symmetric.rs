@@ -49,8 +49,11 @@ pub struct SymmetricProblem<'a> {
 const IN_FIXED_POINT_SPACE: f64 = 1e-8;
 
 /// The orthonormal basis W of the fields t + ω × X_i (at the reference positions) of the
-/// model's rigid motions (and its held motions, with `held`) that the fixed-point space of
+/// model's rigid motions and gauge motions ([`Model::gauge_motions`]: the relabellings of a
+/// spherical reference), and of its held motions with `held`, that the fixed-point space of
 /// `basis` contains (docs/theory.md §7.9): none for a group that moves each of them.
+///
+/// [`Model::gauge_motions`]: crate::model::Model::gauge_motions
 pub fn held_gauge(
     model: &dyn crate::model::Model,
     basis: &SparseBasis,
@@ -59,6 +62,7 @@ pub fn held_gauge(
     let reference = model.reference();
     let layout = model.layout();
     let mut motions = model.rigid_motions();
+    motions.extend(model.gauge_motions());
     if held {
         motions.extend(model.held_motions());
     }
