@@ -182,6 +182,12 @@ pub trait CriticalTest {
     ) -> Result<(DMatrix<f64>, f64), ModelError>;
 }
 
+/// A state on one side of a sign change: (arclength from the earlier end, u, every parameter).
+pub type StateSide = (f64, Vec<f64>, Vec<f64>);
+
+/// A test function of a state (u, every parameter).
+pub type StateTest<'a> = dyn FnMut(&[f64], &[f64]) -> Option<f64> + 'a;
+
 /// A zero of a block's test function found on a step ([`Trials::zero`]): the state (u,
 /// every parameter), the function's value there, and the nearest converged states found on
 /// each side of its sign change, (s, u, every parameter) — the earlier end's side first;
@@ -194,7 +200,7 @@ pub struct ZeroFound {
     /// The test function there.
     pub value: f64,
     /// The nearest states of either sign found inside the step.
-    pub sides: [Option<(f64, Vec<f64>, Vec<f64>)>; 2],
+    pub sides: [Option<StateSide>; 2],
 }
 
 /// The states of one step that [`Crossings::localise`] evaluates its crossings at: a converged
@@ -209,11 +215,7 @@ pub trait Trials {
     /// `change`, by Newton on the path's equations and the test function together; `None`
     /// (the default) where the states cannot do that or it fails: the caller then searches
     /// on [`Trials::state`].
-    fn zero(
-        &mut self,
-        _change: SignChange,
-        _test: &mut dyn FnMut(&[f64], &[f64]) -> Option<f64>,
-    ) -> Option<ZeroFound> {
+    fn zero(&mut self, _change: SignChange, _test: &mut StateTest<'_>) -> Option<ZeroFound> {
         None
     }
 }
@@ -936,11 +938,7 @@ impl<P: Problem + States> Trials for StepTrials<'_, P> {
         Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
     }
 
-    fn zero(
-        &mut self,
-        change: SignChange,
-        test: &mut dyn FnMut(&[f64], &[f64]) -> Option<f64>,
-    ) -> Option<ZeroFound> {
+    fn zero(&mut self, change: SignChange, test: &mut StateTest<'_>) -> Option<ZeroFound> {
         let found = self
             .driver
             .zero_on_step(self.from, change, &mut |p: &P, q, l, _| {

@@ -1061,6 +1061,14 @@ pub struct SignChange {
     pub width: f64,
 }
 
+/// A converged state on one side of a sign change: (arclength from the earlier point, q, λ).
+pub type SideState = (f64, DVector<f64>, DVector<f64>);
+
+/// The test function of [`zero_on_step`]: its value at (q, λ) of the problem, with the
+/// iterate's unit tangent.
+pub type StepTest<'a, P> =
+    dyn FnMut(&P, &DVector<f64>, &DVector<f64>, &DVector<f64>) -> Option<f64> + 'a;
+
 /// A zero found by [`zero_on_step`]: the state, its test-function value, its arclength from
 /// the earlier point, and the converged states nearest to it found on each side of the sign
 /// change (the first side's, the second side's: `None` where the search found none inside
@@ -1072,7 +1080,7 @@ pub struct ZeroOnStep {
     /// The test function there.
     pub value: f64,
     /// The nearest converged states found on each side: (s, q, λ).
-    pub sides: [Option<(f64, DVector<f64>, DVector<f64>)>; 2],
+    pub sides: [Option<SideState>; 2],
     /// Newton iterations taken (evaluations of the problem).
     pub iterations: usize,
 }
@@ -1095,7 +1103,7 @@ pub fn zero_on_step<P: Problem + ?Sized>(
     problem: &mut P,
     from: &PathPoint,
     change: SignChange,
-    test: &mut dyn FnMut(&P, &DVector<f64>, &DVector<f64>, &DVector<f64>) -> Option<f64>,
+    test: &mut StepTest<'_, P>,
     opts: &PathOptions,
 ) -> Option<ZeroOnStep> {
     let m = problem.dim();
@@ -1127,7 +1135,7 @@ pub fn zero_on_step<P: Problem + ?Sized>(
     for j in 0..nl {
         lambda[j] += t[m + j] * target * sl(j);
     }
-    let mut sides: [Option<(f64, DVector<f64>, DVector<f64>)>; 2] = [None, None];
+    let mut sides: [Option<SideState>; 2] = [None, None];
     let mut previous: Option<(f64, f64)> = None;
     // |g| at the last iterate where it was evaluated.
     let mut last_converged = f64::INFINITY;
@@ -1410,7 +1418,7 @@ impl<P: Problem> Continuation<P> {
         &mut self,
         from: &PathPoint,
         change: SignChange,
-        test: &mut dyn FnMut(&P, &DVector<f64>, &DVector<f64>, &DVector<f64>) -> Option<f64>,
+        test: &mut StepTest<'_, P>,
     ) -> Option<ZeroOnStep> {
         zero_on_step(&mut self.problem, from, change, test, &self.opts)
     }
