@@ -1045,6 +1045,10 @@ fn step_on_plane<P: Problem + ?Sized>(
 /// converged corrector at every trial.
 const ZERO_ITERATIONS: usize = 24;
 
+/// Converged iterates in a row whose test function stays above the tolerance without halving
+/// after which [`zero_on_step`] gives up.
+const ZERO_STALLS: usize = 3;
+
 /// A state of one step where a test function changes sign: the two sides of the search as
 /// (arclength from the earlier point, the function's value there).
 #[derive(Debug, Clone, Copy)]
@@ -1098,7 +1102,8 @@ pub struct ZeroOnStep {
 /// falsi of the bracket where the secant leaves it). Returns the first iterate whose residual
 /// passes the corrector's test, whose next correction at a fixed arclength is within the
 /// corrector's tolerance, and whose |τ| is at most `change.tolerance`; `None` if that takes
-/// more than [`ZERO_ITERATIONS`] iterations or any evaluation or solve fails.
+/// more than [`ZERO_ITERATIONS`] iterations, |τ| stalls above the tolerance for
+/// [`ZERO_STALLS`] converged iterates, or any evaluation or solve fails.
 pub fn zero_on_step<P: Problem + ?Sized>(
     problem: &mut P,
     from: &PathPoint,
@@ -1137,8 +1142,10 @@ pub fn zero_on_step<P: Problem + ?Sized>(
     }
     let mut sides: [Option<SideState>; 2] = [None, None];
     let mut previous: Option<(f64, f64)> = None;
-    // |g| at the last iterate where it was evaluated.
+    // |g| at the last converged iterate, and the converged iterates in a row since |g| last
+    // halved.
     let mut last_converged = f64::INFINITY;
+    let mut stalled = 0;
     for it in 1..=ZERO_ITERATIONS {
         if super::interrupt::requested() {
             return None;
@@ -1200,6 +1207,16 @@ pub fn zero_on_step<P: Problem + ?Sized>(
                 found = Some(g);
             }
             if converged {
+                // |g| above the tolerance and no longer halving: at the noise of its states,
+                // not at a zero; the caller's search takes over.
+                if g.abs() > change.tolerance && g.abs() > 0.5 * last_converged {
+                    stalled += 1;
+                    if stalled == ZERO_STALLS {
+                        return None;
+                    }
+                } else {
+                    stalled = 0;
+                }
                 last_converged = g.abs();
             }
             let inside = next.is_finite() && next > lo.0.min(hi.0) && next < lo.0.max(hi.0);
