@@ -1058,12 +1058,13 @@ impl Blocks for IrrepBlocks<'_> {
         } else {
             Detail::Eigenvalues { lowest }
         };
+        // One block reads K only around its orbit representatives.
         self.stability
             .analyse(
                 u,
                 params,
                 self.constraints,
-                &mut self.eval,
+                &mut self.local,
                 Some(block),
                 detail,
             )

@@ -390,27 +390,20 @@ pub fn run_thesis(
     })
 }
 
-/// The bundled thesis scenes (`scenes/thesis/*.toml` of the source tree, or of the working
-/// directory), each run and timed: the section of `thesis.md` that lists them.
+/// The bundled thesis scenes (`scenes/thesis/*.toml`, embedded in the binary and written with
+/// the meshes they read into a temporary directory), each run and timed: the section of
+/// `thesis.md` that lists them.
 fn thesis_scenes(progress: &mut dyn FnMut(&str)) -> Result<String, String> {
-    use super::thesis::{scene_run, scenes_table};
-    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/thesis");
-    let dir = [built, PathBuf::from("scenes/thesis")]
-        .into_iter()
-        .find(|d| d.is_dir());
-    let Some(dir) = dir else {
-        return Ok("## The bundled thesis scenes\n\nNot run: no scenes/thesis directory.\n".into());
-    };
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map_err(|e| format!("{}: {e}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    files.sort();
+    use super::thesis::{scene_run, scenes_table, write_thesis_scenes};
+    let dir = tempfile::tempdir().map_err(|e| format!("a temporary directory: {e}"))?;
+    let files = write_thesis_scenes(dir.path())?;
     let mut runs = Vec::new();
     for f in &files {
-        stage(progress, &format!("thesis scene {} …", f.display()))?;
-        runs.push(scene_run(f).map_err(|e| format!("{}: {}", f.display(), one_line(&e)))?);
+        let name = f
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        stage(progress, &format!("thesis scene {name} …"))?;
+        runs.push(scene_run(f).map_err(|e| format!("{name}: {}", one_line(&e)))?);
     }
     Ok(scenes_table(&runs))
 }

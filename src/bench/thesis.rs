@@ -246,6 +246,103 @@ pub fn thesis_table(runs: &[ThesisRun]) -> String {
     md
 }
 
+/// The bundled thesis scenes (`scenes/thesis/*.toml`), embedded in the binary: (file name,
+/// text). `memstab bench --thesis` runs these, so an installed binary needs no source tree.
+pub const THESIS_SCENES: &[(&str, &str)] = &[
+    (
+        "paper1_disc_irregular.toml",
+        include_str!("../../scenes/thesis/paper1_disc_irregular.toml"),
+    ),
+    (
+        "paper1_disc_irregular_diagram.toml",
+        include_str!("../../scenes/thesis/paper1_disc_irregular_diagram.toml"),
+    ),
+    (
+        "paper1_disc_limit_curve_k.toml",
+        include_str!("../../scenes/thesis/paper1_disc_limit_curve_k.toml"),
+    ),
+    (
+        "paper1_disc_limit_curve_radius.toml",
+        include_str!("../../scenes/thesis/paper1_disc_limit_curve_radius.toml"),
+    ),
+    (
+        "paper2_gas_pressure_fold.toml",
+        include_str!("../../scenes/thesis/paper2_gas_pressure_fold.toml"),
+    ),
+    (
+        "paper2_gas_pressure_fold_f8.toml",
+        include_str!("../../scenes/thesis/paper2_gas_pressure_fold_f8.toml"),
+    ),
+    (
+        "paper2_solution_surface_f8.toml",
+        include_str!("../../scenes/thesis/paper2_solution_surface_f8.toml"),
+    ),
+    (
+        "paper2_sphere_on_plane.toml",
+        include_str!("../../scenes/thesis/paper2_sphere_on_plane.toml"),
+    ),
+    (
+        "paper2_sphere_on_plane_f8.toml",
+        include_str!("../../scenes/thesis/paper2_sphere_on_plane_f8.toml"),
+    ),
+    (
+        "paper3_gas_fluid_pressure.toml",
+        include_str!("../../scenes/thesis/paper3_gas_fluid_pressure.toml"),
+    ),
+    (
+        "paper3_gas_fluid_squeeze.toml",
+        include_str!("../../scenes/thesis/paper3_gas_fluid_squeeze.toml"),
+    ),
+    (
+        "paper3_gas_fluid_squeeze_linear.toml",
+        include_str!("../../scenes/thesis/paper3_gas_fluid_squeeze_linear.toml"),
+    ),
+    (
+        "paper3_gas_fluid_squeeze_linear_thesis_mesh.toml",
+        include_str!("../../scenes/thesis/paper3_gas_fluid_squeeze_linear_thesis_mesh.toml"),
+    ),
+    (
+        "paper3_squeezed_cap.toml",
+        include_str!("../../scenes/thesis/paper3_squeezed_cap.toml"),
+    ),
+    (
+        "paper4_hilltop_k.toml",
+        include_str!("../../scenes/thesis/paper4_hilltop_k.toml"),
+    ),
+    (
+        "paper4_spinning_cap.toml",
+        include_str!("../../scenes/thesis/paper4_spinning_cap.toml"),
+    ),
+];
+
+/// The mesh files the bundled thesis scenes read, by their path relative to `scenes/` (a
+/// scene's `mesh.path` is relative to its own directory, `scenes/thesis`).
+pub const THESIS_MESHES: &[(&str, &[u8])] = &[(
+    "meshes/disc_irregular.vtu",
+    include_bytes!("../../scenes/meshes/disc_irregular.vtu"),
+)];
+
+/// Writes the bundled thesis scenes into `dir` as `dir/thesis/*.toml`, with the mesh files
+/// they read beside them as in the source tree (`dir/meshes/…`); returns the scenes' paths in
+/// the order of [`THESIS_SCENES`].
+pub fn write_thesis_scenes(dir: &Path) -> Result<Vec<std::path::PathBuf>, String> {
+    let write = |rel: &str, bytes: &[u8]| -> Result<std::path::PathBuf, String> {
+        let path = dir.join(rel);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+        }
+        std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(path)
+    };
+    for (rel, bytes) in THESIS_MESHES {
+        write(rel, bytes)?;
+    }
+    THESIS_SCENES
+        .iter()
+        .map(|(name, text)| write(&format!("thesis/{name}"), text.as_bytes()))
+        .collect()
+}
+
 /// One bundled thesis scene run as `memstab run` runs it, outputs not written.
 #[derive(Debug, Clone)]
 pub struct SceneRun {
@@ -311,4 +408,46 @@ pub fn scenes_table(runs: &[SceneRun]) -> String {
         );
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{write_thesis_scenes, THESIS_MESHES, THESIS_SCENES};
+
+    /// The embedded scenes are exactly the bundled `scenes/thesis/*.toml`, byte for byte, and
+    /// every mesh file one of them reads is embedded; written out, each scene loads with its
+    /// mesh found beside it.
+    #[test]
+    fn the_embedded_thesis_scenes_are_the_bundled_ones_and_load_where_written() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        let mut bundled: Vec<String> = std::fs::read_dir(root.join("thesis"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".toml"))
+            .collect();
+        bundled.sort();
+        let embedded: Vec<String> = THESIS_SCENES.iter().map(|(n, _)| n.to_string()).collect();
+        assert_eq!(embedded, bundled);
+        for (name, text) in THESIS_SCENES {
+            let on_disk = std::fs::read_to_string(root.join("thesis").join(name)).unwrap();
+            assert_eq!(*text, on_disk, "{name}");
+        }
+        for (rel, bytes) in THESIS_MESHES {
+            assert_eq!(
+                *bytes,
+                std::fs::read(root.join(rel)).unwrap().as_slice(),
+                "{rel}"
+            );
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let paths = write_thesis_scenes(dir.path()).unwrap();
+        assert_eq!(paths.len(), THESIS_SCENES.len());
+        for path in &paths {
+            let scene = crate::scene::Scene::load(path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            if let crate::scene::MeshSpec::File(f) = &scene.mesh {
+                assert!(f.path.is_file(), "{}: {}", path.display(), f.path.display());
+            }
+        }
+    }
 }

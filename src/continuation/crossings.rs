@@ -5,7 +5,7 @@
 //! classified — and [`IndexChanges`], the detector that watches the index at every point of a
 //! path and rejects steps that leave the connected path.
 
-use super::driver::{Accepted, Continuation, PathPoint, Problem};
+use super::driver::{Accepted, Continuation, PathPoint, Problem, SignChange};
 use super::events::{
     locate_within, Admission, Detector, Event, MeasureFn, States, REJECTED_STEP_FACTOR,
 };
@@ -188,6 +188,50 @@ pub trait CriticalTest {
     ) -> Result<(DMatrix<f64>, f64), ModelError>;
 }
 
+/// A state on one side of a sign change: (arclength from the earlier end, u, every parameter).
+pub type StateSide = (f64, Vec<f64>, Vec<f64>);
+
+/// A test function of a state (u, every parameter).
+pub type StateTest<'a> = dyn FnMut(&[f64], &[f64]) -> Option<f64> + 'a;
+
+/// A zero of a block's test function found on a step ([`Trials::zero`]): the state (u,
+/// every parameter), the function's value there, and the nearest converged states found on
+/// each side of its sign change, (s, u, every parameter) — the earlier end's side first;
+/// `None` where the search found none inside the step.
+pub struct ZeroFound {
+    /// The displacement.
+    pub u: Vec<f64>,
+    /// Every parameter.
+    pub params: Vec<f64>,
+    /// The test function there.
+    pub value: f64,
+    /// The nearest states of either sign found inside the step.
+    pub sides: [Option<StateSide>; 2],
+}
+
+/// The states of one step that [`Crossings::localise`] evaluates its crossings at: a converged
+/// state at any arclength s of the step and, where the states come from a path that can be
+/// solved together with a test function, the zero of that function directly
+/// ([`super::driver::zero_on_step`]). Any `FnMut(f64) -> Option<(u, params)>` gives the states
+/// alone.
+pub trait Trials {
+    /// (u, params) at s ∈ [0, s1] (s = 0 at the earlier end), `None` where it cannot be found.
+    fn state(&mut self, s: f64) -> Option<(Vec<f64>, Vec<f64>)>;
+    /// The state of the step where `test` (of (u, params)) is zero, from the sign change
+    /// `change`, by Newton on the path's equations and the test function together; `None`
+    /// (the default) where the states cannot do that or it fails: the caller then searches
+    /// on [`Trials::state`].
+    fn zero(&mut self, _change: SignChange, _test: &mut StateTest<'_>) -> Option<ZeroFound> {
+        None
+    }
+}
+
+impl<F: FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>> Trials for F {
+    fn state(&mut self, s: f64) -> Option<(Vec<f64>, Vec<f64>)> {
+        self(s)
+    }
+}
+
 /// Index changes of the blocks, localised and classified: the stability analysis of states of
 /// one model (docs/theory.md §8, §10, §11), by any [`Blocks`].
 pub struct Crossings<'a> {
@@ -259,7 +303,7 @@ impl<'a> Crossings<'a> {
         after_step: usize,
         s1: f64,
         control_turns: bool,
-        mut state: impl FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
+        mut trials: impl Trials,
     ) -> Vec<Event> {
         let mut found = Vec::new();
         let mut warnings = Vec::new();
@@ -292,7 +336,7 @@ impl<'a> Crossings<'a> {
             if n0.abs_diff(n1) == 1 {
                 let k = n0.min(n1);
                 if let Some((u, p, sp, g, bracket)) =
-                    self.by_test_function(&a, &b, mu, k, s1, &mut state)
+                    self.by_test_function(&a, &b, mu, k, s1, &mut trials)
                 {
                     let at = (u, p, &sp, g);
                     match self.critical_point(mu, k, at, bracket, after_step, control_turns) {
@@ -344,7 +388,7 @@ impl<'a> Crossings<'a> {
                 let tol = self.blocks.zero_eigenvalue() * a.spectrum.scale;
                 let mut failure = None;
                 // Every evaluated (s, eigenvalue, control), to tell a jump from a crossing.
-                let mut trials: Vec<(f64, f64, Option<f64>)> = Vec::new();
+                let mut tried: Vec<(f64, f64, Option<f64>)> = Vec::new();
                 // The bracket's ends as the localisation narrows it (the side of g0, the
                 // side of g1), with their states.
                 let mut sides = [
@@ -356,7 +400,7 @@ impl<'a> Crossings<'a> {
                         if super::interrupt::requested() {
                             return None;
                         }
-                        let Some((u, p)) = state(s) else {
+                        let Some((u, p)) = trials.state(s) else {
                             failure = Some(format!(
                                 "the state at {:.3} of the step did not converge",
                                 s / s1
@@ -366,7 +410,7 @@ impl<'a> Crossings<'a> {
                         let sp = self.block_eigen(&u, &p, mu, k + 1, false)?;
                         let value = sp.blocks[mu].eigenvalues.get(k).copied();
                         if let Some(g) = value {
-                            trials.push((s, g, control.and_then(|c| p.get(c).copied())));
+                            tried.push((s, g, control.and_then(|c| p.get(c).copied())));
                             // As `locate_within` moves its ends.
                             let side = usize::from(g.signum() == g1.signum());
                             sides[side] = (s, u, p);
@@ -450,7 +494,7 @@ impl<'a> Crossings<'a> {
                 if g_best.abs() > JUMP_EIGENVALUE * a.spectrum.scale {
                     // No zero: the eigenvalue jumps between two neighbouring states.
                     let side = |positive: bool| {
-                        trials
+                        tried
                             .iter()
                             .filter(|t| (t.1 > 0.0) == positive)
                             .min_by(|x, y| (x.0 - s_best).abs().total_cmp(&(y.0 - s_best).abs()))
@@ -473,7 +517,7 @@ impl<'a> Crossings<'a> {
                     continue;
                 }
                 // Re-evaluate at the best point, with the eigenvectors for the critical mode.
-                let evaluated = state(s_best).and_then(|(u, p)| {
+                let evaluated = trials.state(s_best).and_then(|(u, p)| {
                     let sp = self.block_eigen(&u, &p, mu, k + 1, true)?;
                     Some((u, p, sp))
                 });
@@ -526,7 +570,7 @@ impl Crossings<'_> {
         mu: usize,
         k: usize,
         s1: f64,
-        state: &mut dyn FnMut(f64) -> Option<(Vec<f64>, Vec<f64>)>,
+        trials: &mut dyn Trials,
     ) -> Option<Located> {
         let tol = self.blocks.zero_eigenvalue() * a.spectrum.scale;
         if tol <= 0.0 {
@@ -543,6 +587,10 @@ impl Crossings<'_> {
         if (g0 > 0.0) != rising || g1 == 0.0 || (g1 > 0.0) == rising {
             return None;
         }
+        // Newton on the path's equations and σ together, where the states allow it.
+        if let Some(located) = self.by_newton(a, b, mu, k, s1, (g0, g1, &border), trials) {
+            return Some(located);
+        }
         // The best trial's state, kept for the eigenvalues there.
         let mut best: Option<(f64, f64, Vec<f64>, Vec<f64>)> = None;
         // The bracket's ends as the search narrows it (the side of g0, the side of g1).
@@ -556,7 +604,7 @@ impl Crossings<'_> {
                 if super::interrupt::requested() {
                     return None;
                 }
-                let (u, p) = state(s)?;
+                let (u, p) = trials.state(s)?;
                 let (g, _) = blocks.test_function(&u, &p, mu, Some(&border), 0)?;
                 sides[usize::from((g > 0.0) == (g1 > 0.0))] = (s, u.clone(), p.clone());
                 if best.as_ref().is_none_or(|t| g.abs() < t.1.abs()) {
@@ -582,6 +630,51 @@ impl Crossings<'_> {
             ends: [(u0, p0), (u2, p2)],
         };
         (g.abs() <= tol).then_some((u, p, sp, g, bracket))
+    }
+
+    /// The crossing of the `k`-th eigenvalue of block `mu` as the zero of the block's test
+    /// function τ (border `border`, τ = g0 at `a`, g1 at `b`) found by Newton on the path's
+    /// equations and τ together ([`Trials::zero`], docs/theory.md §11.2), then certified as
+    /// [`Crossings::by_test_function`] certifies its best trial: the block's eigenvalues and
+    /// eigenvectors at the state, its `k`-th within the tolerance. `None` where the trials
+    /// cannot solve for the zero, the iteration fails or the certificate does not hold.
+    #[allow(clippy::too_many_arguments)]
+    fn by_newton(
+        &mut self,
+        a: &End<'_>,
+        b: &End<'_>,
+        mu: usize,
+        k: usize,
+        s1: f64,
+        (g0, g1, border): (f64, f64, &[f64]),
+        trials: &mut dyn Trials,
+    ) -> Option<Located> {
+        let tol = self.blocks.zero_eigenvalue() * a.spectrum.scale;
+        let blocks = &mut self.blocks;
+        let change = SignChange {
+            first: (0.0, g0),
+            second: (s1, g1),
+            tolerance: tol,
+            width: LOCATE_WIDTH * s1.abs(),
+        };
+        let zero = trials.zero(change, &mut |u, p| {
+            blocks
+                .test_function(u, p, mu, Some(border), 0)
+                .map(|(g, _)| g)
+        })?;
+        let sp = self.block_eigen(&zero.u, &zero.params, mu, k + 1, true)?;
+        let g = *sp.blocks[mu].eigenvalues.get(k)?;
+        if g.abs() > tol {
+            return None;
+        }
+        let [first, second] = zero.sides;
+        let (s0, u0, p0) = first.unwrap_or((0.0, a.u.to_vec(), a.params.to_vec()));
+        let (s2, u2, p2) = second.unwrap_or((s1, b.u.to_vec(), b.params.to_vec()));
+        let bracket = Bracket {
+            width: (s2 - s0).abs() / s1.abs().max(f64::MIN_POSITIVE),
+            ends: [(u0, p0), (u2, p2)],
+        };
+        Some((zero.u, zero.params, sp, g, bracket))
     }
 
     /// The critical point of the `k`-th eigenvalue `g` of block `mu` at the state (u, p),
@@ -831,57 +924,100 @@ impl<P: Problem + States> Detector<P> for IndexChanges<'_> {
                 params: p1,
             },
         );
-        // A state inside the step: corrected from the earlier point (without the branch-jump
-        // guard, which a step next to a branch point of the path would trip). Where that fails — near a
-        // singular point of the path, such as a nearly symmetric (imperfect) bifurcation that
-        // the step went over, where the corrector's basin shrinks — from the nearest state
-        // found so far on the same side, forwards from the earlier point's side or backwards
-        // from the later point's.
+        // The states inside the step, and the test function's zeros on it ([`StepTrials`]).
         let mut back = point.clone();
         back.tangent = -back.tangent;
-        let mut forward: Vec<(f64, PathPoint)> = Vec::new();
-        let mut backward: Vec<(f64, PathPoint)> = vec![(s1, back)];
-        // The corrector from the earlier point failed at and beyond this s (not tried again).
-        let mut fails_from = f64::INFINITY;
+        let trials = StepTrials {
+            driver,
+            from: &step.from,
+            forward: Vec::new(),
+            backward: vec![(s1, back)],
+            fails_from: f64::INFINITY,
+        };
         self.crossings
-            .localise(ends.0, ends.1, after, s1, turns, |s| {
-                let direct = if s < fails_from {
-                    driver.corrected_from(&step.from, s).ok()
-                } else {
-                    None
-                };
-                let q = match direct {
+            .localise(ends.0, ends.1, after, s1, turns, trials)
+    }
+}
+
+/// The states of one accepted step of a driver, for [`Crossings::localise`]: a state inside
+/// the step corrected from the earlier point (without the branch-jump guard, which a step next
+/// to a branch point of the path would trip); where that fails — near a singular point of the
+/// path, such as a nearly symmetric (imperfect) bifurcation that the step went over, where the
+/// corrector's basin shrinks — from the nearest state found so far on the same side, forwards
+/// from the earlier point's side or backwards from the later point's. A test function's zero
+/// by Newton on the path's equations and the function together ([`super::driver::zero_on_step`]).
+struct StepTrials<'d, P> {
+    driver: &'d mut Continuation<P>,
+    from: &'d PathPoint,
+    forward: Vec<(f64, PathPoint)>,
+    backward: Vec<(f64, PathPoint)>,
+    /// The corrector from the earlier point failed at and beyond this s (not tried again).
+    fails_from: f64,
+}
+
+impl<P: Problem + States> Trials for StepTrials<'_, P> {
+    fn state(&mut self, s: f64) -> Option<(Vec<f64>, Vec<f64>)> {
+        let driver = &mut *self.driver;
+        let direct = if s < self.fails_from {
+            driver.corrected_from(self.from, s).ok()
+        } else {
+            None
+        };
+        let q = match direct {
+            Some(q) => q,
+            None => {
+                self.fails_from = self.fails_from.min(s);
+                let near_forward = self
+                    .forward
+                    .iter()
+                    .filter(|(t, _)| *t < s)
+                    .max_by(|x, y| x.0.total_cmp(&y.0));
+                let chained = near_forward.and_then(|(t, p)| driver.step_from(p, s - t).ok());
+                match chained {
                     Some(q) => q,
                     None => {
-                        fails_from = fails_from.min(s);
-                        let near_forward = forward
+                        let (t, p) = self
+                            .backward
                             .iter()
-                            .filter(|(t, _)| *t < s)
-                            .max_by(|x, y| x.0.total_cmp(&y.0));
-                        let chained =
-                            near_forward.and_then(|(t, p)| driver.step_from(p, s - t).ok());
-                        match chained {
-                            Some(q) => q,
-                            None => {
-                                let (t, p) = backward
-                                    .iter()
-                                    .filter(|(t, _)| *t > s)
-                                    .min_by(|x, y| x.0.total_cmp(&y.0))?;
-                                let q = driver.step_from(p, t - s).ok()?;
-                                backward.push((s, q.clone()));
-                                let problem = driver.problem();
-                                return Some((
-                                    problem.displacement(&q.q),
-                                    problem.parameters(&q.lambda),
-                                ));
-                            }
-                        }
+                            .filter(|(t, _)| *t > s)
+                            .min_by(|x, y| x.0.total_cmp(&y.0))?;
+                        let q = driver.step_from(p, t - s).ok()?;
+                        self.backward.push((s, q.clone()));
+                        let problem = driver.problem();
+                        return Some((problem.displacement(&q.q), problem.parameters(&q.lambda)));
                     }
-                };
-                forward.push((s, q.clone()));
-                let problem = driver.problem();
-                Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
+                }
+            }
+        };
+        self.forward.push((s, q.clone()));
+        let problem = self.driver.problem();
+        Some((problem.displacement(&q.q), problem.parameters(&q.lambda)))
+    }
+
+    fn zero(&mut self, change: SignChange, test: &mut StateTest<'_>) -> Option<ZeroFound> {
+        let found = self
+            .driver
+            .zero_on_step(self.from, change, &mut |p: &P, q, l, _| {
+                test(&p.displacement(q), &p.parameters(l))
+            })?;
+        let problem = self.driver.problem();
+        let state = |q: &nalgebra::DVector<f64>, l: &nalgebra::DVector<f64>| {
+            (problem.displacement(q), problem.parameters(l))
+        };
+        let (u, params) = state(&found.point.q, &found.point.lambda);
+        let [first, second] = found.sides;
+        let side = |x: Option<(f64, nalgebra::DVector<f64>, nalgebra::DVector<f64>)>| {
+            x.map(|(s, q, l)| {
+                let (u, p) = state(&q, &l);
+                (s, u, p)
             })
+        };
+        Some(ZeroFound {
+            u,
+            params,
+            value: found.value,
+            sides: [side(first), side(second)],
+        })
     }
 }
 

@@ -21,7 +21,9 @@
 //! A corrector that does not converge, or that ends far from its predictor, halves the step;
 //! below `min_step` the driver reports where and why it stalled.
 
-use crate::linalg::bordered::{bordered_solve, solve_dense, sparse_lu_solve, SharedFactorization};
+use crate::linalg::bordered::{
+    bordered_solve_all, solve_dense, sparse_lu_solve, SharedFactorization,
+};
 use crate::linalg::SymmetricPattern;
 use crate::model::{ModelError, StateDefect};
 use crate::results::PhaseTimes;
@@ -314,8 +316,17 @@ enum Extended {
 impl Extended {
     /// Solves A x = rhs (rhs of the extended system's size); `None` if A is singular.
     fn solve(self, rhs: &DVector<f64>) -> Option<DVector<f64>> {
+        self.solve_all(&[rhs])?.pop()
+    }
+
+    /// Solves A x = rhs for every rhs in `all` from one factorisation of A; `None` if A is
+    /// singular.
+    fn solve_all(self, all: &[&DVector<f64>]) -> Option<Vec<DVector<f64>>> {
         match self {
-            Extended::Dense(a) => solve_dense(a, rhs),
+            Extended::Dense(a) => match all {
+                [rhs] => Some(vec![solve_dense(a, rhs)?]),
+                _ => all.iter().map(|rhs| solve_dense(a.clone(), rhs)).collect(),
+            },
             Extended::Sparse {
                 pattern,
                 values,
@@ -327,13 +338,29 @@ impl Extended {
             } => {
                 let m = pattern.n();
                 let nb = d.nrows();
-                let mut full = DVector::zeros(m + nb);
-                full.rows_mut(0, m + nb - extra)
-                    .copy_from(&rhs.rows(0, m + nb - extra));
-                let x = bordered_solve(&pattern, &values, &b, &c, &d, &solver, &full)
-                    .or_else(|| sparse_lu_solve(&pattern, &values, &b, &c, &d, &full))?;
-                let x = x.rows(0, m + nb - extra).into_owned();
-                x.iter().all(|v| v.is_finite()).then_some(x)
+                let full: Vec<DVector<f64>> = all
+                    .iter()
+                    .map(|rhs| {
+                        let mut full = DVector::zeros(m + nb);
+                        full.rows_mut(0, m + nb - extra)
+                            .copy_from(&rhs.rows(0, m + nb - extra));
+                        full
+                    })
+                    .collect();
+                let refs: Vec<&DVector<f64>> = full.iter().collect();
+                let xs = match bordered_solve_all(&pattern, &values, &b, &c, &d, &solver, &refs) {
+                    Some(xs) => xs,
+                    None => full
+                        .iter()
+                        .map(|f| sparse_lu_solve(&pattern, &values, &b, &c, &d, f))
+                        .collect::<Option<Vec<_>>>()?,
+                };
+                xs.into_iter()
+                    .map(|x| {
+                        let x = x.rows(0, m + nb - extra).into_owned();
+                        x.iter().all(|v| v.is_finite()).then_some(x)
+                    })
+                    .collect()
             }
         }
     }
@@ -927,6 +954,9 @@ fn step_on_plane<P: Problem + ?Sized>(
     for j in 0..nl {
         lambda[j] += t[m + j] * s * sl(j);
     }
+    // The step's own direction is its plane's normal: the tangent at a converged iterate
+    // then solves the same bordered system, and comes from the same factorisation.
+    let same_plane = guarded && std::ptr::eq(plane, direction);
     for it in 1..=opts.max_iterations {
         let lin = problem.evaluate(&q, &lambda)?;
         let c = lin.constraints.len();
@@ -940,7 +970,15 @@ fn step_on_plane<P: Problem + ?Sized>(
         }
         g[m + c] = arc;
         let converged = lin.converged(opts);
-        let d = a.solve(&(-&g)).ok_or(StepError::Singular)?;
+        let (d, tangent) = if same_plane && converged {
+            let mut e = DVector::zeros(m + c + 1);
+            e[m + c] = 1.0;
+            let mut xs = a.solve_all(&[&(-&g), &e]).ok_or(StepError::Singular)?;
+            let tangent = xs.pop().ok_or(StepError::Singular)?;
+            (xs.pop().ok_or(StepError::Singular)?, Some(tangent))
+        } else {
+            (a.solve(&(-&g)).ok_or(StepError::Singular)?, None)
+        };
         q += d.rows(0, m) * sq;
         for j in 0..nl {
             lambda[j] += d[m + j] * sl(j);
@@ -958,8 +996,22 @@ fn step_on_plane<P: Problem + ?Sized>(
             });
         }
         if converged && d.amax() <= opts.tolerance {
-            let lin = problem.evaluate(&q, &lambda)?;
-            let tangent = tangent_at(&lin, opts, Some(t)).ok_or(StepError::SingularTangent)?;
+            // The tangent at the converged iterate, before its last correction (within the
+            // corrector's tolerance of the point), from its factorisation; else at the point.
+            let tangent = match tangent {
+                Some(x) if x.norm() > 0.0 => {
+                    let x = &x / x.norm();
+                    if x.dot(t) < 0.0 {
+                        -x
+                    } else {
+                        x
+                    }
+                }
+                _ => {
+                    let lin = problem.evaluate(&q, &lambda)?;
+                    tangent_at(&lin, opts, Some(t)).ok_or(StepError::SingularTangent)?
+                }
+            };
             // Stay on the branch: the corrector must end near the predictor and the tangent
             // must not turn sharply; otherwise the step is cut rather than a jump accepted.
             let mut dist2 = (&q - &from.q - t.rows(0, m) * (s * sq)).norm_squared() / (sq * sq);
@@ -987,6 +1039,225 @@ fn step_on_plane<P: Problem + ?Sized>(
     Err(StepError::NotConverged {
         iterations: opts.max_iterations,
     })
+}
+
+/// Iterations [`zero_on_step`] takes at most before its caller falls back to a search with a
+/// converged corrector at every trial.
+const ZERO_ITERATIONS: usize = 24;
+
+/// Converged iterates in a row whose test function stays above the tolerance without halving
+/// after which [`zero_on_step`] gives up.
+const ZERO_STALLS: usize = 3;
+
+/// A state of one step where a test function changes sign: the two sides of the search as
+/// (arclength from the earlier point, the function's value there).
+#[derive(Debug, Clone, Copy)]
+pub struct SignChange {
+    /// The side of the earlier end: (s, g).
+    pub first: (f64, f64),
+    /// The side of the later end: (s, g), g of the other sign.
+    pub second: (f64, f64),
+    /// |g| at or below which the zero is found.
+    pub tolerance: f64,
+    /// The arclength to which the zero is located once |g| is within the tolerance: the
+    /// search goes on until Newton's next move along the step is shorter (or |g| stops
+    /// decreasing, at round-off).
+    pub width: f64,
+}
+
+/// A converged state on one side of a sign change: (arclength from the earlier point, q, λ).
+pub type SideState = (f64, DVector<f64>, DVector<f64>);
+
+/// The test function of [`zero_on_step`]: its value at (q, λ) of the problem, with the
+/// iterate's unit tangent.
+pub type StepTest<'a, P> =
+    dyn FnMut(&P, &DVector<f64>, &DVector<f64>, &DVector<f64>) -> Option<f64> + 'a;
+
+/// A zero found by [`zero_on_step`]: the state, its test-function value, its arclength from
+/// the earlier point, and the converged states nearest to it found on each side of the sign
+/// change (the first side's, the second side's: `None` where the search found none inside
+/// the step, the caller's ends then standing for them).
+#[derive(Debug, Clone)]
+pub struct ZeroOnStep {
+    /// The state.
+    pub point: PathPoint,
+    /// The test function there.
+    pub value: f64,
+    /// The nearest converged states found on each side: (s, q, λ).
+    pub sides: [Option<SideState>; 2],
+    /// Newton iterations taken (evaluations of the problem).
+    pub iterations: usize,
+}
+
+/// Newton on the augmented system R(y) = 0, g(y) = 0, τ(y) = 0 in y = (q, λ) along the step
+/// from `from` (docs/theory.md §11.2): τ's gradient taken along the step's direction t only,
+/// ∇τ ≈ τ' t with τ' its secant slope along the arclength, each iteration is one solve of
+/// the corrector's bordered system with the arclength row's target moved to
+/// s − τ(y)/τ' — one evaluation and one factorisation per iteration, for the state and the
+/// crossing together, where a search on the arclength converges a whole corrector at every
+/// trial. τ (`test`, at (q, λ) of the problem, with the iterate's unit tangent) is evaluated
+/// at the iterates whose relative residual is within the square root of the corrector's
+/// tolerance (farther off the path its value does not say where along the step the zero
+/// lies); the target is kept inside the bracket of converged states of either sign (regula
+/// falsi of the bracket where the secant leaves it). Returns the first iterate whose residual
+/// passes the corrector's test, whose next correction at a fixed arclength is within the
+/// corrector's tolerance, and whose |τ| is at most `change.tolerance`; `None` if that takes
+/// more than [`ZERO_ITERATIONS`] iterations, |τ| stalls above the tolerance for
+/// [`ZERO_STALLS`] converged iterates, or any evaluation or solve fails.
+pub fn zero_on_step<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    change: SignChange,
+    test: &mut StepTest<'_, P>,
+    opts: &PathOptions,
+) -> Option<ZeroOnStep> {
+    let m = problem.dim();
+    let nl = from.lambda.len();
+    let sq = opts.state_scale;
+    let sl = |j: usize| opts.parameter_scale(j);
+    let t = &from.tangent;
+    let arclength = |q: &DVector<f64>, lambda: &DVector<f64>| -> f64 {
+        let mut s = t.rows(0, m).dot(&(q - &from.q)) / sq;
+        for j in 0..nl {
+            s += t[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
+        }
+        s
+    };
+    // The bracket of converged states: (s, g) on the first side and on the second.
+    let (mut lo, mut hi) = (change.first, change.second);
+    let regula_falsi = |lo: (f64, f64), hi: (f64, f64)| -> f64 {
+        let s = (lo.0 * hi.1 - hi.0 * lo.1) / (hi.1 - lo.1);
+        if s.is_finite() && s > lo.0.min(hi.0) && s < lo.0.max(hi.0) {
+            s
+        } else {
+            0.5 * (lo.0 + hi.0)
+        }
+    };
+    let first_sign = change.first.1 > 0.0;
+    let mut target = regula_falsi(lo, hi);
+    let mut q = &from.q + t.rows(0, m) * (target * sq);
+    let mut lambda = from.lambda.clone();
+    for j in 0..nl {
+        lambda[j] += t[m + j] * target * sl(j);
+    }
+    let mut sides: [Option<SideState>; 2] = [None, None];
+    let mut previous: Option<(f64, f64)> = None;
+    // |g| at the last converged iterate, and the converged iterates in a row since |g| last
+    // halved.
+    let mut last_converged = f64::INFINITY;
+    let mut stalled = 0;
+    for it in 1..=ZERO_ITERATIONS {
+        if super::interrupt::requested() {
+            return None;
+        }
+        let lin = problem.evaluate(&q, &lambda).ok()?;
+        let converged = lin.converged(opts);
+        let c = lin.constraints.len();
+        let here = arclength(&q, &lambda);
+        // One factorisation for both: the correction d0 at the present arclength and x with
+        // J x = e (the arclength row's unit), the tangent's direction; the correction to a
+        // target arclength s is d0 + (s − here) x, the plane's row being linear.
+        let mut r = DVector::zeros(m + c + 1);
+        r.rows_mut(0, m).copy_from(&lin.residual);
+        r.rows_mut(m, c).copy_from(&lin.constraints);
+        r.neg_mut();
+        let mut e = DVector::zeros(m + c + 1);
+        e[m + c] = 1.0;
+        let mut xs = lin.extended(opts, t).solve_all(&[&r, &e])?;
+        let x = xs.pop()?;
+        let d0 = xs.pop()?;
+        let mut found = None;
+        // Near enough to the path for the secant (a residual within the square root of the
+        // corrector's tolerance: its next iterate converges), if not yet on it.
+        if converged || lin.relative_residual(opts) <= opts.tolerance.sqrt() {
+            let norm = x.norm();
+            if !(norm > 0.0 && norm.is_finite()) {
+                return None;
+            }
+            let tangent = if x.dot(t) < 0.0 {
+                -&x / norm
+            } else {
+                &x / norm
+            };
+            let g = test(&*problem, &q, &lambda, &tangent)?;
+            if !g.is_finite() {
+                return None;
+            }
+            // A state on the path narrows the bracket on its side.
+            if converged {
+                let side = usize::from((g > 0.0) != first_sign);
+                if side == 0 {
+                    lo = (here, g);
+                } else {
+                    hi = (here, g);
+                }
+                sides[side] = Some((here, q.clone(), lambda.clone()));
+            }
+            let slope = match previous {
+                Some((s0, g0)) if (here - s0).abs() > 0.0 && g != g0 => (g - g0) / (here - s0),
+                _ => (hi.1 - lo.1) / (hi.0 - lo.0),
+            };
+            let next = here - g / slope;
+            // Within the tolerance, and either at the zero to the width asked for or at
+            // round-off (|g| no longer halves from one converged iterate to the next).
+            if converged
+                && g.abs() <= change.tolerance
+                && ((next - here).abs() <= change.width || g.abs() > 0.5 * last_converged)
+            {
+                found = Some(g);
+            }
+            if converged {
+                // |g| above the tolerance and no longer halving: at the noise of its states,
+                // not at a zero; the caller's search takes over.
+                if g.abs() > change.tolerance && g.abs() > 0.5 * last_converged {
+                    stalled += 1;
+                    if stalled == ZERO_STALLS {
+                        return None;
+                    }
+                } else {
+                    stalled = 0;
+                }
+                last_converged = g.abs();
+            }
+            let inside = next.is_finite() && next > lo.0.min(hi.0) && next < lo.0.max(hi.0);
+            target = if found.is_some() {
+                here
+            } else if inside {
+                next
+            } else {
+                regula_falsi(lo, hi)
+            };
+            previous = Some((here, g));
+            if let Some(value) = found {
+                if d0.amax() <= opts.tolerance {
+                    if problem.defect(&q, &lambda).is_some() {
+                        return None;
+                    }
+                    return Some(ZeroOnStep {
+                        point: PathPoint {
+                            q,
+                            lambda,
+                            arclength: from.arclength + here,
+                            iterations: it,
+                            tangent,
+                        },
+                        value,
+                        sides,
+                        iterations: it,
+                    });
+                }
+            }
+        }
+        let d = d0 + x * (target - here);
+        q += d.rows(0, m) * sq;
+        for j in 0..nl {
+            lambda[j] += d[m + j] * sl(j);
+        }
+        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
+            return None;
+        }
+    }
+    None
 }
 
 /// Why the driver could not advance: every step was cut below the minimum.
@@ -1158,6 +1429,17 @@ impl<P: Problem> Continuation<P> {
         step_from(&mut self.problem, from, s, &self.opts)
     }
 
+    /// The zero of `test` between `from` and the point `s` along its tangent where it has
+    /// changed sign ([`zero_on_step`]); the driver's state is unchanged.
+    pub fn zero_on_step(
+        &mut self,
+        from: &PathPoint,
+        change: SignChange,
+        test: &mut StepTest<'_, P>,
+    ) -> Option<ZeroOnStep> {
+        zero_on_step(&mut self.problem, from, change, test, &self.opts)
+    }
+
     /// As [`Continuation::step_from`] without the new tangent and the branch-jump guard
     /// ([`corrected_from`]).
     pub fn corrected_from(&mut self, from: &PathPoint, s: f64) -> Result<PathPoint, StepError> {
@@ -1167,7 +1449,119 @@ impl<P: Problem> Continuation<P> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Stalled, StepError};
+    use super::{
+        point_at, zero_on_step, Linearization, PathOptions, Problem, SignChange, Stalled,
+        StepError, Tangent,
+    };
+    use crate::model::ModelError;
+    use nalgebra::{DMatrix, DVector};
+
+    /// R(q, λ) = q² + λ² − 1 (one unknown): a circle, whose λ turns at q = 0, λ = 1.
+    struct Circle;
+
+    impl Problem for Circle {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn free_parameters(&self) -> usize {
+            1
+        }
+        fn evaluate(
+            &mut self,
+            q: &DVector<f64>,
+            lambda: &DVector<f64>,
+        ) -> Result<Linearization, ModelError> {
+            Ok(Linearization {
+                residual: DVector::from_element(1, q[0] * q[0] + lambda[0] * lambda[0] - 1.0),
+                tangent: Tangent::Dense(DMatrix::from_element(1, 1, 2.0 * q[0])),
+                loads: DMatrix::from_element(1, 1, 2.0 * lambda[0]),
+                constraints: DVector::zeros(0),
+                constraint_q: DMatrix::zeros(0, 1),
+                constraint_lambda: DMatrix::zeros(0, 1),
+            })
+        }
+    }
+
+    /// Newton on the path's equation and a test function together finds the test function's
+    /// zero on the path — a function of the state, and the tangent's control component (a
+    /// turning point) — to the tolerance and width asked for, in a few iterations, with the
+    /// converged states it passed on each side of the sign change.
+    #[test]
+    fn zero_on_step_solves_for_a_state_functions_zero_and_for_a_turning_point() {
+        let opts = PathOptions::default();
+        let mut circle = Circle;
+        let (q0, l0) = (-0.8f64, 0.6f64);
+        let from = point_at(
+            &mut circle,
+            DVector::from_element(1, q0),
+            DVector::from_element(1, l0),
+            1,
+            &opts,
+            None,
+        )
+        .unwrap();
+        // The arclength along the start's tangent to the state at angle θ (q = −cos θ,
+        // λ = sin θ).
+        let s_at = |theta: f64| {
+            let (q, l) = (-theta.cos(), theta.sin());
+            from.tangent[0] * (q - q0) + from.tangent[1] * (l - l0)
+        };
+        // q = −0.3 on the way: g = q + 0.3.
+        let g = |q: &DVector<f64>| q[0] + 0.3;
+        let theta1 = 1.5f64;
+        let s1 = s_at(theta1);
+        let change = SignChange {
+            first: (0.0, q0 + 0.3),
+            second: (s1, -theta1.cos() + 0.3),
+            tolerance: 1e-12,
+            width: 1e-12 * s1,
+        };
+        let zero = zero_on_step(
+            &mut circle,
+            &from,
+            change,
+            &mut |_, q, _, _| Some(g(q)),
+            &opts,
+        )
+        .expect("a zero");
+        let (q, l) = (zero.point.q[0], zero.point.lambda[0]);
+        assert!((q + 0.3).abs() <= 1e-12, "{q}");
+        assert!((q * q + l * l - 1.0).abs() <= 1e-10, "{q} {l}");
+        // A strongly curved path: a secant move costs a corrector iteration more while it is long.
+        assert!(zero.iterations <= 16, "{}", zero.iterations);
+        let [first, second] = &zero.sides;
+        if let Some((s, q, _)) = first {
+            assert!(g(q) < 0.0 && *s >= 0.0 && *s <= s1);
+        }
+        if let Some((s, q, _)) = second {
+            assert!(g(q) > 0.0 && *s >= 0.0 && *s <= s1);
+        }
+        // The turning point of λ at θ = π/2, past it at θ = 2.
+        let theta2 = 2.0f64;
+        let t2 = theta2.cos() * from.tangent[1].signum();
+        let change = SignChange {
+            first: (0.0, from.tangent[1]),
+            second: (s_at(theta2), t2),
+            tolerance: 1e-12,
+            width: 1e-14,
+        };
+        assert!(from.tangent[1] > 0.0 && t2 < 0.0);
+        let turn = zero_on_step(
+            &mut circle,
+            &from,
+            change,
+            &mut |_, _, _, tangent| Some(tangent[1]),
+            &opts,
+        )
+        .expect("a turning point");
+        assert!(turn.point.tangent[1].abs() <= 1e-12);
+        assert!(
+            (turn.point.lambda[0] - 1.0).abs() <= 1e-12,
+            "{}",
+            turn.point.lambda[0]
+        );
+        assert!(turn.point.q[0].abs() <= 1e-6, "{}", turn.point.q[0]);
+    }
 
     /// A stall recorded as plain data reads as the driver's own.
     #[test]

@@ -9,7 +9,7 @@
 //! budget is used or the driver stalls; [`trace`] is a path in the control with the usual
 //! stops.
 
-use super::driver::{Accepted, Continuation, PathPoint, Problem};
+use super::driver::{Accepted, Continuation, PathPoint, Problem, SignChange};
 use crate::results::{BranchTimes, CriticalPoint, Extremum, StopReason};
 
 /// The factor a rejected step is shortened by before it is tried again.
@@ -300,7 +300,9 @@ impl<P: Problem> Detector<P> for TurningPoints {
 
 /// Localises the turning point between `from` (tangent component `k` of one sign) and the
 /// point reached with step `s_hi` (component `t_hi` of the other) where the component
-/// vanishes, by [`locate`] on the step length.
+/// vanishes: by Newton on the path's equations and the component together
+/// ([`zero_on_step`](super::driver::zero_on_step), the tangent of every iterate from its own
+/// factorisation), else by [`locate`] on the step length, each trial a step.
 fn localise_turning<P: Problem>(
     driver: &mut Continuation<P>,
     from: &PathPoint,
@@ -308,6 +310,16 @@ fn localise_turning<P: Problem>(
     k: usize,
     t_hi: f64,
 ) -> Option<PathPoint> {
+    let change = SignChange {
+        first: (0.0, from.tangent[k]),
+        second: (s_hi, t_hi),
+        tolerance: TURNING_TOLERANCE,
+        width: 1e-14 * s_hi.abs(),
+    };
+    if let Some(zero) = driver.zero_on_step(from, change, &mut |_, _, _, tangent| Some(tangent[k]))
+    {
+        return Some(zero.point);
+    }
     let (s, _) = locate(
         |s| driver.step_from(from, s).ok().map(|p| p.tangent[k]),
         from.tangent[k],

@@ -24,6 +24,21 @@ pub fn bordered_solve(
     solver: &SharedFactorization,
     rhs: &DVector<f64>,
 ) -> Option<DVector<f64>> {
+    bordered_solve_all(pattern, values, b, c, d, solver, &[rhs])?.pop()
+}
+
+/// As [`bordered_solve`] for several right-hand sides from one factorisation of A (each
+/// solution refined and, on a near-singular A, checked on its own); `None` if any of them
+/// fails.
+pub fn bordered_solve_all(
+    pattern: &Arc<SymmetricPattern>,
+    values: &[f64],
+    b: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    d: &DMatrix<f64>,
+    solver: &SharedFactorization,
+    all: &[&DVector<f64>],
+) -> Option<Vec<DVector<f64>>> {
     let m = pattern.n();
     let nb = d.nrows();
     let mut guard = solver.lock().ok()?;
@@ -54,6 +69,35 @@ pub fn bordered_solve(
         out.rows_mut(m, nb).copy_from(&z);
         Some(out)
     };
+    let norm = values
+        .iter()
+        .chain(b.iter())
+        .chain(c.iter())
+        .chain(d.iter())
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    all.iter()
+        .map(|rhs| refined((pattern, values, b, c, d), &solve, rhs, near_singular, norm))
+        .collect()
+}
+
+/// The solution of [[A, B], [C, D]] x = rhs from `solve` (block elimination), refined once
+/// (twice on a near-singular A, where it is kept only at a normwise backward error below
+/// [`NEAR_SINGULAR_BACKWARD_ERROR`]; `norm` = max|M_ij|).
+#[allow(clippy::type_complexity)]
+fn refined(
+    (pattern, values, b, c, d): (
+        &SymmetricPattern,
+        &[f64],
+        &DMatrix<f64>,
+        &DMatrix<f64>,
+        &DMatrix<f64>,
+    ),
+    solve: &dyn Fn(&DVector<f64>) -> Option<DVector<f64>>,
+    rhs: &DVector<f64>,
+    near_singular: bool,
+    norm: f64,
+) -> Option<DVector<f64>> {
+    let (m, nb) = (pattern.n(), d.nrows());
     // r = rhs − M sol.
     let residual_of = |sol: &DVector<f64>| -> DVector<f64> {
         let (xs, zs) = (sol.rows(0, m).into_owned(), sol.rows(m, nb).into_owned());
@@ -80,12 +124,6 @@ pub fn bordered_solve(
     }
     if near_singular {
         // The normwise backward error of the whole system, at round-off or refused.
-        let norm = values
-            .iter()
-            .chain(b.iter())
-            .chain(c.iter())
-            .chain(d.iter())
-            .fold(0.0f64, |a, v| a.max(v.abs()));
         let error = residual_of(&sol).amax() / (norm * sol.amax() + rhs.amax()).max(1e-300);
         // NaN (a non-finite solution) is refused too.
         if error.is_nan() || error > NEAR_SINGULAR_BACKWARD_ERROR {
