@@ -34,11 +34,13 @@ mod csv;
 mod curve;
 mod deflation;
 mod diagram;
+mod figure;
 mod json;
 mod lock;
 mod manifest;
 mod matrix_market;
 mod partners;
+mod png;
 mod progress;
 mod refine;
 mod reopen;
@@ -56,6 +58,7 @@ pub use deflation::write_deflation;
 pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };
+pub use figure::{read_layout, Layout, PlacedLabel, Rect};
 pub use json::{write_critical, write_critical_with, write_json};
 pub use lock::{LockError, RunLock, LOCK};
 pub use manifest::{
@@ -67,6 +70,7 @@ pub use matrix_market::{
     RANK_ONE_FILE_TAG,
 };
 pub use partners::write_partners;
+pub use png::{render_png, write_png_beside, PNG_SCALE};
 pub use progress::Progress;
 pub use refine::{write_refine, REFINE_JSON};
 pub use reopen::{FinishedRun, ReopenError};
@@ -76,9 +80,9 @@ pub use run::{
 };
 pub use scales::{balloon_closed_form, Scales};
 pub use states::{Drawing, PvdTime, StateWriter, EVENTS_PVD};
-pub use surface::write_surface;
+pub use surface::{write_surface, write_surface_with};
 pub use svg::{
-    default_axes, write_diagram, write_diagram_with, write_spectrum_diagram,
+    caption_of, default_axes, write_diagram, write_diagram_with, write_spectrum_diagram,
     write_spectrum_diagram_with, AxisScale, Diagram, Marker, MarkerKind, ReferenceCurve, Segment,
     SPECTRUM_AXIS, ZERO_LINE,
 };
