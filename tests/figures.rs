@@ -160,7 +160,7 @@ fn check_layout(layout: &Layout, texts: &[String], what: &str) {
             );
         }
         assert!(
-            texts.iter().any(|t| *t == a.text),
+            texts.contains(&a.text),
             "{what}: the label {:?} is not drawn",
             a.text
         );
@@ -184,7 +184,7 @@ fn check_layout(layout: &Layout, texts: &[String], what: &str) {
         );
     }
     assert!(
-        layout.caption.contains("triangles") && texts.iter().any(|t| *t == layout.caption),
+        layout.caption.contains("triangles") && texts.contains(&layout.caption),
         "{what}: caption {:?}",
         layout.caption
     );

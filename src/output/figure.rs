@@ -251,6 +251,12 @@ impl Line {
     }
 }
 
+/// A wide translucent band: points, colour, width in pixels.
+pub type Band = (Vec<(f64, f64)>, RGBAColor, u32);
+
+/// Marks to label: each mark's index and its point in pixels.
+type ToLabel = Vec<(usize, (f64, f64))>;
+
 /// A labelled point of the plot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mark {
@@ -313,7 +319,7 @@ pub struct Plot {
     /// Filled polygons, drawn first.
     pub polygons: Vec<(Vec<(f64, f64)>, RGBAColor)>,
     /// Wide translucent bands under the lines, (points, colour, width).
-    pub bands: Vec<(Vec<(f64, f64)>, RGBAColor, u32)>,
+    pub bands: Vec<Band>,
     /// Lines, drawn in order.
     pub lines: Vec<Line>,
     /// Marks, drawn over the lines.
@@ -819,11 +825,7 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             .chain(plot.marks.iter().map(|m| m.at))
     };
     let xr = padded(all().map(|p| p.0));
-    let yr = padded(
-        all()
-            .map(|p| p.1)
-            .chain(plot.with_zero.then_some(0.0).into_iter()),
-    );
+    let yr = padded(all().map(|p| p.1).chain(plot.with_zero.then_some(0.0)));
     let (entries, kinds) = plot.entries();
     let mut layout = Layout {
         width: plot.size.0,
@@ -975,7 +977,7 @@ fn draw_labels(
     placed: &[Option<(Rect, bool)>],
     inset: bool,
     layout: &mut Layout,
-) -> Result<Vec<(usize, (f64, f64))>, Box<dyn Error>> {
+) -> Result<ToLabel, Box<dyn Error>> {
     let mut failed = Vec::new();
     for (&(i, from), p) in which.iter().zip(placed) {
         let Some((b, leader)) = *p else {
@@ -1033,7 +1035,7 @@ fn label_marks(
     data: &[(f64, f64)],
     inset: bool,
     layout: &mut Layout,
-) -> Result<Vec<(usize, (f64, f64))>, Box<dyn Error>> {
+) -> Result<ToLabel, Box<dyn Error>> {
     let mut todo = which;
     for &frame in frames {
         if todo.is_empty() {
@@ -1104,7 +1106,7 @@ fn draw_inset(
     (xr, yr): (&Range<f64>, &Range<f64>),
     main: &super::svg::Chart,
     layout: &mut Layout,
-) -> Result<Vec<(usize, (f64, f64))>, Box<dyn Error>> {
+) -> Result<ToLabel, Box<dyn Error>> {
     // The window: the cluster's box, widened to a fifth of the plot's span at least and by
     // 80 % each side, so that the labels find room.
     let at: Vec<(f64, f64)> = cluster.iter().map(|&i| plot.marks[i].at).collect();

@@ -13,6 +13,7 @@
 //! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
 //! | `branches.json` | [`write_branch_graph`] | the graph of critical points and branches |
 //! | `diagram.svg` | [`write_bifurcation_diagram`] | the path and every branch in one bifurcation diagram |
+//! | `*.png` | [`write_png_beside`] | every figure again as a PNG image, rendered with the bundled font |
 //! | `refine.json` | [`write_refine`] | with `--refine`: every critical and turning point on the refined meshes, with its error per level |
 //!
 //! [`write_run`] writes all of them for a finished run.
@@ -25,7 +26,8 @@
 //! leaves nothing (or the previous file) behind. Nothing non-finite is ever written: the
 //! writers check the report (or the state) first and return an [`OutputError`] naming the file
 //! and the offending value. One writer per file: `csv.rs`, `json.rs`, `svg.rs`, `states.rs`,
-//! `progress.rs`.
+//! `progress.rs`; every figure is drawn in the one style of `figure.rs` (see [`Layout`]) and
+//! rendered as PNG by `png.rs`.
 //!
 //! [`PathReport`]: crate::results::PathReport
 

@@ -293,7 +293,7 @@ fn render(
     let mut legend: Vec<Option<usize>> = Vec::new();
     for p in &s.paths {
         // Runs of one index, drawn whole so that a dash runs on across short steps.
-        let mut runs: Vec<(Option<usize>, Vec<(f64, f64)>)> = Vec::new();
+        let mut runs: Vec<super::svg::IndexRun> = Vec::new();
         for pair in p.vertices.windows(2) {
             let index = pair[0].index;
             let q = |v: &crate::results::SurfaceVertex| {
