@@ -354,7 +354,7 @@ impl Plot {
     }
 
     /// The legend: the plot's entries, then one per kind of mark in order of appearance.
-    fn entries(&self) -> (Vec<Entry>, Vec<String>) {
+    fn entries(&self) -> Vec<Entry> {
         let mut out = self.legend.clone();
         let mut kinds: Vec<String> = Vec::new();
         for m in &self.marks {
@@ -363,7 +363,7 @@ impl Plot {
                 out.push(Entry::new(m.kind.clone(), Sample::Symbol(m.symbol)));
             }
         }
-        (out, kinds)
+        out
     }
 }
 
@@ -760,12 +760,14 @@ fn samples(lines: &[Vec<(f64, f64)>]) -> Vec<(f64, f64)> {
     out
 }
 
-/// Draws the legend's entries into the box `b`.
+/// Draws the legend's entries into the box `b`; returns the texts of the entries that show
+/// a marker's symbol.
 pub(super) fn draw_legend(
     root: &DrawingArea<SVGBackend, Shift>,
     b: Rect,
     entries: &[Entry],
-) -> Result<(), Box<dyn Error>> {
+) -> Result<Vec<String>, Box<dyn Error>> {
+    let mut symbols = Vec::new();
     let (x0, y0) = (b.x0 as i32, b.y0 as i32);
     root.draw(&Rectangle::new(
         [(x0, y0), (b.x1 as i32, b.y1 as i32)],
@@ -785,7 +787,10 @@ pub(super) fn draw_legend(
             Sample::Band(c, w) => {
                 root.draw(&PathElement::new([(a, y), (z, y)], c.stroke_width(*w)))?;
             }
-            Sample::Symbol(s) => s.draw(root, ((a + z) / 2, y))?,
+            Sample::Symbol(s) => {
+                s.draw(root, ((a + z) / 2, y))?;
+                symbols.push(e.text.clone());
+            }
             Sample::Note => {}
         }
         let font = ("sans-serif", SMALL)
@@ -794,7 +799,7 @@ pub(super) fn draw_legend(
             .pos(Pos::new(HPos::Left, VPos::Center));
         root.draw(&Text::new(e.text.clone(), (x0 + 44, y), font))?;
     }
-    Ok(())
+    Ok(symbols)
 }
 
 /// Height of a legend row in pixels.
@@ -826,14 +831,12 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
     };
     let xr = padded(all().map(|p| p.0));
     let yr = padded(all().map(|p| p.1).chain(plot.with_zero.then_some(0.0)));
-    let (entries, kinds) = plot.entries();
+    let entries = plot.entries();
     let mut layout = Layout {
         width: plot.size.0,
         height: plot.size.1,
         caption: plot.caption.clone(),
         legend: entries.iter().map(|e| e.text.clone()).collect(),
-        marker_kinds: kinds.clone(),
-        legend_markers: kinds,
         ..Layout::default()
     };
     let mut svg = String::new();
@@ -931,6 +934,9 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
         for m in &plot.marks {
             let (x, y) = ipx(m.at);
             m.symbol.draw(&root, (x, y))?;
+            if !layout.marker_kinds.contains(&m.kind) {
+                layout.marker_kinds.push(m.kind.clone());
+            }
         }
         let mut todo: Vec<(usize, (f64, f64))> = (0..plot.marks.len())
             .filter(|&i| !in_inset[i] && !plot.marks[i].label.is_empty())
@@ -960,7 +966,7 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             .map(|(i, _)| plot.marks[i].label.clone())
             .collect();
         if let Some(b) = layout.legend_box {
-            draw_legend(&root, b, &entries)?;
+            layout.legend_markers = draw_legend(&root, b, &entries)?;
         }
         draw_caption(&root, &plot.caption, plot.size)?;
         root.present()?;
@@ -1254,6 +1260,77 @@ mod tests {
         let r = clip(&[(-1.0, 0.5), (2.0, 0.5)], &(0.0..1.0), &(0.0..1.0));
         assert_eq!(r, [vec![(0.0, 0.5), (1.0, 0.5)]]);
         assert!(clip(&[(2.0, 2.0), (3.0, 3.0)], &(0.0..1.0), &(0.0..1.0)).is_empty());
+    }
+
+    fn mark(at: (f64, f64), symbol: Symbol, kind: &str, label: &str) -> Mark {
+        Mark {
+            at,
+            symbol,
+            kind: kind.into(),
+            label: label.into(),
+        }
+    }
+
+    #[test]
+    fn the_legend_shows_exactly_the_marker_kinds_drawn() {
+        let mut plot = Plot::new("t", "scene s · mesh: disc, 8 triangles", "x", "y");
+        plot.lines
+            .push(Line::new(vec![(0.0, 0.0), (1.0, 1.0)], BLACK, 2, None));
+        plot.legend
+            .push(Entry::new("path", Sample::Line(BLACK, 2, None)));
+        let cross = Symbol::Cross(BLACK);
+        plot.marks
+            .push(mark((0.2, 0.2), cross, "bifurcation point", "a"));
+        plot.marks
+            .push(mark((0.8, 0.8), Symbol::Disc(BLACK), "turning point", "b"));
+        plot.marks
+            .push(mark((0.5, 0.5), cross, "bifurcation point", "c"));
+        let (_, layout) = render(&plot).unwrap();
+        assert_eq!(layout.marker_kinds, ["bifurcation point", "turning point"]);
+        assert_eq!(layout.legend_markers, layout.marker_kinds);
+        assert_eq!(
+            layout.legend,
+            ["path", "bifurcation point", "turning point"]
+        );
+        assert_eq!(layout.labels.len(), 3);
+        plot.marks.clear();
+        let (_, layout) = render(&plot).unwrap();
+        assert!(layout.marker_kinds.is_empty() && layout.legend_markers.is_empty());
+        assert_eq!(layout.legend, ["path"]);
+    }
+
+    #[test]
+    fn a_cluster_of_marks_goes_into_an_inset() {
+        let mut plot = Plot::new("t", "c", "x", "y");
+        plot.lines.push(Line::new(
+            (0..=100).map(|i| (f64::from(i) / 100.0, 0.1)).collect(),
+            BLACK,
+            2,
+            None,
+        ));
+        let cross = Symbol::Cross(BLACK);
+        for (k, x) in [0.100, 0.101, 0.102].into_iter().enumerate() {
+            plot.marks.push(mark(
+                (x, 0.1),
+                cross,
+                "bifurcation point",
+                &format!("point {k}"),
+            ));
+        }
+        plot.marks
+            .push(mark((0.9, 0.1), cross, "bifurcation point", "far"));
+        let (_, layout) = render(&plot).unwrap();
+        let inset = layout.inset.expect("an inset");
+        let zoomed: Vec<&PlacedLabel> = layout.labels.iter().filter(|l| l.in_inset).collect();
+        assert_eq!(zoomed.len(), 3, "{:?}", layout.labels);
+        assert!(zoomed.iter().all(|l| inset.holds(&l.rect)));
+        let far = layout.labels.iter().find(|l| l.text == "far").unwrap();
+        assert!(!far.in_inset && !far.rect.overlaps(&inset));
+        for (i, a) in layout.labels.iter().enumerate() {
+            for b in &layout.labels[..i] {
+                assert!(!a.rect.overlaps(&b.rect), "{a:?} {b:?}");
+            }
+        }
     }
 
     #[test]

@@ -883,10 +883,6 @@ fn render_spectra(
         caption: caption.clone(),
         ..Layout::default()
     };
-    if !marks.is_empty() {
-        layout.marker_kinds.push(mark_legend.to_string());
-        layout.legend_markers.push(mark_legend.to_string());
-    }
     let mut svg = String::new();
     {
         let canvas = SVGBackend::with_string(&mut svg, size).into_drawing_area();
@@ -985,6 +981,9 @@ fn render_spectra(
                     + Cross::new((0, 0), 6, c.stroke_width(2))
                     + Text::new(m.label.clone(), offset, font),
             ))?;
+            if layout.marker_kinds.is_empty() {
+                layout.marker_kinds.push(mark_legend.to_string());
+            }
         }
         // The legend: in the corner that covers no label and the fewest data.
         let frame = layout.plot.unwrap_or(figure::Rect::at(0.0, 0.0, 0.0, 0.0));
@@ -1011,7 +1010,7 @@ fn render_spectra(
             )
         };
         let best = (0..4).min_by_key(|&k| cost(k)).unwrap_or(preferred);
-        figure::draw_legend(&canvas, corners[best], &entries)?;
+        layout.legend_markers = figure::draw_legend(&canvas, corners[best], &entries)?;
         layout.legend_box = Some(corners[best]);
         figure::draw_caption(&canvas, &caption, size)?;
         canvas.present()?;
