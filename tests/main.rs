@@ -20,6 +20,7 @@ mod diagram;
 mod effects_model;
 mod export_rank_one;
 mod faults;
+mod figures;
 mod fluid_volume;
 mod fuzz;
 mod hard_cases;

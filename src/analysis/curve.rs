@@ -353,7 +353,12 @@ impl Analysis for Curve {
         let Some(curve) = result.outcome::<CurveReport>() else {
             return Ok(Vec::new());
         };
-        let files = output::write_curve_with(out, curve, &output::Scales::of_scene(scene))?;
+        let files = output::write_curve_with(
+            out,
+            curve,
+            &output::Scales::of_scene(scene),
+            &output::caption_of(&result.report),
+        )?;
         let what = [
             format!(
                 "{} rows: both parameters, the measures, the block's eigenvalues",
@@ -361,6 +366,7 @@ impl Analysis for Curve {
             ),
             "the curve: its points and events".to_string(),
             format!("{} against {}, events marked", curve.second, curve.control),
+            "the same figure as an image".to_string(),
         ];
         Ok(Described::each(files, what))
     }

@@ -97,6 +97,7 @@ impl Analysis for Deflate {
                 output::default_axes(&result.report).0,
                 result.report.control
             ),
+            "the same figure as an image".to_string(),
         ];
         Ok(Described::each(files, what))
     }

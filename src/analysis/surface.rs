@@ -379,7 +379,7 @@ impl Analysis for Surface {
         &self,
         result: &RunResult,
         _drawing: &dyn crate::output::Drawing,
-        _scene: &Scene,
+        scene: &Scene,
         out: &Path,
     ) -> Result<Vec<Described>, OutputError> {
         let Some(s) = result.outcome::<SurfaceReport>() else {
@@ -400,8 +400,15 @@ impl Analysis for Surface {
                 "{} against {}, coloured by index, critical lines drawn",
                 s.measure, s.a
             ),
+            "the same figure as an image".to_string(),
         ];
-        Ok(Described::each(output::write_surface(out, s)?, what))
+        let files = output::write_surface_with(
+            out,
+            s,
+            &output::Scales::of(scene, &result.report),
+            &output::caption_of(&result.report),
+        )?;
+        Ok(Described::each(files, what))
     }
 
     /// Its paths, their index ranges and critical lines, its warnings.

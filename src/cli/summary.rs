@@ -222,6 +222,10 @@ pub(super) fn print_summary(scene: &Scene, result: &RunResult, out: &Path, writt
         report.critical.len()
     );
     out!("  {:<10} {}", file_name(&written.svg), written.plotted);
+    out!(
+        "  {:<10} the same figure as an image",
+        file_name(&written.png)
+    );
     let in_collection = report.saved.iter().filter(|s| s.in_collection).count();
     out!(
         "  {:<10} ParaView collection of the {in_collection} path state{} (time = path step)",

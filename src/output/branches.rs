@@ -394,6 +394,7 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
                 x: control(&point.parameters),
                 y,
                 label: format!("{} {}", point.kind.short(), point.irrep),
+                kind: "critical point".to_string(),
             });
         }
     }
@@ -401,6 +402,10 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
         title: format!(
             "{} (group {}): path and branches",
             primary.scene, primary.group
+        ),
+        caption: format!(
+            "scene {} · mesh: {} · path solved in group {}",
+            primary.scene, primary.mesh, primary.group
         ),
         control: primary.control.clone(),
         lines,
@@ -489,6 +494,16 @@ pub fn write_branches(
         }
     };
     done.push(diagram.clone());
+    match super::write_png_beside(&diagram) {
+        Ok(png) => done.push(png),
+        Err(error) => {
+            return Err(WriteRunError {
+                error,
+                done,
+                dir: out.to_path_buf(),
+            })
+        }
+    }
     Ok(BranchesWritten {
         json,
         diagram,

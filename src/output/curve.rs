@@ -1,10 +1,12 @@
 //! `curve.csv`, `curve.json` and `curve.svg`: a critical curve ([`CurveReport`]).
 
+use super::figure::{self, finish, Entry, Layout, Line, Mark, Plot, Sample, Symbol};
 use super::scales::Scales;
-use super::svg::{chart, padded, xml_chars, AxisScale};
+use super::svg::{xml_chars, AxisScale};
 use super::{write_whole, Num, OutputError};
 use crate::results::{CurveEventKind, CurveReport};
-use plotters::prelude::*;
+use plotters::style::colors::BLACK;
+use plotters::style::RGBColor;
 use std::io;
 use std::path::{Path, PathBuf};
 
@@ -46,7 +48,8 @@ fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
     Ok(())
 }
 
-/// Writes `curve.csv`, `curve.json` and `curve.svg` into `dir`; returns their paths.
+/// Writes `curve.csv`, `curve.json`, `curve.svg` and `curve.png` (the same figure as an image)
+/// into `dir`; returns their paths.
 ///
 /// `curve.csv` has a row per curve point: `step,arclength,<each parameter>,<each
 /// measure>,critical_eigenvalue,second_eigenvalue,irrep,iterations` (the eigenvalues of the
@@ -59,11 +62,12 @@ fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
 /// [`OutputError::Invalid`] for a non-finite value (nothing is written), else as the other
 /// writers.
 pub fn write_curve(dir: &Path, curve: &CurveReport) -> Result<Vec<PathBuf>, OutputError> {
-    write_curve_with(dir, curve, &Scales::default())
+    write_curve_with(dir, curve, &Scales::default(), "")
 }
 
 /// As [`write_curve`], `curve.svg`'s axes titled and scaled by `scales` (the control's and
-/// the second parameter's dimensionless groups, where the scene fixes them).
+/// the second parameter's dimensionless groups, where the scene fixes them) and `caption`
+/// (the scene and its mesh) written below the plot.
 ///
 /// # Errors
 /// As [`write_curve`].
@@ -71,6 +75,7 @@ pub fn write_curve_with(
     dir: &Path,
     curve: &CurveReport,
     scales: &Scales,
+    caption: &str,
 ) -> Result<Vec<PathBuf>, OutputError> {
     let csv = dir.join("curve.csv");
     check_finite(&csv, curve)?;
@@ -93,8 +98,9 @@ pub fn write_curve_with(
         scales.or_name(&curve.control),
         scales.or_name(&curve.second),
     );
-    let svg = render(curve, c, s, &axes)
+    let (svg, layout) = render(curve, c, s, &axes, caption)
         .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
+    let svg = finish(&svg, &layout);
     write_whole(&csv, |w| {
         let header: Vec<&str> = ["step", "arclength"]
             .into_iter()
@@ -129,7 +135,8 @@ pub fn write_curve_with(
         writeln!(w)
     })?;
     write_whole(&svg_path, |w| w.write_all(xml_chars(&svg).as_bytes()))?;
-    Ok(vec![csv, json, svg_path])
+    let png = super::write_png_beside(&svg_path)?;
+    Ok(vec![csv, json, svg_path, png])
 }
 
 /// The second parameter (column `s`) against the control (column `c`), events marked.
@@ -138,56 +145,46 @@ fn render(
     c: usize,
     s: usize,
     (xs, ys): &(AxisScale, AxisScale),
-) -> Result<String, Box<dyn std::error::Error>> {
+    caption: &str,
+) -> Result<(String, Layout), Box<dyn std::error::Error>> {
     let at = |p: &[f64]| (p[c] * xs.factor, p[s] * ys.factor);
-    let points: Vec<(f64, f64)> = curve.rows.iter().map(|r| at(&r.parameters)).collect();
-    let xr = padded(points.iter().map(|p| p.0));
-    let yr = padded(points.iter().map(|p| p.1));
-    let mut out = String::new();
-    {
-        let root = SVGBackend::with_string(&mut out, (800, 600)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let title = format!("{} curve of {} ({})", curve.kind, curve.irrep, curve.second);
-        let mut chart = chart(&root, &title, &xs.label, &ys.label, xr, yr)?;
-        let blue = RGBColor(31, 87, 180);
-        chart.draw_series(LineSeries::new(
-            points.iter().copied(),
-            blue.stroke_width(2),
-        ))?;
-        let red = RGBColor(200, 30, 30);
-        for e in &curve.events {
-            let at = at(&e.parameters);
-            let font = ("sans-serif", 15).into_font().color(&BLACK);
-            let label = Text::new(e.kind.to_string(), (8, -22), font);
-            match e.kind {
-                CurveEventKind::Cusp | CurveEventKind::Fold => {
-                    chart.draw_series(std::iter::once(
-                        EmptyElement::at(at) + Circle::new((0, 0), 5, red.filled()) + label,
-                    ))?
-                }
-                CurveEventKind::Hilltop | CurveEventKind::IrrepChange => {
-                    let text = match &e.irrep {
-                        Some(irrep) => format!("{} ({irrep})", e.kind),
-                        None => e.kind.to_string(),
-                    };
-                    let font = ("sans-serif", 15).into_font().color(&BLACK);
-                    let green = RGBColor(20, 140, 60);
-                    chart.draw_series(std::iter::once(
-                        EmptyElement::at(at)
-                            + Rectangle::new([(-5, -5), (5, 5)], green.filled())
-                            + Text::new(text, (8, 8), font),
-                    ))?
-                }
-                CurveEventKind::Start | CurveEventKind::End => {
-                    chart.draw_series(std::iter::once(
-                        EmptyElement::at(at)
-                            + Circle::new((0, 0), 4, BLACK.stroke_width(2))
-                            + label,
-                    ))?
-                }
-            };
-        }
-        root.present()?;
+    let title = format!("{} curve of {} ({})", curve.kind, curve.irrep, curve.second);
+    let mut plot = Plot::new(title, caption, &xs.label, &ys.label);
+    let blue = RGBColor(31, 87, 180);
+    plot.lines.push(Line::new(
+        curve.rows.iter().map(|r| at(&r.parameters)).collect(),
+        blue,
+        2,
+        None,
+    ));
+    plot.legend.push(Entry::new(
+        format!("critical curve ({} in {})", curve.kind, curve.irrep),
+        Sample::Line(blue, 2, None),
+    ));
+    for e in &curve.events {
+        let (symbol, kind) = match e.kind {
+            CurveEventKind::Cusp => (Symbol::Disc(RGBColor(200, 30, 30)), "cusp"),
+            CurveEventKind::Fold => (Symbol::Disc(RGBColor(230, 130, 0)), "fold of the curve"),
+            CurveEventKind::Hilltop => (Symbol::Square(RGBColor(20, 140, 60)), "hilltop"),
+            CurveEventKind::IrrepChange => {
+                (Symbol::Square(RGBColor(148, 103, 189)), "irrep change")
+            }
+            CurveEventKind::Start | CurveEventKind::End => {
+                (Symbol::Ring(BLACK), "start or end of the curve")
+            }
+        };
+        let label = match (&e.irrep, e.kind) {
+            (Some(irrep), CurveEventKind::Hilltop | CurveEventKind::IrrepChange) => {
+                format!("{} ({irrep})", e.kind)
+            }
+            _ => e.kind.to_string(),
+        };
+        plot.marks.push(Mark {
+            at: at(&e.parameters),
+            symbol,
+            kind: kind.to_string(),
+            label,
+        });
     }
-    Ok(out)
+    figure::render(&plot)
 }

@@ -74,7 +74,8 @@ pub fn write_deflation(
         Ok(())
     })?;
     let svg = write_bifurcation_diagram(dir, &picture)?;
-    Ok(vec![json, csv, svg])
+    let png = super::write_png_beside(&svg)?;
+    Ok(vec![json, csv, svg, png])
 }
 
 /// The run's path and every piece: the measure of the path's diagram (the stretch, the
@@ -108,6 +109,7 @@ fn diagram(searches: &[DeflationReport], path: &PathReport) -> BifurcationDiagra
                 x,
                 y,
                 label: format!("solution {k}"),
+                kind: "solution of deflated Newton".to_string(),
             });
             if s.piece.is_empty() {
                 continue;
@@ -135,6 +137,7 @@ fn diagram(searches: &[DeflationReport], path: &PathReport) -> BifurcationDiagra
             path.control,
             values.join(", ")
         ),
+        caption: super::svg::caption_of(path),
         control: path.control.clone(),
         lines,
         marks,

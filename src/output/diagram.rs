@@ -5,9 +5,11 @@
 //! coloured by its isotropy subgroup's class (one legend entry per class); critical points
 //! are crosses labelled with their kind and irrep.
 
-use super::svg::{padded, place_marker_labels, short, PALETTE};
+use super::figure::{self, finish, Entry, Layout, Line, Mark, Plot, Sample, Symbol};
+use super::svg::{short, xml_chars, PALETTE};
 use super::{write_whole, OutputError};
-use plotters::prelude::*;
+use plotters::style::colors::BLACK;
+use plotters::style::RGBColor;
 use std::error::Error;
 use std::path::{Path, PathBuf};
 
@@ -34,6 +36,9 @@ pub struct DiagramMark {
     pub y: f64,
     /// `double E1`, `simple A2`, `limit A1` …
     pub label: String,
+    /// What kind of point it is (`critical point`, `solution`, …): its legend entry; each
+    /// kind has its own symbol.
+    pub kind: String,
 }
 
 /// What `diagram.svg` shows.
@@ -41,6 +46,8 @@ pub struct DiagramMark {
 pub struct BifurcationDiagram {
     /// The title.
     pub title: String,
+    /// The caption line below the plot: the scene and its mesh.
+    pub caption: String,
     /// The control's name (the x axis).
     pub control: String,
     /// The path first, then the branches.
@@ -107,8 +114,9 @@ pub fn write_bifurcation_diagram(
             ),
         ));
     }
-    let svg = render(diagram)
+    let (svg, layout) = render(diagram)
         .map_err(|e| OutputError::invalid(&path, format!("plotting failed: {e}")))?;
+    let svg = xml_chars(&finish(&svg, &layout));
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
     Ok(path)
 }
@@ -124,16 +132,15 @@ fn classes(diagram: &BifurcationDiagram) -> Vec<String> {
     out
 }
 
-fn render(diagram: &BifurcationDiagram) -> Result<String, Box<dyn Error>> {
-    let all = || {
-        diagram
-            .lines
-            .iter()
-            .flat_map(|l| l.points.iter().copied())
-            .chain(diagram.marks.iter().map(|m| (m.x, m.y)))
-    };
-    let xr = padded(all().map(|p| p.0));
-    let yr = padded(all().map(|p| p.1).chain(std::iter::once(0.0)));
+/// The symbols of the marks' kinds, in order of first appearance.
+const SYMBOLS: [Symbol; 4] = [
+    Symbol::Cross(BLACK),
+    Symbol::Disc(RGBColor(200, 30, 30)),
+    Symbol::Square(RGBColor(20, 140, 60)),
+    Symbol::Ring(BLACK),
+];
+
+fn render(diagram: &BifurcationDiagram) -> Result<(String, Layout), Box<dyn Error>> {
     let classes = classes(diagram);
     let colour = |class: &str| {
         classes
@@ -141,98 +148,65 @@ fn render(diagram: &BifurcationDiagram) -> Result<String, Box<dyn Error>> {
             .position(|c| c == class)
             .map_or(BLACK, |k| PALETTE[k % PALETTE.len()])
     };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (900, 650)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(diagram.title.as_str(), ("sans-serif", 22))
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(xr, yr)?;
-        chart
-            .configure_mesh()
-            .x_desc(diagram.control.as_str())
-            .y_desc(diagram.y_axis.as_str())
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()?;
-        let mut legend_done: Vec<String> = Vec::new();
-        for l in &diagram.lines {
-            let c = if l.path { BLACK } else { colour(&l.class) };
-            let width = if l.path { 2 } else { 3 };
-            // Stretches of one stability drawn whole, so that a dash pattern runs across
-            // short steps instead of restarting (and looking solid) at every point.
-            let mut runs: Vec<(bool, Vec<(f64, f64)>)> = Vec::new();
-            for (k, w) in l.points.windows(2).enumerate() {
-                let stable = l.stable[k + 1].or(l.stable[k]).unwrap_or(true);
-                match runs.last_mut() {
-                    Some((s, pts)) if *s == stable => pts.push(w[1]),
-                    _ => runs.push((stable, vec![w[0], w[1]])),
-                }
-            }
-            for (stable, pts) in runs {
-                let pts = pts.into_iter();
-                let series = if stable {
-                    chart.draw_series(LineSeries::new(pts, c.stroke_width(width)))?
-                } else {
-                    chart.draw_series(DashedLineSeries::new(pts, 7, 5, c.stroke_width(width)))?
-                };
-                if !legend_done.contains(&l.class) {
-                    legend_done.push(l.class.clone());
-                    series.label(l.class.clone()).legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], c.stroke_width(width))
-                    });
-                }
+    let mut plot = Plot::new(
+        diagram.title.as_str(),
+        diagram.caption.as_str(),
+        diagram.control.as_str(),
+        diagram.y_axis.as_str(),
+    );
+    plot.with_zero = true;
+    let mut legend_done: Vec<String> = Vec::new();
+    let (mut any_stable, mut any_unstable) = (false, false);
+    const DASH: (u32, u32) = (7, 5);
+    for l in &diagram.lines {
+        let c = if l.path { BLACK } else { colour(&l.class) };
+        let width = if l.path { 2 } else { 3 };
+        // Stretches of one stability drawn whole, so that a dash pattern runs across
+        // short steps instead of restarting (and looking solid) at every point.
+        let mut runs: Vec<(bool, Vec<(f64, f64)>)> = Vec::new();
+        for (k, w) in l.points.windows(2).enumerate() {
+            let stable = l.stable[k + 1].or(l.stable[k]).unwrap_or(true);
+            match runs.last_mut() {
+                Some((s, pts)) if *s == stable => pts.push(w[1]),
+                _ => runs.push((stable, vec![w[0], w[1]])),
             }
         }
-        let labels: Vec<String> = diagram
-            .marks
-            .iter()
-            .map(|m| format!("{} ({})", m.label, short(m.x)))
-            .collect();
-        let wanted: Vec<(f64, f64, usize, bool)> = diagram
-            .marks
-            .iter()
-            .zip(&labels)
-            .map(|(m, l)| {
-                let (x, y) = chart.backend_coord(&(m.x, m.y));
-                (f64::from(x), f64::from(y), l.chars().count(), false)
-            })
-            .collect();
-        let offsets = place_marker_labels(&wanted);
-        for ((m, label), &at) in diagram.marks.iter().zip(labels).zip(&offsets) {
-            let font = ("sans-serif", 13).into_font().color(&BLACK);
-            chart.draw_series(std::iter::once(
-                EmptyElement::at((m.x, m.y))
-                    + Cross::new((0, 0), 6, BLACK.stroke_width(2))
-                    + Text::new(label, at, font),
-            ))?;
+        for (stable, pts) in runs {
+            any_stable |= stable;
+            any_unstable |= !stable;
+            plot.lines
+                .push(Line::new(pts, c, width, (!stable).then_some(DASH)));
         }
-        // The line styles, as legend entries without a line of their own.
-        let grey = RGBColor(90, 90, 90);
-        chart
-            .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())?
-            .label("stable: solid")
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], grey.stroke_width(2)));
-        chart
-            .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())?
-            .label("unstable: dashed")
-            .legend(move |(x, y)| {
-                EmptyElement::at((x, y))
-                    + PathElement::new([(0, 0), (7, 0)], grey.stroke_width(2))
-                    + PathElement::new([(12, 0), (19, 0)], grey.stroke_width(2))
-            });
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()?;
-        root.present()?;
+        if !legend_done.contains(&l.class) {
+            legend_done.push(l.class.clone());
+            plot.legend
+                .push(Entry::new(l.class.clone(), Sample::Line(c, width, None)));
+        }
     }
-    Ok(svg)
+    // The line styles, as legend entries of their own, for the styles drawn.
+    let grey = RGBColor(90, 90, 90);
+    if any_stable {
+        plot.legend
+            .push(Entry::new("stable: solid", Sample::Line(grey, 2, None)));
+    }
+    if any_unstable {
+        plot.legend.push(Entry::new(
+            "unstable: dashed",
+            Sample::Line(grey, 2, Some(DASH)),
+        ));
+    }
+    let mut kinds: Vec<&str> = Vec::new();
+    for m in &diagram.marks {
+        let k = kinds.iter().position(|k| *k == m.kind).unwrap_or_else(|| {
+            kinds.push(&m.kind);
+            kinds.len() - 1
+        });
+        plot.marks.push(Mark {
+            at: (m.x, m.y),
+            symbol: SYMBOLS[k % SYMBOLS.len()],
+            kind: m.kind.clone(),
+            label: format!("{} ({})", m.label, short(m.x)),
+        });
+    }
+    figure::render(&plot)
 }

@@ -13,6 +13,7 @@
 //! | `branch_NN/…` | [`write_branches`] | one directory per branch (`[analysis.branches]`), with the files above |
 //! | `branches.json` | [`write_branch_graph`] | the graph of critical points and branches |
 //! | `diagram.svg` | [`write_bifurcation_diagram`] | the path and every branch in one bifurcation diagram |
+//! | `*.png` | [`write_png_beside`] | every figure again as a PNG image, rendered with the bundled font |
 //! | `refine.json` | [`write_refine`] | with `--refine`: every critical and turning point on the refined meshes, with its error per level |
 //!
 //! [`write_run`] writes all of them for a finished run.
@@ -25,7 +26,8 @@
 //! leaves nothing (or the previous file) behind. Nothing non-finite is ever written: the
 //! writers check the report (or the state) first and return an [`OutputError`] naming the file
 //! and the offending value. One writer per file: `csv.rs`, `json.rs`, `svg.rs`, `states.rs`,
-//! `progress.rs`.
+//! `progress.rs`; every figure is drawn in the one style of `figure.rs` (see [`Layout`]) and
+//! rendered as PNG by `png.rs`.
 //!
 //! [`PathReport`]: crate::results::PathReport
 
@@ -34,11 +36,13 @@ mod csv;
 mod curve;
 mod deflation;
 mod diagram;
+mod figure;
 mod json;
 mod lock;
 mod manifest;
 mod matrix_market;
 mod partners;
+mod png;
 mod progress;
 mod refine;
 mod reopen;
@@ -56,6 +60,7 @@ pub use deflation::write_deflation;
 pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };
+pub use figure::{read_layout, Layout, PlacedLabel, Rect};
 pub use json::{write_critical, write_critical_with, write_json};
 pub use lock::{LockError, RunLock, LOCK};
 pub use manifest::{
@@ -67,6 +72,7 @@ pub use matrix_market::{
     RANK_ONE_FILE_TAG,
 };
 pub use partners::write_partners;
+pub use png::{render_png, write_png_beside, PNG_SCALE};
 pub use progress::Progress;
 pub use refine::{write_refine, REFINE_JSON};
 pub use reopen::{FinishedRun, ReopenError};
@@ -76,9 +82,9 @@ pub use run::{
 };
 pub use scales::{balloon_closed_form, Scales};
 pub use states::{Drawing, PvdTime, StateWriter, EVENTS_PVD};
-pub use surface::write_surface;
+pub use surface::{write_surface, write_surface_with};
 pub use svg::{
-    default_axes, write_diagram, write_diagram_with, write_spectrum_diagram,
+    caption_of, default_axes, write_diagram, write_diagram_with, write_spectrum_diagram,
     write_spectrum_diagram_with, AxisScale, Diagram, Marker, MarkerKind, ReferenceCurve, Segment,
     SPECTRUM_AXIS, ZERO_LINE,
 };

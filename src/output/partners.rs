@@ -182,7 +182,23 @@ pub fn write_partners(
             partners.len()
         ),
     ));
-    let svg = write_bifurcation_diagram(out, &picture(partners, path))?;
+    let mut picture = picture(partners, path);
+    let scales = super::Scales::of(scene, path);
+    let (xs, ys) = (
+        scales.or_name(&picture.control),
+        scales.or_name(&picture.y_axis),
+    );
+    for l in &mut picture.lines {
+        for p in &mut l.points {
+            *p = (p.0 * xs.factor, p.1 * ys.factor);
+        }
+    }
+    for m in &mut picture.marks {
+        (m.x, m.y) = (m.x * xs.factor, m.y * ys.factor);
+    }
+    (picture.control, picture.y_axis) = (xs.label, ys.label);
+    let svg = write_bifurcation_diagram(out, &picture)?;
+    let png = super::write_png_beside(&svg)?;
     files.push((
         svg,
         format!(
@@ -191,6 +207,7 @@ pub fn write_partners(
             path.control
         ),
     ));
+    files.push((png, "the same figure as an image".to_string()));
     Ok(files)
 }
 
@@ -229,6 +246,7 @@ fn picture(partners: &[Partner], path: &PathReport) -> BifurcationDiagram {
                 x,
                 y,
                 label: format!("fold {}", p.fold),
+                kind: "fold of the path".to_string(),
             });
         }
         let Some(piece) = &p.piece else { continue };
@@ -240,6 +258,7 @@ fn picture(partners: &[Partner], path: &PathReport) -> BifurcationDiagram {
                 x,
                 y,
                 label: format!("{} {}", cp.kind.short(), cp.irrep),
+                kind: "critical point of a second piece".to_string(),
             });
         }
     }
@@ -248,6 +267,7 @@ fn picture(partners: &[Partner], path: &PathReport) -> BifurcationDiagram {
             "{}: the path and the second pieces beside its folds",
             path.scene
         ),
+        caption: super::svg::caption_of(path),
         control: path.control.clone(),
         lines,
         marks,

@@ -181,6 +181,7 @@ impl FinishedRun {
             path: PrimaryPath {
                 scene: scene.clone(),
                 group: group.clone(),
+                mesh: mesh_description(&v),
                 control,
                 parameters,
                 values,
@@ -196,5 +197,19 @@ impl FinishedRun {
     /// or no such point).
     pub fn index_at(&self, n: usize) -> Option<usize> {
         self.path.index.get(n).copied().flatten()
+    }
+}
+
+/// The mesh of a `path.json` as [`MeshInfo::describe`](crate::results::MeshInfo::describe)
+/// names it; empty if the file does not say.
+fn mesh_description(v: &serde_json::Value) -> String {
+    let m = &v["mesh"];
+    match (
+        m["generator"].as_str(),
+        m["elements"].as_u64(),
+        m["group"].as_str(),
+    ) {
+        (Some(g), Some(n), Some(group)) => format!("{g}, {n} triangles, group {group}"),
+        _ => String::new(),
     }
 }

@@ -12,13 +12,14 @@ use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// The files every run writes into its directory, besides its states.
-pub const RUN_FILES: [&str; 8] = [
+pub const RUN_FILES: [&str; 9] = [
     "path.csv",
     "path.states",
     "path.json",
     "critical.json",
     "critical.states",
     "path.svg",
+    "path.png",
     "path.pvd",
     "events.pvd",
 ];
@@ -36,6 +37,8 @@ pub struct Written {
     pub critical_states: PathBuf,
     /// `path.svg`.
     pub svg: PathBuf,
+    /// `path.png`: the same figure as an image.
+    pub png: PathBuf,
     /// What the SVG shows, in words.
     pub plotted: String,
     /// `path.pvd`.
@@ -64,6 +67,7 @@ impl Written {
             self.critical.clone(),
             self.critical_states.clone(),
             self.svg.clone(),
+            self.png.clone(),
             self.pvd.clone(),
             self.events.clone(),
         ];
@@ -343,6 +347,8 @@ pub fn write_run_with(
     };
     let svg = attempt!(svg);
     done.push(svg.clone());
+    let png = attempt!(super::write_png_beside(&svg));
+    done.push(png.clone());
     let mut own = attempt!(own(result, out));
     if let Some(r) = &result.report.refinement {
         let path = attempt!(super::write_refine(out, r));
@@ -380,6 +386,7 @@ pub fn write_run_with(
         critical: critical_json,
         critical_states,
         svg,
+        png,
         plotted,
         pvd,
         events,

@@ -1,7 +1,9 @@
 //! `surface.vtu`, `surface.json` and `surface.svg`: an equilibrium surface
 //! ([`SurfaceReport`]).
 
-use super::svg::{chart, padded, xml_chars};
+use super::figure::{self, finish, Entry, Layout, Line, Mark, Plot, Sample, Symbol};
+use super::scales::Scales;
+use super::svg::xml_chars;
 use super::{write_whole, Num, OutputError};
 use crate::results::{CriticalKind, SurfaceReport};
 use plotters::prelude::*;
@@ -61,7 +63,8 @@ fn check_finite(path: &Path, s: &SurfaceReport) -> Result<(), OutputError> {
     Ok(())
 }
 
-/// Writes `surface.vtu`, `surface.json` and `surface.svg` into `dir`; returns their paths.
+/// Writes `surface.vtu`, `surface.json`, `surface.svg` and `surface.png` (the same figure as an
+/// image) into `dir`; returns their paths.
 ///
 /// `surface.vtu` (VTK XML unstructured grid, ASCII) has a point per path vertex at
 /// (a, b, measure), path after path, then a point per point of every critical line; its
@@ -77,6 +80,20 @@ fn check_finite(path: &Path, s: &SurfaceReport) -> Result<(), OutputError> {
 /// [`OutputError::Invalid`] for a non-finite value or a surface without vertices (nothing
 /// is written), else as the other writers.
 pub fn write_surface(dir: &Path, s: &SurfaceReport) -> Result<Vec<PathBuf>, OutputError> {
+    write_surface_with(dir, s, &Scales::default(), "")
+}
+
+/// As [`write_surface`], `surface.svg`'s axes titled and scaled by `scales` and `caption`
+/// (the scene and its mesh) written below the plot.
+///
+/// # Errors
+/// As [`write_surface`].
+pub fn write_surface_with(
+    dir: &Path,
+    s: &SurfaceReport,
+    scales: &Scales,
+    caption: &str,
+) -> Result<Vec<PathBuf>, OutputError> {
     let vtu = dir.join("surface.vtu");
     let json = dir.join("surface.json");
     let svg_path = dir.join("surface.svg");
@@ -85,15 +102,17 @@ pub fn write_surface(dir: &Path, s: &SurfaceReport) -> Result<Vec<PathBuf>, Outp
     if s.vertex_count() == 0 {
         return Err(OutputError::invalid(&vtu, "the surface has no vertices"));
     }
-    let svg = render(s, a, m)
+    let (svg, layout) = render(s, a, m, scales, caption)
         .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
+    let svg = finish(&svg, &layout);
     write_whole(&vtu, |w| write_vtu(w, s, (a, b, m)))?;
     write_whole(&json, |w| {
         serde_json::to_writer_pretty(&mut *w, s).map_err(io::Error::other)?;
         writeln!(w)
     })?;
     write_whole(&svg_path, |w| w.write_all(xml_chars(&svg).as_bytes()))?;
-    Ok(vec![vtu, json, svg_path])
+    let png = super::write_png_beside(&svg_path)?;
+    Ok(vec![vtu, json, svg_path, png])
 }
 
 /// One ASCII data array of the VTU.
@@ -234,95 +253,115 @@ fn index_colour(index: Option<usize>) -> RGBColor {
 }
 
 /// The measure (column `m`) against a (column `a`): triangles and paths by index, the
-/// critical lines over them.
-fn render(s: &SurfaceReport, a: usize, m: usize) -> Result<String, Box<dyn std::error::Error>> {
+/// critical lines over them; axes titled and scaled by `scales`.
+fn render(
+    s: &SurfaceReport,
+    a: usize,
+    m: usize,
+    scales: &Scales,
+    caption: &str,
+) -> Result<(String, Layout), Box<dyn std::error::Error>> {
+    let (xs, ys) = (scales.or_name(&s.a), scales.or_name(&s.measure));
     let vertices: Vec<_> = s.vertices().collect();
-    let at = |i: usize| (vertices[i].parameters[a], vertices[i].measures[m]);
-    let xr = padded(vertices.iter().map(|v| v.parameters[a]));
-    let yr = padded(vertices.iter().map(|v| v.measures[m]));
-    let mut out = String::new();
-    {
-        let root = SVGBackend::with_string(&mut out, (800, 600)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let (lo, hi) = (
-            s.paths.first().map_or(0.0, |p| p.b),
-            s.paths.last().map_or(0.0, |p| p.b),
-        );
-        let title = format!(
-            "equilibrium surface: {} paths in {} at {} = {} … {}",
-            s.paths.len(),
-            s.a,
-            s.b,
-            super::svg::short(lo),
-            super::svg::short(hi)
-        );
-        let mut chart = chart(&root, &title, &s.a, &s.measure, xr, yr)?;
-        chart.draw_series(s.triangles.iter().map(|t| {
-            let index = t.iter().map(|&v| vertices[v].index).max().flatten();
-            Polygon::new(
-                t.iter().map(|&v| at(v)).collect::<Vec<_>>(),
-                index_colour(index).mix(0.18).filled(),
-            )
-        }))?;
-        let mut legend: Vec<Option<usize>> = Vec::new();
-        for p in &s.paths {
-            for pair in p.vertices.windows(2) {
-                let index = pair[0].index;
-                let series = chart.draw_series(LineSeries::new(
-                    pair.iter().map(|v| (v.parameters[a], v.measures[m])),
-                    index_colour(index).stroke_width(2),
-                ))?;
-                if !legend.contains(&index) {
-                    legend.push(index);
-                    let c = index_colour(index);
-                    let label = match index {
-                        Some(0) => "index 0 (stable)".to_string(),
-                        Some(i) => format!("index {i}"),
-                        None => "index not computed".to_string(),
-                    };
-                    series.label(label).legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
-                }
-            }
-        }
-        let (mut limit_legend, mut bifurcation_legend) = (false, false);
-        for l in &s.lines {
-            let points: Vec<(f64, f64)> = l
-                .points
-                .iter()
-                .map(|p| (p.parameters[a], p.measures[m]))
-                .collect();
-            chart.draw_series(points.iter().map(|&p| Circle::new(p, 3, BLACK.filled())))?;
-            if l.kind == CriticalKind::LimitPoint {
-                let series = chart.draw_series(LineSeries::new(points, BLACK.stroke_width(3)))?;
-                if !std::mem::replace(&mut limit_legend, true) {
-                    series.label("limit line (fold)").legend(|(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(3))
-                    });
-                }
-            } else {
-                let series = chart.draw_series(DashedLineSeries::new(
-                    points,
-                    6,
-                    4,
-                    BLACK.stroke_width(2),
-                ))?;
-                if !std::mem::replace(&mut bifurcation_legend, true) {
-                    series.label("bifurcation line").legend(|(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2))
-                    });
-                }
-            }
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()?;
-        root.present()?;
+    let at = |i: usize| {
+        (
+            vertices[i].parameters[a] * xs.factor,
+            vertices[i].measures[m] * ys.factor,
+        )
+    };
+    let (lo, hi) = (
+        s.paths.first().map_or(0.0, |p| p.b),
+        s.paths.last().map_or(0.0, |p| p.b),
+    );
+    let title = format!(
+        "equilibrium surface: {} paths in {} at {} = {} … {}",
+        s.paths.len(),
+        s.a,
+        s.b,
+        super::svg::short(lo),
+        super::svg::short(hi)
+    );
+    let mut plot = Plot::new(title, caption, &xs.label, &ys.label);
+    for t in &s.triangles {
+        let index = t.iter().map(|&v| vertices[v].index).max().flatten();
+        let c = index_colour(index);
+        plot.polygons.push((
+            t.iter().map(|&v| at(v)).collect(),
+            RGBAColor(c.0, c.1, c.2, 0.18),
+        ));
     }
-    Ok(out)
+    let mut legend: Vec<Option<usize>> = Vec::new();
+    for p in &s.paths {
+        // Runs of one index, drawn whole so that a dash runs on across short steps.
+        let mut runs: Vec<super::svg::IndexRun> = Vec::new();
+        for pair in p.vertices.windows(2) {
+            let index = pair[0].index;
+            let q = |v: &crate::results::SurfaceVertex| {
+                (v.parameters[a] * xs.factor, v.measures[m] * ys.factor)
+            };
+            match runs.last_mut() {
+                Some((i, pts)) if *i == index => pts.push(q(&pair[1])),
+                _ => runs.push((index, vec![q(&pair[0]), q(&pair[1])])),
+            }
+        }
+        for (index, pts) in runs {
+            let (c, dash) = (index_colour(index), index_dash(index));
+            plot.lines.push(Line::new(pts, c, 2, dash));
+            if !legend.contains(&index) {
+                legend.push(index);
+            }
+        }
+    }
+    legend.sort();
+    for index in legend {
+        plot.legend.push(Entry::new(
+            super::svg::index_legend(index),
+            Sample::Line(index_colour(index), 2, index_dash(index)),
+        ));
+    }
+    let (mut limit, mut bifurcation) = (false, false);
+    for l in &s.lines {
+        let points: Vec<(f64, f64)> = l
+            .points
+            .iter()
+            .map(|p| (p.parameters[a] * xs.factor, p.measures[m] * ys.factor))
+            .collect();
+        for &p in &points {
+            plot.marks.push(Mark {
+                at: p,
+                symbol: Symbol::Disc(BLACK),
+                kind: "critical point of a path".to_string(),
+                label: String::new(),
+            });
+        }
+        if l.kind == CriticalKind::LimitPoint {
+            plot.lines.push(Line::new(points, BLACK, 3, None));
+            limit = true;
+        } else {
+            plot.lines.push(Line::new(points, BLACK, 2, Some((6, 4))));
+            bifurcation = true;
+        }
+    }
+    if limit {
+        plot.legend.push(Entry::new(
+            "limit line (fold)",
+            Sample::Line(BLACK, 3, None),
+        ));
+    }
+    if bifurcation {
+        plot.legend.push(Entry::new(
+            "bifurcation line",
+            Sample::Line(BLACK, 2, Some((6, 4))),
+        ));
+    }
+    figure::render(&plot)
+}
+
+/// The dash of an index: stable solid, unstable dashed.
+fn index_dash(index: Option<usize>) -> Option<(u32, u32)> {
+    match index {
+        Some(0) => None,
+        Some(_) => Some((8, 5)),
+        None => Some((2, 4)),
+    }
 }

@@ -9,6 +9,8 @@
 //! is written as SVG `<text>` elements that the viewer renders with its own fonts, and plotters
 //! only estimates text extents for the layout, so no font file is read or needed.
 
+use super::figure::{self, finish, Entry, Layout, Line, Mark, Plot, Sample, Symbol};
+pub(super) use super::figure::{padded, tick};
 use super::{check_finite, write_whole, OutputError};
 use crate::results::{PathReport, TurningRow};
 use plotters::prelude::*;
@@ -153,7 +155,7 @@ pub struct Diagram {
     pub turning_points: bool,
     /// File name in the output directory (default `path.svg`).
     pub file: String,
-    /// Width and height in pixels (default 800 × 600).
+    /// Width and height in pixels (default 900 × 650).
     pub size: (u32, u32),
     /// Draw the path by the rows' instability index, one colour and line style per index
     /// with a legend entry each, the markers with an `after_step` inserted into the polyline
@@ -168,7 +170,7 @@ pub struct Diagram {
 }
 
 impl Diagram {
-    /// `y` against `x`, turning points marked, into `path.svg`, 800 × 600.
+    /// `y` against `x`, turning points marked, into `path.svg`, 900 × 650.
     pub fn new(x: impl Into<String>, y: impl Into<String>) -> Self {
         Self {
             x: x.into(),
@@ -177,7 +179,7 @@ impl Diagram {
             markers: Vec::new(),
             turning_points: true,
             file: "path.svg".to_string(),
-            size: (800, 600),
+            size: (900, 650),
             by_index: false,
             x_scale: None,
             y_scale: None,
@@ -347,7 +349,7 @@ pub fn write_diagram_with(
     } else {
         Vec::new()
     };
-    let svg = render(
+    let (svg, layout) = render(
         report,
         diagram,
         &Drawn {
@@ -359,13 +361,12 @@ pub fn write_diagram_with(
         },
     )
     .map_err(|e| invalid(format!("plotting failed: {e}")))?;
-    let svg = xml_chars(&svg);
+    let svg = xml_chars(&finish(&svg, &layout));
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
     Ok(path)
 }
 
-/// A chart of the diagrams' one style on `root`: the title above, white background already
-/// filled by the caller, the axes over `xr` × `yr` with their titles and light grid lines.
+/// A plotters chart of the figures' style (see [`figure::chart`]).
 pub(super) type Chart<'a, 'b> = ChartContext<
     'a,
     SVGBackend<'b>,
@@ -374,32 +375,6 @@ pub(super) type Chart<'a, 'b> = ChartContext<
         plotters::coord::types::RangedCoordf64,
     >,
 >;
-
-/// Builds the [`Chart`] of the diagrams' style (caption, margins, axis titles, grid).
-pub(super) fn chart<'a, 'b>(
-    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
-    title: &str,
-    x: &str,
-    y: &str,
-    xr: Range<f64>,
-    yr: Range<f64>,
-) -> Result<Chart<'a, 'b>, Box<dyn Error>> {
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 22))
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(70)
-        .build_cartesian_2d(xr, yr)?;
-    chart
-        .configure_mesh()
-        .x_desc(x)
-        .y_desc(y)
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()?;
-    Ok(chart)
-}
 
 /// A stretch of the path at one instability index: the index and its points.
 pub(crate) type IndexRun = (Option<usize>, Vec<(f64, f64)>);
@@ -506,55 +481,36 @@ pub(crate) fn index_legend(i: Option<usize>) -> String {
     }
 }
 
-/// Estimated pixels per character of a 15 px marker label.
-const MARKER_CHAR: f64 = 8.0;
-/// Height of a marker label's box in pixels.
-const MARKER_LINE: f64 = 18.0;
-
-/// Greedy placement of marker labels that do not overlap: each label `(pixel x, pixel y,
-/// characters, prefers below)` in turn takes the first of the vertical offsets (its preferred
-/// side first, then alternating further away) whose box overlaps no label placed before it.
-/// Returns the offset (dx, dy) of each label's top left corner from its point.
-pub(crate) fn place_marker_labels(labels: &[(f64, f64, usize, bool)]) -> Vec<(i32, i32)> {
-    let mut boxes: Vec<(f64, f64, f64, f64)> = Vec::new();
-    let mut order: Vec<usize> = (0..labels.len()).collect();
-    order.sort_by(|&a, &b| labels[a].0.total_cmp(&labels[b].0));
-    let mut placed = vec![(8, -22); labels.len()];
-    for k in order {
-        let (x, y, chars, below) = labels[k];
-        let w = chars as f64 * MARKER_CHAR;
-        let (first, second): (f64, f64) = if below { (6.0, -22.0) } else { (-22.0, 6.0) };
-        let candidates = (0..12).map(|j| {
-            let step = f64::from(j / 2) * MARKER_LINE;
-            if j % 2 == 0 {
-                first + step * first.signum()
-            } else {
-                second + step * second.signum()
-            }
-        });
-        let mut chosen = first;
-        for dy in candidates {
-            let b = (x + 8.0, y + dy, x + 8.0 + w, y + dy + MARKER_LINE);
-            let free = boxes
-                .iter()
-                .all(|o| b.2 <= o.0 || o.2 <= b.0 || b.3 <= o.1 || o.3 <= b.1);
-            if free {
-                chosen = dy;
-                break;
-            }
-        }
-        boxes.push((x + 8.0, y + chosen, x + 8.0 + w, y + chosen + MARKER_LINE));
-        placed[k] = (8, chosen.round() as i32);
-    }
-    placed
+/// The caption line of a run's figures: its scene and its mesh (generator, triangles, the
+/// mesh's group) and the group it is solved in.
+pub fn caption_of(report: &PathReport) -> String {
+    format!(
+        "scene {} · mesh: {} · solved in group {}",
+        report.scene,
+        report.mesh.describe(),
+        report.group
+    )
 }
 
-/// Draws the diagram into an SVG string.
-fn render(report: &PathReport, diagram: &Diagram, d: &Drawn) -> Result<String, Box<dyn Error>> {
-    let (path, markers, marker_points) = (d.path, d.markers, d.marker_points);
-    let all = || path.iter().chain(marker_points).chain(d.reference);
-    let xr = padded(all().map(|p| p.0));
-    let yr = padded(all().map(|p| p.1));
+/// The symbol and legend entry of a marker kind; `control` names the control parameter.
+fn marker_style(kind: MarkerKind, control: &str) -> (Symbol, String) {
+    match kind {
+        MarkerKind::Maximum | MarkerKind::Minimum => (
+            Symbol::Disc(RGBColor(200, 30, 30)),
+            format!("turning point of {control}"),
+        ),
+        MarkerKind::Bifurcation => (Symbol::Cross(BLACK), "bifurcation point".to_string()),
+        MarkerKind::Other => (Symbol::Ring(BLACK), "critical point".to_string()),
+    }
+}
+
+/// Draws the diagram into an SVG string with its layout.
+fn render(
+    report: &PathReport,
+    diagram: &Diagram,
+    d: &Drawn,
+) -> Result<(String, Layout), Box<dyn Error>> {
+    let path = d.path;
     let x_title = diagram
         .x_scale
         .as_ref()
@@ -563,171 +519,85 @@ fn render(report: &PathReport, diagram: &Diagram, d: &Drawn) -> Result<String, B
         .y_scale
         .as_ref()
         .map_or(diagram.y.as_str(), |s| s.label.as_str());
-    // The legend's entries, to find a corner for it.
-    let mut indices: Vec<Option<usize>> = d.runs.iter().map(|r| r.0).collect();
-    indices.sort();
-    indices.dedup();
-    let mut entries: Vec<String> = indices.iter().map(|&i| index_legend(i)).collect();
-    entries.extend(diagram.reference.as_ref().map(|r| r.label.clone()));
-    // The stretches of the path between rows of which one has a flag, and the flags' names.
+    let title = format!("{} (group {})", report.scene, report.group);
+    let mut plot = Plot::new(title, caption_of(report), x_title, y_title);
+    plot.size = diagram.size;
+    let blue = RGBColor(31, 87, 180);
+    let red = RGBColor(200, 30, 30);
+    if let Some(r) = &diagram.reference {
+        let grey = RGBColor(110, 110, 110);
+        plot.lines
+            .push(Line::new(d.reference.to_vec(), grey, 1, None));
+        plot.legend
+            .push(Entry::new(r.label.clone(), Sample::Line(grey, 1, None)));
+    }
+    // Under the path: its flagged stretches, wide and translucent orange.
     let row_flags: Vec<Vec<&str>> = (0..path.len()).map(|i| report.row_flags(i)).collect();
     let flagged: Vec<usize> = (1..path.len())
         .filter(|&i| !row_flags[i - 1].is_empty() || !row_flags[i].is_empty())
         .collect();
-    let mut names: Vec<&str> = row_flags.iter().flatten().copied().collect();
-    names.sort_unstable();
-    names.dedup();
-    let flagged_legend = format!("flagged: {}", names.join(", "));
     if !flagged.is_empty() {
-        entries.push(flagged_legend.clone());
+        let mut names: Vec<&str> = row_flags.iter().flatten().copied().collect();
+        names.sort_unstable();
+        names.dedup();
+        let band = RGBAColor(255, 150, 0, 0.45);
+        for &i in &flagged {
+            plot.bands.push((vec![path[i - 1], path[i]], band, 11));
+        }
+        plot.legend.push(Entry::new(
+            format!("flagged: {}", names.join(", ")),
+            Sample::Band(band, 11),
+        ));
     }
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, diagram.size).into_drawing_area();
-        root.fill(&WHITE)?;
-        let title = format!("{} (group {})", report.scene, report.group);
-        let mut chart = chart(&root, &title, x_title, y_title, xr.clone(), yr.clone())?;
-
-        let blue = RGBColor(31, 87, 180);
-        let red = RGBColor(200, 30, 30);
-        if let Some(r) = &diagram.reference {
-            let grey = RGBColor(110, 110, 110);
-            chart
-                .draw_series(LineSeries::new(
-                    d.reference.iter().copied(),
-                    grey.stroke_width(1),
-                ))?
-                .label(r.label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 20, y)], grey.stroke_width(1))
-                });
-        }
-        // Under the path: its flagged stretches, wide and translucent orange.
-        let band = RGBAColor(255, 150, 0, 0.45).stroke_width(11);
-        for (k, &i) in flagged.iter().enumerate() {
-            let series = chart.draw_series(LineSeries::new([path[i - 1], path[i]], band))?;
-            if k == 0 {
-                series
-                    .label(flagged_legend.clone())
-                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], band));
+    if diagram.by_index {
+        let mut done: Vec<Option<usize>> = Vec::new();
+        for (index, run) in d.runs {
+            let (c, dash) = index_style(*index);
+            let width = if index.is_some() { 3 } else { 1 };
+            plot.lines.push(Line::new(run.clone(), c, width, dash));
+            if !done.contains(index) {
+                done.push(*index);
+                plot.legend.push(Entry::new(
+                    index_legend(*index),
+                    Sample::Line(c, width, dash),
+                ));
             }
         }
-        if diagram.by_index {
-            let mut legend_done: Vec<Option<usize>> = Vec::new();
-            for (index, run) in d.runs {
-                let (c, dash) = index_style(*index);
-                let width = if index.is_some() { 3 } else { 1 };
-                let pts = run.iter().copied();
-                let series = match dash {
-                    None => chart.draw_series(LineSeries::new(pts, c.stroke_width(width)))?,
-                    Some((on, off)) => chart.draw_series(DashedLineSeries::new(
-                        pts,
-                        on,
-                        off,
-                        c.stroke_width(width),
-                    ))?,
-                };
-                if !legend_done.contains(index) {
-                    legend_done.push(*index);
-                    let (a, b) = match dash {
-                        None => (10, 10),
-                        Some((on, off)) => (on as i32, (on + off) as i32),
-                    };
-                    let style = c.stroke_width(width);
-                    series.label(index_legend(*index)).legend(move |(x, y)| {
-                        EmptyElement::at((x, y))
-                            + PathElement::new([(0, 0), (a, 0)], style)
-                            + PathElement::new([(b, 0), ((b + a).min(20).max(b), 0)], style)
-                    });
-                }
-            }
-        } else {
-            let base = if diagram.segments.is_empty() {
-                blue.stroke_width(2)
-            } else {
-                RGBColor(170, 170, 170).stroke_width(1)
-            };
-            chart.draw_series(LineSeries::new(path.iter().copied(), base))?;
-        }
-
-        let (mut stable_legend, mut unstable_legend) = (false, false);
-        for s in diagram.segments.iter().filter(|_| !diagram.by_index) {
-            let pts = path[s.first..=s.last].iter().copied();
+    } else if diagram.segments.is_empty() {
+        plot.lines.push(Line::new(path.to_vec(), blue, 2, None));
+    } else {
+        let grey = RGBColor(170, 170, 170);
+        plot.lines.push(Line::new(path.to_vec(), grey, 1, None));
+        let (mut stable, mut unstable) = (false, false);
+        for s in &diagram.segments {
+            let pts = path[s.first..=s.last].to_vec();
             if s.stable {
-                let series = chart.draw_series(LineSeries::new(pts, blue.stroke_width(3)))?;
-                if !std::mem::replace(&mut stable_legend, true) {
-                    series.label("stable").legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], blue.stroke_width(3))
-                    });
-                }
+                plot.lines.push(Line::new(pts, blue, 3, None));
+                stable = true;
             } else {
-                let style = red.stroke_width(3);
-                let series = chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?;
-                if !std::mem::replace(&mut unstable_legend, true) {
-                    series.label("unstable").legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], red.stroke_width(3))
-                    });
-                }
+                plot.lines.push(Line::new(pts, red, 3, Some((8, 5))));
+                unstable = true;
             }
         }
-        if stable_legend || unstable_legend || !entries.is_empty() {
-            let chars = entries.iter().map(|l| l.chars().count()).max().unwrap_or(8);
-            let (w, h) = diagram.size;
-            let plot = (f64::from(w) - 110.0, f64::from(h) - 130.0);
-            let size = (
-                (45.0 + chars as f64 * LEGEND_CHAR) / plot.0,
-                (12.0 + (entries.len().max(2)) as f64 * 18.0) / plot.1,
-            );
-            let occupied: Vec<(f64, f64)> = path
-                .iter()
-                .chain(marker_points)
-                .chain(d.reference)
-                .copied()
-                .collect();
-            let (corner, _) = emptiest_corner(&occupied, &xr, &yr, size);
-            chart
-                .configure_series_labels()
-                .position(corner)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()?;
+        if stable {
+            plot.legend
+                .push(Entry::new("stable", Sample::Line(blue, 3, None)));
         }
-
-        let wanted: Vec<(f64, f64, usize, bool)> = markers
-            .iter()
-            .zip(marker_points)
-            .map(|(m, p)| {
-                let (px, py) = chart.backend_coord(p);
-                (
-                    f64::from(px),
-                    f64::from(py),
-                    m.label.chars().count(),
-                    m.kind == MarkerKind::Minimum,
-                )
-            })
-            .collect();
-        let offsets = place_marker_labels(&wanted);
-        for ((m, &(x, y)), &text_at) in markers.iter().zip(marker_points).zip(&offsets) {
-            let font = ("sans-serif", 15).into_font().color(&BLACK);
-            let label = Text::new(m.label.clone(), text_at, font);
-            match m.kind {
-                MarkerKind::Maximum | MarkerKind::Minimum => chart.draw_series(std::iter::once(
-                    EmptyElement::at((x, y)) + Circle::new((0, 0), 5, red.filled()) + label,
-                ))?,
-                MarkerKind::Bifurcation => chart.draw_series(std::iter::once(
-                    EmptyElement::at((x, y)) + Cross::new((0, 0), 6, BLACK.stroke_width(2)) + label,
-                ))?,
-                MarkerKind::Other => chart.draw_series(std::iter::once(
-                    EmptyElement::at((x, y))
-                        + Circle::new((0, 0), 5, BLACK.stroke_width(2))
-                        + label,
-                ))?,
-            };
+        if unstable {
+            plot.legend
+                .push(Entry::new("unstable", Sample::Line(red, 3, Some((8, 5)))));
         }
-        root.present()?;
     }
-    Ok(svg)
+    for (m, &at) in d.markers.iter().zip(d.marker_points) {
+        let (symbol, kind) = marker_style(m.kind, &report.control);
+        plot.marks.push(Mark {
+            at,
+            symbol,
+            kind,
+            label: m.label.clone(),
+        });
+    }
+    figure::render(&plot)
 }
 
 /// Colours of the irreps' lines, in irrep order; past the last one they repeat, dashed.
@@ -897,9 +767,9 @@ pub fn write_spectrum_diagram_with(
     } else {
         "critical point"
     };
-    let svg = render_spectra(report, &curves, &higher, &marks, (x_title, f, legend))
+    let (svg, layout) = render_spectra(report, &curves, &higher, &marks, (x_title, f, legend))
         .map_err(|e| invalid(format!("plotting failed: {e}")))?;
-    let svg = xml_chars(&svg);
+    let svg = xml_chars(&finish(&svg, &layout));
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
     Ok(path)
 }
@@ -920,9 +790,9 @@ fn render_spectra(
     higher: &[Vec<Vec<(f64, f64)>>],
     marks: &[CriticalMark],
     (x_title, f, mark_legend): (&str, f64, &str),
-) -> Result<String, Box<dyn Error>> {
+) -> Result<(String, Layout), Box<dyn Error>> {
     let spectra = &report.spectra;
-    let size = (800u32, 600u32);
+    let size = (800u32, 600u32 + figure::CAPTION_H);
     let points = || curves.iter().chain(higher).flatten().flatten();
     let xs = spectra.rows.iter().map(|r| r.control * f);
     let xr = padded(xs.chain(marks.iter().map(|m| m.x)));
@@ -930,10 +800,14 @@ fn render_spectra(
     // Room for the vertical labels of the critical points on either side of the zero line.
     let (plot_w, plot_h) = (
         f64::from(size.0 - 2 * 20 - 80),
-        f64::from(size.1 - 2 * 20 - 90),
+        f64::from(size.1 - figure::CAPTION_H - 2 * 20 - 90),
     );
     let px = plot_w / (xr.end - xr.start);
-    let (labels, need) = place_labels(marks.iter().map(|m| (m.x * px, m.label.len())));
+    let (labels, need) = place_labels(
+        marks
+            .iter()
+            .map(|m| (m.x * px, figure::text_size(&m.label, SPECTRUM_LABEL).0)),
+    );
     let yr = headroom(yr, need.0 / plot_h, need.1 / plot_h);
     let colour = |mu: usize| PALETTE[mu % PALETTE.len()];
     let dashed = |mu: usize| mu >= PALETTE.len();
@@ -963,12 +837,27 @@ fn render_spectra(
         )
         .chain((!marks.is_empty()).then(|| mark_legend.to_string()))
         .collect();
-    // The legend's estimated size as fractions of the plot, to find a corner it fits in.
-    let chars = legend.iter().map(|l| l.chars().count()).max().unwrap_or(0);
-    let legend_box = (
-        (45.0 + chars as f64 * LEGEND_CHAR) / plot_w,
-        (12.0 + legend.len() as f64 * 18.0) / plot_h,
-    );
+    let entries: Vec<Entry> = legend
+        .iter()
+        .enumerate()
+        .map(|(k, text)| {
+            let sample = if k < spectra.irreps.len() {
+                if curves[k].is_empty() {
+                    Sample::Note
+                } else {
+                    Sample::Line(colour(k), 2, dashed(k).then_some((8, 4)))
+                }
+            } else if text == HIGHER_LEGEND {
+                Sample::Line(RGBColor(90, 90, 90), 1, Some((5, 4)))
+            } else {
+                Sample::Symbol(Symbol::Cross(BLACK))
+            };
+            Entry::new(text.clone(), sample)
+        })
+        .collect();
+    // The legend's size as fractions of the plot, to find a corner it fits in.
+    let (lw, lh) = figure::legend_size(&entries);
+    let legend_box = (lw / plot_w, lh / plot_h);
     // The lines, sampled between their points, and the critical points on the zero line.
     let dense = curves.iter().chain(higher).flatten().flat_map(|run| {
         run.windows(2).flat_map(|w| {
@@ -986,10 +875,19 @@ fn render_spectra(
         .chain(marks.iter().map(|m| (m.x, 0.0)))
         .collect();
     let (legend_at, yr) = legend_place(&occupied, &xr, yr, legend_box);
+    let caption = caption_of(report);
+    let mut layout = Layout {
+        width: size.0,
+        height: size.1,
+        legend: legend.clone(),
+        caption: caption.clone(),
+        ..Layout::default()
+    };
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        root.fill(&WHITE)?;
+        let canvas = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        canvas.fill(&WHITE)?;
+        let (root, _) = canvas.split_vertically(size.1 - figure::CAPTION_H);
         let title = format!(
             "{} (group {}): lowest eigenvalue by irrep",
             report.scene, report.group
@@ -1018,26 +916,14 @@ fn render_spectra(
             [(xr.start, 0.0), (xr.end, 0.0)],
             ZERO_LINE.stroke_width(1),
         ))?;
-        for (mu, (runs, name)) in curves.iter().zip(&legend).enumerate() {
+        for (mu, runs) in curves.iter().enumerate() {
             let c = colour(mu);
-            if runs.is_empty() {
-                chart
-                    .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                    .label(name.clone())
-                    .legend(|(x, y)| EmptyElement::at((x, y)));
-                continue;
-            }
-            for (k, run) in runs.iter().enumerate() {
+            for run in runs {
                 let style = c.stroke_width(2);
-                let series = if dashed(mu) {
-                    chart.draw_series(DashedLineSeries::new(run.iter().copied(), 8, 4, style))?
+                if dashed(mu) {
+                    chart.draw_series(DashedLineSeries::new(run.iter().copied(), 8, 4, style))?;
                 } else {
-                    chart.draw_series(LineSeries::new(run.iter().copied(), style))?
-                };
-                if k == 0 {
-                    series.label(name.clone()).legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
+                    chart.draw_series(LineSeries::new(run.iter().copied(), style))?;
                 }
             }
         }
@@ -1052,40 +938,40 @@ fn render_spectra(
                 ))?;
             }
         }
-        if higher.iter().any(|r| !r.is_empty()) {
-            let grey = RGBColor(90, 90, 90);
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label(HIGHER_LEGEND)
-                .legend(move |(x, y)| {
-                    EmptyElement::at((x, y))
-                        + PathElement::new([(0, 0), (5, 0)], grey.stroke_width(1))
-                        + PathElement::new([(9, 0), (14, 0)], grey.stroke_width(1))
-                        + PathElement::new([(18, 0), (20, 0)], grey.stroke_width(1))
-                });
-        }
-        if !marks.is_empty() {
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label(mark_legend)
-                .legend(|(x, y)| Cross::new((x + 10, y), 5, BLACK.stroke_width(2)));
-        }
-        chart
-            .configure_series_labels()
-            .position(legend_at)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()?;
-
+        let (pxr, pyr) = chart.plotting_area().get_pixel_range();
+        layout.plot = Some(figure::Rect {
+            x0: f64::from(pxr.start),
+            y0: f64::from(pyr.start),
+            x1: f64::from(pxr.end),
+            y1: f64::from(pyr.end),
+        });
         for (m, &(up, start)) in marks.iter().zip(&labels) {
+            let (x, y) = chart.backend_coord(&(m.x, 0.0));
+            let (len, thick) = figure::text_size(&m.label, SPECTRUM_LABEL);
+            let (x, y, s) = (f64::from(x), f64::from(y), f64::from(start));
+            let (y0, y1) = if up {
+                (y - s - len, y - s)
+            } else {
+                (y + s, y + s + len)
+            };
+            layout.labels.push(figure::PlacedLabel {
+                text: m.label.clone(),
+                rect: figure::Rect {
+                    x0: x - thick / 2.0,
+                    y0,
+                    x1: x + thick / 2.0,
+                    y1,
+                },
+                leader: false,
+                in_inset: false,
+            });
             let c = m.irrep.map_or(BLACK, colour);
             let (transform, offset) = if up {
                 (FontTransform::Rotate270, (0, -start))
             } else {
                 (FontTransform::Rotate90, (0, start))
             };
-            let font = ("sans-serif", 13)
+            let font = ("sans-serif", SPECTRUM_LABEL)
                 .into_font()
                 .transform(transform)
                 .color(&c)
@@ -1095,31 +981,61 @@ fn render_spectra(
                     + Cross::new((0, 0), 6, c.stroke_width(2))
                     + Text::new(m.label.clone(), offset, font),
             ))?;
+            if layout.marker_kinds.is_empty() {
+                layout.marker_kinds.push(mark_legend.to_string());
+            }
         }
-        root.present()?;
+        // The legend: in the corner that covers no label and the fewest data.
+        let frame = layout.plot.unwrap_or(figure::Rect::at(0.0, 0.0, 0.0, 0.0));
+        let data: Vec<(f64, f64)> = occupied
+            .iter()
+            .map(|p| {
+                let (x, y) = chart.backend_coord(p);
+                (f64::from(x), f64::from(y))
+            })
+            .collect();
+        let preferred = match legend_at {
+            SeriesLabelPosition::UpperRight => 0,
+            SeriesLabelPosition::UpperLeft => 1,
+            SeriesLabelPosition::LowerRight => 2,
+            _ => 3,
+        };
+        let corners = figure::corners(frame, figure::legend_size(&entries));
+        let cost = |k: usize| {
+            let b = &corners[k];
+            (
+                layout.labels.iter().filter(|l| l.rect.overlaps(b)).count(),
+                data.iter().filter(|p| b.contains(**p)).count(),
+                usize::from(k != preferred),
+            )
+        };
+        let best = (0..4).min_by_key(|&k| cost(k)).unwrap_or(preferred);
+        layout.legend_markers = figure::draw_legend(&canvas, corners[best], &entries)?;
+        layout.legend_box = Some(corners[best]);
+        figure::draw_caption(&canvas, &caption, size)?;
+        canvas.present()?;
     }
-    Ok(svg)
+    Ok((svg, layout))
 }
 
-/// Pixels per character of a 14 px legend entry (an estimate).
-const LEGEND_CHAR: f64 = 7.5;
-/// Pixels per character of a 13 px label (an estimate: the viewer's font decides).
-const LABEL_CHAR: f64 = 7.2;
+/// Font size of the spectrum diagram's vertical labels.
+const SPECTRUM_LABEL: u32 = 14;
+
 /// Gap between the zero line and a label, and between stacked labels, in pixels.
 const LABEL_GAP: f64 = 12.0;
 /// Labels closer than this (pixels along the control) would overlap side by side.
 const LABEL_WIDTH: f64 = 16.0;
 
-/// Places the vertical labels of the critical points `(x in pixels, characters)`, sorted by
+/// Places the vertical labels of the critical points `(x, length)` in pixels, sorted by
 /// x: each goes above or below the zero line, into the lane where it can start nearest to the
 /// line without overlapping an earlier label (labels less than [`LABEL_WIDTH`] apart stack
 /// outwards; above on a tie). Returns per label (above?, pixels from the line to its start)
 /// and the pixels the labels need above and below the line.
-fn place_labels(labels: impl Iterator<Item = (f64, usize)>) -> (Vec<(bool, i32)>, (f64, f64)) {
+fn place_labels(labels: impl Iterator<Item = (f64, f64)>) -> (Vec<(bool, i32)>, (f64, f64)) {
     // Per lane (above, below): the placed labels as (x, far end from the line).
     let mut lanes: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
     let mut placed = Vec::new();
-    for (x, chars) in labels {
+    for (x, length) in labels {
         let start = |lane: &Vec<(f64, f64)>| {
             lane.iter()
                 .filter(|(x0, _)| (x - x0).abs() < LABEL_WIDTH)
@@ -1129,7 +1045,7 @@ fn place_labels(labels: impl Iterator<Item = (f64, usize)>) -> (Vec<(bool, i32)>
         let (up_start, down_start) = (start(&lanes[0]), start(&lanes[1]));
         let up = up_start <= down_start;
         let begin = if up { up_start } else { down_start };
-        let end = begin + chars as f64 * LABEL_CHAR;
+        let end = begin + length;
         lanes[usize::from(!up)].push((x, end));
         placed.push((up, begin.round() as i32));
     }
@@ -1217,30 +1133,6 @@ fn emptiest_corner(
     (corner, counts[best])
 }
 
-/// A tick label on an axis spanning `span`: decimals to resolve a hundredth of the span,
-/// and a plain `0` for a tick at zero up to round-off (never `-0.0`).
-fn tick(v: f64, span: f64) -> String {
-    if !v.is_finite() || !span.is_finite() || span <= 0.0 {
-        return format!("{v}");
-    }
-    if v.abs() <= 1e-9 * span {
-        return "0".to_string();
-    }
-    // Plotters puts about ten ticks on an axis: one more decimal than a tenth of the span
-    // needs, then the trailing zeros trimmed.
-    let decimals = (1 - (0.1 * span).log10().floor() as i32).clamp(0, 12) as usize;
-    if (1e-3..1e5).contains(&v.abs()) || decimals <= 6 {
-        let text = format!("{v:.decimals$}");
-        if text.contains('.') {
-            text.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            text
-        }
-    } else {
-        format!("{v:.2e}")
-    }
-}
-
 /// A quantity of the report: a parameter or a measure, by index.
 #[derive(Debug, Clone, Copy)]
 enum Axis {
@@ -1272,26 +1164,6 @@ fn unknown(report: &PathReport, name: &str) -> String {
         report.parameters.join(", "),
         report.measures.join(", ")
     )
-}
-
-/// The range of `values` widened by 5 % on each side (a single value: ±5 % of it, or ±1 at
-/// zero; no values: 0..1).
-pub(super) fn padded(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-        (lo.min(v), hi.max(v))
-    });
-    if lo > hi {
-        return 0.0..1.0;
-    }
-    let span = hi - lo;
-    let pad = if span > 1e-12 * hi.abs().max(lo.abs()) {
-        0.05 * span
-    } else if hi != 0.0 {
-        0.05 * hi.abs()
-    } else {
-        1.0
-    };
-    (lo - pad)..(hi + pad)
 }
 
 /// `x` with five significant digits (`1.3551`, `0.0012346`, `12346`, `1.2346e7`).
@@ -1337,23 +1209,12 @@ mod tests {
     }
 
     #[test]
-    fn tick_labels() {
-        assert_eq!(tick(-1e-18, 0.2), "0");
-        assert_eq!(tick(0.05, 0.2), "0.05");
-        assert_eq!(tick(-0.15, 0.2), "-0.15");
-        assert_eq!(tick(-0.0125, 0.085), "-0.0125");
-        assert_eq!(tick(20.0, 46.0), "20");
-        assert_eq!(tick(0.30000000000000004, 1.0), "0.3");
-        assert_eq!(tick(2e-9, 4e-9), "2.00e-9");
-    }
-
-    #[test]
     fn labels_stack_where_they_would_overlap() {
         // Far apart: all above, at the base gap. Close: above, below, then stacked above.
-        let (placed, need) = place_labels([(0.0, 10), (100.0, 10)].into_iter());
+        let (placed, need) = place_labels([(0.0, 72.0), (100.0, 72.0)].into_iter());
         assert_eq!(placed, [(true, 12), (true, 12)]);
         assert!((need.0 - (12.0 + 72.0 + 4.0)).abs() < 1e-9 && need.1 == 0.0);
-        let (placed, _) = place_labels([(0.0, 10), (3.0, 10), (6.0, 10)].into_iter());
+        let (placed, _) = place_labels([(0.0, 72.0), (3.0, 72.0), (6.0, 72.0)].into_iter());
         assert_eq!(placed[0], (true, 12));
         assert_eq!(placed[1], (false, 12));
         assert!(placed[2].0 && placed[2].1 > 12 + 72, "{placed:?}");
@@ -1394,39 +1255,5 @@ mod tests {
         let rows = [(0, None), (1, Some(2)), (2, Some(2))];
         let runs = index_runs(&rows, &path[..3], &[]);
         assert_eq!(runs, [(Some(2), path[..3].to_vec())]);
-    }
-
-    #[test]
-    fn marker_labels_do_not_pile_up() {
-        // Three labels at one point, one far away: the three take different heights whose
-        // boxes do not overlap; the far one keeps its preferred place.
-        let labels = [
-            (100.0, 100.0, 10, false),
-            (100.0, 100.0, 10, false),
-            (102.0, 101.0, 10, true),
-            (600.0, 100.0, 10, false),
-        ];
-        let at = place_marker_labels(&labels);
-        assert_eq!(at[0], (8, -22));
-        assert_eq!(at[3], (8, -22));
-        let tops: Vec<f64> = at[..3]
-            .iter()
-            .zip(&labels)
-            .map(|(o, l)| l.1 + f64::from(o.1))
-            .collect();
-        for i in 0..3 {
-            for j in 0..i {
-                assert!((tops[i] - tops[j]).abs() >= MARKER_LINE, "{tops:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn padded_ranges() {
-        assert_eq!(padded([1.0, 3.0].into_iter()), 0.9..3.1);
-        assert_eq!(padded(std::iter::empty()), 0.0..1.0);
-        assert_eq!(padded([0.0].into_iter()), -1.0..1.0);
-        let r = padded([2.0].into_iter());
-        assert!(r.start < 2.0 && r.end > 2.0);
     }
 }

@@ -450,6 +450,9 @@ pub struct PrimaryPath {
     pub scene: String,
     /// The scene's group.
     pub group: String,
+    /// The mesh, as [`MeshInfo::describe`](super::MeshInfo::describe) names it (empty
+    /// where not known).
+    pub mesh: String,
     /// The control's name.
     pub control: String,
     /// Parameter names, in order.
@@ -467,6 +470,7 @@ impl PrimaryPath {
         Self {
             scene: report.scene.clone(),
             group: report.group.clone(),
+            mesh: report.mesh.describe(),
             control: report.control.clone(),
             parameters: report.parameters.clone(),
             values: report

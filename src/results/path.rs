@@ -19,6 +19,16 @@ pub struct MeshInfo {
     pub order: usize,
 }
 
+impl MeshInfo {
+    /// `disc, 1792 triangles, group C7v`: the mesh as a figure's caption names it.
+    pub fn describe(&self) -> String {
+        format!(
+            "{}, {} triangles, group {}",
+            self.generator, self.elements, self.group
+        )
+    }
+}
+
 /// One converged point of the path.
 #[derive(Debug, Clone, Serialize)]
 pub struct PathRow {

@@ -1,0 +1,268 @@
+//! The figures memstab writes, checked as a reader would: every SVG of fresh runs of small
+//! bundled scenes is well-formed XML with the `<svg>` root; its layout (written by the
+//! figure builder into the SVG) has no two labels overlapping, no label on the legend or
+//! the inset, none left out, every label drawn as a `<text>`, a legend entry for every marker
+//! kind drawn and none for a kind not drawn; the caption names the scene and the mesh. The
+//! Paper 4 cap's path puts its cluster of critical points at the fold into an inset.
+
+use memstab::output::{read_layout, Layout};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Runs `memstab run scenes/<scene>` into a fresh directory under `root`; returns it.
+fn run(root: &Path, scene: &str) -> PathBuf {
+    let name = Path::new(scene).file_stem().unwrap().to_string_lossy();
+    let out = root.join(name.as_ref());
+    let o = Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(["run", &format!("scenes/{scene}"), "--out"])
+        .arg(&out)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the memstab binary runs");
+    assert!(
+        o.status.success(),
+        "memstab run {scene}: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
+/// Every `.svg` under `dir`, sorted.
+fn svgs(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(svgs(&p));
+        } else if p.extension().is_some_and(|x| x == "svg") {
+            out.push(p);
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Checks that `svg` is well-formed XML (one root element, `svg`; matching tags; valid
+/// attributes and references) and returns the text of its `<text>` elements.
+fn well_formed(svg: &str, what: &str) -> Vec<String> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(svg);
+    reader.config_mut().check_end_names = true;
+    let (mut depth, mut roots, mut in_text) = (0usize, 0usize, false);
+    let mut texts: Vec<String> = Vec::new();
+    let check_attributes = |e: &quick_xml::events::BytesStart| {
+        for a in e.attributes().with_checks(true) {
+            let a = a.unwrap_or_else(|err| panic!("{what}: bad attribute: {err}"));
+            a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                .unwrap_or_else(|err| panic!("{what}: bad attribute value: {err}"));
+        }
+    };
+    loop {
+        match reader.read_event() {
+            Err(e) => panic!(
+                "{what}: not well-formed at byte {}: {e}",
+                reader.buffer_position()
+            ),
+            Ok(Event::Eof) => break,
+            Ok(Event::Start(e)) => {
+                if depth == 0 {
+                    roots += 1;
+                    assert_eq!(e.name().as_ref(), b"svg", "{what}: the root is not <svg>");
+                }
+                check_attributes(&e);
+                depth += 1;
+                if e.name().as_ref() == b"text" {
+                    in_text = true;
+                    texts.push(String::new());
+                }
+            }
+            Ok(Event::Empty(e)) => {
+                assert!(depth > 0, "{what}: an element outside the root");
+                check_attributes(&e);
+            }
+            Ok(Event::End(e)) => {
+                assert!(depth > 0, "{what}: an end tag without a start");
+                depth -= 1;
+                if e.name().as_ref() == b"text" {
+                    in_text = false;
+                }
+            }
+            Ok(Event::Text(t)) => {
+                let raw = t.decode().expect("UTF-8");
+                assert!(
+                    depth > 0 || raw.trim().is_empty(),
+                    "{what}: text outside the root"
+                );
+                if in_text {
+                    if let Some(last) = texts.last_mut() {
+                        last.push_str(&raw);
+                    }
+                }
+            }
+            Ok(Event::GeneralRef(r)) => {
+                let name = r.decode().expect("UTF-8");
+                let c = match name.as_ref() {
+                    "lt" => Some('<'),
+                    "gt" => Some('>'),
+                    "amp" => Some('&'),
+                    "quot" => Some('"'),
+                    "apos" => Some('\''),
+                    _ => r
+                        .resolve_char_ref()
+                        .unwrap_or_else(|e| panic!("{what}: bad reference &{name};: {e}")),
+                };
+                let c = c.unwrap_or_else(|| panic!("{what}: unknown entity &{name};"));
+                if in_text {
+                    if let Some(last) = texts.last_mut() {
+                        last.push(c);
+                    }
+                }
+            }
+            Ok(_) => {}
+        }
+    }
+    assert_eq!(depth, 0, "{what}: {depth} elements left open");
+    assert_eq!(roots, 1, "{what}: {roots} root elements");
+    texts.iter().map(|t| t.trim().to_string()).collect()
+}
+
+/// The layout's promises: labels apart, off the legend and inset, on the canvas, drawn;
+/// the legend's marker entries exactly the kinds drawn; a caption naming the mesh.
+fn check_layout(layout: &Layout, texts: &[String], what: &str) {
+    let canvas =
+        memstab::output::Rect::at(0.0, 0.0, f64::from(layout.width), f64::from(layout.height));
+    assert!(
+        layout.dropped.is_empty(),
+        "{what}: labels left out: {:?}",
+        layout.dropped
+    );
+    for (i, a) in layout.labels.iter().enumerate() {
+        assert!(canvas.holds(&a.rect), "{what}: {:?} off the canvas", a.text);
+        for b in &layout.labels[..i] {
+            assert!(
+                !a.rect.overlaps(&b.rect),
+                "{what}: labels {:?} {:?} and {:?} {:?} overlap",
+                a.text,
+                a.rect,
+                b.text,
+                b.rect
+            );
+        }
+        if let Some(l) = layout.legend_box {
+            assert!(!a.rect.overlaps(&l), "{what}: {:?} on the legend", a.text);
+        }
+        if let (Some(inset), false) = (layout.inset, a.in_inset) {
+            assert!(
+                !a.rect.overlaps(&inset),
+                "{what}: {:?} on the inset",
+                a.text
+            );
+        }
+        assert!(
+            texts.contains(&a.text),
+            "{what}: the label {:?} is not drawn",
+            a.text
+        );
+    }
+    let mut drawn = layout.marker_kinds.clone();
+    let mut shown = layout.legend_markers.clone();
+    drawn.sort();
+    shown.sort();
+    assert_eq!(drawn, shown, "{what}: marker kinds drawn and in the legend");
+    for k in &shown {
+        assert!(
+            layout.legend.contains(k) && texts.iter().any(|t| t == k),
+            "{what}: no legend entry {k:?} in {:?}",
+            layout.legend
+        );
+    }
+    for entry in &layout.legend {
+        assert!(
+            texts.iter().any(|t| t == entry),
+            "{what}: legend entry {entry:?} not drawn"
+        );
+    }
+    assert!(
+        layout.caption.contains("triangles") && texts.contains(&layout.caption),
+        "{what}: caption {:?}",
+        layout.caption
+    );
+}
+
+/// Checks every SVG under `dir`; returns their layouts by file name.
+fn check_all(dir: &Path) -> Vec<(String, Layout)> {
+    let files = svgs(dir);
+    assert!(!files.is_empty(), "no SVG in {}", dir.display());
+    files
+        .iter()
+        .map(|f| {
+            let what = f.display().to_string();
+            let svg = std::fs::read_to_string(f).unwrap();
+            let texts = well_formed(&svg, &what);
+            let layout = read_layout(&svg).unwrap_or_else(|| panic!("{what}: no layout"));
+            check_layout(&layout, &texts, &what);
+            let name = f.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+            (name, layout)
+        })
+        .collect()
+}
+
+#[test]
+fn every_figure_of_the_bundled_scenes_is_well_formed_and_legible() {
+    let root = tempfile::tempdir().unwrap();
+    let mut checked = Vec::new();
+    for scene in [
+        "balloon.toml",
+        "ponding.toml",
+        "balloon_deflation.toml",
+        "disc_fluid_above.toml",
+        "disc_upward.toml",
+        "thesis/paper1_disc_limit_curve_radius.toml",
+        "thesis/paper1_disc_irregular_diagram.toml",
+    ] {
+        let dir = run(root.path(), scene);
+        for (name, _) in check_all(&dir) {
+            checked.push(format!("{scene}: {name}"));
+        }
+    }
+    // The kinds of figure: a path, a spectrum, deflation's solutions, a critical curve, a
+    // bifurcation diagram with its branches.
+    for f in [
+        "balloon.toml: path.svg",
+        "ponding.toml: path.svg",
+        "balloon_deflation.toml: deflation.svg",
+        "thesis/paper1_disc_limit_curve_radius.toml: curve.svg",
+        "thesis/paper1_disc_irregular_diagram.toml: diagram.svg",
+    ] {
+        assert!(checked.iter().any(|c| c == f), "{f} not in {checked:?}");
+    }
+}
+
+#[test]
+fn the_spinning_cap_zooms_on_its_critical_points_at_the_fold() {
+    let root = tempfile::tempdir().unwrap();
+    let dir = run(root.path(), "thesis/paper4_spinning_cap.toml");
+    let layouts = check_all(&dir);
+    let (_, path) = layouts.iter().find(|(n, _)| n == "path.svg").unwrap();
+    let inset = path.inset.expect("an inset");
+    let zoomed: Vec<&str> = path
+        .labels
+        .iter()
+        .filter(|l| l.in_inset)
+        .map(|l| l.text.as_str())
+        .collect();
+    // The m = 4 pair (B2, B1) and E3 sit within a label's height of the fold on the page.
+    for text in ["simple B2 m = 4", "simple B1 m = 4"] {
+        assert!(
+            zoomed.contains(&text),
+            "{text} not in the inset: {zoomed:?}"
+        );
+    }
+    for l in path.labels.iter().filter(|l| l.in_inset) {
+        assert!(inset.holds(&l.rect), "{} outside the inset", l.text);
+    }
+    // Every critical point and the turning point has its label.
+    // (the limit point is the turning point, one label for both).
+    assert_eq!(path.labels.len(), 6, "{:?}", path.labels);
+}
