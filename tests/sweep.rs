@@ -496,3 +496,27 @@ fn bad_sweep_files_are_refused_with_one_line_and_nothing_written() {
         text(&o).1
     );
 }
+
+#[test]
+fn the_bundled_sweep_expands_into_its_tasks() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k");
+    let file = Path::new(&scene("sweeps/paper1_disc_k.toml")).to_path_buf();
+    let o = sweep(&file, &out, &["--emit", "slurm"], None);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o).1);
+    let tsv = std::fs::read_to_string(out.join("tasks.tsv")).unwrap();
+    let ks: Vec<&str> = tsv
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').nth(2).unwrap())
+        .collect();
+    assert_eq!(ks, ["0.0", "0.025", "0.05", "0.075", "0.1"]);
+    let scene = std::fs::read_to_string(out.join("run_0003/scene.toml")).unwrap();
+    assert!(
+        scene.contains("k = 0.05") && scene.contains("max = 4.9"),
+        "{scene}"
+    );
+    assert!(std::fs::read_to_string(out.join("sweep.slurm"))
+        .unwrap()
+        .contains("--array=1-5"));
+}

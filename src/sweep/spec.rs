@@ -151,9 +151,11 @@ fn flatten(
             toml::Value::Table(t) => flatten(section, &key, t, lists, out)?,
             toml::Value::Array(_) => out.push((key, v.clone())),
             other if !lists => out.push((key, other.clone())),
-            other => return Err(format!(
+            other => {
+                return Err(format!(
                 "{section}.{key} = {other}: a grid key takes a list of values, e.g. {key} = [1, 2]"
-            )),
+            ))
+            }
         }
     }
     Ok(())
