@@ -171,6 +171,21 @@ fn clear(run: &Path) -> Result<(), SweepError> {
 /// The run of one task's scene into `run`: an error is the task's failure, one line.
 fn execute(run: &Path, scene_file: &Path) -> Result<TaskOutcome, String> {
     let scene = Scene::load(scene_file).map_err(|e| e.to_string())?;
+    let stop = run_scene(scene, run)?;
+    crate::output::add_to_manifest(run, &[scene_file.to_path_buf()], None, "")
+        .map_err(|e| e.to_string())?;
+    Ok(if stop == StopReason::Interrupted {
+        TaskOutcome::Interrupted
+    } else {
+        TaskOutcome::Finished(stop.to_string())
+    })
+}
+
+/// Runs `scene` into the directory `run` (which must exist) as `memstab run` does, its
+/// `[refine]` included, and writes `summary.json` there (what `memstab run --json` prints),
+/// added to the run's manifest; returns why the path stopped. An error is one line: the scene
+/// cannot be built, its start does not converge, a file cannot be written.
+pub fn run_scene(scene: Scene, run: &Path) -> Result<StopReason, String> {
     let compare = |e: CompareError| match e {
         CompareError::Input(m) | CompareError::Failure(m) | CompareError::Interrupted(m) => m,
     };
@@ -204,13 +219,8 @@ fn execute(run: &Path, scene_file: &Path) -> Result<TaskOutcome, String> {
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     let file = run.join(SUMMARY_JSON);
     super::write_text(&file, &format!("{text}\n")).map_err(|e| e.to_string())?;
-    crate::output::add_to_manifest(run, &[file, scene_file.to_path_buf()], None, "")
-        .map_err(|e| e.to_string())?;
-    Ok(if interrupted {
-        TaskOutcome::Interrupted
-    } else {
-        TaskOutcome::Finished(result.report.stop.to_string())
-    })
+    crate::output::add_to_manifest(run, &[file], None, "").map_err(|e| e.to_string())?;
+    Ok(result.report.stop)
 }
 
 /// Runs every task of the sweep in `dir`, `jobs` at a time (with one, in task order and each
