@@ -16,7 +16,8 @@
 //! - [`results`]: typed results; [`output`]: the writers;
 //! - [`reference`](mod@reference): closed forms; [`demo`]: the bundled demo;
 //!   [`bench`](mod@bench): the studies behind
-//!   `memstab bench` (a leaf: nothing else uses it); [`text`]: number formatting.
+//!   `memstab bench` (a leaf: nothing else uses it); [`sweep`]: parameter sweeps, run here
+//!   or by a scheduler, and their collected table (a leaf too); [`text`]: number formatting.
 
 pub use meshes;
 pub use symmetry;
@@ -36,4 +37,5 @@ pub mod results;
 pub mod scene;
 pub mod stability;
 pub mod study;
+pub mod sweep;
 pub mod text;

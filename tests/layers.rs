@@ -18,7 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["adapted", "stability", "output"],
     &["study"],
     &["analysis"],
-    &["bench", "demo"],
+    &["bench", "demo", "sweep"],
 ];
 
 fn layer(module: &str) -> Option<usize> {

@@ -47,6 +47,7 @@ mod stability;
 mod state_fields;
 mod subgroup_path;
 mod surface;
+mod sweep;
 mod tension_field;
 mod thesis;
 mod thesis_curves;

@@ -25,6 +25,7 @@ mod mesh;
 mod run;
 mod spectrum;
 mod summary;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -57,6 +58,10 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Write the full tangent K at the scene's start state in Matrix Market format.
     ExportMatrix(export::ExportArgs),
+    /// A base scene over a grid of its keys: one run per point, here or by a scheduler.
+    Sweep(sweep::SweepArgs),
+    /// A sweep's finished runs in one table and figure; the others listed.
+    Collect(sweep::CollectArgs),
 }
 
 /// Writes one line to stdout; a closed pipe ends the process quietly (exit 0), any other
@@ -141,6 +146,8 @@ pub(crate) fn main() -> ExitCode {
         Command::Compare(args) => compare::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::ExportMatrix(args) => export::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
+        Command::Collect(args) => sweep::collect(&args),
     };
     // A command that a signal stopped (its work cut short at the next safe point, or a
     // solve it ended) exits 130, whatever it returned; bad input stays bad input.

@@ -52,6 +52,7 @@ mod states;
 pub mod store;
 mod surface;
 mod svg;
+mod sweep;
 
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten};
 pub use csv::write_csv;
@@ -88,6 +89,7 @@ pub use svg::{
     write_spectrum_diagram_with, AxisScale, Diagram, Marker, MarkerKind, ReferenceCurve, Segment,
     SPECTRUM_AXIS, ZERO_LINE,
 };
+pub use sweep::{figure_axis, write_sweep_table, COLLECTED_CSV, COLLECTED_RUNS_CSV, COLLECTED_SVG};
 
 use crate::results::PathReport;
 use std::io::{self, Write};

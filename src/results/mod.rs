@@ -19,6 +19,7 @@ mod spectra;
 mod state;
 mod stop;
 mod surface;
+pub mod sweep;
 pub mod validity;
 
 pub use branches::{
