@@ -4,10 +4,11 @@
 //! value, one colour per irrep and wave number).
 
 use super::csv::quote;
-use super::svg::{chart, padded, xml_chars};
+use super::figure::{self, Line, Mark, Plot, Symbol};
+use super::svg::xml_chars;
 use super::{write_whole, Num, OutputError};
 use crate::results::sweep::{SweepPoint, SweepPointKind, SweepTable};
-use plotters::prelude::*;
+use plotters::style::RGBColor;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -216,57 +217,37 @@ fn render(table: &SweepTable, axis: Option<usize>) -> Result<String, Box<dyn std
             .push((x_of(p.task), p.value, p.valid));
         *r += 1;
     }
-    let xs = table.points.iter().map(|p| x_of(p.task));
-    let xr = padded(xs.filter(|x| x.is_finite()));
-    let yr = padded(table.points.iter().map(|p| p.value));
     let x_title = axis.map_or("task", |k| table.keys[k].as_str());
     let y_title = table.control.as_deref().unwrap_or("control");
-    let mut out = String::new();
-    {
-        let root = SVGBackend::with_string(&mut out, (800, 600)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let title = format!("{}: critical and turning values", table.name);
-        let mut chart = chart(&root, &title, x_title, y_title, xr, yr)?;
-        let mut legend_done = vec![false; labels.len()];
-        for ((l, _, _), points) in &mut series {
-            points.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let colour = PALETTE[*l % PALETTE.len()];
-            chart.draw_series(LineSeries::new(
-                points.iter().map(|p| (p.0, p.1)),
-                colour.stroke_width(1),
-            ))?;
-            let drawn = chart.draw_series(points.iter().map(|&(x, y, valid)| {
-                let style = if valid {
-                    colour.filled()
-                } else {
-                    colour.stroke_width(2)
-                };
-                Circle::new((x, y), 4, style)
-            }))?;
-            if !legend_done[*l] {
-                legend_done[*l] = true;
-                drawn
-                    .label(labels[*l].clone())
-                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
-            }
+    let mut plot = Plot::new(
+        format!("{}: critical and turning values", table.name),
+        format!("sweep {} · {} runs", table.name, table.runs.len()),
+        x_title,
+        y_title,
+    );
+    for ((l, _, _), points) in &mut series {
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let colour = PALETTE[*l % PALETTE.len()];
+        plot.lines.push(Line::new(
+            points.iter().map(|p| (p.0, p.1)).collect(),
+            colour,
+            1,
+            None,
+        ));
+        for &(x, y, valid) in points.iter() {
+            let (symbol, kind) = if valid {
+                (Symbol::Disc(colour), labels[*l].clone())
+            } else {
+                (Symbol::Ring(colour), format!("{} (flagged)", labels[*l]))
+            };
+            plot.marks.push(Mark {
+                at: (x, y),
+                symbol,
+                kind,
+                label: String::new(),
+            });
         }
-        if table.points.iter().any(|p| !p.valid) {
-            let grey = RGBColor(90, 90, 90);
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label("flagged: hollow")
-                .legend(move |(x, y)| Circle::new((x + 10, y), 4, grey.stroke_width(2)));
-        }
-        if !labels.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()?;
-        }
-        root.present()?;
     }
-    Ok(out)
+    let (svg, layout) = figure::render(&plot)?;
+    Ok(figure::finish(&svg, &layout))
 }
