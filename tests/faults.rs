@@ -994,7 +994,7 @@ fn each_kind_of_stall_has_its_hint() {
             why: "the last failure".into(),
             kind,
         };
-        let line = memstab::analysis::stall_hint(scene, &stalled, "p", &opts);
+        let line = memstab::study::stall_hint(scene, &stalled, "p", &opts);
         assert!(!line.contains('\n'), "{line}");
         assert!(
             line.starts_with("the path stopped after point 7 (p = 0.5): likely cause: "),
@@ -1058,4 +1058,39 @@ fn twenty_concurrent_runs_into_one_directory_complete_or_are_refused() {
     assert!(completed >= 1, "no run completed");
     assert_eq!(assert_manifest_verifies(&out), "the stretch reached 4");
     assert!(!out.join(memstab::output::LOCK).exists());
+}
+
+/// A branch that cannot leave its point gets the same one line as a stalled path: on the
+/// spinning cap the branches of the E1 double at ω² = 18.0954 stall at their first step, and
+/// each says so and what to try.
+#[test]
+fn a_stalled_branch_names_the_cause() {
+    use memstab::results::StopReason;
+    let text = std::fs::read_to_string(scene("thesis/paper4_spinning_cap.toml")).unwrap()
+        + "\n[analysis.branches]\ndepth = 1\nsteps = 2\n";
+    let scene = memstab::scene::Scene::from_toml_str(&text, "cap").unwrap();
+    let mut study = memstab::study::build(scene).unwrap();
+    let result = memstab::analysis::run(&mut *study, |_, _| {}).unwrap();
+    let branches = result.branches.expect("branches");
+    let stalled: Vec<_> = branches
+        .graph
+        .branches
+        .iter()
+        .filter(|b| matches!(b.stop, StopReason::Stalled(_)))
+        .collect();
+    assert!(!stalled.is_empty(), "no stalled branch");
+    for b in stalled {
+        let hints: Vec<_> = b
+            .warnings
+            .iter()
+            .filter(|w| w.contains("likely cause"))
+            .collect();
+        assert_eq!(hints.len(), 1, "{:?}", b.warnings);
+        assert!(
+            hints[0].contains("the branch could not leave its critical point")
+                && hints[0].contains("[analysis.branches]"),
+            "{}",
+            hints[0]
+        );
+    }
 }

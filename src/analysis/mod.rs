@@ -245,104 +245,15 @@ pub fn run_from(
     if let StopReason::Stalled(s) = &stop {
         let control = study.control().map_or("the control", |c| c.name.as_str());
         let hint = if s.after == 0 && study.start_drifted() {
-            stall_hint_unheld(study.scene(), s, control)
+            crate::study::stall_hint_unheld(study.scene(), s, control)
         } else {
-            stall_hint(study.scene(), s, control, &opts)
+            crate::study::stall_hint(study.scene(), s, control, &opts)
         };
         cx.record.warnings.push(hint);
     }
     let mut result = cx.record.finish(study, stop, stability_note, cx.times);
     study.annotate(&mut result);
     Ok(result)
-}
-
-/// The one line a path stuck at a start accepted at round-off along a near-singular direction
-/// gets: a motion nothing holds, whatever the kind of its failed steps.
-fn stall_hint_unheld(scene: &Scene, stalled: &crate::results::Stalled, control: &str) -> String {
-    format!(
-        "the path could not leave its start point ({control} = {}; every step failed: {}): \
-         likely cause (the start was accepted at round-off, its tangent near-singular): {}",
-        crate::text::num(stalled.control),
-        stalled.why,
-        crate::study::unheld(scene)
-    )
-}
-
-/// The one line a path that stalled gets: which known cause fits the kind
-/// of its last failure, and what to try (`opts`: the options the path ran with; `control`:
-/// the control's name).
-pub fn stall_hint(
-    scene: &Scene,
-    stalled: &crate::results::Stalled,
-    control: &str,
-    opts: &PathOptions,
-) -> String {
-    use crate::results::StepFailure as F;
-    let at = if stalled.after == 0 {
-        format!(
-            "the path could not leave its start point ({control} = {}; every step failed: {})",
-            crate::text::num(stalled.control),
-            stalled.why
-        )
-    } else {
-        format!(
-            "the path stopped after point {} ({control} = {})",
-            stalled.after,
-            crate::text::num(stalled.control)
-        )
-    };
-    let step = crate::text::num(opts.max_step);
-    let planes: Vec<&scene::PlaneEffect> = scene
-        .effects
-        .iter()
-        .filter_map(|e| e.get::<scene::PlaneEffect>())
-        .collect();
-    let why = match stalled.kind {
-        F::BranchJump => format!(
-            "likely cause: a sharp turn of the path (or a bifurcation close by), where the \
-             corrector lands on another piece and the branch-jump guard refuses it; try a \
-             smaller `max-step` in [analysis] (now {step})"
-        ),
-        F::NotConverged if !planes.is_empty() => {
-            let cubic = if planes.iter().all(|p| p.exponent == 3) {
-                "a softer `penalty` of the plane"
-            } else {
-                "the cubic penalty (`exponent = 3` of the plane), whose force starts smoothly"
-            };
-            format!(
-                "likely cause: a contact change (nodes touching or leaving a plane) that the \
-                 corrector cannot cross; try a smaller `max-step` in [analysis] (now {step}) or \
-                 {cubic}"
-            )
-        }
-        F::NotConverged => format!(
-            "likely cause: a stretch of the path too curved for the corrector's budget \
-             (`max-iterations` = {}); try a smaller `max-step` in [analysis] (now {step}) or \
-             a larger `max-iterations`",
-            opts.max_iterations
-        ),
-        F::Diverged => format!(
-            "likely cause: a step too long for the corrector here; try a smaller `max-step` in \
-             [analysis] (now {step})"
-        ),
-        F::Singular if stalled.after == 0 => format!(
-            "likely cause (its tangent is singular there): {}; or a parameter at a degenerate \
-             value",
-            crate::study::unheld(scene)
-        ),
-        F::Singular => format!(
-            "likely cause: {control} reached a degenerate value, where the path's system is \
-             singular (a parameter at zero, a bifurcation of the symmetric block); try a \
-             bound on {control} (`[parameters.{control}] min`/`max`) before it, or a \
-             different start"
-        ),
-        F::Model | F::Degenerate => format!(
-            "likely cause: {control} reached a value the membrane cannot take (a triangle \
-             inverted or collapsed, a volume gone to zero, the membrane inside out); end the \
-             path before it with a bound on {control} (`[parameters.{control}] min`/`max`)"
-        ),
-    };
-    format!("{at}: {why}")
 }
 
 /// What an analysis collects for the report, in the order it finds it.

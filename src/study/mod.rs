@@ -284,6 +284,123 @@ pub fn unheld(scene: &Scene) -> &'static str {
     }
 }
 
+/// The one line a path stuck at a start accepted at round-off along a near-singular direction
+/// gets: a motion nothing holds, whatever the kind of its failed steps.
+pub fn stall_hint_unheld(
+    scene: &Scene,
+    stalled: &crate::results::Stalled,
+    control: &str,
+) -> String {
+    format!(
+        "the path could not leave its start point ({control} = {}; every step failed: {}): \
+         likely cause (the start was accepted at round-off, its tangent near-singular): {}",
+        crate::text::num(stalled.control),
+        stalled.why,
+        unheld(scene)
+    )
+}
+
+/// The one line a branch that stalled gets: at its critical point (it never left it), that
+/// its first step found no state — a direction of its fixed-point space that nothing stiffens
+/// there, or a second branch close by; after some points, the path's hint for the kind of its
+/// last failure, the points numbered from the critical point.
+pub fn branch_stall_hint(
+    scene: &Scene,
+    stalled: &crate::results::Stalled,
+    control: &str,
+    opts: &PathOptions,
+) -> String {
+    if stalled.after == 0 {
+        return format!(
+            "the branch could not leave its critical point ({control} = {}; every first step \
+             failed: {}): likely cause: a direction of the branch's fixed-point space that \
+             nothing stiffens there (a nearly neutral mode, a drift) or another branch close \
+             by; try a smaller `max-step` in [analysis.branches], or switch at a point of the \
+             path of a finer mesh",
+            crate::text::num(stalled.control),
+            stalled.why
+        );
+    }
+    stall_hint(scene, stalled, control, opts).replacen("the path stopped", "the branch stopped", 1)
+}
+
+/// The one line a path that stalled gets: which known cause fits the kind
+/// of its last failure, and what to try (`opts`: the options the path ran with; `control`:
+/// the control's name).
+pub fn stall_hint(
+    scene: &Scene,
+    stalled: &crate::results::Stalled,
+    control: &str,
+    opts: &PathOptions,
+) -> String {
+    use crate::results::StepFailure as F;
+    let at = if stalled.after == 0 {
+        format!(
+            "the path could not leave its start point ({control} = {}; every step failed: {})",
+            crate::text::num(stalled.control),
+            stalled.why
+        )
+    } else {
+        format!(
+            "the path stopped after point {} ({control} = {})",
+            stalled.after,
+            crate::text::num(stalled.control)
+        )
+    };
+    let step = crate::text::num(opts.max_step);
+    let planes: Vec<&scene::PlaneEffect> = scene
+        .effects
+        .iter()
+        .filter_map(|e| e.get::<scene::PlaneEffect>())
+        .collect();
+    let why = match stalled.kind {
+        F::BranchJump => format!(
+            "likely cause: a sharp turn of the path (or a bifurcation close by), where the \
+             corrector lands on another piece and the branch-jump guard refuses it; try a \
+             smaller `max-step` in [analysis] (now {step})"
+        ),
+        F::NotConverged if !planes.is_empty() => {
+            let cubic = if planes.iter().all(|p| p.exponent == 3) {
+                "a softer `penalty` of the plane"
+            } else {
+                "the cubic penalty (`exponent = 3` of the plane), whose force starts smoothly"
+            };
+            format!(
+                "likely cause: a contact change (nodes touching or leaving a plane) that the \
+                 corrector cannot cross; try a smaller `max-step` in [analysis] (now {step}) or \
+                 {cubic}"
+            )
+        }
+        F::NotConverged => format!(
+            "likely cause: a stretch of the path too curved for the corrector's budget \
+             (`max-iterations` = {}); try a smaller `max-step` in [analysis] (now {step}) or \
+             a larger `max-iterations`",
+            opts.max_iterations
+        ),
+        F::Diverged => format!(
+            "likely cause: a step too long for the corrector here; try a smaller `max-step` in \
+             [analysis] (now {step})"
+        ),
+        F::Singular if stalled.after == 0 => format!(
+            "likely cause (its tangent is singular there): {}; or a parameter at a degenerate \
+             value",
+            unheld(scene)
+        ),
+        F::Singular => format!(
+            "likely cause: {control} reached a degenerate value, where the path's system is \
+             singular (a parameter at zero, a bifurcation of the symmetric block); try a \
+             bound on {control} (`[parameters.{control}] min`/`max`) before it, or a \
+             different start"
+        ),
+        F::Model | F::Degenerate => format!(
+            "likely cause: {control} reached a value the membrane cannot take (a triangle \
+             inverted or collapsed, a volume gone to zero, the membrane inside out); end the \
+             path before it with a bound on {control} (`[parameters.{control}] min`/`max`)"
+        ),
+    };
+    format!("{at}: {why}")
+}
+
 impl RunError {
     /// Whether a signal stopped the run before it found anything.
     pub fn interrupted(&self) -> bool {

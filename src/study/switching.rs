@@ -1119,7 +1119,16 @@ pub fn run(study: &MeshStudy, critical: &[CriticalPoint], options: BranchOptions
         top: &top,
         options,
     };
-    let graph = switching.run(critical);
+    let mut graph = switching.run(critical);
+    // A branch that stalled gets the one line its path would: the cause that fits the kind of
+    // its last failed step, and what to try.
+    let name = Study::control(study).map_or_else(|| "the control".to_string(), |c| c.name.clone());
+    for b in &mut graph.branches {
+        if let StopReason::Stalled(s) = &b.stop {
+            let hint = super::branch_stall_hint(&study.scene, s, &name, &switching.options.path);
+            b.warnings.push(hint);
+        }
+    }
     let runs = graph
         .branches
         .iter()
