@@ -479,3 +479,104 @@ fn a_refined_level_that_fails_is_recorded_and_the_run_reports_the_others() {
     );
     assert!(summary.contains("no refined level ran"), "{summary}");
 }
+
+/// Paper 1's disc from below on the thesis mesh (C7v, 1 792 triangles): `run --refine
+/// --continuum` gives the fold and the first two doubles the values `compare --meshes
+/// axisymmetric,C7v --refine` finds on the same two meshes, and error estimates (value less
+/// the Richardson value) within 1 % of their distance from the meridian's value there; the
+/// points farther along the path, which the finer mesh does not have, are labelled not
+/// mesh-converged.
+#[test]
+fn the_disc_from_below_refined_agrees_with_compare_and_labels_its_post_fold_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/disc_fluid_below.toml");
+    let out = dir.path().join("below");
+    run(&[
+        "run",
+        scene,
+        "--refine",
+        "--continuum",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let refine = json(&out.join("refine.json"));
+    let critical = refine["critical"].as_array().unwrap();
+    let compare = memstab(&[
+        "compare",
+        scene,
+        "--meshes",
+        "axisymmetric,C7v",
+        "--refine",
+        "--json",
+    ]);
+    assert!(compare.status.success(), "{}", text(&compare.stderr));
+    let compare: Value = serde_json::from_slice(&compare.stdout).unwrap();
+    // The C7v mesh's levels in compare: each critical value per level, by irrep.
+    let c7v = compare["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["label"] == "C7v")
+        .unwrap();
+    let level = |k: usize| -> Vec<(String, f64)> {
+        c7v["levels"][k]["critical"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| {
+                (
+                    c["irrep"].as_str().unwrap().to_string(),
+                    c["value"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    let reference: Vec<f64> = compare["meshes"][0]["levels"][0]["critical"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["value"].as_f64().unwrap())
+        .collect();
+    let mut converged = 0;
+    for p in critical {
+        let irrep = p["irreps"][0].as_str().unwrap();
+        // The coarse run's critical point number (1-based, in path order).
+        let number = p["points"][0].as_u64().unwrap();
+        if number <= 3 {
+            // The fold and the first two doubles (E1, E2) on its far side: the same value on
+            // both levels as compare's.
+            for l in 0..2 {
+                let v = p["values"][l].as_f64().unwrap();
+                assert!(
+                    level(l)
+                        .iter()
+                        .any(|(i, w)| i == irrep && (v - w).abs() <= 1e-9 * w.abs()),
+                    "{irrep} {v} not among {:?}",
+                    level(l)
+                );
+            }
+            assert_eq!(p["estimate"]["basis"], "richardson", "{p}");
+            // The error estimate against the distance from the meridian (compare's
+            // continuum): within 1 %.
+            let continuum = p["continuum"].as_f64().unwrap();
+            assert!(reference
+                .iter()
+                .any(|r| (r - continuum).abs() <= 1e-12 * r.abs()));
+            for l in 0..2 {
+                let error = p["errors"][l].as_f64().unwrap();
+                let distance = (p["values"][l].as_f64().unwrap() - continuum).abs();
+                assert!(
+                    (error - distance).abs() <= 0.01 * distance,
+                    "{irrep}: {error} vs {distance}"
+                );
+            }
+            converged += 1;
+        } else {
+            // Farther down the path, where the meridian and the finer mesh part ways with it.
+            assert_eq!(p["estimate"]["basis"], "not-mesh-converged", "{p}");
+        }
+    }
+    assert_eq!(converged, 3);
+    assert!(critical.len() > 3, "no point farther along: {critical:?}");
+}
