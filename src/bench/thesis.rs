@@ -298,6 +298,10 @@ pub const THESIS_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/thesis/paper3_gas_fluid_squeeze_linear.toml"),
     ),
     (
+        "paper3_gas_fluid_squeeze_linear_diagram.toml",
+        include_str!("../../scenes/thesis/paper3_gas_fluid_squeeze_linear_diagram.toml"),
+    ),
+    (
         "paper3_gas_fluid_squeeze_linear_thesis_mesh.toml",
         include_str!("../../scenes/thesis/paper3_gas_fluid_squeeze_linear_thesis_mesh.toml"),
     ),
