@@ -446,6 +446,14 @@ impl<'a> Crossings<'a> {
                     (sides[0].1.as_slice(), sides[0].2.as_slice()),
                     (sides[1].1.as_slice(), sides[1].2.as_slice()),
                 );
+                // The bracket's ends: the nearest trial states on either side of the change.
+                let bracket = Bracket {
+                    width,
+                    ends: [
+                        (sides[0].1.clone(), sides[0].2.clone()),
+                        (sides[1].1.clone(), sides[1].2.clone()),
+                    ],
+                };
                 if g_best.abs() > JUMP_EIGENVALUE * a.spectrum.scale
                     && switched.is_some_and(|n| n > 0)
                 {
@@ -470,13 +478,6 @@ impl<'a> Crossings<'a> {
                             "the states of the jump could not be evaluated",
                         ));
                         continue;
-                    };
-                    let bracket = Bracket {
-                        width,
-                        ends: [
-                            (sides[0].1.clone(), sides[0].2.clone()),
-                            (sides[1].1.clone(), sides[1].2.clone()),
-                        ],
                     };
                     match self.critical_point(
                         mu,
@@ -524,13 +525,6 @@ impl<'a> Crossings<'a> {
                 let Some((u, p, sp)) = evaluated else {
                     warnings.push(not_localised("the best point could not be evaluated"));
                     continue;
-                };
-                let bracket = Bracket {
-                    width,
-                    ends: [
-                        (sides[0].1.clone(), sides[0].2.clone()),
-                        (sides[1].1.clone(), sides[1].2.clone()),
-                    ],
                 };
                 let at = (u, p, &sp, g_best);
                 match self.critical_point(mu, k, at, bracket, after_step, control_turns) {

@@ -5,10 +5,9 @@
 
 use super::csv::quote;
 use super::figure::{self, Line, Mark, Plot, Symbol};
-use super::svg::xml_chars;
+use super::svg::{xml_chars, PALETTE};
 use super::{write_whole, Num, OutputError};
 use crate::results::sweep::{SweepPoint, SweepPointKind, SweepTable};
-use plotters::style::RGBColor;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -164,17 +163,6 @@ fn label(p: &SweepPoint) -> String {
 /// A series of the figure: its label's number, the values of the other keys, the rank of
 /// its points among their runs' points of that label; its points are (x, y, valid).
 type SeriesKey = (usize, String, usize);
-
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(31, 87, 180),
-    RGBColor(200, 30, 30),
-    RGBColor(20, 140, 60),
-    RGBColor(230, 130, 0),
-    RGBColor(120, 60, 170),
-    RGBColor(0, 150, 160),
-    RGBColor(150, 90, 40),
-    RGBColor(90, 90, 90),
-];
 
 /// The points' values against the swept key `axis` (the task number without one): a series
 /// per label, per values of the other keys and per rank of the point among the run's points

@@ -224,6 +224,8 @@ impl std::fmt::Display for Verdict {
             VerdictKind::Split => f.write_str("split")?,
         }
         match self.missing {
+            // Its partner is the second piece's: on another path, named below.
+            Some(Missing::Partner) if self.piece_gap.is_some() => {}
             Some(Missing::Partner) => f.write_str("; partner not found in range")?,
             Some(Missing::Image) => f.write_str("; an image not found in range")?,
             None => {}
@@ -232,7 +234,11 @@ impl std::fmt::Display for Verdict {
             f.write_str("; met on the other side of the path's turn")?;
         }
         if let Some(gap) = self.piece_gap {
-            write!(f, "; a second piece beside it at RMS distance {}", sci(gap))?;
+            write!(
+                f,
+                "; its partner lies on a second piece beside it, at RMS distance {}",
+                sci(gap)
+            )?;
         }
         if self.on_piece {
             f.write_str("; on the second piece beside the imperfect fold")?;
@@ -819,10 +825,14 @@ mod tests {
         let (rungs, _) = match_rungs(&[reference, other], 0.0);
         let m2 = &rungs[0].images[1];
         assert_eq!(m2.levels[0].verdict.piece_gap, Some(0.08));
-        assert!(m2.levels[0]
-            .verdict
-            .to_string()
-            .ends_with("a second piece beside it at RMS distance 8.000e-2"));
+        let verdict = m2.levels[0].verdict.to_string();
+        assert!(
+            verdict.ends_with(
+                "its partner lies on a second piece beside it, at RMS distance 8.000e-2"
+            ),
+            "{verdict}"
+        );
+        assert!(!verdict.contains("not found"), "{verdict}");
         assert_eq!(m2.order, Some(2.0));
         let m1 = &rungs[1].images[1].levels[0];
         assert_eq!(m1.points.len(), 2);
