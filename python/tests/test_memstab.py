@@ -118,7 +118,9 @@ def test_the_model_residual_and_tangent_agree_and_vanish_at_the_start():
 
 
 def test_a_run_releases_the_gil():
-    scene = tiny_disc(12)
+    # Held through the run, the GIL would let the main thread wake once, after it: one gap
+    # as long as the run. Released, the main thread keeps waking every few milliseconds.
+    scene = tiny_disc(24)
     done = threading.Event()
     out = {}
 
@@ -137,5 +139,6 @@ def test_a_run_releases_the_gil():
         gaps.append(now - last)
         last = now
     thread.join()
-    assert out["seconds"] > 0.2, "the run is long enough to tell"
+    # Long enough to tell: many of the main thread's 5 ms sleeps fit into it.
+    assert out["seconds"] > 20 * 0.005, out["seconds"]
     assert len(gaps) > 10 and max(gaps) < 0.5 * out["seconds"], (max(gaps), out["seconds"])
