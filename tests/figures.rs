@@ -262,6 +262,12 @@ fn the_spinning_cap_zooms_on_its_critical_points_at_the_fold() {
     for l in path.labels.iter().filter(|l| l.in_inset) {
         assert!(inset.holds(&l.rect), "{} outside the inset", l.text);
     }
+    // A mode figure for each of the path's six critical points.
+    let modes = layouts
+        .iter()
+        .filter(|(n, _)| n.starts_with("critical_") && n.ends_with("_mode.svg"))
+        .count();
+    assert_eq!(modes, 6);
     // Every critical point and the turning point has its label.
     // (the limit point is the turning point, one label for both).
     assert_eq!(path.labels.len(), 6, "{:?}", path.labels);
@@ -294,6 +300,20 @@ fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
         "{:?}",
         curve.legend
     );
+    // The critical point's mode, seen from above with its colour bar, titled with its kind,
+    // irrep, wave number and isotropy (the layout checks above covered it).
+    assert!(layouts.iter().any(|(n, _)| n == "critical_01_mode.svg"));
+    let mode = std::fs::read_to_string(dir.join("critical_01_mode.svg")).unwrap();
+    let texts = well_formed(&mode, "critical_01_mode.svg");
+    for text in [
+        "mode of the limit point in A1, m = 0, isotropy C7v",
+        "normal component / max",
+        "+1",
+        "−1",
+    ] {
+        assert!(texts.iter().any(|t| t == text), "{text} not in {texts:?}");
+    }
+    assert!(dir.join("critical_01_mode.png").exists());
 
     // The surface's regions: one legend entry per index its triangles are shaded by (the
     // largest index of their corners), and none other.
