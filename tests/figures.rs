@@ -262,7 +262,103 @@ fn the_spinning_cap_zooms_on_its_critical_points_at_the_fold() {
     for l in path.labels.iter().filter(|l| l.in_inset) {
         assert!(inset.holds(&l.rect), "{} outside the inset", l.text);
     }
+    // A mode figure for each of the path's six critical points.
+    let modes = layouts
+        .iter()
+        .filter(|(n, _)| n.starts_with("critical_") && n.ends_with("_mode.svg"))
+        .count();
+    assert_eq!(modes, 6);
     // Every critical point and the turning point has its label.
     // (the limit point is the turning point, one label for both).
     assert_eq!(path.labels.len(), 6, "{:?}", path.labels);
+}
+
+#[test]
+fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
+    let root = tempfile::tempdir().unwrap();
+    // The disc's path in h reaches the limit curve stable and turns back unstable: both of
+    // its states next to the curve's first point are ringed and labelled with their index.
+    let dir = run(root.path(), "thesis/paper1_disc_limit_curve_radius.toml");
+    let layouts = check_all(&dir);
+    let (_, curve) = layouts.iter().find(|(n, _)| n == "curve.svg").unwrap();
+    for kind in [
+        "state of the path in h: stable",
+        "state of the path in h: unstable",
+    ] {
+        assert!(
+            curve.legend_markers.iter().any(|k| k == kind),
+            "{kind} not in {:?}",
+            curve.legend_markers
+        );
+    }
+    let labels: Vec<&str> = curve.labels.iter().map(|l| l.text.as_str()).collect();
+    for text in ["stable (index 0)", "unstable (index 1)"] {
+        assert!(labels.contains(&text), "{text} not in {labels:?}");
+    }
+    assert!(
+        curve.legend.iter().any(|e| e.contains("limit curve")),
+        "{:?}",
+        curve.legend
+    );
+    // The critical point's mode, seen from above with its colour bar, titled with its kind,
+    // irrep, wave number and isotropy (the layout checks above covered it).
+    assert!(layouts.iter().any(|(n, _)| n == "critical_01_mode.svg"));
+    let mode = std::fs::read_to_string(dir.join("critical_01_mode.svg")).unwrap();
+    let texts = well_formed(&mode, "critical_01_mode.svg");
+    for text in [
+        "mode of the limit point in A1, m = 0, isotropy C7v",
+        "normal component / max",
+        "+1",
+        "−1",
+    ] {
+        assert!(texts.iter().any(|t| t == text), "{text} not in {texts:?}");
+    }
+    assert!(dir.join("critical_01_mode.png").exists());
+
+    // The surface's regions: one legend entry per index its triangles are shaded by (the
+    // largest index of their corners), and none other.
+    let dir = run(root.path(), "thesis/paper2_solution_surface_f8.toml");
+    let layouts = check_all(&dir);
+    let (_, surface) = layouts.iter().find(|(n, _)| n == "surface.svg").unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("surface.json")).unwrap()).unwrap();
+    let index: Vec<Option<u64>> = json["paths"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|p| p["vertices"].as_array().unwrap())
+        .map(|v| v["index"].as_u64())
+        .collect();
+    let mut regions: Vec<Option<u64>> = json["triangles"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            t.as_array()
+                .unwrap()
+                .iter()
+                .map(|v| index[v.as_u64().unwrap() as usize])
+                .max()
+                .flatten()
+        })
+        .collect();
+    regions.sort();
+    regions.dedup();
+    let expected: Vec<String> = regions
+        .iter()
+        .map(|r| match r {
+            None => "region: index not computed".to_string(),
+            Some(0) => "stable region (index 0)".to_string(),
+            Some(i) => format!("unstable region (index {i})"),
+        })
+        .collect();
+    let shown: Vec<String> = surface
+        .legend
+        .iter()
+        .filter(|e| e.contains("region"))
+        .cloned()
+        .collect();
+    assert_eq!(shown, expected);
+    // This surface has both: the stable sheets and the unstable one between the folds.
+    assert!(expected.len() >= 2, "{expected:?}");
 }

@@ -356,6 +356,7 @@ impl Analysis for Curve {
         let files = output::write_curve_with(
             out,
             curve,
+            Some(&result.report),
             &output::Scales::of_scene(scene),
             &output::caption_of(&result.report),
         )?;

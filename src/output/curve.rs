@@ -4,7 +4,7 @@ use super::figure::{self, finish, Entry, Layout, Line, Mark, Plot, Sample, Symbo
 use super::scales::Scales;
 use super::svg::{xml_chars, AxisScale};
 use super::{write_whole, Num, OutputError};
-use crate::results::{CurveEventKind, CurveReport};
+use crate::results::{CriticalKind, CurveEventKind, CurveReport, PathReport};
 use plotters::style::colors::BLACK;
 use plotters::style::RGBColor;
 use std::io;
@@ -62,18 +62,22 @@ fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
 /// [`OutputError::Invalid`] for a non-finite value (nothing is written), else as the other
 /// writers.
 pub fn write_curve(dir: &Path, curve: &CurveReport) -> Result<Vec<PathBuf>, OutputError> {
-    write_curve_with(dir, curve, &Scales::default(), "")
+    write_curve_with(dir, curve, None, &Scales::default(), "")
 }
 
 /// As [`write_curve`], `curve.svg`'s axes titled and scaled by `scales` (the control's and
 /// the second parameter's dimensionless groups, where the scene fixes them) and `caption`
-/// (the scene and its mesh) written below the plot.
+/// (the scene and its mesh) written below the plot. `path`, the path in the control that found
+/// the curve's first point, shows which side of the curve is stable where it is known: the
+/// path's states either side of that point are ringed and labelled with their index, and a
+/// note says so when the path's index was not computed.
 ///
 /// # Errors
 /// As [`write_curve`].
 pub fn write_curve_with(
     dir: &Path,
     curve: &CurveReport,
+    path: Option<&PathReport>,
     scales: &Scales,
     caption: &str,
 ) -> Result<Vec<PathBuf>, OutputError> {
@@ -98,7 +102,8 @@ pub fn write_curve_with(
         scales.or_name(&curve.control),
         scales.or_name(&curve.second),
     );
-    let (svg, layout) = render(curve, c, s, &axes, caption)
+    let sides = path.map(|p| sides(curve, p, c, s)).unwrap_or_default();
+    let (svg, layout) = render(curve, (c, s), &sides, &axes, caption)
         .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
     let svg = finish(&svg, &layout);
     write_whole(&csv, |w| {
@@ -139,11 +144,51 @@ pub fn write_curve_with(
     Ok(vec![csv, json, svg_path, png])
 }
 
-/// The second parameter (column `s`) against the control (column `c`), events marked.
+/// A state of the path next to the curve's first point: (control, second) and its index.
+type Side = ((f64, f64), Option<usize>);
+
+/// The path's states either side of the curve's first point (its last critical point in the
+/// curve's irrep lies between path steps k and k + 1): the rows k and k + 1 that exist, in
+/// (control, second). Where the path crosses a bifurcation curve the two lie on either side of
+/// it; where it turns at a limit curve both lie on the side the path came from.
+fn sides(curve: &CurveReport, path: &PathReport, c: usize, s: usize) -> Vec<Side> {
+    let (Some(pc), Some(ps)) = (
+        path.parameters
+            .iter()
+            .position(|p| *p == curve.parameters[c]),
+        path.parameters
+            .iter()
+            .position(|p| *p == curve.parameters[s]),
+    ) else {
+        return Vec::new();
+    };
+    let Some(cp) = path.critical.iter().rev().find(|p| p.irrep == curve.irrep) else {
+        return Vec::new();
+    };
+    let k = cp.after_step;
+    path.rows
+        .iter()
+        .filter(|r| r.step == k || r.step == k + 1)
+        .filter(|r| r.parameters[pc] != cp.parameters[pc] || r.parameters[ps] != cp.parameters[ps])
+        .map(|r| ((r.parameters[pc], r.parameters[ps]), r.index))
+        .collect()
+}
+
+/// The colour of a path state's index: blue stable, orange unstable, grey not computed.
+fn side_colour(index: Option<usize>) -> RGBColor {
+    match index {
+        Some(0) => RGBColor(31, 87, 180),
+        Some(_) => RGBColor(230, 120, 20),
+        None => RGBColor(150, 150, 150),
+    }
+}
+
+/// The second parameter (column `s`) against the control (column `c`), events marked, the
+/// path's states `sides` next to the first point with their index.
 fn render(
     curve: &CurveReport,
-    c: usize,
-    s: usize,
+    (c, s): (usize, usize),
+    sides: &[Side],
     (xs, ys): &(AxisScale, AxisScale),
     caption: &str,
 ) -> Result<(String, Layout), Box<dyn std::error::Error>> {
@@ -161,6 +206,46 @@ fn render(
         format!("critical curve ({} in {})", curve.kind, curve.irrep),
         Sample::Line(blue, 2, None),
     ));
+    // The path's states next to the first point, ringed in the colour of their index.
+    let mut known = false;
+    for &((x, y), index) in sides {
+        let colour = side_colour(index);
+        let here = (x * xs.factor, y * ys.factor);
+        let (kind, label) = match index {
+            Some(0) => (
+                format!("state of the path in {}: stable", curve.control),
+                "stable (index 0)".to_string(),
+            ),
+            Some(i) => (
+                format!("state of the path in {}: unstable", curve.control),
+                format!("unstable (index {i})"),
+            ),
+            None => (
+                format!("state of the path in {}: index not computed", curve.control),
+                String::new(),
+            ),
+        };
+        known |= index.is_some();
+        plot.marks.push(Mark {
+            at: here,
+            symbol: Symbol::Ring(colour),
+            kind,
+            label,
+        });
+    }
+    if known {
+        if curve.kind == CriticalKind::LimitPoint {
+            plot.legend.push(Entry::new(
+                "at a limit curve the branch turns: both its states lie on one side",
+                Sample::Note,
+            ));
+        }
+    } else {
+        plot.legend.push(Entry::new(
+            "stability either side of the curve: not computed",
+            Sample::Note,
+        ));
+    }
     for e in &curve.events {
         let (symbol, kind) = match e.kind {
             CurveEventKind::Cusp => (Symbol::Disc(RGBColor(200, 30, 30)), "cusp"),

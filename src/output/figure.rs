@@ -279,6 +279,8 @@ pub enum Sample {
     Band(RGBAColor, u32),
     /// A symbol.
     Symbol(Symbol),
+    /// A filled square of this colour: a shaded region.
+    Patch(RGBAColor),
     /// Nothing: the entry is a note.
     Note,
 }
@@ -790,6 +792,13 @@ pub(super) fn draw_legend(
             Sample::Symbol(s) => {
                 s.draw(root, ((a + z) / 2, y))?;
                 symbols.push(e.text.clone());
+            }
+            Sample::Patch(c) => {
+                root.draw(&Rectangle::new([(a, y - 7), (z, y + 7)], c.filled()))?;
+                root.draw(&Rectangle::new(
+                    [(a, y - 7), (z, y + 7)],
+                    RGBColor(120, 120, 120).stroke_width(1),
+                ))?;
             }
             Sample::Note => {}
         }

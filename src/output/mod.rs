@@ -41,6 +41,7 @@ mod json;
 mod lock;
 mod manifest;
 mod matrix_market;
+mod mode;
 mod partners;
 mod png;
 mod progress;

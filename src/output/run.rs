@@ -47,7 +47,8 @@ pub struct Written {
     pub events: PathBuf,
     /// `path.states`: every path point's state (none for a branch).
     pub points: Option<PathBuf>,
-    /// The state files, in the order written.
+    /// The state files, in the order written, each critical state's mode figures
+    /// (`critical_NN_mode.svg`, `.png`) after it.
     pub states: Vec<PathBuf>,
     /// The analysis' own files (a critical curve's `curve.csv`, `curve.json`, `curve.svg`; a
     /// surface's `surface.vtu`, `surface.json`, `surface.svg`), each with what it holds.
@@ -248,20 +249,23 @@ pub fn write_run_with(
     let (mut turning, mut critical) = (0usize, 0usize);
     for s in &result.states {
         let (positions, fields) = drawing.draw(s);
+        // A critical state's mode, drawn once its state is written.
+        let mut pending: Option<(String, Vec<[f64; 3]>)> = None;
         let label = s.label();
         let saved = match (&s.kind, &s.mode) {
             (StateKind::Step, _) => writer.save(s.step, s.control, &positions, fields),
             (StateKind::Critical { .. }, Some(_)) => {
                 critical += 1;
-                writer.save_as(
-                    &format!("critical_{critical:02}"),
-                    &label,
-                    false,
-                    s.step,
-                    s.control,
-                    &positions,
-                    fields,
-                )
+                let stem = format!("critical_{critical:02}");
+                pending = fields
+                    .point
+                    .iter()
+                    .find_map(|f| match (&f.name[..], &f.data) {
+                        ("critical_mode", meshes::write::FieldData::Vector(v)) => Some(v.clone()),
+                        _ => None,
+                    })
+                    .map(|m| (stem.clone(), m));
+                writer.save_as(&stem, &label, false, s.step, s.control, &positions, fields)
             }
             // The held state of a linear-buckling sweep is the state of every sample: the
             // path collection's one dataset.
@@ -294,6 +298,13 @@ pub fn write_run_with(
         if !states.contains(&path) {
             states.push(path.clone());
             done.push(path);
+        }
+        if let Some((stem, mode)) = pending {
+            let files = attempt!(mode_figure(
+                out, &stem, drawing, s, &positions, &mode, result
+            ));
+            done.extend(files.iter().cloned());
+            states.extend(files);
         }
     }
     let pvd = writer.pvd_path();
@@ -396,6 +407,43 @@ pub fn write_run_with(
         branches,
         manifest,
     })
+}
+
+/// `<stem>_mode.svg` and `.png` of the critical state `s` drawn at `positions` with its mode
+/// `mode` (the point field `critical_mode`): titled with the critical point's kind, irrep,
+/// isotropy and wave number where the report has them.
+fn mode_figure(
+    out: &Path,
+    stem: &str,
+    drawing: &dyn Drawing,
+    s: &crate::results::State,
+    positions: &[meshes::Vec3],
+    mode: &[[f64; 3]],
+    result: &RunResult,
+) -> Result<Vec<PathBuf>, OutputError> {
+    let report = &result.report;
+    let k = report
+        .critical
+        .iter()
+        .position(|cp| cp.parameters == s.params);
+    let title = match k.map(|k| (&report.critical[k], report.wave_numbers.get(k))) {
+        Some((cp, m)) => {
+            let m = m.map_or_else(String::new, |m| format!(", m = {m}"));
+            format!(
+                "mode of the {} in {}{m}, isotropy {}",
+                cp.kind, cp.irrep, cp.isotropy.name
+            )
+        }
+        None => format!("mode of the {}", s.label()),
+    };
+    super::mode::write_mode(
+        out,
+        stem,
+        (positions, &drawing.mesh().triangles),
+        mode,
+        &title,
+        &super::caption_of(report),
+    )
 }
 
 /// The unit normal at each node of the surface at positions `x`: the sum of its triangles'

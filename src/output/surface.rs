@@ -282,12 +282,26 @@ fn render(
         super::svg::short(hi)
     );
     let mut plot = Plot::new(title, caption, &xs.label, &ys.label);
+    // A triangle is shaded by the largest index of its corners: stable only where all three
+    // are; a region whose index was not computed is grey.
+    let mut shaded: Vec<Option<usize>> = Vec::new();
     for t in &s.triangles {
         let index = t.iter().map(|&v| vertices[v].index).max().flatten();
         let c = index_colour(index);
         plot.polygons.push((
             t.iter().map(|&v| at(v)).collect(),
-            RGBAColor(c.0, c.1, c.2, 0.18),
+            RGBAColor(c.0, c.1, c.2, REGION_ALPHA),
+        ));
+        if !shaded.contains(&index) {
+            shaded.push(index);
+        }
+    }
+    shaded.sort();
+    for index in shaded {
+        let c = index_colour(index);
+        plot.legend.push(Entry::new(
+            region_legend(index),
+            Sample::Patch(RGBAColor(c.0, c.1, c.2, REGION_ALPHA)),
         ));
     }
     let mut legend: Vec<Option<usize>> = Vec::new();
@@ -355,6 +369,18 @@ fn render(
         ));
     }
     figure::render(&plot)
+}
+
+/// The opacity of a shaded region of the surface.
+const REGION_ALPHA: f64 = 0.18;
+
+/// The legend's text for the region of triangles of one index.
+fn region_legend(index: Option<usize>) -> String {
+    match index {
+        None => "region: index not computed".to_string(),
+        Some(0) => "stable region (index 0)".to_string(),
+        Some(i) => format!("unstable region (index {i})"),
+    }
 }
 
 /// The dash of an index: stable solid, unstable dashed.
