@@ -409,9 +409,14 @@ pub fn write_run_with(
     })
 }
 
+/// The most triangles a mode figure draws: a vector figure of more (a revolved meridian's
+/// surface) takes megabytes per mode, and the VTU beside it shows the mode better.
+pub const MODE_FIGURE_TRIANGLES: usize = 25_000;
+
 /// `<stem>_mode.svg` and `.png` of the critical state `s` drawn at `positions` with its mode
 /// `mode` (the point field `critical_mode`): titled with the critical point's kind, irrep,
-/// isotropy and wave number where the report has them.
+/// isotropy and wave number where the report has them. None for a mesh of more than
+/// [`MODE_FIGURE_TRIANGLES`] triangles.
 fn mode_figure(
     out: &Path,
     stem: &str,
@@ -421,6 +426,9 @@ fn mode_figure(
     mode: &[[f64; 3]],
     result: &RunResult,
 ) -> Result<Vec<PathBuf>, OutputError> {
+    if drawing.mesh().triangles.len() > MODE_FIGURE_TRIANGLES {
+        return Ok(Vec::new());
+    }
     let report = &result.report;
     let k = report
         .critical
