@@ -441,19 +441,12 @@ impl<'a> Crossings<'a> {
                     ));
                     continue;
                 };
-                let width = (sides[1].0 - sides[0].0).abs() / s1.abs().max(f64::MIN_POSITIVE);
                 let switched = self.blocks.switched(
                     (sides[0].1.as_slice(), sides[0].2.as_slice()),
                     (sides[1].1.as_slice(), sides[1].2.as_slice()),
                 );
                 // The bracket's ends: the nearest trial states on either side of the change.
-                let bracket = Bracket {
-                    width,
-                    ends: [
-                        (sides[0].1.clone(), sides[0].2.clone()),
-                        (sides[1].1.clone(), sides[1].2.clone()),
-                    ],
-                };
+                let bracket = bracket_of(sides, s1);
                 if g_best.abs() > JUMP_EIGENVALUE * a.spectrum.scale
                     && switched.is_some_and(|n| n > 0)
                 {
@@ -462,9 +455,10 @@ impl<'a> Crossings<'a> {
                     // jump itself. It is reported at the side whose eigenvalue is nearer
                     // zero, with the jump's two states as its bracket; its residual
                     // eigenvalue says that it is not a smooth zero.
-                    let evaluated: Vec<(Vec<f64>, Vec<f64>, Spectrum, f64)> = sides
+                    let evaluated: Vec<(Vec<f64>, Vec<f64>, Spectrum, f64)> = bracket
+                        .ends
                         .iter()
-                        .filter_map(|(_, u, p)| {
+                        .filter_map(|(u, p)| {
                             let sp = self.block_eigen(u, p, mu, k + 1, true)?;
                             let g = sp.blocks[mu].eigenvalues.get(k).copied()?;
                             Some((u.clone(), p.clone(), sp, g))
@@ -616,14 +610,23 @@ impl Crossings<'_> {
             Some((s, _, u, p)) if s == s_best => (u, p),
             _ => return None,
         };
-        let sp = self.block_eigen(&u, &p, mu, k + 1, true)?;
+        let (sp, g) = self.certified(&u, &p, mu, k, tol)?;
+        Some((u, p, sp, g, bracket_of(sides, s1)))
+    }
+
+    /// Block `mu`'s spectrum with its eigenvectors at (u, p) and its `k`-th eigenvalue, when
+    /// that is zero to `tol`: what makes a located state a crossing.
+    fn certified(
+        &mut self,
+        u: &[f64],
+        p: &[f64],
+        mu: usize,
+        k: usize,
+        tol: f64,
+    ) -> Option<(Spectrum, f64)> {
+        let sp = self.block_eigen(u, p, mu, k + 1, true)?;
         let g = *sp.blocks[mu].eigenvalues.get(k)?;
-        let [(s0, u0, p0), (s2, u2, p2)] = sides;
-        let bracket = Bracket {
-            width: (s2 - s0).abs() / s1.abs().max(f64::MIN_POSITIVE),
-            ends: [(u0, p0), (u2, p2)],
-        };
-        (g.abs() <= tol).then_some((u, p, sp, g, bracket))
+        (g.abs() <= tol).then_some((sp, g))
     }
 
     /// The crossing of the `k`-th eigenvalue of block `mu` as the zero of the block's test
@@ -656,19 +659,13 @@ impl Crossings<'_> {
                 .test_function(u, p, mu, Some(border), 0)
                 .map(|(g, _)| g)
         })?;
-        let sp = self.block_eigen(&zero.u, &zero.params, mu, k + 1, true)?;
-        let g = *sp.blocks[mu].eigenvalues.get(k)?;
-        if g.abs() > tol {
-            return None;
-        }
+        let (sp, g) = self.certified(&zero.u, &zero.params, mu, k, tol)?;
         let [first, second] = zero.sides;
-        let (s0, u0, p0) = first.unwrap_or((0.0, a.u.to_vec(), a.params.to_vec()));
-        let (s2, u2, p2) = second.unwrap_or((s1, b.u.to_vec(), b.params.to_vec()));
-        let bracket = Bracket {
-            width: (s2 - s0).abs() / s1.abs().max(f64::MIN_POSITIVE),
-            ends: [(u0, p0), (u2, p2)],
-        };
-        Some((zero.u, zero.params, sp, g, bracket))
+        let sides = [
+            first.unwrap_or((0.0, a.u.to_vec(), a.params.to_vec())),
+            second.unwrap_or((s1, b.u.to_vec(), b.params.to_vec())),
+        ];
+        Some((zero.u, zero.params, sp, g, bracket_of(sides, s1)))
     }
 
     /// The critical point of the `k`-th eigenvalue `g` of block `mu` at the state (u, p),
@@ -705,6 +702,15 @@ impl Crossings<'_> {
             state: u,
             bracket: Some(bracket),
         })
+    }
+}
+
+/// The bracket between two trial states (s, u, params) of a step of arclength `s1`: its
+/// width as a share of the step, and the states.
+fn bracket_of([(s0, u0, p0), (s2, u2, p2)]: [(f64, Vec<f64>, Vec<f64>); 2], s1: f64) -> Bracket {
+    Bracket {
+        width: (s2 - s0).abs() / s1.abs().max(f64::MIN_POSITIVE),
+        ends: [(u0, p0), (u2, p2)],
     }
 }
 
