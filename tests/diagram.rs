@@ -414,3 +414,162 @@ fn the_linear_penalty_squeeze_closes_a_circuit_between_two_b1_points_of_its_path
     assert!(branch.isotropy_exact());
     assert_eq!(g.connections.len(), 2, "{:?}", g.connections);
 }
+
+/// The bundled upward-loaded disc on a coarse mesh (6 divisions) as `kind` with `extra` keys
+/// under `[analysis]`, written into `dir`; its path.
+fn coarse_disc(dir: &std::path::Path, kind: &str, extra: &str, name: &str) -> String {
+    let text = bundled("disc_upward.toml");
+    let cut = text.find("\n[analysis.branches]").expect("branches");
+    let text = text[..cut]
+        .replace("divisions = 16 ", "divisions = 6 ")
+        .replace("type = \"path\"", &format!("type = \"{kind}\"\n{extra}"));
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+fn json_of(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap_or_else(|_| panic!("{path:?}")))
+        .unwrap()
+}
+
+/// Every branch of a graph as (isotropy, half, points, control at its end to 1e-9).
+fn branch_list(graph: &serde_json::Value) -> Vec<(String, String, u64, String)> {
+    graph["branches"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| {
+            (
+                b["isotropy"].as_str().unwrap().to_string(),
+                b["half"].as_str().unwrap().to_string(),
+                b["points"].as_u64().unwrap(),
+                format!("{:.9}", b["end"]["h"].as_f64().expect("the end's h")),
+            )
+        })
+        .collect()
+}
+
+/// `memstab diagram RUN_DIR` computes from a finished path what a `type = "diagram"` run of
+/// the same scene adds to its path: the same branches at depth 2 (each once), ending at the
+/// same control, and the same graph; its files join the run's manifest, so the run still
+/// verifies when `memstab branch` reads it afterwards.
+#[test]
+fn memstab_diagram_of_a_finished_path_is_the_diagram_run_of_its_scene() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path_scene = coarse_disc(tmp.path(), "path", "", "path.toml");
+    let diagram_scene = coarse_disc(
+        tmp.path(),
+        "diagram",
+        "depth = 2\nbranch-steps = 8",
+        "diagram.toml",
+    );
+    let (run_dir, whole) = (tmp.path().join("run"), tmp.path().join("whole"));
+    for (scene, dir) in [(&path_scene, &run_dir), (&diagram_scene, &whole)] {
+        let o = memstab(&["run", scene, "--out", dir.to_str().unwrap(), "--quiet"]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    }
+    assert!(!run_dir.join("branches.json").exists());
+    let o = memstab(&[
+        "diagram",
+        run_dir.to_str().unwrap(),
+        "--depth",
+        "2",
+        "--steps",
+        "8",
+    ]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    assert!(stdout.contains("branches (depth 2)"), "{stdout}");
+    assert!(stdout.contains("second pieces:"), "{stdout}");
+    let (a, b) = (
+        json_of(&run_dir.join("diagram.json")),
+        json_of(&whole.join("diagram.json")),
+    );
+    let list = branch_list(&a);
+    assert!(list.len() >= 2, "{list:?}");
+    assert_eq!(list, branch_list(&b));
+    assert_eq!(
+        a["nodes"].as_array().unwrap().len(),
+        b["nodes"].as_array().unwrap().len()
+    );
+    assert_eq!(a["partners"], b["partners"]);
+    let manifest = std::fs::read_to_string(run_dir.join("manifest.json")).unwrap();
+    for f in [
+        "diagram.json",
+        "branches.json",
+        "branch_01/path.csv",
+        "partners.svg",
+    ] {
+        assert!(manifest.contains(f), "{f} not in the manifest");
+    }
+    let o = memstab(&[
+        "branch",
+        run_dir.to_str().unwrap(),
+        "--critical",
+        "1",
+        "--steps",
+        "2",
+        "--out",
+        tmp.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+}
+
+/// Bad input to `memstab diagram` is one line and exit 2, nothing written: no run, a bad
+/// flag, a run whose states are gone, a run of an analysis that is no path.
+#[test]
+fn memstab_diagram_refuses_bad_input_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = coarse_disc(tmp.path(), "path", "", "path.toml");
+    let run_dir = tmp.path().join("run");
+    let o = memstab(&["run", &scene, "--out", run_dir.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let dir = run_dir.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["diagram", empty.to_str().unwrap()], "path.json"),
+        (vec!["diagram", dir, "--depth", "9"], "--depth 9"),
+        (vec!["diagram", dir, "--depth", "0"], "--depth 0"),
+        (vec!["diagram", dir, "--steps", "0"], "--steps 0"),
+        (
+            vec!["diagram", dir, "--partner-steps", "0"],
+            "--partner-steps 0",
+        ),
+        (vec!["diagram", dir, "--max-step", "0"], "--max-step 0"),
+        (vec!["diagram", dir, "--out", "/nonexistent/x"], "--out"),
+    ] {
+        let out = memstab(&args);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "'{needle}' not in {err}");
+    }
+    assert!(!run_dir.join("diagram.json").exists(), "nothing written");
+    // A run whose states are gone (the manifest names them: refused naming the file).
+    std::fs::remove_file(run_dir.join("path.states")).unwrap();
+    let out = memstab(&["diagram", dir]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("path.states"), "{err}");
+    assert!(!run_dir.join("diagram.json").exists(), "nothing written");
+    // A held state's run is no path.
+    let held = bundled("ponding.toml");
+    let held_scene = tmp.path().join("ponding.toml");
+    std::fs::write(&held_scene, held).unwrap();
+    let held_dir = tmp.path().join("held");
+    let o = memstab(&[
+        "run",
+        held_scene.to_str().unwrap(),
+        "--out",
+        held_dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = memstab(&["diagram", held_dir.to_str().unwrap()]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("linear-buckling analysis"), "{err}");
+    assert!(!held_dir.join("diagram.json").exists());
+}

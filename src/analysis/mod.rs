@@ -206,7 +206,41 @@ pub fn run_from(
     let point = study.solve_start(guess, &params, &opts)?;
     times.start = t.elapsed();
     times.start_problem = point.times;
+    let from = match start {
+        Start::Critical(cp) => Some((**cp).clone()),
+        Start::Solve | Start::From { .. } => None,
+    };
     let study: &dyn Study = study;
+    let record = Record::new(study);
+    let stage = |study: &dyn Study, cx: &mut Context<'_>| analysis.run(study, cx);
+    let held = analysis.held();
+    with_context(
+        study,
+        (point, from),
+        record,
+        observer,
+        times,
+        held,
+        &opts,
+        stage,
+    )
+}
+
+/// Runs `stage` in a [`Context`] on `study` from the converged `start` (and the critical
+/// point it starts from, if any), `record` holding what is known so far, with the index by
+/// blocks if the study has it (`held`: states held at their control, as linear buckling's);
+/// then the result, its stop as `stage` and a signal leave it, annotated by the study.
+#[allow(clippy::too_many_arguments)]
+fn with_context(
+    study: &dyn Study,
+    (start, from): (Point, Option<CriticalPoint>),
+    record: Record,
+    observer: &mut dyn Observer,
+    mut times: RunTimes,
+    held: bool,
+    opts: &PathOptions,
+    stage: impl FnOnce(&dyn Study, &mut Context<'_>) -> Result<StopReason, RunError>,
+) -> Result<RunResult, RunError> {
     let t = Instant::now();
     let blocks = study.blocks();
     times.adapted_basis = t.elapsed();
@@ -218,22 +252,19 @@ pub fn run_from(
     let control = study.control().map(|c| c.index);
     let crossings = blocks
         .ok()
-        .map(|b| Crossings::new(b, &measure, control, analysis.held()));
+        .map(|b| Crossings::new(b, &measure, control, held));
     let mut cx = Context {
-        start: point,
-        from: match start {
-            Start::Critical(cp) => Some((**cp).clone()),
-            Start::Solve | Start::From { .. } => None,
-        },
+        start,
+        from,
         crossings,
-        record: Record::new(study),
+        record,
         observer,
         times,
     };
     // A signal during a later phase (the branches of a finished path, a curve's or a
     // surface's second parameter) ends the run as interrupted, whatever its path's stop was;
     // a solve it cut short ends it so too, with what was found before (none: the error).
-    let stop = match analysis.run(study, &mut cx) {
+    let stop = match stage(study, &mut cx) {
         _ if crate::continuation::interrupt::requested() && !cx.record.rows.is_empty() => {
             StopReason::Interrupted
         }
@@ -247,13 +278,73 @@ pub fn run_from(
         let hint = if s.after == 0 && study.start_drifted() {
             crate::study::stall_hint_unheld(study.scene(), s, control)
         } else {
-            crate::study::stall_hint(study.scene(), s, control, &opts)
+            crate::study::stall_hint(study.scene(), s, control, opts)
         };
         cx.record.warnings.push(hint);
     }
     let mut result = cx.record.finish(study, stop, stability_note, cx.times);
     study.annotate(&mut result);
     Ok(result)
+}
+
+/// Runs `stage` on the finished path `run` of `study`, read back as if just followed (its
+/// rows, states and critical points in the record; [`restart::reload`]), from the start
+/// state solved again (it sets the targets of `"initial"` constraints) — the next analysis
+/// of a path starting from its last result (`memstab diagram RUN_DIR`). The result's path is
+/// the run's, its stop the run's words.
+///
+/// # Errors
+/// [`AfterError::Input`] when the run does not fit the study; [`AfterError::Start`] when the
+/// start state does not converge again; [`AfterError::Run`] when `stage` fails.
+pub fn after_finished(
+    study: &mut dyn Study,
+    run: &crate::output::FinishedRun,
+    opts: &PathOptions,
+    observer: &mut dyn Observer,
+    stage: impl FnOnce(&dyn Study, &mut Context<'_>) -> Result<StopReason, RunError>,
+) -> Result<RunResult, AfterError> {
+    let input = |e: crate::output::ReopenError| AfterError::Input(e.to_string());
+    restart::check(run, study).map_err(input)?;
+    let reloaded = restart::reload(run, study).map_err(input)?;
+    let mut times = RunTimes::default();
+    let t = Instant::now();
+    let params = study.start_values().to_vec();
+    let point = study
+        .solve_start(None, &params, opts)
+        .map_err(AfterError::Start)?;
+    times.start = t.elapsed();
+    times.start_problem = point.times;
+    let study: &dyn Study = study;
+    let mut record = Record::new(study);
+    record.rows = reloaded.rows;
+    record.points = reloaded.points;
+    record.critical = reloaded.critical;
+    record.irreps = run.irreps.clone();
+    with_context(
+        study,
+        (point, None),
+        record,
+        observer,
+        times,
+        false,
+        opts,
+        stage,
+    )
+    .map_err(AfterError::Run)
+}
+
+/// Why an analysis of a finished path could not run ([`after_finished`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AfterError {
+    /// The run or the scene does not fit (bad input).
+    #[error("{0}")]
+    Input(String),
+    /// The start state did not converge again.
+    #[error("{0}")]
+    Start(RunError),
+    /// The analysis failed.
+    #[error("{0}")]
+    Run(RunError),
 }
 
 /// What an analysis collects for the report, in the order it finds it.

@@ -3,9 +3,9 @@
 //! `analysis.from-run`, `memstab branch`), read back with the readers of [`crate::output`] and
 //! checked against the study before anything is computed — the [`Start`] the analyses take.
 
-use crate::output::store::{read_critical_states, read_states, CRITICAL_FILE};
+use crate::output::store::{read_critical_states, read_states, SavedCritical, CRITICAL_FILE};
 use crate::output::{FinishedRun, ReopenError};
-use crate::results::{CriticalPoint, RecordedPoint};
+use crate::results::{CriticalPoint, PathRow, PointState, RecordedPoint};
 use crate::study::{Start, Study};
 
 /// The start the scene asks for: a critical point of `analysis.from-run`, a saved point of
@@ -151,6 +151,17 @@ pub fn critical_state(
         )));
     }
     let saved = read_critical_states(&run.dir).map_err(|e| ReopenError(e.to_string()))?;
+    checked_critical(run, study, &saved, n)
+}
+
+/// Critical point `n` (1-based, in range) of `saved` (the run's `critical.states`) checked
+/// against `study`: its state and unit mode.
+fn checked_critical(
+    run: &FinishedRun,
+    study: &dyn Study,
+    saved: &[SavedCritical],
+    n: usize,
+) -> Result<(Vec<f64>, Vec<f64>), ReopenError> {
     let file = run.dir.join(CRITICAL_FILE);
     let Some(point) = saved.get(n - 1) else {
         return Err(ReopenError(format!(
@@ -215,4 +226,59 @@ fn curve_start(study: &dyn Study) -> Result<Option<CriticalPoint>, String> {
         .recorded(&[recorded], 1, state, mode)
         .map_err(|e| format!("'analysis.from' = {i}: critical point {}: {e}", i + 1))?;
     Ok(Some(points.remove(0)))
+}
+
+/// A finished path read back whole: its rows, every row's state in the fixed-point
+/// coordinates of the study, and its critical points each with its state and mode — what a
+/// later analysis of the path (`memstab diagram RUN_DIR`) starts from, as if the path had
+/// just been followed.
+#[derive(Debug, Clone)]
+pub struct Reloaded {
+    /// The rows, as written.
+    pub rows: Vec<PathRow>,
+    /// Every row's state.
+    pub points: Vec<PointState>,
+    /// The critical points, with their states and modes.
+    pub critical: Vec<CriticalPoint>,
+}
+
+/// The path of `run` read back for `study` (checked against it first: [`check_model`]): its
+/// rows from `path.json`, every row's state from `path.states`, every critical point from
+/// `critical.states`. A run that kept no states, or states that do not fit the rows, is an
+/// error naming the file.
+pub fn reload(run: &FinishedRun, study: &dyn Study) -> Result<Reloaded, ReopenError> {
+    check_model(run, study)?;
+    let states = read_states(&run.dir.join("path.json")).map_err(|e| ReopenError(e.to_string()))?;
+    let unknowns = study.about().unknowns;
+    if states.unknowns != unknowns || states.points != run.rows.len() {
+        return Err(ReopenError(format!(
+            "{}: {} states of {} unknowns, path.json has {} rows and the scene's model {unknowns} unknowns",
+            states.file.display(),
+            states.points,
+            states.unknowns,
+            run.rows.len()
+        )));
+    }
+    let mut points = Vec::with_capacity(states.points);
+    for k in 0..states.points {
+        let saved = states.point(k).map_err(|e| ReopenError(e.to_string()))?;
+        points.push(PointState {
+            q: study.coordinates(&saved.u),
+            parameters: saved.parameters,
+        });
+    }
+    let saved = read_critical_states(&run.dir).map_err(|e| ReopenError(e.to_string()))?;
+    let mut critical = Vec::with_capacity(run.critical.len());
+    for n in 1..=run.critical.len() {
+        let (state, mode) = checked_critical(run, study, &saved, n)?;
+        let mut all = study
+            .recorded(&run.critical, n, state, mode)
+            .map_err(ReopenError)?;
+        critical.push(all.swap_remove(n - 1));
+    }
+    Ok(Reloaded {
+        rows: run.rows.clone(),
+        points,
+        critical,
+    })
 }

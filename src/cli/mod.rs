@@ -19,6 +19,7 @@ mod branch;
 mod common;
 mod compare;
 mod demo;
+mod diagram;
 mod export;
 mod group;
 mod mesh;
@@ -48,6 +49,8 @@ enum Command {
     Run(run::RunArgs),
     /// Switch branches at a critical point of a finished run: branches.json, branch_NN/, diagram.svg.
     Branch(branch::BranchArgs),
+    /// The global diagram of a finished path run: every branch to a depth, the second pieces beside its folds.
+    Diagram(diagram::DiagramArgs),
     /// Run the bundled demo (a k = 0.1 balloon) and compare it with the closed form.
     Demo(demo::DemoArgs),
     /// The tangent's spectrum by irrep at the scene's start state (or at --at values).
@@ -141,6 +144,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Group(args) => group::run(&args),
         Command::Run(args) => run::run(&args),
         Command::Branch(args) => branch::run(&args),
+        Command::Diagram(args) => diagram::run(&args),
         Command::Demo(args) => demo::demo(&args),
         Command::Spectrum(args) => spectrum::run(&args),
         Command::Compare(args) => compare::run(&args),

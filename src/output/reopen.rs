@@ -9,7 +9,7 @@
 //! its file, and must give the same model (name, group, unknowns). What is read is checked
 //! against the run's `manifest.json` first: an edited file is refused, naming it.
 
-use crate::results::{PrimaryPath, RecordedPoint};
+use crate::results::{PathRow, PrimaryPath, RecordedPoint};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -36,6 +36,12 @@ pub struct FinishedRun {
     pub path: PrimaryPath,
     /// The critical points, in order (critical point N is `critical[N - 1]`).
     pub critical: Vec<RecordedPoint>,
+    /// Every row of the path, as written.
+    pub rows: Vec<PathRow>,
+    /// The irrep blocks of the rows' `negative` counts (empty when no row has them).
+    pub irreps: Vec<String>,
+    /// Why the path ended, in the run's words.
+    pub stop: String,
 }
 
 fn field<'a>(v: &'a Value, key: &str, file: &Path) -> Result<&'a Value, ReopenError> {
@@ -102,15 +108,42 @@ impl FinishedRun {
             .ok_or_else(|| ReopenError(format!("{}: 'rows' is not a list", file.display())))?;
         let mut values = Vec::with_capacity(rows.len());
         let mut index = Vec::with_capacity(rows.len());
+        let mut full = Vec::with_capacity(rows.len());
         for (k, r) in rows.iter().enumerate() {
             let p = numbers(
                 field(r, "parameters", &file)?,
                 &format!("rows[{k}].parameters"),
                 &file,
             )?;
+            if p.len() != parameters.len() {
+                return Err(ReopenError(format!(
+                    "{}: rows[{k}] has {} parameters, the run names {}",
+                    file.display(),
+                    p.len(),
+                    parameters.len()
+                )));
+            }
             values.push(c.and_then(|c| p.get(c).copied()).unwrap_or(0.0));
             index.push(r.get("index").and_then(Value::as_u64).map(|i| i as usize));
+            full.push(
+                serde_json::from_value::<PathRow>(r.clone())
+                    .map_err(|e| ReopenError(format!("{}: rows[{k}]: {e}", file.display())))?,
+            );
         }
+        let irreps: Vec<String> = v
+            .get("irreps")
+            .and_then(Value::as_array)
+            .map(|a| {
+                a.iter()
+                    .filter_map(|m| m.as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let stop = v
+            .get("stop")
+            .and_then(Value::as_str)
+            .unwrap_or_default()
+            .to_string();
         let mut critical = Vec::new();
         let list = field(&v, "critical", &file)?
             .as_array()
@@ -190,6 +223,9 @@ impl FinishedRun {
             scene,
             group,
             critical,
+            rows: full,
+            irreps,
+            stop,
         })
     }
 

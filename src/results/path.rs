@@ -30,7 +30,7 @@ impl MeshInfo {
 }
 
 /// One converged point of the path.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct PathRow {
     /// Index along the path (0 = start).
     pub step: usize,

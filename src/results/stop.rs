@@ -82,6 +82,9 @@ pub enum StopReason {
         /// Where its amplitude's law through its last states reaches zero.
         estimate: f64,
     },
+    /// The path of a finished run read back, which ended as its `path.json` says (in its
+    /// words).
+    Recorded(String),
 }
 
 impl std::fmt::Display for StopReason {
@@ -115,6 +118,7 @@ impl std::fmt::Display for StopReason {
                 "it returned to the states of the path it left between {:.6} and {:.6} (its amplitude vanishing at about {estimate:.6}), where that path has no known critical point",
                 between[0], between[1]
             ),
+            Self::Recorded(words) => f.write_str(words),
         }
     }
 }

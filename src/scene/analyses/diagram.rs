@@ -59,6 +59,24 @@ fn default_partner_steps() -> usize {
 }
 
 impl DiagramAnalysis {
+    /// The diagram of the path `p`: its control, stops and settings, the depth, steps and
+    /// largest step of its `[analysis.branches]` where it has them (at least the default
+    /// depth), the defaults elsewhere.
+    pub fn of_path(p: &PathAnalysis) -> Self {
+        let b = p.branches.as_ref();
+        Self {
+            control: p.control.clone(),
+            stop_stretch: p.stop_stretch,
+            stop_displacement: p.stop_displacement,
+            depth: b.map_or(default_depth(), |b| b.depth.max(default_depth())),
+            branch_steps: b.map_or(default_branch_steps(), |b| b.steps),
+            branch_max_step: b.and_then(|b| b.max_step),
+            partners: default_partners(),
+            partner_steps: default_partner_steps(),
+            settings: p.settings.clone(),
+        }
+    }
+
     /// The path with its branches that the diagram runs first.
     pub fn path(&self) -> PathAnalysis {
         PathAnalysis {
