@@ -843,7 +843,8 @@ impl Switching<'_> {
             self.constraints,
             cp.parameters.clone(),
             self.control,
-        );
+        )
+        .holding_neutral();
         let start = PathPoint {
             q: child.basis.restrict(&cp.state),
             lambda: problem.free_values(&cp.parameters),
