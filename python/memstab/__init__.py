@@ -530,8 +530,11 @@ class _Bar:
 
     def __call__(self, points: int, fraction, message: str) -> None:
         if self._bar is None:
-            total = self.TICKS if fraction is not None else None
-            self._bar = self._tqdm(total=total, desc=self._desc, leave=True)
+            if fraction is not None:
+                total, shape = self.TICKS, "{desc}: {percentage:3.0f}%|{bar}| [{elapsed}] {postfix}"
+            else:
+                total, shape = None, "{desc}: [{elapsed}] {postfix}"
+            self._bar = self._tqdm(total=total, desc=self._desc, leave=True, bar_format=shape)
         if fraction is not None:
             self._bar.n = round(fraction * self.TICKS)
         else:
@@ -547,7 +550,13 @@ class _Bar:
 
 
 def _progress(progress, desc: str):
-    if progress is False or progress is None:
+    if progress is None:
+        # As the command line: a bar where someone watches (a terminal, a notebook), none
+        # in a log.
+        import sys
+
+        progress = sys.stderr.isatty() or "ipykernel" in sys.modules
+    if progress is False:
         return None
     if callable(progress) and progress is not True:
         return progress
@@ -555,13 +564,14 @@ def _progress(progress, desc: str):
     return _Bar(tqdm, desc) if tqdm is not None else None
 
 
-def run(scene: Scene, out: str | os.PathLike | None = None, progress=True) -> Result:
+def run(scene: Scene, out: str | os.PathLike | None = None, progress=None) -> Result:
     """Runs ``scene`` as ``memstab run`` does into ``out`` (made if missing), or into a
     temporary directory that lives as long as the result. The GIL is released meanwhile.
 
-    ``progress``: True draws a tqdm bar when tqdm is installed (nothing without it), False
-    draws none, a callable is called as ``progress(points, fraction, message)`` at every
-    converged point. Ctrl-C stops the run at its next point; what it found is written (into
+    ``progress``: True draws the command line's bar with tqdm when tqdm is installed
+    (nothing without it), False draws none, None (the default) draws it where stderr is a
+    terminal or in a notebook; a callable is called as ``progress(points, fraction,
+    message)`` at every converged point. Ctrl-C stops the run at its next point; what it found is written (into
     ``out``) and ``KeyboardInterrupt`` is raised."""
     if not isinstance(scene, Scene):
         raise TypeError("run() takes a memstab.Scene")
@@ -645,21 +655,24 @@ def compare(
     divisions: int | None = None,
     samples: int | None = None,
     include_flagged: bool = False,
-    progress: bool = True,
+    progress: bool | None = None,
 ) -> Comparison:
     """``memstab compare SCENE --meshes A,B,…``: ``scene`` on each of ``meshes`` (a list,
     or one comma-separated string: group names such as ``"C8v"`` for the scene's generator
     with that group, full overrides ``"disc:sectors=8,divisions=12,group=C2v"``, or
     ``"axisymmetric"``; the first is the reference), the critical points matched across
     them. Keywords as the command's flags. Progress lines go to tqdm's ``write`` (or to
-    stderr) unless ``progress=False``; Ctrl-C stops it and raises ``KeyboardInterrupt``."""
+    stderr) where stderr is a terminal or in a notebook (``progress=True``: always, False:
+    never); Ctrl-C stops it and raises ``KeyboardInterrupt``."""
     if not isinstance(scene, Scene):
         raise TypeError("compare() takes a memstab.Scene")
     meshes = [meshes] if isinstance(meshes, str) else [str(m) for m in meshes]
     report = None
-    if progress:
-        import sys
+    import sys
 
+    if progress is None:
+        progress = sys.stderr.isatty() or "ipykernel" in sys.modules
+    if progress:
         tqdm = _tqdm()
         write = tqdm.write if tqdm is not None else (lambda s: print(s, file=sys.stderr))
         report = lambda _points, _fraction, line: write(f"compare: {line}")  # noqa: E731

@@ -117,13 +117,15 @@ def test_a_run_shows_the_command_lines_progress_in_tqdm(monkeypatch, capsys):
     assert "h = " in err and f"{points} points" in err, err[-500:]
     memstab.run(tiny_disc(3), progress=False)
     assert capsys.readouterr().err == ""
+    memstab.run(tiny_disc(3))  # stderr is not a terminal here: no bar, as on the command line
+    assert capsys.readouterr().err == ""
 
 
 def test_the_progress_bar_follows_the_control(monkeypatch):
     updates = []
 
     class Recorder:
-        def __init__(self, total=None, desc=None, leave=True):
+        def __init__(self, total=None, desc=None, leave=True, bar_format=None):
             self.total, self.n, self.closed = total, 0, False
             updates.append(self)
             self.seen = []
@@ -138,7 +140,7 @@ def test_the_progress_bar_follows_the_control(monkeypatch):
             self.closed = True
 
     monkeypatch.setattr(memstab, "_tqdm", lambda: Recorder)
-    result = memstab.run(tiny_disc(3))
+    result = memstab.run(tiny_disc(3), progress=True)
     (bar,) = updates
     assert bar.total == memstab._Bar.TICKS and bar.closed
     assert len(bar.seen) == result.summary["points"]
