@@ -229,7 +229,8 @@ class Model:
     def blocks(self, u, params, rank_one: bool = True) -> dict:
         """The symmetry-adapted blocks of K(u, Λ) at a symmetric state: ``{irrep: B_μᵀ K
         B_μ}`` as scipy.sparse matrices. Their eigenvalues, each counted d_μ times, are K's
-        (docs/theory.md, the symmetry-adapted basis)."""
+        (docs/theory.md §10.5); a complex-type block spans its irrep's whole component, so
+        its eigenvalues, which come in pairs, count once."""
         k = self.tangent(u, params, rank_one=rank_one).tocsc()
         return {
             name: (b.T @ k @ b).tocsc() for name, b in self.adapted_bases().items()
