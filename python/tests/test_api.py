@@ -105,6 +105,45 @@ def test_ctrl_c_stops_a_run_promptly_and_raises_keyboard_interrupt(tmp_path):
     assert json.loads((out / "manifest.json").read_text())["stop"] == "interrupted"
 
 
+def test_a_spectrum_and_a_comparison_stop_at_the_library_interrupt(tmp_path):
+    # The library's hooks request the stop after the first block of a spectrum, and after
+    # the fifth sample of a comparison's linear-buckling sweeps.
+    run = memstab.run(tiny_disc(3), out=tmp_path / "disc", progress=False)
+    script = f"""
+        import sys
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from test_api import tiny_disc
+        import memstab
+        from pathlib import Path
+        result = memstab.Result(Path({str(run.dir)!r}), "", None, tiny_disc(3))
+        try:
+            result.spectrum(2)
+            print("spectrum finished")
+        except KeyboardInterrupt as e:
+            print("KeyboardInterrupt:", e)
+        print("then:", result.spectrum(2).attrs["index"])
+        scene = memstab.Scene.load("scenes/ponding.toml").with_(
+            {{"mesh.divisions": 3, "parameters.rho.max": 10.5, "analysis.samples": 40}}
+        )
+        try:
+            memstab.compare(scene, ["C7v", "C1v"], progress=False)
+            print("compare finished")
+        except KeyboardInterrupt as e:
+            print("KeyboardInterrupt:", e)
+    """
+    p = python(
+        script,
+        env={"MEMSTAB_INTERRUPT_AFTER_BLOCKS": "1", "MEMSTAB_INTERRUPT_AFTER_STEPS": "5"},
+    )
+    stdout, stderr = p.communicate(timeout=300)
+    assert p.returncode == 0, stderr
+    lines = stdout.splitlines()
+    assert lines[0] == "KeyboardInterrupt: interrupted: stopped between the tangent's blocks", stdout
+    row = run.path[run.path["step"] == 2].iloc[0]
+    assert lines[1] == f"then: {int(row['index'])}", stdout
+    assert lines[2].startswith("KeyboardInterrupt: interrupted"), stdout
+
+
 # -- progress --------------------------------------------------------------------------
 
 
