@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The Python package (python/): its abi3 wheel built with maturin in a virtual environment
-# (maturin, numpy, pandas, meshio, scipy, pytest and matplotlib from PyPI), installed there,
+# (maturin, numpy, pandas, meshio, scipy, pytest and matplotlib from PyPI, and for the tests
+# of the optional parts tqdm, pyarrow, pyvista and the continuation package bice), installed there,
 # its tests run (pytest: real runs on small meshes), and the study blocks of docs/python.md
 # (between `<!-- study -->` and `<!-- /study -->`) run as one script, as a reader would from
 # the repository's root.
@@ -13,7 +14,11 @@ venv="${1:-.venv-python}"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 venv="$(cd "$venv" && pwd)"
 "$venv/bin/pip" install --quiet --upgrade pip
-"$venv/bin/pip" install --quiet maturin numpy pandas meshio scipy pytest matplotlib
+"$venv/bin/pip" install --quiet maturin numpy pandas meshio scipy pytest matplotlib tqdm pyarrow bice
+# pyvista for `state(i, pyvista=True)`: the versions scripts/requirements.txt pins, which the
+# round-trip check has downloaded already.
+"$venv/bin/pip" install --quiet "$(grep -o '^pyvista==[0-9.]*' scripts/requirements.txt)" \
+    "$(grep -o '^vtk==[0-9.]*' scripts/requirements.txt)"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 

@@ -838,3 +838,45 @@ fn wrinkling_keys_are_checked() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains("material.wrinkling = \"relaxed\""), "{err}");
 }
+
+/// A `[mesh]` table on its own (as the Python package's `memstab.mesh` gives it) is read and
+/// checked as a scene's: the generator's options, and one line naming `mesh.<key>`.
+#[test]
+fn a_mesh_table_alone_parses_with_the_scenes_messages() {
+    let spec = MeshSpec::parse(
+        "generator = \"disc\"\nsectors = 8\ndivisions = 3\ngroup = \"C4v\"\n",
+        "t",
+    )
+    .expect("a valid [mesh]");
+    let MeshSpec::Disc(disc) = &spec else {
+        panic!("a disc: {spec:?}")
+    };
+    assert_eq!(
+        (disc.sectors, disc.divisions, disc.group.as_deref()),
+        (8, 3, Some("C4v"))
+    );
+    let built = spec.build().expect("it builds");
+    assert_eq!(built.mesh.triangles.len(), 8 * 3 * 3);
+    assert_eq!(built.group().name(), "C4v");
+    for (text, needles) in [
+        (
+            "generator = \"disc\"\nsectors = 0\n",
+            &["mesh.sectors", "0"][..],
+        ),
+        (
+            "generator = \"disc\"\nfrequency = 3\n",
+            &["mesh.frequency", "disc"][..],
+        ),
+        ("generator = \"cube\"\n", &["mesh.generator", "cube"][..]),
+        (
+            "generator = \"icosphere\"\nradius = -1.0\n",
+            &["mesh.radius", "-1"][..],
+        ),
+    ] {
+        let e = MeshSpec::parse(text, "t").expect_err(text).to_string();
+        assert!(!e.contains('\n'), "{e}");
+        for n in needles {
+            assert!(e.contains(n), "{text:?}: {e} lacks {n}");
+        }
+    }
+}

@@ -90,6 +90,17 @@ pub trait Observer {
 /// An [`Observer`] that only reports progress.
 pub struct Progress<F>(pub F);
 
+/// The control a progress display of `study`'s run follows: its name (`control` without one)
+/// and its bounds when both are finite.
+pub fn progress_control(study: &dyn Study) -> (String, Option<(f64, f64)>) {
+    let handle = study.control();
+    let control = handle.map_or_else(|| "control".to_string(), |c| c.name.clone());
+    let range = handle
+        .map(|c| (c.min, c.max))
+        .filter(|(a, b)| a.is_finite() && b.is_finite());
+    (control, range)
+}
+
 impl<F: FnMut(usize, f64)> Observer for Progress<F> {
     fn progress(&mut self, point: usize, control: f64) {
         (self.0)(point, control)

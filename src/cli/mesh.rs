@@ -8,8 +8,8 @@ use super::CliError;
 use clap::{Args, Subcommand, ValueEnum};
 use memstab::limits::Limits;
 use memstab::scene::{DiscMesh, DownSpec, IcosphereMesh, MeshSpec, TruncatedSphereMesh};
-use meshes::write::{write_mesh, Fields, Format};
-use meshes::{MeshError, SymmetricMesh};
+use meshes::write::{orbit_fields, write_mesh, Format};
+use meshes::MeshError;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -210,26 +210,4 @@ pub(crate) fn run(args: &MeshArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
-}
-
-/// Node and triangle orbit numbers, to see the fundamental domain and its images.
-fn orbit_fields(sym: &SymmetricMesh) -> Fields {
-    let numbers = |n: usize, orbits: Vec<Vec<usize>>| -> Vec<f64> {
-        let mut id = vec![0.0; n];
-        for (k, orbit) in orbits.iter().enumerate() {
-            for &i in orbit {
-                id[i] = k as f64;
-            }
-        }
-        id
-    };
-    Fields::new()
-        .point_scalar(
-            "node_orbit",
-            numbers(sym.mesh.nodes.len(), sym.action.node_orbits()),
-        )
-        .cell_scalar(
-            "triangle_orbit",
-            numbers(sym.mesh.triangles.len(), sym.action.triangle_orbits()),
-        )
 }

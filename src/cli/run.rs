@@ -133,11 +133,7 @@ fn execute_refined(
         .map_err(|e| CliError::Input(one_line(&format!("{}: {e}", study.about().origin))))?;
     let dir = super::common::OutDir::create(out)?;
     let clock = std::time::Instant::now();
-    let handle = study.control();
-    let control = handle.map_or_else(|| "control".to_string(), |c| c.name.clone());
-    let range = handle
-        .map(|c| (c.min, c.max))
-        .filter(|(a, b)| a.is_finite() && b.is_finite());
+    let (control, range) = memstab::analysis::progress_control(&*study);
     let progress = Progress::new(&control, range, quiet);
     let result = run_from(
         &mut *study,

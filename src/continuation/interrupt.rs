@@ -42,6 +42,13 @@ pub fn requested() -> bool {
     REQUESTED.load(Ordering::SeqCst)
 }
 
+/// Withdraws the request once the work it stopped has returned, so that a process that goes
+/// on (a Python session after a `KeyboardInterrupt`) can start new work; the test hooks'
+/// counts go on.
+pub fn clear() {
+    REQUESTED.store(false, Ordering::SeqCst);
+}
+
 /// Counts one accepted continuation step; makes the request after the k-th when the test hook
 /// [`AFTER_STEPS`] asks for it.
 pub fn step_accepted() {

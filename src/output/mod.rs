@@ -75,7 +75,7 @@ pub use matrix_market::{
 };
 pub use partners::write_partners;
 pub use png::{render_png, write_png_beside, PNG_SCALE};
-pub use progress::Progress;
+pub use progress::{fraction as progress_fraction, message as progress_message, Progress};
 pub use refine::{write_refine, REFINE_JSON};
 pub use reopen::{FinishedRun, ReopenError};
 pub use run::{

@@ -37,6 +37,13 @@ pub(super) fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+pub(super) fn parse_mesh(text: &str, origin: &str) -> Result<MeshSpec, SceneError> {
+    let doc: Table = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
+    let spec = read_mesh(&Value::Table(doc)).map_err(|p| p.into_error(origin))?;
+    super::validate::check_mesh_options(&spec).map_err(|p| p.into_error(origin))?;
+    Ok(spec)
+}
+
 fn syntax_error(text: &str, origin: &str, e: &toml::de::Error) -> SceneError {
     let start = e.span().map_or(0, |s| s.start.min(text.len()));
     let start = (0..=start)

@@ -643,6 +643,13 @@ pub const AXISYMMETRIC_ONLY: &str =
     "generator \"axisymmetric\" is a meridian, not a 3-D mesh: `memstab run`, `branch` and `compare` take it, `spectrum` and `export-matrix` do not";
 
 impl MeshSpec {
+    /// A `[mesh]` table on its own, as TOML text (`generator = "disc"`, `sectors = 8`, …),
+    /// read and checked as a scene's `[mesh]` is (the messages name `mesh.<key>`); a radius
+    /// must be a number here. The file generator's path is taken as given.
+    pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
+        load::parse_mesh(text, origin)
+    }
+
     /// The generator.
     pub fn generator(&self) -> Generator {
         match self {

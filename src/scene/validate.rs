@@ -453,7 +453,7 @@ fn check_mesh_radius(scene: &Scene) -> Result<(), Problem> {
 /// numbers, and the reference triangles are degenerate.
 pub const RADIUS_RANGE: (f64, f64) = (1e-75, 1e75);
 
-fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
+pub(super) fn check_mesh_options(mesh: &MeshSpec) -> Result<(), Problem> {
     let radius_rule = |r: f64| {
         positive("mesh.radius", r)?;
         let (lo, hi) = RADIUS_RANGE;

@@ -22,7 +22,9 @@ mod task;
 pub use collect::collect;
 pub use emit::{emit_slurm, emit_snakemake, SLURM_SCRIPT, SNAKEFILE};
 pub use spec::{expand, MAX_POINTS};
-pub use task::{run_all, run_scene, run_task, status, TaskOutcome, TaskStatus};
+pub use task::{
+    run_all, run_scene, run_scene_reporting, run_task, status, TaskOutcome, TaskStatus, Tick,
+};
 
 use crate::results::sweep::SweptValue;
 use std::path::{Path, PathBuf};

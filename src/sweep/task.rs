@@ -186,6 +186,28 @@ fn execute(run: &Path, scene_file: &Path) -> Result<TaskOutcome, String> {
 /// added to the run's manifest; returns why the path stopped. An error is one line: the scene
 /// cannot be built, its start does not converge, a file cannot be written.
 pub fn run_scene(scene: Scene, run: &Path) -> Result<StopReason, String> {
+    run_scene_reporting(scene, run, &mut |_| {})
+}
+
+/// One converged point of a run as a progress display shows it (the command line's bar).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tick {
+    /// The points converged so far.
+    pub points: usize,
+    /// The control's value at the last one.
+    pub value: f64,
+    /// Where that value lies in the control's range, in [0, 1] (`None` without a range).
+    pub fraction: Option<f64>,
+    /// The bar's message: `p = 1.35510 in [0, 2], 120 points`.
+    pub message: String,
+}
+
+/// As [`run_scene`], calling `report` at every converged point of the path.
+pub fn run_scene_reporting(
+    scene: Scene,
+    run: &Path,
+    report: &mut dyn FnMut(&Tick),
+) -> Result<StopReason, String> {
     let compare = |e: CompareError| match e {
         CompareError::Input(m) | CompareError::Failure(m) | CompareError::Interrupted(m) => m,
     };
@@ -197,10 +219,19 @@ pub fn run_scene(scene: Scene, run: &Path) -> Result<StopReason, String> {
     let start = crate::analysis::restart::start_of(&*study)
         .map_err(|e| format!("{}: {e}", study.about().origin))?;
     let clock = std::time::Instant::now();
+    let (control, range) = crate::analysis::progress_control(&*study);
+    let range = range.filter(|(a, b)| b > a);
     let mut result = crate::analysis::run_from(
         &mut *study,
         &start,
-        &mut crate::analysis::Progress(|_, _| {}),
+        &mut crate::analysis::Progress(|point: usize, value: f64| {
+            report(&Tick {
+                points: point + 1,
+                value,
+                fraction: crate::output::progress_fraction(value, range),
+                message: crate::output::progress_message(&control, value, range, point + 1),
+            })
+        }),
     )
     .map_err(|e| e.to_string())?;
     let interrupted = result.report.stop == StopReason::Interrupted;

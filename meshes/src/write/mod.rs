@@ -275,6 +275,29 @@ pub fn write_mesh(
     }
 }
 
+/// The node and triangle orbit numbers of a symmetric mesh (`node_orbit`, `triangle_orbit`),
+/// to see its fundamental domain and the domain's images.
+pub fn orbit_fields(sym: &crate::SymmetricMesh) -> Fields {
+    let numbers = |n: usize, orbits: Vec<Vec<usize>>| -> Vec<f64> {
+        let mut id = vec![0.0; n];
+        for (k, orbit) in orbits.iter().enumerate() {
+            for &i in orbit {
+                id[i] = k as f64;
+            }
+        }
+        id
+    };
+    Fields::new()
+        .point_scalar(
+            "node_orbit",
+            numbers(sym.mesh.nodes.len(), sym.action.node_orbits()),
+        )
+        .cell_scalar(
+            "triangle_orbit",
+            numbers(sym.mesh.triangles.len(), sym.action.triangle_orbits()),
+        )
+}
+
 /// The `set_<name>` point scalar written for node set `name`: 1.0 on `nodes`, 0.0 elsewhere.
 pub fn node_set_field(name: &str, nodes: &[usize], num_nodes: usize) -> Field {
     let mut v = vec![0.0; num_nodes];
