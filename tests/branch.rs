@@ -773,3 +773,67 @@ fn branches_joining_two_points_form_a_closed_circuit_followed_once() {
         other => panic!("the second point: {other:?}"),
     }
 }
+
+/// The spinning cap's E1 double (Paper 4, C8v, 12 divisions, ω² = 18.095): its branches, of
+/// isotropy C1v, contain the drift across the spin axis, which the stability blocks hold
+/// (docs/theory.md §8.5) — the critical point is one of the held body. Held on the branch as
+/// well, both branches (the two classes of mirrors, C1v and C1v') leave it as pitchforks, their states of exactly their isotropy; each
+/// says that it is held and with what force. Free on the branch, no first step converged
+/// (the critical point of the held blocks is no bifurcation of the free body).
+#[test]
+fn the_spinning_caps_e1_branches_hold_the_drift_and_leave() {
+    let text = std::fs::read_to_string(format!(
+        "{}/scenes/thesis/paper4_spinning_cap.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replace("max = 30.0", "max = 18.4")
+    .replace("stop-displacement = 1.2", "")
+        + "\n[analysis.branches]\ndepth = 1\nsteps = 4\npoints = [2]\n";
+    let mut s = study(&text);
+    let result = run(&mut s, |_, _| {}).expect("run");
+    let cp = &result.report.critical[1];
+    assert_eq!((cp.irrep.as_str(), cp.multiplicity), ("E1", 2));
+    assert!(
+        (cp.parameters[1] - 18.0954).abs() < 1e-3,
+        "{:?}",
+        cp.parameters
+    );
+    let b = result.branches.as_ref().expect("branches");
+    let leaving = leaving(b, 2);
+    assert_eq!(
+        leaving.len(),
+        2,
+        "one class, both halves or a conjugate pair"
+    );
+    for br in leaving {
+        assert!(br.isotropy.starts_with("C1v"), "{}", br.isotropy);
+        assert_eq!(
+            br.points.len(),
+            5,
+            "{}: {:?} {:?}",
+            br.isotropy,
+            br.stop,
+            br.warnings
+        );
+        assert!(br.isotropy_exact());
+        assert!(
+            br.warnings
+                .iter()
+                .any(|w| w.contains("holds 2 neutral motions")
+                    || w.contains("holds 1 neutral motion")),
+            "{:?}",
+            br.warnings
+        );
+        // The branch leaves: its states move off the path's, with the control.
+        let asymmetry: Vec<f64> = br.points.iter().map(|p| p.asymmetry).collect();
+        assert!(
+            asymmetry[1] > 0.0 && asymmetry.windows(2).all(|w| w[1] > w[0]),
+            "{asymmetry:?}"
+        );
+        assert!(
+            control(br, 4) < control(br, 0),
+            "subcritical, as its normal form says"
+        );
+    }
+}

@@ -920,6 +920,9 @@ impl Switching<'_> {
                 self.point(u, params, arclength, iterations, index)
             },
         );
+        if let Some(note) = held_note(driver.problem_mut(), &child.basis, &branch, opts) {
+            branch.warnings.push(note);
+        }
         if let Some(c) = self.control {
             observe(&mut branch, c, &dir.field, opts.state_scale);
         }
@@ -974,6 +977,42 @@ impl Switching<'_> {
             stabiliser_class,
         }
     }
+}
+
+/// What a branch holds beyond the rigid motions (the model's held motions in its
+/// fixed-point space: a drift across a spin axis, docs/theory.md §7.9), and the largest force
+/// that holds them along its points relative to the residual's scale — an axle's force: the
+/// branch is an equilibrium of the held body, as the stability blocks read every state.
+/// `None` when it holds nothing more.
+fn held_note(
+    problem: &mut SymmetricProblem,
+    basis: &crate::adapted::SparseBasis,
+    branch: &SwitchedBranch,
+    opts: &PathOptions,
+) -> Option<String> {
+    let extra = problem.held_beyond_rigid();
+    if extra == 0 {
+        return None;
+    }
+    let sigma = opts.parameter_scales.first().copied().unwrap_or(1.0);
+    let force = branch
+        .points
+        .iter()
+        .filter_map(|p| {
+            let q = basis.restrict(&p.u);
+            let lambda = problem.free_values(&p.parameters);
+            problem
+                .held_force(&q, &lambda, opts.state_scale, sigma)?
+                .ok()
+        })
+        .fold(0.0, f64::max);
+    Some(format!(
+        "the branch holds {extra} neutral motion{} of the model in its fixed-point space (a \
+         drift across the spin axis), as the stability analysis does: its states are \
+         equilibria of the held body, with a holding force up to {} of the residual's scale",
+        if extra == 1 { "" } else { "s" },
+        crate::text::sig_digits(force, 3)
+    ))
 }
 
 /// Ends `branch` where it returns to the states of the path it left (the stabiliser of its

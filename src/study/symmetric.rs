@@ -184,6 +184,12 @@ impl<'a> SymmetricProblem<'a> {
         self.gauge = self.rigid.clone();
     }
 
+    /// The number of held motions beyond the rigid motions and relabellings (those
+    /// [`Self::holding_neutral`] adds in this fixed-point space).
+    pub fn held_beyond_rigid(&self) -> usize {
+        self.gauge.ncols().saturating_sub(self.rigid.ncols())
+    }
+
     /// The number of neutral motions held in the fixed-point space (docs/theory.md §7.9).
     pub fn held_motions(&self) -> usize {
         self.gauge.ncols()
