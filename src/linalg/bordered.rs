@@ -1,7 +1,7 @@
 //! Solves of bordered and general systems for the path follower and the extended systems
 //! built on it: [[A, B], [C, D]] with A sparse symmetric and a border of a few dense rows
-//! and columns ([`bordered_solve`], falling back to [`sparse_lu_solve`] when A itself is
-//! singular), and dense LU ([`solve_dense`]).
+//! and columns ([`bordered_solve`]: a zero pivot of A shifted and the shift bordered; falling
+//! back to [`sparse_lu_solve`]), and dense LU ([`solve_dense`]).
 
 use super::{SymmetricFactorization, SymmetricPattern};
 use faer::sparse::{SparseColMat, Triplet};
@@ -13,8 +13,9 @@ pub type SharedFactorization = Arc<Mutex<Option<SymmetricFactorization>>>;
 
 /// [[A, B], [C, D]] [x; z] = [r1; r2] by block elimination on a sparse LBLᵀ of A (symbolic
 /// analysis kept in `solver`): A X = B, S = D − C X, S z = r2 − C A⁻¹ r1, x = A⁻¹(r1 − B z),
-/// then one step of iterative refinement on the whole system (A is nearly singular close
-/// to a limit point, which the border makes regular). `None` if A is singular.
+/// then one step of iterative refinement on the whole system. A singular to round-off (close
+/// to a limit point, or along a held rigid motion, which the border makes regular) has its
+/// zero pivots shifted and the shift bordered (docs/theory.md §7.7). `None` if that fails.
 pub fn bordered_solve(
     pattern: &Arc<SymmetricPattern>,
     values: &[f64],
@@ -46,27 +47,61 @@ pub fn bordered_solve_all(
         *guard = Some(SymmetricFactorization::new(pattern).ok()?);
     }
     let fact = guard.as_mut()?;
-    // A singular to round-off (at a limit point, where the border makes the system regular):
-    // block elimination on its tiny pivots, refined, and kept only when the whole system's
-    // residual is at round-off; else `None` (the caller's sparse LU).
-    let near_singular = match fact.factorize(values) {
-        Ok(()) => false,
-        Err(super::FactorError::Singular { .. }) if fact.allow_tiny_pivots() => true,
-        Err(_) => return None,
+    // A singular to round-off — a limit point, where the border makes the system regular, or
+    // a rigid motion the border holds: each zero pivot's unknown e_k has its diagonal shifted
+    // by s = max|A|, A' = A + s E Eᵀ, and the shift is undone exactly by k more border rows
+    // and columns, [[A', B, −E], [C, D, 0], [s Eᵀ, 0, −I]] [x; z; t] = [r1; r2; 0] (t = s Eᵀ x),
+    // so that block elimination runs on a regular A'. Only when that fails is `None` returned
+    // (the caller's sparse LU).
+    let scale = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let mut shifted: Vec<usize> = Vec::new();
+    let mut own: Option<Vec<f64>> = None;
+    loop {
+        let now = own.as_deref().unwrap_or(values);
+        match fact.factorize(now) {
+            Ok(()) => break,
+            Err(super::FactorError::Singular { index, .. })
+                if shifted.len() < MAX_SHIFTED_PIVOTS && !shifted.contains(&index) =>
+            {
+                let mut v = own.take().unwrap_or_else(|| values.to_vec());
+                v[pattern.position(index, index)?] += scale;
+                own = Some(v);
+                shifted.push(index);
+            }
+            Err(_) => return None,
+        }
+    }
+    let k = shifted.len();
+    let (b, c, d) = if k == 0 {
+        (b.clone(), c.clone(), d.clone())
+    } else {
+        let (mut b2, mut c2) = (DMatrix::zeros(m, nb + k), DMatrix::zeros(nb + k, m));
+        b2.view_mut((0, 0), (m, nb)).copy_from(b);
+        c2.view_mut((0, 0), (nb, m)).copy_from(c);
+        let mut d2 = DMatrix::zeros(nb + k, nb + k);
+        d2.view_mut((0, 0), (nb, nb)).copy_from(d);
+        for (j, &i) in shifted.iter().enumerate() {
+            b2[(i, nb + j)] = -1.0;
+            c2[(nb + j, i)] = scale;
+            d2[(nb + j, nb + j)] = -1.0;
+        }
+        (b2, c2, d2)
     };
+    let values = own.as_deref().unwrap_or(values);
+    let nk = nb + k;
     // X = A⁻¹ B.
     let mut x_b = b.clone();
     fact.solve_many_in_place(x_b.as_mut_slice()).ok()?;
-    let schur = d - c * &x_b;
+    let schur = &d - &c * &x_b;
     let lu = schur.lu();
     let solve = |r: &DVector<f64>| -> Option<DVector<f64>> {
         let mut y = r.rows(0, m).into_owned();
         fact.solve_in_place(y.as_mut_slice()).ok()?;
-        let z = lu.solve(&(r.rows(m, nb) - c * &y))?;
+        let z = lu.solve(&(r.rows(m, nk) - &c * &y))?;
         let x = y - &x_b * &z;
-        let mut out = DVector::zeros(m + nb);
+        let mut out = DVector::zeros(m + nk);
         out.rows_mut(0, m).copy_from(&x);
-        out.rows_mut(m, nb).copy_from(&z);
+        out.rows_mut(m, nk).copy_from(&z);
         Some(out)
     };
     let norm = values
@@ -76,13 +111,21 @@ pub fn bordered_solve_all(
         .chain(d.iter())
         .fold(0.0f64, |a, v| a.max(v.abs()));
     all.iter()
-        .map(|rhs| refined((pattern, values, b, c, d), &solve, rhs, near_singular, norm))
+        .map(|rhs| {
+            let mut padded = DVector::zeros(m + nk);
+            padded.rows_mut(0, m + nb).copy_from(rhs);
+            let sol = refined((pattern, values, &b, &c, &d), &solve, &padded, k > 0, norm)?;
+            Some(sol.rows(0, m + nb).into_owned())
+        })
         .collect()
 }
 
+/// The most zero pivots [`bordered_solve_all`] shifts and borders before it gives up.
+const MAX_SHIFTED_PIVOTS: usize = 8;
+
 /// The solution of [[A, B], [C, D]] x = rhs from `solve` (block elimination), refined once
-/// (twice on a near-singular A, where it is kept only at a normwise backward error below
-/// [`NEAR_SINGULAR_BACKWARD_ERROR`]; `norm` = max|M_ij|).
+/// (twice after zero pivots were shifted, where it is kept only at a normwise backward error
+/// below [`NEAR_SINGULAR_BACKWARD_ERROR`]; `norm` = max|M_ij|).
 #[allow(clippy::type_complexity)]
 fn refined(
     (pattern, values, b, c, d): (
@@ -134,12 +177,12 @@ fn refined(
 }
 
 /// The largest normwise backward error ‖r‖∞ / (max|M_ij| ‖x‖∞ + ‖rhs‖∞) of a bordered solve
-/// by block elimination on an A singular to round-off that [`bordered_solve`] keeps (a few
-/// hundred times the unit round-off).
+/// by block elimination after shifted pivots that [`bordered_solve`] keeps (a few hundred
+/// times the unit round-off).
 const NEAR_SINGULAR_BACKWARD_ERROR: f64 = 1e-13;
 
-/// The same system by faer's sparse LU of the whole matrix (the fallback when A itself is
-/// singular).
+/// The same system by faer's sparse LU of the whole matrix (the fallback when block
+/// elimination fails even with shifted pivots).
 pub fn sparse_lu_solve(
     pattern: &SymmetricPattern,
     values: &[f64],

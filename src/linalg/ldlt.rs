@@ -427,26 +427,6 @@ impl SymmetricFactorization {
         self.pivots.map(|p| p.inertia)
     }
 
-    /// Lets the solves use a factorisation whose pivots include some that count as zero
-    /// but are finite and nonzero (a matrix singular to round-off, as the tangent at a limit
-    /// point is): for a bordered system that the border makes regular, whose block
-    /// elimination is then checked by its residual ([`super::bordered::bordered_solve`]).
-    /// Returns whether the solves are now allowed (not for a non-finite or an exactly zero
-    /// pivot).
-    pub fn allow_tiny_pivots(&mut self) -> bool {
-        match &mut self.pivots {
-            Some(p) => match p.failure {
-                None => true,
-                Some(FactorError::Singular { value, .. }) if value != 0.0 => {
-                    p.failure = None;
-                    true
-                }
-                Some(_) => false,
-            },
-            None => false,
-        }
-    }
-
     /// `ln |det A|` (`-∞` if a pivot is exactly zero).
     pub fn log_abs_det(&self) -> Option<f64> {
         self.pivots.map(|p| p.log_abs_det)
