@@ -535,6 +535,20 @@ fn a_contact_change_within_a_meridians_bracket_is_flagged_as_on_a_mesh() {
     for (cp, check) in result.report.critical.iter().zip(&checks.critical) {
         assert!(cp.bracket.is_some() && check.contact.is_some(), "{check:?}");
     }
+    // Where a ring enters or leaves contact, the linear penalty's stiffness jumps and with it
+    // eigenvalues across zero: those crossings are points at the jump, flagged not-localised
+    // and contact-jump, as on a 3-D mesh; the smooth zeros keep no flag.
+    let mut jumps = 0;
+    for (k, cp) in result.report.critical.iter().enumerate() {
+        let flags: Vec<&str> = result.report.flags(k).iter().map(Flag::name).collect();
+        if cp.residual_eigenvalue <= memstab::results::validity::LOCALISED {
+            assert!(flags.is_empty(), "{flags:?}");
+        } else {
+            assert_eq!(flags, ["not-localised", "contact-jump"]);
+            jumps += 1;
+        }
+    }
+    assert!(jumps >= 2, "{jumps} jumps");
     // The nodes in contact and their penetration, computed here from z <= 1.8.
     let depth = |u: &[f64]| -> Vec<f64> {
         study
@@ -612,4 +626,36 @@ fn a_contact_change_within_a_meridians_bracket_is_flagged_as_on_a_mesh() {
     let checks = result.report.checks.clone().unwrap();
     assert!(checks.critical.iter().all(|c| c.contact.is_none()));
     assert!((0..result.report.critical.len()).all(|k| result.report.flags(k).is_empty()));
+}
+
+#[test]
+fn a_localised_points_bracket_is_the_localisations_own_not_the_steps() {
+    // A localisation stops once the eigenvalue is within its tolerance, which its first
+    // trial may meet; the bracket it reports (the not-localised flag's measure, the states
+    // the contact-jump flag compares) must still be the states on either side of the zero
+    // next to it, not the step's far end: on the 3-D balloon (the test function's Newton
+    // route) and its meridian (localised to round-off), every point's bracket is a small
+    // share of its step.
+    let dir = tempfile::tempdir().unwrap();
+    let solid =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/balloon.toml"))
+            .unwrap()
+            .replace("frequency = 8", "frequency = 4");
+    let meridian = std::fs::read_to_string(meridian_balloon(dir.path(), &[])).unwrap();
+    for text in [solid, meridian] {
+        let scene = memstab::scene::Scene::from_toml_str(&text, "balloon").unwrap();
+        let mut study = memstab::study::build(scene).unwrap();
+        let result = memstab::analysis::run(&mut *study, |_, _| {}).unwrap();
+        let critical = &result.report.critical;
+        assert_eq!(critical.len(), 2, "{}", study.about().mesh.generator);
+        for cp in critical {
+            let bracket = cp.bracket.as_ref().expect("a bracket");
+            assert!(
+                bracket.width > 0.0 && bracket.width <= 1e-4,
+                "{}: a bracket of {:e} of the step",
+                study.about().mesh.generator,
+                bracket.width
+            );
+        }
+    }
 }
