@@ -1,4 +1,5 @@
-//! A run's critical and turning points on refined meshes (docs/theory.md §8.11): each point's
+//! A run's critical and turning points (and a critical curve's events) on refined meshes
+//! (docs/theory.md §8.11): each point's
 //! value on every level, the observed order, the Richardson value and an error estimate per
 //! level beside that level's wall time, as plain data (`memstab run --refine`, `refine.json`).
 

@@ -6,7 +6,9 @@
 //! estimate per level. A point with no counterpart on a refined mesh is not mesh-converged
 //! ([`crate::results::validity::Flag::NotMeshConverged`]). With `continuum` the scene also
 //! runs on its meridian, as `compare` runs `axisymmetric`, and every point gets the
-//! meridian's value and its distance from it.
+//! meridian's value and its distance from it. On a critical curve its events (cusps, folds,
+//! hilltops, irrep changes) are followed the same way, each kind on its own, both
+//! coordinates estimated ([`refine_events`]).
 
 use super::matching::{match_rungs, measure_distances, Rung};
 use super::meshes::{describe, resolution, variant, Common};
