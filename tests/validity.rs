@@ -213,14 +213,25 @@ fn a_stretch_beyond_the_materials_range_is_flagged_on_rows_and_points() {
 
 #[test]
 fn a_bad_max_stretch_is_refused_naming_the_key() {
+    // On a 3-D mesh and on a meridian alike.
     let dir = tempfile::tempdir().unwrap();
-    for (scene, expect) in [(
-        small_balloon(
-            dir.path(),
-            &[("thickness = 0.01 ", "thickness = 0.01\nmax-stretch = 0.5 #")],
+    let bad = "'material.max-stretch' must be a finite number > 1, got";
+    for (scene, expect) in [
+        (
+            small_balloon(
+                dir.path(),
+                &[("thickness = 0.01 ", "thickness = 0.01\nmax-stretch = 0.5 #")],
+            ),
+            format!("{bad} 0.5"),
         ),
-        "'material.max-stretch' must be a finite number > 1, got 0.5",
-    )] {
+        (
+            meridian_balloon(
+                dir.path(),
+                &[("thickness = 0.01", "thickness = 0.01\nmax-stretch = 1.0 #")],
+            ),
+            format!("{bad} 1"),
+        ),
+    ] {
         let out = dir.path().join("out");
         let o = Command::new(env!("CARGO_BIN_EXE_memstab"))
             .args([
@@ -234,7 +245,7 @@ fn a_bad_max_stretch_is_refused_naming_the_key() {
         assert_eq!(o.status.code(), Some(2));
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(err.trim().lines().count(), 1, "{err}");
-        assert!(err.contains(expect), "{err}");
+        assert!(err.contains(&expect), "{err}");
         assert!(!out.exists());
     }
 }
