@@ -112,8 +112,13 @@ fn the_balloons_error_estimates_bracket_the_true_errors() {
             "{r} against {exact}: {p}"
         );
     }
-    // The meridian's value is the closed form, and each level's distance from it its error.
-    for (p, exact) in points.iter().zip([P_MAX, P_MIN]) {
+    // The meridian's value is the closed form, and each level's distance from it its error,
+    // for the critical and the turning points alike.
+    for (p, exact) in points
+        .iter()
+        .zip([P_MAX, P_MIN])
+        .chain(turning.iter().zip([P_MAX, P_MIN]))
+    {
         let c = p["continuum"].as_f64().unwrap();
         assert!((c - exact).abs() < 1e-6, "{p}");
         let d = p["distances"][0].as_f64().unwrap();

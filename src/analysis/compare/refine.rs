@@ -354,20 +354,30 @@ impl Refiner {
             })
             .collect();
         // The turning points, on their own.
-        let turning_levels = levels
-            .iter()
-            .map(|l| Level {
-                critical: l.turning.clone(),
-                ..l.clone()
-            })
-            .collect();
-        let turning_runs = [MeshRuns {
+
+        let as_turning = |l: &Level| Level {
+            critical: l.turning.clone(),
+            ..l.clone()
+        };
+        let mut turning_runs = vec![MeshRuns {
             label: "run".into(),
             generator: String::new(),
-            levels: turning_levels,
+            levels: levels.iter().map(as_turning).collect(),
             check: None,
         }];
-        let (turning_rungs, _) = match_rungs(&turning_runs, self.floor);
+        // The meridian's turning points, as its critical points are matched.
+        if let Some((coarse, fine)) = &continuum {
+            turning_runs.push(MeshRuns {
+                label: "axisymmetric".into(),
+                generator: "axisymmetric".into(),
+                levels: vec![as_turning(coarse)],
+                check: Some(as_turning(fine)),
+            });
+        }
+        let (mut turning_rungs, _) = match_rungs(&turning_runs, self.floor);
+        if continuum.is_some() {
+            measure_distances(&turning_runs, &mut turning_rungs, 1);
+        }
         let turning = turning_rungs
             .iter()
             .filter(|r| r.found_at == base_resolution)
