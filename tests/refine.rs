@@ -112,8 +112,13 @@ fn the_balloons_error_estimates_bracket_the_true_errors() {
             "{r} against {exact}: {p}"
         );
     }
-    // The meridian's value is the closed form, and each level's distance from it its error.
-    for (p, exact) in points.iter().zip([P_MAX, P_MIN]) {
+    // The meridian's value is the closed form, and each level's distance from it its error,
+    // for the critical and the turning points alike.
+    for (p, exact) in points
+        .iter()
+        .zip([P_MAX, P_MIN])
+        .chain(turning.iter().zip([P_MAX, P_MIN]))
+    {
         let c = p["continuum"].as_f64().unwrap();
         assert!((c - exact).abs() < 1e-6, "{p}");
         let d = p["distances"][0].as_f64().unwrap();
@@ -579,4 +584,108 @@ fn the_disc_from_below_refined_agrees_with_compare_and_labels_its_post_fold_poin
     }
     assert_eq!(converged, 3);
     assert!(critical.len() > 3, "no point farther along: {critical:?}");
+}
+
+/// The cusp of the balloon's limit-point curve in (p, k) in closed form: the maximum of k on
+/// the fold line k(λ) (golden-section search), with the sphere's pressure there.
+fn closed_form_cusp() -> (f64, f64) {
+    let (mut a, mut b) = (1.4f64, 3.0f64);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..200 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if crate::common::fold_k(c) > crate::common::fold_k(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let l = 0.5 * (a + b);
+    let k = crate::common::fold_k(l);
+    (memstab::reference::sphere_pressure(k, l), k)
+}
+
+/// A critical curve's cusp under `--refine 2` (the balloon's limit point followed in (p, k)
+/// at icosphere frequency 4, 8, 16): both coordinates on every level, the pressure's observed
+/// order 2, its error estimates bracketing the true errors against the closed form and its
+/// Richardson value far closer than the finest level; k, which the fold line's maximum fixes
+/// to within 3e-7 on every level, is said to converge outside the assumed order rather than
+/// extrapolated. The cusp has counterparts on every level: no flag in critical.json.
+#[test]
+fn a_critical_curves_cusp_is_refined_against_its_closed_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("curve.toml");
+    std::fs::write(
+        &scene,
+        crate::common::balloon_with_k(
+            4,
+            "[parameters.k]\nstart = 0.1\nmin = 0.05\nmax = 0.3\n\n[analysis]\n\
+             type = \"critical-curve\"\ncontrol = \"p\"\nsecond = \"k\"\nfrom = \"limit\"\n\
+             steps = 120\npath-steps = 400\nmax-step = 0.05\n\n",
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let stdout = run(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--refine",
+        "2",
+        "--quiet",
+    ]);
+    let (p_c, k_c) = closed_form_cusp();
+    let refinement = json(&out.join("refine.json"));
+    assert_eq!(refinement["second"], "k", "{refinement}");
+    let events = refinement["events"].as_array().unwrap();
+    assert_eq!(events.len(), 1, "{refinement}");
+    let cusp = &events[0];
+    assert_eq!(cusp["kind"], "cusp");
+    assert_eq!(cusp["extremum"], "maximum");
+    // The curve's events: start, cusp, end.
+    assert_eq!(cusp["event"], 2);
+    let p = &cusp["control"];
+    assert_eq!(p["estimate"]["basis"], "richardson", "{cusp}");
+    assert!(
+        (p["observed_order"].as_f64().unwrap() - 2.0).abs() < 0.1,
+        "{cusp}"
+    );
+    let values: Vec<f64> = p["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(values.len(), 3);
+    for (v, e) in values.iter().zip(p["errors"].as_array().unwrap()) {
+        let (truth, e) = ((v - p_c).abs(), e.as_f64().unwrap());
+        assert!(
+            truth <= 1.5 * e && truth >= e / 1.5,
+            "p {v}: true error {truth}, estimated {e}: {cusp}"
+        );
+    }
+    let r = p["richardson"].as_f64().unwrap();
+    assert!(
+        (r - p_c).abs() < 0.01 * (values[2] - p_c).abs(),
+        "Richardson {r} against {p_c}: {cusp}"
+    );
+    let k = &cusp["second"];
+    for v in k["values"].as_array().unwrap() {
+        assert!((v.as_f64().unwrap() - k_c).abs() < 1e-6, "{cusp}");
+    }
+    assert_eq!(k["estimate"]["basis"], "not-asymptotic", "{cusp}");
+    // The summary prints the cusp's levels; critical.json carries no flag on it.
+    assert!(
+        stdout.contains("curve event 2: cusp (maximum of k)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("level 2: k = "), "{stdout}");
+    let critical = json(&out.join("critical.json"));
+    let listed = critical
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == "cusp")
+        .unwrap();
+    assert_eq!(listed["flags"], serde_json::json!([]), "{listed}");
 }

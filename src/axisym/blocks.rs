@@ -281,6 +281,21 @@ impl Blocks for MeridianBlocks {
         v.to_vec()
     }
 
+    /// The nodes (rings) whose contact with a plane differs between the states `a` and `b`
+    /// (a linear penalty's stiffness starts there, docs/theory.md §8.9); `None` without a
+    /// plane.
+    fn switched(&self, a: (&[f64], &[f64]), b: (&[f64], &[f64])) -> Option<usize> {
+        let (before, _) = self.model.penetrations(a.0, a.1)?;
+        let (after, _) = self.model.penetrations(b.0, b.1)?;
+        Some(
+            before
+                .iter()
+                .zip(&after)
+                .filter(|(x, y)| (**x > 0.0) != (**y > 0.0))
+                .count(),
+        )
+    }
+
     /// A meridian block costs a few hundred element evaluations: crossings are localised to
     /// round-off (the bracket at round-off of the step), as a fold where its eigenvalue is
     /// weak against the block's largest entry (a stiff plane's penalty) would otherwise be

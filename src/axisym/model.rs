@@ -349,6 +349,43 @@ impl AxisymModel {
             .sum()
     }
 
+    /// The largest principal stretch at displacement `q` over the elements' quadrature
+    /// points, from the stress-free state: the larger of the meridional λ_s = λ₀|x_ξ|/|X_ξ|
+    /// and the hoop λ_θ = λ₀ r/R (λ₀ the pre-stretch; the two are principal, x_ξ lying in
+    /// the (r, z) plane and the hoop direction normal to it; docs/theory.md §15.2).
+    pub fn largest_stretch(&self, q: &[f64]) -> f64 {
+        let x = self.positions(q);
+        let lam = self.meridian.prestretch;
+        (0..self.meridian.elements())
+            .flat_map(|e| super::points(&self.meridian, &x, e))
+            .map(|p| (lam * p.x_xi.norm() / p.dx_ref).max(lam * p.r / p.big_r))
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// Every node's deepest penetration ⟨d − n_z z⟩ of the planes at displacement `q` (0
+    /// where it is clear of them) and the mean length of the elements' chords (two per
+    /// quadratic element) there; `None` without a plane.
+    pub fn penetrations(&self, q: &[f64], params: &[f64]) -> Option<(Vec<f64>, f64)> {
+        if self.planes.is_empty() {
+            return None;
+        }
+        let x = self.positions(q);
+        let depth = x
+            .iter()
+            .map(|p| {
+                self.planes
+                    .iter()
+                    .map(|plane| (plane.offset.value(params) - plane.normal_z * p[1]).max(0.0))
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        let chords: f64 = x
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum();
+        Some((depth, chords / (x.len() - 1).max(1) as f64))
+    }
+
     /// Π, gradient, tangent and parameter loads at displacement `q`, parameters `params`.
     pub fn evaluate(&self, q: &[f64], params: &[f64]) -> Result<Evaluated, AxisymError> {
         let nq = self.dim();

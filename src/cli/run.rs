@@ -158,8 +158,9 @@ fn execute_refined(
                 eprintln!("refine: {line}");
             }
         };
-        match refiner.run(&result.report, seconds, &progress) {
-            Ok(r) => result.report.refinement = r,
+        match refiner.run(&result, seconds, &progress) {
+            Ok(Some(r)) => memstab::analysis::compare::attach(&mut result, r),
+            Ok(None) => {}
             Err(CompareError::Input(m) | CompareError::Failure(m)) => {
                 return Err(dir.failed(&format!("--refine: {m}")))
             }

@@ -205,6 +205,8 @@ pub struct ZeroFound {
     pub params: Vec<f64>,
     /// The test function there.
     pub value: f64,
+    /// Its arclength from the earlier end.
+    pub s: f64,
     /// The nearest states of either sign found inside the step.
     pub sides: [Option<StateSide>; 2],
 }
@@ -445,11 +447,11 @@ impl<'a> Crossings<'a> {
                     (sides[0].1.as_slice(), sides[0].2.as_slice()),
                     (sides[1].1.as_slice(), sides[1].2.as_slice()),
                 );
-                // The bracket's ends: the nearest trial states on either side of the change.
-                let bracket = bracket_of(sides, s1);
                 if g_best.abs() > JUMP_EIGENVALUE * a.spectrum.scale
                     && switched.is_some_and(|n| n > 0)
                 {
+                    // The bracket's ends: the nearest trial states on either side of the jump.
+                    let bracket = bracket_of(sides, s1);
                     // The eigenvalue jumps across zero where the model's switches change (a
                     // node enters or leaves contact): the stability changes there, at the
                     // jump itself. It is reported at the side whose eigenvalue is nearer
@@ -511,6 +513,21 @@ impl<'a> Crossings<'a> {
                     warnings.push(not_localised(&why));
                     continue;
                 }
+                // The bracket's ends: the nearest states on either side of the zero.
+                let blocks = &mut self.blocks;
+                tighten(
+                    &mut sides,
+                    s_best,
+                    reach(g0, g1, s1, g_best, tol),
+                    g0 > 0.0,
+                    |s| {
+                        let (u, p) = trials.state(s)?;
+                        let sp = blocks.block_eigen(&u, &p, mu, k + 1, false)?;
+                        let g = sp.blocks[mu].eigenvalues.get(k).copied()?;
+                        Some((g, u, p))
+                    },
+                );
+                let bracket = bracket_of(sides, s1);
                 // Re-evaluate at the best point, with the eigenvectors for the critical mode.
                 let evaluated = trials.state(s_best).and_then(|(u, p)| {
                     let sp = self.block_eigen(&u, &p, mu, k + 1, true)?;
@@ -606,11 +623,23 @@ impl Crossings<'_> {
             tol,
             LOCATE_WIDTH,
         )?;
-        let (u, p) = match best {
-            Some((s, _, u, p)) if s == s_best => (u, p),
+        let (u, p, g_best) = match best {
+            Some((s, g, u, p)) if s == s_best => (u, p, g),
             _ => return None,
         };
         let (sp, g) = self.certified(&u, &p, mu, k, tol)?;
+        let blocks = &mut self.blocks;
+        tighten(
+            &mut sides,
+            s_best,
+            reach(g0, g1, s1, g_best, tol),
+            g0 > 0.0,
+            |s| {
+                let (u, p) = trials.state(s)?;
+                let (g, _) = blocks.test_function(&u, &p, mu, Some(&border), 0)?;
+                Some((g, u, p))
+            },
+        );
         Some((u, p, sp, g, bracket_of(sides, s1)))
     }
 
@@ -661,10 +690,22 @@ impl Crossings<'_> {
         })?;
         let (sp, g) = self.certified(&zero.u, &zero.params, mu, k, tol)?;
         let [first, second] = zero.sides;
-        let sides = [
+        let mut sides = [
             first.unwrap_or((0.0, a.u.to_vec(), a.params.to_vec())),
             second.unwrap_or((s1, b.u.to_vec(), b.params.to_vec())),
         ];
+        let blocks = &mut self.blocks;
+        tighten(
+            &mut sides,
+            zero.s,
+            reach(g0, g1, s1, zero.value, tol),
+            g0 > 0.0,
+            |s| {
+                let (u, p) = trials.state(s)?;
+                let (g, _) = blocks.test_function(&u, &p, mu, Some(border), 0)?;
+                Some((g, u, p))
+            },
+        );
         Some((zero.u, zero.params, sp, g, bracket_of(sides, s1)))
     }
 
@@ -711,6 +752,64 @@ fn bracket_of([(s0, u0, p0), (s2, u2, p2)]: [(f64, Vec<f64>, Vec<f64>); 2], s1: 
     Bracket {
         width: (s2 - s0).abs() / s1.abs().max(f64::MIN_POSITIVE),
         ends: [(u0, p0), (u2, p2)],
+    }
+}
+
+/// How many times [`tighten`] doubles its reach before it leaves a side as it is.
+const TIGHTEN_TRIES: usize = 24;
+
+/// A trial state of a step with a function's value there: (g, u, every parameter).
+type Trial = (f64, Vec<f64>, Vec<f64>);
+
+/// The distance from a localised zero at which [`tighten`] first looks for a state of either
+/// sign: twice the distance over which g, at its mean slope over the step (g0 at 0, g1 at s1),
+/// changes by the larger of the tolerance and |g| at the zero, and never less than the
+/// localisation's width.
+fn reach(g0: f64, g1: f64, s1: f64, g_best: f64, tol: f64) -> f64 {
+    let slope = (g1 - g0).abs() / s1.abs().max(f64::MIN_POSITIVE);
+    let r = 2.0 * tol.max(g_best.abs()) / slope;
+    let floor = LOCATE_WIDTH * s1.abs();
+    if r.is_finite() {
+        r.max(floor)
+    } else {
+        floor
+    }
+}
+
+/// The sides of a zero localised at `s_best` narrowed about it (docs/theory.md §11.2). A
+/// localisation ends once |g| is within its tolerance, which its first trial may meet, and a
+/// Newton iteration at the zero may pass converged states on one side only: the other side
+/// is then still the step's end, and the bracket as wide as the step. Each side farther than
+/// `reach` from the zero is replaced by the state at s_best ± r towards it, for the first r
+/// of reach, 2·reach, 4·reach, … ([`TIGHTEN_TRIES`] at most, never past the side) where g has
+/// that side's sign (nearer the zero its sign is the noise of the tolerance); `positive`: g
+/// is positive on `sides[0]`'s side; `g(s)` the function and state at s (`None`: no state
+/// there, the side is kept).
+fn tighten(
+    sides: &mut [(f64, Vec<f64>, Vec<f64>); 2],
+    s_best: f64,
+    reach: f64,
+    positive: bool,
+    mut g: impl FnMut(f64) -> Option<Trial>,
+) {
+    for (k, side) in sides.iter_mut().enumerate() {
+        let want_positive = (k == 0) == positive;
+        let far = side.0 - s_best;
+        let mut r = reach;
+        for _ in 0..TIGHTEN_TRIES {
+            if !(r > 0.0 && r < far.abs()) {
+                break;
+            }
+            let s = s_best + r.copysign(far);
+            match g(s) {
+                Some((value, u, p)) if value != 0.0 && (value > 0.0) == want_positive => {
+                    *side = (s, u, p);
+                    break;
+                }
+                Some(_) => r *= 2.0,
+                None => break,
+            }
+        }
     }
 }
 
@@ -1016,6 +1115,7 @@ impl<P: Problem + States> Trials for StepTrials<'_, P> {
             u,
             params,
             value: found.value,
+            s: found.point.arclength - self.from.arclength,
             sides: [side(first), side(second)],
         })
     }
@@ -1023,7 +1123,42 @@ impl<P: Problem + States> Trials for StepTrials<'_, P> {
 
 #[cfg(test)]
 mod tests {
-    use super::leaves_path;
+    use super::{leaves_path, reach, tighten};
+
+    /// A zero met at once (at s = 0.3, the first trial within the tolerance) leaves the far
+    /// side at the step's end; tightening brings each side to a state of its sign next to the
+    /// zero, where g(s) = s − 0.3 is noise (of the wrong sign) within 1e-9 of the zero.
+    #[test]
+    fn a_zero_met_at_once_gets_the_bracket_of_its_tolerance() {
+        let g = |s: f64| {
+            let d = s - 0.3;
+            if d.abs() < 1e-9 {
+                -d
+            } else {
+                d
+            }
+        };
+        let state = |s: f64| (s, vec![s], vec![2.0 * s]);
+        // The zero's own state on the positive side, the negative side still the step's start.
+        let mut sides = [state(0.0), state(0.3 + 1e-12)];
+        let r = reach(g(0.0), g(1.0), 1.0, 1e-12, 1e-10);
+        assert!((r - 2e-10).abs() < 1e-22, "{r}");
+        let mut trials = 0;
+        tighten(&mut sides, 0.3 + 1e-12, r, false, |s| {
+            trials += 1;
+            let (s, u, p) = state(s);
+            Some((g(s), u, p))
+        });
+        let [(a, ua, pa), (b, _, _)] = &sides;
+        assert!(g(*a) < 0.0 && *a < 0.3 && 0.3 - a < 1e-8, "{a}");
+        assert_eq!((ua[0], pa[0]), (*a, 2.0 * a));
+        assert_eq!(*b, 0.3 + 1e-12);
+        assert!(trials > 1 && trials < 10, "{trials}");
+        // A side already within reach is kept, and so is one where no state is found.
+        let mut near = [state(0.3 - 1e-11), state(0.9)];
+        tighten(&mut near, 0.3, 1e-10, false, |_| None);
+        assert_eq!((near[0].0, near[1].0), (0.3 - 1e-11, 0.9));
+    }
 
     /// At a fold the count changes by one and the control turns; between two regular points
     /// neither happens. Anything else leaves the path: the parity without a turn, a turn

@@ -11,7 +11,8 @@ pub const REFINE_JSON: &str = "refine.json";
 
 /// Writes `dir/refine.json`: the [`Refinement`] as pretty-printed JSON (the levels with their
 /// meshes and wall times, every critical and turning point with its value per level, the
-/// observed order, the Richardson value, the error per level and what the estimate rests on)
+/// observed order, the Richardson value, the error per level and what the estimate rests on;
+/// a critical curve's events with both coordinates so)
 /// and returns its path.
 ///
 /// # Errors
@@ -24,16 +25,18 @@ pub fn write_refine(dir: &Path, refinement: &Refinement) -> Result<PathBuf, Outp
         .iter()
         .chain(&refinement.turning)
         .flat_map(|p| {
-            p.values
-                .iter()
-                .chain(&p.errors)
-                .chain(&p.distances)
-                .flatten()
-                .chain(&p.observed_order)
-                .chain(&p.richardson)
+            p.series
+                .numbers()
+                .chain(p.distances.iter().flatten())
                 .chain(&p.continuum)
                 .chain(&p.continuum_error)
         })
+        .chain(
+            refinement
+                .events
+                .iter()
+                .flat_map(|e| e.control.numbers().chain(e.second.numbers())),
+        )
         .chain(refinement.levels.iter().map(|l| &l.seconds));
     if let Some(v) = numbers.into_iter().find(|v| !v.is_finite()) {
         return Err(OutputError::invalid(

@@ -367,8 +367,13 @@ pub fn write_run_with(
         own.push(Described {
             path,
             what: format!(
-                "the critical and turning points at resolution {}: values, order, Richardson, \
-                 error and wall time per level",
+                "the critical and turning points{} at resolution {}: values, order, \
+                 Richardson, error and wall time per level",
+                if r.events.is_empty() {
+                    ""
+                } else {
+                    " and the curve's events"
+                },
                 levels.join(", ")
             ),
         });

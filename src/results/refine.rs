@@ -1,8 +1,9 @@
-//! A run's critical and turning points on refined meshes (docs/theory.md §8.11): each point's
+//! A run's critical and turning points (and a critical curve's events) on refined meshes
+//! (docs/theory.md §8.11): each point's
 //! value on every level, the observed order, the Richardson value and an error estimate per
 //! level beside that level's wall time, as plain data (`memstab run --refine`, `refine.json`).
 
-use super::StopReason;
+use super::{Extremum, StopReason};
 use crate::text::{sci, sig_digits};
 use serde::Serialize;
 
@@ -38,6 +39,13 @@ pub struct Refinement {
     pub critical: Vec<PointRefinement>,
     /// The run's turning points of the control, in path order.
     pub turning: Vec<PointRefinement>,
+    /// The events of a critical curve (`type = "critical-curve"`) in curve order, but its
+    /// start and end: empty for another analysis.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<EventRefinement>,
+    /// The curve's second parameter, with events.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub second: Option<String>,
     /// Critical points of the refined meshes with no counterpart on the run's own mesh.
     pub new_on_finer: Vec<NewPoint>,
     /// The refined runs that failed (and those not run after a failed one): `levels` and the
@@ -101,20 +109,9 @@ pub struct PointRefinement {
     /// The wave number of its mode about z, where the mesh has an axis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub m: Option<usize>,
-    /// Its value on every level (the mean of a split pair's halves); `null` where the level
-    /// has no counterpart.
-    pub values: Vec<Option<f64>>,
-    /// The observed order log2(|v₀ − v₁| / |v₁ − v₂|), with three levels.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub observed_order: Option<f64>,
-    /// The Richardson value v_f + (v_f − v_c)/(2^p − 1) of the two finest levels, p the
-    /// assumed order; only in the asymptotic range.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub richardson: Option<f64>,
-    /// Each level's error estimate |v − Richardson|; `null` where there is none.
-    pub errors: Vec<Option<f64>>,
-    /// What the estimate rests on.
-    pub estimate: Estimate,
+    /// Its value on every level, the observed order, the Richardson value and the errors.
+    #[serde(flatten)]
+    pub series: Series,
     /// The meridian's value, with `--continuum`, when it has a counterpart.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub continuum: Option<f64>,
@@ -130,7 +127,73 @@ pub struct PointRefinement {
 impl PointRefinement {
     /// True when every refined mesh has a counterpart.
     pub fn converged(&self) -> bool {
+        self.series.converged()
+    }
+}
+
+/// One number followed through the levels: its value on each, the observed order, the
+/// Richardson value and each level's error.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Series {
+    /// Its value on every level (the mean of a split pair's halves); `null` where the level
+    /// has no counterpart.
+    pub values: Vec<Option<f64>>,
+    /// The observed order log2(|v₀ − v₁| / |v₁ − v₂|), with three levels.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observed_order: Option<f64>,
+    /// The Richardson value v_f + (v_f − v_c)/(2^p − 1) of the two finest levels, p the
+    /// assumed order; only in the asymptotic range.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub richardson: Option<f64>,
+    /// Each level's error estimate |v − Richardson|; `null` where there is none.
+    pub errors: Vec<Option<f64>>,
+    /// What the estimate rests on.
+    pub estimate: Estimate,
+}
+
+impl Series {
+    /// True when every refined mesh has a counterpart.
+    pub fn converged(&self) -> bool {
         !matches!(self.estimate, Estimate::NotMeshConverged { .. })
+    }
+
+    /// Its finite numbers' check: every number it holds.
+    pub fn numbers(&self) -> impl Iterator<Item = &f64> {
+        self.values
+            .iter()
+            .chain(&self.errors)
+            .flatten()
+            .chain(&self.observed_order)
+            .chain(&self.richardson)
+    }
+}
+
+/// An event of a critical curve (a cusp, a fold, a hilltop, a change of the critical irrep)
+/// followed through the refinements: both its coordinates, each with its estimate. The curve's
+/// start is the path's critical point (in `critical`), its end where the curve left its range
+/// or budget: neither is an event of the mesh's.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventRefinement {
+    /// Its number among the curve's events, from 1 (the start), as in `curve.json`.
+    pub event: usize,
+    /// Its kind: `cusp`, `fold`, `hilltop`, `irrep change`.
+    pub kind: String,
+    /// For a cusp or fold: whether the second parameter has a maximum or a minimum there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extremum: Option<Extremum>,
+    /// For a hilltop or an irrep change: the other irrep singular there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub irrep: Option<String>,
+    /// The control's value through the levels.
+    pub control: Series,
+    /// The second parameter's value through the levels.
+    pub second: Series,
+}
+
+impl EventRefinement {
+    /// True when every refined mesh has a counterpart.
+    pub fn converged(&self) -> bool {
+        self.control.converged()
     }
 }
 
@@ -176,9 +239,67 @@ pub struct NewPoint {
     pub m: Option<usize>,
 }
 
-/// The critical and turning points on the refined meshes: each level's value, error estimate
-/// and wall time, the observed order and the Richardson value (or why there is none), the
-/// continuum's value and distance.
+/// The lines of one number through the levels (`name` is what it is the value of): each
+/// level's value, error and wall time, then the observed order and the Richardson value, or
+/// why there is none.
+fn series_lines(r: &Refinement, name: &str, p: &Series, indent: &str) -> Vec<String> {
+    let mut lines = Vec::new();
+    for (l, (v, e)) in p.values.iter().zip(&p.errors).enumerate() {
+        let value = v.map_or_else(|| "-".to_string(), |v| sig_digits(v, 8));
+        let error = e.map_or_else(String::new, |e| format!("  error {}", sci(e)));
+        lines.push(format!(
+            "{indent}level {l}: {name} = {value}{error}  ({:.2} s)",
+            r.levels[l].seconds
+        ));
+    }
+    let changes = || {
+        let v: Vec<f64> = p.values.iter().flatten().copied().collect();
+        v.windows(2)
+            .map(|w| sci(w[1] - w[0]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let tail = match (&p.estimate, p.richardson) {
+        (Estimate::Richardson { observed: true }, Some(x)) => format!(
+            "observed order {:.2}; Richardson {}",
+            p.observed_order.unwrap_or(f64::NAN),
+            sig_digits(x, 8)
+        ),
+        (Estimate::Richardson { .. }, Some(x)) => format!(
+            "order {} assumed (two levels do not observe it); Richardson {}",
+            r.assumed_order,
+            sig_digits(x, 8)
+        ),
+        (Estimate::Unchanged, _) => "the value does not change on refinement".to_string(),
+        (Estimate::NotRefined, _) => "no refined level ran: no error estimated".to_string(),
+        (Estimate::NotAsymptotic { order }, _) => format!(
+            "observed order {}, far from {}: not in the asymptotic range, not \
+             extrapolated and no error estimated (the value changes by {})",
+            order.map_or_else(|| "undefined".to_string(), |p| format!("{p:.2}")),
+            r.assumed_order,
+            changes()
+        ),
+        _ => String::new(),
+    };
+    if !tail.is_empty() {
+        lines.push(format!("{indent}{tail}"));
+    }
+    lines
+}
+
+/// `: not mesh-converged, …` for a series without a counterpart on a refined mesh.
+fn status(p: &Series) -> String {
+    match &p.estimate {
+        Estimate::NotMeshConverged { finer } => {
+            format!(": not mesh-converged, no counterpart on {finer}")
+        }
+        _ => String::new(),
+    }
+}
+
+/// The critical and turning points (and a critical curve's events) on the refined meshes:
+/// each level's value, error estimate and wall time, the observed order and the Richardson
+/// value (or why there is none), the continuum's value and distance.
 pub fn summary(r: &Refinement) -> Vec<String> {
     let mut lines = Vec::new();
     lines.push(format!(
@@ -203,50 +324,8 @@ pub fn summary(r: &Refinement) -> Vec<String> {
     }
     let block = |lines: &mut Vec<String>, title: String, p: &PointRefinement| {
         let m = p.m.map_or_else(String::new, |m| format!(", m = {m}"));
-        let status = match &p.estimate {
-            Estimate::NotMeshConverged { finer } => {
-                format!(": not mesh-converged, no counterpart on {finer}")
-            }
-            _ => String::new(),
-        };
-        lines.push(format!("  {title}{m}{status}"));
-        for (l, (v, e)) in p.values.iter().zip(&p.errors).enumerate() {
-            let value = v.map_or_else(|| "-".to_string(), |v| sig_digits(v, 8));
-            let error = e.map_or_else(String::new, |e| format!("  error {}", sci(e)));
-            lines.push(format!(
-                "    level {l}: {} = {value}{error}  ({:.2} s)",
-                r.control, r.levels[l].seconds
-            ));
-        }
-        let changes = || {
-            let v: Vec<f64> = p.values.iter().flatten().copied().collect();
-            v.windows(2)
-                .map(|w| sci(w[1] - w[0]))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let mut tail = match (&p.estimate, p.richardson) {
-            (Estimate::Richardson { observed: true }, Some(x)) => format!(
-                "observed order {:.2}; Richardson {}",
-                p.observed_order.unwrap_or(f64::NAN),
-                sig_digits(x, 8)
-            ),
-            (Estimate::Richardson { .. }, Some(x)) => format!(
-                "order {} assumed (two levels do not observe it); Richardson {}",
-                r.assumed_order,
-                sig_digits(x, 8)
-            ),
-            (Estimate::Unchanged, _) => "the value does not change on refinement".to_string(),
-            (Estimate::NotRefined, _) => "no refined level ran: no error estimated".to_string(),
-            (Estimate::NotAsymptotic { order }, _) => format!(
-                "observed order {}, far from {}: not in the asymptotic range, not \
-                 extrapolated and no error estimated (the value changes by {})",
-                order.map_or_else(|| "undefined".to_string(), |p| format!("{p:.2}")),
-                r.assumed_order,
-                changes()
-            ),
-            _ => String::new(),
-        };
+        lines.push(format!("  {title}{m}{}", status(&p.series)));
+        let mut series = series_lines(r, &r.control, &p.series, "    ");
         if let Some(c) = p.continuum {
             let e = p
                 .continuum_error
@@ -260,14 +339,16 @@ pub fn summary(r: &Refinement) -> Vec<String> {
                 .map_or_else(String::new, |d| {
                     format!(", distance of the finest {}", sci(*d))
                 });
-            if !tail.is_empty() {
-                tail.push_str("; ");
+            let text = format!("continuum {}{e}{d}", sig_digits(c, 8));
+            // After the estimate's line, or alone.
+            match series.last_mut() {
+                Some(last) if !last.trim_start().starts_with("level ") => {
+                    last.push_str(&format!("; {text}"));
+                }
+                _ => series.push(format!("    {text}")),
             }
-            tail.push_str(&format!("continuum {}{e}{d}", sig_digits(c, 8)));
         }
-        if !tail.is_empty() {
-            lines.push(format!("    {tail}"));
-        }
+        lines.extend(series);
     };
     for p in &r.critical {
         let numbers: Vec<String> = p.points.iter().map(ToString::to_string).collect();
@@ -284,6 +365,24 @@ pub fn summary(r: &Refinement) -> Vec<String> {
     }
     for (k, p) in r.turning.iter().enumerate() {
         block(&mut lines, format!("turning {}: {}", k + 1, p.kind), p);
+    }
+    let second = r.second.as_deref().unwrap_or("second");
+    for e in &r.events {
+        let what = match (&e.extremum, &e.irrep) {
+            (Some(x), _) => format!(" ({x} of {second})"),
+            (None, Some(irrep)) => format!(" with {irrep}"),
+            (None, None) => String::new(),
+        };
+        lines.push(format!(
+            "  curve event {}: {}{what}{}",
+            e.event,
+            e.kind,
+            status(&e.control)
+        ));
+        lines.extend(series_lines(r, &r.control, &e.control, "    "));
+        if e.control.converged() {
+            lines.extend(series_lines(r, second, &e.second, "    "));
+        }
     }
     for n in &r.new_on_finer {
         let m = n.m.map_or_else(String::new, |m| format!(", m = {m}"));

@@ -220,7 +220,7 @@ impl PathReport {
         }
         if let Some(r) = &self.refinement {
             for p in r.critical.iter().filter(|p| p.points.contains(&(k + 1))) {
-                if let super::refine::Estimate::NotMeshConverged { finer } = &p.estimate {
+                if let super::refine::Estimate::NotMeshConverged { finer } = &p.series.estimate {
                     flags.push(Flag::NotMeshConverged {
                         finer: finer.clone(),
                     });
@@ -242,7 +242,7 @@ impl PathReport {
         };
         if let Some(r) = &self.refinement {
             for p in r.turning.iter().filter(|p| p.points.contains(&(t + 1))) {
-                if let super::refine::Estimate::NotMeshConverged { finer } = &p.estimate {
+                if let super::refine::Estimate::NotMeshConverged { finer } = &p.series.estimate {
                     flags.push(Flag::NotMeshConverged {
                         finer: finer.clone(),
                     });
@@ -274,6 +274,34 @@ impl Flag {
             Flag::ContactJump { .. } => "contact-jump",
             Flag::Stretch { .. } => "stretch",
             Flag::NotMeshConverged { .. } => "not-mesh-converged",
+        }
+    }
+}
+
+impl super::refine::Refinement {
+    /// The flags it raises on a critical curve's event `number` (from 1, the curve's order):
+    /// `not-mesh-converged` where a refined mesh has no counterpart of it.
+    pub fn event_flags(&self, number: usize) -> Vec<Flag> {
+        self.events
+            .iter()
+            .filter(|e| e.event == number)
+            .filter_map(|e| match &e.control.estimate {
+                super::refine::Estimate::NotMeshConverged { finer } => {
+                    Some(Flag::NotMeshConverged {
+                        finer: finer.clone(),
+                    })
+                }
+                _ => None,
+            })
+            .collect()
+    }
+}
+
+impl super::CurveReport {
+    /// Adds the flags `refinement` raises to its events (`not-mesh-converged`).
+    pub fn flag_refined(&mut self, refinement: &super::refine::Refinement) {
+        for (k, e) in self.events.iter_mut().enumerate() {
+            e.flags.extend(refinement.event_flags(k + 1));
         }
     }
 }

@@ -221,16 +221,6 @@ pub(super) fn check(scene: &mut Scene) -> Result<(), Problem> {
     check_mesh_options(&scene.mesh)?;
     check_mesh_radius(scene)?;
     check_material(&scene.material, &scene.parameters)?;
-    if let (Some(max), MeshSpec::Axisymmetric(_)) = (scene.material.max_stretch, &scene.mesh) {
-        return Err(Problem::at(
-            "material.max-stretch",
-            format!(
-                "= {}: the axisymmetric model does not measure its states' principal stretches; \
-                 run the scene on a 3-D mesh",
-                num(max)
-            ),
-        ));
-    }
     for (i, effect) in scene.effects.iter_mut().enumerate() {
         check_effect(i, effect, &scene.parameters)?;
     }

@@ -669,6 +669,25 @@ impl Study for MeridianStudy {
             .collect()
     }
 
+    /// Its largest principal stretch (the meridian's elements do not say where it would
+    /// wrinkle: no count).
+    fn state_check(&self, u: &[f64], _params: &[f64]) -> crate::results::validity::StateCheck {
+        let stretch = (u.len() == self.model.dim())
+            .then(|| self.model.largest_stretch(u))
+            .filter(|s| s.is_finite());
+        crate::results::validity::StateCheck {
+            stretch,
+            ..Default::default()
+        }
+    }
+
+    fn penetrations(&self, u: &[f64], params: &[f64]) -> Option<(Vec<f64>, f64)> {
+        if u.len() != self.model.dim() {
+            return None;
+        }
+        self.model.penetrations(u, params)
+    }
+
     fn annotate(&self, result: &mut RunResult) {
         result.report.wave_numbers = result
             .report
@@ -676,6 +695,7 @@ impl Study for MeridianStudy {
             .iter()
             .map(|cp| wave_number(&cp.irrep).unwrap_or(0))
             .collect();
+        result.report.checks = Some(super::checks::checks(self, result));
     }
 }
 

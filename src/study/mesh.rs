@@ -24,7 +24,7 @@ use crate::model::constraint::Constraint;
 use crate::model::CellQuantity;
 use crate::model::{Effect, FeModel, Model, Vec3};
 use crate::output::{node_normals, Drawing};
-use crate::results::validity::{Checks, ContactChange, StateCheck};
+use crate::results::validity::{Checks, StateCheck};
 use crate::results::{
     Branches, CriticalPoint, MeshInfo, RecordedPoint, RunResult, State, StateKind,
     WrinkledCritical, WrinkledPoint, Wrinkling,
@@ -653,100 +653,6 @@ impl MeshStudy {
             .collect()
     }
 
-    /// What a state's fields say of its validity: its wrinkled triangles and largest principal
-    /// stretch (`None` where the model shows no such field, or the state is not one of the
-    /// model's).
-    fn state_check(&self, u: &[f64], params: &[f64]) -> StateCheck {
-        if u.len() != self.model.layout().unknowns() {
-            return StateCheck::default();
-        }
-        let fields = self.model.cell_fields(u, params);
-        let field = |q: CellQuantity| fields.iter().find(|f| f.quantity == q);
-        StateCheck {
-            wrinkled: field(CellQuantity::Wrinkled)
-                .map(|f| f.values.iter().filter(|&&w| w > 0.5).count()),
-            stretch: field(CellQuantity::Stretch1)
-                .map(|f| f.values.iter().copied().fold(f64::NEG_INFINITY, f64::max))
-                .filter(|s| s.is_finite()),
-            contact: None,
-        }
-    }
-
-    /// How the contact set changed within critical point `cp`'s localisation bracket: the
-    /// nodes in contact at one end and not at the other, the deepest penetration at the point
-    /// over the mean edge length there; `None` without a contact effect or a bracket.
-    fn contact_change(&self, cp: &CriticalPoint) -> Option<ContactChange> {
-        let bracket = cp.bracket.as_ref()?;
-        let n = self.model.layout().unknowns();
-        if cp.state.len() != n || bracket.ends.iter().any(|(u, _)| u.len() != n) {
-            return None;
-        }
-        let (at, x) = self.model.penetrations(&cp.state, &cp.parameters)?;
-        let [(u0, p0), (u1, p1)] = &bracket.ends;
-        let (before, _) = self.model.penetrations(u0, p0)?;
-        let (after, _) = self.model.penetrations(u1, p1)?;
-        let changed = before
-            .iter()
-            .zip(&after)
-            .filter(|(a, b)| (**a > 0.0) != (**b > 0.0))
-            .count();
-        let triangles = &self.mesh().triangles;
-        let edges: f64 = triangles
-            .iter()
-            .map(|&[a, b, c]| (x[b] - x[a]).norm() + (x[c] - x[b]).norm() + (x[a] - x[c]).norm())
-            .sum();
-        let h = edges / (3 * triangles.len().max(1)) as f64;
-        let deepest = at.iter().copied().fold(0.0, f64::max);
-        Some(ContactChange {
-            changed,
-            penetration: if h > 0.0 { deepest / h } else { 0.0 },
-            bracket: bracket.width,
-        })
-    }
-
-    /// What the states of a finished run say of their validity: every row's (from every
-    /// point's kept state; none for a branch, which keeps none), turning point's and critical
-    /// point's, with the contact's change in each critical point's bracket.
-    fn checks(&self, result: &RunResult) -> Checks {
-        let report = &result.report;
-        let rows = if result.points.len() == report.rows.len() {
-            result
-                .points
-                .iter()
-                .map(|p| self.state_check(&self.expand(&p.q), &p.parameters))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let turning: Vec<StateCheck> = result
-            .states
-            .iter()
-            .filter(|s| matches!(s.kind, crate::results::StateKind::Turning(_)))
-            .map(|s| self.state_check(&s.u, &s.params))
-            .collect();
-        let turning = if turning.len() == report.turning_points.len() {
-            turning
-        } else {
-            Vec::new()
-        };
-        let critical = report
-            .critical
-            .iter()
-            .map(|cp| StateCheck {
-                contact: self.contact_change(cp),
-                ..self.state_check(&cp.state, &cp.parameters)
-            })
-            .collect();
-        Checks {
-            max_stretch: self.scene.material.max_stretch,
-            triangles: self.mesh.mesh.triangles.len(),
-            relaxed: self.scene.material.relaxed_stiffness().is_some(),
-            rows,
-            turning,
-            critical,
-        }
-    }
-
     /// Where the membrane wrinkles along the path: the first point with wrinkled triangles
     /// (`checks`, from every point's kept state) and the critical points in a wrinkled state;
     /// `None` when the model shows no `wrinkled` field or no point's state was kept (a
@@ -1079,18 +985,40 @@ impl Study for MeshStudy {
         self.wrinkled_triangles(u, params)
     }
 
-    fn state_flags(&self, u: &[f64], params: &[f64]) -> Vec<crate::results::validity::Flag> {
-        let checks = Checks {
-            max_stretch: self.scene.material.max_stretch,
-            triangles: self.mesh.mesh.triangles.len(),
-            relaxed: self.scene.material.relaxed_stiffness().is_some(),
-            ..Checks::default()
-        };
-        checks.state_flags(&self.state_check(u, params), None)
+    /// Its wrinkled triangles and largest principal stretch, from its cell fields.
+    fn state_check(&self, u: &[f64], params: &[f64]) -> StateCheck {
+        if u.len() != self.model.layout().unknowns() {
+            return StateCheck::default();
+        }
+        let fields = self.model.cell_fields(u, params);
+        let field = |q: CellQuantity| fields.iter().find(|f| f.quantity == q);
+        StateCheck {
+            wrinkled: field(CellQuantity::Wrinkled)
+                .map(|f| f.values.iter().filter(|&&w| w > 0.5).count()),
+            stretch: field(CellQuantity::Stretch1)
+                .map(|f| f.values.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+                .filter(|s| s.is_finite()),
+            contact: None,
+        }
+    }
+
+    /// Each node's deepest penetration of the contact effects, and the mean edge length of
+    /// the deformed triangles.
+    fn penetrations(&self, u: &[f64], params: &[f64]) -> Option<(Vec<f64>, f64)> {
+        if u.len() != self.model.layout().unknowns() {
+            return None;
+        }
+        let (at, x) = self.model.penetrations(u, params)?;
+        let triangles = &self.mesh().triangles;
+        let edges: f64 = triangles
+            .iter()
+            .map(|&[a, b, c]| (x[b] - x[a]).norm() + (x[c] - x[b]).norm() + (x[a] - x[c]).norm())
+            .sum();
+        Some((at, edges / (3 * triangles.len().max(1)) as f64))
     }
 
     fn annotate(&self, result: &mut RunResult) {
-        let checks = self.checks(result);
+        let checks = super::checks::checks(self, result);
         result.report.wrinkling = self.wrinkling(result, &checks);
         result.report.wave_numbers = self.wave_numbers(&result.report.critical);
         result.report.checks = Some(checks);

@@ -8,6 +8,7 @@
 //! point; the writers see it only as the states it draws.
 
 pub mod block_test;
+pub mod checks;
 pub mod meridian;
 mod meridian_branches;
 pub mod mesh;
@@ -492,11 +493,23 @@ pub trait Study: Sync + crate::output::Drawing {
     fn wrinkled(&self, _u: &[f64], _params: &[f64]) -> Option<usize> {
         None
     }
+    /// What the state (u, Λ) says of its validity (docs/theory.md §8.10): its wrinkled
+    /// elements and largest principal stretch, each `None` where the model does not measure
+    /// it (and both for a state that is not one of the model's).
+    fn state_check(&self, _u: &[f64], _params: &[f64]) -> crate::results::validity::StateCheck {
+        crate::results::validity::StateCheck::default()
+    }
+    /// The penetration ⟨−δ⟩ of every node into the penalty planes at the state (u, Λ) (the
+    /// deepest over the planes, 0 where a node is clear) and the mean element size there;
+    /// `None` without a plane, or for a state that is not one of the model's.
+    fn penetrations(&self, _u: &[f64], _params: &[f64]) -> Option<(Vec<f64>, f64)> {
+        None
+    }
     /// The validity flags of the state (u, Λ) (`wrinkled` under the plain energy, `stretch`
     /// beyond `material.max-stretch`; docs/theory.md §8.10), empty where the model does not
-    /// measure them.
-    fn state_flags(&self, _u: &[f64], _params: &[f64]) -> Vec<crate::results::validity::Flag> {
-        Vec::new()
+    /// measure them ([`checks::state_flags`] of [`Study::state_check`]).
+    fn state_flags(&self, u: &[f64], params: &[f64]) -> Vec<crate::results::validity::Flag> {
+        checks::state_flags(self, u, params)
     }
 }
 

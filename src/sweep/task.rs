@@ -237,8 +237,9 @@ pub fn run_scene_reporting(
     let interrupted = result.report.stop == StopReason::Interrupted;
     if let Some(refiner) = refiner.filter(|_| !interrupted) {
         let seconds = clock.elapsed().as_secs_f64();
-        match refiner.run(&result.report, seconds, &|_| {}) {
-            Ok(r) => result.report.refinement = r,
+        match refiner.run(&result, seconds, &|_| {}) {
+            Ok(Some(r)) => crate::analysis::compare::attach(&mut result, r),
+            Ok(None) => {}
             Err(CompareError::Interrupted(_)) => {}
             Err(CompareError::Input(m) | CompareError::Failure(m)) => {
                 return Err(format!("refinement: {m}"))

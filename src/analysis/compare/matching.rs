@@ -887,6 +887,7 @@ mod tests {
                 critical,
                 flagged: Vec::new(),
                 turning: Vec::new(),
+                events: Vec::new(),
                 pieces: Vec::new(),
             }],
             check: None,

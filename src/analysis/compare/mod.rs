@@ -80,7 +80,7 @@ pub use matching::{
     DistanceOrder, Image, MeshImages, Missing, Rung, RungKind, Verdict, VerdictKind,
 };
 pub use meshes::{parse_meshes, MeshChoice};
-pub use refine::{estimate, observed_order, richardson, RefineOptions, Refiner};
+pub use refine::{attach, estimate, observed_order, richardson, RefineOptions, Refiner};
 
 use crate::adapted::AdaptedBasis;
 use crate::model::Model;
@@ -239,6 +239,10 @@ pub struct Level {
     /// `minimum` (what `run --refine` matches across meshes; not part of the comparison).
     #[serde(skip)]
     pub turning: Vec<Point>,
+    /// A critical curve's events but its start and end (what `run --refine` matches across
+    /// meshes; not part of the comparison).
+    #[serde(skip)]
+    pub events: Vec<refine::EventPoint>,
     /// The second pieces beside its imperfect folds; their critical points are among
     /// `critical`, each with its `piece`.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -425,6 +429,7 @@ fn execute_meridian(
         critical,
         flagged: Vec::new(),
         turning: turning_of(report, control),
+        events: refine::events_of(&result),
         pieces: Vec::new(),
     })
 }
@@ -557,6 +562,7 @@ fn execute(
         critical,
         flagged: Vec::new(),
         turning: turning_of(report, control),
+        events: refine::events_of(&result),
         pieces,
     })
 }
@@ -930,6 +936,7 @@ mod tests {
             critical,
             flagged: Vec::new(),
             turning: Vec::new(),
+            events: Vec::new(),
             pieces: Vec::new(),
         };
         let meshes = vec![

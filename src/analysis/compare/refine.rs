@@ -6,19 +6,24 @@
 //! estimate per level. A point with no counterpart on a refined mesh is not mesh-converged
 //! ([`crate::results::validity::Flag::NotMeshConverged`]). With `continuum` the scene also
 //! runs on its meridian, as `compare` runs `axisymmetric`, and every point gets the
-//! meridian's value and its distance from it.
+//! meridian's value and its distance from it. On a critical curve its events (cusps, folds,
+//! hilltops, irrep changes) are followed the same way, each kind on its own, both
+//! coordinates estimated ([`refine_events`]).
 
 use super::matching::{match_rungs, measure_distances, Rung};
 use super::meshes::{describe, resolution, variant, Common};
+use super::Point;
 use super::{
     floor_of, labelled, parse_meshes, point_of, range_of, refine_mesh, turning_of, CompareError,
     Job, Level, MeshRuns,
 };
 use crate::results::refine::{
-    ContinuumRun, Estimate, FailedRun, NewPoint, PointRefinement, RefinedLevel, Refinement,
-    ASSUMED_ORDER, MERIDIAN_ORDER, ORDER_TOLERANCE,
+    ContinuumRun, Estimate, EventRefinement, FailedRun, NewPoint, PointRefinement, RefinedLevel,
+    Refinement, Series, ASSUMED_ORDER, MERIDIAN_ORDER, ORDER_TOLERANCE,
 };
-use crate::results::PathReport;
+use crate::results::{
+    CriticalKind, CurveEventKind, CurveReport, Extremum, Outcome, RunResult, StopReason,
+};
 use crate::scene::{MeshSpec, Scene};
 use crate::study::meridian::MeridianStudy;
 use crate::study::mesh::MeshStudy;
@@ -216,10 +221,11 @@ impl Refiner {
     /// when a signal interrupted a run: its points would be missing for that reason alone.
     pub fn run(
         self,
-        base: &PathReport,
+        result: &RunResult,
         seconds: f64,
         progress: &(dyn Fn(&str) + Sync),
     ) -> Result<Option<Refinement>, CompareError> {
+        let base = &result.report;
         let interrupted = crate::continuation::interrupt::requested;
         let control = base.parameters.iter().position(|p| *p == base.control);
         let critical = (0..base.critical.len())
@@ -255,6 +261,7 @@ impl Refiner {
             critical,
             flagged: Vec::new(),
             turning: turning_of(base, control),
+            events: events_of(result),
             pieces: Vec::new(),
         };
         let mut levels = vec![own];
@@ -347,26 +354,44 @@ impl Refiner {
             })
             .collect();
         // The turning points, on their own.
-        let turning_levels = levels
-            .iter()
-            .map(|l| Level {
-                critical: l.turning.clone(),
-                ..l.clone()
-            })
-            .collect();
-        let turning_runs = [MeshRuns {
+
+        let as_turning = |l: &Level| Level {
+            critical: l.turning.clone(),
+            ..l.clone()
+        };
+        let mut turning_runs = vec![MeshRuns {
             label: "run".into(),
             generator: String::new(),
-            levels: turning_levels,
+            levels: levels.iter().map(as_turning).collect(),
             check: None,
         }];
-        let (turning_rungs, _) = match_rungs(&turning_runs, self.floor);
+        // The meridian's turning points, as its critical points are matched.
+        if let Some((coarse, fine)) = &continuum {
+            turning_runs.push(MeshRuns {
+                label: "axisymmetric".into(),
+                generator: "axisymmetric".into(),
+                levels: vec![as_turning(coarse)],
+                check: Some(as_turning(fine)),
+            });
+        }
+        let (mut turning_rungs, _) = match_rungs(&turning_runs, self.floor);
+        if continuum.is_some() {
+            measure_distances(&turning_runs, &mut turning_rungs, 1);
+        }
         let turning = turning_rungs
             .iter()
             .filter(|r| r.found_at == base_resolution)
             .map(|r| refined(r, true, &finer, order))
             .collect();
+        // A critical curve's events, each kind on its own.
+        let on_levels: Vec<(usize, Vec<EventPoint>)> = levels
+            .iter()
+            .map(|l| (l.resolution, l.events.clone()))
+            .collect();
+        let events = refine_events(&on_levels, &finer, order, self.floor);
         Ok(Some(Refinement {
+            second: result.outcome::<CurveReport>().map(|c| c.second.clone()),
+            events,
             control: self.control,
             assumed_order: order,
             order_tolerance: ORDER_TOLERANCE,
@@ -430,11 +455,7 @@ fn refined(rung: &Rung, turning: bool, finer: &[String], order: f64) -> PointRef
         .iter()
         .map(|i| i + 1)
         .collect();
-    let (observed_order, richardson, errors, estimate) = estimate(&values, finer, order);
-    let distances = match rung.continuum {
-        Some(c) => values.iter().map(|v| v.map(|v| v - c)).collect(),
-        None => Vec::new(),
-    };
+    let series = series(values, finer, order);
     PointRefinement {
         points,
         kind: if turning {
@@ -448,15 +469,190 @@ fn refined(rung: &Rung, turning: bool, finer: &[String], order: f64) -> PointRef
             rung.irreps.clone()
         },
         m: rung.m,
+        distances: match rung.continuum {
+            Some(c) => series.values.iter().map(|v| v.map(|v| v - c)).collect(),
+            None => Vec::new(),
+        },
+        series,
+        continuum: rung.continuum,
+        continuum_error: rung.continuum_error,
+    }
+}
+
+/// Values on levels of halved h with their estimate ([`estimate`]).
+fn series(values: Vec<Option<f64>>, finer: &[String], order: f64) -> Series {
+    let (observed_order, richardson, errors, estimate) = estimate(&values, finer, order);
+    Series {
         values,
         observed_order,
         richardson,
         errors,
         estimate,
-        continuum: rung.continuum,
-        continuum_error: rung.continuum_error,
-        distances,
     }
+}
+
+/// An event of a critical curve on one level, as `run --refine` follows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventPoint {
+    /// Its number among the curve's events, from 1 (the start).
+    pub number: usize,
+    /// Its kind.
+    pub kind: CurveEventKind,
+    /// A cusp's or fold's extremum of the second parameter.
+    pub extremum: Option<Extremum>,
+    /// A hilltop's or an irrep change's other irrep.
+    pub irrep: Option<String>,
+    /// The control's value there.
+    pub control: f64,
+    /// The second parameter's value there.
+    pub second: f64,
+}
+
+impl EventPoint {
+    /// What its images on other levels share with it: the kind, the extremum, the other
+    /// irrep.
+    fn key(&self) -> String {
+        format!(
+            "{} {} {}",
+            self.kind,
+            self.extremum.map_or_else(String::new, |x| x.to_string()),
+            self.irrep.as_deref().unwrap_or("")
+        )
+    }
+}
+
+/// The events of a run's critical curve (none for another analysis), but its start and end.
+pub(super) fn events_of(result: &RunResult) -> Vec<EventPoint> {
+    let Some(curve) = result.outcome::<CurveReport>() else {
+        return Vec::new();
+    };
+    let column = |name: &str| curve.parameters.iter().position(|p| p == name);
+    let (Some(c), Some(s)) = (column(&curve.control), column(&curve.second)) else {
+        return Vec::new();
+    };
+    curve
+        .events
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| !matches!(e.kind, CurveEventKind::Start | CurveEventKind::End))
+        .map(|(k, e)| EventPoint {
+            number: k + 1,
+            kind: e.kind,
+            extremum: e.extremum,
+            irrep: e.irrep.clone(),
+            control: e.parameters[c],
+            second: e.parameters[s],
+        })
+        .collect()
+}
+
+/// The events of the first level followed through the others (each level's resolution and
+/// events, the first level the run's own): the events of one kind (with one extremum or
+/// other irrep) are matched as critical points are, by the control's value
+/// ([`match_rungs`]); each gets both coordinates on every level with their estimates, and an
+/// event without a counterpart on a refined level is not mesh-converged. In the first
+/// level's order.
+pub fn refine_events(
+    levels: &[(usize, Vec<EventPoint>)],
+    finer: &[String],
+    order: f64,
+    floor: f64,
+) -> Vec<EventRefinement> {
+    let Some((base_resolution, base)) = levels.first() else {
+        return Vec::new();
+    };
+    let mut keys: Vec<String> = Vec::new();
+    for key in base.iter().map(EventPoint::key) {
+        if !keys.contains(&key) {
+            keys.push(key);
+        }
+    }
+    let mut out = Vec::new();
+    for key in &keys {
+        let of_key: Vec<Vec<&EventPoint>> = levels
+            .iter()
+            .map(|(_, events)| events.iter().filter(|e| e.key() == *key).collect())
+            .collect();
+        let runs = [MeshRuns {
+            label: "run".into(),
+            generator: String::new(),
+            levels: levels
+                .iter()
+                .zip(&of_key)
+                .map(|((resolution, _), events)| bare(*resolution, events))
+                .collect(),
+            check: None,
+        }];
+        let (rungs, _) = match_rungs(&runs, floor);
+        for rung in rungs.iter().filter(|r| r.found_at == *base_resolution) {
+            let images = &rung.images[0].levels;
+            let at = |l: usize| images[l].points.first().map(|&i| of_key[l][i]);
+            let Some(event) = at(0) else { continue };
+            let along = |f: fn(&EventPoint) -> f64| {
+                (0..images.len()).map(|l| at(l).map(f)).collect::<Vec<_>>()
+            };
+            out.push(EventRefinement {
+                event: event.number,
+                kind: event.kind.to_string(),
+                extremum: event.extremum,
+                irrep: event.irrep.clone(),
+                control: series(along(|e| e.control), finer, order),
+                second: series(along(|e| e.second), finer, order),
+            });
+        }
+    }
+    out.sort_by_key(|e| e.event);
+    out
+}
+
+/// A level that holds `events` as its critical points (limit points, met as the control
+/// rises, unlabelled: matched by the control's value alone) and nothing else.
+fn bare(resolution: usize, events: &[&EventPoint]) -> Level {
+    Level {
+        mesh: String::new(),
+        resolution,
+        nodes: 0,
+        triangles: 0,
+        group: String::new(),
+        order: 1,
+        unknowns: 0,
+        symmetric_unknowns: 0,
+        stop: StopReason::Condition,
+        note: None,
+        warnings: Vec::new(),
+        seconds: 0.0,
+        critical: events
+            .iter()
+            .map(|e| Point {
+                kind: CriticalKind::LimitPoint,
+                irrep: e.key(),
+                multiplicity: 1,
+                value: e.control,
+                m: None,
+                residual_eigenvalue: 0.0,
+                precision: None,
+                isotropy: String::new(),
+                rising: true,
+                flags: Vec::new(),
+                piece: None,
+            })
+            .collect(),
+        flagged: Vec::new(),
+        turning: Vec::new(),
+        events: Vec::new(),
+        pieces: Vec::new(),
+    }
+}
+
+/// Puts `refinement` into `result`'s report, and the flags it raises on a critical curve's
+/// events (`not-mesh-converged`) on them.
+pub fn attach(result: &mut RunResult, refinement: Refinement) {
+    if let Some(curve) = result.outcome::<CurveReport>() {
+        let mut curve = curve.clone();
+        curve.flag_refined(&refinement);
+        result.outcome = Some(Outcome::new(curve));
+    }
+    result.report.refinement = Some(refinement);
 }
 
 /// The observed order of three values on meshes halved each time: log2(|v₀ − v₁| / |v₁ − v₂|),
@@ -536,6 +732,7 @@ pub fn estimate(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::results::validity::Flag;
 
     #[test]
     fn second_order_values_are_extrapolated_and_their_errors_estimated() {
@@ -590,5 +787,121 @@ mod tests {
         assert_eq!(basis, Estimate::NotMeshConverged { finer: "c".into() });
         let (_, _, _, basis) = estimate(&[Some(1.0), Some(1.0)], &finer, 2.0);
         assert_eq!(basis, Estimate::Unchanged);
+    }
+
+    fn event(
+        number: usize,
+        kind: CurveEventKind,
+        irrep: Option<&str>,
+        at: (f64, f64),
+    ) -> EventPoint {
+        EventPoint {
+            number,
+            kind,
+            extremum: (kind == CurveEventKind::Cusp).then_some(Extremum::Maximum),
+            irrep: irrep.map(str::to_string),
+            control: at.0,
+            second: at.1,
+        }
+    }
+
+    /// A cusp whose coordinates converge at O(h²) on three levels is extrapolated in both; a
+    /// hilltop whose finest level has only a hilltop with another irrep (and a cusp nearby)
+    /// has no counterpart there: not mesh-converged, and its event flagged so in the curve.
+    #[test]
+    fn a_curves_events_are_followed_through_the_levels_by_kind() {
+        use CurveEventKind::{Cusp, Hilltop};
+        // Coordinates (1 + h²/10, 0.2 − h²/100) at h = 1, 1/2, 1/4.
+        let cusp = |number, h: f64| {
+            event(
+                number,
+                Cusp,
+                None,
+                (1.0 + h * h / 10.0, 0.2 - h * h / 100.0),
+            )
+        };
+        let levels = vec![
+            (
+                4,
+                vec![cusp(2, 1.0), event(3, Hilltop, Some("B1"), (3.0, 0.1))],
+            ),
+            (
+                8,
+                vec![event(2, Hilltop, Some("B1"), (3.01, 0.1)), cusp(3, 0.5)],
+            ),
+            (
+                16,
+                vec![cusp(2, 0.25), event(3, Hilltop, Some("B2"), (3.0, 0.1))],
+            ),
+        ];
+        let finer = ["f4".to_string(), "f8".to_string(), "f16".to_string()];
+        let events = refine_events(&levels, &finer, 2.0, 1e-3);
+        assert_eq!(events.len(), 2, "{events:?}");
+        let (c, h) = (&events[0], &events[1]);
+        assert_eq!((c.event, c.kind.as_str()), (2, "cusp"));
+        assert_eq!(c.extremum, Some(Extremum::Maximum));
+        assert!((c.control.observed_order.unwrap() - 2.0).abs() < 1e-9);
+        assert!((c.control.richardson.unwrap() - 1.0).abs() < 1e-12);
+        assert!((c.second.richardson.unwrap() - 0.2).abs() < 1e-12);
+        assert!((c.control.errors[0].unwrap() - 0.1).abs() < 1e-12);
+        assert!((c.second.errors[2].unwrap() - 0.000625).abs() < 1e-12);
+        assert_eq!((h.event, h.irrep.as_deref()), (3, Some("B1")));
+        assert_eq!(h.control.values, [Some(3.0), Some(3.01), None]);
+        assert_eq!(
+            h.control.estimate,
+            Estimate::NotMeshConverged {
+                finer: "f16".into()
+            }
+        );
+        assert!(!h.converged() && c.converged());
+        // On the run's curve: the hilltop is flagged, the cusp is not.
+        let curve_event = |kind, irrep: Option<&str>| crate::results::CurveEvent {
+            kind,
+            extremum: None,
+            irrep: irrep.map(str::to_string),
+            residual_eigenvalue: None,
+            after_step: 0,
+            parameters: vec![0.0, 0.0],
+            measures: Vec::new(),
+            flags: Vec::new(),
+        };
+        let curve = CurveReport {
+            control: "p".into(),
+            second: "k".into(),
+            irrep: "Ag".into(),
+            kind: CriticalKind::LimitPoint,
+            multiplicity: 1,
+            parameters: vec!["k".into(), "p".into()],
+            measures: Vec::new(),
+            rows: Vec::new(),
+            events: vec![
+                curve_event(CurveEventKind::Start, None),
+                curve_event(Cusp, None),
+                curve_event(Hilltop, Some("B1")),
+                curve_event(CurveEventKind::End, None),
+            ],
+            stop: StopReason::Bounds,
+            warnings: Vec::new(),
+        };
+        let mut curve = curve;
+        curve.flag_refined(&Refinement {
+            control: "p".into(),
+            assumed_order: 2.0,
+            order_tolerance: ORDER_TOLERANCE,
+            levels: Vec::new(),
+            continuum: None,
+            critical: Vec::new(),
+            turning: Vec::new(),
+            events,
+            second: Some("k".into()),
+            new_on_finer: Vec::new(),
+            failed: Vec::new(),
+        });
+        let flags: Vec<Vec<&str>> = curve
+            .events
+            .iter()
+            .map(|e| e.flags.iter().map(Flag::name).collect())
+            .collect();
+        assert_eq!(flags, [vec![], vec![], vec!["not-mesh-converged"], vec![]]);
     }
 }
