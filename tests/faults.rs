@@ -1061,13 +1061,14 @@ fn twenty_concurrent_runs_into_one_directory_complete_or_are_refused() {
 }
 
 /// A branch that cannot leave its point gets the same one line as a stalled path: on the
-/// spinning cap the branches of the E1 double at ω² = 18.0954 stall at their first step, and
-/// each says so and what to try.
+/// upward disc the C1 branch of the A2 point at h = 4.14106 on a C1v branch, 2·10⁻⁴ below the
+/// E1 double, stalls at its first step, and says so and what to try.
 #[test]
 fn a_stalled_branch_names_the_cause() {
     use memstab::results::StopReason;
-    let text = std::fs::read_to_string(scene("thesis/paper4_spinning_cap.toml")).unwrap()
-        + "\n[analysis.branches]\ndepth = 1\nsteps = 2\n";
+    let text = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
+    assert!(text.contains("\ndepth = 1 "), "the bundled scene's depth");
+    let text = text.replacen("\ndepth = 1 ", "\ndepth = 2 ", 1);
     let scene = memstab::scene::Scene::from_toml_str(&text, "cap").unwrap();
     let mut study = memstab::study::build(scene).unwrap();
     let result = memstab::analysis::run(&mut *study, |_, _| {}).unwrap();

@@ -93,6 +93,12 @@ pub fn bordered_solve_all(
     let mut x_b = b.clone();
     fact.solve_many_in_place(x_b.as_mut_slice()).ok()?;
     let schur = &d - &c * &x_b;
+    // With shifted pivots J is singular exactly when the Schur complement is (det J = det A′
+    // det S): a system the border leaves singular is refused here, not solved into a huge
+    // step.
+    if k > 0 && !regular(&schur) {
+        return None;
+    }
     let lu = schur.lu();
     let solve = |r: &DVector<f64>| -> Option<DVector<f64>> {
         let mut y = r.rows(0, m).into_owned();
@@ -119,6 +125,20 @@ pub fn bordered_solve_all(
         })
         .collect()
 }
+
+/// Whether the small dense `s` is regular to working precision: its singular values' ratio
+/// above [`SINGULAR_SCHUR`].
+fn regular(s: &DMatrix<f64>) -> bool {
+    let sv = s.singular_values();
+    let (lo, hi) = sv.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+        (lo.min(*v), hi.max(*v))
+    });
+    hi > 0.0 && lo.is_finite() && lo > SINGULAR_SCHUR * hi
+}
+
+/// The smallest ratio of a Schur complement's singular values that [`bordered_solve_all`]
+/// takes for regular after shifted pivots.
+const SINGULAR_SCHUR: f64 = 1e-13;
 
 /// The most zero pivots [`bordered_solve_all`] shifts and borders before it gives up.
 const MAX_SHIFTED_PIVOTS: usize = 8;
