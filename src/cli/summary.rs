@@ -297,7 +297,8 @@ fn print_wrinkling(report: &PathReport) {
         out!(
             "note: under the relaxed energy the tangent jumps where a triangle turns taut, \
              wrinkled or slack, so an eigenvalue may jump through zero there (docs/theory.md \
-             §2.9): the index changes above that could not be localised may be such jumps"
+             §2.9): the index changes above that could not be localised may be such jumps; \
+             a `wrinkling-width` in [material] smooths the switching into crossings"
         );
     }
 }
