@@ -775,6 +775,7 @@ impl MeshStudy {
             first,
             critical,
             relaxed: self.scene.material.relaxed_stiffness().is_some(),
+            width: self.scene.material.relaxed_width().unwrap_or(0.0),
         })
     }
 
