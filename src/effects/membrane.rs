@@ -1582,7 +1582,7 @@ mod tests {
                     .map_or(Local::ZERO, |(l, _)| l)
             };
             let step = 1e-7;
-            check_kernel(kernel, &x, &dir, step, 1e-8).map_err(TestCaseError::fail)?;
+            check_kernel(kernel, &x, &dir, step, 1e-6).map_err(TestCaseError::fail)?;
         }
     }
 
