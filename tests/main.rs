@@ -52,3 +52,4 @@ mod tension_field;
 mod thesis;
 mod thesis_curves;
 mod validity;
+mod wrinkled_switching;

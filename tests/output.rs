@@ -881,6 +881,7 @@ fn critical_points_carry_their_validity_flags() {
             mode: 0.25,
         }],
         relaxed: false,
+        width: 0.0,
     });
     assert!(r.flags(0).is_empty());
     assert_eq!(

@@ -769,8 +769,9 @@ fn critical_curve_keys_are_checked() {
     rejects(&text, &["'parameters.kk' is neither the control"]);
 }
 
-/// `material.wrinkling` and `material.wrinkling-stiffness`: the relaxed energy is chosen by
-/// name, its stiffness lies in [0, 1] and needs it; bad values get one line naming the key.
+/// `material.wrinkling`, `material.wrinkling-stiffness` and `material.wrinkling-width`: the
+/// relaxed energy is chosen by name, its stiffness lies in [0, 1], its switching width in
+/// [0, 0.1], and both need it; bad values get one line naming the key.
 #[test]
 fn wrinkling_keys_are_checked() {
     let relaxed = edit(
@@ -815,6 +816,40 @@ fn wrinkling_keys_are_checked() {
         ),
         &[
             "'material.wrinkling-stiffness'",
+            "0.01",
+            "wrinkling = \"relaxed\"",
+        ],
+    );
+    // The switching width: 0 unless given, in [0, 0.1], only with the relaxed energy.
+    assert_eq!(scene.material.relaxed_width(), Some(0.0));
+    assert_eq!(plain.material.relaxed_width(), None);
+    let width = |w: &str| {
+        edit(
+            "prestretch = 1.1",
+            &format!("prestretch = 1.1\nwrinkling = \"relaxed\"\nwrinkling-width = {w}"),
+        )
+    };
+    let widened = Scene::from_toml_str(&width("1e-3"), "test.toml").unwrap();
+    assert_eq!(widened.material.relaxed_width(), Some(1e-3));
+    rejects(
+        &width("-1e-3"),
+        &["'material.wrinkling-width'", "between 0 and 0.1", "-0.001"],
+    );
+    rejects(
+        &width("0.5"),
+        &["'material.wrinkling-width'", "between 0 and 0.1", "0.5"],
+    );
+    rejects(
+        &width("\"wide\""),
+        &["'material.wrinkling-width'", "number"],
+    );
+    rejects(
+        &edit(
+            "prestretch = 1.1",
+            "prestretch = 1.1\nwrinkling-width = 0.01",
+        ),
+        &[
+            "'material.wrinkling-width'",
             "0.01",
             "wrinkling = \"relaxed\"",
         ],

@@ -251,6 +251,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
         first: None,
         critical: flagged[1..].to_vec(),
         relaxed: false,
+        width: 0.0,
     };
     let warnings = w.warnings(&slack_points);
     assert_eq!(warnings.len(), 1, "{warnings:?}");
@@ -272,6 +273,7 @@ fn a_critical_point_in_a_wrinkled_state_is_warned_about() {
             mode: 0.5,
         }],
         relaxed: false,
+        width: 0.0,
     };
     assert!(stray.warnings(&slack_points).is_empty());
 }

@@ -83,7 +83,10 @@ fn solve(
         .collect();
     let membrane = Membrane::new(&nodes, &triangles, MooneyRivlin::new(mu, k, h), 1.0)
         .unwrap()
-        .with_wrinkling(Wrinkling::Relaxed { stiffness });
+        .with_wrinkling(Wrinkling::Relaxed {
+            stiffness,
+            width: 0.0,
+        });
     let fixed: Vec<usize> = inner.iter().chain(&outer).copied().collect();
     let effects: Vec<Box<dyn Effect>> = vec![Box::new(membrane)];
     let model = FeModel::new(start, triangles.clone(), &fixed, effects, vec![]);
@@ -108,7 +111,7 @@ fn solve(
         }
         let elem = ReferenceTriangle::new(&t.map(|i| nodes[i]), 1.0, h).unwrap();
         let (local, _) = elem
-            .relaxed_energy_gradient_hessian(&mat, stiffness, &t.map(|i| x[i]))
+            .relaxed_energy_gradient_hessian(&mat, [stiffness, 0.0], &t.map(|i| x[i]))
             .unwrap();
         for n in touches {
             let radial = x[t[n]] / x[t[n]].norm();
@@ -266,7 +269,10 @@ fn the_index_of_the_wrinkled_annulus_stays_zero_and_converges_as_the_stiffness_v
     let mut smallest = Vec::new();
     let mut last = None;
     for eps in [1e-3, 1e-4, 1e-5, 1e-6] {
-        let model = model_with(Wrinkling::Relaxed { stiffness: eps });
+        let model = model_with(Wrinkling::Relaxed {
+            stiffness: eps,
+            width: 0.0,
+        });
         let sol = newton(&model, &vec![0.0; model.unknowns()], &[], &options).unwrap();
         let values = eigenvalues(&model, &sol.u);
         println!(

@@ -288,16 +288,24 @@ fn print_wrinkling(report: &PathReport) {
             w.triangles
         ),
     }
-    if w.relaxed
-        && report
-            .warnings
-            .iter()
-            .any(|m| m.contains("could not be localised"))
-    {
+    let jumped = report
+        .warnings
+        .iter()
+        .any(|m| m.contains("could not be localised"));
+    if w.relaxed && jumped && w.width > 0.0 {
+        out!(
+            "note: with the switching width {} the relaxed energy is twice differentiable, but \
+             an eigenvalue may still change within a part of a step too short to resolve \
+             (docs/theory.md §2.9): a smaller `max-step` in [analysis] may localise the index \
+             changes above",
+            memstab::text::num(w.width)
+        );
+    } else if w.relaxed && jumped {
         out!(
             "note: under the relaxed energy the tangent jumps where a triangle turns taut, \
              wrinkled or slack, so an eigenvalue may jump through zero there (docs/theory.md \
-             §2.9): the index changes above that could not be localised may be such jumps"
+             §2.9): the index changes above that could not be localised may be such jumps; \
+             a `wrinkling-width` in [material] smooths the switching into crossings"
         );
     }
 }

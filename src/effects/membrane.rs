@@ -134,12 +134,16 @@ impl MooneyRivlin {
     /// The relaxed (tension-field) energy W_ε = W* + ε (c1 + c2)(t − 2) with its gradient
     /// and Hessian blocks in F = [f1 f2], as [`MooneyRivlin::energy_in_f`], and the state
     /// that selects W* (docs/theory.md §2.9): taut (λ₁λ₂² ≥ 1) W* = W, wrinkled (λ₁ > 1,
-    /// λ₁λ₂² < 1) W* = w(λ₁) = W(λ₁, λ₁^(−1/2)), slack (λ₁ ≤ 1) W* = 0. `None` where J ≤ 0.
+    /// λ₁λ₂² < 1) W* = w(λ₁) = W(λ₁, λ₁^(−1/2)), slack (λ₁ ≤ 1) W* = 0. With a switching
+    /// width δ = `width` > 0, W* is blended across the two switching surfaces within bands of
+    /// half-width δ in stretch ([`MooneyRivlin::smoothed_in_f`]); outside them it is W* exactly.
+    /// The state is W*'s (δ = 0). `None` where J ≤ 0.
     #[allow(clippy::type_complexity, clippy::needless_range_loop)]
     pub fn relaxed_in_f(
         &self,
         f: &[Vector3<f64>; 2],
         stiffness: f64,
+        width: f64,
     ) -> Option<(f64, [Vector3<f64>; 2], [[Matrix3<f64>; 2]; 2], TensionState)> {
         let (n1, n2) = (f[0].norm_squared(), f[1].norm_squared());
         let j = f[0].cross(&f[1]).norm_squared();
@@ -148,29 +152,36 @@ impl MooneyRivlin {
         }
         let spectral = Spectral::of(f);
         let state = spectral.state(j);
-        let (mut w, mut p, mut hf) = match state {
-            TensionState::Taut => self.energy_in_f(f)?,
-            TensionState::Slack => (0.0, [Vector3::zeros(); 2], [[Matrix3::zeros(); 2]; 2]),
-            TensionState::Wrinkled => {
-                // W* = w(s), s = λ₁² the larger eigenvalue of C = FᵀF with unit eigenvector
-                // n = (n_1, n_2); u = F n, v = F n⊥, n⊥ = (−n_2, n_1). ∂s/∂f_i = 2 n_i u and
-                // ∂²s/∂f_i∂f_k = 2 n_i n_k I + 2 g_i g_kᵀ/(s − s₂), g_i = n_i v + n⊥_i u.
-                let Spectral { s, s2, n, u, v } = spectral;
-                let [w0, w1, w2] = self.uniaxial(s);
-                let np = [-n[1], n[0]];
-                let ds = [u * (2.0 * n[0]), u * (2.0 * n[1])];
-                let g = [v * n[0] + u * np[0], v * n[1] + u * np[1]];
-                let gap = s - s2;
-                let mut hf = [[Matrix3::zeros(); 2]; 2];
-                for i in 0..2 {
-                    for k in 0..2 {
-                        hf[i][k] = outer(&ds[i], &ds[k]) * w2
-                            + (Matrix3::identity() * (2.0 * n[i] * n[k])
-                                + outer(&g[i], &g[k]) * (2.0 / gap))
-                                * w1;
+        let smoothed = (width > 0.0)
+            .then(|| self.smoothed_in_f(f, &spectral, width))
+            .flatten();
+        let (mut w, mut p, mut hf) = if let Some(blended) = smoothed {
+            blended
+        } else {
+            match state {
+                TensionState::Taut => self.energy_in_f(f)?,
+                TensionState::Slack => (0.0, [Vector3::zeros(); 2], [[Matrix3::zeros(); 2]; 2]),
+                TensionState::Wrinkled => {
+                    // W* = w(s), s = λ₁² the larger eigenvalue of C = FᵀF with unit eigenvector
+                    // n = (n_1, n_2); u = F n, v = F n⊥, n⊥ = (−n_2, n_1). ∂s/∂f_i = 2 n_i u and
+                    // ∂²s/∂f_i∂f_k = 2 n_i n_k I + 2 g_i g_kᵀ/(s − s₂), g_i = n_i v + n⊥_i u.
+                    let Spectral { s, s2, n, u, v } = spectral;
+                    let [w0, w1, w2] = self.uniaxial(s);
+                    let np = [-n[1], n[0]];
+                    let ds = [u * (2.0 * n[0]), u * (2.0 * n[1])];
+                    let g = [v * n[0] + u * np[0], v * n[1] + u * np[1]];
+                    let gap = s - s2;
+                    let mut hf = [[Matrix3::zeros(); 2]; 2];
+                    for i in 0..2 {
+                        for k in 0..2 {
+                            hf[i][k] = outer(&ds[i], &ds[k]) * w2
+                                + (Matrix3::identity() * (2.0 * n[i] * n[k])
+                                    + outer(&g[i], &g[k]) * (2.0 / gap))
+                                    * w1;
+                        }
                     }
+                    (w0, [ds[0] * w1, ds[1] * w1], hf)
                 }
-                (w0, [ds[0] * w1, ds[1] * w1], hf)
             }
         };
         if stiffness != 0.0 {
@@ -183,6 +194,152 @@ impl MooneyRivlin {
             }
         }
         Some((w, p, hf, state))
+    }
+
+    /// The relaxed energy blended across its switching surfaces (docs/theory.md §2.9,
+    /// "Switching width"): with s = λ₁², q = λ₂², a = (s − 1)/(2δ) − 1 and
+    /// b = (s q² − 1)/(2δ) − 1 (each −1 on the slack or the taut surface and 1 about 2δ in
+    /// stretch beyond it, on the side in tension),
+    ///
+    /// f(s, q) = S(a) [w(s) + (W(s, q) − w(s)) S(b)],
+    ///
+    /// S the quintic step, 0 below −1, 1 above 1, C² ([`smooth_step`]). The bands lie where
+    /// W* is in tension, so f ≤ W* and no tension of f is negative. Near equal stretches
+    /// (s − q < 2δ) f is blended with its mirror f(q, s), to the symmetric mean at s = q, so
+    /// that the energy is a C² function of C there too. It is W* outside the bands and their
+    /// mirrors, and `None` there (the caller takes W*'s own branch). Its derivatives in F
+    /// follow from those in (s, t = s + q) with ∂s/∂F, ∂²s/∂F² of
+    /// [`MooneyRivlin::relaxed_in_f`]; the term of ∂²s, 2 (∂/∂s − ∂/∂q) g gᵀ/(s − q), takes
+    /// its limit (∂/∂s − ∂/∂q)² at equal stretches.
+    #[allow(clippy::type_complexity, clippy::needless_range_loop)]
+    fn smoothed_in_f(
+        &self,
+        f: &[Vector3<f64>; 2],
+        spectral: &Spectral,
+        width: f64,
+    ) -> Option<(f64, [Vector3<f64>; 2], [[Matrix3<f64>; 2]; 2])> {
+        let Spectral { s, s2: q, n, u, v } = *spectral;
+        if q <= 0.0 {
+            return None;
+        }
+        let d2 = 2.0 * width;
+        let in_band = |x: f64, y: f64| {
+            let a = (x - 1.0) / d2 - 1.0;
+            let b = (x * y * y - 1.0) / d2 - 1.0;
+            a > -1.0 && (a < 1.0 || b.abs() < 1.0)
+        };
+        let gap = s - q;
+        let near = gap < d2;
+        if !(in_band(s, q) || near && in_band(q, s)) {
+            return None;
+        }
+        let [energy, f_s, f_q, f_ss, f_sq, f_qq] = if near {
+            // F = f + χ Δ, Δ = (f(q, s) − f(s, q))/2, χ = 1 − S(g/δ − 1) of g = s − q: 1 with
+            // χ′ = χ″ = 0 at g = 0, 0 from g = 2δ.
+            let j = self.blend_jet(s, q, width);
+            let m = self.blend_jet(q, s, width);
+            // The mirror's derivatives in (s, q): its arguments swapped.
+            let (dd, d_s, d_q) = (
+                0.5 * (m[0] - j[0]),
+                0.5 * (m[2] - j[1]),
+                0.5 * (m[1] - j[2]),
+            );
+            let (d_ss, d_sq, d_qq) = (
+                0.5 * (m[5] - j[3]),
+                0.5 * (m[4] - j[4]),
+                0.5 * (m[3] - j[5]),
+            );
+            let [sg, sg1, sg2] = smooth_step(gap / width - 1.0);
+            let (c, c1, c2) = (1.0 - sg, -sg1 / width, -sg2 / (width * width));
+            [
+                j[0] + c * dd,
+                j[1] + c1 * dd + c * d_s,
+                j[2] - c1 * dd + c * d_q,
+                j[3] + c2 * dd + 2.0 * c1 * d_s + c * d_ss,
+                j[4] - c2 * dd + c1 * (d_q - d_s) + c * d_sq,
+                j[5] + c2 * dd - 2.0 * c1 * d_q + c * d_qq,
+            ]
+        } else {
+            self.blend_jet(s, q, width)
+        };
+        // In (s, t): h(s, t) = f(s, t − s).
+        let (h_s, h_t) = (f_s - f_q, f_q);
+        let (h_ss, h_st, h_tt) = (f_ss - 2.0 * f_sq + f_qq, f_sq - f_qq, f_qq);
+        let np = [-n[1], n[0]];
+        let ds = [u * (2.0 * n[0]), u * (2.0 * n[1])];
+        let dt = [f[0] * 2.0, f[1] * 2.0];
+        let g = [v * n[0] + u * np[0], v * n[1] + u * np[1]];
+        // 2 h_s/(s − q); at equal stretches h_s = 0 (the blend is symmetric there) and the
+        // quotient is its derivative along s − q, h_ss.
+        let rotation = if gap > 1e-8 * s {
+            2.0 * h_s / gap
+        } else {
+            h_ss
+        };
+        let mut hf = [[Matrix3::zeros(); 2]; 2];
+        for i in 0..2 {
+            for k in 0..2 {
+                let mut h = outer(&ds[i], &ds[k]) * h_ss
+                    + (outer(&ds[i], &dt[k]) + outer(&dt[i], &ds[k])) * h_st
+                    + outer(&dt[i], &dt[k]) * h_tt
+                    + outer(&g[i], &g[k]) * rotation;
+                if i == k {
+                    h += Matrix3::identity() * (2.0 * n[i] * n[k] * h_s + 2.0 * h_t);
+                } else {
+                    h += Matrix3::identity() * (2.0 * n[i] * n[k] * h_s);
+                }
+                hf[i][k] = h;
+            }
+        }
+        let p = [ds[0] * h_s + dt[0] * h_t, ds[1] * h_s + dt[1] * h_t];
+        Some((energy, p, hf))
+    }
+
+    /// The blend f(s, q) = S(a) [w(s) + (W(s, q) − w(s)) S(b)] of
+    /// [`MooneyRivlin::smoothed_in_f`] and its derivatives at any s, q > 0:
+    /// [f, f_s, f_q, f_ss, f_sq, f_qq].
+    fn blend_jet(&self, s: f64, q: f64, width: f64) -> [f64; 6] {
+        let d2 = 2.0 * width;
+        let a = (s - 1.0) / d2 - 1.0;
+        let b = (s * q * q - 1.0) / d2 - 1.0;
+        let (c1, c2) = (self.c1, self.c2);
+        // W(s, q) and its derivatives.
+        let ww = c1 * (s + q + 1.0 / (s * q) - 3.0) + c2 * (s * q + 1.0 / s + 1.0 / q - 3.0);
+        let w_s = c1 * (1.0 - 1.0 / (s * s * q)) + c2 * (q - 1.0 / (s * s));
+        let w_q = c1 * (1.0 - 1.0 / (s * q * q)) + c2 * (s - 1.0 / (q * q));
+        let w_ss = 2.0 * c1 / (s * s * s * q) + 2.0 * c2 / (s * s * s);
+        let w_sq = c1 / (s * s * q * q) + c2;
+        let w_qq = 2.0 * c1 / (s * q * q * q) + 2.0 * c2 / (q * q * q);
+        // w(s) and D = W − w.
+        let [u0, u1, u2] = self.uniaxial(s);
+        let (dd, d_s, d_q, d_ss, d_sq, d_qq) = (ww - u0, w_s - u1, w_q, w_ss - u2, w_sq, w_qq);
+        // b's derivatives (b_ss = 0).
+        let (b_s, b_q, b_sq, b_qq) = (q * q / d2, 2.0 * s * q / d2, 2.0 * q / d2, 2.0 * s / d2);
+        let [sb, sb1, sb2] = smooth_step(b);
+        // B = w + D S(b); where S(b) = 0 (D may be large far inside the wrinkled state) B = w.
+        let (bb, bb_s, bb_q, bb_ss, bb_sq, bb_qq) = if sb == 0.0 && sb1 == 0.0 {
+            (u0, u1, 0.0, u2, 0.0, 0.0)
+        } else {
+            (
+                u0 + dd * sb,
+                u1 + d_s * sb + dd * sb1 * b_s,
+                d_q * sb + dd * sb1 * b_q,
+                u2 + d_ss * sb + 2.0 * d_s * sb1 * b_s + dd * sb2 * b_s * b_s,
+                d_sq * sb + (d_s * b_q + d_q * b_s) * sb1 + dd * (sb2 * b_s * b_q + sb1 * b_sq),
+                d_qq * sb + 2.0 * d_q * sb1 * b_q + dd * (sb2 * b_q * b_q + sb1 * b_qq),
+            )
+        };
+        // f = S(a) B, a_s = 1/(2δ).
+        let [sa, sa1, sa2] = smooth_step(a);
+        let a_s = 1.0 / d2;
+        [
+            sa * bb,
+            sa1 * a_s * bb + sa * bb_s,
+            sa * bb_q,
+            sa2 * a_s * a_s * bb + 2.0 * sa1 * a_s * bb_s + sa * bb_ss,
+            sa1 * a_s * bb_q + sa * bb_sq,
+            sa * bb_qq,
+        ]
     }
 
     /// The energy of uniaxial tension at the natural width ν = λ₁^(−1/2) and its first two
@@ -240,6 +397,8 @@ pub enum Wrinkling {
     Relaxed {
         /// ε.
         stiffness: f64,
+        /// The switching width δ ≥ 0 (0: W* exactly; docs/theory.md §2.9).
+        width: f64,
     },
 }
 
@@ -298,6 +457,23 @@ pub struct ReferenceTriangle {
     m: [f64; 3],
     /// H · A0 (stress-free volume of the element).
     volume: f64,
+}
+
+/// The quintic step S(x) = 0 for x ≤ −1, 1 for x ≥ 1 and y³(10 − 15y + 6y²), y = (x + 1)/2,
+/// between: C², with S′ and S″ zero at ±1. Returns (S, S′, S″) in x.
+fn smooth_step(x: f64) -> [f64; 3] {
+    if x <= -1.0 {
+        return [0.0; 3];
+    }
+    if x >= 1.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let y = 0.5 * (x + 1.0);
+    [
+        y * y * y * (10.0 - 15.0 * y + 6.0 * y * y),
+        15.0 * y * y * (1.0 - y) * (1.0 - y),
+        15.0 * y * (1.0 - y) * (1.0 - 2.0 * y),
+    ]
 }
 
 /// The 3×3 outer product u vᵀ.
@@ -386,12 +562,12 @@ impl ReferenceTriangle {
     pub fn relaxed_energy_gradient_hessian(
         &self,
         mat: &MooneyRivlin,
-        stiffness: f64,
+        [stiffness, width]: [f64; 2],
         x: &[Vector3<f64>; 3],
     ) -> Option<(Local, TensionState)> {
         let mut state = TensionState::Taut;
         let local = self.local_of(x, |f| {
-            let (w, p, hf, s) = mat.relaxed_in_f(f, stiffness)?;
+            let (w, p, hf, s) = mat.relaxed_in_f(f, stiffness, width)?;
             state = s;
             Some((w, p, hf))
         })?;
@@ -734,8 +910,9 @@ impl Effect for Membrane {
         let want_loads = out.request().loads && slots.iter().any(Option::is_some);
         // ∂c1/∂k = −c1/(1 + k), ∂c2/∂k = c1/(1 + k).
         let (dc1, dc2) = (-mat.c1 / (1.0 + k), mat.c1 / (1.0 + k));
-        if let Wrinkling::Relaxed { stiffness } = self.wrinkling {
-            return self.assemble_relaxed(x, out, [mu, k, thickness, prestretch, scale], stiffness);
+        if let Wrinkling::Relaxed { stiffness, width } = self.wrinkling {
+            let law = [stiffness, width];
+            return self.assemble_relaxed(x, out, [mu, k, thickness, prestretch, scale], law);
         }
         out.add_triangles(x, slots, |t, xt, terms| {
             let elem = self.elements[t].at(effective, thickness);
@@ -859,7 +1036,7 @@ impl Membrane {
         x: &[Vec3],
         out: &mut Assembler<'_>,
         [mu, k, thickness, prestretch, scale]: [f64; 5],
-        stiffness: f64,
+        law: [f64; 2],
     ) -> Result<(), ModelError> {
         let effective = prestretch / scale;
         let mat = MooneyRivlin::new(mu, k, thickness);
@@ -878,7 +1055,7 @@ impl Membrane {
         out.add_triangles(x, slots, |t, xt, terms| {
             let elem = self.elements[t].at(effective, thickness);
             terms.local = elem
-                .relaxed_energy_gradient_hessian(&mat, stiffness, xt)
+                .relaxed_energy_gradient_hessian(&mat, law, xt)
                 .ok_or_else(inverted)?
                 .0;
             if !want_loads {
@@ -893,7 +1070,7 @@ impl Membrane {
             }
             if slots[1].is_some() {
                 terms.loads[1] = elem
-                    .relaxed_energy_gradient_hessian(&dmat, stiffness, xt)
+                    .relaxed_energy_gradient_hessian(&dmat, law, xt)
                     .ok_or_else(inverted)?
                     .0
                     .grad;
@@ -1134,7 +1311,9 @@ mod tests {
         for &(l1, l2) in &[(1.2, 1.1), (1.5, 0.9), (1.05, 1.0), (2.0, 0.75)] {
             let (elem, x) = stretched(l1, l2, 1.1, [0.2, -0.4, 0.7]);
             let plain = elem.energy_gradient_hessian(&mat, &x).unwrap();
-            let (relaxed, state) = elem.relaxed_energy_gradient_hessian(&mat, 0.0, &x).unwrap();
+            let (relaxed, state) = elem
+                .relaxed_energy_gradient_hessian(&mat, [0.0; 2], &x)
+                .unwrap();
             assert_eq!(state, TensionState::Taut, "({l1}, {l2})");
             assert_eq!(plain, relaxed);
         }
@@ -1145,7 +1324,9 @@ mod tests {
             (0.9, 0.9, TensionState::Slack),
         ] {
             let (elem, x) = stretched(l1, l2, 1.1, [0.2, -0.4, 0.7]);
-            let (_, state) = elem.relaxed_energy_gradient_hessian(&mat, 0.0, &x).unwrap();
+            let (_, state) = elem
+                .relaxed_energy_gradient_hessian(&mat, [0.0; 2], &x)
+                .unwrap();
             assert_eq!(state, want, "({l1}, {l2})");
             let r = elem.relaxed_state(&mat, &x).unwrap();
             assert_eq!(r.state, want);
@@ -1175,7 +1356,8 @@ mod tests {
         };
         let at = |l1: f64, l2: f64| {
             let (elem, x) = stretched(l1, l2, 0.4, [0.1, 0.2, 0.3]);
-            elem.relaxed_energy_gradient_hessian(&mat, 0.0, &x).unwrap()
+            elem.relaxed_energy_gradient_hessian(&mat, [0.0; 2], &x)
+                .unwrap()
         };
         // Taut–wrinkled at λ₁ = 1.4.
         let nu = 1.4f64.powf(-0.5);
@@ -1223,10 +1405,10 @@ mod tests {
                 .sum::<f64>()
         };
         let eps = 1e-3;
-        let (_, _, h0, state) = mat.relaxed_in_f(&f, 0.0).unwrap();
+        let (_, _, h0, state) = mat.relaxed_in_f(&f, 0.0, 0.0).unwrap();
         assert_eq!(state, TensionState::Wrinkled);
         assert!(second(&h0).abs() < 1e-12, "{}", second(&h0));
-        let (_, _, he, _) = mat.relaxed_in_f(&f, eps).unwrap();
+        let (_, _, he, _) = mat.relaxed_in_f(&f, eps, 0.0).unwrap();
         let want = 2.0 * eps * (mat.c1 + mat.c2);
         assert!(
             (second(&he) - want).abs() < 1e-12 * want.max(1.0),
@@ -1274,14 +1456,132 @@ mod tests {
             let (elem, x) = stretched(l1, l2, phi, turn);
             let step = 1e-6;
             let state = |s: f64| {
-                elem.relaxed_energy_gradient_hessian(&mat, eps, &perturbed(&x, &dir, s))
+                elem.relaxed_energy_gradient_hessian(&mat, [eps, 0.0], &perturbed(&x, &dir, s))
                     .map(|(_, st)| st)
             };
             prop_assert_eq!(state(0.0), Some(want));
             prop_assume!(state(step) == Some(want) && state(-step) == Some(want));
             let kernel = |y: &[Vector3<f64>; 3]| {
-                elem.relaxed_energy_gradient_hessian(&mat, eps, y).map_or(Local::ZERO, |(l, _)| l)
+                elem.relaxed_energy_gradient_hessian(&mat, [eps, 0.0], y).map_or(Local::ZERO, |(l, _)| l)
             };
+            check_kernel(kernel, &x, &dir, step, 1e-6).map_err(TestCaseError::fail)?;
+        }
+    }
+
+    /// The stretches (λ₁, λ₂) at the band coordinates of [`MooneyRivlin::smoothed_in_f`]:
+    /// `a` = (s − 1)/(2δ) − 1 and `b` = (s q² − 1)/(2δ) − 1, s = λ₁², q = λ₂².
+    fn at_band(a: f64, b: f64, width: f64) -> (f64, f64) {
+        let s = 1.0 + 2.0 * width * (a + 1.0);
+        let q = ((1.0 + 2.0 * width * (b + 1.0)) / s).sqrt();
+        (s.sqrt(), q.sqrt())
+    }
+
+    /// With a switching width δ the relaxed energy is W* itself, bit for bit, outside the
+    /// bands |a| < 1, |b| < 1 (in all three states), within O(δ²) of it inside them, and C²
+    /// across the bands' edges: its Hessian changes by O(h) over a step h there, where W*'s
+    /// jumps by O(1) across its switching surfaces.
+    #[test]
+    fn the_smoothed_relaxed_energy_is_the_exact_one_outside_its_bands_and_twice_differentiable() {
+        let mat = MooneyRivlin::new(1.0, 0.3, 1.0);
+        let width = 1e-2;
+        let at = |l1: f64, l2: f64, w: f64| {
+            let (elem, x) = stretched(l1, l2, 0.4, [0.1, 0.2, 0.3]);
+            elem.relaxed_energy_gradient_hessian(&mat, [1e-4, w], &x)
+                .unwrap()
+                .0
+        };
+        for &(l1, l2) in &[(1.3, 1.1), (1.5, 0.6), (0.9, 0.5), (0.95, 0.95), (2.0, 0.7)] {
+            assert_eq!(at(l1, l2, 0.0), at(l1, l2, width), "({l1}, {l2})");
+        }
+        let hess_change = |p: &Local, q: &Local| {
+            (0..81).fold(0.0f64, |m, i| {
+                m.max((p.hess[i / 9][i % 9] - q.hess[i / 9][i % 9]).abs())
+            })
+        };
+        let h = 1e-7;
+        for &(a, b) in &[
+            (3.0, 1.0),
+            (3.0, -1.0),
+            (1.0, -4.0),
+            (-1.0, -4.0),
+            (0.5, 1.0),
+        ] {
+            // Across the edge along a (b held) and along b (a held).
+            for (da, db) in [(h, 0.0), (0.0, h)] {
+                let (p1, p2) = at_band(a + da, b + db, width);
+                let (m1, m2) = at_band(a - da, b - db, width);
+                let change = hess_change(&at(p1, p2, width), &at(m1, m2, width));
+                assert!(
+                    change < 1e-4,
+                    "({a}, {b}): the Hessian changes by {change:e}"
+                );
+            }
+        }
+        // At equal stretches inside the bands (an isotropic state within 4δ of the natural
+        // one) the blend is symmetric in them: C², its derivatives those of differences.
+        for &l in &[(1.0 + 3.0 * width).sqrt(), (1.0 + 1.2 * width).sqrt()] {
+            let (elem, x) = stretched(l, l, 0.4, [0.1, 0.2, 0.3]);
+            let kernel = |y: &[Vector3<f64>; 3]| {
+                elem.relaxed_energy_gradient_hessian(&mat, [1e-4, width], y)
+                    .unwrap()
+                    .0
+            };
+            for dir in [
+                [0.3, -0.2, 0.5, 0.1, 0.7, -0.4, -0.6, 0.2, 0.3],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ] {
+                check_kernel(kernel, &x, &dir, 1e-7, 1e-6).unwrap();
+            }
+        }
+        // Inside the bands the blend differs from W* by O(δ²) per unit μ: a tenth of δ, a
+        // hundredth of the difference.
+        for &(a, b) in &[(3.0, 0.3), (3.0, -0.6), (0.4, -3.0), (-0.5, -3.0)] {
+            let gap = |w: f64| {
+                let (l1, l2) = at_band(a, b, w);
+                (at(l1, l2, w).value - at(l1, l2, 0.0).value).abs()
+            };
+            let (coarse, fine) = (gap(1e-2), gap(1e-3));
+            assert!(coarse > 0.0, "({a}, {b})");
+            let ratio = coarse / fine;
+            assert!((60.0..160.0).contains(&ratio), "({a}, {b}): ratio {ratio}");
+        }
+    }
+
+    proptest! {
+        /// The smoothed relaxed energy's gradient and Hessian against central differences
+        /// inside its bands: near the taut–wrinkled surface (`which` 0), the wrinkled–slack
+        /// surface (1) and where both bands overlap near the natural state (2), there also at
+        /// nearly equal stretches, where the blend meets its mirror; widths 1e-3 … 5e-2.
+        #[test]
+        fn smoothed_relaxed_derivatives_match_finite_differences(
+            which in 0usize..3,
+            a in -0.98f64..0.98,
+            b in -0.98f64..0.98,
+            far in 0.0f64..1.0,
+            phi in 0.0f64..3.2,
+            turn in proptest::array::uniform3(-2.0f64..2.0),
+            dir in proptest::array::uniform9(-1.0f64..1.0),
+            k in 0.0f64..0.5,
+            width in 1e-3f64..5e-2,
+        ) {
+            let (l1, l2) = match which {
+                // Far from the slack band (a ≥ 3), in the taut band.
+                0 => at_band(3.0 + 40.0 * far, b, width),
+                // In the slack band, λ₂ well below λ₁.
+                1 => {
+                    let (l1, _) = at_band(a, 0.0, width);
+                    (l1, l1 * (0.3 + 0.6 * far))
+                }
+                // In both: near the natural state, off equal stretches.
+                _ => at_band(a, b, width),
+            };
+            let mat = MooneyRivlin::new(1.0, k, 1.0);
+            let (elem, x) = stretched(l1, l2, phi, turn);
+            let kernel = |y: &[Vector3<f64>; 3]| {
+                elem.relaxed_energy_gradient_hessian(&mat, [1e-4, width], y)
+                    .map_or(Local::ZERO, |(l, _)| l)
+            };
+            let step = 1e-7;
             check_kernel(kernel, &x, &dir, step, 1e-6).map_err(TestCaseError::fail)?;
         }
     }

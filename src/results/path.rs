@@ -170,6 +170,13 @@ pub struct Wrinkling {
     /// triangles are those not taut, which that energy describes (left out when false).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub relaxed: bool,
+    /// The relaxed energy's switching width δ (docs/theory.md §2.9; left out when 0).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub width: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl Wrinkling {

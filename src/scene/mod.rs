@@ -288,6 +288,10 @@ pub struct Material {
     /// [`DEFAULT_WRINKLING_STIFFNESS`]); only with `wrinkling = "relaxed"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wrinkling_stiffness: Option<f64>,
+    /// The switching width δ of the relaxed energy, 0 ≤ δ ≤ 0.1 (default 0: the relaxed
+    /// energy exactly); only with `wrinkling = "relaxed"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wrinkling_width: Option<f64>,
     /// The largest principal stretch (from the stress-free state) the material is stated
     /// for, above 1; a state stretched beyond it is flagged `stretch` (docs/theory.md §8.10).
     /// None: no range stated, no flag.
@@ -323,6 +327,12 @@ impl Material {
             self.wrinkling_stiffness
                 .unwrap_or(DEFAULT_WRINKLING_STIFFNESS)
         })
+    }
+
+    /// The switching width δ when the relaxed energy is selected (0 unless the scene gives
+    /// one), `None` for the plain one.
+    pub fn relaxed_width(&self) -> Option<f64> {
+        (self.wrinkling == Wrinkling::Relaxed).then(|| self.wrinkling_width.unwrap_or(0.0))
     }
 
     /// The quantities with their keys and the range a value must lie in.

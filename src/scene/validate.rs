@@ -560,6 +560,21 @@ fn check_material(m: &Material, parameters: &BTreeMap<String, Parameter>) -> Res
             ));
         }
     }
+    if let Some(width) = m.wrinkling_width {
+        let key = "material.wrinkling-width";
+        if m.wrinkling != super::Wrinkling::Relaxed {
+            return Err(Problem::at(
+                key,
+                format!("= {}: needs wrinkling = \"relaxed\"", num(width)),
+            ));
+        }
+        if !(width.is_finite() && (0.0..=0.1).contains(&width)) {
+            return Err(Problem::at(
+                key,
+                format!("must be between 0 and 0.1, got {}", num(width)),
+            ));
+        }
+    }
     Ok(())
 }
 

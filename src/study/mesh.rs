@@ -208,7 +208,10 @@ impl MeshStudy {
         )
         .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?
         .with_wrinkling(match mat.relaxed_stiffness() {
-            Some(stiffness) => membrane::Wrinkling::Relaxed { stiffness },
+            Some(stiffness) => membrane::Wrinkling::Relaxed {
+                stiffness,
+                width: mat.relaxed_width().unwrap_or(0.0),
+            },
             None => membrane::Wrinkling::None,
         });
         // The mesh was generated at the radius parameter's start value R0.
@@ -678,6 +681,7 @@ impl MeshStudy {
             first,
             critical,
             relaxed: self.scene.material.relaxed_stiffness().is_some(),
+            width: self.scene.material.relaxed_width().unwrap_or(0.0),
         })
     }
 

@@ -355,6 +355,12 @@ pub fn stall_hint(
         .filter_map(|e| e.get::<scene::PlaneEffect>())
         .collect();
     let why = match stalled.kind {
+        F::BranchJump if scene.material.relaxed_width() == Some(0.0) => format!(
+            "likely cause: a corner of the path where triangles switch between taut, wrinkled \
+             and slack (the relaxed energy's tangent jumps there), or a bifurcation close by; \
+             a `wrinkling-width` in [material] (e.g. 1e-3) smooths the switching \
+             (docs/theory.md §2.9), or try a smaller `max-step` in [analysis] (now {step})"
+        ),
         F::BranchJump => format!(
             "likely cause: a sharp turn of the path (or a bifurcation close by), where the \
              corrector lands on another piece and the branch-jump guard refuses it; try a \
