@@ -162,6 +162,16 @@ pub fn write_from_run(
     let primary = crate::results::PrimaryPath::of(&result.report);
     let written =
         output::write_branches(drawing, scene, branches, &primary, out).map_err(|e| e.error)?;
+    Ok((written, write_pieces(result, drawing, scene, out)?))
+}
+
+/// `diagram.json`, `partners.svg` and a directory per second piece of `result`.
+fn write_pieces(
+    result: &RunResult,
+    drawing: &dyn Drawing,
+    scene: &Scene,
+    out: &FilePath,
+) -> Result<Vec<Described>, OutputError> {
     let none = Vec::new();
     let found = result.outcome::<Vec<Partner>>().unwrap_or(&none);
     let files = output::write_partners(
@@ -172,13 +182,10 @@ pub fn write_from_run(
         result.branches.as_ref(),
         &result.report,
     )?;
-    Ok((
-        written,
-        files
-            .into_iter()
-            .map(|(path, what)| Described { path, what })
-            .collect(),
-    ))
+    Ok(files
+        .into_iter()
+        .map(|(path, what)| Described { path, what })
+        .collect())
 }
 
 /// The lines of a diagram's summary beyond its path and branches: the second pieces.
@@ -207,20 +214,7 @@ impl Analysis for Diagram {
         scene: &Scene,
         out: &FilePath,
     ) -> Result<Vec<Described>, OutputError> {
-        let none = Vec::new();
-        let found = result.outcome::<Vec<Partner>>().unwrap_or(&none);
-        let files = output::write_partners(
-            drawing,
-            scene,
-            out,
-            found,
-            result.branches.as_ref(),
-            &result.report,
-        )?;
-        Ok(files
-            .into_iter()
-            .map(|(path, what)| Described { path, what })
-            .collect())
+        write_pieces(result, drawing, scene, out)
     }
 
     fn summary(&self, result: &RunResult) -> Vec<String> {

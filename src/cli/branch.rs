@@ -17,7 +17,7 @@ use super::common::{load_scene, one_line, sig_digits};
 use super::CliError;
 use clap::Args;
 use memstab::analysis::branch;
-use memstab::output::{write_branches, BranchesWritten, FinishedRun};
+use memstab::output::{write_branches, BranchesWritten};
 use memstab::results::{directory, Branches, Node, StopReason};
 use std::path::PathBuf;
 
@@ -49,15 +49,7 @@ pub(crate) struct BranchArgs {
 }
 
 pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
-    let input = |e: memstab::output::ReopenError| CliError::Input(one_line(&e.to_string()));
-    let finished = FinishedRun::read(&args.run_dir).map_err(input)?;
-    let out = args.out.clone().unwrap_or_else(|| args.run_dir.clone());
-    if !out.is_dir() {
-        return Err(CliError::Input(format!(
-            "--out '{}' is not an existing directory",
-            out.display()
-        )));
-    }
+    let (finished, out) = super::common::finished_run(&args.run_dir, args.out.as_deref())?;
     if let Some(d) = args.depth {
         if !(1..=memstab::scene::MAX_BRANCH_DEPTH).contains(&d) {
             return Err(CliError::Input(format!(

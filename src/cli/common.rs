@@ -252,3 +252,21 @@ impl<'a> OutDir<'a> {
         CliError::Failure(format!("{}; nothing was written{left}", one_line(error)))
     }
 }
+
+/// A finished run in `run_dir` read back, and the directory to write into (`out`, default
+/// `run_dir`; it must exist).
+pub(crate) fn finished_run(
+    run_dir: &std::path::Path,
+    out: Option<&std::path::Path>,
+) -> Result<(memstab::output::FinishedRun, std::path::PathBuf), CliError> {
+    let finished = memstab::output::FinishedRun::read(run_dir)
+        .map_err(|e| CliError::Input(one_line(&e.to_string())))?;
+    let out = out.unwrap_or(run_dir).to_path_buf();
+    if !out.is_dir() {
+        return Err(CliError::Input(format!(
+            "--out '{}' is not an existing directory",
+            out.display()
+        )));
+    }
+    Ok((finished, out))
+}

@@ -19,7 +19,6 @@ use super::common::{load_scene, one_line};
 use super::CliError;
 use clap::Args;
 use memstab::analysis::{diagram, AfterError, Progress};
-use memstab::output::FinishedRun;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -53,15 +52,7 @@ pub(crate) struct DiagramArgs {
 }
 
 pub(crate) fn run(args: &DiagramArgs) -> Result<(), CliError> {
-    let input = |e: memstab::output::ReopenError| CliError::Input(one_line(&e.to_string()));
-    let finished = FinishedRun::read(&args.run_dir).map_err(input)?;
-    let out = args.out.clone().unwrap_or_else(|| args.run_dir.clone());
-    if !out.is_dir() {
-        return Err(CliError::Input(format!(
-            "--out '{}' is not an existing directory",
-            out.display()
-        )));
-    }
+    let (finished, out) = super::common::finished_run(&args.run_dir, args.out.as_deref())?;
     let scene_file = args
         .scene
         .clone()
