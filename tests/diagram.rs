@@ -573,3 +573,41 @@ fn memstab_diagram_refuses_bad_input_naming_it() {
     assert!(err.contains("linear-buckling analysis"), "{err}");
     assert!(!held_dir.join("diagram.json").exists());
 }
+
+/// A signal during `memstab diagram` ends it as a run's does: exit 130, what was found written
+/// and listed in the manifest, which says `interrupted` and still verifies (the run reads
+/// back afterwards).
+#[test]
+fn an_interrupted_memstab_diagram_exits_130_with_a_manifest_that_verifies() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = coarse_disc(tmp.path(), "path", "", "path.toml");
+    let run_dir = tmp.path().join("run");
+    let o = memstab(&["run", &scene, "--out", run_dir.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_memstab"))
+        .args(["diagram", run_dir.to_str().unwrap(), "--steps", "8"])
+        .env("MEMSTAB_INTERRUPT_AFTER_STEPS", "3")
+        .output()
+        .unwrap();
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    let manifest = json_of(&run_dir.join("manifest.json"));
+    assert_eq!(manifest["stop"], "interrupted");
+    assert!(run_dir.join("branches.json").is_file());
+    let o = memstab(&[
+        "branch",
+        run_dir.to_str().unwrap(),
+        "--critical",
+        "1",
+        "--steps",
+        "2",
+        "--out",
+        tmp.path().to_str().unwrap(),
+    ]);
+    assert!(
+        o.status.success(),
+        "the run still verifies: {}",
+        text(&o.stderr)
+    );
+}
