@@ -362,6 +362,24 @@ impl AxisymModel {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
+    /// The elements with a negative principal tension at one of their quadrature points at
+    /// displacement `q`: the meridional and hoop directions are principal, and the
+    /// incompressible Mooney–Rivlin membrane's tension along λ₁ is
+    /// 2H(λ₁ − λ₁⁻³λ₂⁻²)(c₁ + c₂λ₂²), negative exactly where λ₁⁴λ₂² < 1 (c₁ > 0, c₂ ≥ 0) — the
+    /// 3-D mesh's `wrinkled` triangles, counted per element (docs/theory.md §8.10).
+    pub fn wrinkled_elements(&self, q: &[f64]) -> usize {
+        let x = self.positions(q);
+        let lam = self.meridian.prestretch;
+        (0..self.meridian.elements())
+            .filter(|&e| {
+                super::points(&self.meridian, &x, e).iter().any(|p| {
+                    let (s, t) = (lam * p.x_xi.norm() / p.dx_ref, lam * p.r / p.big_r);
+                    s.powi(4) * t * t < 1.0 || t.powi(4) * s * s < 1.0
+                })
+            })
+            .count()
+    }
+
     /// Every node's deepest penetration ⟨d − n_z z⟩ of the planes at displacement `q` (0
     /// where it is clear of them) and the mean length of the elements' chords (two per
     /// quadratic element) there; `None` without a plane.
@@ -1375,6 +1393,34 @@ pub(super) mod tests {
             model.evaluate(&q, &[w2]).unwrap().energy - bare.evaluate(&q, &[w2]).unwrap().energy;
         let exact = -0.5 * 0.8 * w2 * 8.0 * PI * a.powi(5) / 15.0;
         assert!((pi_spin / exact - 1.0).abs() < 1e-6, "{pi_spin} vs {exact}");
+    }
+
+    /// A sphere scaled by c from its reference (pre-stretch λ₀) has both principal stretches
+    /// λ₀c: every element is wrinkled just below λ₀c = 1 and none just above. Stretched to
+    /// 1.02 and flattened (z scaled by 0.9), it keeps a hoop stretch of 1.02 and shortens its
+    /// meridians near the equator: only the elements where λ_s⁴λ_θ² or λ_θ⁴λ_s² drops below
+    /// 1 are counted, fewer than all and more than none.
+    #[test]
+    fn wrinkled_elements_are_those_with_a_negative_principal_tension() {
+        let mat = MooneyRivlin::new(1.0, 0.2, 0.1);
+        let lam = 1.05;
+        let model = AxisymModel::new(Meridian::sphere(1.0, 16, lam, mat).unwrap(), Vec::new());
+        // About the first pole, whose height a closed meridian holds.
+        let z0 = model.meridian.nodes[0][1];
+        let scaled = |c: f64, b: f64| {
+            let x: Vec<[f64; 2]> = model
+                .meridian
+                .nodes
+                .iter()
+                .map(|p| [c * p[0], z0 + b * c * (p[1] - z0)])
+                .collect();
+            model.displacement_of(&x)
+        };
+        let n = model.meridian.elements();
+        assert_eq!(model.wrinkled_elements(&scaled(0.99 / lam, 1.0)), n);
+        assert_eq!(model.wrinkled_elements(&scaled(1.01 / lam, 1.0)), 0);
+        let flat = model.wrinkled_elements(&scaled(1.02 / lam, 0.9));
+        assert!(flat > 0 && flat < n, "{flat} of {n}");
     }
 
     /// The m = 0 block on (U, W) is the tangent of the axisymmetric problem.

@@ -76,7 +76,7 @@ impl std::fmt::Display for Flag {
             } => {
                 write!(
                     f,
-                    "wrinkled, {triangles} of {of} triangles with a negative principal tension"
+                    "wrinkled, {triangles} of {of} elements with a negative principal tension"
                 )?;
                 match mode {
                     Some(mode) => write!(f, ", {:.0} % of the mode there", 100.0 * mode),
@@ -211,12 +211,13 @@ impl PathReport {
                     bracket: c.bracket,
                 });
             }
-            // The wrinkled triangles are counted above, with the mode's share.
-            let only_stretch = StateCheck {
-                wrinkled: None,
+            // The wrinkled elements are counted above, with the mode's share, where the run
+            // has a wrinkling record (a 3-D mesh); else (a meridian) from the point's state.
+            let rest = StateCheck {
+                wrinkled: check.wrinkled.filter(|_| self.wrinkling.is_none()),
                 ..check.clone()
             };
-            flags.extend(checks.state_flags(&only_stretch, None));
+            flags.extend(checks.state_flags(&rest, None));
         }
         if let Some(r) = &self.refinement {
             for p in r.critical.iter().filter(|p| p.points.contains(&(k + 1))) {

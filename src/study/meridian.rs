@@ -671,13 +671,18 @@ impl Study for MeridianStudy {
 
     /// Its largest principal stretch (the meridian's elements do not say where it would
     /// wrinkle: no count).
+    fn wrinkled(&self, u: &[f64], _params: &[f64]) -> Option<usize> {
+        (u.len() == self.model.dim()).then(|| self.model.wrinkled_elements(u))
+    }
+
     fn state_check(&self, u: &[f64], _params: &[f64]) -> crate::results::validity::StateCheck {
-        let stretch = (u.len() == self.model.dim())
-            .then(|| self.model.largest_stretch(u))
-            .filter(|s| s.is_finite());
+        if u.len() != self.model.dim() {
+            return crate::results::validity::StateCheck::default();
+        }
         crate::results::validity::StateCheck {
-            stretch,
-            ..Default::default()
+            wrinkled: Some(self.model.wrinkled_elements(u)),
+            stretch: Some(self.model.largest_stretch(u)).filter(|s| s.is_finite()),
+            contact: None,
         }
     }
 
