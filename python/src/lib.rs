@@ -211,7 +211,6 @@ fn spectrum(
     count: usize,
 ) -> PyResult<String> {
     use memstab::analysis::restart;
-    use memstab::stability::{Detail, Stability};
     let scene = Scene::from_toml_str(text, origin).map_err(error)?;
     three_d(&scene)?;
     let dir = PathBuf::from(run_dir);
@@ -228,20 +227,9 @@ fn spectrum(
             }
             _ => return Err("give one of a path point and a critical point".into()),
         };
-        let adapted = memstab::adapted::AdaptedBasis::new(&study.action, study.model.layout())
+        let spectrum = study
+            .spectrum_at(&u, &params, count)
             .map_err(|e| e.to_string())?;
-        let stability = Stability::new(&study.model, &adapted).interruptible();
-        let mut eval = study.model.new_evaluation();
-        let spectrum = stability
-            .analyse(
-                &u,
-                &params,
-                &study.constraints,
-                &mut eval,
-                None,
-                Detail::Eigenvalues { lowest: count },
-            )
-            .map_err(|e| format!("the tangent could not be evaluated: {e}"))?;
         let scale = spectrum.scale;
         let json = serde_json::json!({
             "group": study.action.group().name(),

@@ -18,10 +18,8 @@
 use super::common::{build_study, load_scene, one_line, parse_at, saved_point, sci};
 use super::CliError;
 use clap::Args;
-use memstab::adapted::AdaptedBasis;
 use memstab::analysis::equilibrium::state_at;
-use memstab::model::Model;
-use memstab::stability::{Detail, Stability};
+use memstab::study::mesh::SpectrumError;
 use memstab::study::Point;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -100,24 +98,11 @@ pub(crate) fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let (study, at, u, params, iterations, point) = state(args)?;
     let origin = study.scene.origin.clone();
     let held = memstab::analysis::analysis_of(&study.scene.analysis).held();
-    let adapted = AdaptedBasis::new(&study.action, study.model.layout())
-        .map_err(|e| CliError::Input(format!("scene '{origin}': {e}")))?;
-    let stability = Stability::new(&study.model, &adapted).interruptible();
-    let mut eval = study.model.new_evaluation();
-    let spectrum = stability
-        .analyse(
-            &u,
-            &params,
-            &study.constraints,
-            &mut eval,
-            None,
-            Detail::Eigenvalues { lowest: args.count },
-        )
-        .map_err(|e| {
-            CliError::Failure(format!(
-                "the tangent could not be evaluated: {}",
-                one_line(&e.to_string())
-            ))
+    let spectrum = study
+        .spectrum_at(&u, &params, args.count)
+        .map_err(|e| match e {
+            SpectrumError::Basis(e) => CliError::Input(format!("scene '{origin}': {e}")),
+            e @ SpectrumError::Tangent(_) => CliError::Failure(one_line(&e.to_string())),
         })?;
     // A signal while the blocks were analysed: the blocks not started were skipped, so no
     // part of the spectrum is printed.

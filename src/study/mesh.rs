@@ -123,6 +123,17 @@ pub struct MeshStudy {
     start_drifted: bool,
 }
 
+/// Why [`MeshStudy::spectrum_at`] gave no spectrum.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum SpectrumError {
+    /// The symmetry-adapted basis could not be built.
+    #[error("{0}")]
+    Basis(String),
+    /// The tangent could not be evaluated at the state.
+    #[error("the tangent could not be evaluated: {0}")]
+    Tangent(crate::model::ModelError),
+}
+
 impl MeshStudy {
     /// Builds mesh, effects, model, constraints and basis from a validated scene.
     pub fn build(scene: Scene) -> Result<Self, StudyError> {
@@ -589,6 +600,33 @@ impl MeshStudy {
             })
             .as_ref()
             .map_err(Clone::clone)
+    }
+
+    /// The tangent's spectrum by irrep block at the state (u, Λ): the `lowest` eigenvalues of
+    /// every block, stopping between blocks on a signal (`memstab spectrum`, and Python's).
+    ///
+    /// # Errors
+    /// [`SpectrumError::Basis`] when the symmetry-adapted basis cannot be built (bad input);
+    /// [`SpectrumError::Tangent`] when the tangent cannot be evaluated there.
+    pub fn spectrum_at(
+        &self,
+        u: &[f64],
+        params: &[f64],
+        lowest: usize,
+    ) -> Result<crate::continuation::crossings::Spectrum, SpectrumError> {
+        let adapted = self.adapted().map_err(SpectrumError::Basis)?;
+        let stability = Stability::new(&self.model, adapted).interruptible();
+        let mut eval = self.model.new_evaluation();
+        stability
+            .analyse(
+                u,
+                params,
+                &self.constraints,
+                &mut eval,
+                None,
+                crate::stability::Detail::Eigenvalues { lowest },
+            )
+            .map_err(SpectrumError::Tangent)
     }
 
     /// The number of wrinkled triangles of the state (u, Λ), or `None` when the model shows
