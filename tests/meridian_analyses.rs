@@ -110,10 +110,9 @@ fn balloon_meridian(elements: usize, modes: usize, middle: &str) -> String {
 // ---------------------------------------------------------------------------------------
 
 /// The pressure maximum found on the path in p at k = 0.2 and followed in k (increasing) to
-/// and past the cusp. Started at k = 0.2 rather than 0.1 to keep the test fast: every curve
-/// point costs a gradient of the test function by central differences of the block in each of
-/// the meridian's unknowns (O(n²) element evaluations), and the cusp's localisation many of
-/// them — 9 s at 64 elements even so.
+/// and past the cusp. Started at k = 0.2 rather than 0.1 to keep the test short: every curve
+/// point costs a gradient of the test function by central differences of the block's element
+/// parts (docs/theory.md §15.19), and the cusp's localisation several of them.
 const CURVE: &str = r#"[parameters.k]
 start = 0.2
 min = 0.05

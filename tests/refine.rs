@@ -609,7 +609,9 @@ fn closed_form_cusp() -> (f64, f64) {
 /// order 2, its error estimates bracketing the true errors against the closed form and its
 /// Richardson value far closer than the finest level; k, which the fold line's maximum fixes
 /// to within 3e-7 on every level, is said to converge outside the assumed order rather than
-/// extrapolated. The cusp has counterparts on every level: no flag in critical.json.
+/// extrapolated. The cusp has counterparts on every level: no flag in critical.json. With
+/// `--continuum` the meridian's curve gives the cusp as well, at the closed form, with each
+/// level's distance from it.
 #[test]
 fn a_critical_curves_cusp_is_refined_against_its_closed_form() {
     let dir = tempfile::tempdir().unwrap();
@@ -632,6 +634,7 @@ fn a_critical_curves_cusp_is_refined_against_its_closed_form() {
         out.to_str().unwrap(),
         "--refine",
         "2",
+        "--continuum",
         "--quiet",
     ]);
     let (p_c, k_c) = closed_form_cusp();
@@ -674,12 +677,35 @@ fn a_critical_curves_cusp_is_refined_against_its_closed_form() {
         assert!((v.as_f64().unwrap() - k_c).abs() < 1e-6, "{cusp}");
     }
     assert_eq!(k["estimate"]["basis"], "not-asymptotic", "{cusp}");
+    // The meridian's cusp: the closed form's to its quadratic elements' accuracy (a relative
+    // 6e-9 at 64 elements), with its own error from twice the elements, and every level's
+    // distance from it.
+    let on_meridian = &cusp["continuum"];
+    for (coordinate, truth, tolerance) in [("control", p_c, 3e-8), ("second", k_c, 1e-9)] {
+        let c = &on_meridian[coordinate];
+        let value = c["value"].as_f64().unwrap();
+        assert!((value - truth).abs() < tolerance, "{coordinate}: {cusp}");
+        assert!(
+            c["error"].as_f64().unwrap() < tolerance,
+            "{coordinate}: {cusp}"
+        );
+        for (l, d) in c["distances"].as_array().unwrap().iter().enumerate() {
+            let v = cusp[coordinate]["values"][l].as_f64().unwrap();
+            // (to the last bit the JSON parser rounds)
+            let d = d.as_f64().unwrap();
+            assert!(
+                (d - (v - value)).abs() <= 1e-15 * v.abs(),
+                "{coordinate}: {cusp}"
+            );
+        }
+    }
     // The summary prints the cusp's levels; critical.json carries no flag on it.
     assert!(
         stdout.contains("curve event 2: cusp (maximum of k)"),
         "{stdout}"
     );
     assert!(stdout.contains("level 2: k = "), "{stdout}");
+    assert!(stdout.contains("continuum: p = 1.505047"), "{stdout}");
     let critical = json(&out.join("critical.json"));
     let listed = critical
         .as_array()

@@ -182,6 +182,18 @@ impl AxisymModel {
             return;
         }
         let scale = v.iter().fold(0.0f64, |s, a| s.max(a.abs())).max(1e-300);
+        self.set_border_scaled(layout, x, params, scale, v);
+    }
+
+    /// [`AxisymModel::set_border`] with the columns' scale given.
+    pub(super) fn set_border_scaled(
+        &self,
+        layout: &BlockLayout,
+        x: &[[f64; 2]],
+        params: &[f64],
+        scale: f64,
+        v: &mut [f64],
+    ) {
         let n = layout.kept;
         let borders = self.border_vectors(layout.m, x, params);
         for (j, (b, norm, c)) in borders.iter().enumerate() {

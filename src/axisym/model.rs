@@ -333,6 +333,11 @@ impl AxisymModel {
         x
     }
 
+    /// The node and component (0 = r, 1 = z) of every unknown of q.
+    pub fn free(&self) -> &[(usize, usize)] {
+        &self.free
+    }
+
     /// The displacement q that puts the nodes at `x` (held components are ignored).
     pub fn displacement_of(&self, x: &[[f64; 2]]) -> Vec<f64> {
         self.free
@@ -781,48 +786,14 @@ impl AxisymModel {
         params: &[f64],
     ) -> Result<Vec<Vec<f64>>, AxisymError> {
         let x = self.positions(q);
-        let lam = self.meridian.prestretch;
-        let material = self.meridian.material.at(params)?;
-        // The spin on the 5-point rule (its terms are of degree 9), a fluid with a wetting
-        // line on its element's wet part (docs/theory.md §15.14), the rest on 4 points.
-        let (spin, rest): (Vec<Pressure>, Vec<Pressure>) = self
-            .resolved_pressures(&x, params)?
-            .into_iter()
-            .partition(|p| matches!(p, Pressure::Spin { .. }));
-        let (wetting, rest): (Vec<Pressure>, Vec<Pressure>) =
-            rest.into_iter().partition(|p| p.level(params).is_some());
-        let points = (0..self.meridian.elements())
-            .map(|e| {
-                let mut points =
-                    block_points(&self.meridian, &x, e, Some(&material), &rest, params)?;
-                if !spin.is_empty() {
-                    let rule = &super::GAUSS5;
-                    points.extend(block_points_on(&self.meridian, &x, e, &spin, params, rule));
-                }
-                let zs = [x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]];
-                for load in &wetting {
-                    let level = load.level(params).expect("a fluid with a level");
-                    let rule = super::wet_part(zs, level).rule;
-                    let one = std::slice::from_ref(load);
-                    points.extend(block_points_on(&self.meridian, &x, e, one, params, &rule));
-                }
-                Ok(points)
-            })
-            .collect::<Result<Vec<_>, AxisymError>>()?;
+        let points = self.element_points(&x, params)?;
         // The wave numbers are independent: one task each.
         let values: Vec<Vec<f64>> = layouts
             .par_iter()
             .map(|layout| {
                 let mut v = vec![0.0; layout.pattern.nnz()];
-                let factor = FloorPlane::block_factor(layout.m);
                 for (e, points) in points.iter().enumerate() {
-                    let mut local = block_local(points, layout.m, lam);
-                    for k in self.owned_nodes(e) {
-                        for plane in &self.planes {
-                            let c = plane.at(x[2 * e + k][1], params);
-                            local[(3 * k + 2, 3 * k + 2)] += factor * c.stiffness;
-                        }
-                    }
+                    let local = self.element_block(e, points, layout.m, &x, params);
                     for &(ij, k, c) in &layout.slots[e] {
                         v[k] += c * local.as_slice()[ij];
                     }
@@ -835,6 +806,123 @@ impl AxisymModel {
             return Err(AxisymError::NonFinite);
         }
         Ok(values)
+    }
+
+    /// Each element's part of wᵀ K_m w at displacement `q` (`weights[k]` = w_r w_c for the
+    /// pattern's entry k in row r and column c): its Gauss points and the planes at the nodes
+    /// it owns, without the border. Element e's part depends on the nodes of e alone when
+    /// [`AxisymModel::blocks_are_local`].
+    pub fn block_quadratic_by_element(
+        &self,
+        layout: &BlockLayout,
+        q: &[f64],
+        params: &[f64],
+        weights: &[f64],
+    ) -> Result<Vec<f64>, AxisymError> {
+        let x = self.positions(q);
+        let points = self.element_points(&x, params)?;
+        let parts: Vec<f64> = points
+            .par_iter()
+            .enumerate()
+            .map(|(e, points)| {
+                let local = self.element_block(e, points, layout.m, &x, params);
+                layout.slots[e]
+                    .iter()
+                    .map(|&(ij, k, c)| c * local.as_slice()[ij] * weights[k])
+                    .sum()
+            })
+            .collect();
+        if parts.iter().any(|v| !v.is_finite()) {
+            return Err(AxisymError::NonFinite);
+        }
+        Ok(parts)
+    }
+
+    /// wᵀ B w for the border B of block `layout` alone (the held motions and constraints,
+    /// [`super::held`]), its columns scaled by `scale` (what the elements' largest entry
+    /// sets in [`AxisymModel::blocks_values`]).
+    pub fn border_quadratic(
+        &self,
+        layout: &BlockLayout,
+        q: &[f64],
+        params: &[f64],
+        scale: f64,
+        weights: &[f64],
+    ) -> f64 {
+        if layout.border == 0 {
+            return 0.0;
+        }
+        let x = self.positions(q);
+        let mut v = vec![0.0; layout.pattern.nnz()];
+        self.set_border_scaled(layout, &x, params, scale, &mut v);
+        v.iter().zip(weights).map(|(a, w)| a * w).sum()
+    }
+
+    /// Whether a block's entries on each element depend on that element's nodes alone (no
+    /// effect resolves its pressure from the whole membrane, as a fixed amount of gas does
+    /// from the volume): what lets [`AxisymModel::block_quadratic_by_element`] be
+    /// differenced element by element.
+    pub fn blocks_are_local(&self) -> bool {
+        !self
+            .pressures
+            .iter()
+            .any(|p| matches!(p, Pressure::GasAmount { .. }))
+    }
+
+    /// The Gauss points of every element for the blocks at the nodes `x`: the spin on the
+    /// 5-point rule (its terms are of degree 9), a fluid with a wetting line on its
+    /// element's wet part (docs/theory.md §15.14), the rest on 4 points.
+    fn element_points(
+        &self,
+        x: &[[f64; 2]],
+        params: &[f64],
+    ) -> Result<Vec<Vec<BlockPoint>>, AxisymError> {
+        let material = self.meridian.material.at(params)?;
+        let (spin, rest): (Vec<Pressure>, Vec<Pressure>) = self
+            .resolved_pressures(x, params)?
+            .into_iter()
+            .partition(|p| matches!(p, Pressure::Spin { .. }));
+        let (wetting, rest): (Vec<Pressure>, Vec<Pressure>) =
+            rest.into_iter().partition(|p| p.level(params).is_some());
+        (0..self.meridian.elements())
+            .map(|e| {
+                let mut points =
+                    block_points(&self.meridian, x, e, Some(&material), &rest, params)?;
+                if !spin.is_empty() {
+                    let rule = &super::GAUSS5;
+                    points.extend(block_points_on(&self.meridian, x, e, &spin, params, rule));
+                }
+                let zs = [x[2 * e][1], x[2 * e + 1][1], x[2 * e + 2][1]];
+                for load in &wetting {
+                    let level = load.level(params).expect("a fluid with a level");
+                    let rule = super::wet_part(zs, level).rule;
+                    let one = std::slice::from_ref(load);
+                    points.extend(block_points_on(&self.meridian, x, e, one, params, &rule));
+                }
+                Ok(points)
+            })
+            .collect()
+    }
+
+    /// Element e's 9 × 9 block of wave number m from its Gauss points, with the planes'
+    /// stiffness at the nodes it owns.
+    fn element_block(
+        &self,
+        e: usize,
+        points: &[BlockPoint],
+        m: usize,
+        x: &[[f64; 2]],
+        params: &[f64],
+    ) -> SMatrix<f64, 9, 9> {
+        let mut local = block_local(points, m, self.meridian.prestretch);
+        let factor = FloorPlane::block_factor(m);
+        for k in self.owned_nodes(e) {
+            for plane in &self.planes {
+                let c = plane.at(x[2 * e + k][1], params);
+                local[(3 * k + 2, 3 * k + 2)] += factor * c.stiffness;
+            }
+        }
+        local
     }
 }
 
@@ -1537,7 +1625,7 @@ pub(super) mod tests {
     }
 
     /// The generic cap with the fluid's level at `level`: (model, q, params).
-    fn partly_wet(level: f64) -> (AxisymModel, Vec<f64>, Vec<f64>) {
+    pub(crate) fn partly_wet(level: f64) -> (AxisymModel, Vec<f64>, Vec<f64>) {
         let (model, q, mut params) = generic();
         params[2] = level;
         (model, q, params)

@@ -31,12 +31,19 @@ pub fn write_refine(dir: &Path, refinement: &Refinement) -> Result<PathBuf, Outp
                 .chain(&p.continuum)
                 .chain(&p.continuum_error)
         })
-        .chain(
-            refinement
-                .events
-                .iter()
-                .flat_map(|e| e.control.numbers().chain(e.second.numbers())),
-        )
+        .chain(refinement.events.iter().flat_map(|e| {
+            let continuum = e.continuum.iter().flat_map(|c| {
+                [&c.control, &c.second].into_iter().flat_map(|v| {
+                    std::iter::once(&v.value)
+                        .chain(&v.error)
+                        .chain(v.distances.iter().flatten())
+                })
+            });
+            e.control
+                .numbers()
+                .chain(e.second.numbers())
+                .chain(continuum)
+        }))
         .chain(refinement.levels.iter().map(|l| &l.seconds));
     if let Some(v) = numbers.into_iter().find(|v| !v.is_finite()) {
         return Err(OutputError::invalid(

@@ -52,6 +52,10 @@ pub struct CurveEvent {
     /// For a hilltop or an irrep change: the other irrep whose block is singular there.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub irrep: Option<String>,
+    /// For a hilltop or an irrep change: the wave number about z of the other block's mode,
+    /// where the model has an axis (what names it alike on the 3-D mesh and the meridian).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
     /// For a hilltop or an irrep change: the other block's localised eigenvalue relative to
     /// max|K_ij|.
     #[serde(skip_serializing_if = "Option::is_none")]

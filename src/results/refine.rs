@@ -184,10 +184,39 @@ pub struct EventRefinement {
     /// For a hilltop or an irrep change: the other irrep singular there.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub irrep: Option<String>,
+    /// That irrep's wave number about z, where the model has an axis: what matches it on
+    /// the meridian.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub m: Option<usize>,
     /// The control's value through the levels.
     pub control: Series,
     /// The second parameter's value through the levels.
     pub second: Series,
+    /// Its counterpart on the meridian, with `--continuum`, when it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuum: Option<EventContinuum>,
+}
+
+/// A curve event's counterpart on the meridian (`--continuum`): both its coordinates there.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventContinuum {
+    /// The control's value.
+    pub control: ContinuumValue,
+    /// The second parameter's value.
+    pub second: ContinuumValue,
+}
+
+/// One coordinate of a point on the meridian, as a reference for the 3-D levels.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContinuumValue {
+    /// Its value at N elements.
+    pub value: f64,
+    /// Its own error: |value(2N) − value(N)| of the meridian's runs at N and 2N elements.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<f64>,
+    /// Each level's distance from it (value − continuum); `null` where a level has no
+    /// counterpart.
+    pub distances: Vec<Option<f64>>,
 }
 
 impl EventRefinement {
@@ -370,7 +399,10 @@ pub fn summary(r: &Refinement) -> Vec<String> {
     for e in &r.events {
         let what = match (&e.extremum, &e.irrep) {
             (Some(x), _) => format!(" ({x} of {second})"),
-            (None, Some(irrep)) => format!(" with {irrep}"),
+            (None, Some(irrep)) => match e.m {
+                Some(m) => format!(" with {irrep} (m = {m})"),
+                None => format!(" with {irrep}"),
+            },
             (None, None) => String::new(),
         };
         lines.push(format!(
@@ -382,6 +414,26 @@ pub fn summary(r: &Refinement) -> Vec<String> {
         lines.extend(series_lines(r, &r.control, &e.control, "    "));
         if e.control.converged() {
             lines.extend(series_lines(r, second, &e.second, "    "));
+        }
+        if let Some(c) = &e.continuum {
+            let text = |name: &str, v: &ContinuumValue| {
+                let err = v
+                    .error
+                    .map_or_else(String::new, |e| format!(" +-{}", sci(e)));
+                let d = v
+                    .distances
+                    .iter()
+                    .rev()
+                    .flatten()
+                    .next()
+                    .map_or_else(String::new, |d| format!(" (finest level {})", sci(*d)));
+                format!("{name} = {}{err}{d}", sig_digits(v.value, 8))
+            };
+            lines.push(format!(
+                "    continuum: {}, {}",
+                text(&r.control, &c.control),
+                text(second, &c.second)
+            ));
         }
     }
     for n in &r.new_on_finer {

@@ -693,6 +693,10 @@ impl Study for MeridianStudy {
         self.model.penetrations(u, params)
     }
 
+    fn wave_number(&self, cp: &CriticalPoint) -> Option<usize> {
+        wave_number(&cp.irrep)
+    }
+
     fn annotate(&self, result: &mut RunResult) {
         result.report.wave_numbers = result
             .report

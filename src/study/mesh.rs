@@ -726,19 +726,24 @@ impl MeshStudy {
     /// The wave number m about z of every critical mode, when the mesh has an axis (a disc or
     /// a truncated sphere, as `compare` labels them); empty otherwise.
     pub fn wave_numbers(&self, critical: &[CriticalPoint]) -> Vec<usize> {
+        critical
+            .iter()
+            .map_while(|cp| self.wave_number_of(cp))
+            .collect()
+    }
+
+    /// The wave number m about z of a critical mode, when the mesh has an axis.
+    fn wave_number_of(&self, cp: &CriticalPoint) -> Option<usize> {
         match self.scene.mesh {
-            scene::MeshSpec::Disc(_) | scene::MeshSpec::TruncatedSphere(_) => critical
-                .iter()
-                .map(|cp| {
-                    crate::adapted::labels::wave_number(
-                        self.model.reference(),
-                        self.model.layout(),
-                        &cp.mode,
-                        MAX_WAVE_NUMBER,
-                    )
-                })
-                .collect(),
-            _ => Vec::new(),
+            scene::MeshSpec::Disc(_) | scene::MeshSpec::TruncatedSphere(_) => {
+                Some(crate::adapted::labels::wave_number(
+                    self.model.reference(),
+                    self.model.layout(),
+                    &cp.mode,
+                    MAX_WAVE_NUMBER,
+                ))
+            }
+            _ => None,
         }
     }
 }
@@ -1057,6 +1062,10 @@ impl Study for MeshStudy {
             .map(|&[a, b, c]| (x[b] - x[a]).norm() + (x[c] - x[b]).norm() + (x[a] - x[c]).norm())
             .sum();
         Some((at, edges / (3 * triangles.len().max(1)) as f64))
+    }
+
+    fn wave_number(&self, cp: &CriticalPoint) -> Option<usize> {
+        self.wave_number_of(cp)
     }
 
     fn annotate(&self, result: &mut RunResult) {

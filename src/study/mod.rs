@@ -494,6 +494,12 @@ pub trait Study: Sync + crate::output::Drawing {
     /// Labels the study adds to a finished run (the wave numbers of critical modes, where the
     /// membrane wrinkles, the scales of its axes).
     fn annotate(&self, result: &mut RunResult);
+    /// The wave number m about z of a critical point's mode, where the model has an axis (a
+    /// disc, a truncated sphere, the meridian), `None` otherwise: what names a mode alike on
+    /// models whose blocks are named differently.
+    fn wave_number(&self, _cp: &CriticalPoint) -> Option<usize> {
+        None
+    }
     /// The number of triangles of the state (u, Λ) with a negative principal tension (where
     /// the membrane would wrinkle), `None` where the model does not say.
     fn wrinkled(&self, _u: &[f64], _params: &[f64]) -> Option<usize> {

@@ -18,8 +18,9 @@ use super::{
     Job, Level, MeshRuns,
 };
 use crate::results::refine::{
-    ContinuumRun, Estimate, EventRefinement, FailedRun, NewPoint, PointRefinement, RefinedLevel,
-    Refinement, Series, ASSUMED_ORDER, MERIDIAN_ORDER, ORDER_TOLERANCE,
+    ContinuumRun, ContinuumValue, Estimate, EventContinuum, EventRefinement, FailedRun, NewPoint,
+    PointRefinement, RefinedLevel, Refinement, Series, ASSUMED_ORDER, MERIDIAN_ORDER,
+    ORDER_TOLERANCE,
 };
 use crate::results::{
     CriticalKind, CurveEventKind, CurveReport, Extremum, Outcome, RunResult, StopReason,
@@ -388,7 +389,19 @@ impl Refiner {
             .iter()
             .map(|l| (l.resolution, l.events.clone()))
             .collect();
-        let events = refine_events(&on_levels, &finer, order, self.floor);
+        let on_meridian = continuum.as_ref().map(|(c, f)| {
+            (
+                (c.resolution, c.events.clone()),
+                (f.resolution, f.events.clone()),
+            )
+        });
+        let events = refine_events(
+            &on_levels,
+            on_meridian.as_ref().map(|(c, f)| (c, f)),
+            &finer,
+            order,
+            self.floor,
+        );
         Ok(Some(Refinement {
             second: result.outcome::<CurveReport>().map(|c| c.second.clone()),
             events,
@@ -502,6 +515,8 @@ pub struct EventPoint {
     pub extremum: Option<Extremum>,
     /// A hilltop's or an irrep change's other irrep.
     pub irrep: Option<String>,
+    /// That irrep's wave number about z, where the model has an axis.
+    pub m: Option<usize>,
     /// The control's value there.
     pub control: f64,
     /// The second parameter's value there.
@@ -509,17 +524,24 @@ pub struct EventPoint {
 }
 
 impl EventPoint {
-    /// What its images on other levels share with it: the kind, the extremum, the other
-    /// irrep.
+    /// What its images on other levels and on the meridian share with it: the kind, the
+    /// extremum, the other irrep's wave number where the model has an axis (the meridian's
+    /// blocks are named by it, the mesh's by their irreps), else its name.
     fn key(&self) -> String {
+        let other = match (self.m, &self.irrep) {
+            (Some(m), Some(_)) => format!("m={m}"),
+            (_, irrep) => irrep.clone().unwrap_or_default(),
+        };
         format!(
-            "{} {} {}",
+            "{} {} {other}",
             self.kind,
             self.extremum.map_or_else(String::new, |x| x.to_string()),
-            self.irrep.as_deref().unwrap_or("")
         )
     }
 }
+
+/// One level's resolution and its curve's events.
+pub type EventLevel = (usize, Vec<EventPoint>);
 
 /// The events of a run's critical curve (none for another analysis), but its start and end.
 pub(super) fn events_of(result: &RunResult) -> Vec<EventPoint> {
@@ -540,6 +562,7 @@ pub(super) fn events_of(result: &RunResult) -> Vec<EventPoint> {
             kind: e.kind,
             extremum: e.extremum,
             irrep: e.irrep.clone(),
+            m: e.m,
             control: e.parameters[c],
             second: e.parameters[s],
         })
@@ -550,10 +573,14 @@ pub(super) fn events_of(result: &RunResult) -> Vec<EventPoint> {
 /// events, the first level the run's own): the events of one kind (with one extremum or
 /// other irrep) are matched as critical points are, by the control's value
 /// ([`match_rungs`]); each gets both coordinates on every level with their estimates, and an
-/// event without a counterpart on a refined level is not mesh-converged. In the first
-/// level's order.
+/// event without a counterpart on a refined level is not mesh-converged. With `continuum`
+/// (the meridian's events at N and 2N elements) each event's counterpart there is matched
+/// the same way, as a second mesh ([`measure_distances`]), and gives both coordinates'
+/// continuum values, their own errors and each level's distances. In the first level's
+/// order.
 pub fn refine_events(
-    levels: &[(usize, Vec<EventPoint>)],
+    levels: &[EventLevel],
+    continuum: Option<(&EventLevel, &EventLevel)>,
     finer: &[String],
     order: f64,
     floor: f64,
@@ -573,7 +600,7 @@ pub fn refine_events(
             .iter()
             .map(|(_, events)| events.iter().filter(|e| e.key() == *key).collect())
             .collect();
-        let runs = [MeshRuns {
+        let mut runs = vec![MeshRuns {
             label: "run".into(),
             generator: String::new(),
             levels: levels
@@ -583,7 +610,19 @@ pub fn refine_events(
                 .collect(),
             check: None,
         }];
-        let (rungs, _) = match_rungs(&runs, floor);
+        let meridian = continuum.map(|(coarse, fine)| (of_kind(coarse, key), of_kind(fine, key)));
+        if let Some(((coarse, _), (fine, _))) = &meridian {
+            runs.push(MeshRuns {
+                label: "axisymmetric".into(),
+                generator: "axisymmetric".into(),
+                levels: vec![coarse.clone()],
+                check: Some(fine.clone()),
+            });
+        }
+        let (mut rungs, _) = match_rungs(&runs, floor);
+        if meridian.is_some() {
+            measure_distances(&runs, &mut rungs, 1);
+        }
         for rung in rungs.iter().filter(|r| r.found_at == *base_resolution) {
             let images = &rung.images[0].levels;
             let at = |l: usize| images[l].points.first().map(|&i| of_key[l][i]);
@@ -591,18 +630,48 @@ pub fn refine_events(
             let along = |f: fn(&EventPoint) -> f64| {
                 (0..images.len()).map(|l| at(l).map(f)).collect::<Vec<_>>()
             };
+            let continuum = meridian.as_ref().and_then(|((_, coarse), (_, fine))| {
+                let on = rung.images[1].levels[0]
+                    .points
+                    .first()
+                    .map(|&i| coarse[i])?;
+                // Its image at 2N elements: the nearest of its kind in the control.
+                let check = fine.iter().min_by(|a, b| {
+                    (a.control - on.control)
+                        .abs()
+                        .total_cmp(&(b.control - on.control).abs())
+                });
+                let value = |f: fn(&EventPoint) -> f64| ContinuumValue {
+                    value: f(on),
+                    error: check.map(|c| (f(c) - f(on)).abs()),
+                    distances: along(f).iter().map(|v| v.map(|v| v - f(on))).collect(),
+                };
+                Some(EventContinuum {
+                    control: value(|e| e.control),
+                    second: value(|e| e.second),
+                })
+            });
             out.push(EventRefinement {
                 event: event.number,
                 kind: event.kind.to_string(),
                 extremum: event.extremum,
                 irrep: event.irrep.clone(),
+                m: event.m,
                 control: series(along(|e| e.control), finer, order),
                 second: series(along(|e| e.second), finer, order),
+                continuum,
             });
         }
     }
     out.sort_by_key(|e| e.event);
     out
+}
+
+/// The events of the kind `key` on one level (its resolution and events), and that level
+/// holding them ([`bare`]).
+fn of_kind<'a>((resolution, events): &'a EventLevel, key: &str) -> (Level, Vec<&'a EventPoint>) {
+    let events: Vec<&EventPoint> = events.iter().filter(|e| e.key() == key).collect();
+    (bare(*resolution, &events), events)
 }
 
 /// A level that holds `events` as its critical points (limit points, met as the control
@@ -800,9 +869,63 @@ mod tests {
             kind,
             extremum: (kind == CurveEventKind::Cusp).then_some(Extremum::Maximum),
             irrep: irrep.map(str::to_string),
+            m: None,
             control: at.0,
             second: at.1,
         }
+    }
+
+    /// On the meridian the blocks are named by their wave number: a hilltop with the mesh's
+    /// E2 (m = 2) is the meridian's hilltop with m2, not the one with m3 beside it, and gets
+    /// its coordinates there; a cusp is matched by its kind alone; an event the meridian does
+    /// not have gets no continuum.
+    #[test]
+    fn a_curves_events_are_matched_on_the_meridian_by_wave_number() {
+        use CurveEventKind::{Cusp, Hilltop};
+        let with_m = |mut e: EventPoint, m| {
+            e.m = Some(m);
+            e
+        };
+        let mesh = vec![
+            (
+                8,
+                vec![
+                    event(2, Cusp, None, (1.5, 0.21)),
+                    with_m(event(3, Hilltop, Some("E2"), (2.0, 0.3)), 2),
+                    with_m(event(4, Hilltop, Some("E4"), (2.5, 0.3)), 4),
+                ],
+            ),
+            (
+                16,
+                vec![
+                    event(2, Cusp, None, (1.49, 0.2101)),
+                    with_m(event(3, Hilltop, Some("E2"), (1.99, 0.3)), 2),
+                    with_m(event(4, Hilltop, Some("E4"), (2.49, 0.3)), 4),
+                ],
+            ),
+        ];
+        let meridian = |shift: f64| {
+            (
+                64,
+                vec![
+                    event(2, Cusp, None, (1.48 + shift, 0.2102)),
+                    with_m(event(3, Hilltop, Some("m3"), (1.985, 0.3)), 3),
+                    with_m(event(4, Hilltop, Some("m2"), (1.98 + shift, 0.31)), 2),
+                ],
+            )
+        };
+        let (coarse, fine) = (meridian(0.0), meridian(1e-4));
+        let finer = ["f8".to_string(), "f16".to_string()];
+        let events = refine_events(&mesh, Some((&coarse, &fine)), &finer, 2.0, 1e-3);
+        assert_eq!(events.len(), 3, "{events:?}");
+        let cusp = events[0].continuum.as_ref().expect("the cusp's continuum");
+        assert_eq!(cusp.control.value, 1.48);
+        assert!((cusp.control.error.unwrap() - 1e-4).abs() < 1e-12);
+        assert!((cusp.control.distances[1].unwrap() - 0.01).abs() < 1e-12);
+        let hilltop = events[1].continuum.as_ref().expect("E2's continuum");
+        assert_eq!((hilltop.control.value, hilltop.second.value), (1.98, 0.31));
+        assert_eq!(events[1].m, Some(2));
+        assert!(events[2].continuum.is_none(), "{:?}", events[2]);
     }
 
     /// A cusp whose coordinates converge at O(h²) on three levels is extrapolated in both; a
@@ -835,7 +958,7 @@ mod tests {
             ),
         ];
         let finer = ["f4".to_string(), "f8".to_string(), "f16".to_string()];
-        let events = refine_events(&levels, &finer, 2.0, 1e-3);
+        let events = refine_events(&levels, None, &finer, 2.0, 1e-3);
         assert_eq!(events.len(), 2, "{events:?}");
         let (c, h) = (&events[0], &events[1]);
         assert_eq!((c.event, c.kind.as_str()), (2, "cusp"));
@@ -859,6 +982,7 @@ mod tests {
             kind,
             extremum: None,
             irrep: irrep.map(str::to_string),
+            m: None,
             residual_eigenvalue: None,
             after_step: 0,
             parameters: vec![0.0, 0.0],
