@@ -57,7 +57,7 @@ pub use revolve::{
     revolved_rings,
 };
 
-use crate::effects::membrane::MooneyRivlin;
+use crate::effects::membrane::{MooneyRivlin, Wrinkling};
 use crate::effects::Quantity;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
@@ -245,6 +245,9 @@ pub struct Meridian {
     /// Which ends slide on a plane z = const (docs/theory.md §15.9): the end node keeps its
     /// height (W = 0 for every wave number) and moves freely in r and θ.
     pub sliding: (bool, bool),
+    /// How the membrane carries compression: the plain energy, or the relaxed
+    /// (tension-field) energy of docs/theory.md §2.9, the same law as on a 3-D mesh.
+    pub wrinkling: Wrinkling,
 }
 
 /// A meridian's radius must be finite and positive, and it needs at least one element.
@@ -281,6 +284,7 @@ impl Meridian {
             material: material.into(),
             clamped: (false, true),
             sliding: (false, false),
+            wrinkling: Wrinkling::None,
         })
     }
 
@@ -348,7 +352,26 @@ impl Meridian {
             material,
             clamped: (false, clamped),
             sliding: (false, false),
+            wrinkling: Wrinkling::None,
         })
+    }
+
+    /// The membrane's energy per stress-free volume W, its gradient and its Hessian blocks in
+    /// F = [f1 f2] for `material` (the meridian's at the parameters, or its derivative in
+    /// k: every term is linear in (c1, c2), the relaxed energy's states and blends
+    /// included), under the meridian's law of compression. `None` where J ≤ 0.
+    #[allow(clippy::type_complexity)]
+    pub fn energy_in_f(
+        &self,
+        material: &MooneyRivlin,
+        f: &[Vector3<f64>; 2],
+    ) -> Option<(f64, [Vector3<f64>; 2], [[nalgebra::Matrix3<f64>; 2]; 2])> {
+        match self.wrinkling {
+            Wrinkling::None => material.energy_in_f(f),
+            Wrinkling::Relaxed { stiffness, width } => material
+                .relaxed_in_f(f, stiffness, width)
+                .map(|(w, p, hf, _)| (w, p, hf)),
+        }
     }
 
     /// Whether node `i` is at a clamped end.
@@ -549,7 +572,9 @@ fn membrane_full(
                 p.x_xi * (lam / p.dx_ref),
                 Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
             ];
-            let (_, _, hf) = material.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
+            let (_, _, hf) = meridian
+                .energy_in_f(&material, &f)
+                .ok_or(AxisymError::Degenerate(e))?;
             let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
             for t in 0..nt {
                 let theta = 2.0 * std::f64::consts::PI * t as f64 / nt as f64;

@@ -854,24 +854,40 @@ fn wrinkling_keys_are_checked() {
             "wrinkling = \"relaxed\"",
         ],
     );
-    // The relaxed scene builds on a 3-D mesh, with the areas as measures; the meridian
-    // refuses it.
+    // The relaxed scene builds on a 3-D mesh and on the meridian, with the areas as
+    // measures; the meridian refuses a switching width.
     let study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
     let names: Vec<&str> = study.measures.iter().map(|(n, _)| n.as_str()).collect();
     assert!(
         names.ends_with(&["wrinkled_area", "slack_area"]),
         "{names:?}"
     );
-    let meridian = relaxed.replace(
-        "generator = \"disc\"\nradius = 1.1\nsectors = 6\ndivisions = 3",
-        "generator = \"axisymmetric\"\nshape = \"disc\"\nradius = 1.1\nelements = 8",
+    let on_meridian = |text: &str| {
+        text.replace(
+            "generator = \"disc\"\nradius = 1.1\nsectors = 6\ndivisions = 3",
+            "generator = \"axisymmetric\"\nshape = \"disc\"\nradius = 1.1\nelements = 8",
+        )
+    };
+    let meridian = on_meridian(&relaxed);
+    assert!(meridian.contains("axisymmetric"));
+    let study = memstab::study::build(Scene::from_toml_str(&meridian, "test.toml").unwrap())
+        .expect("the meridian takes the relaxed energy");
+    assert!(
+        study
+            .about()
+            .measures
+            .ends_with(&["wrinkled_area".to_string(), "slack_area".to_string()]),
+        "{:?}",
+        study.about().measures
     );
-    let err = memstab::study::build(Scene::from_toml_str(&meridian, "test.toml").unwrap())
-        .err()
-        .expect("the meridian refuses the relaxed energy")
-        .to_string();
+    let err = memstab::study::build(
+        Scene::from_toml_str(&on_meridian(&width("1e-3")), "test.toml").unwrap(),
+    )
+    .err()
+    .expect("the meridian refuses a switching width")
+    .to_string();
     assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.contains("material.wrinkling = \"relaxed\""), "{err}");
+    assert!(err.contains("material.wrinkling-width = 0.001"), "{err}");
 }
 
 /// A `[mesh]` table on its own (as the Python package's `memstab.mesh` gives it) is read and

@@ -32,7 +32,7 @@
 //! and 2π (C + S)ᵀH(C + S) for m = 0, exactly.
 
 use super::{AxisymError, FloorPlane, Meridian};
-use crate::effects::membrane::MooneyRivlin;
+use crate::effects::membrane::{MooneyRivlin, TensionState};
 use crate::effects::Quantity;
 use crate::linalg::SymmetricPattern;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -385,6 +385,28 @@ impl AxisymModel {
             .count()
     }
 
+    /// The current areas of the membrane in the wrinkled and in the slack state of the
+    /// relaxed energy at displacement `q` ([`TensionState::of_stretches`] of the meridional
+    /// and hoop stretches, the principal ones of a state of revolution, at each Gauss
+    /// point, 2π r |x_ξ| w of area each).
+    pub fn tension_areas(&self, q: &[f64]) -> [f64; 2] {
+        let x = self.positions(q);
+        let lam = self.meridian.prestretch;
+        let mut areas = [0.0; 2];
+        for e in 0..self.meridian.elements() {
+            for p in super::points(&self.meridian, &x, e) {
+                let (s, t) = (lam * p.x_xi.norm() / p.dx_ref, lam * p.r / p.big_r);
+                let area = 2.0 * PI * p.r * p.x_xi.norm() * p.weight;
+                match TensionState::of_stretches(s, t) {
+                    TensionState::Taut => {}
+                    TensionState::Wrinkled => areas[0] += area,
+                    TensionState::Slack => areas[1] += area,
+                }
+            }
+        }
+        areas
+    }
+
     /// Every node's deepest penetration ⟨d − n_z z⟩ of the planes at displacement `q` (0
     /// where it is clear of them) and the mean length of the elements' chords (two per
     /// quadratic element) there; `None` without a plane.
@@ -480,7 +502,10 @@ impl AxisymModel {
                 let a = lam / p.dx_ref;
                 let b = lam / p.big_r;
                 let f = [p.x_xi * a, Vector3::new(0.0, p.r * b, 0.0)];
-                let (w, pk, hf) = material.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
+                let (w, pk, hf) = self
+                    .meridian
+                    .energy_in_f(&material, &f)
+                    .ok_or(AxisymError::Degenerate(e))?;
                 let da = 2.0 * PI * h * p.dx_ref * p.big_r / (lam * lam) * p.weight;
                 out.energy += w * da;
                 // ∂f_i/∂(node k, component c).
@@ -509,7 +534,10 @@ impl AxisymModel {
                     }
                 }
                 if let (Some(j), Some(dmat)) = (k_slot, &along_k) {
-                    let (_, dpk, _) = dmat.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
+                    let (_, dpk, _) = self
+                        .meridian
+                        .energy_in_f(dmat, &f)
+                        .ok_or(AxisymError::Degenerate(e))?;
                     for (i, l) in loads[j].iter_mut().enumerate() {
                         let di = df(i / 2, i % 2);
                         *l += (dpk[0].dot(&di[0]) + dpk[1].dot(&di[1])) * da;
@@ -1023,7 +1051,9 @@ fn block_points(
                     p.x_xi * (lam / p.dx_ref),
                     Vector3::new(0.0, lam * p.r / p.big_r, 0.0),
                 ];
-                let (_, _, hf) = material.energy_in_f(&f).ok_or(AxisymError::Degenerate(e))?;
+                let (_, _, hf) = meridian
+                    .energy_in_f(material, &f)
+                    .ok_or(AxisymError::Degenerate(e))?;
                 let da0 = p.dx_ref * p.big_r / (lam * lam) * p.weight;
                 let mut hh = SMatrix::<f64, 6, 6>::zeros();
                 for (i, row) in hf.iter().enumerate() {
@@ -1509,6 +1539,99 @@ pub(super) mod tests {
         assert_eq!(model.wrinkled_elements(&scaled(1.01 / lam, 1.0)), 0);
         let flat = model.wrinkled_elements(&scaled(1.02 / lam, 0.9));
         assert!(flat > 0 && flat < n, "{flat} of {n}");
+    }
+
+    /// The relaxed energy on the meridian: equal to the plain energy in a taut state (ε = 0,
+    /// to round-off: the same law), and in states with taut, wrinkled and slack Gauss points
+    /// its gradient, tangent and loads (k among the parameters: the relaxed energy is linear
+    /// in (c1, c2) in every state) are the differences of its energy and gradient; the areas
+    /// of the states are the membrane's.
+    #[test]
+    fn the_relaxed_meridian_matches_its_differences_in_every_state() {
+        use crate::effects::membrane::Wrinkling;
+        let mat = super::super::MeridianMaterial {
+            mu: Quantity::Value(1.0),
+            k: Quantity::Parameter(1),
+            thickness: Quantity::Value(0.1),
+        };
+        let lam = 1.05;
+        let gas = vec![Pressure::Gas {
+            pressure: Quantity::Parameter(0),
+        }];
+        let plain = AxisymModel::new(Meridian::sphere(1.0, 16, lam, mat).unwrap(), gas);
+        let params = [0.3, 0.2];
+        let z0 = plain.meridian.nodes[0][1];
+        let scaled = |c: f64, b: f64| {
+            let x: Vec<[f64; 2]> = plain
+                .meridian
+                .nodes
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    // A ripple, so that no two Gauss points share their stretches.
+                    let w = 1.0 + 0.0005 * (1.7 * i as f64).sin();
+                    [w * c * p[0], z0 + b * c * (p[1] - z0)]
+                })
+                .collect();
+            plain.displacement_of(&x)
+        };
+        let relaxed = |stiffness: f64, width: f64| {
+            let mut m = plain.clone();
+            m.meridian.wrinkling = Wrinkling::Relaxed { stiffness, width };
+            m
+        };
+        // Taut: the same numbers.
+        let taut = scaled(1.03 / lam, 1.0);
+        assert_eq!(plain.tension_areas(&taut), [0.0, 0.0]);
+        let (a, b) = (
+            plain.evaluate(&taut, &params).unwrap(),
+            relaxed(0.0, 0.0).evaluate(&taut, &params).unwrap(),
+        );
+        assert!((a.energy - b.energy).abs() <= 1e-14 * a.energy.abs());
+        let largest = a.gradient.iter().fold(0.0f64, |m, g| m.max(g.abs()));
+        for (ga, gb) in a.gradient.iter().zip(&b.gradient) {
+            assert!((ga - gb).abs() <= 1e-13 * largest);
+        }
+        assert!((&a.tangent - &b.tangent).amax() <= 1e-13 * a.tangent.amax());
+        // Slack everywhere (stretched 0.99 from the stress-free state): the whole area of the
+        // sphere of radius 0.99/λ0, to the quadrature's accuracy.
+        let slack = plain.tension_areas(&scaled(0.99 / lam, 1.0));
+        let sphere = 4.0 * PI * (0.99f64 / lam).powi(2);
+        assert!(
+            slack[0] == 0.0 && (slack[1] - sphere).abs() < 1e-3 * sphere,
+            "{slack:?}"
+        );
+        // Flattened and stretched more towards the south pole: taut, wrinkled and slack
+        // points together, none within 1e-4 in stretch of a switching surface (where the
+        // Hessian jumps and differences of the gradient are not the tangent).
+        let n = plain.meridian.nodes.len() as f64;
+        let x: Vec<[f64; 2]> = plain
+            .meridian
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let c = (0.965 + 0.07 * i as f64 / n) / lam;
+                [c * p[0], z0 + 0.9 * c * (p[1] - z0)]
+            })
+            .collect();
+        let mixed = plain.displacement_of(&x);
+        let mut states = [0usize; 3];
+        for e in 0..plain.meridian.elements() {
+            for p in super::super::points(&plain.meridian, &x, e) {
+                let (s, t) = (lam * p.x_xi.norm() / p.dx_ref, lam * p.r / p.big_r);
+                let (l1, l2) = (s.max(t), s.min(t));
+                let clear = (l1 - 1.0).abs().min((l1 * l2 * l2 - 1.0).abs());
+                assert!(clear > 1e-4, "element {e}: stretches {s}, {t}");
+                states[TensionState::of_stretches(s, t).code() as usize] += 1;
+            }
+        }
+        assert!(states.iter().all(|&k| k > 0), "{states:?}");
+        let [wrinkled, slack] = plain.tension_areas(&mixed);
+        assert!(wrinkled > 0.0 && slack > 0.0 && wrinkled + slack < sphere);
+        for stiffness in [1e-4, 0.0] {
+            check_derivatives(&relaxed(stiffness, 0.0), &mixed, &params);
+        }
     }
 
     /// The m = 0 block on (U, W) is the tangent of the axisymmetric problem.

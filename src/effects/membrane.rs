@@ -378,6 +378,19 @@ pub enum TensionState {
 }
 
 impl TensionState {
+    /// The state of principal stretches λ₁, λ₂ (either order): taut when λ₁λ₂² ≥ 1 (λ₁ the
+    /// larger), slack when λ₁ ≤ 1, wrinkled otherwise — as W* selects it.
+    pub fn of_stretches(a: f64, b: f64) -> Self {
+        let (l1, l2) = if a >= b { (a, b) } else { (b, a) };
+        if l1 * l2 * l2 >= 1.0 {
+            TensionState::Taut
+        } else if l1 <= 1.0 {
+            TensionState::Slack
+        } else {
+            TensionState::Wrinkled
+        }
+    }
+
     /// The value of the `membrane_state` cell field: 0 taut, 1 wrinkled, 2 slack.
     pub fn code(self) -> f64 {
         match self {

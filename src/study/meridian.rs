@@ -17,6 +17,7 @@ use crate::axisym::{
 };
 use crate::continuation::crossings::{Blocks, CriticalTest};
 use crate::continuation::{solve_at, PathOptions, SolveError};
+use crate::effects::membrane::Wrinkling;
 use crate::effects::spec::{Build, MeridianLoad};
 use crate::effects::Quantity;
 use crate::output::{node_normals, Drawing};
@@ -90,11 +91,6 @@ impl MeridianStudy {
         };
         // μ, k and H numbers or parameters (docs/theory.md §15.18); the pre-stretch a number.
         let m = &scene.material;
-        if m.relaxed_stiffness().is_some() {
-            return Err(unsupported(
-                "material.wrinkling = \"relaxed\": the axisymmetric model has the plain energy only; run the scene on a 3-D mesh".to_string(),
-            ));
-        }
         let material = MeridianMaterial {
             mu: index(&m.mu),
             k: index(&m.k),
@@ -132,6 +128,18 @@ impl MeridianStudy {
             ),
         };
         meridian.clamped = (false, false);
+        if let Some(width) = m.relaxed_width().filter(|w| *w > 0.0) {
+            return Err(unsupported(format!(
+                "material.wrinkling-width = {width}: the axisymmetric model takes the relaxed energy exactly (no switching width); leave the key out, or run the scene on a 3-D mesh"
+            )));
+        }
+        meridian.wrinkling = match m.relaxed_stiffness() {
+            Some(stiffness) => Wrinkling::Relaxed {
+                stiffness,
+                width: 0.0,
+            },
+            None => Wrinkling::None,
+        };
         for (i, name) in scene.boundary.fixed.iter().enumerate() {
             if Some(name.as_str()) == edge {
                 meridian.clamped.1 = true;
@@ -249,11 +257,15 @@ impl MeridianStudy {
         let encloses = model.meridian.closed()
             || !scene.constraints.is_empty()
             || scene.effects.iter().any(|e| e.spec().measures_enclosure());
-        let measures = measure_names(
+        let mut measures = measure_names(
             encloses,
             stress_free_volume.is_some(),
             has_gas_amount(&model),
         );
+        // Under the relaxed energy, the areas of its states, as on a 3-D mesh.
+        if model.meridian.wrinkling != Wrinkling::None {
+            measures.extend(["wrinkled_area".into(), "slack_area".into()]);
+        }
         super::check_measure(&scene, &measures).map_err(Unsupported)?;
         let about = About {
             scene: scene.info.name.clone(),
@@ -490,6 +502,9 @@ impl Study for MeridianStudy {
         }
         if has_gas_amount(&self.model) {
             out.push(self.model.gas_pressure(&x, params));
+        }
+        if self.model.meridian.wrinkling != Wrinkling::None {
+            out.extend(self.model.tension_areas(q));
         }
         out
     }
