@@ -86,6 +86,9 @@ pub struct PlacedLabel {
     pub leader: bool,
     /// True if it is placed in the inset.
     pub in_inset: bool,
+    /// The point it labels, in pixels (in the inset for a label placed there).
+    #[serde(default)]
+    pub at: (f64, f64),
 }
 
 /// The layout of a written figure: what a test checks.
@@ -113,6 +116,33 @@ pub struct Layout {
     pub caption: String,
     /// Labels that found no place (and are not drawn).
     pub dropped: Vec<String>,
+    /// The dimensionless groups of the figure's quantities, for a script that draws the same
+    /// run in the same style.
+    #[serde(default)]
+    pub scales: Vec<QuantityScale>,
+}
+
+/// A quantity of a figure and its dimensionless group: the axis title and the factor its
+/// values are multiplied by (1 and the quantity's name where the scene fixes no scale).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QuantityScale {
+    /// The parameter or measure, by name.
+    pub quantity: String,
+    /// The axis title.
+    pub label: String,
+    /// The factor.
+    pub factor: f64,
+}
+
+impl QuantityScale {
+    /// `quantity` with its scale.
+    pub fn new(quantity: &str, scale: &super::svg::AxisScale) -> Self {
+        Self {
+            quantity: quantity.to_string(),
+            label: scale.label.clone(),
+            factor: scale.factor,
+        }
+    }
 }
 
 /// The layout written into an SVG by memstab, `None` if it has none (or it does not parse).
@@ -129,13 +159,28 @@ pub fn read_layout(svg: &str) -> Option<Layout> {
 
 /// The SVG text of a plotting backend, finished in the figures' style: the text's font
 /// families set to [`FONT_FAMILY`] and the layout inserted as `<metadata>` after the opening
-/// `<svg …>` tag.
+/// `<svg …>` tag, its texts as the SVG draws them.
 pub fn finish(svg: &str, layout: &Layout) -> String {
     let svg = svg.replace(
         "font-family=\"sans-serif\"",
         &format!("font-family=\"{FONT_FAMILY}\""),
     );
-    let json = serde_json::to_string(layout).unwrap_or_default();
+    // The layout's texts as the SVG draws them (characters XML does not allow replaced).
+    let clean = super::svg::xml_chars;
+    let mut layout = layout.clone();
+    layout.caption = clean(&layout.caption);
+    for t in layout
+        .legend
+        .iter_mut()
+        .chain(&mut layout.marker_kinds)
+        .chain(&mut layout.legend_markers)
+        .chain(&mut layout.dropped)
+        .chain(layout.labels.iter_mut().map(|l| &mut l.text))
+        .chain(layout.scales.iter_mut().map(|s| &mut s.label))
+    {
+        *t = clean(t);
+    }
+    let json = serde_json::to_string(&layout).unwrap_or_default();
     let json = json
         .replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -677,11 +722,17 @@ pub fn place_labels(
                         continue;
                     }
                     let hidden = data.iter().filter(|d| b.contains(**d)).count() as f64;
-                    let near = b.nearest(p);
-                    let d = (near.0 - p.0).hypot(near.1 - p.1);
-                    let cost = d + 12.0 * hidden + di as f64 * 0.5 + k as f64 * 4.0;
+                    let d = distance(&b, p);
+                    // A box as near to another point as to its own needs a leader line;
+                    // one that does not is preferred.
+                    let shared = ambiguous(&b, p, points);
+                    let cost = d
+                        + 12.0 * hidden
+                        + di as f64 * 0.5
+                        + k as f64 * 4.0
+                        + if shared { AMBIGUOUS } else { 0.0 };
                     if best.as_ref().is_none_or(|b| cost < b.0) {
-                        best = Some((cost, b, d));
+                        best = Some((cost, b, if shared { f64::INFINITY } else { d }));
                     }
                 }
             }
@@ -692,6 +743,28 @@ pub fn place_labels(
         }
     }
     out
+}
+
+/// What a box near another point than its own costs the placement, in pixels of distance.
+const AMBIGUOUS: f64 = 40.0;
+
+/// Points closer than this (pixels) are drawn as one: a label of either labels both.
+pub const SAME_POINT: f64 = 4.0;
+
+/// The distance from `p` to the box `b` (zero inside).
+pub fn distance(b: &Rect, p: (f64, f64)) -> f64 {
+    let n = b.nearest(p);
+    (n.0 - p.0).hypot(n.1 - p.1)
+}
+
+/// True if a label in box `b` of the point `own` would be read as labelling another of
+/// `points`: one apart from `own` (by [`SAME_POINT`] or more) that is no farther from the box
+/// than `own` plus two pixels. Such a label needs a leader line.
+pub fn ambiguous(b: &Rect, own: (f64, f64), points: &[(f64, f64)]) -> bool {
+    let d = distance(b, own);
+    points
+        .iter()
+        .any(|&q| (q.0 - own.0).hypot(q.1 - own.1) >= SAME_POINT && distance(b, q) <= d + 2.0)
 }
 
 /// Groups of marks (indices) whose pixel points lie closer than `gap` to another of the
@@ -1004,7 +1077,8 @@ fn draw_labels(
             let to = b.nearest(from);
             // From the symbol's edge to the box.
             let len = (to.0 - from.0).hypot(to.1 - from.1).max(1e-9);
-            let s = f64::from(SYMBOL) + 1.0;
+            // (from the point itself when the box is nearer than the symbol's edge)
+            let s = (f64::from(SYMBOL) + 1.0).min(len / 2.0);
             let start = (
                 from.0 + (to.0 - from.0) * s / len,
                 from.1 + (to.1 - from.1) * s / len,
@@ -1031,6 +1105,7 @@ fn draw_labels(
             rect: b,
             leader,
             in_inset: inset,
+            at: from,
         });
     }
     Ok(failed)
@@ -1244,6 +1319,33 @@ mod tests {
             }
         }
         assert!(placed.iter().filter(|p| p.unwrap().1).count() >= 1);
+    }
+
+    #[test]
+    fn a_label_nearer_another_point_than_its_own_gets_a_leader() {
+        let frame = Rect::at(0.0, 0.0, 800.0, 600.0);
+        // Three points a few pixels apart in a row, and one far away.
+        let pts = [
+            (400.0, 300.0),
+            (410.0, 300.0),
+            (420.0, 302.0),
+            (100.0, 100.0),
+        ];
+        let sizes = [(110.0, 16.0); 4];
+        let placed = place_labels(&pts, &sizes, frame, &[], &[]);
+        for (k, p) in placed.iter().enumerate() {
+            let (b, leader) = p.unwrap();
+            assert!(
+                leader || !ambiguous(&b, pts[k], &pts),
+                "label {k} at {b:?} reads as another point's"
+            );
+        }
+        // The lone point's label sits next to it.
+        assert!(!placed[3].unwrap().1);
+        // Points closer than SAME_POINT are one: a box beside both is not ambiguous.
+        let b = Rect::at(410.0, 290.0, 50.0, 16.0);
+        assert!(!ambiguous(&b, (400.0, 300.0), &[(401.0, 301.0)]));
+        assert!(ambiguous(&b, (400.0, 300.0), &[(420.0, 300.0)]));
     }
 
     #[test]

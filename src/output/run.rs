@@ -552,6 +552,12 @@ fn diagram(scene: &Scene, report: &PathReport, axes: &(String, String)) -> Diagr
         .markers(markers)
         .scales(scales.or_name(&axes.0), scales.or_name(&axes.1));
     d.turning_points = false;
+    d.quantities = report
+        .parameters
+        .iter()
+        .chain(&report.measures)
+        .map(|q| super::QuantityScale::new(q, &scales.or_name(q)))
+        .collect();
     if axes.0 == "stretch" && axes.1 == report.control {
         if let Some(curve) = super::balloon_closed_form(scene, report) {
             d = d.reference(curve);
