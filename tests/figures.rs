@@ -127,7 +127,7 @@ fn figures_of(scene: &str) -> (&'static Path, Vec<(String, Layout)>) {
 
 #[test]
 fn the_spinning_cap_zooms_on_its_critical_points_at_the_fold() {
-    let (_, layouts) = figures_of("thesis/paper4_spinning_cap.toml");
+    let (dir, layouts) = figures_of("thesis/paper4_spinning_cap.toml");
     let (_, path) = layouts.iter().find(|(n, _)| n == "path.svg").unwrap();
     let inset = path.inset.expect("an inset");
     let zoomed: Vec<&str> = path
@@ -155,6 +155,25 @@ fn the_spinning_cap_zooms_on_its_critical_points_at_the_fold() {
     // Every critical point and the turning point has its label.
     // (the limit point is the turning point, one label for both).
     assert_eq!(path.labels.len(), 6, "{:?}", path.labels);
+    // The turning point's value reads off the vertical axis: ω² in its group ρ ω² R³/(μH).
+    let w2 = path.scales.iter().find(|s| s.quantity == "w2").unwrap();
+    assert!(w2.label.starts_with("ρ ω² R³/(μH)"), "{w2:?}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("path.json")).unwrap()).unwrap();
+    let max = report["turning_points"][0]["parameters"]["w2"]
+        .as_f64()
+        .expect("the maximum's w2");
+    let label = path
+        .labels
+        .iter()
+        .find(|l| l.text.starts_with("max "))
+        .expect("the maximum's label");
+    let shown: f64 = label.text["max ρ ω² R³/(μH) = ".len()..]
+        .split(' ')
+        .next()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{:?}", label.text));
+    assert!((shown - max * w2.factor).abs() < 1e-4, "{shown} vs {max}");
 }
 
 #[test]

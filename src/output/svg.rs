@@ -55,6 +55,13 @@ pub struct Marker {
 impl Marker {
     /// The marker of a turning point of the control, labelled like `max p = 1.3551`.
     pub fn turning(report: &PathReport, t: &TurningRow) -> Self {
+        Self::turning_scaled(report, t, None)
+    }
+
+    /// As [`Marker::turning`], the value given in the control's dimensionless group when
+    /// `scale` is its axis (`max ρ ω² R³/(μH) = 3.3461`: the group is the axis title up to
+    /// its list of values), so that the label reads off the axis.
+    pub fn turning_scaled(report: &PathReport, t: &TurningRow, scale: Option<&AxisScale>) -> Self {
         let kind = if t.kind == crate::results::Extremum::Minimum {
             MarkerKind::Minimum
         } else {
@@ -70,9 +77,16 @@ impl Marker {
             .iter()
             .position(|p| *p == report.control)
             .and_then(|i| t.parameters.get(i));
+        let (name, factor) = match scale {
+            Some(s) => (
+                s.label.split(" (").next().unwrap_or(&s.label).to_string(),
+                s.factor,
+            ),
+            None => (report.control.clone(), 1.0),
+        };
         let label = match value {
-            Some(v) => format!("{word} {} = {}", report.control, short(*v)),
-            None => format!("{word} {}", report.control),
+            Some(v) => format!("{word} {name} = {}", short(*v * factor)),
+            None => format!("{word} {name}"),
         };
         Self {
             parameters: t.parameters.clone(),
