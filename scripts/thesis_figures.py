@@ -106,14 +106,19 @@ def note_unscaled(label, run_dir, axes):
     return f"{label} ({', '.join(names)} unscaled: no mesh radius)" if names else label
 
 
+class Refused(Exception):
+    """A figure [`check_labels`] refuses."""
+
+
 def check_labels(fig, file):
     """Refuses a figure whose labels overlap each other, a legend, or (outside it) an inset:
     the boxes of every annotation, legend and inset as drawn. A refused figure is written as
     NAME.refused.png, for a look."""
 
     def refuse(why):
-        fig.savefig(Path(file).with_suffix(".refused.png"), dpi=130)
-        sys.exit(f"{file}: {why}")
+        if file is not None:
+            fig.savefig(Path(file).with_suffix(".refused.png"), dpi=130)
+        raise Refused(f"{file}: {why}")
 
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
@@ -551,7 +556,40 @@ def variant(scene, out, name, *replacements):
     return path
 
 
+def self_check():
+    """The label check itself: it passes labels apart and refuses labels that overlap, one on
+    the legend, and one on an inset (a check that cannot fail checks nothing)."""
+
+    def figure(texts, legend=False, inset=False):
+        fig, ax = plt.subplots(figsize=(4, 3))
+        ax.plot([0, 1], [0, 1], label="line")
+        for x, y, t in texts:
+            ax.annotate(t, (x, y), xytext=(x, y), textcoords="data", fontsize=8)
+        if legend:
+            ax.legend(loc="upper left")
+        if inset:
+            ax.inset_axes((0.55, 0.05, 0.4, 0.4))
+        return fig
+
+    cases = [
+        (figure([(0.1, 0.5, "apart"), (0.6, 0.9, "labels")]), None),
+        (figure([(0.4, 0.5, "overlapping"), (0.42, 0.5, "labels")]), "overlap"),
+        (figure([(0.02, 0.95, "on the legend")], legend=True), "legend"),
+        (figure([(0.6, 0.2, "on the inset")], inset=True), "inset"),
+    ]
+    for fig, expected in cases:
+        try:
+            check_labels(fig, None)
+            refused = None
+        except Refused as e:
+            refused = str(e)
+        plt.close(fig)
+        if (refused is None) != (expected is None) or (expected and expected not in refused):
+            sys.exit(f"the label check is broken: expected {expected!r}, got {refused!r}")
+
+
 def main(memstab, out, figures):
+    self_check()
     out.mkdir(parents=True, exist_ok=True)
     figures.mkdir(parents=True, exist_ok=True)
 
@@ -616,4 +654,7 @@ def main(memstab, out, figures):
 if __name__ == "__main__":
     if len(sys.argv) != 4:
         sys.exit(__doc__)
-    main(sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3]))
+    try:
+        main(sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3]))
+    except Refused as e:
+        sys.exit(str(e))
