@@ -97,9 +97,8 @@ fn quick_bench_writes_finite_tables_and_a_plot() {
         );
     }
 
+    crate::common::figures::check_svg(&out.join("accuracy.svg"));
     let svg = std::fs::read_to_string(out.join("accuracy.svg")).unwrap();
-    // A benchmark's plot, not a figure of a scene: well-formed, without the figures' layout.
-    crate::common::figures::well_formed(&svg, "accuracy.svg");
     assert!(
         svg.starts_with("<svg") && svg.contains("f=8"),
         "{}",

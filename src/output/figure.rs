@@ -375,6 +375,11 @@ pub struct Plot {
     pub legend: Vec<Entry>,
     /// Include y = 0 in the vertical range.
     pub with_zero: bool,
+    /// Logarithmic axes (x, y): the points' values on such an axis are log10 of the
+    /// quantity, and its ticks are labelled with the decades (`1e-3`, `1`, `10`).
+    pub log: (bool, bool),
+    /// The axes' ranges, when given (default: the data's, padded).
+    pub ranges: Option<(Range<f64>, Range<f64>)>,
 }
 
 impl Plot {
@@ -397,6 +402,8 @@ impl Plot {
             marks: Vec::new(),
             legend: Vec::new(),
             with_zero: false,
+            log: (false, false),
+            ranges: None,
         }
     }
 
@@ -456,6 +463,20 @@ pub fn tick(v: f64, span: f64) -> String {
     }
 }
 
+/// The tick label of a logarithmic axis at log10 value `v`: the decade (`1e-3`, `1`, `10`,
+/// `100`, `1e3`) at a whole power of ten, nothing between.
+pub fn decade(v: f64) -> String {
+    if !v.is_finite() || (v - v.round()).abs() > 1e-9 {
+        return String::new();
+    }
+    match v.round() as i32 {
+        0 => "1".to_string(),
+        1 => "10".to_string(),
+        2 => "100".to_string(),
+        e => format!("1e{e}"),
+    }
+}
+
 /// Font size of the title.
 const TITLE: u32 = 24;
 /// Font size of the caption line and legend.
@@ -477,6 +498,7 @@ pub fn chart<'a, 'b>(
     xr: Range<f64>,
     yr: Range<f64>,
     caption: bool,
+    log: (bool, bool),
 ) -> Result<super::svg::Chart<'a, 'b>, Box<dyn Error>> {
     let mut chart = ChartBuilder::on(root)
         .caption(title, ("sans-serif", TITLE))
@@ -486,8 +508,9 @@ pub fn chart<'a, 'b>(
         .y_label_area_size(78)
         .build_cartesian_2d(xr.clone(), yr.clone())?;
     let (xs, ys) = (xr.end - xr.start, yr.end - yr.start);
-    let xf = |v: &f64| tick(*v, xs);
-    let yf = |v: &f64| tick(*v, ys);
+    let label = |v: f64, span: f64, log: bool| if log { decade(v) } else { tick(v, span) };
+    let xf = |v: &f64| label(*v, xs, log.0);
+    let yf = |v: &f64| label(*v, ys, log.1);
     chart
         .configure_mesh()
         .x_desc(x)
@@ -911,8 +934,12 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             .chain(plot.polygons.iter().flat_map(|p| p.0.iter().copied()))
             .chain(plot.marks.iter().map(|m| m.at))
     };
-    let xr = padded(all().map(|p| p.0));
-    let yr = padded(all().map(|p| p.1).chain(plot.with_zero.then_some(0.0)));
+    let (xr, yr) = plot.ranges.clone().unwrap_or_else(|| {
+        (
+            padded(all().map(|p| p.0)),
+            padded(all().map(|p| p.1).chain(plot.with_zero.then_some(0.0))),
+        )
+    });
     let entries = plot.entries();
     let mut layout = Layout {
         width: plot.size.0,
@@ -932,6 +959,7 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             xr.clone(),
             yr.clone(),
             !plot.caption.is_empty(),
+            plot.log,
         )?;
         let (pxr, pyr) = chart.plotting_area().get_pixel_range();
         let frame = Rect {
@@ -1238,8 +1266,17 @@ fn draw_inset(
         .y_label_area_size(58)
         .build_cartesian_2d(wx.clone(), wy.clone())?;
     let (sx, sy) = (wx.end - wx.start, wy.end - wy.start);
-    let xf = |v: &f64| tick(*v, sx);
-    let yf = |v: &f64| tick(*v, sy);
+    // On a logarithmic axis the inset's window is a fraction of a decade: its ticks give the
+    // quantity's values.
+    let label = |v: f64, span: f64, log: bool| {
+        if log {
+            super::svg::short(10f64.powf(v))
+        } else {
+            tick(v, span)
+        }
+    };
+    let xf = |v: &f64| label(*v, sx, plot.log.0);
+    let yf = |v: &f64| label(*v, sy, plot.log.1);
     chart
         .configure_mesh()
         .x_labels(3)

@@ -36,7 +36,7 @@ mod csv;
 mod curve;
 mod deflation;
 mod diagram;
-mod figure;
+pub(crate) mod figure;
 mod json;
 mod lock;
 mod manifest;
