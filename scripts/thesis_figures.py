@@ -9,11 +9,16 @@ Every figure is drawn from a run's files, never from numbers typed in here:
 - the critical modes from the critical_NN.vtu states (the mode's normal component at the
   deformed state, drawn on the reference membrane seen from above, one panel per point, titled
   with its kind, irrep, isotropy and m, with a colour bar);
-- a critical curve from curve.csv with the events of critical.json;
+- a critical curve from curve.csv with the events of critical.json, the path that found it
+  drawn across it solid where stable and dashed where not (which side of the curve is
+  stable), and a panel of differences below when two curves nearly coincide;
 - a solution surface from surface.vtu, coloured by the index, with its fold lines.
 
-As in memstab's own figures, the legend has an entry for each line style and marker drawn and
-for nothing else, and a caption line names each run's scene and mesh.
+As in memstab's own figures, every axis is a dimensionless group with its scale named (read
+from the layout memstab records in each run's SVG figures, so from the scene's units), the
+legend has an entry for each line style and marker drawn and for nothing else, and a caption
+line names each run's scene and mesh. Every figure is checked before it is written: no two
+labels overlap, and none lies on the legend or (outside it) on the inset.
 
 Usage: python scripts/thesis_figures.py MEMSTAB OUT_DIR FIGURE_DIR
   MEMSTAB     the memstab binary
@@ -24,12 +29,15 @@ scripts/thesis_figures.sh sets up the Python packages and calls this with the de
 """
 
 import csv
+import html
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import matplotlib
+import matplotlib.text
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -60,9 +68,89 @@ def numbers(column):
     return np.array([float(v) for v in column])
 
 
-def caption(fig, run_dirs):
+def scales(run_dir):
+    """The dimensionless groups memstab's own figures of a run record in their layout: quantity
+    -> (axis title, factor); a quantity the scene fixes no scale for maps to (its name, 1)."""
+    out = {}
+    for svg in sorted(run_dir.glob("*.svg")):
+        m = re.search(r'<metadata id="memstab-layout">(.*?)</metadata>', svg.read_text(), re.S)
+        if not m:
+            continue
+        for q in json.loads(html.unescape(m.group(1))).get("scales", []):
+            scaled = q["label"] != q["quantity"] or q["factor"] != 1.0
+            if scaled or q["quantity"] not in out:
+                out[q["quantity"]] = (q["label"], q["factor"])
+    return out
+
+
+class Axes:
+    """The dimensionless axis of quantity `q` over several runs: the title of the first run
+    whose scene fixes its scale, and each run's own factor. A run whose scene fixes none (a
+    mesh read from a file has no radius) is drawn unscaled and `unscaled` names it."""
+
+    def __init__(self, runs, q):
+        self.q = q
+        found = [scales(r).get(q, (q, 1.0)) for r in runs]
+        self.factors = {str(r): f for r, (_, f) in zip(runs, found)}
+        titled = [t for t, f in found if t != q or f != 1.0]
+        self.title = titled[0] if titled else q
+        self.unscaled = {str(r) for r, (t, f) in zip(runs, found) if titled and t == q and f == 1.0}
+
+    def factor(self, run_dir):
+        return self.factors[str(run_dir)]
+
+
+def note_unscaled(label, run_dir, axes):
+    """`label` with a note of the axes `run_dir` is drawn unscaled on."""
+    names = [a.q for a in axes if str(run_dir) in a.unscaled]
+    return f"{label} ({', '.join(names)} unscaled: no mesh radius)" if names else label
+
+
+class Refused(Exception):
+    """A figure [`check_labels`] refuses."""
+
+
+def check_labels(fig, file):
+    """Refuses a figure whose labels overlap each other, a legend, or (outside it) an inset:
+    the boxes of every annotation, legend and inset as drawn. A refused figure is written as
+    NAME.refused.png, for a look."""
+
+    def refuse(why):
+        if file is not None:
+            fig.savefig(Path(file).with_suffix(".refused.png"), dpi=130)
+        raise Refused(f"{file}: {why}")
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    labels, legends, insets = [], [], []
+    for ax in fig.axes:
+        for t in ax.texts:
+            if t.get_visible() and t.get_text():
+                # The text's own box (an annotation's would include its leader line).
+                box = matplotlib.text.Text.get_window_extent(t, renderer)
+                labels.append((t.get_text(), ax, box))
+        if ax.get_legend() is not None:
+            legends.append(ax.get_legend().get_window_extent(renderer))
+        for child in ax.child_axes:
+            insets.append((child, child.get_tightbbox(renderer)))
+    legends += [leg.get_window_extent(renderer) for leg in fig.legends]
+    for i, (a, ax_a, box_a) in enumerate(labels):
+        for b, _, box_b in labels[:i]:
+            if box_a.overlaps(box_b):
+                refuse(f"labels {a!r} and {b!r} overlap")
+        for box in legends:
+            if box_a.overlaps(box):
+                refuse(f"label {a!r} lies on the legend")
+        for inset, box in insets:
+            if ax_a is not inset and box_a.overlaps(box):
+                refuse(f"label {a!r} lies on the inset")
+
+
+def caption(fig, run_dirs, legend_of=None):
     """The caption line memstab's own figures have: each run's scene and mesh (generator,
-    triangles, the mesh's group) and the group it is solved in, from its path.json."""
+    triangles, the mesh's group) and the group it is solved in, from its path.json. With
+    `legend_of` (axes), their legend goes above the caption, below the plots, where no label
+    or data can run into it."""
     parts = []
     for run_dir in run_dirs:
         if run_dir is None:
@@ -73,7 +161,15 @@ def caption(fig, run_dirs):
                      f"group {m['group']} · solved in group {r['group']}")
     parts = list(dict.fromkeys(parts))
     fig.text(0.01, 0.005, "\n".join(parts), fontsize=6.5, color="0.3", ha="left", va="bottom")
-    fig.tight_layout(rect=(0, 0.035 * len(parts), 1, 1))
+    bottom = 0.035 * len(parts)
+    if legend_of is not None:
+        handles, labels = legend_of.get_legend_handles_labels()
+        legend = fig.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, bottom),
+                            ncol=2 if len(labels) > 3 and max(map(len, labels)) < 45 else 1,
+                            fontsize=7.5, frameon=False)
+        fig.canvas.draw()
+        bottom += legend.get_window_extent().height / fig.bbox.height + 0.01
+    fig.tight_layout(rect=(0, bottom, 1, 1))
 
 
 # The markers of the critical points, as memstab's own figures draw them.
@@ -151,7 +247,7 @@ def clusters(ax, points, gap):
     return [g for g in out.values() if len(g) > 1]
 
 
-def path_figure(runs, x, y, title, file, xlabel=None, ylabel=None):
+def path_figure(runs, x, y, title, file):
     """Paths in the (x, y) plane, one colour per (run directory, label), solid where the index
     is 0 and dashed where it is positive, with their critical points marked and labelled by
     irrep (and wave number m where the scene has one); a cluster of critical points closer
@@ -160,10 +256,13 @@ def path_figure(runs, x, y, title, file, xlabel=None, ylabel=None):
     kinds = set()
     pieces = []  # (xs, ys, style, colour)
     marks = []  # (x, y, kind, text)
+    ax_x, ax_y = Axes([d for d, _ in runs], x), Axes([d for d, _ in runs], y)
     for n, (run_dir, label) in enumerate(runs):
         colour = f"C{n}"
+        label = note_unscaled(label, run_dir, (ax_x, ax_y))
+        fx, fy = ax_x.factor(run_dir), ax_y.factor(run_dir)
         cols = read_csv(run_dir / "path.csv")
-        xs, ys = numbers(cols[x]), numbers(cols[y])
+        xs, ys = numbers(cols[x]) * fx, numbers(cols[y]) * fy
         index = numbers(cols["index"]).astype(int)
         start = 0
         styles = set()
@@ -182,8 +281,8 @@ def path_figure(runs, x, y, title, file, xlabel=None, ylabel=None):
             ax.plot([], [], "--", color=colour, label=f"{label}: unstable (index > 0)")
         critical = json.loads((run_dir / "critical.json").read_text())
         for c in (p for p in critical if not p.get("curve")):
-            px = c["parameters"].get(x, c["measures"].get(x))
-            py = c["parameters"].get(y, c["measures"].get(y))
+            px = c["parameters"].get(x, c["measures"].get(x)) * fx
+            py = c["parameters"].get(y, c["measures"].get(y)) * fy
             kind = "limit point" if c["kind"] == "limit point" else "other"
             kinds.add(kind)
             m = f", m = {c['m']}" if c.get("m") is not None else ""
@@ -198,13 +297,11 @@ def path_figure(runs, x, y, title, file, xlabel=None, ylabel=None):
     draw(ax)
     for kind in sorted(kinds):
         ax.plot([], [], MARKERS[kind][0], color="k", ms=5, label=MARKERS[kind][1])
-    ax.set_xlabel(xlabel or x)
-    ax.set_ylabel(ylabel or y)
+    ax.set_xlabel(ax_x.title)
+    ax.set_ylabel(ax_y.title)
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3)
-    caption(fig, [d for d, _ in runs])
-    legend = ax.legend(fontsize=8, loc="best")
-    legend.set_zorder(1)  # under the labels
+    caption(fig, [d for d, _ in runs], legend_of=ax)
     fig.canvas.draw()
     points = [(m[0], m[1]) for m in marks]
     label_h = 8 * fig.dpi / 72 * 1.2
@@ -212,22 +309,20 @@ def path_figure(runs, x, y, title, file, xlabel=None, ylabel=None):
     inset = None
     if cluster:
         # The inset in the corner of the axes that holds the fewest line points and not the
-        # legend.
+        # cluster.
         allx = np.concatenate([p[0] for p in pieces])
         ally = np.concatenate([p[1] for p in pieces])
         frac = ax.transAxes.inverted().transform(ax.transData.transform(np.c_[allx, ally]))
-        leg = legend.get_window_extent().transformed(ax.transAxes.inverted())
         best = None
         for cx, cy in ((0.58, 0.56), (0.05, 0.56), (0.58, 0.06), (0.05, 0.06)):
             w, h = 0.38, 0.38
             inside = ((frac[:, 0] > cx) & (frac[:, 0] < cx + w)
                       & (frac[:, 1] > cy) & (frac[:, 1] < cy + h)).sum()
-            overlaps = not (leg.x1 < cx or leg.x0 > cx + w or leg.y1 < cy or leg.y0 > cy + h)
             cfrac = ax.transAxes.inverted().transform(
                 ax.transData.transform(np.array([points[i] for i in cluster])))
             covers = ((cfrac[:, 0] > cx) & (cfrac[:, 0] < cx + w)
                       & (cfrac[:, 1] > cy) & (cfrac[:, 1] < cy + h)).any()
-            cost = (overlaps or covers, inside)
+            cost = (covers, inside)
             if best is None or cost < best[0]:
                 best = (cost, (cx, cy, w, h))
         inset = ax.inset_axes(best[1])
@@ -245,6 +340,7 @@ def path_figure(runs, x, y, title, file, xlabel=None, ylabel=None):
     rest = [i for i in range(len(marks)) if i not in cluster]
     avoid = inset.get_tightbbox() if inset is not None else None
     column_labels(ax, [points[i] for i in rest], [marks[i][3] for i in rest], avoid=avoid)
+    check_labels(fig, file)
     fig.savefig(file, dpi=130)
     plt.close(fig)
 
@@ -290,20 +386,64 @@ def mode_figure(run_dir, title, file, limit=6):
     plt.close(fig)
 
 
+def single_valued(xs, ys):
+    """(xs, ys) sorted by x if x rises or falls strictly along the curve, else None."""
+    d = np.diff(xs)
+    if len(xs) < 2 or not ((d > 0).all() or (d < 0).all()):
+        return None
+    order = np.argsort(xs)
+    return xs[order], ys[order]
+
+
+def near_pairs(curves, span, within=0.03):
+    """Pairs (i, j) of curves, each a function of x, that overlap in x and differ there by
+    less than `within` of the plot's vertical `span`: drawn as one line, they need a panel of
+    their differences."""
+    pairs = []
+    for j in range(len(curves)):
+        for i in range(j):
+            a, b = single_valued(*curves[i]), single_valued(*curves[j])
+            if a is None or b is None:
+                continue
+            lo, hi = max(a[0][0], b[0][0]), min(a[0][-1], b[0][-1])
+            if hi <= lo:
+                continue
+            grid = np.linspace(lo, hi, 200)
+            diff = np.interp(grid, *b) - np.interp(grid, *a)
+            if np.abs(diff).max() < within * span:
+                pairs.append((i, j, grid, diff))
+    return pairs
+
+
 def curve_figure(runs, x, y, title, file):
     """Critical curves in (x, y), one per run directory, with their events (hilltops, cusps,
-    irrep changes) marked, and labelled on the first curve."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    irrep changes) marked and labelled on the first curve; the path that found the first
+    curve drawn across it (solid where stable, dashed where not), so that the stable side
+    shows; a panel of differences below for curves that nearly coincide."""
+    ax_x, ax_y = Axes(runs, x), Axes(runs, y)
+    curves, names = [], []
+    for run_dir in runs:
+        cols = read_csv(run_dir / "curve.csv")
+        curves.append((numbers(cols[x]) * ax_x.factor(run_dir),
+                       numbers(cols[y]) * ax_y.factor(run_dir)))
+        names.append(cols["irrep"][0])
+    ally = np.concatenate([c[1] for c in curves])
+    pairs = near_pairs(curves, np.ptp(ally))
+    if pairs:
+        fig, (ax, dax) = plt.subplots(2, 1, figsize=(6.4, 6.0), sharex=True,
+                                      gridspec_kw={"height_ratios": [3, 1.3]})
+    else:
+        fig, ax = plt.subplots(figsize=(6.4, 4.6))
     events_drawn = False
     labelled = []
-    for n, run_dir in enumerate(runs):
-        cols = read_csv(run_dir / "curve.csv")
-        ax.plot(numbers(cols[x]), numbers(cols[y]), "-", color=f"C{n}", lw=1.6,
-                label=f"critical curve of the {cols['irrep'][0]} block")
+    for n, (run_dir, (cx, cy)) in enumerate(zip(runs, curves)):
+        ax.plot(cx, cy, "-", color=f"C{n}", lw=1.6,
+                label=f"critical curve of the {names[n]} block")
         critical = json.loads((run_dir / "critical.json").read_text())
         events = (c for c in critical if c.get("curve") and c["kind"] not in ("start", "end"))
         for e in events:
-            px, py = e["parameters"][x], e["parameters"][y]
+            px = e["parameters"][x] * ax_x.factor(run_dir)
+            py = e["parameters"][y] * ax_y.factor(run_dir)
             ax.plot(px, py, "o", color="C3", ms=5)
             events_drawn = True
             if n > 0:
@@ -312,24 +452,70 @@ def curve_figure(runs, x, y, title, file):
             labelled.append(((px, py), what))
     if events_drawn:
         ax.plot([], [], "o", color="C3", ms=5, label="event (hilltop, cusp, irrep change)")
-    ax.set_xlabel(x)
-    ax.set_ylabel(y)
+    # Which side is stable: the path that found the first curve's start, near the curves.
+    first = runs[0]
+    report = json.loads((first / "path.json").read_text())
+    control = report["control"]
+    held = y if control == x else x
+    cols = read_csv(first / "path.csv")
+    px = numbers(cols[x]) * ax_x.factor(first)
+    py = numbers(cols[y]) * ax_y.factor(first)
+    index = numbers(cols["index"]).astype(int)
+    lo, hi = ally.min() - 0.1 * np.ptp(ally), ally.max() + 0.1 * np.ptp(ally)
+    along = py if control == y else px
+    if control == x:
+        allx = np.concatenate([c[0] for c in curves])
+        lo, hi = allx.min() - 0.1 * np.ptp(allx), allx.max() + 0.1 * np.ptp(allx)
+    near = (along >= lo) & (along <= hi)
+    value = float(cols[held][0])
+    drawn = set()
+    for stable in (True, False):
+        mask = near & ((index == 0) == stable)
+        # Each run of rows on one side, joined to the next row so the line has no gaps.
+        for run in np.split(np.flatnonzero(mask), np.flatnonzero(np.diff(np.flatnonzero(mask)) > 1) + 1):
+            if len(run) == 0:
+                continue
+            stop = min(run[-1] + 2, len(px))
+            ax.plot(px[run[0]:stop], py[run[0]:stop], "-" if stable else "--", color="0.35", lw=1.3)
+            drawn.add(stable)
+    for stable in (True, False):
+        if stable in drawn:
+            word = "stable (index 0)" if stable else "unstable (index > 0)"
+            ax.plot([], [], "-" if stable else "--", color="0.35", lw=1.3,
+                    label=f"path in {control} at {held} = {value:g}: {word}")
+    if json.loads((first / "curve.json").read_text())["kind"] == "limit point":
+        ax.plot([], [], " ", label="at a limit curve the path turns back: its stable and "
+                                   "unstable states lie on one side")
+    ax.set_ylabel(ax_y.title)
     ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8, loc="best")
     ax.grid(alpha=0.3)
-    caption(fig, runs)
+    if pairs:
+        for i, j, grid, diff in pairs:
+            dax.plot(grid, diff, "-", color=f"C{j}", lw=1.4,
+                     label=f"{names[j]} curve − {names[i]} curve")
+        dax.axhline(0, color="0.5", lw=0.8)
+        dax.set_ylabel(f"difference in\n{ax_y.title.split(' (')[0]}", fontsize=9)
+        dax.legend(fontsize=7.5, loc="best")
+        dax.grid(alpha=0.3)
+        dax.set_xlabel(ax_x.title)
+    else:
+        ax.set_xlabel(ax_x.title)
+    caption(fig, runs, legend_of=ax)
+    fig.canvas.draw()
     column_labels(ax, [p for p, _ in labelled], [t for _, t in labelled])
+    check_labels(fig, file)
     fig.savefig(file, dpi=130)
     plt.close(fig)
 
 
-def surface_figure(run_dir, xlabel, ylabel, zlabel, title, file):
+def surface_figure(run_dir, a, b, measure, title, file):
     """A solution surface from surface.vtu: its triangles in (a, b, measure), coloured by
     the index (blue where stable, orange where unstable), with its critical lines in black."""
     import meshio
 
     surface = meshio.read(run_dir / "surface.vtu")
-    x, y, z = surface.points.T
+    axes = [Axes([run_dir], q) for q in (a, b, measure)]
+    x, y, z = (surface.points[:, k] * axes[k].factor(run_dir) for k in range(3))
     index = surface.point_data["index"]
     fig = plt.figure(figsize=(6.4, 5.0))
     ax = fig.add_subplot(projection="3d")
@@ -346,9 +532,9 @@ def surface_figure(run_dir, xlabel, ylabel, zlabel, title, file):
             for a, b in block.data:
                 ax.plot([x[a], x[b]], [y[a], y[b]], [z[a], z[b]], "-", color="k", lw=1.8)
     ax.plot([], [], "-", color="k", lw=1.8, label="fold lines")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_zlabel(zlabel)
+    ax.set_xlabel(axes[0].title, fontsize=8)
+    ax.set_ylabel(axes[1].title, fontsize=8)
+    ax.set_zlabel(axes[2].title, fontsize=8)
     ax.view_init(elev=22, azim=-58)
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=8, loc="upper left")
@@ -370,15 +556,47 @@ def variant(scene, out, name, *replacements):
     return path
 
 
+def self_check():
+    """The label check itself: it passes labels apart and refuses labels that overlap, one on
+    the legend, and one on an inset (a check that cannot fail checks nothing)."""
+
+    def figure(texts, legend=False, inset=False):
+        fig, ax = plt.subplots(figsize=(4, 3))
+        ax.plot([0, 1], [0, 1], label="line")
+        for x, y, t in texts:
+            ax.annotate(t, (x, y), xytext=(x, y), textcoords="data", fontsize=8)
+        if legend:
+            ax.legend(loc="upper left")
+        if inset:
+            ax.inset_axes((0.55, 0.05, 0.4, 0.4))
+        return fig
+
+    cases = [
+        (figure([(0.1, 0.5, "apart"), (0.6, 0.9, "labels")]), None),
+        (figure([(0.4, 0.5, "overlapping"), (0.42, 0.5, "labels")]), "overlap"),
+        (figure([(0.02, 0.95, "on the legend")], legend=True), "legend"),
+        (figure([(0.6, 0.2, "on the inset")], inset=True), "inset"),
+    ]
+    for fig, expected in cases:
+        try:
+            check_labels(fig, None)
+            refused = None
+        except Refused as e:
+            refused = str(e)
+        plt.close(fig)
+        if (refused is None) != (expected is None) or (expected and expected not in refused):
+            sys.exit(f"the label check is broken: expected {expected!r}, got {refused!r}")
+
+
 def main(memstab, out, figures):
+    self_check()
     out.mkdir(parents=True, exist_ok=True)
     figures.mkdir(parents=True, exist_ok=True)
 
     below = run(memstab, "scenes/disc_fluid_below.toml", out / "disc_fluid_below")
     path_figure([(below, "C7v")], "max_displacement", "h",
                 "Paper 1: the C7v disc pushed up by fluid from below (k = 0)",
-                figures / "paper1_disc_below_path.png",
-                xlabel="largest displacement / a", ylabel="level h / a")
+                figures / "paper1_disc_below_path.png")
     mode_figure(below, "Paper 1: critical modes of the disc from below (normal component)",
                 figures / "paper1_disc_below_modes.png")
 
@@ -386,8 +604,7 @@ def main(memstab, out, figures):
     path_figure([(below, "C7v, 1 792 triangles"), (irregular, "irregular, 1 800 triangles")],
                 "max_displacement", "h",
                 "Paper 1: the disc from below on a symmetric and an irregular mesh",
-                figures / "paper1_disc_irregular_path.png",
-                xlabel="largest displacement / a", ylabel="level h / a")
+                figures / "paper1_disc_irregular_path.png")
 
     scene = "scenes/thesis/paper1_disc_limit_curve_k.toml"
     limit = run(memstab, scene, out / "disc_curve_k_limit")
@@ -403,7 +620,7 @@ def main(memstab, out, figures):
                  figures / "paper2_gas_pressure_fold.png")
 
     surface = run(memstab, "scenes/thesis/paper2_solution_surface_f8.toml", out / "paper2_surface")
-    surface_figure(surface, "gas over-pressure p", "fluid volume V", "stretch",
+    surface_figure(surface, "p", "V", "stretch",
                    "Paper 2: the solution surface of the sphere on a plane",
                    figures / "paper2_solution_surface.png")
 
@@ -413,14 +630,12 @@ def main(memstab, out, figures):
     path_figure([(cubic, "cubic penalty, κ = 1e3"), (linear, "linear penalty, κ = 1e3")],
                 "volume", "d",
                 "Paper 3: gas above fluid squeezed between two planes x = ±a",
-                figures / "paper3_penalty_laws.png",
-                xlabel="enclosed volume / R³", ylabel="plane offset d = −a")
+                figures / "paper3_penalty_laws.png")
 
     cap = run(memstab, "scenes/thesis/paper4_spinning_cap.toml", out / "paper4_c8v")
     path_figure([(cap, "C8v")], "max_displacement", "w2",
                 "Paper 4: the filled cap spinning on the floor (C8v mesh)",
-                figures / "paper4_spinning_cap_path.png",
-                xlabel="largest displacement / R", ylabel="w2 (angular speed squared)")
+                figures / "paper4_spinning_cap_path.png")
     mode_figure(cap, "Paper 4: critical modes of the spinning cap (normal component)",
                 figures / "paper4_spinning_cap_modes.png")
 
@@ -439,4 +654,7 @@ def main(memstab, out, figures):
 if __name__ == "__main__":
     if len(sys.argv) != 4:
         sys.exit(__doc__)
-    main(sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3]))
+    try:
+        main(sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3]))
+    except Refused as e:
+        sys.exit(str(e))

@@ -10,12 +10,17 @@
 #   MESHIO_VENV  virtual environment to create/reuse (default: <repo>/.venv-meshio, gitignored)
 #   PYTHON       interpreter that creates it (default: python3)
 #   OUT          where the runs are written (default: <repo>/target/thesis-figures)
+#   FIGURES      where the PNG figures go (default: <repo>/docs/figures)
+#
+# Each figure is checked before it is written (no two labels overlap, none lies on a legend or
+# an inset); the script fails naming the figure and the labels otherwise.
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="${MESHIO_VENV:-$ROOT/.venv-meshio}"
 PYTHON="${PYTHON:-python3}"
 OUT="${OUT:-$ROOT/target/thesis-figures}"
+FIGURES="${FIGURES:-$ROOT/docs/figures}"
 PACKAGES=(meshio==5.3.5 numpy==2.2.6 matplotlib==3.11.2)
 
 fail() {
@@ -34,5 +39,5 @@ if ! "$VENV/bin/python" -c 'import sys' >/dev/null 2>&1; then
 fi
 "$VENV/bin/python" -m pip install --disable-pip-version-check --quiet "${PACKAGES[@]}" \
     || fail "pip could not install ${PACKAGES[*]} into $VENV"
-"$VENV/bin/python" "$ROOT/scripts/thesis_figures.py" "$MEMSTAB" "$OUT" "$ROOT/docs/figures"
-echo "thesis_figures: figures in $ROOT/docs/figures, runs in $OUT"
+"$VENV/bin/python" "$ROOT/scripts/thesis_figures.py" "$MEMSTAB" "$OUT" "$FIGURES"
+echo "thesis_figures: figures in $FIGURES, runs in $OUT"

@@ -97,6 +97,7 @@ fn quick_bench_writes_finite_tables_and_a_plot() {
         );
     }
 
+    crate::common::figures::check_svg(&out.join("accuracy.svg"));
     let svg = std::fs::read_to_string(out.join("accuracy.svg")).unwrap();
     assert!(
         svg.starts_with("<svg") && svg.contains("f=8"),

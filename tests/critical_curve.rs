@@ -285,6 +285,7 @@ fn a_critical_curve_run_writes_its_curve() {
         .unwrap()
         .iter()
         .any(|e| e["kind"] == "cusp"));
+    crate::common::figures::check_svg(&dir.path().join("curve.svg"));
     let svg = std::fs::read_to_string(dir.path().join("curve.svg")).unwrap();
     assert!(svg.contains("cusp"));
     // critical.json: the path's limit point, then the curve's events with parameters by name.

@@ -177,6 +177,7 @@ fn a_deflation_run_writes_its_files_and_bad_keys_are_refused() {
         assert!(out.join(f).is_file(), "{f}");
         assert!(manifest.contains(f), "{f} not in the manifest");
     }
+    crate::common::figures::check_svg(&out.join("deflation.svg"));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("deflation.json")).unwrap())
             .unwrap();

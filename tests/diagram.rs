@@ -183,7 +183,7 @@ fn a_diagram_run_writes_the_second_piece_and_its_graph() {
     for f in ["path.csv", "path.json", "critical.json", "manifest.json"] {
         assert!(out.join("partner_01").join(f).is_file(), "{f}");
     }
-    assert!(out.join("partners.svg").is_file());
+    crate::common::figures::check_svg(&out.join("partners.svg"));
     // The run's manifest lists the piece's files: the run verifies.
     let manifest = std::fs::read_to_string(out.join("manifest.json")).unwrap();
     assert!(manifest.contains("partner_01/path.csv"), "{manifest}");

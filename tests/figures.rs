@@ -1,21 +1,50 @@
-//! The figures memstab writes, checked as a reader would: every SVG of fresh runs of small
-//! bundled scenes is well-formed XML with the `<svg>` root; its layout (written by the
-//! figure builder into the SVG) has no two labels overlapping, no label on the legend or
-//! the inset, none left out, every label drawn as a `<text>`, a legend entry for every marker
-//! kind drawn and none for a kind not drawn; the caption names the scene and the mesh. The
-//! Paper 4 cap's path puts its cluster of critical points at the fold into an inset.
+//! The figures memstab writes, checked as a reader would (the checks are in
+//! `common::figures`): every SVG of a fresh run of every bundled scene is well-formed XML
+//! with the `<svg>` root; its layout (written by the figure builder into the SVG) has no two
+//! labels overlapping, no label on the legend or the inset, none left out, every label drawn
+//! as a `<text>` and nearer its own point than any other unless a leader line joins them, a
+//! legend entry for every marker kind drawn and none for a kind not drawn; the caption names
+//! the scene and the mesh. The Paper 4 cap's path and the Paper 3 squeezed cap's path put
+//! their clusters of critical points into an inset.
 
-use memstab::output::{read_layout, Layout};
+use crate::common::figures::{check_all, well_formed};
+use memstab::output::Layout;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::OnceLock;
 
-/// Runs `memstab run scenes/<scene>` into a fresh directory under `root`; returns it.
-fn run(root: &Path, scene: &str) -> PathBuf {
-    let name = Path::new(scene).file_stem().unwrap().to_string_lossy();
-    let out = root.join(name.as_ref());
+/// Every bundled scene: the `.toml` files under `scenes/` but the sweep files of
+/// `scenes/sweeps/` (not scenes), as paths relative to `scenes/`, sorted.
+fn bundled_scenes() -> Vec<String> {
+    fn walk(dir: &Path, root: &Path, out: &mut Vec<String>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                if p.file_name().is_some_and(|n| n != "sweeps") {
+                    walk(&p, root, out);
+                }
+            } else if p.extension().is_some_and(|x| x == "toml") {
+                let rel = p.strip_prefix(root).unwrap();
+                out.push(rel.to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut out = Vec::new();
+    walk(&root, &root, &mut out);
+    out.sort();
+    out
+}
+
+/// Runs `memstab run scenes/<scene>` into `out` (emptied first).
+fn run(scene: &str, out: &Path) {
+    if out.exists() {
+        std::fs::remove_dir_all(out).unwrap();
+    }
     let o = Command::new(env!("CARGO_BIN_EXE_memstab"))
-        .args(["run", &format!("scenes/{scene}"), "--out"])
-        .arg(&out)
+        .args(["run", &format!("scenes/{scene}"), "--quiet", "--out"])
+        .arg(out)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .expect("the memstab binary runs");
@@ -25,225 +54,80 @@ fn run(root: &Path, scene: &str) -> PathBuf {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     );
-    out
 }
 
-/// Every `.svg` under `dir`, sorted.
-fn svgs(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            out.extend(svgs(&p));
-        } else if p.extension().is_some_and(|x| x == "svg") {
-            out.push(p);
-        }
-    }
-    out.sort();
-    out
-}
-
-/// Checks that `svg` is well-formed XML (one root element, `svg`; matching tags; valid
-/// attributes and references) and returns the text of its `<text>` elements.
-fn well_formed(svg: &str, what: &str) -> Vec<String> {
-    use quick_xml::events::Event;
-    let mut reader = quick_xml::Reader::from_str(svg);
-    reader.config_mut().check_end_names = true;
-    let (mut depth, mut roots, mut in_text) = (0usize, 0usize, false);
-    let mut texts: Vec<String> = Vec::new();
-    let check_attributes = |e: &quick_xml::events::BytesStart| {
-        for a in e.attributes().with_checks(true) {
-            let a = a.unwrap_or_else(|err| panic!("{what}: bad attribute: {err}"));
-            a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
-                .unwrap_or_else(|err| panic!("{what}: bad attribute value: {err}"));
-        }
-    };
-    loop {
-        match reader.read_event() {
-            Err(e) => panic!(
-                "{what}: not well-formed at byte {}: {e}",
-                reader.buffer_position()
-            ),
-            Ok(Event::Eof) => break,
-            Ok(Event::Start(e)) => {
-                if depth == 0 {
-                    roots += 1;
-                    assert_eq!(e.name().as_ref(), b"svg", "{what}: the root is not <svg>");
-                }
-                check_attributes(&e);
-                depth += 1;
-                if e.name().as_ref() == b"text" {
-                    in_text = true;
-                    texts.push(String::new());
-                }
-            }
-            Ok(Event::Empty(e)) => {
-                assert!(depth > 0, "{what}: an element outside the root");
-                check_attributes(&e);
-            }
-            Ok(Event::End(e)) => {
-                assert!(depth > 0, "{what}: an end tag without a start");
-                depth -= 1;
-                if e.name().as_ref() == b"text" {
-                    in_text = false;
-                }
-            }
-            Ok(Event::Text(t)) => {
-                let raw = t.decode().expect("UTF-8");
-                assert!(
-                    depth > 0 || raw.trim().is_empty(),
-                    "{what}: text outside the root"
-                );
-                if in_text {
-                    if let Some(last) = texts.last_mut() {
-                        last.push_str(&raw);
+/// A fresh run of every bundled scene, made once for the tests of this file (two at a time)
+/// under the test target's scratch directory: (scene, its output directory).
+fn bundled_runs() -> &'static [(String, PathBuf)] {
+    static RUNS: OnceLock<Vec<(String, PathBuf)>> = OnceLock::new();
+    RUNS.get_or_init(|| {
+        let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bundled-figures");
+        std::fs::create_dir_all(&root).unwrap();
+        let runs: Vec<(String, PathBuf)> = bundled_scenes()
+            .into_iter()
+            .map(|s| {
+                let dir = root.join(s.trim_end_matches(".toml").replace('/', "_"));
+                (s, dir)
+            })
+            .collect();
+        let next = AtomicUsize::new(0);
+        std::thread::scope(|scope| {
+            for _ in 0..2 {
+                scope.spawn(|| {
+                    while let Some((scene, dir)) = runs.get(next.fetch_add(1, Ordering::Relaxed)) {
+                        run(scene, dir);
                     }
-                }
+                });
             }
-            Ok(Event::GeneralRef(r)) => {
-                let name = r.decode().expect("UTF-8");
-                let c = match name.as_ref() {
-                    "lt" => Some('<'),
-                    "gt" => Some('>'),
-                    "amp" => Some('&'),
-                    "quot" => Some('"'),
-                    "apos" => Some('\''),
-                    _ => r
-                        .resolve_char_ref()
-                        .unwrap_or_else(|e| panic!("{what}: bad reference &{name};: {e}")),
-                };
-                let c = c.unwrap_or_else(|| panic!("{what}: unknown entity &{name};"));
-                if in_text {
-                    if let Some(last) = texts.last_mut() {
-                        last.push(c);
-                    }
-                }
-            }
-            Ok(_) => {}
-        }
-    }
-    assert_eq!(depth, 0, "{what}: {depth} elements left open");
-    assert_eq!(roots, 1, "{what}: {roots} root elements");
-    texts.iter().map(|t| t.trim().to_string()).collect()
+        });
+        runs
+    })
 }
 
-/// The layout's promises: labels apart, off the legend and inset, on the canvas, drawn;
-/// the legend's marker entries exactly the kinds drawn; a caption naming the mesh.
-fn check_layout(layout: &Layout, texts: &[String], what: &str) {
-    let canvas =
-        memstab::output::Rect::at(0.0, 0.0, f64::from(layout.width), f64::from(layout.height));
-    assert!(
-        layout.dropped.is_empty(),
-        "{what}: labels left out: {:?}",
-        layout.dropped
-    );
-    for (i, a) in layout.labels.iter().enumerate() {
-        assert!(canvas.holds(&a.rect), "{what}: {:?} off the canvas", a.text);
-        for b in &layout.labels[..i] {
-            assert!(
-                !a.rect.overlaps(&b.rect),
-                "{what}: labels {:?} {:?} and {:?} {:?} overlap",
-                a.text,
-                a.rect,
-                b.text,
-                b.rect
-            );
-        }
-        if let Some(l) = layout.legend_box {
-            assert!(!a.rect.overlaps(&l), "{what}: {:?} on the legend", a.text);
-        }
-        if let (Some(inset), false) = (layout.inset, a.in_inset) {
-            assert!(
-                !a.rect.overlaps(&inset),
-                "{what}: {:?} on the inset",
-                a.text
-            );
-        }
-        assert!(
-            texts.contains(&a.text),
-            "{what}: the label {:?} is not drawn",
-            a.text
-        );
-    }
-    let mut drawn = layout.marker_kinds.clone();
-    let mut shown = layout.legend_markers.clone();
-    drawn.sort();
-    shown.sort();
-    assert_eq!(drawn, shown, "{what}: marker kinds drawn and in the legend");
-    for k in &shown {
-        assert!(
-            layout.legend.contains(k) && texts.iter().any(|t| t == k),
-            "{what}: no legend entry {k:?} in {:?}",
-            layout.legend
-        );
-    }
-    for entry in &layout.legend {
-        assert!(
-            texts.iter().any(|t| t == entry),
-            "{what}: legend entry {entry:?} not drawn"
-        );
-    }
-    assert!(
-        layout.caption.contains("triangles") && texts.contains(&layout.caption),
-        "{what}: caption {:?}",
-        layout.caption
-    );
-}
-
-/// Checks every SVG under `dir`; returns their layouts by file name.
-fn check_all(dir: &Path) -> Vec<(String, Layout)> {
-    let files = svgs(dir);
-    assert!(!files.is_empty(), "no SVG in {}", dir.display());
-    files
+/// The output directory of the bundled scene `scene` (its path under `scenes/`).
+fn bundled(scene: &str) -> &'static Path {
+    bundled_runs()
         .iter()
-        .map(|f| {
-            let what = f.display().to_string();
-            let svg = std::fs::read_to_string(f).unwrap();
-            let texts = well_formed(&svg, &what);
-            let layout = read_layout(&svg).unwrap_or_else(|| panic!("{what}: no layout"));
-            check_layout(&layout, &texts, &what);
-            let name = f.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
-            (name, layout)
-        })
-        .collect()
+        .find(|(s, _)| s == scene)
+        .map(|(_, d)| d.as_path())
+        .unwrap_or_else(|| panic!("no bundled scene {scene}"))
 }
 
 #[test]
 fn every_figure_of_the_bundled_scenes_is_well_formed_and_legible() {
-    let root = tempfile::tempdir().unwrap();
     let mut checked = Vec::new();
-    for scene in [
-        "balloon.toml",
-        "ponding.toml",
-        "balloon_deflation.toml",
-        "disc_fluid_above.toml",
-        "disc_upward.toml",
-        "thesis/paper1_disc_limit_curve_radius.toml",
-        "thesis/paper1_disc_irregular_diagram.toml",
-    ] {
-        let dir = run(root.path(), scene);
-        for (name, _) in check_all(&dir) {
+    for (scene, dir) in bundled_runs() {
+        for (name, _) in check_all(dir) {
             checked.push(format!("{scene}: {name}"));
         }
     }
     // The kinds of figure: a path, a spectrum, deflation's solutions, a critical curve, a
-    // bifurcation diagram with its branches.
+    // solution surface, a bifurcation diagram with its branches and partners, a mode, and
+    // the meridian's path.
     for f in [
         "balloon.toml: path.svg",
         "ponding.toml: path.svg",
         "balloon_deflation.toml: deflation.svg",
         "thesis/paper1_disc_limit_curve_radius.toml: curve.svg",
+        "thesis/paper2_solution_surface_f8.toml: surface.svg",
         "thesis/paper1_disc_irregular_diagram.toml: diagram.svg",
+        "thesis/paper1_disc_irregular_diagram.toml: partners.svg",
+        "thesis/paper4_spinning_cap.toml: critical_01_mode.svg",
+        "axisymmetric/paper4_spinning_cap.toml: path.svg",
     ] {
         assert!(checked.iter().any(|c| c == f), "{f} not in {checked:?}");
     }
 }
 
+/// The layouts of the figures of the bundled scene `scene`, checked, by file name.
+fn figures_of(scene: &str) -> (&'static Path, Vec<(String, Layout)>) {
+    let dir = bundled(scene);
+    (dir, check_all(dir))
+}
+
 #[test]
 fn the_spinning_cap_zooms_on_its_critical_points_at_the_fold() {
-    let root = tempfile::tempdir().unwrap();
-    let dir = run(root.path(), "thesis/paper4_spinning_cap.toml");
-    let layouts = check_all(&dir);
+    let (dir, layouts) = figures_of("thesis/paper4_spinning_cap.toml");
     let (_, path) = layouts.iter().find(|(n, _)| n == "path.svg").unwrap();
     let inset = path.inset.expect("an inset");
     let zoomed: Vec<&str> = path
@@ -271,15 +155,55 @@ fn the_spinning_cap_zooms_on_its_critical_points_at_the_fold() {
     // Every critical point and the turning point has its label.
     // (the limit point is the turning point, one label for both).
     assert_eq!(path.labels.len(), 6, "{:?}", path.labels);
+    // The turning point's value reads off the vertical axis: ω² in its group ρ ω² R³/(μH).
+    let w2 = path.scales.iter().find(|s| s.quantity == "w2").unwrap();
+    assert!(w2.label.starts_with("ρ ω² R³/(μH)"), "{w2:?}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("path.json")).unwrap()).unwrap();
+    let max = report["turning_points"][0]["parameters"]["w2"]
+        .as_f64()
+        .expect("the maximum's w2");
+    let label = path
+        .labels
+        .iter()
+        .find(|l| l.text.starts_with("max "))
+        .expect("the maximum's label");
+    let shown: f64 = label.text["max ρ ω² R³/(μH) = ".len()..]
+        .split(' ')
+        .next()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{:?}", label.text));
+    assert!((shown - max * w2.factor).abs() < 1e-4, "{shown} vs {max}");
+}
+
+#[test]
+fn the_squeezed_cap_under_the_linear_penalty_zooms_on_its_bifurcations() {
+    // Its bifurcation points all lie near the end of the path, a few pixels apart on the
+    // page: every one is labelled in the inset, apart, with leaders where a label could be
+    // read as another's.
+    let (_, layouts) = figures_of("thesis/paper3_gas_fluid_squeeze_linear.toml");
+    let (_, path) = layouts.iter().find(|(n, _)| n == "path.svg").unwrap();
+    let inset = path.inset.expect("an inset");
+    let critical: Vec<_> = path
+        .labels
+        .iter()
+        .filter(|l| l.text.starts_with("simple"))
+        .collect();
+    assert!(critical.len() >= 4, "{:?}", path.labels);
+    for l in critical {
+        assert!(
+            l.in_inset && inset.holds(&l.rect),
+            "{} not in the inset",
+            l.text
+        );
+    }
 }
 
 #[test]
 fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
-    let root = tempfile::tempdir().unwrap();
     // The disc's path in h reaches the limit curve stable and turns back unstable: both of
     // its states next to the curve's first point are ringed and labelled with their index.
-    let dir = run(root.path(), "thesis/paper1_disc_limit_curve_radius.toml");
-    let layouts = check_all(&dir);
+    let (dir, layouts) = figures_of("thesis/paper1_disc_limit_curve_radius.toml");
     let (_, curve) = layouts.iter().find(|(n, _)| n == "curve.svg").unwrap();
     for kind in [
         "state of the path in h: stable",
@@ -295,6 +219,10 @@ fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
     for text in ["stable (index 0)", "unstable (index 1)"] {
         assert!(labels.contains(&text), "{text} not in {labels:?}");
     }
+    // The figure records its quantities' dimensionless groups for a script to reuse.
+    let h = curve.scales.iter().find(|s| s.quantity == "h").expect("h");
+    assert!(h.label.starts_with("h/a") && h.factor > 0.0, "{h:?}");
+    assert!(curve.scales.iter().any(|s| s.quantity == "R"));
     assert!(
         curve.legend.iter().any(|e| e.contains("limit curve")),
         "{:?}",
@@ -317,8 +245,7 @@ fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
 
     // The surface's regions: one legend entry per index its triangles are shaded by (the
     // largest index of their corners), and none other.
-    let dir = run(root.path(), "thesis/paper2_solution_surface_f8.toml");
-    let layouts = check_all(&dir);
+    let (dir, layouts) = figures_of("thesis/paper2_solution_surface_f8.toml");
     let (_, surface) = layouts.iter().find(|(n, _)| n == "surface.svg").unwrap();
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("surface.json")).unwrap()).unwrap();

@@ -180,6 +180,7 @@ fn a_linear_buckling_run_plots_the_spectrum_by_irrep() {
 
     // path.svg: a line of all 47 samples per irrep, each in its own colour, the zero line,
     // the legend with every irrep and its dimension, a label per critical point.
+    crate::common::figures::check_svg(&dir.join("path.svg"));
     let svg = std::fs::read_to_string(dir.join("path.svg")).unwrap();
     let lines = polylines(&svg);
     let data: Vec<_> = lines.iter().filter(|l| l.1.len() == 47).collect();

@@ -16,6 +16,7 @@ use meshes::{Mesh, Vec3};
 use std::fs;
 use std::path::Path;
 
+use crate::common::figures::check_svg;
 use crate::common::{polylines, texts};
 
 /// p R/(μH) of the Mooney-Rivlin sphere at stretch l.
@@ -200,6 +201,7 @@ fn svg_shows_the_path_and_labels_the_turning_points() {
     let (x, y) = default_axes(&r);
     assert_eq!((x.as_str(), y.as_str()), ("stretch", "p"));
     let path = write_diagram(dir.path(), &r, &x, &y).unwrap();
+    check_svg(&path);
     assert_eq!(path, dir.path().join("path.svg"));
     let svg = fs::read_to_string(&path).unwrap();
     assert!(svg.starts_with("<svg"), "{}", &svg[..80]);
@@ -253,6 +255,7 @@ fn svg_takes_segments_and_markers() {
         .unwrap()])
         .file("stability.svg");
     let path = write_diagram_with(dir.path(), &r, &diagram).unwrap();
+    check_svg(&path);
     let svg = fs::read_to_string(path).unwrap();
     for text in [
         "stable",
@@ -270,6 +273,46 @@ fn svg_takes_segments_and_markers() {
     }]);
     let err = write_diagram_with(dir.path(), &r, &bad).unwrap_err();
     assert!(err.to_string().contains("30..=41"), "{err}");
+}
+
+/// A crowd of critical points at three points a few pixels apart, and three more apart: every label is
+/// placed (none dropped), apart from the others, and the crowd's go into an inset.
+#[test]
+fn svg_zooms_on_a_crowd_of_critical_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = report();
+    let mut markers = Vec::new();
+    // Rows 14 (twice, moved along the stretch by 0.03 and 0.06: a few pixels) and three
+    // rows apart.
+    for (row, moved, label) in [
+        (14, 0.0, "simple B1 m = 1"),
+        (14, 0.0, "simple A2 m = 2"),
+        (14, 0.0, "double E1 m = 1"),
+        (14, 0.03, "simple B2 m = 4"),
+        (14, 0.03, "simple B1 m = 4"),
+        (14, 0.06, "double E3 m = 3"),
+        (24, 0.0, "simple A2 m = 6"),
+        (33, 0.0, "double E2 m = 2"),
+        (38, 0.0, "simple B1 m = 5"),
+    ] {
+        let mut m = Marker::at_row(&r, row, label, MarkerKind::Bifurcation).unwrap();
+        m.measures[1] += moved;
+        markers.push(m);
+    }
+    let diagram = Diagram::new("stretch", "p").markers(markers);
+    let path = write_diagram_with(dir.path(), &r, &diagram).unwrap();
+    let layout = check_svg(&path);
+    let inset = layout.inset.expect("an inset");
+    assert_eq!(layout.labels.len(), 9 + 2, "{:?}", layout.labels);
+    for l in &layout.labels {
+        let crowd = ["m = 1", "A2 m = 2", "m = 4", "m = 3"]
+            .iter()
+            .any(|t| l.text.ends_with(t));
+        assert_eq!(l.in_inset, crowd, "{}", l.text);
+        if crowd {
+            assert!(inset.holds(&l.rect), "{} outside the inset", l.text);
+        }
+    }
 }
 
 #[test]
@@ -512,6 +555,7 @@ fn spectrum_svg_draws_a_line_per_irrep_and_the_zero_line() {
     let dir = tempfile::tempdir().unwrap();
     let r = sweep();
     let path = write_spectrum_diagram(dir.path(), &r).unwrap();
+    check_svg(&path);
     assert_eq!(path, dir.path().join("path.svg"));
     let svg = fs::read_to_string(&path).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
@@ -670,6 +714,7 @@ fn svg_by_index_draws_each_index_and_switches_at_the_critical_point() {
         .by_index();
     diagram.turning_points = false;
     let path = write_diagram_with(dir.path(), &r, &diagram).unwrap();
+    check_svg(&path);
     let svg = fs::read_to_string(path).unwrap();
     let texts = texts(&svg);
     for entry in ["index 0 (stable)", "index 1", "index 2"] {
@@ -774,6 +819,7 @@ fn svg_axes_are_dimensionless_and_the_balloon_has_its_closed_form() {
         .reference(curve.clone())
         .by_index();
     let path = write_diagram_with(dir.path(), &r, &diagram).unwrap();
+    check_svg(&path);
     let svg = fs::read_to_string(path).unwrap();
     let texts = texts(&svg);
     for text in [
@@ -802,6 +848,7 @@ fn spectrum_svg_draws_the_higher_eigenvalues_that_cross_zero() {
         row.eigenvalues[0] = vec![a1, 0.03 - 0.004 * x, 0.5 + 0.01 * x];
     }
     let path = write_spectrum_diagram(dir.path(), &r).unwrap();
+    check_svg(&path);
     let svg = fs::read_to_string(path).unwrap();
     let texts = texts(&svg);
     assert!(

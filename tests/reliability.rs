@@ -204,6 +204,7 @@ fn names_and_messages_stay_valid() {
         "--quiet",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    crate::common::figures::check_svg(&out.join("path.svg"));
     let svg = std::fs::read_to_string(out.join("path.svg")).unwrap();
     let xml_char = |c: char| {
         matches!(c, '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}')

@@ -152,6 +152,7 @@ fn surface_run_writes_its_files() {
         "{}",
         &vtu[..300]
     );
+    crate::common::figures::check_svg(&out.join("surface.svg"));
     let svg = std::fs::read_to_string(out.join("surface.svg")).unwrap();
     assert!(svg.contains("limit line (fold)") && svg.contains("index 0 (stable)"));
     let manifest = std::fs::read_to_string(out.join("manifest.json")).unwrap();

@@ -209,8 +209,9 @@ fn a_three_by_three_sweep_runs_here_resumes_and_collects() {
     );
     assert!(!stdout.contains("not merged"), "{stdout}");
     assert_table_matches_runs(&out);
+    crate::common::figures::check_svg(&out.join("collected.svg"));
     let svg = std::fs::read_to_string(out.join("collected.svg")).unwrap();
-    assert!(svg.contains("<svg") && svg.contains("material.k") && svg.contains("E1, m = 1"));
+    assert!(svg.contains("material.k") && svg.contains("E1, m = 1"));
 
     // One at a time, in another directory: the same table.
     let one = dir.path().join("one");

@@ -877,112 +877,64 @@ fn decades(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     10f64.powf(a)..10f64.powf(b)
 }
 
-/// A decade's tick label (`1e-3`, `1`, `10`), empty between decades.
-fn decade_label(v: f64) -> String {
-    let e = v.log10();
-    if (e - e.round()).abs() > 1e-6 {
-        return String::new();
-    }
-    match e.round() as i32 {
-        0 => "1".to_string(),
-        1 => "10".to_string(),
-        2 => "100".to_string(),
-        e => format!("1e{e}"),
-    }
-}
-
-/// The accuracy plot of points (wall time s, relative error, frequency): the maximum's solid
-/// blue with discs, the minimum's dashed red with squares (so that both show where they
-/// overlap), both axes over whole decades with every decade labelled.
+/// The accuracy plot of points (wall time s, relative error, frequency) in memstab's figure
+/// style: the maximum's solid blue with discs, the minimum's dashed red with squares (so that
+/// both show where they overlap), each point labelled with its frequency (labels kept apart),
+/// both axes logarithmic over whole decades with every decade labelled, a legend of both
+/// lines and both markers, and a caption naming the meshes.
 pub fn accuracy_plot(
     max: &[(f64, f64, usize)],
     min: &[(f64, f64, usize)],
 ) -> Result<String, Box<dyn std::error::Error>> {
+    use crate::output::figure::{self, Entry, Line, Mark, Plot, Sample, Symbol};
     let all = || max.iter().chain(min);
-    let xr = decades(all().map(|p| p.0));
-    let yr = decades(all().map(|p| p.1));
-    // Every decade a key point (a tick and its label), 2…9 times it a light grid line.
-    let ticks = |r: &std::ops::Range<f64>| -> (Vec<f64>, Vec<f64>) {
-        let (a, b) = (r.start.log10().round() as i32, r.end.log10().round() as i32);
-        let bold: Vec<f64> = (a..=b).map(|e| 10f64.powi(e)).collect();
-        let light = (a..b)
-            .flat_map(|e| (2..10).map(move |k| f64::from(k) * 10f64.powi(e)))
-            .collect();
-        (bold, light)
-    };
-    let ((xb, xl), (yb, yl)) = (ticks(&xr), ticks(&yr));
-    let x_axis = xr.log_scale().with_key_points(xb).with_light_points(xl);
-    let y_axis = yr.log_scale().with_key_points(yb).with_light_points(yl);
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                "balloon k = 0.1: relative error of the turning pressures vs wall time",
-                ("sans-serif", 18),
-            )
-            .margin(20)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x_axis, y_axis)?;
-        chart
-            .configure_mesh()
-            .x_desc("wall time of the level (s)")
-            .y_desc("relative error")
-            .label_style(("sans-serif", 13))
-            .axis_desc_style(("sans-serif", 15))
-            .x_label_formatter(&|v| decade_label(*v))
-            .y_label_formatter(&|v| decade_label(*v))
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()?;
-        let blue = RGBColor(31, 87, 180);
-        let red = RGBColor(200, 30, 30);
-        chart
-            .draw_series(LineSeries::new(
-                max.iter().map(|p| (p.0, p.1)),
-                blue.stroke_width(3),
-            ))?
-            .label("p_max")
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(3))
+    let log = |r: std::ops::Range<f64>| r.start.log10()..r.end.log10();
+    let xr = log(decades(all().map(|p| p.0)));
+    let yr = log(decades(all().map(|p| p.1)));
+    let frequencies: Vec<usize> = all().map(|p| p.2).collect();
+    let triangles = |f: Option<&usize>| f.map_or(0, |f| 20 * f * f);
+    let caption = format!(
+        "memstab bench · mesh: icosphere, {} to {} triangles, group Ih",
+        triangles(frequencies.iter().min()),
+        triangles(frequencies.iter().max())
+    );
+    let mut plot = Plot::new(
+        "balloon k = 0.1: relative error of the turning pressures vs wall time",
+        caption,
+        "wall time of the level (s)",
+        "relative error",
+    );
+    plot.log = (true, true);
+    plot.ranges = Some((xr, yr));
+    let blue = RGBColor(31, 87, 180);
+    let red = RGBColor(200, 30, 30);
+    let at = |p: &(f64, f64, usize)| (p.0.log10(), p.1.log10());
+    for (points, colour, width, dash, name, symbol) in [
+        (max, blue, 3, None, "p_max", Symbol::Disc(blue)),
+        (min, red, 2, Some((7, 4)), "p_min", Symbol::Square(red)),
+    ] {
+        if points.is_empty() {
+            continue;
+        }
+        plot.lines.push(Line::new(
+            points.iter().map(at).collect(),
+            colour,
+            width,
+            dash,
+        ));
+        plot.legend
+            .push(Entry::new(name, Sample::Line(colour, width, dash)));
+        for p in points {
+            plot.marks.push(Mark {
+                at: at(p),
+                symbol,
+                kind: format!("{name} of a level"),
+                label: format!("f={}", p.2),
             });
-        chart
-            .draw_series(DashedLineSeries::new(
-                min.iter().map(|p| (p.0, p.1)),
-                7,
-                4,
-                red.stroke_width(2),
-            ))?
-            .label("p_min")
-            .legend(move |(x, y)| {
-                EmptyElement::at((x, y))
-                    + PathElement::new(vec![(0, 0), (7, 0)], red.stroke_width(2))
-                    + PathElement::new(vec![(11, 0), (18, 0)], red.stroke_width(2))
-            });
-        chart.draw_series(max.iter().map(|p| {
-            EmptyElement::at((p.0, p.1))
-                + Circle::new((0, 0), 5, blue.filled())
-                + Text::new(format!("f={}", p.2), (6, -16), ("sans-serif", 12))
-        }))?;
-        chart.draw_series(min.iter().map(|p| {
-            EmptyElement::at((p.0, p.1))
-                + Rectangle::new([(-3, -3), (3, 3)], red.filled())
-                + Text::new(
-                    format!("f={}", p.2),
-                    (6, 4),
-                    ("sans-serif", 12).into_font().color(&red),
-                )
-        }))?;
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .draw()?;
-        root.present()?;
+        }
     }
-    Ok(svg)
+    let (svg, layout) = figure::render(&plot)?;
+    Ok(figure::finish(&svg, &layout))
 }
 
 /// The heading of `accuracy.md`: what ran, on how many cores.
@@ -1058,7 +1010,21 @@ mod tests {
             red_pieces > 3,
             "the minimum's dashed line: {red_pieces} pieces"
         );
-        assert_eq!(decade_label(0.002), "");
+        assert_eq!(crate::output::figure::decade(0.002f64.log10()), "");
         assert_eq!(decades([0.002, 0.3].into_iter()), 0.001..1.0);
+        // In the figures' style: a legend of both lines and both markers, every label placed.
+        let layout = crate::output::read_layout(&svg).expect("a layout");
+        assert_eq!(
+            layout.marker_kinds,
+            ["p_max of a level", "p_min of a level"]
+        );
+        assert_eq!(layout.legend_markers, layout.marker_kinds);
+        assert_eq!(layout.labels.len(), 6);
+        assert!(layout.dropped.is_empty());
+        assert!(
+            layout.caption.contains("80 to 1280 triangles"),
+            "{}",
+            layout.caption
+        );
     }
 }

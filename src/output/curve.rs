@@ -103,8 +103,12 @@ pub fn write_curve_with(
         scales.or_name(&curve.second),
     );
     let sides = path.map(|p| sides(curve, p, c, s)).unwrap_or_default();
-    let (svg, layout) = render(curve, (c, s), &sides, &axes, caption)
+    let (svg, mut layout) = render(curve, (c, s), &sides, &axes, caption)
         .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
+    layout.scales = vec![
+        figure::QuantityScale::new(&curve.control, &axes.0),
+        figure::QuantityScale::new(&curve.second, &axes.1),
+    ];
     let svg = finish(&svg, &layout);
     write_whole(&csv, |w| {
         let header: Vec<&str> = ["step", "arclength"]

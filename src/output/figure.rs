@@ -86,6 +86,9 @@ pub struct PlacedLabel {
     pub leader: bool,
     /// True if it is placed in the inset.
     pub in_inset: bool,
+    /// The point it labels, in pixels (in the inset for a label placed there).
+    #[serde(default)]
+    pub at: (f64, f64),
 }
 
 /// The layout of a written figure: what a test checks.
@@ -113,6 +116,33 @@ pub struct Layout {
     pub caption: String,
     /// Labels that found no place (and are not drawn).
     pub dropped: Vec<String>,
+    /// The dimensionless groups of the figure's quantities, for a script that draws the same
+    /// run in the same style.
+    #[serde(default)]
+    pub scales: Vec<QuantityScale>,
+}
+
+/// A quantity of a figure and its dimensionless group: the axis title and the factor its
+/// values are multiplied by (1 and the quantity's name where the scene fixes no scale).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QuantityScale {
+    /// The parameter or measure, by name.
+    pub quantity: String,
+    /// The axis title.
+    pub label: String,
+    /// The factor.
+    pub factor: f64,
+}
+
+impl QuantityScale {
+    /// `quantity` with its scale.
+    pub fn new(quantity: &str, scale: &super::svg::AxisScale) -> Self {
+        Self {
+            quantity: quantity.to_string(),
+            label: scale.label.clone(),
+            factor: scale.factor,
+        }
+    }
 }
 
 /// The layout written into an SVG by memstab, `None` if it has none (or it does not parse).
@@ -129,13 +159,28 @@ pub fn read_layout(svg: &str) -> Option<Layout> {
 
 /// The SVG text of a plotting backend, finished in the figures' style: the text's font
 /// families set to [`FONT_FAMILY`] and the layout inserted as `<metadata>` after the opening
-/// `<svg …>` tag.
+/// `<svg …>` tag, its texts as the SVG draws them.
 pub fn finish(svg: &str, layout: &Layout) -> String {
     let svg = svg.replace(
         "font-family=\"sans-serif\"",
         &format!("font-family=\"{FONT_FAMILY}\""),
     );
-    let json = serde_json::to_string(layout).unwrap_or_default();
+    // The layout's texts as the SVG draws them (characters XML does not allow replaced).
+    let clean = super::svg::xml_chars;
+    let mut layout = layout.clone();
+    layout.caption = clean(&layout.caption);
+    for t in layout
+        .legend
+        .iter_mut()
+        .chain(&mut layout.marker_kinds)
+        .chain(&mut layout.legend_markers)
+        .chain(&mut layout.dropped)
+        .chain(layout.labels.iter_mut().map(|l| &mut l.text))
+        .chain(layout.scales.iter_mut().map(|s| &mut s.label))
+    {
+        *t = clean(t);
+    }
+    let json = serde_json::to_string(&layout).unwrap_or_default();
     let json = json
         .replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -330,6 +375,11 @@ pub struct Plot {
     pub legend: Vec<Entry>,
     /// Include y = 0 in the vertical range.
     pub with_zero: bool,
+    /// Logarithmic axes (x, y): the points' values on such an axis are log10 of the
+    /// quantity, and its ticks are labelled with the decades (`1e-3`, `1`, `10`).
+    pub log: (bool, bool),
+    /// The axes' ranges, when given (default: the data's, padded).
+    pub ranges: Option<(Range<f64>, Range<f64>)>,
 }
 
 impl Plot {
@@ -352,6 +402,8 @@ impl Plot {
             marks: Vec::new(),
             legend: Vec::new(),
             with_zero: false,
+            log: (false, false),
+            ranges: None,
         }
     }
 
@@ -411,6 +463,20 @@ pub fn tick(v: f64, span: f64) -> String {
     }
 }
 
+/// The tick label of a logarithmic axis at log10 value `v`: the decade (`1e-3`, `1`, `10`,
+/// `100`, `1e3`) at a whole power of ten, nothing between.
+pub fn decade(v: f64) -> String {
+    if !v.is_finite() || (v - v.round()).abs() > 1e-9 {
+        return String::new();
+    }
+    match v.round() as i32 {
+        0 => "1".to_string(),
+        1 => "10".to_string(),
+        2 => "100".to_string(),
+        e => format!("1e{e}"),
+    }
+}
+
 /// Font size of the title.
 const TITLE: u32 = 24;
 /// Font size of the caption line and legend.
@@ -432,6 +498,7 @@ pub fn chart<'a, 'b>(
     xr: Range<f64>,
     yr: Range<f64>,
     caption: bool,
+    log: (bool, bool),
 ) -> Result<super::svg::Chart<'a, 'b>, Box<dyn Error>> {
     let mut chart = ChartBuilder::on(root)
         .caption(title, ("sans-serif", TITLE))
@@ -441,8 +508,9 @@ pub fn chart<'a, 'b>(
         .y_label_area_size(78)
         .build_cartesian_2d(xr.clone(), yr.clone())?;
     let (xs, ys) = (xr.end - xr.start, yr.end - yr.start);
-    let xf = |v: &f64| tick(*v, xs);
-    let yf = |v: &f64| tick(*v, ys);
+    let label = |v: f64, span: f64, log: bool| if log { decade(v) } else { tick(v, span) };
+    let xf = |v: &f64| label(*v, xs, log.0);
+    let yf = |v: &f64| label(*v, ys, log.1);
     chart
         .configure_mesh()
         .x_desc(x)
@@ -677,11 +745,17 @@ pub fn place_labels(
                         continue;
                     }
                     let hidden = data.iter().filter(|d| b.contains(**d)).count() as f64;
-                    let near = b.nearest(p);
-                    let d = (near.0 - p.0).hypot(near.1 - p.1);
-                    let cost = d + 12.0 * hidden + di as f64 * 0.5 + k as f64 * 4.0;
+                    let d = distance(&b, p);
+                    // A box as near to another point as to its own needs a leader line;
+                    // one that does not is preferred.
+                    let shared = ambiguous(&b, p, points);
+                    let cost = d
+                        + 12.0 * hidden
+                        + di as f64 * 0.5
+                        + k as f64 * 4.0
+                        + if shared { AMBIGUOUS } else { 0.0 };
                     if best.as_ref().is_none_or(|b| cost < b.0) {
-                        best = Some((cost, b, d));
+                        best = Some((cost, b, if shared { f64::INFINITY } else { d }));
                     }
                 }
             }
@@ -692,6 +766,28 @@ pub fn place_labels(
         }
     }
     out
+}
+
+/// What a box near another point than its own costs the placement, in pixels of distance.
+const AMBIGUOUS: f64 = 40.0;
+
+/// Points closer than this (pixels) are drawn as one: a label of either labels both.
+pub const SAME_POINT: f64 = 4.0;
+
+/// The distance from `p` to the box `b` (zero inside).
+pub fn distance(b: &Rect, p: (f64, f64)) -> f64 {
+    let n = b.nearest(p);
+    (n.0 - p.0).hypot(n.1 - p.1)
+}
+
+/// True if a label in box `b` of the point `own` would be read as labelling another of
+/// `points`: one apart from `own` (by [`SAME_POINT`] or more) that is no farther from the box
+/// than `own` plus two pixels. Such a label needs a leader line.
+pub fn ambiguous(b: &Rect, own: (f64, f64), points: &[(f64, f64)]) -> bool {
+    let d = distance(b, own);
+    points
+        .iter()
+        .any(|&q| (q.0 - own.0).hypot(q.1 - own.1) >= SAME_POINT && distance(b, q) <= d + 2.0)
 }
 
 /// Groups of marks (indices) whose pixel points lie closer than `gap` to another of the
@@ -838,8 +934,12 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             .chain(plot.polygons.iter().flat_map(|p| p.0.iter().copied()))
             .chain(plot.marks.iter().map(|m| m.at))
     };
-    let xr = padded(all().map(|p| p.0));
-    let yr = padded(all().map(|p| p.1).chain(plot.with_zero.then_some(0.0)));
+    let (xr, yr) = plot.ranges.clone().unwrap_or_else(|| {
+        (
+            padded(all().map(|p| p.0)),
+            padded(all().map(|p| p.1).chain(plot.with_zero.then_some(0.0))),
+        )
+    });
     let entries = plot.entries();
     let mut layout = Layout {
         width: plot.size.0,
@@ -859,6 +959,7 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             xr.clone(),
             yr.clone(),
             !plot.caption.is_empty(),
+            plot.log,
         )?;
         let (pxr, pyr) = chart.plotting_area().get_pixel_range();
         let frame = Rect {
@@ -1004,7 +1105,8 @@ fn draw_labels(
             let to = b.nearest(from);
             // From the symbol's edge to the box.
             let len = (to.0 - from.0).hypot(to.1 - from.1).max(1e-9);
-            let s = f64::from(SYMBOL) + 1.0;
+            // (from the point itself when the box is nearer than the symbol's edge)
+            let s = (f64::from(SYMBOL) + 1.0).min(len / 2.0);
             let start = (
                 from.0 + (to.0 - from.0) * s / len,
                 from.1 + (to.1 - from.1) * s / len,
@@ -1031,6 +1133,7 @@ fn draw_labels(
             rect: b,
             leader,
             in_inset: inset,
+            at: from,
         });
     }
     Ok(failed)
@@ -1163,8 +1266,17 @@ fn draw_inset(
         .y_label_area_size(58)
         .build_cartesian_2d(wx.clone(), wy.clone())?;
     let (sx, sy) = (wx.end - wx.start, wy.end - wy.start);
-    let xf = |v: &f64| tick(*v, sx);
-    let yf = |v: &f64| tick(*v, sy);
+    // On a logarithmic axis the inset's window is a fraction of a decade: its ticks give the
+    // quantity's values.
+    let label = |v: f64, span: f64, log: bool| {
+        if log {
+            super::svg::short(10f64.powf(v))
+        } else {
+            tick(v, span)
+        }
+    };
+    let xf = |v: &f64| label(*v, sx, plot.log.0);
+    let yf = |v: &f64| label(*v, sy, plot.log.1);
     chart
         .configure_mesh()
         .x_labels(3)
@@ -1244,6 +1356,33 @@ mod tests {
             }
         }
         assert!(placed.iter().filter(|p| p.unwrap().1).count() >= 1);
+    }
+
+    #[test]
+    fn a_label_nearer_another_point_than_its_own_gets_a_leader() {
+        let frame = Rect::at(0.0, 0.0, 800.0, 600.0);
+        // Three points a few pixels apart in a row, and one far away.
+        let pts = [
+            (400.0, 300.0),
+            (410.0, 300.0),
+            (420.0, 302.0),
+            (100.0, 100.0),
+        ];
+        let sizes = [(110.0, 16.0); 4];
+        let placed = place_labels(&pts, &sizes, frame, &[], &[]);
+        for (k, p) in placed.iter().enumerate() {
+            let (b, leader) = p.unwrap();
+            assert!(
+                leader || !ambiguous(&b, pts[k], &pts),
+                "label {k} at {b:?} reads as another point's"
+            );
+        }
+        // The lone point's label sits next to it.
+        assert!(!placed[3].unwrap().1);
+        // Points closer than SAME_POINT are one: a box beside both is not ambiguous.
+        let b = Rect::at(410.0, 290.0, 50.0, 16.0);
+        assert!(!ambiguous(&b, (400.0, 300.0), &[(401.0, 301.0)]));
+        assert!(ambiguous(&b, (400.0, 300.0), &[(420.0, 300.0)]));
     }
 
     #[test]

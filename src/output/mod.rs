@@ -36,7 +36,7 @@ mod csv;
 mod curve;
 mod deflation;
 mod diagram;
-mod figure;
+pub(crate) mod figure;
 mod json;
 mod lock;
 mod manifest;
@@ -62,7 +62,7 @@ pub use deflation::write_deflation;
 pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,
 };
-pub use figure::{read_layout, Layout, PlacedLabel, Rect};
+pub use figure::{read_layout, Layout, PlacedLabel, QuantityScale, Rect};
 pub use json::{write_critical, write_critical_with, write_json};
 pub use lock::{LockError, RunLock, LOCK};
 pub use manifest::{

@@ -512,9 +512,12 @@ fn diagram(scene: &Scene, report: &PathReport, axes: &(String, String)) -> Diagr
             }
         })
         .collect();
+    let scales = super::Scales::of(scene, report);
+    // The turning points' values read off the control's axis when it is the vertical one.
+    let control_axis = (axes.1 == report.control).then(|| scales.or_name(&report.control));
     let mut markers: Vec<Marker> = Vec::new();
     for t in &report.turning_points {
-        let mut m = Marker::turning(report, t);
+        let mut m = Marker::turning_scaled(report, t, control_axis.as_ref());
         if let Some(k) = report
             .critical
             .iter()
@@ -547,11 +550,16 @@ fn diagram(scene: &Scene, report: &PathReport, axes: &(String, String)) -> Diagr
             switches: true,
         });
     }
-    let scales = super::Scales::of(scene, report);
     let mut d = Diagram::new(&axes.0, &axes.1)
         .markers(markers)
         .scales(scales.or_name(&axes.0), scales.or_name(&axes.1));
     d.turning_points = false;
+    d.quantities = report
+        .parameters
+        .iter()
+        .chain(&report.measures)
+        .map(|q| super::QuantityScale::new(q, &scales.or_name(q)))
+        .collect();
     if axes.0 == "stretch" && axes.1 == report.control {
         if let Some(curve) = super::balloon_closed_form(scene, report) {
             d = d.reference(curve);

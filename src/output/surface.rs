@@ -102,8 +102,12 @@ pub fn write_surface_with(
     if s.vertex_count() == 0 {
         return Err(OutputError::invalid(&vtu, "the surface has no vertices"));
     }
-    let (svg, layout) = render(s, a, m, scales, caption)
+    let (svg, mut layout) = render(s, a, m, scales, caption)
         .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
+    layout.scales = [&s.a, &s.b, &s.measure]
+        .into_iter()
+        .map(|q| figure::QuantityScale::new(q, &scales.or_name(q)))
+        .collect();
     let svg = finish(&svg, &layout);
     write_whole(&vtu, |w| write_vtu(w, s, (a, b, m)))?;
     write_whole(&json, |w| {

@@ -55,6 +55,13 @@ pub struct Marker {
 impl Marker {
     /// The marker of a turning point of the control, labelled like `max p = 1.3551`.
     pub fn turning(report: &PathReport, t: &TurningRow) -> Self {
+        Self::turning_scaled(report, t, None)
+    }
+
+    /// As [`Marker::turning`], the value given in the control's dimensionless group when
+    /// `scale` is its axis (`max ρ ω² R³/(μH) = 3.3461`: the group is the axis title up to
+    /// its list of values), so that the label reads off the axis.
+    pub fn turning_scaled(report: &PathReport, t: &TurningRow, scale: Option<&AxisScale>) -> Self {
         let kind = if t.kind == crate::results::Extremum::Minimum {
             MarkerKind::Minimum
         } else {
@@ -70,9 +77,16 @@ impl Marker {
             .iter()
             .position(|p| *p == report.control)
             .and_then(|i| t.parameters.get(i));
+        let (name, factor) = match scale {
+            Some(s) => (
+                s.label.split(" (").next().unwrap_or(&s.label).to_string(),
+                s.factor,
+            ),
+            None => (report.control.clone(), 1.0),
+        };
         let label = match value {
-            Some(v) => format!("{word} {} = {}", report.control, short(*v)),
-            None => format!("{word} {}", report.control),
+            Some(v) => format!("{word} {name} = {}", short(*v * factor)),
+            None => format!("{word} {name}"),
         };
         Self {
             parameters: t.parameters.clone(),
@@ -167,6 +181,9 @@ pub struct Diagram {
     pub y_scale: Option<AxisScale>,
     /// A reference curve under the path (default none).
     pub reference: Option<ReferenceCurve>,
+    /// The dimensionless groups of the report's other quantities, recorded in the figure's
+    /// layout beside its axes' (default none).
+    pub quantities: Vec<figure::QuantityScale>,
 }
 
 impl Diagram {
@@ -184,6 +201,7 @@ impl Diagram {
             x_scale: None,
             y_scale: None,
             reference: None,
+            quantities: Vec::new(),
         }
     }
 
@@ -349,7 +367,7 @@ pub fn write_diagram_with(
     } else {
         Vec::new()
     };
-    let (svg, layout) = render(
+    let (svg, mut layout) = render(
         report,
         diagram,
         &Drawn {
@@ -361,6 +379,31 @@ pub fn write_diagram_with(
         },
     )
     .map_err(|e| invalid(format!("plotting failed: {e}")))?;
+    let unscaled = |name: &str| AxisScale {
+        label: name.to_string(),
+        factor: 1.0,
+    };
+    layout.scales = vec![
+        figure::QuantityScale::new(
+            &diagram.x,
+            &diagram
+                .x_scale
+                .clone()
+                .unwrap_or_else(|| unscaled(&diagram.x)),
+        ),
+        figure::QuantityScale::new(
+            &diagram.y,
+            &diagram
+                .y_scale
+                .clone()
+                .unwrap_or_else(|| unscaled(&diagram.y)),
+        ),
+    ];
+    for q in &diagram.quantities {
+        if !layout.scales.iter().any(|s| s.quantity == q.quantity) {
+            layout.scales.push(q.clone());
+        }
+    }
     let svg = xml_chars(&finish(&svg, &layout));
     write_whole(&path, |w| w.write_all(svg.as_bytes()))?;
     Ok(path)
@@ -945,6 +988,13 @@ fn render_spectra(
             x1: f64::from(pxr.end),
             y1: f64::from(pyr.end),
         });
+        let crosses: Vec<(f64, f64)> = marks
+            .iter()
+            .map(|m| {
+                let (x, y) = chart.backend_coord(&(m.x, 0.0));
+                (f64::from(x), f64::from(y))
+            })
+            .collect();
         for (m, &(up, start)) in marks.iter().zip(&labels) {
             let (x, y) = chart.backend_coord(&(m.x, 0.0));
             let (len, thick) = figure::text_size(&m.label, SPECTRUM_LABEL);
@@ -954,16 +1004,32 @@ fn render_spectra(
             } else {
                 (y + s, y + s + len)
             };
+            let rect = figure::Rect {
+                x0: x - thick / 2.0,
+                y0,
+                x1: x + thick / 2.0,
+                y1,
+            };
+            // A label stacked over another point's: a leader line from its own cross.
+            let leader = figure::ambiguous(&rect, (x, y), &crosses);
+            if leader {
+                let (from, to) = if up {
+                    (y - 7.0, y - s)
+                } else {
+                    (y + 7.0, y + s)
+                };
+                let px = x.round() as i32;
+                canvas.draw(&PathElement::new(
+                    vec![(px, from.round() as i32), (px, to.round() as i32)],
+                    RGBColor(110, 110, 110).stroke_width(1),
+                ))?;
+            }
             layout.labels.push(figure::PlacedLabel {
                 text: m.label.clone(),
-                rect: figure::Rect {
-                    x0: x - thick / 2.0,
-                    y0,
-                    x1: x + thick / 2.0,
-                    y1,
-                },
-                leader: false,
+                rect,
+                leader,
                 in_inset: false,
+                at: (x, y),
             });
             let c = m.irrep.map_or(BLACK, colour);
             let (transform, offset) = if up {

@@ -1,5 +1,7 @@
 //! Helpers shared by integration tests: reading our SVG output, following a path, and the
-//! bundled balloon's variants with their closed form.
+//! bundled balloon's variants with their closed form; the checks of every figure (`figures`).
+
+pub mod figures;
 
 /// The `<polyline>`s of an SVG: stroke colour and points.
 #[allow(dead_code)]
