@@ -361,11 +361,25 @@ fn the_deflated_cap_between_planes_stays_stable_under_the_relaxed_energy() {
 /// Paper 2's sphere on the plane, gas above a fixed fluid volume V = 2, deflated in p: the
 /// scene with V held and a path down from p = 0.5. `material` is added to `[material]`.
 fn deflated_sphere(material: &str, steps: usize) -> memstab::results::RunResult {
-    let text = std::fs::read_to_string(format!(
+    let scene = deflated_scene(material, steps, None);
+    let mut study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
+    memstab::analysis::run(&mut study, |_, _| {}).unwrap()
+}
+
+/// The scene of [`deflated_sphere`], its `[mesh]` body replaced by `mesh` if given.
+fn deflated_scene(material: &str, steps: usize, mesh: Option<&str>) -> memstab::scene::Scene {
+    let mut text = std::fs::read_to_string(format!(
         "{}/scenes/thesis/paper2_gas_pressure_fold_f8.toml",
         env!("CARGO_MANIFEST_DIR")
     ))
     .unwrap();
+    if let Some(mesh) = mesh {
+        let icosphere = "generator = \"icosphere\"\nradius = 1.0\nfrequency = 8              \
+                         # 1280 triangles, 642 nodes\ndown = \"vertex\"            \
+                         # gravity and the plane keep C5v";
+        assert!(text.contains(icosphere));
+        text = text.replacen(icosphere, mesh, 1);
+    }
     let (body, start) = text.split_once("[analysis]").unwrap();
     let start = &start[start.find("[start]").unwrap()..];
     let body = body
@@ -382,9 +396,66 @@ fn deflated_sphere(material: &str, steps: usize) -> memstab::results::RunResult 
          control = \"p\"\ndirection = \"decrease\"\nsteps = {steps}\n\n{start}"
     );
     assert!(text.contains("start = 2.0") && text.contains(material));
-    let scene = memstab::scene::Scene::from_toml_str(&text, "deflated").unwrap();
-    let mut study = memstab::study::mesh::MeshStudy::build(scene).unwrap();
-    memstab::analysis::run(&mut study, |_, _| {}).unwrap()
+    memstab::scene::Scene::from_toml_str(&text, "deflated").unwrap()
+}
+
+/// The deflated sphere on its meridian (64 elements, wave numbers to 8) under the relaxed
+/// energy: the 3-D mesh's first critical point, just after the onset of wrinkling, is there a
+/// cluster of double bifurcations of high wave number that starts between the last taut
+/// and the first wrinkled path point, the highest wave number first (docs/theory.md §2.9,
+/// "On the meridian"): the wrinkled region, stiff across its wrinkles by ε alone, is made
+/// unstable by the pressure at every short wave; m = 1 (the 3-D mesh's E1) never.
+#[test]
+fn the_deflated_sphere_on_its_meridian_loses_stability_at_short_waves_as_it_wrinkles() {
+    let scene = deflated_scene(
+        "wrinkling = \"relaxed\"",
+        8,
+        Some("generator = \"axisymmetric\"\nshape = \"sphere\"\nradius = 1.0\nelements = 64\nmodes = 8"),
+    );
+    let mut study = memstab::study::build(scene).unwrap();
+    let run = memstab::analysis::run(study.as_mut(), |_, _| {}).unwrap();
+    let r = &run.report;
+    let column = |name: &str| r.measures.iter().position(|n| n == name).unwrap();
+    let (p, area) = (
+        r.parameters.iter().position(|n| n == "p").unwrap(),
+        column("wrinkled_area"),
+    );
+    let onset = r
+        .rows
+        .iter()
+        .position(|row| row.measures[area] > 0.0)
+        .expect("the sphere wrinkles");
+    assert!(onset > 0, "wrinkled from the start");
+    let (taut, wrinkled) = (r.rows[onset - 1].parameters[p], r.rows[onset].parameters[p]);
+    assert!(!r.critical.is_empty());
+    let first = r
+        .critical
+        .iter()
+        .map(|c| c.parameters[p])
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        first < taut && first > wrinkled,
+        "{first} not in ({wrinkled}, {taut})"
+    );
+    // Every point a double bifurcation; those within 0.01 in p of the first are of the
+    // highest wave numbers, the largest of them (8) among them.
+    let m: Vec<usize> = r.wave_numbers.clone();
+    assert_eq!(m.len(), r.critical.len());
+    let cluster: Vec<usize> = r
+        .critical
+        .iter()
+        .zip(&m)
+        .filter(|(c, _)| c.parameters[p] > first - 0.01)
+        .map(|(c, &m)| {
+            assert_eq!(c.multiplicity, 2, "{c:?}");
+            m
+        })
+        .collect();
+    assert!(
+        cluster.contains(&8) && cluster.iter().all(|&m| m >= 5),
+        "{cluster:?}"
+    );
+    assert!(!m.contains(&1), "{m:?}");
 }
 
 /// A critical point in a partly wrinkled state and its value as ε → 0: the deflated sphere
