@@ -77,14 +77,8 @@ impl Layout {
             .iter()
             .map(|t| std::array::from_fn(|a| dof_of[t[a / 3]][a % 3]))
             .collect();
-        let entries = tri_dofs.iter().flat_map(|d| {
-            d.iter().filter(|&&r| r != NONE).flat_map(move |&r| {
-                d.iter()
-                    .filter(|&&c| c != NONE)
-                    .map(move |&c| (r as usize, c as usize))
-            })
-        });
-        let pattern = SymmetricPattern::from_entries(unknowns, entries);
+        // Every pair of unknowns of a triangle, without listing the 81 pairs per triangle.
+        let pattern = SymmetricPattern::from_cliques(unknowns, &tri_dofs, NONE);
         let slot = |r: u32, c: u32| -> u32 {
             if r == NONE || c == NONE {
                 NONE
