@@ -32,6 +32,9 @@ pub struct Layout {
     /// Whether the triangles form a closed surface (every edge in two of them), found once:
     /// every state's validity check asks ([`super::validity::state_defect_of`]).
     closed: bool,
+    /// The nodes on the rim: on an edge that only one triangle has in its direction
+    /// ([`super::validity::edge_summary`]), sorted.
+    rim: Vec<usize>,
 }
 
 /// Held coordinates that move with a parameter Λ_p: node i sits at X_i + (Λ_p − Λ_p⁰) r_i,
@@ -88,6 +91,7 @@ impl Layout {
                     .map_or(NONE, |p| u32::try_from(p).expect("pattern fits u32"))
             }
         };
+        let (closed, rim) = super::validity::edge_summary(&triangles);
         let tri_slots = tri_dofs
             .iter()
             .map(|d| std::array::from_fn(|k| slot(d[k / 9], d[k % 9])))
@@ -97,7 +101,8 @@ impl Layout {
             .map(|d| std::array::from_fn(|k| slot(d[k / 3], d[k % 3])))
             .collect();
         Self {
-            closed: super::validity::is_closed(&triangles),
+            closed,
+            rim,
             triangles,
             dof_of,
             unknowns,
@@ -228,6 +233,11 @@ impl Layout {
     /// Whether the triangles form a closed surface ([`super::validity::is_closed`]).
     pub fn is_closed(&self) -> bool {
         self.closed
+    }
+
+    /// The rim's nodes, sorted: empty for a closed, consistently oriented surface.
+    pub fn rim(&self) -> &[usize] {
+        &self.rim
     }
 
     /// The unknown of coordinate `k` of node `i`, or `None` for a fixed node.
