@@ -382,8 +382,11 @@ impl Evaluation {
             loads: vec![vec![0.0; n]; parameters],
             rank_one: Vec::new(),
             positions: Vec::with_capacity(layout.dof_of.len()),
-            tri_terms: vec![TriangleTerms::default(); layout.triangles.len()],
-            node_terms: vec![NodeTerms::default(); layout.dof_of.len()],
+            // Sized by the first assembly (`add_triangles`, `add_nodes`), for the whole mesh
+            // or the subset: ≈ 1 kB per triangle, not worth holding in an evaluation that is
+            // restricted or never assembled.
+            tri_terms: Vec::new(),
+            node_terms: Vec::new(),
             request: Request::ALL,
             subset: None,
         }
@@ -391,8 +394,8 @@ impl Evaluation {
 
     /// The same buffer, assembling only `subset` from now on.
     pub fn restricted_to(mut self, subset: std::sync::Arc<Subset>) -> Self {
-        self.tri_terms = vec![TriangleTerms::default(); subset.triangles.len()];
-        self.node_terms = vec![NodeTerms::default(); subset.nodes.len()];
+        self.tri_terms = Vec::new();
+        self.node_terms = Vec::new();
         self.subset = Some(subset);
         self
     }
@@ -492,6 +495,8 @@ impl<'a> Assembler<'a> {
         let tris = &self.layout.triangles;
         let ids = self.out.subset.clone();
         let id = |k: usize| ids.as_ref().map_or(k, |s| s.triangles[k]);
+        let count = ids.as_ref().map_or(tris.len(), |s| s.triangles.len());
+        self.out.tri_terms.resize(count, TriangleTerms::default());
         self.out
             .tri_terms
             .par_iter_mut()
@@ -562,6 +567,10 @@ impl<'a> Assembler<'a> {
         const { assert!(N <= LOAD_SLOTS, "at most LOAD_SLOTS load parameters") };
         let ids = self.out.subset.clone();
         let id = |k: usize| ids.as_ref().map_or(k, |s| s.nodes[k]);
+        let count = ids
+            .as_ref()
+            .map_or(self.layout.dof_of.len(), |s| s.nodes.len());
+        self.out.node_terms.resize(count, NodeTerms::default());
         self.out
             .node_terms
             .par_iter_mut()
