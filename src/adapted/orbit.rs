@@ -91,11 +91,11 @@ impl OrbitFrame {
         }
         let mut node_of = vec![(0, 0); layout.unknowns()];
         let mut dofs = vec![[u32::MAX; 3]; nodes];
-        for i in 0..nodes {
-            for k in 0..3 {
+        for (i, node_dofs) in dofs.iter_mut().enumerate() {
+            for (k, slot) in node_dofs.iter_mut().enumerate() {
                 if let Some(d) = layout.dof(i, k) {
                     node_of[d] = (i as u32, k as u8);
-                    dofs[i][k] = d as u32;
+                    *slot = d as u32;
                 }
             }
         }
@@ -226,7 +226,7 @@ impl Seeds {
         let images = &frame.images[frame.orbit_of[i0] as usize * frame.order..][..frame.order];
         let s = &self.seeds[e * d..(e + 1) * d];
         let mut at: Vec<(usize, Vector3<f64>)> = Vec::new();
-        for g in 0..self.frame.order {
+        for (g, &image) in images.iter().enumerate() {
             let dm = self.dmat(g);
             let mut v = Vector3::zeros();
             for (b, sb) in s.iter().enumerate() {
@@ -235,7 +235,7 @@ impl Seeds {
             if v == Vector3::zeros() {
                 continue;
             }
-            let j = images[g] as usize;
+            let j = image as usize;
             let w = frame.rotations[g] * v * coef;
             match at.iter_mut().find(|(n, _)| *n == j) {
                 Some((_, x)) => *x += w,
