@@ -76,12 +76,7 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
     let all: Vec<DMatrix<f64>> = basis
         .irreps
         .iter()
-        .flat_map(|b| {
-            b.partners(action, layout)
-                .iter()
-                .map(dense)
-                .collect::<Vec<_>>()
-        })
+        .flat_map(|b| b.partners(layout).iter().map(dense).collect::<Vec<_>>())
         .collect();
     let q = DMatrix::from_columns(
         &all.iter()

@@ -176,3 +176,57 @@ fn archimedes_on_a_sphere_converges_at_second_order() {
     assert!(errs[1] < 5e-3, "{errs:?}");
     assert!((1.7..2.3).contains(&rate), "rate {rate}, errors {errs:?}");
 }
+
+/// An evaluation restricted to the triangles around a few nodes gives the residual and the
+/// tangent's columns at those nodes as the whole mesh's evaluation does, from one state to
+/// the next (it clears only the slots it writes), and no value in the columns of the nodes
+/// outside its triangles.
+#[test]
+fn a_restricted_evaluation_is_exact_at_its_nodes_from_state_to_state() {
+    use memstab::model::Subset;
+    let m = sphere(3);
+    let model = FeModel::new(
+        m.nodes.clone(),
+        m.triangles.clone(),
+        &[],
+        vec![membrane(&m, 1.0)],
+        vec![],
+    );
+    let layout = model.layout();
+    let nodes = [0usize, 5, 17, 40];
+    let subset = std::sync::Arc::new(Subset::around(layout, &nodes));
+    let touched: std::collections::HashSet<usize> = subset
+        .triangles()
+        .iter()
+        .flat_map(|&t| layout.triangles()[t])
+        .collect();
+    let mut part = model.new_evaluation().restricted_to(subset);
+    let mut whole = model.new_evaluation();
+    let (col_ptr, n) = (layout.pattern().col_ptr(), model.unknowns());
+    for (seed, stretch) in [(1u64, 1.2), (2, 1.5), (3, 1.1)] {
+        let mut u = random_vector(seed, n, 0.03);
+        for (i, x) in model.reference().iter().enumerate() {
+            for c in 0..3 {
+                u[layout.dof(i, c).unwrap()] += (stretch - 1.0) * x[c];
+            }
+        }
+        model.evaluate(&u, &[], Request::ALL, &mut whole).unwrap();
+        model.evaluate(&u, &[], Request::ALL, &mut part).unwrap();
+        let scale = whole.tangent.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for i in 0..m.nodes.len() {
+            for c in 0..3 {
+                let d = layout.dof(i, c).unwrap();
+                let column = col_ptr[d]..col_ptr[d + 1];
+                if nodes.contains(&i) {
+                    assert!((part.residual[d] - whole.residual[d]).abs() <= 1e-13 * scale);
+                    for p in column {
+                        let (a, b) = (part.tangent[p], whole.tangent[p]);
+                        assert!((a - b).abs() <= 1e-13 * scale, "seed {seed}: {a} vs {b}");
+                    }
+                } else if !touched.contains(&i) {
+                    assert!(column.clone().all(|p| part.tangent[p] == 0.0), "node {i}");
+                }
+            }
+        }
+    }
+}

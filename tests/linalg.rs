@@ -252,6 +252,43 @@ fn pattern_merges_duplicates_closes_symmetry_and_has_the_diagonal() {
 }
 
 #[test]
+fn pattern_of_cliques_is_the_pattern_of_their_pairs() {
+    // Triangles of a strip with three unknowns per node, some held (u32::MAX), and a
+    // repeated clique: the pattern equals that of every pair within every clique.
+    const NONE: u32 = u32::MAX;
+    let mut rng = Rng(11);
+    let n = 40;
+    let cliques: Vec<[u32; 6]> = (0..60)
+        .map(|_| {
+            std::array::from_fn(|_| {
+                let k = (rng.next_u64() % (n as u64 + 6)) as u32;
+                if k >= n as u32 {
+                    NONE
+                } else {
+                    k
+                }
+            })
+        })
+        .chain([[0, 1, 2, NONE, 1, 0], [0, 1, 2, NONE, 1, 0]])
+        .collect();
+    let pairs = cliques.iter().flat_map(|c| {
+        c.iter().filter(|&&i| i != NONE).flat_map(move |&i| {
+            c.iter()
+                .filter(|&&j| j != NONE)
+                .map(move |&j| (i as usize, j as usize))
+        })
+    });
+    let by_pairs = SymmetricPattern::from_entries(n, pairs);
+    let by_cliques = SymmetricPattern::from_cliques(n, &cliques, NONE);
+    assert_eq!(by_cliques.col_ptr(), by_pairs.col_ptr());
+    assert_eq!(by_cliques.row_idx(), by_pairs.row_idx());
+    // An index alone in no clique still has its diagonal.
+    let lonely = SymmetricPattern::from_cliques(3, &[[0u32, 1]], NONE);
+    assert_eq!(lonely.col_ptr(), &[0, 2, 4, 5]);
+    assert_eq!(lonely.row_idx(), &[0, 1, 0, 1, 2]);
+}
+
+#[test]
 fn matvec_matches_dense() {
     let mut rng = Rng(7);
     let a = fe_like(5, 2, &mut rng);

@@ -77,9 +77,10 @@ impl Mesh {
 
     /// The shortest edge length.
     pub fn min_edge(&self) -> f64 {
-        self.edges()
-            .keys()
-            .map(|&(a, b)| (self.nodes[a] - self.nodes[b]).norm())
+        self.triangles
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+            .map(|(a, b)| (self.nodes[a] - self.nodes[b]).norm())
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -113,19 +114,37 @@ impl Mesh {
             / 6.0
     }
 
-    /// Undirected edges `(min, max)` with the triangles that use them, each with the
-    /// direction it runs in that triangle (true if from min to max).
-    pub(crate) fn edges(&self) -> HashMap<(usize, usize), Vec<(usize, bool)>> {
-        let mut edges: HashMap<(usize, usize), Vec<(usize, bool)>> = HashMap::new();
-        for (t, tri) in self.triangles.iter().enumerate() {
-            for k in 0..3 {
-                let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                edges
-                    .entry((a.min(b), a.max(b)))
-                    .or_default()
-                    .push((t, a < b));
+    /// Undirected edges `(min, max)`, sorted, with the triangles that use them, each with the
+    /// direction it runs in that triangle (true if from min to max); from one sort of the
+    /// triangles' edges.
+    pub(crate) fn edges(&self) -> Edges {
+        let mut all: Vec<(usize, usize, usize, bool)> = self
+            .triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(t, tri)| {
+                (0..3).map(move |k| {
+                    let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                    (a.min(b), a.max(b), t, a < b)
+                })
+            })
+            .collect();
+        all.sort_unstable();
+        let mut edges = Edges {
+            keys: Vec::new(),
+            start: vec![0],
+            uses: Vec::with_capacity(all.len()),
+        };
+        for (a, b, t, dir) in all {
+            if edges.keys.last() != Some(&(a, b)) {
+                if !edges.keys.is_empty() {
+                    edges.start.push(edges.uses.len());
+                }
+                edges.keys.push((a, b));
             }
+            edges.uses.push((t, dir));
         }
+        edges.start.push(edges.uses.len());
         edges
     }
 
@@ -135,8 +154,8 @@ impl Mesh {
         let bad = |m: String| Err(MeshError::Topology(m));
         let edges = self.edges();
         let mut boundary_next: HashMap<usize, usize> = HashMap::new();
-        for (&(a, b), uses) in &edges {
-            match uses.as_slice() {
+        for ((a, b), uses) in edges.iter() {
+            match uses {
                 [(t, dir)] => {
                     // Boundary edge, oriented as in its triangle.
                     let (from, to) = if *dir { (a, b) } else { (b, a) };
@@ -172,8 +191,8 @@ impl Mesh {
         for _ in 0..self.triangles.len() {
             graph.add_node(());
         }
-        for uses in edges.values() {
-            if let [(t1, _), (t2, _)] = uses.as_slice() {
+        for (_, uses) in edges.iter() {
+            if let [(t1, _), (t2, _)] = uses {
                 graph.add_edge((*t1 as u32).into(), (*t2 as u32).into(), ());
             }
         }
@@ -214,10 +233,7 @@ impl Mesh {
         })
     }
 
-    fn check_vertex_fans(
-        &self,
-        edges: &HashMap<(usize, usize), Vec<(usize, bool)>>,
-    ) -> Result<(), MeshError> {
+    fn check_vertex_fans(&self, edges: &Edges) -> Result<(), MeshError> {
         // Around node v, triangles sharing an edge through v are adjacent; they must form a
         // single connected fan.
         let mut around: Vec<Vec<usize>> = vec![Vec::new(); self.nodes.len()];
@@ -235,8 +251,8 @@ impl Mesh {
             i
         }
         let mut link_edges: Vec<Vec<(usize, usize)>> = vec![Vec::new(); self.nodes.len()];
-        for (&(a, b), uses) in edges {
-            if let [(t1, _), (t2, _)] = uses.as_slice() {
+        for ((a, b), uses) in edges.iter() {
+            if let [(t1, _), (t2, _)] = uses {
                 link_edges[a].push((*t1, *t2));
                 link_edges[b].push((*t1, *t2));
             }
@@ -257,5 +273,28 @@ impl Mesh {
             }
         }
         Ok(())
+    }
+}
+
+/// The undirected edges of a mesh ([`Mesh::edges`]): the keys `(min, max)` sorted, and the
+/// uses of edge e — (triangle, runs from min to max) — at `uses[start[e]..start[e + 1]]`.
+pub(crate) struct Edges {
+    keys: Vec<(usize, usize)>,
+    start: Vec<usize>,
+    uses: Vec<(usize, bool)>,
+}
+
+impl Edges {
+    /// The number of edges.
+    pub(crate) fn len(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// Every edge with its uses.
+    pub(crate) fn iter(&self) -> impl Iterator<Item = ((usize, usize), &[(usize, bool)])> {
+        self.keys
+            .iter()
+            .enumerate()
+            .map(|(e, &k)| (k, &self.uses[self.start[e]..self.start[e + 1]]))
     }
 }

@@ -7,7 +7,6 @@ use crate::linalg::SymmetricPattern;
 use crate::model::Layout;
 use meshes::GroupAction;
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
-use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -26,6 +25,11 @@ pub(super) struct OrbitFrame {
     /// list: `to_rep[to_rep_ptr[j]..to_rep_ptr[j + 1]]` (|H| elements per node).
     pub(super) to_rep_ptr: Vec<u32>,
     pub(super) to_rep: Vec<u16>,
+    /// For orbit o, the images π_g(i₀) of its representative i₀ (its smallest node):
+    /// `images[o * order + g]`.
+    pub(super) images: Vec<u32>,
+    /// For each node, its unknowns (`u32::MAX` where it has none).
+    pub(super) dofs: Vec<[u32; 3]>,
 }
 
 impl OrbitFrame {
@@ -86,13 +90,19 @@ impl OrbitFrame {
             to_rep_ptr[j + 1] = to_rep.len() as u32;
         }
         let mut node_of = vec![(0, 0); layout.unknowns()];
-        for i in 0..nodes {
-            for k in 0..3 {
+        let mut dofs = vec![[u32::MAX; 3]; nodes];
+        for (i, node_dofs) in dofs.iter_mut().enumerate() {
+            for (k, slot) in node_dofs.iter_mut().enumerate() {
                 if let Some(d) = layout.dof(i, k) {
                     node_of[d] = (i as u32, k as u8);
+                    *slot = d as u32;
                 }
             }
         }
+        let images = orbits
+            .iter()
+            .flat_map(|orbit| (0..group.order()).map(|g| action.node_perm(g)[orbit[0]] as u32))
+            .collect();
         Self {
             order: group.order(),
             rotations: group.elements().to_vec(),
@@ -100,6 +110,8 @@ impl OrbitFrame {
             orbit_of,
             to_rep_ptr,
             to_rep,
+            images,
+            dofs,
         }
     }
 
@@ -206,19 +218,15 @@ impl Seeds {
     }
 
     /// Partner a of column e, Σ_b P_{ab} s_{e,b}, summed over the whole group.
-    pub(super) fn column(
-        &self,
-        action: &GroupAction,
-        layout: &Layout,
-        e: usize,
-        a: usize,
-    ) -> Vec<(usize, f64)> {
+    pub(super) fn column(&self, e: usize, a: usize) -> Vec<(usize, f64)> {
         let d = self.d;
-        let coef = d as f64 / self.frame.order as f64;
+        let frame = &*self.frame;
+        let coef = d as f64 / frame.order as f64;
         let i0 = self.rep[e] as usize;
+        let images = &frame.images[frame.orbit_of[i0] as usize * frame.order..][..frame.order];
         let s = &self.seeds[e * d..(e + 1) * d];
         let mut at: Vec<(usize, Vector3<f64>)> = Vec::new();
-        for g in 0..self.frame.order {
+        for (g, &image) in images.iter().enumerate() {
             let dm = self.dmat(g);
             let mut v = Vector3::zeros();
             for (b, sb) in s.iter().enumerate() {
@@ -227,8 +235,8 @@ impl Seeds {
             if v == Vector3::zeros() {
                 continue;
             }
-            let j = action.node_perm(g)[i0];
-            let w = self.frame.rotations[g] * v * coef;
+            let j = image as usize;
+            let w = frame.rotations[g] * v * coef;
             match at.iter_mut().find(|(n, _)| *n == j) {
                 Some((_, x)) => *x += w,
                 None => at.push((j, w)),
@@ -238,7 +246,9 @@ impl Seeds {
         for (j, w) in at {
             for k in 0..3 {
                 if w[k].abs() > 1e-15 {
-                    col.push((layout.dof(j, k).expect("free orbit"), w[k]));
+                    let dof = frame.dofs[j][k];
+                    assert!(dof != u32::MAX, "a free orbit has unknowns");
+                    col.push((dof as usize, w[k]));
                 }
             }
         }
@@ -350,9 +360,5 @@ pub(super) fn orbit_basis(
         }
         seeds.by_orbit.push(start..seeds.rep.len() as u32);
     }
-    let columns = (0..seeds.rep.len())
-        .into_par_iter()
-        .map(|e| seeds.column(action, layout, e, 0))
-        .collect();
-    SparseBasis::with_seeds(layout.unknowns(), columns, seeds)
+    SparseBasis::with_seeds(layout.unknowns(), seeds)
 }

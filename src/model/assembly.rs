@@ -32,6 +32,9 @@ pub struct Layout {
     /// Whether the triangles form a closed surface (every edge in two of them), found once:
     /// every state's validity check asks ([`super::validity::state_defect_of`]).
     closed: bool,
+    /// The nodes on the rim: on an edge that only one triangle has in its direction
+    /// ([`super::validity::edge_summary`]), sorted.
+    rim: Vec<usize>,
 }
 
 /// Held coordinates that move with a parameter Λ_p: node i sits at X_i + (Λ_p − Λ_p⁰) r_i,
@@ -77,14 +80,8 @@ impl Layout {
             .iter()
             .map(|t| std::array::from_fn(|a| dof_of[t[a / 3]][a % 3]))
             .collect();
-        let entries = tri_dofs.iter().flat_map(|d| {
-            d.iter().filter(|&&r| r != NONE).flat_map(move |&r| {
-                d.iter()
-                    .filter(|&&c| c != NONE)
-                    .map(move |&c| (r as usize, c as usize))
-            })
-        });
-        let pattern = SymmetricPattern::from_entries(unknowns, entries);
+        // Every pair of unknowns of a triangle, without listing the 81 pairs per triangle.
+        let pattern = SymmetricPattern::from_cliques(unknowns, &tri_dofs, NONE);
         let slot = |r: u32, c: u32| -> u32 {
             if r == NONE || c == NONE {
                 NONE
@@ -94,6 +91,7 @@ impl Layout {
                     .map_or(NONE, |p| u32::try_from(p).expect("pattern fits u32"))
             }
         };
+        let (closed, rim) = super::validity::edge_summary(&triangles);
         let tri_slots = tri_dofs
             .iter()
             .map(|d| std::array::from_fn(|k| slot(d[k / 9], d[k % 9])))
@@ -103,7 +101,8 @@ impl Layout {
             .map(|d| std::array::from_fn(|k| slot(d[k / 3], d[k % 3])))
             .collect();
         Self {
-            closed: super::validity::is_closed(&triangles),
+            closed,
+            rim,
             triangles,
             dof_of,
             unknowns,
@@ -236,6 +235,11 @@ impl Layout {
         self.closed
     }
 
+    /// The rim's nodes, sorted: empty for a closed, consistently oriented surface.
+    pub fn rim(&self) -> &[usize] {
+        &self.rim
+    }
+
     /// The unknown of coordinate `k` of node `i`, or `None` for a fixed node.
     pub fn dof(&self, node: usize, k: usize) -> Option<usize> {
         let d = self.dof_of[node][k];
@@ -335,10 +339,15 @@ pub struct Evaluation {
 /// an effect computes itself (the enclosed volume of a gas amount, its rank-one gradient)
 /// stay complete. At a symmetric state the orbit representatives are all the symmetric
 /// solver needs (see [`crate::adapted`]), about 1/|G| of the mesh.
+///
+/// Such an evaluation writes only the tangent's slots of its triangles and nodes; the others
+/// stay zero, so it clears and checks only those (≈ 1/|G| of K's values, 83 MB at f = 128).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Subset {
     triangles: Vec<usize>,
     nodes: Vec<usize>,
+    /// The tangent slots its triangles and nodes write, sorted.
+    slots: Vec<u32>,
 }
 
 impl Subset {
@@ -348,13 +357,25 @@ impl Subset {
         for &i in nodes {
             mark[i] = true;
         }
-        let triangles = (0..layout.triangles.len())
+        let triangles: Vec<usize> = (0..layout.triangles.len())
             .filter(|&t| layout.triangles[t].iter().any(|&i| mark[i]))
             .collect();
         let mut nodes = nodes.to_vec();
         nodes.sort_unstable();
         nodes.dedup();
-        Self { triangles, nodes }
+        let mut slots: Vec<u32> = triangles
+            .iter()
+            .flat_map(|&t: &usize| layout.tri_slots[t])
+            .chain(nodes.iter().flat_map(|&i| layout.node_slots[i]))
+            .filter(|&k| k != NONE)
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
+        Self {
+            triangles,
+            nodes,
+            slots,
+        }
     }
 
     /// The triangles assembled.
@@ -378,8 +399,11 @@ impl Evaluation {
             loads: vec![vec![0.0; n]; parameters],
             rank_one: Vec::new(),
             positions: Vec::with_capacity(layout.dof_of.len()),
-            tri_terms: vec![TriangleTerms::default(); layout.triangles.len()],
-            node_terms: vec![NodeTerms::default(); layout.dof_of.len()],
+            // Sized by the first assembly (`add_triangles`, `add_nodes`), for the whole mesh
+            // or the subset: ≈ 1 kB per triangle, not worth holding in an evaluation that is
+            // restricted or never assembled.
+            tri_terms: Vec::new(),
+            node_terms: Vec::new(),
             request: Request::ALL,
             subset: None,
         }
@@ -387,8 +411,10 @@ impl Evaluation {
 
     /// The same buffer, assembling only `subset` from now on.
     pub fn restricted_to(mut self, subset: std::sync::Arc<Subset>) -> Self {
-        self.tri_terms = vec![TriangleTerms::default(); subset.triangles.len()];
-        self.node_terms = vec![NodeTerms::default(); subset.nodes.len()];
+        self.tri_terms = Vec::new();
+        self.node_terms = Vec::new();
+        // Zero outside the subset's slots from now on (fresh, so its pages stay unwritten).
+        self.tangent = vec![0.0; self.tangent.len()];
         self.subset = Some(subset);
         self
     }
@@ -403,7 +429,13 @@ impl Evaluation {
         self.energy = 0.0;
         self.residual.fill(0.0);
         if request.tangent {
-            self.tangent.fill(0.0);
+            match &self.subset {
+                Some(subset) => subset
+                    .slots
+                    .iter()
+                    .for_each(|&k| self.tangent[k as usize] = 0.0),
+                None => self.tangent.fill(0.0),
+            }
             self.rank_one.clear();
         }
         if request.loads {
@@ -424,7 +456,14 @@ impl Evaluation {
         if !self.residual.iter().all(|v| v.is_finite()) {
             return bad("residual");
         }
-        if self.request.tangent && !self.tangent.iter().all(|v| v.is_finite()) {
+        let tangent_finite = || match &self.subset {
+            Some(subset) => subset
+                .slots
+                .iter()
+                .all(|&k| self.tangent[k as usize].is_finite()),
+            None => self.tangent.iter().all(|v| v.is_finite()),
+        };
+        if self.request.tangent && !tangent_finite() {
             return bad("tangent");
         }
         if self.request.loads && !self.loads.iter().flatten().all(|v| v.is_finite()) {
@@ -488,6 +527,8 @@ impl<'a> Assembler<'a> {
         let tris = &self.layout.triangles;
         let ids = self.out.subset.clone();
         let id = |k: usize| ids.as_ref().map_or(k, |s| s.triangles[k]);
+        let count = ids.as_ref().map_or(tris.len(), |s| s.triangles.len());
+        self.out.tri_terms.resize(count, TriangleTerms::default());
         self.out
             .tri_terms
             .par_iter_mut()
@@ -558,6 +599,10 @@ impl<'a> Assembler<'a> {
         const { assert!(N <= LOAD_SLOTS, "at most LOAD_SLOTS load parameters") };
         let ids = self.out.subset.clone();
         let id = |k: usize| ids.as_ref().map_or(k, |s| s.nodes[k]);
+        let count = ids
+            .as_ref()
+            .map_or(self.layout.dof_of.len(), |s| s.nodes.len());
+        self.out.node_terms.resize(count, NodeTerms::default());
         self.out
             .node_terms
             .par_iter_mut()

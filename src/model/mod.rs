@@ -556,19 +556,7 @@ impl FeModel {
         let Some((c, r)) = sphere_through(&self.reference) else {
             return Vec::new();
         };
-        let directed: std::collections::HashSet<(usize, usize)> = self
-            .layout
-            .triangles()
-            .iter()
-            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-            .collect();
-        let mut rim: Vec<usize> = directed
-            .iter()
-            .filter(|&&(a, b)| !directed.contains(&(b, a)))
-            .map(|&(a, _)| a)
-            .collect();
-        rim.sort_unstable();
-        rim.dedup();
+        let rim = self.layout.rim();
         let axes: Vec<Vec3> = if rim.is_empty() {
             (0..3).map(|k| Vec3::ith(k, 1.0)).collect()
         } else {

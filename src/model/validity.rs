@@ -66,6 +66,40 @@ pub fn principal_stretches(r: [Vec3; 3], x: [Vec3; 3]) -> (f64, f64) {
     (big.max(0.0).sqrt(), small.max(0.0).sqrt())
 }
 
+/// The edges of `triangles` at once: whether every edge is shared by exactly two of them
+/// ([`is_closed`]), and the rim — the nodes a on a directed edge (a, b) of some triangle
+/// whose reverse (b, a) is no triangle's edge, sorted — from one sort of the directed edges
+/// (no hashing: the answer of a mesh's every state check and of its relabellings).
+pub fn edge_summary(triangles: &[[usize; 3]]) -> (bool, Vec<usize>) {
+    let key = |a: usize, b: usize| ((a as u128) << 64) | b as u128;
+    let mut directed: Vec<u128> = triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
+        .collect();
+    directed.sort_unstable();
+    let count = |k: u128| {
+        let lo = directed.partition_point(|&x| x < k);
+        directed[lo..].iter().take_while(|&&x| x == k).count()
+    };
+    let mut closed = !triangles.is_empty();
+    let mut rim = Vec::new();
+    let mut k = 0;
+    while k < directed.len() {
+        let here = directed[k];
+        let run = directed[k..].iter().take_while(|&&x| x == here).count();
+        let (a, b) = ((here >> 64) as usize, here as u64 as usize);
+        let reverse = count(key(b, a));
+        if reverse == 0 {
+            rim.push(a);
+        }
+        closed &= run + reverse == 2;
+        k += run;
+    }
+    rim.sort_unstable();
+    rim.dedup();
+    (closed, rim)
+}
+
 /// Whether every edge of `triangles` is shared by exactly two of them.
 pub fn is_closed(triangles: &[[usize; 3]]) -> bool {
     let mut count: HashMap<(usize, usize), u32> = HashMap::with_capacity(3 * triangles.len());
@@ -182,6 +216,12 @@ mod tests {
     fn a_scaled_state_is_accepted_until_its_stretch_leaves_the_range() {
         let (x, t) = tetrahedron();
         assert!(is_closed(&t) && !is_closed(&t[..3]));
+        assert_eq!(edge_summary(&t), (true, vec![]));
+        // Without the fourth face, its three nodes are the rim.
+        let mut missing = t[3].to_vec();
+        missing.sort_unstable();
+        assert_eq!(edge_summary(&t[..3]), (false, missing));
+        assert_eq!(edge_summary(&[]), (false, vec![]));
         let scaled = |f: f64| x.iter().map(|p| p * f).collect::<Vec<_>>();
         assert_eq!(state_defect(&x, &t, &scaled(1.0)), None);
         assert_eq!(state_defect(&x, &t, &scaled(0.9 * STRETCH_MAX)), None);

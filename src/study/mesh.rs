@@ -151,17 +151,19 @@ impl MeshStudy {
         )?;
         let mut mesh = scene.build_mesh()?;
         let mut warnings = scene.mesh_warnings(&mesh);
-        if orient_up(&mut mesh.mesh) {
+        let unusable =
+            |e: meshes::MeshError| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene)));
+        let mut topology = mesh.mesh.topology().map_err(unusable)?;
+        if orient_up(&mut mesh.mesh, topology.closed) {
             warnings.push(format!(
                 "{}: the triangles' normals pointed down (−z); they were turned to point up, so that fluid 'below' is under the membrane and 'above' on it",
                 mesh_key(&scene)
             ));
+            // Its boundary loops now run the other way round.
+            topology = mesh.mesh.topology().map_err(unusable)?;
         }
         let m = &mesh.mesh;
         let parameters: Vec<String> = scene.parameters.keys().cloned().collect();
-        let topology = m
-            .topology()
-            .map_err(|e| StudyError::Unsupported(format!("{}: {e}", mesh_key(&scene))))?;
         let closed = topology.closed;
         let fixed = scene.fixed_nodes(&mesh);
         let sliding: Vec<(usize, Vec3)> = scene
@@ -1079,9 +1081,10 @@ impl Study for MeshStudy {
 /// Turns an open mesh whose normals point down on the whole (a negative projected area
 /// Σ_T A_T·ẑ, which only its boundary determines) to point up — the orientation in which
 /// fluid "below" and "above" and the closing plate are defined; true if it did. A closed mesh
-/// (outward by construction) and one whose boundary projects to no area are left as they are.
-fn orient_up(m: &mut meshes::Mesh) -> bool {
-    if m.topology().is_ok_and(|t| t.closed) {
+/// (outward by construction; `closed`, from its topology) and one whose boundary projects to
+/// no area are left as they are.
+fn orient_up(m: &mut meshes::Mesh, closed: bool) -> bool {
+    if closed {
         return false;
     }
     let projected: f64 = (0..m.triangles.len()).map(|t| m.area_vector(t).z).sum();
