@@ -100,12 +100,7 @@ impl MeridianTest {
         let mut grad = DVector::zeros(u.len());
         let mut shifted = u.to_vec();
         for i in 0..u.len() {
-            shifted[i] = u[i] + h;
-            let plus = self.quadratic(&shifted, params, v)?;
-            shifted[i] = u[i] - h;
-            let minus = self.quadratic(&shifted, params, v)?;
-            shifted[i] = u[i];
-            grad[i] = -(plus - minus) / (2.0 * h);
+            grad[i] = -central(&mut shifted, i, h, |q| self.quadratic(q, params, v))?;
         }
         Ok(grad)
     }
@@ -167,12 +162,12 @@ impl MeridianTest {
                 grad[k] = -(first..=last).map(|e| plus[e] - minus[e]).sum::<f64>() / (2.0 * h);
             }
         }
-        let values = self
-            .model
-            .block_values(&self.layout, u, params)
-            .map_err(err)?;
         if self.layout.border > 0 {
             // The elements' largest entry, as `set_border` takes it.
+            let values = self
+                .model
+                .block_values(&self.layout, u, params)
+                .map_err(err)?;
             let kept = self.layout.kept;
             let mut scale = 0.0f64;
             for j in 0..kept {
@@ -183,17 +178,17 @@ impl MeridianTest {
                 }
             }
             let scale = scale.max(1e-300);
+            let border = |q: &[f64]| {
+                Ok::<_, ModelError>(self.model.border_quadratic(
+                    &self.layout,
+                    q,
+                    params,
+                    scale,
+                    &weights,
+                ))
+            };
             for k in 0..u.len() {
-                shifted[k] = u[k] + h;
-                let plus =
-                    self.model
-                        .border_quadratic(&self.layout, &shifted, params, scale, &weights);
-                shifted[k] = u[k] - h;
-                let minus =
-                    self.model
-                        .border_quadratic(&self.layout, &shifted, params, scale, &weights);
-                shifted[k] = u[k];
-                grad[k] -= (plus - minus) / (2.0 * h);
+                grad[k] -= central(&mut shifted, k, h, border)?;
             }
         }
         Ok(grad)
@@ -213,12 +208,7 @@ impl CriticalTest for MeridianTest {
         let mut p = params.to_vec();
         for j in 0..params.len() {
             let h = DIFFERENCE_STEP * params[j].abs().max(1.0);
-            p[j] = params[j] + h;
-            let plus = self.quadratic(u, &p, &vector)?;
-            p[j] = params[j] - h;
-            let minus = self.quadratic(u, &p, &vector)?;
-            p[j] = params[j];
-            grad_params[j] = -(plus - minus) / (2.0 * h);
+            grad_params[j] = -central(&mut p, j, h, |p| self.quadratic(u, p, &vector))?;
         }
         Ok(TestValue {
             sigma,
@@ -244,6 +234,22 @@ impl CriticalTest for MeridianTest {
     ) -> Result<(DMatrix<f64>, f64), ModelError> {
         self.matrix(u, params)
     }
+}
+
+/// The central difference (f(x + h e_i) − f(x − h e_i)) / 2h, x left as it was.
+fn central(
+    x: &mut [f64],
+    i: usize,
+    h: f64,
+    mut f: impl FnMut(&[f64]) -> Result<f64, ModelError>,
+) -> Result<f64, ModelError> {
+    let x0 = x[i];
+    x[i] = x0 + h;
+    let plus = f(x);
+    x[i] = x0 - h;
+    let minus = f(x);
+    x[i] = x0;
+    Ok((plus? - minus?) / (2.0 * h))
 }
 
 #[cfg(test)]

@@ -326,6 +326,14 @@ fn status(p: &Series) -> String {
     }
 }
 
+/// A continuum value's own error (` +-e`, or nothing) and the finest level's distance from
+/// it, printed.
+fn continuum_parts(error: Option<f64>, distances: &[Option<f64>]) -> (String, Option<String>) {
+    let e = error.map_or_else(String::new, |e| format!(" +-{}", sci(e)));
+    let d = distances.iter().rev().flatten().next().map(|d| sci(*d));
+    (e, d)
+}
+
 /// The critical and turning points (and a critical curve's events) on the refined meshes:
 /// each level's value, error estimate and wall time, the observed order and the Richardson
 /// value (or why there is none), the continuum's value and distance.
@@ -356,18 +364,8 @@ pub fn summary(r: &Refinement) -> Vec<String> {
         lines.push(format!("  {title}{m}{}", status(&p.series)));
         let mut series = series_lines(r, &r.control, &p.series, "    ");
         if let Some(c) = p.continuum {
-            let e = p
-                .continuum_error
-                .map_or_else(String::new, |e| format!(" +-{}", sci(e)));
-            let d = p
-                .distances
-                .iter()
-                .rev()
-                .flatten()
-                .next()
-                .map_or_else(String::new, |d| {
-                    format!(", distance of the finest {}", sci(*d))
-                });
+            let (e, d) = continuum_parts(p.continuum_error, &p.distances);
+            let d = d.map_or_else(String::new, |d| format!(", distance of the finest {d}"));
             let text = format!("continuum {}{e}{d}", sig_digits(c, 8));
             // After the estimate's line, or alone.
             match series.last_mut() {
@@ -417,16 +415,8 @@ pub fn summary(r: &Refinement) -> Vec<String> {
         }
         if let Some(c) = &e.continuum {
             let text = |name: &str, v: &ContinuumValue| {
-                let err = v
-                    .error
-                    .map_or_else(String::new, |e| format!(" +-{}", sci(e)));
-                let d = v
-                    .distances
-                    .iter()
-                    .rev()
-                    .flatten()
-                    .next()
-                    .map_or_else(String::new, |d| format!(" (finest level {})", sci(*d)));
+                let (err, d) = continuum_parts(v.error, &v.distances);
+                let d = d.map_or_else(String::new, |d| format!(" (finest level {d})"));
                 format!("{name} = {}{err}{d}", sig_digits(v.value, 8))
             };
             lines.push(format!(
