@@ -1523,22 +1523,30 @@ pub(super) mod tests {
         let mat = MooneyRivlin::new(1.0, 0.2, 0.1);
         let lam = 1.05;
         let model = AxisymModel::new(Meridian::sphere(1.0, 16, lam, mat).unwrap(), Vec::new());
-        // About the first pole, whose height a closed meridian holds.
-        let z0 = model.meridian.nodes[0][1];
-        let scaled = |c: f64, b: f64| {
-            let x: Vec<[f64; 2]> = model
-                .meridian
-                .nodes
-                .iter()
-                .map(|p| [c * p[0], z0 + b * c * (p[1] - z0)])
-                .collect();
-            model.displacement_of(&x)
-        };
+        let scaled = |c: f64, b: f64| scaled_about_the_pole(&model, c, b, 0.0);
         let n = model.meridian.elements();
         assert_eq!(model.wrinkled_elements(&scaled(0.99 / lam, 1.0)), n);
         assert_eq!(model.wrinkled_elements(&scaled(1.01 / lam, 1.0)), 0);
         let flat = model.wrinkled_elements(&scaled(1.02 / lam, 0.9));
         assert!(flat > 0 && flat < n, "{flat} of {n}");
+    }
+
+    /// The displacement that scales a closed meridian by `c` about its first pole (whose
+    /// height it holds), its heights by `b` more, its radii by 1 + `ripple` sin(1.7 i) at
+    /// node i.
+    fn scaled_about_the_pole(model: &AxisymModel, c: f64, b: f64, ripple: f64) -> Vec<f64> {
+        let z0 = model.meridian.nodes[0][1];
+        let x: Vec<[f64; 2]> = model
+            .meridian
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let w = 1.0 + ripple * (1.7 * i as f64).sin();
+                [w * c * p[0], z0 + b * c * (p[1] - z0)]
+            })
+            .collect();
+        model.displacement_of(&x)
     }
 
     /// The relaxed energy on the meridian: equal to the plain energy in a taut state (ε = 0,
@@ -1561,20 +1569,8 @@ pub(super) mod tests {
         let plain = AxisymModel::new(Meridian::sphere(1.0, 16, lam, mat).unwrap(), gas);
         let params = [0.3, 0.2];
         let z0 = plain.meridian.nodes[0][1];
-        let scaled = |c: f64, b: f64| {
-            let x: Vec<[f64; 2]> = plain
-                .meridian
-                .nodes
-                .iter()
-                .enumerate()
-                .map(|(i, p)| {
-                    // A ripple, so that no two Gauss points share their stretches.
-                    let w = 1.0 + 0.0005 * (1.7 * i as f64).sin();
-                    [w * c * p[0], z0 + b * c * (p[1] - z0)]
-                })
-                .collect();
-            plain.displacement_of(&x)
-        };
+        // A ripple, so that no two Gauss points share their stretches.
+        let scaled = |c: f64, b: f64| scaled_about_the_pole(&plain, c, b, 0.0005);
         let relaxed = |stiffness: f64, width: f64| {
             let mut m = plain.clone();
             m.meridian.wrinkling = Wrinkling::Relaxed { stiffness, width };
