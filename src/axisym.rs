@@ -452,6 +452,17 @@ struct Point {
     x_xi: Vector3<f64>,
 }
 
+impl Point {
+    /// The principal stretches of a state of revolution from the stress-free one
+    /// (pre-stretch λ0): meridional λ0 |x_ξ|/|X_ξ| and hoop λ0 r/R.
+    fn stretches(&self, prestretch: f64) -> (f64, f64) {
+        (
+            prestretch * self.x_xi.norm() / self.dx_ref,
+            prestretch * self.r / self.big_r,
+        )
+    }
+}
+
 fn points(meridian: &Meridian, x: &[[f64; 2]], e: usize) -> Vec<Point> {
     points_on(meridian, x, e, &GAUSS)
 }

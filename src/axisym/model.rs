@@ -363,7 +363,10 @@ impl AxisymModel {
         let lam = self.meridian.prestretch;
         (0..self.meridian.elements())
             .flat_map(|e| super::points(&self.meridian, &x, e))
-            .map(|p| (lam * p.x_xi.norm() / p.dx_ref).max(lam * p.r / p.big_r))
+            .map(|p| {
+                let (s, t) = p.stretches(lam);
+                s.max(t)
+            })
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
@@ -378,7 +381,7 @@ impl AxisymModel {
         (0..self.meridian.elements())
             .filter(|&e| {
                 super::points(&self.meridian, &x, e).iter().any(|p| {
-                    let (s, t) = (lam * p.x_xi.norm() / p.dx_ref, lam * p.r / p.big_r);
+                    let (s, t) = p.stretches(lam);
                     s.powi(4) * t * t < 1.0 || t.powi(4) * s * s < 1.0
                 })
             })
@@ -395,7 +398,7 @@ impl AxisymModel {
         let mut areas = [0.0; 2];
         for e in 0..self.meridian.elements() {
             for p in super::points(&self.meridian, &x, e) {
-                let (s, t) = (lam * p.x_xi.norm() / p.dx_ref, lam * p.r / p.big_r);
+                let (s, t) = p.stretches(lam);
                 let area = 2.0 * PI * p.r * p.x_xi.norm() * p.weight;
                 match TensionState::of_stretches(s, t) {
                     TensionState::Taut => {}
@@ -1615,7 +1618,7 @@ pub(super) mod tests {
         let mut states = [0usize; 3];
         for e in 0..plain.meridian.elements() {
             for p in super::super::points(&plain.meridian, &x, e) {
-                let (s, t) = (lam * p.x_xi.norm() / p.dx_ref, lam * p.r / p.big_r);
+                let (s, t) = p.stretches(lam);
                 let (l1, l2) = (s.max(t), s.min(t));
                 let clear = (l1 - 1.0).abs().min((l1 * l2 * l2 - 1.0).abs());
                 assert!(clear > 1e-4, "element {e}: stretches {s}, {t}");
