@@ -28,7 +28,7 @@
 use super::path::{record_branch, start_driver};
 use super::{Analysis, Context, Observer, RunError};
 use crate::continuation::crossings::{CriticalTest, Crossings, End, IndexChanges, Spectrum};
-use crate::continuation::events::{trace, Detector, Event, States};
+use crate::continuation::events::{trace, Branch, Detector, Event, States};
 use crate::continuation::{
     Accepted, Continuation, Linearization, PathOptions, PathPoint, Problem, Settings,
 };
@@ -439,13 +439,13 @@ impl Analysis for Curve {
     fn run(&self, study: &dyn Study, cx: &mut Context<'_>) -> Result<StopReason, RunError> {
         let analysis = &self.0;
         let t0 = Instant::now();
-        let Some(crossings) = cx.crossings.take() else {
+        if cx.crossings.is_none() {
             return Err(RunError::Curve(
                 "the critical curve needs the stability analysis by blocks, which this \
                  scene's group does not allow"
                     .into(),
             ));
-        };
+        }
         if analysis.from_run.is_some() {
             let Some(cp) = cx.from.clone() else {
                 return Err(RunError::Curve(
@@ -458,21 +458,85 @@ impl Analysis for Curve {
             record.state(0, StateKind::Step, cp.state.clone(), &cp.parameters);
             record.add_critical(cp.clone());
             cx.times.path = t0.elapsed();
-            let curve = self.follow(study, crossings, &cp, &mut *cx.observer)?;
+            let curve = self.follow(study, &mut cx.crossings, &cp, &mut *cx.observer)?;
             cx.record.outcome = Some(Outcome::new(curve));
             return Ok(StopReason::CriticalPoint);
         }
         // The path in the control up to the point.
+        let located = self.locate(study, &mut cx.crossings, &cx.start, &mut *cx.observer)?;
+        cx.times.steps = located.branch.times;
+        cx.times.index = located.index_time;
+        record_branch(
+            study,
+            &mut cx.record,
+            &*located.problem,
+            &located.branch,
+            &located.indices,
+            usize::MAX,
+        );
+        cx.times.path = t0.elapsed();
+        // A signal in the path phase: the path so far is the result (no curve).
+        if located.branch.stop == StopReason::Interrupted {
+            return Ok(StopReason::Interrupted);
+        }
+        let cp = located.point(&analysis.control, &analysis.from)?;
+        let stop = located.branch.stop.clone();
+        let curve = self.follow(study, &mut cx.crossings, &cp, &mut *cx.observer)?;
+        cx.record.outcome = Some(Outcome::new(curve));
+        Ok(stop)
+    }
+}
+
+/// The path in the control from a start state up to the critical point a curve starts from.
+pub(super) struct Located<'s> {
+    /// The path.
+    pub branch: Branch,
+    /// Its problem (the path's coordinates).
+    pub problem: Box<dyn Followed + 's>,
+    /// The index at every point of the path.
+    pub indices: Vec<Option<usize>>,
+    /// The time spent on the index.
+    pub index_time: std::time::Duration,
+}
+
+impl Located<'_> {
+    /// The critical point the path stopped at, or an error saying what it found instead.
+    pub fn point(&self, control: &str, from: &CurveStart) -> Result<CriticalPoint, RunError> {
+        match self.branch.stop {
+            StopReason::CriticalPoint => self.branch.critical_points().last().cloned(),
+            _ => None,
+        }
+        .ok_or_else(|| {
+            RunError::Curve(format!(
+                "the path in '{control}' found no {} (analysis.from) in {} steps: {}",
+                describe(from),
+                self.branch.points.len() - 1,
+                self.branch.stop
+            ))
+        })
+    }
+}
+
+impl Curve {
+    /// The path in the control from `start` (the second parameter held) up to the critical
+    /// point `from`, with the index by blocks at every point (`crossings`, taken and put
+    /// back; it must be there).
+    pub(super) fn locate<'s>(
+        &self,
+        study: &'s dyn Study,
+        crossings: &mut Option<Crossings<'_>>,
+        start: &crate::study::Point,
+        observer: &mut dyn Observer,
+    ) -> Result<Located<'s>, RunError> {
         let opts = self.options(study);
         let max_steps = opts.max_steps;
-        let mut driver = start_driver(study, &cx.start, opts)?;
+        let mut driver = start_driver(study, start, opts)?;
         let mut first = FirstCritical {
-            index: IndexChanges::new(crossings),
-            from: analysis.from.clone(),
+            index: IndexChanges::new(crossings.take().expect("the index by blocks")),
+            from: self.0.from.clone(),
             seen: 0,
         };
         let mut count = 0usize;
-        let observer = &mut *cx.observer;
         let branch = {
             let mut extra: Vec<&mut dyn Detector<Box<dyn Followed>>> = vec![&mut first];
             trace(
@@ -487,48 +551,23 @@ impl Analysis for Curve {
                 },
             )
         };
-        let path_problem = driver.into_problem();
-        cx.times.steps = branch.times;
-        cx.times.index = first.index.index_time;
+        let index_time = first.index.index_time;
         let indices = first.index.indices.clone();
-        let crossings = first.index.into_crossings();
-        record_branch(
-            study,
-            &mut cx.record,
-            &*path_problem,
-            &branch,
-            &indices,
-            usize::MAX,
-        );
-        cx.times.path = t0.elapsed();
-        // A signal in the path phase: the path so far is the result (no curve).
-        if branch.stop == StopReason::Interrupted {
-            return Ok(StopReason::Interrupted);
-        }
-        let Some(cp) = (match branch.stop {
-            StopReason::CriticalPoint => branch.critical_points().last().cloned(),
-            _ => None,
-        }) else {
-            return Err(RunError::Curve(format!(
-                "the path in '{}' found no {} (analysis.from) in {} steps: {}",
-                analysis.control,
-                describe(&analysis.from),
-                branch.points.len() - 1,
-                branch.stop
-            )));
-        };
-        let curve = self.follow(study, crossings, &cp, &mut *cx.observer)?;
-        cx.record.outcome = Some(Outcome::new(curve));
-        Ok(branch.stop)
+        *crossings = Some(first.index.into_crossings());
+        Ok(Located {
+            branch,
+            problem: driver.into_problem(),
+            indices,
+            index_time,
+        })
     }
-}
 
-impl Curve {
-    /// Follows the critical point `cp` in (control, second).
-    fn follow(
+    /// Follows the critical point `cp` in (control, second), with the index by blocks
+    /// (`crossings`, taken and put back; it must be there).
+    pub(super) fn follow(
         &self,
         study: &dyn Study,
-        crossings: Crossings<'_>,
+        crossings: &mut Option<Crossings<'_>>,
         cp: &CriticalPoint,
         observer: &mut dyn Observer,
     ) -> Result<CurveReport, RunError> {
@@ -543,7 +582,8 @@ impl Curve {
         };
         let (control, second) = (index(&analysis.control), index(&analysis.second));
         let mu = crossings
-            .block(&cp.irrep)
+            .as_ref()
+            .and_then(|c| c.block(&cp.irrep))
             .expect("the critical point's block is one of the study's");
         let test = study.critical_test(cp).map_err(RunError::Curve)?;
         let inner = study.problem(
@@ -576,7 +616,7 @@ impl Curve {
         // `trace` watches the turning points of λ_0, the second parameter: cusps and folds.
         let mut refresh = RefreshBorder;
         let mut others = OtherBlocks {
-            crossings,
+            crossings: crossings.take().expect("the index by blocks"),
             own: mu,
             previous: None,
         };
@@ -601,7 +641,7 @@ impl Curve {
                 },
             )
         };
-        let crossings = others.crossings;
+        let crossings = crossings.insert(others.crossings);
         let mut problem = driver.into_problem();
         let mut report = CurveReport {
             control: analysis.control.clone(),
@@ -652,6 +692,7 @@ impl Curve {
                 m: None,
                 residual_eigenvalue: None,
                 after_step,
+                arclength: point.arclength,
                 measures: study.measure(&u, &params),
                 flags: study.state_flags(&u, &params),
                 parameters: params,
@@ -691,6 +732,7 @@ impl Curve {
                 m: study.wave_number(other),
                 residual_eigenvalue: Some(other.residual_eigenvalue),
                 after_step: other.after_step,
+                arclength: branch.points[other.after_step].arclength,
                 parameters: other.parameters.clone(),
                 measures: other.measures.clone(),
             });

@@ -63,6 +63,8 @@ pub struct CurveEvent {
     /// The curve step just before the event.
     #[serde(rename = "step")]
     pub after_step: usize,
+    /// The arclength along the curve where it happened (scaled norm, as the rows').
+    pub arclength: f64,
     /// Every parameter there (the report's order).
     pub parameters: Vec<f64>,
     /// Every measure there.

@@ -985,6 +985,7 @@ mod tests {
             m: None,
             residual_eigenvalue: None,
             after_step: 0,
+            arclength: 0.0,
             parameters: vec![0.0, 0.0],
             measures: Vec::new(),
             flags: Vec::new(),
