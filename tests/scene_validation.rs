@@ -769,6 +769,53 @@ fn critical_curve_keys_are_checked() {
     rejects(&text, &["'parameters.kk' is neither the control"]);
 }
 
+/// A cusp curve names three different free parameters and a range of the third inside its
+/// bounds; bad keys are one line naming the key and the value.
+#[test]
+fn cusp_curve_keys_are_checked() {
+    let cusps = |analysis: &str| {
+        let base = edit("k = 0.1", "k = \"kk\"").replacen("gravity = 1.0", "gravity = \"g\"", 1);
+        let at = base.find("[analysis]").unwrap();
+        format!(
+            "{}[parameters.kk]\nstart = 0.1\nmin = 0.0\nmax = 0.3\n\n[parameters.g]\nstart = 1.0\nmin = 0.5\nmax = 2.0\n\n[analysis]\ntype = \"cusp-curve\"\ncontrol = \"rho\"\nsecond = \"kk\"\n{analysis}",
+            &base[..at]
+        )
+    };
+    let scene = Scene::from_toml_str(&cusps("third = \"g\"\nrange = [0.5, 1.5]\n"), "t")
+        .expect("a valid cusp curve");
+    let spec = scene
+        .analysis
+        .get::<memstab::scene::CuspCurveAnalysis>()
+        .expect("a cusp curve");
+    assert_eq!((spec.slices, spec.bisections), (6, 4));
+    assert_eq!(spec.values().first(), Some(&0.5));
+    assert_eq!(spec.values().last(), Some(&1.5));
+    rejects(
+        &cusps("third = \"rho\"\nrange = [0.5, 1.5]\n"),
+        &["'analysis.third' = \"rho\" is the control"],
+    );
+    rejects(
+        &cusps("third = \"kk\"\nrange = [0.0, 0.2]\n"),
+        &["'analysis.third' = \"kk\" is the second parameter"],
+    );
+    rejects(
+        &cusps("third = \"g\"\nrange = [0.1, 1.5]\n"),
+        &["'analysis.range' = [0.1, 1.5]: outside [min, max] = [0.5, 2] of parameters.g"],
+    );
+    rejects(
+        &cusps("third = \"g\"\nrange = [1.5, 0.5]\n"),
+        &["'analysis.range' = [1.5, 0.5]: needs [min, max]"],
+    );
+    rejects(
+        &cusps("third = \"g\"\nrange = [0.5, 1.5]\nslices = 1\n"),
+        &["'analysis.slices' must be >= 2, got 1"],
+    );
+    rejects(
+        &cusps("third = \"q\"\nrange = [0.5, 1.5]\n"),
+        &["'analysis.third': unknown parameter \"q\""],
+    );
+}
+
 /// `material.wrinkling`, `material.wrinkling-stiffness` and `material.wrinkling-width`: the
 /// relaxed energy is chosen by name, its stiffness lies in [0, 1], its switching width in
 /// [0, 0.1], and both need it; bad values get one line naming the key.

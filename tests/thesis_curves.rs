@@ -526,3 +526,59 @@ fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
         "{richardson} vs {ha}"
     );
 }
+
+/// Paper 1's "swallowtail and cusp catastrophes" (`scenes/thesis/paper1_disc_swallowtail.toml`,
+/// 448 triangles): at a fluid density ρ of 0.30 to 0.45 the disc's limit point followed in
+/// (h, k) has a pair of cusps — a maximum of k, then a minimum — that draws together as ρ
+/// grows; at 0.50 and 0.55 there is none. The pair ends between the slices in a
+/// swallowtail: both orders of its distance near 3/2 (1/2 would be lips or beaks), the fold
+/// line crossing itself beside it, the end estimated inside its bracket to better than the
+/// bracket's width.
+#[test]
+fn the_disc_from_below_has_a_swallowtail_where_its_pair_of_cusps_vanishes_with_the_density() {
+    use memstab::results::{CuspCurveReport, Extremum, PairEndKind};
+    let mut study = MeshStudy::build(bundled("thesis/paper1_disc_swallowtail.toml")).unwrap();
+    let report = run(&mut study, |_, _| {})
+        .expect("the cusp curve runs")
+        .outcome::<CuspCurveReport>()
+        .cloned()
+        .unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    let k = report.parameters.iter().position(|p| p == "k").unwrap();
+    let [end] = report.ends.as_slice() else {
+        panic!("one end of a pair: {:?}", report.ends);
+    };
+    assert_eq!(end.kind, PairEndKind::Swallowtail, "{end:?}");
+    let [a, b] = end.bracket;
+    assert!(0.45 < a && a < b && b < 0.5, "bracket {a}..{b}");
+    let rho = end.estimate.unwrap();
+    assert!(
+        a < rho && rho < b,
+        "the end {rho} outside its bracket {a}..{b}"
+    );
+    assert!(end.error.unwrap() < 0.5 * (b - a), "{end:?}");
+    for order in end.orders.unwrap() {
+        assert!((order - 1.5).abs() < 0.1, "{end:?}");
+    }
+    assert!(end.self_crossing);
+    let mut last_gap = f64::INFINITY;
+    for slice in &report.slices {
+        assert!(slice.failure.is_none(), "{slice:?}");
+        if slice.third < rho {
+            let [max, min] = slice.cusps.as_slice() else {
+                panic!("two cusps at rho = {}: {:?}", slice.third, slice.cusps);
+            };
+            assert_eq!(max.extremum, Some(Extremum::Maximum));
+            assert_eq!(min.extremum, Some(Extremum::Minimum));
+            let gap = max.parameters[k] - min.parameters[k];
+            assert!(
+                gap > 0.0 && gap < last_gap,
+                "rho = {}: gap {gap}",
+                slice.third
+            );
+            last_gap = gap;
+        } else {
+            assert!(slice.cusps.is_empty(), "cusps at rho = {}", slice.third);
+        }
+    }
+}

@@ -24,6 +24,7 @@ pub mod branch;
 pub mod buckling;
 pub mod compare;
 pub mod curve;
+pub mod cusps;
 pub mod deflation;
 pub mod diagram;
 pub mod equilibrium;
@@ -55,6 +56,7 @@ pub fn analysis_of(spec: &scene::Analysis) -> Box<dyn Analysis> {
         .or_else(|| of(spec, equilibrium::Equilibrium))
         .or_else(|| of(spec, buckling::Buckling))
         .or_else(|| of(spec, curve::Curve))
+        .or_else(|| of(spec, cusps::Cusps))
         .or_else(|| of(spec, surface::Surface))
         .or_else(|| of(spec, deflation::Deflate))
         .or_else(|| of(spec, diagram::Diagram))

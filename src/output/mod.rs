@@ -34,6 +34,7 @@
 mod branches;
 mod csv;
 mod curve;
+mod cusps;
 mod deflation;
 mod diagram;
 pub(crate) mod figure;
@@ -58,6 +59,7 @@ mod sweep;
 pub use branches::{diagram, write_branch_graph, write_branches, BranchesWritten};
 pub use csv::write_csv;
 pub use curve::{write_curve, write_curve_with};
+pub use cusps::write_cusp_curve;
 pub use deflation::write_deflation;
 pub use diagram::{
     write_bifurcation_diagram, BifurcationDiagram, DiagramLine, DiagramMark, ASYMMETRY_AXIS,

@@ -10,6 +10,7 @@
 mod branches;
 mod critical;
 mod curve;
+mod cusps;
 pub mod deflation;
 pub mod partner;
 mod path;
@@ -29,6 +30,7 @@ pub use branches::{
 };
 pub use critical::{Bracket, CriticalKind, CriticalPoint, Isotropy};
 pub use curve::{CurveEvent, CurveEventKind, CurveReport, CurveRow};
+pub use cusps::{CuspCurveReport, CuspSlice, PairEnd, PairEndKind};
 pub use path::{
     MeshInfo, PathReport, PathRow, PointState, SavedState, StatesInfo, TurningRow,
     WrinkledCritical, WrinkledPoint, Wrinkling,

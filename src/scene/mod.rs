@@ -39,8 +39,8 @@ pub use crate::effects::spec::{EffectSpec, Quantity, Range};
 pub use crate::effects::spin::SpinEffect;
 pub use analyses::{
     analysis_types, Analysis, AnalysisSpec, BranchesAnalysis, CriticalCurveAnalysis, CurveStart,
-    DiagramAnalysis, EquilibriumAnalysis, LinearBucklingAnalysis, PathAnalysis, SurfaceAnalysis,
-    MAX_BRANCH_DEPTH,
+    CuspCurveAnalysis, DiagramAnalysis, EquilibriumAnalysis, LinearBucklingAnalysis, PathAnalysis,
+    SurfaceAnalysis, MAX_BRANCH_DEPTH,
 };
 pub use error::{Problem, SceneError};
 pub use tags::{ConstraintKind, Generator};

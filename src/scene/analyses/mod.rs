@@ -11,6 +11,7 @@
 
 mod buckling;
 mod curve;
+mod cusps;
 pub mod deflation;
 mod diagram;
 mod equilibrium;
@@ -19,6 +20,7 @@ mod surface;
 
 pub use buckling::LinearBucklingAnalysis;
 pub use curve::{CriticalCurveAnalysis, CurveStart};
+pub use cusps::CuspCurveAnalysis;
 pub use diagram::DiagramAnalysis;
 pub use equilibrium::EquilibriumAnalysis;
 pub use path::{BranchesAnalysis, PathAnalysis, MAX_BRANCH_DEPTH};
@@ -42,6 +44,7 @@ const REGISTRY: &[Entry] = &[
     Entry::of::<EquilibriumAnalysis>("equilibrium", &NEWTON),
     Entry::of::<LinearBucklingAnalysis>("linear-buckling", &NEWTON),
     Entry::of::<CriticalCurveAnalysis>("critical-curve", &PATHS),
+    Entry::of::<CuspCurveAnalysis>("cusp-curve", &PATHS),
     Entry::of::<SurfaceAnalysis>("surface", &PATHS),
     Entry::of::<deflation::DeflationAnalysis>("deflation", &ALL),
     Entry::of::<DiagramAnalysis>("diagram", &ALL),
