@@ -508,6 +508,60 @@ def curve_figure(runs, x, y, title, file):
     plt.close(fig)
 
 
+def cusp_figure(runs, title, file):
+    """The cusps of a limit curve followed in a third parameter (`type = "cusp-curve"`): left,
+    each slice's fold line near its cusps in (second, control), coloured by the third
+    parameter, the cusps marked; right, the pair's distance in the second parameter against
+    the third on every run (one per mesh), with the pair's end and its error."""
+    first = json.loads((runs[0][0] / "cusp_curve.json").read_text())
+    c, s, t = (first["parameters"].index(first[k]) for k in ("control", "second", "third"))
+    ax_x, ax_y = Axes([r for r, _ in runs], first["second"]), Axes([r for r, _ in runs], first["control"])
+    fig, (ax, dax) = plt.subplots(1, 2, figsize=(10.0, 4.6), gridspec_kw={"width_ratios": [3, 2]})
+    slices = [sl for sl in first["slices"] if "failure" not in sl and not sl["refined"]]
+    thirds = [sl["third"] for sl in slices]
+    cmap = plt.get_cmap("coolwarm")
+    cusps = [(e["parameters"][s], e["parameters"][c]) for sl in slices for e in sl["cusps"]]
+    xs, ys = [p[0] for p in cusps], [p[1] for p in cusps]
+    wx, wy = max(xs) - min(xs), max(ys) - min(ys)
+    fx, fy = ax_x.factor(runs[0][0]), ax_y.factor(runs[0][0])
+    for sl in slices:
+        colour = cmap((sl["third"] - min(thirds)) / (max(thirds) - min(thirds)))
+        line = np.array(sl["line"])
+        near = ((line[:, 1] > min(xs) - wx) & (line[:, 1] < max(xs) + wx)
+                & (line[:, 0] > min(ys) - wy) & (line[:, 0] < max(ys) + wy))
+        ax.plot(line[near, 1] * fx, line[near, 0] * fy, "-", color=colour, lw=1.5,
+                label=f"fold line at {first['third']} = {sl['third']:g}")
+        for e in sl["cusps"]:
+            marker = "o" if e["extremum"] == "maximum" else "s"
+            ax.plot(e["parameters"][s] * fx, e["parameters"][c] * fy, marker, color="k", ms=4)
+    ax.plot([], [], "o", color="k", ms=4, label=f"cusp, maximum of {first['second']}")
+    ax.plot([], [], "s", color="k", ms=4, label=f"cusp, minimum of {first['second']}")
+    ax.set_xlabel(ax_x.title)
+    ax.set_ylabel(ax_y.title)
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    for n, (run_dir, name) in enumerate(runs):
+        report = json.loads((run_dir / "cusp_curve.json").read_text())
+        pts = sorted((sl["third"], abs(sl["cusps"][0]["parameters"][s] - sl["cusps"][1]["parameters"][s]))
+                     for sl in report["slices"] if len(sl["cusps"]) == 2)
+        dax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", color=f"C{n}", ms=3, lw=1.2,
+                 label=name)
+        for end in report["ends"]:
+            if end["estimate"] is not None:
+                dax.axvline(end["estimate"], color=f"C{n}", ls="--", lw=1.0,
+                            label=f"{name}: {end['kind']} at {first['third']} = "
+                                  f"{end['estimate']:.5f} ± {end['error']:.1g}")
+    dax.set_xlabel(first["third"])
+    dax.set_ylabel(f"the pair's distance in {first['second']}")
+    dax.set_title("the pair of cusps draws together and vanishes", fontsize=10)
+    dax.grid(alpha=0.3)
+    dax.legend(fontsize=7, loc="lower left")
+    caption(fig, [r for r, _ in runs], legend_of=ax)
+    check_labels(fig, file)
+    fig.savefig(file, dpi=130)
+    plt.close(fig)
+
+
 def surface_figure(run_dir, a, b, measure, title, file):
     """A solution surface from surface.vtu: its triangles in (a, b, measure), coloured by
     the index (blue where stable, orange where unstable), with its critical lines in black."""
@@ -613,6 +667,14 @@ def main(memstab, out, figures):
     curve_figure([limit, double], "k", "h",
                  "Paper 1: the disc's limit point and first double point followed in k",
                  figures / "paper1_disc_limit_curve_k.png")
+
+    swallowtail = run(memstab, "scenes/thesis/paper1_disc_swallowtail.toml",
+                      out / "paper1_swallowtail")
+    meridian = run(memstab, "scenes/axisymmetric/paper1_disc_swallowtail.toml",
+                   out / "paper1_swallowtail_meridian")
+    cusp_figure([(swallowtail, "C7v, 448 triangles"), (meridian, "meridian, 32 elements")],
+                "Paper 1: the disc's cusps in (k, h) as the density varies",
+                figures / "paper1_disc_swallowtail.png")
 
     fold = run(memstab, "scenes/thesis/paper2_gas_pressure_fold_f8.toml", out / "paper2_fold")
     curve_figure([fold], "V", "p",
