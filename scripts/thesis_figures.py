@@ -173,7 +173,8 @@ def caption(fig, run_dirs, legend_of=None):
 
 
 # The markers of the critical points, as memstab's own figures draw them.
-MARKERS = {"limit point": ("s", "limit point"), "other": ("X", "bifurcation point")}
+MARKERS = {"limit point": ("s", "limit point"), "other": ("X", "bifurcation point"),
+           "unconverged": ("o", "not mesh-converged: no counterpart on the refined mesh")}
 
 
 def column_labels(ax, points, texts, fontsize=8, avoid=None):
@@ -280,10 +281,20 @@ def path_figure(runs, x, y, title, file):
         if "--" in styles:
             ax.plot([], [], "--", color=colour, label=f"{label}: unstable (index > 0)")
         critical = json.loads((run_dir / "critical.json").read_text())
-        for c in (p for p in critical if not p.get("curve")):
+        # With the run's refinement (`--refine`), a point without a counterpart on the finer
+        # mesh is drawn apart: not a result of the model, an artefact of the mesh.
+        unconverged = set()
+        if (run_dir / "refine.json").exists():
+            refined = json.loads((run_dir / "refine.json").read_text())
+            for r in refined["critical"]:
+                if r["estimate"]["basis"] == "not-mesh-converged":
+                    unconverged.update(r["points"])
+        for number, c in enumerate((p for p in critical if not p.get("curve")), start=1):
             px = c["parameters"].get(x, c["measures"].get(x)) * fx
             py = c["parameters"].get(y, c["measures"].get(y)) * fy
             kind = "limit point" if c["kind"] == "limit point" else "other"
+            if number in unconverged:
+                kind = "unconverged"
             kinds.add(kind)
             m = f", m = {c['m']}" if c.get("m") is not None else ""
             marks.append((px, py, kind, f"{c['irrep']}{m}"))
@@ -292,11 +303,15 @@ def path_figure(runs, x, y, title, file):
         for xs, ys, style, colour in pieces:
             axes.plot(xs, ys, style, color=colour, lw=1.6)
         for px, py, kind, _ in marks:
-            axes.plot(px, py, MARKERS[kind][0], color="k", ms=5)
+            hollow = kind == "unconverged"
+            axes.plot(px, py, MARKERS[kind][0], color="0.45" if hollow else "k", ms=5,
+                      mfc="none" if hollow else None)
 
     draw(ax)
     for kind in sorted(kinds):
-        ax.plot([], [], MARKERS[kind][0], color="k", ms=5, label=MARKERS[kind][1])
+        hollow = kind == "unconverged"
+        ax.plot([], [], MARKERS[kind][0], color="0.45" if hollow else "k", ms=5,
+                mfc="none" if hollow else None, label=MARKERS[kind][1])
     ax.set_xlabel(ax_x.title)
     ax.set_ylabel(ax_y.title)
     ax.set_title(title, fontsize=10)
@@ -647,7 +662,7 @@ def main(memstab, out, figures):
     out.mkdir(parents=True, exist_ok=True)
     figures.mkdir(parents=True, exist_ok=True)
 
-    below = run(memstab, "scenes/disc_fluid_below.toml", out / "disc_fluid_below")
+    below = run(memstab, "scenes/disc_fluid_below.toml", out / "disc_fluid_below", "--refine")
     path_figure([(below, "C7v")], "max_displacement", "h",
                 "Paper 1: the C7v disc pushed up by fluid from below (k = 0)",
                 figures / "paper1_disc_below_path.png")
