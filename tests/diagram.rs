@@ -229,6 +229,58 @@ fn compare_matches_the_c8v_doubles_on_the_c2v_caps_second_piece() {
     assert_eq!(pieces[0]["m"], 2);
 }
 
+/// Paper 4's cap clamped at its cut (`scenes/thesis/paper4_spinning_cap_clamped.toml`), where
+/// the first instability is the m = 1 double: on C2v, cos θ and sin θ lie in B1 and B2, so
+/// the double splits into two simple bifurcation points with single zero eigenvalues — the
+/// thesis's "two slightly split bifurcation points" — on the connected path, each of isotropy
+/// C1v, and their gap shrinks faster than the mesh size (order about 3 from 12 to 24
+/// divisions), while the C8v mesh keeps the double exact.
+#[test]
+fn the_clamped_caps_m1_double_splits_into_two_simple_points_on_c2v_with_a_vanishing_gap() {
+    let path = format!(
+        "{}/scenes/thesis/paper4_spinning_cap_clamped.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let o = memstab(&[
+        "compare", &path, "--meshes", "C8v,C2v", "--refine", "--quiet", "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let c: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rung = c["rungs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["m"] == 1)
+        .expect("the m = 1 rung")
+        .clone();
+    for level in rung["images"][0]["levels"].as_array().unwrap() {
+        assert_eq!(level["multiplicity"], 2, "{level}");
+        assert_eq!(level["gap"], 0.0, "C8v keeps the double: {level}");
+    }
+    let c2v = &rung["images"][1];
+    let levels = c2v["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 2);
+    let mut gaps = Vec::new();
+    for level in levels {
+        assert_eq!(level["verdict"], "split", "{level}");
+        let mut irreps: Vec<&str> = level["irreps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|i| i.as_str().unwrap())
+            .collect();
+        irreps.sort_unstable();
+        assert_eq!(irreps, ["B1", "B2"], "{level}");
+        let gap = level["gap"].as_f64().unwrap();
+        let value = level["values"][0].as_f64().unwrap();
+        assert!(gap > 0.0 && gap < 5e-3 * value, "a slight split: {level}");
+        gaps.push(gap);
+    }
+    assert!(gaps[1] < gaps[0] / 4.0, "the gap shrinks: {gaps:?}");
+    let order = c2v["order"].as_f64().unwrap();
+    assert!((2.5..3.5).contains(&order), "order {order}");
+}
+
 /// A diagram's own keys are checked like every key: one line naming it.
 #[test]
 fn a_diagrams_bad_keys_are_refused_naming_them() {

@@ -266,6 +266,10 @@ pub const THESIS_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/thesis/paper1_disc_limit_curve_radius.toml"),
     ),
     (
+        "paper1_disc_swallowtail.toml",
+        include_str!("../../scenes/thesis/paper1_disc_swallowtail.toml"),
+    ),
+    (
         "paper2_gas_pressure_fold.toml",
         include_str!("../../scenes/thesis/paper2_gas_pressure_fold.toml"),
     ),
@@ -316,6 +320,10 @@ pub const THESIS_SCENES: &[(&str, &str)] = &[
     (
         "paper4_spinning_cap.toml",
         include_str!("../../scenes/thesis/paper4_spinning_cap.toml"),
+    ),
+    (
+        "paper4_spinning_cap_clamped.toml",
+        include_str!("../../scenes/thesis/paper4_spinning_cap_clamped.toml"),
     ),
 ];
 
