@@ -18,7 +18,7 @@
 
 use super::curve::Curve;
 use super::path::record_branch;
-use super::surface::carry;
+use super::surface::{carry, carry_outwards};
 use super::{Analysis, Context, RunError};
 use crate::continuation::PathOptions;
 use crate::output::{self, Described, OutputError};
@@ -300,31 +300,8 @@ impl Analysis for Cusps {
         let (c, s, t) = (index(&a.control), index(&a.second), index(&a.third));
         let opts = self.options(study);
         let values = a.values();
-        let mut warnings = Vec::new();
         // The start state at every value of the grid, carried outwards from the start's.
-        let mut starts: Vec<Option<Carried>> = vec![None; values.len()];
-        let split = values.partition_point(|&v| v < cx.start.params[t]);
-        let up: Vec<usize> = (split..values.len()).collect();
-        let down: Vec<usize> = (0..split).rev().collect();
-        for side in [up, down] {
-            let mut from = (cx.start.u.clone(), cx.start.params.clone());
-            for j in side {
-                match carry(study, &opts, &from.0, &from.1, t, values[j]) {
-                    Ok(state) => {
-                        from = state.clone();
-                        starts[j] = Some(state);
-                    }
-                    Err(why) => {
-                        warnings.push(format!(
-                            "no slice at {} = {}: {why}",
-                            a.third,
-                            num(values[j])
-                        ));
-                        break;
-                    }
-                }
-            }
-        }
+        let (starts, mut warnings) = carry_outwards(study, &opts, &cx.start, t, &values);
         let scene_step = (a.settings.max_step, a.settings.steps);
         let mut recorded = None;
         // (slice, its start) in grid order.

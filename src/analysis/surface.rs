@@ -176,6 +176,39 @@ pub(super) fn carry(
     Ok((u, params))
 }
 
+/// The start state carried to each of `values` (ascending) of parameter `b`, outwards from
+/// the start's own value in both directions, each from its neighbour; a value that cannot be
+/// reached (and every value beyond it) is `None`, with a warning.
+pub(super) fn carry_outwards(
+    study: &dyn Study,
+    opts: &PathOptions,
+    start: &Point,
+    b: usize,
+    values: &[f64],
+) -> (Vec<Option<(Vec<f64>, Vec<f64>)>>, Vec<String>) {
+    let mut warnings = Vec::new();
+    let mut starts = vec![None; values.len()];
+    let split = values.partition_point(|&v| v < start.params[b]);
+    let up: Vec<usize> = (split..values.len()).collect();
+    let down: Vec<usize> = (0..split).rev().collect();
+    for side in [up, down] {
+        let mut from = (start.u.clone(), start.params.clone());
+        for j in side {
+            match carry(study, opts, &from.0, &from.1, b, values[j]) {
+                Ok(state) => {
+                    from = state.clone();
+                    starts[j] = Some(state);
+                }
+                Err(why) => {
+                    warnings.push(why);
+                    break;
+                }
+            }
+        }
+    }
+    (starts, warnings)
+}
+
 /// `type = "surface"`.
 pub struct Surface(pub SurfaceAnalysis);
 
@@ -216,32 +249,8 @@ impl Analysis for Surface {
             .or_else(|| study.about().measures.first().cloned())
             .unwrap_or_default();
         let values = analysis.b_values();
-        let mut warnings = Vec::new();
-        let (u_start, params_start) = (&cx.start.u, &cx.start.params);
         // The start state at every value of b, carried outwards from the start's b.
-        let mut starts: Vec<Option<(Vec<f64>, Vec<f64>)>> = vec![None; values.len()];
-        let split = values.partition_point(|&v| v < params_start[b]);
-        let up: Vec<usize> = (split..values.len()).collect();
-        let down: Vec<usize> = (0..split).rev().collect();
-        for side in [up, down] {
-            let mut from = (u_start.to_vec(), params_start.to_vec());
-            for j in side {
-                match carry(study, &opts, &from.0, &from.1, b, values[j]) {
-                    Ok(state) => {
-                        from = state.clone();
-                        starts[j] = Some(state);
-                    }
-                    Err(why) => {
-                        warnings.push(format!(
-                            "no path at {} = {}: {why}",
-                            analysis.b(),
-                            num(values[j])
-                        ));
-                        break;
-                    }
-                }
-            }
-        }
+        let (starts, mut warnings) = carry_outwards(study, &opts, &cx.start, b, &values);
         let mut crossings = cx.crossings.take();
         let mut paths: Vec<SurfacePath> = Vec::new();
         let mut recorded: Option<StopReason> = None;
