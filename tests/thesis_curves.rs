@@ -630,3 +630,54 @@ fn past_its_fold_the_disc_from_below_turns_back_on_the_meridian_where_its_skirt_
         path.turning_points
     );
 }
+
+/// Paper 2's solution surface on the thesis's f = 16 icosphere
+/// (`scenes/thesis/paper2_solution_surface.toml`): every one of the seven paths passes both
+/// A1 folds (a maximum of p, then a minimum), so both critical lines span all seven paths,
+/// the maximum falling from about 1.355 and the minimum from about 1.150 as the fluid volume
+/// grows, each within 0.5 % of the f = 8 surface's.
+#[test]
+fn the_solution_surface_on_the_thesis_mesh_folds_along_both_lines_over_every_path() {
+    let mut study = MeshStudy::build(bundled("thesis/paper2_solution_surface.toml")).unwrap();
+    let surface = run(&mut study, |_, _| {})
+        .expect("the surface runs")
+        .outcome::<memstab::results::SurfaceReport>()
+        .cloned()
+        .expect("a surface");
+    assert!(surface.warnings.is_empty(), "{:?}", surface.warnings);
+    assert_eq!(surface.paths.len(), 7);
+    let p = surface.parameter("p").unwrap();
+    for path in &surface.paths {
+        let [max, min] = path.critical.as_slice() else {
+            panic!("V = {}: {:?}", path.b, path.critical);
+        };
+        assert!(
+            [max, min]
+                .iter()
+                .all(|c| c.kind == CriticalKind::LimitPoint && c.irrep == "A1"),
+            "V = {}",
+            path.b
+        );
+        assert!(max.parameters[p] > min.parameters[p], "V = {}", path.b);
+    }
+    let (first, last) = (&surface.paths[0], &surface.paths[6]);
+    for (k, f8_first, f8_last) in [(0, 1.35903, 1.29126), (1, 1.15309, 1.14951)] {
+        let (a, b) = (
+            first.critical[k].parameters[p],
+            last.critical[k].parameters[p],
+        );
+        assert!(b < a, "fold {k} falls with V: {a} -> {b}");
+        assert!(
+            (a / f8_first - 1.0).abs() < 5e-3,
+            "fold {k}: {a} against f = 8's {f8_first}"
+        );
+        assert!(
+            (b / f8_last - 1.0).abs() < 5e-3,
+            "fold {k}: {b} against f = 8's {f8_last}"
+        );
+    }
+    assert_eq!(surface.lines.len(), 2, "{:?}", surface.lines);
+    for line in &surface.lines {
+        assert_eq!(line.points.len(), 7, "a critical line over every path");
+    }
+}

@@ -278,6 +278,10 @@ pub const THESIS_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/thesis/paper2_gas_pressure_fold_f8.toml"),
     ),
     (
+        "paper2_solution_surface.toml",
+        include_str!("../../scenes/thesis/paper2_solution_surface.toml"),
+    ),
+    (
         "paper2_solution_surface_f8.toml",
         include_str!("../../scenes/thesis/paper2_solution_surface_f8.toml"),
     ),
