@@ -206,13 +206,43 @@ fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
     let (dir, layouts) = figures_of("thesis/paper1_disc_limit_curve_radius.toml");
     let (_, curve) = layouts.iter().find(|(n, _)| n == "curve.svg").unwrap();
     for kind in [
-        "state of the path in h: stable",
-        "state of the path in h: unstable",
+        "state of the path in h: stable (index 0)",
+        "state of the path in h: unstable (index 1)",
     ] {
         assert!(
             curve.legend_markers.iter().any(|k| k == kind),
             "{kind} not in {:?}",
             curve.legend_markers
+        );
+    }
+    // The path is drawn across the curve by its index, stable solid and unstable dashed, each
+    // with its legend entry (the checker holds the legend's keyed lines to those drawn).
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("path.json")).unwrap()).unwrap();
+    let radius = report["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|p| p == "R")
+        .map(|k| report["rows"][0]["parameters"][k].as_f64().unwrap())
+        .expect("R on the path");
+    for word in ["stable (index 0)", "unstable (index 1)"] {
+        let kind = curve
+            .line_kinds
+            .iter()
+            .find(|k| k.starts_with("path in h at R = ") && k.ends_with(&format!(": {word}")))
+            .unwrap_or_else(|| panic!("no path {word} in {:?}", curve.line_kinds));
+        let held: f64 = kind["path in h at R = ".len()..kind.len() - word.len() - 2]
+            .parse()
+            .unwrap();
+        assert!(
+            (held - radius).abs() < 1e-4 * radius,
+            "{kind} at R = {radius}"
+        );
+        assert!(
+            curve.legend_lines.contains(kind),
+            "{:?}",
+            curve.legend_lines
         );
     }
     let labels: Vec<&str> = curve.labels.iter().map(|l| l.text.as_str()).collect();
