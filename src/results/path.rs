@@ -5,7 +5,7 @@ use super::{CriticalPoint, Extremum, Spectra, StopReason};
 use serde::Serialize;
 
 /// The mesh a run used.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct MeshInfo {
     /// Generator name (`disc`, `icosphere`, `truncated-sphere`).
     pub generator: String,
