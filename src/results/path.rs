@@ -17,9 +17,29 @@ pub struct MeshInfo {
     pub group: String,
     /// Its order.
     pub order: usize,
+    /// The largest distance of a node from the nodes' centroid, in the mesh's coordinates
+    /// (a 3-D mesh's; the length a figure of a mesh read from a file is scaled by).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
 }
 
 impl MeshInfo {
+    /// The largest distance of one of `nodes` from their centroid (`None` without nodes).
+    pub fn radius_of(nodes: &[[f64; 3]]) -> Option<f64> {
+        if nodes.is_empty() {
+            return None;
+        }
+        let n = nodes.len() as f64;
+        let c = nodes.iter().fold([0.0; 3], |c, p| {
+            [c[0] + p[0] / n, c[1] + p[1] / n, c[2] + p[2] / n]
+        });
+        let r = nodes
+            .iter()
+            .map(|p| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt())
+            .fold(0.0, f64::max);
+        r.is_finite().then_some(r)
+    }
+
     /// `disc, 1792 triangles, group C7v`: the mesh as a figure's caption names it.
     pub fn describe(&self) -> String {
         format!(
@@ -284,6 +304,7 @@ mod tests {
                 elements: 0,
                 group: String::new(),
                 order: 1,
+                radius: None,
             },
             group: String::new(),
             group_order: 1,
