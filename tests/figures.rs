@@ -363,8 +363,8 @@ fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
 #[test]
 fn a_mesh_read_from_a_file_is_scaled_by_its_own_radius() {
     // The disc of disc_fluid_below.toml read from a Gmsh file: the scene gives no radius, the
-    // mesh's own (its nodes' largest distance from their centroid) scales the axes as the
-    // generated disc's radius does.
+    // mesh's own (its nodes' largest distance from the surface's centroid) scales the axes as
+    // the generated disc's radius does.
     let (dir, layouts) = figures_of("disc_file.toml");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("path.json")).unwrap()).unwrap();

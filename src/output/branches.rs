@@ -423,7 +423,7 @@ fn drawing_radius(drawing: &dyn super::Drawing) -> Option<f64> {
         .iter()
         .map(|p| [p[0], p[1], p[2]])
         .collect();
-    crate::results::MeshInfo::radius_of(&nodes)
+    crate::results::MeshInfo::radius_of(&nodes, &drawing.mesh().triangles)
 }
 
 /// Writes every branch's directory (the files of [`write_run`]), then `branches.json` and

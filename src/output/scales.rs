@@ -120,7 +120,7 @@ impl Scales {
 /// The scene's natural length a (the mesh radius over the prestretch), μH, and the length's
 /// symbol (`R` for a sphere, `a` for a disc), where the scene fixes them. A generated mesh's
 /// radius is the scene's; a mesh read from a file has none in the scene, and its own is taken
-/// (`mesh_radius`: the largest distance of a node from the nodes' centroid, the generated
+/// (`mesh_radius`: the largest distance of a node from the surface's centroid, the generated
 /// disc's and sphere's radius alike).
 fn natural(scene: &Scene, mesh_radius: Option<f64>) -> (Option<f64>, Option<f64>, &'static str) {
     let m = &scene.material;

@@ -422,6 +422,7 @@ impl MeshStudy {
                         .iter()
                         .map(|p| [p[0], p[1], p[2]])
                         .collect::<Vec<_>>(),
+                    &mesh.mesh.triangles,
                 ),
             },
             group: action.group().name().to_string(),
