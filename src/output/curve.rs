@@ -56,7 +56,8 @@ fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
 /// critical block nearest zero, relative to max|K_ij|). `curve.json` is the whole report,
 /// with the events (start, cusps, folds, end). `curve.svg` plots the second parameter
 /// against the control with the events marked (hilltops and irrep changes with the other
-/// irrep).
+/// irrep) and, given the path that found the curve ([`write_curve_with`]), that path across
+/// it by its index.
 ///
 /// # Errors
 /// [`OutputError::Invalid`] for a non-finite value (nothing is written), else as the other

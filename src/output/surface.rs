@@ -74,7 +74,8 @@ fn check_finite(path: &Path, s: &SurfaceReport) -> Result<(), OutputError> {
 /// `critical_line` (the line's number; −1 for path vertices) and every measure.
 /// `surface.json` is the whole report; `surface.svg` draws the measure against a: the
 /// triangles and the paths coloured by index, the critical lines in black (limit lines
-/// solid, bifurcation lines dashed).
+/// solid, bifurcation lines dashed), the paths cut at [`budget_cut`] where they stopped on
+/// their step budget at different values of a.
 ///
 /// # Errors
 /// [`OutputError::Invalid`] for a non-finite value or a surface without vertices (nothing
