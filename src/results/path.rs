@@ -46,7 +46,7 @@ impl MeshInfo {
             }
             total += area;
         }
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return None;
         }
         let c = c.map(|x| x / total);
