@@ -11,6 +11,11 @@
 #   PYTHON       interpreter that creates it (default: python3)
 #   OUT          where the runs are written (default: <repo>/target/thesis-figures)
 #   FIGURES      where the PNG figures go (default: <repo>/docs/figures)
+#   FULL         1: Paper 2's fold line on the thesis's mesh (icosphere f = 16, 5120 triangles;
+#                about 15 s more) instead of f = 8 (CI's form and docs/figures). The other
+#                figures' scenes already run on the thesis's mesh sizes or near them; the
+#                solution surface stays on f = 8 (on f = 16 its step budget ends short of
+#                its second fold).
 #
 # Each figure is checked before it is written (no two labels overlap, none lies on a legend or
 # an inset); the script fails naming the figure and the labels otherwise.
