@@ -31,6 +31,7 @@ scripts/thesis_figures.sh sets up the Python packages and calls this with the de
 import csv
 import html
 import json
+import os
 import re
 import subprocess
 import sys
@@ -86,7 +87,7 @@ def scales(run_dir):
 class Axes:
     """The dimensionless axis of quantity `q` over several runs: the title of the first run
     whose scene fixes its scale, and each run's own factor. A run whose scene fixes none (a
-    mesh read from a file has no radius) is drawn unscaled and `unscaled` names it."""
+    parameter without a known scale) is drawn unscaled and `unscaled` names it."""
 
     def __init__(self, runs, q):
         self.q = q
@@ -575,17 +576,99 @@ def cusp_figure(runs, title, file):
     check_labels(fig, file)
     fig.savefig(file, dpi=130)
     plt.close(fig)
+def budget_cut(report):
+    """Where memstab's surface.svg cuts a surface's paths (docs/scenes.md, `surface.svg`): where
+    paths stopped on their step budget, every path's last monotone stretch in a is cut at the
+    end of the first that stopped on it, when all run the same way and reach back to it.
+    Returns (the value of a, the direction of the last stretches, how far past the cut each
+    vertex lies, the number of paths cut) or None."""
+    a = report["parameters"].index(report["a"])
+    paths = report["paths"]
+    if len(paths) < 2:
+        return None
+    stretches = []
+    for p in paths:
+        x = [v["parameters"][a] for v in p["vertices"]]
+        steps = [d for d in np.diff(x) if d != 0]
+        if not steps:
+            return None
+        direction = float(np.sign(steps[-1]))
+        start = len(x) - 1
+        while start > 0 and (x[start] - x[start - 1]) * direction >= 0:
+            start -= 1
+        stretches.append((start, direction, x))
+    direction = stretches[0][1]
+    if any(d != direction for _, d, _ in stretches):
+        return None
+    ends = [x[-1] * direction for (_, _, x), p in zip(stretches, paths)
+            if "step budget" in p["stop"]]
+    if not ends:
+        return None
+    at = min(ends) * direction
+    if any(x[start] * direction > at * direction for start, _, x in stretches):
+        return None
+    past = []
+    for start, _, x in stretches:
+        past += [(v - at) * direction if k >= start else min((v - at) * direction, 0.0)
+                 for k, v in enumerate(x)]
+    cut = sum(1 for _, _, x in stretches if (x[-1] - at) * direction > 0)
+    return (at, direction, np.array(past), cut) if cut else None
+
+
+def clipped(points, triangles, past):
+    """The triangles' parts where `past` <= 0 (linear along their edges), fanned into
+    triangles: (their points, the triangles over them)."""
+    points = [tuple(p) for p in points]
+    out = []
+    for tri in triangles:
+        t = [past[i] for i in tri]
+        kept = []
+        for k in range(3):
+            i, j = tri[k], tri[(k + 1) % 3]
+            ti, tj = t[k], t[(k + 1) % 3]
+            if ti <= 0:
+                kept.append(i)
+            if (ti <= 0) != (tj <= 0):
+                f = ti / (ti - tj)
+                points.append(tuple(np.add(points[i], f * np.subtract(points[j], points[i]))))
+                kept.append(len(points) - 1)
+        out += [(kept[0], kept[k], kept[k + 1]) for k in range(1, len(kept) - 1)]
+    # Only the points the kept triangles use (the axes span what is drawn).
+    used = sorted({i for t in out for i in t})
+    number = {i: n for n, i in enumerate(used)}
+    return (np.array([points[i] for i in used]).reshape(-1, 3),
+            np.array([[number[i] for i in t] for t in out], dtype=int).reshape(-1, 3))
 
 
 def surface_figure(run_dir, a, b, measure, title, file):
     """A solution surface from surface.vtu: its triangles in (a, b, measure), coloured by
-    the index (blue where stable, orange where unstable), with its critical lines in black."""
+    the index (blue where stable, orange where unstable), with its critical lines in black;
+    where paths stopped on their step budget, cut where memstab's surface.svg cuts them."""
     import meshio
 
     surface = meshio.read(run_dir / "surface.vtu")
+    report = json.loads((run_dir / "surface.json").read_text())
     axes = [Axes([run_dir], q) for q in (a, b, measure)]
-    x, y, z = (surface.points[:, k] * axes[k].factor(run_dir) for k in range(3))
+    scale = np.array([axes[k].factor(run_dir) for k in range(3)])
     index = surface.point_data["index"]
+    vertices = sum(len(p["vertices"]) for p in report["paths"])
+    cut = budget_cut(report)
+    past = np.zeros(len(surface.points))
+    if cut:
+        at, direction, past[:vertices], _ = cut
+        # A critical point past the cut goes with its path: the vertex after it is cut away
+        # and it lies beyond the cut in a.
+        column = report["parameters"].index(report["a"])
+        k = vertices
+        for line in report["lines"]:
+            for q in line["points"]:
+                path = report["paths"][q["path"]]
+                after = path["critical"][q["critical"]]["step"] + 1
+                nxt = [path["first_vertex"] + i for i, v in enumerate(path["vertices"])
+                       if v["step"] == after]
+                if nxt and past[nxt[0]] > 0 and (q["parameters"][column] - at) * direction > 0:
+                    past[k] = 1.0
+                k += 1
     fig = plt.figure(figsize=(6.4, 5.0))
     ax = fig.add_subplot(projection="3d")
     for block in surface.cells:
@@ -595,12 +678,22 @@ def surface_figure(run_dir, a, b, measure, title, file):
             for mask, colour, label in ((stable, "C0", "stable (index 0)"),
                                         (~stable, "C1", "unstable (index > 0)")):
                 if mask.any():
-                    ax.plot_trisurf(x, y, z, triangles=tri[mask], color=colour, alpha=0.55,
+                    pts, tris = clipped(surface.points, tri[mask], past)
+                    if len(tris) == 0:
+                        continue
+                    x, y, z = (pts[:, k] * scale[k] for k in range(3))
+                    ax.plot_trisurf(x, y, z, triangles=tris, color=colour, alpha=0.55,
                                     linewidth=0.1, edgecolor="k", label=label)
         elif block.type == "line":
-            for a, b in block.data:
-                ax.plot([x[a], x[b]], [y[a], y[b]], [z[a], z[b]], "-", color="k", lw=1.8)
+            x, y, z = (surface.points[:, k] * scale[k] for k in range(3))
+            for p, q in block.data:
+                if past[p] > 0 or past[q] > 0:
+                    continue
+                ax.plot([x[p], x[q]], [y[p], y[q]], [z[p], z[q]], "-", color="k", lw=1.8)
     ax.plot([], [], "-", color="k", lw=1.8, label="fold lines")
+    if cut:
+        ax.plot([], [], " ", label=f"{cut[3]} of {len(report['paths'])} paths cut at "
+                                   f"{a} = {cut[0]:.5g} (step budget)")
     ax.set_xlabel(axes[0].title, fontsize=8)
     ax.set_ylabel(axes[1].title, fontsize=8)
     ax.set_zlabel(axes[2].title, fontsize=8)
@@ -691,12 +784,20 @@ def main(memstab, out, figures):
                 "Paper 1: the disc's cusps in (k, h) as the density varies",
                 figures / "paper1_disc_swallowtail.png")
 
-    fold = run(memstab, "scenes/thesis/paper2_gas_pressure_fold_f8.toml", out / "paper2_fold")
+    # FULL=1: Paper 2's fold line on the thesis's icosphere (f = 16, 5120 triangles) instead
+    # of f = 8; the numbers docs/thesis.md quotes beside the figure are f = 8's.
+    full = os.environ.get("FULL") == "1"
+    fold_scene = ("scenes/thesis/paper2_gas_pressure_fold.toml" if full
+                  else "scenes/thesis/paper2_gas_pressure_fold_f8.toml")
+    fold = run(memstab, fold_scene, out / "paper2_fold")
     curve_figure([fold], "V", "p",
                  "Paper 2: the gas pressure's maximum followed in the fluid volume",
                  figures / "paper2_gas_pressure_fold.png")
 
-    surface = run(memstab, "scenes/thesis/paper2_solution_surface_f8.toml", out / "paper2_surface")
+    # FULL=1: the surface on f = 16 too (60 steps per path, both fold lines over every path).
+    surface_scene = ("scenes/thesis/paper2_solution_surface.toml" if full
+                     else "scenes/thesis/paper2_solution_surface_f8.toml")
+    surface = run(memstab, surface_scene, out / "paper2_surface")
     surface_figure(surface, "p", "V", "stretch",
                    "Paper 2: the solution surface of the sphere on a plane",
                    figures / "paper2_solution_surface.png")

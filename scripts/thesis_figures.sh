@@ -11,6 +11,9 @@
 #   PYTHON       interpreter that creates it (default: python3)
 #   OUT          where the runs are written (default: <repo>/target/thesis-figures)
 #   FIGURES      where the PNG figures go (default: <repo>/docs/figures)
+#   FULL         1: Paper 2's fold line and solution surface on the thesis's mesh (f = 16;
+#                about 25 s more) instead of f = 8 (CI's form and docs/figures). The other
+#                figures' scenes already run on the thesis's mesh sizes or near them.
 #
 # Each figure is checked before it is written (no two labels overlap, none lies on a legend or
 # an inset); the script fails naming the figure and the labels otherwise.

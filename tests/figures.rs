@@ -206,13 +206,43 @@ fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
     let (dir, layouts) = figures_of("thesis/paper1_disc_limit_curve_radius.toml");
     let (_, curve) = layouts.iter().find(|(n, _)| n == "curve.svg").unwrap();
     for kind in [
-        "state of the path in h: stable",
-        "state of the path in h: unstable",
+        "state of the path in h: stable (index 0)",
+        "state of the path in h: unstable (index 1)",
     ] {
         assert!(
             curve.legend_markers.iter().any(|k| k == kind),
             "{kind} not in {:?}",
             curve.legend_markers
+        );
+    }
+    // The path is drawn across the curve by its index, stable solid and unstable dashed, each
+    // with its legend entry (the checker holds the legend's keyed lines to those drawn).
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("path.json")).unwrap()).unwrap();
+    let radius = report["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|p| p == "R")
+        .map(|k| report["rows"][0]["parameters"][k].as_f64().unwrap())
+        .expect("R on the path");
+    for word in ["stable (index 0)", "unstable (index 1)"] {
+        let kind = curve
+            .line_kinds
+            .iter()
+            .find(|k| k.starts_with("path in h at R = ") && k.ends_with(&format!(": {word}")))
+            .unwrap_or_else(|| panic!("no path {word} in {:?}", curve.line_kinds));
+        let held: f64 = kind["path in h at R = ".len()..kind.len() - word.len() - 2]
+            .parse()
+            .unwrap();
+        assert!(
+            (held - radius).abs() < 1e-4 * radius,
+            "{kind} at R = {radius}"
+        );
+        assert!(
+            curve.legend_lines.contains(kind),
+            "{:?}",
+            curve.legend_lines
         );
     }
     let labels: Vec<&str> = curve.labels.iter().map(|l| l.text.as_str()).collect();
@@ -288,4 +318,74 @@ fn the_critical_curve_and_the_surface_show_which_side_is_stable() {
     assert_eq!(shown, expected);
     // This surface has both: the stable sheets and the unstable one between the folds.
     assert!(expected.len() >= 2, "{expected:?}");
+    // Its paths by index, one legend entry each.
+    for kind in ["index 0 (stable)", "index 1"] {
+        assert!(
+            surface.line_kinds.iter().any(|k| k == kind),
+            "{:?}",
+            surface.line_kinds
+        );
+    }
+    // Its paths stop on their step budget at different values of p: the figure cuts them all
+    // where the first one stopped, and says so in the caption.
+    let column = json["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|q| q == "p")
+        .unwrap();
+    let ends: Vec<f64> = json["paths"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["stop"].as_str().unwrap().contains("step budget"))
+        .map(|p| {
+            let v = p["vertices"].as_array().unwrap().last().unwrap();
+            v["parameters"][column].as_f64().unwrap()
+        })
+        .collect();
+    assert!(ends.len() >= 2, "{ends:?}");
+    let first = ends.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(ends.iter().any(|&e| e > first), "{ends:?}");
+    let at: f64 = surface
+        .caption
+        .split(" paths cut at p = ")
+        .nth(1)
+        .and_then(|t| t.strip_suffix(" (step budget)"))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no cut in the caption {:?}", surface.caption));
+    assert!(
+        (at - first).abs() < 1e-4 * first.abs(),
+        "cut at {at}, first end {first}"
+    );
+}
+
+#[test]
+fn a_mesh_read_from_a_file_is_scaled_by_its_own_radius() {
+    // The disc of disc_fluid_below.toml read from a Gmsh file: the scene gives no radius, the
+    // mesh's own (its nodes' largest distance from the surface's centroid) scales the axes as
+    // the generated disc's radius does.
+    let (dir, layouts) = figures_of("disc_file.toml");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("path.json")).unwrap()).unwrap();
+    let radius = report["mesh"]["radius"]
+        .as_f64()
+        .expect("the mesh's radius");
+    assert!((radius - 1.1).abs() < 1e-9, "{radius}");
+    let (_, generated) = figures_of("disc_fluid_below.toml");
+    let scale = |layouts: &[(String, Layout)], q: &str| {
+        let (_, path) = layouts.iter().find(|(n, _)| n == "path.svg").unwrap();
+        path.scales
+            .iter()
+            .find(|s| s.quantity == q)
+            .cloned()
+            .unwrap()
+    };
+    for q in ["h", "max_displacement"] {
+        let (file, disc) = (scale(&layouts, q), scale(&generated, q));
+        assert!(file.label.contains("/a (a = 1)"), "{file:?}");
+        assert_eq!(file.label, disc.label);
+        // a = the radius over the prestretch 1.1.
+        assert!((file.factor - 1.1 / radius).abs() < 1e-12, "{file:?}");
+    }
 }

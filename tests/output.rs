@@ -67,6 +67,7 @@ fn report() -> PathReport {
             elements: 20,
             group: "Ih".to_string(),
             order: 120,
+            radius: None,
         },
         group: "Ih".to_string(),
         group_order: 120,
@@ -800,7 +801,7 @@ fn svg_axes_are_dimensionless_and_the_balloon_has_its_closed_form() {
     );
     assert!(v.label.starts_with("V/V0"));
     let ponding = scene_file("disc_fluid_above.toml");
-    let rho = Scales::of_scene(&ponding);
+    let rho = Scales::of_scene(&ponding, None);
     let rho = rho.get("rho").unwrap();
     assert_eq!(rho.label, "ρ g a²/(μH) (g = 1, μH = 1, a = 1)");
     assert!((rho.factor - 1.0).abs() < 1e-12);

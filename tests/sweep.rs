@@ -209,9 +209,30 @@ fn a_three_by_three_sweep_runs_here_resumes_and_collects() {
     );
     assert!(!stdout.contains("not merged"), "{stdout}");
     assert_table_matches_runs(&out);
-    crate::common::figures::check_svg(&out.join("collected.svg"));
+    let layout = crate::common::figures::check_svg(&out.join("collected.svg"));
     let svg = std::fs::read_to_string(out.join("collected.svg")).unwrap();
     assert!(svg.contains("material.k") && svg.contains("E1, m = 1"));
+    // The caption names the meshes the runs solved on: one disc at three sizes, the sizes
+    // read from the runs' own path.json.
+    let triangles: Vec<u64> = [1, 2, 3]
+        .map(|t| {
+            json(&out.join(format!("run_000{t}/path.json")))["mesh"]["elements"]
+                .as_u64()
+                .unwrap()
+        })
+        .to_vec();
+    assert!(
+        triangles[0] < triangles[1] && triangles[1] < triangles[2],
+        "{triangles:?}"
+    );
+    let group = json(&out.join("run_0001/path.json"))["mesh"]["group"].clone();
+    let meshes = format!(
+        "meshes: disc, {} to {} triangles, group {}",
+        triangles[0],
+        triangles[2],
+        group.as_str().unwrap()
+    );
+    assert!(layout.caption.ends_with(&meshes), "{:?}", layout.caption);
 
     // One at a time, in another directory: the same table.
     let one = dir.path().join("one");

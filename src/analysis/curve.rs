@@ -357,7 +357,7 @@ impl Analysis for Curve {
             out,
             curve,
             Some(&result.report),
-            &output::Scales::of_scene(scene),
+            &output::Scales::of_scene(scene, result.report.mesh.radius),
             &output::caption_of(&result.report),
         )?;
         let what = [

@@ -458,7 +458,7 @@ impl Analysis for Cusps {
         let files = output::write_cusp_curve(
             out,
             report,
-            &output::Scales::of_scene(scene),
+            &output::Scales::of_scene(scene, result.report.mesh.radius),
             &output::caption_of(&result.report),
         )?;
         let what = [

@@ -415,6 +415,17 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
     }
 }
 
+/// The radius of the drawn mesh ([`crate::results::MeshInfo::radius`]).
+fn drawing_radius(drawing: &dyn super::Drawing) -> Option<f64> {
+    let nodes: Vec<[f64; 3]> = drawing
+        .mesh()
+        .nodes
+        .iter()
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    crate::results::MeshInfo::radius_of(&nodes, &drawing.mesh().triangles)
+}
+
 /// Writes every branch's directory (the files of [`write_run`]), then `branches.json` and
 /// `diagram.svg`, into `out`.
 ///
@@ -473,7 +484,7 @@ pub fn write_branches(
     };
     done.push(json.clone());
     let mut picture = diagram(branches, primary);
-    let scale = super::Scales::of_scene(scene).or_name(&primary.control);
+    let scale = super::Scales::of_scene(scene, drawing_radius(drawing)).or_name(&primary.control);
     picture.control = scale.label;
     for l in &mut picture.lines {
         for p in &mut l.points {

@@ -56,7 +56,8 @@ fn check_finite(path: &Path, curve: &CurveReport) -> Result<(), OutputError> {
 /// critical block nearest zero, relative to max|K_ij|). `curve.json` is the whole report,
 /// with the events (start, cusps, folds, end). `curve.svg` plots the second parameter
 /// against the control with the events marked (hilltops and irrep changes with the other
-/// irrep).
+/// irrep) and, given the path that found the curve ([`write_curve_with`]), that path across
+/// it by its index.
 ///
 /// # Errors
 /// [`OutputError::Invalid`] for a non-finite value (nothing is written), else as the other
@@ -69,8 +70,10 @@ pub fn write_curve(dir: &Path, curve: &CurveReport) -> Result<Vec<PathBuf>, Outp
 /// the second parameter's dimensionless groups, where the scene fixes them) and `caption`
 /// (the scene and its mesh) written below the plot. `path`, the path in the control that found
 /// the curve's first point, shows which side of the curve is stable where it is known: the
-/// path's states either side of that point are ringed and labelled with their index, and a
-/// note says so when the path's index was not computed.
+/// path is drawn across the curve by its index (stable solid, unstable dashed, a legend entry
+/// for each index drawn inside the axes, which span the curve), its states either side of
+/// that point are ringed and labelled with their index, and a note says so when the path's
+/// index was not computed.
 ///
 /// # Errors
 /// As [`write_curve`].
@@ -103,7 +106,8 @@ pub fn write_curve_with(
         scales.or_name(&curve.second),
     );
     let sides = path.map(|p| sides(curve, p, c, s)).unwrap_or_default();
-    let (svg, mut layout) = render(curve, (c, s), &sides, &axes, caption)
+    let across = path.map(|p| across(curve, p, c, s)).unwrap_or_default();
+    let (svg, mut layout) = render(curve, (c, s), (&sides, &across), &axes, caption)
         .map_err(|e| OutputError::invalid(&svg_path, format!("plotting failed: {e}")))?;
     layout.scales = vec![
         figure::QuantityScale::new(&curve.control, &axes.0),
@@ -178,13 +182,50 @@ fn sides(curve: &CurveReport, path: &PathReport, c: usize, s: usize) -> Vec<Side
         .collect()
 }
 
-/// The colour of a path state's index: blue stable, orange unstable, grey not computed.
-fn side_colour(index: Option<usize>) -> RGBColor {
-    match index {
-        Some(0) => RGBColor(31, 87, 180),
-        Some(_) => RGBColor(230, 120, 20),
-        None => RGBColor(150, 150, 150),
+/// A stretch of the path of one index: the index and its points in (control, second), joined
+/// to the next row so that the line has no gaps.
+type Run = (Option<usize>, Vec<(f64, f64)>);
+
+/// The path's runs of one index in (control, second): drawn across the curve, they show which
+/// side of it is stable (at a bifurcation curve the index changes as the path crosses; at a
+/// limit curve the path turns back on its own line, stable one way and unstable the other).
+/// None when the path's report lacks either parameter.
+fn across(curve: &CurveReport, path: &PathReport, c: usize, s: usize) -> Vec<Run> {
+    let column = |name: &str| path.parameters.iter().position(|p| p == name);
+    let (Some(pc), Some(ps)) = (column(&curve.parameters[c]), column(&curve.parameters[s])) else {
+        return Vec::new();
+    };
+    let q = |p: &[f64]| (p[pc], p[ps]);
+    let mut runs: Vec<Run> = Vec::new();
+    let mut push = |index: Option<usize>, from: (f64, f64), to: (f64, f64)| match runs.last_mut() {
+        Some((i, pts)) if *i == index => pts.push(to),
+        _ => runs.push((index, vec![from, to])),
+    };
+    for pair in path.rows.windows(2) {
+        let (from, to) = (q(&pair[0].parameters), q(&pair[1].parameters));
+        // Where the index changes at a critical point of the path, the stretch before it has
+        // the one index and the stretch after it the other.
+        let split = path
+            .critical
+            .iter()
+            .find(|cp| cp.after_step == pair[0].step)
+            .filter(|_| pair[0].index != pair[1].index);
+        match split {
+            Some(cp) => {
+                let at = q(&cp.parameters);
+                push(pair[0].index, from, at);
+                push(pair[1].index, at, to);
+            }
+            None => push(pair[0].index, from, to),
+        }
     }
+    runs
+}
+
+/// The colour of a path state's index: blue stable, warmer with every negative eigenvalue,
+/// grey not computed (as on the surface's figure).
+fn side_colour(index: Option<usize>) -> RGBColor {
+    super::surface::index_colour(index)
 }
 
 /// The second parameter (column `s`) against the control (column `c`), events marked, the
@@ -192,24 +233,77 @@ fn side_colour(index: Option<usize>) -> RGBColor {
 fn render(
     curve: &CurveReport,
     (c, s): (usize, usize),
-    sides: &[Side],
+    (sides, across): (&[Side], &[Run]),
     (xs, ys): &(AxisScale, AxisScale),
     caption: &str,
 ) -> Result<(String, Layout), Box<dyn std::error::Error>> {
     let at = |p: &[f64]| (p[c] * xs.factor, p[s] * ys.factor);
     let title = format!("{} curve of {} ({})", curve.kind, curve.irrep, curve.second);
     let mut plot = Plot::new(title, caption, &xs.label, &ys.label);
-    let blue = RGBColor(31, 87, 180);
-    plot.lines.push(Line::new(
-        curve.rows.iter().map(|r| at(&r.parameters)).collect(),
-        blue,
-        2,
-        None,
+    // The axes span the curve, its events and the path's states next to it: the path is cut
+    // at them.
+    let shown: Vec<(f64, f64)> = curve
+        .rows
+        .iter()
+        .map(|r| at(&r.parameters))
+        .chain(curve.events.iter().map(|e| at(&e.parameters)))
+        .chain(
+            sides
+                .iter()
+                .map(|&((x, y), _)| (x * xs.factor, y * ys.factor)),
+        )
+        .collect();
+    plot.ranges = Some((
+        figure::padded(shown.iter().map(|p| p.0)),
+        figure::padded(shown.iter().map(|p| p.1)),
     ));
-    plot.legend.push(Entry::new(
-        format!("critical curve ({} in {})", curve.kind, curve.irrep),
-        Sample::Line(blue, 2, None),
-    ));
+    plot.lines.push(
+        Line::new(
+            curve.rows.iter().map(|r| at(&r.parameters)).collect(),
+            BLACK,
+            2,
+            None,
+        )
+        .kind(format!(
+            "critical curve ({} in {})",
+            curve.kind, curve.irrep
+        )),
+    );
+    // The path across the curve: stable solid (drawn first and wider, so that an unstable
+    // stretch back along the same line shows over it), unstable dashed.
+    let held = across
+        .first()
+        .and_then(|(_, pts)| pts.first())
+        .map(|p| super::svg::short(p.1));
+    let mut runs: Vec<&Run> = across.iter().collect();
+    runs.sort_by_key(|(i, _)| i.map_or(1, |i| usize::from(i > 0)));
+    for (index, pts) in runs {
+        let word = match index {
+            Some(0) => "stable (index 0)".to_string(),
+            Some(i) => format!("unstable (index {i})"),
+            None => "index not computed".to_string(),
+        };
+        let kind = format!(
+            "path in {} at {} = {}: {word}",
+            curve.control,
+            curve.second,
+            held.clone().unwrap_or_default()
+        );
+        let width = if *index == Some(0) { 3 } else { 2 };
+        let pts = pts
+            .iter()
+            .map(|&(x, y)| (x * xs.factor, y * ys.factor))
+            .collect();
+        plot.lines.push(
+            Line::new(
+                pts,
+                side_colour(*index),
+                width,
+                super::surface::index_dash(*index),
+            )
+            .kind(kind),
+        );
+    }
     // The path's states next to the first point, ringed in the colour of their index.
     let mut known = false;
     for &((x, y), index) in sides {
@@ -217,11 +311,14 @@ fn render(
         let here = (x * xs.factor, y * ys.factor);
         let (kind, label) = match index {
             Some(0) => (
-                format!("state of the path in {}: stable", curve.control),
+                format!("state of the path in {}: stable (index 0)", curve.control),
                 "stable (index 0)".to_string(),
             ),
             Some(i) => (
-                format!("state of the path in {}: unstable", curve.control),
+                format!(
+                    "state of the path in {}: unstable (index {i})",
+                    curve.control
+                ),
                 format!("unstable (index {i})"),
             ),
             None => (

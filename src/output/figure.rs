@@ -110,6 +110,12 @@ pub struct Layout {
     pub marker_kinds: Vec<String>,
     /// The marker kinds the legend shows.
     pub legend_markers: Vec<String>,
+    /// The kinds of the keyed lines ([`Line::kind`]) drawn inside the plot, each once.
+    #[serde(default)]
+    pub line_kinds: Vec<String>,
+    /// The legend's entries for keyed lines.
+    #[serde(default)]
+    pub legend_lines: Vec<String>,
     /// The inset's box, if there is one.
     pub inset: Option<Rect>,
     /// The caption line.
@@ -174,6 +180,8 @@ pub fn finish(svg: &str, layout: &Layout) -> String {
         .iter_mut()
         .chain(&mut layout.marker_kinds)
         .chain(&mut layout.legend_markers)
+        .chain(&mut layout.line_kinds)
+        .chain(&mut layout.legend_lines)
         .chain(&mut layout.dropped)
         .chain(layout.labels.iter_mut().map(|l| &mut l.text))
         .chain(layout.scales.iter_mut().map(|s| &mut s.label))
@@ -276,6 +284,9 @@ pub struct Line {
     pub width: u32,
     /// Dash and gap in pixels; `None`: solid.
     pub dash: Option<(u32, u32)>,
+    /// What the line is, as its legend entry says: a keyed line gets its entry from the
+    /// figure, once per kind, and only when a piece of it is drawn inside the plot.
+    pub kind: Option<String>,
 }
 
 impl Line {
@@ -292,7 +303,14 @@ impl Line {
             alpha: 1.0,
             width,
             dash,
+            kind: None,
         }
+    }
+
+    /// The line keyed by `kind` (its legend entry).
+    pub fn kind(mut self, kind: impl Into<String>) -> Self {
+        self.kind = Some(kind.into());
+        self
     }
 }
 
@@ -407,16 +425,35 @@ impl Plot {
         }
     }
 
-    /// The legend: the plot's entries, then one per kind of mark in order of appearance.
-    fn entries(&self) -> Vec<Entry> {
-        let mut out = self.legend.clone();
+    /// The legend: the plot's entries, one per kind of keyed line drawn (`drawn`: the lines
+    /// with a piece inside the plot), one per kind of mark in order of appearance, then the
+    /// plot's notes.
+    fn entries(&self, drawn: &[bool]) -> Vec<Entry> {
+        let (notes, mut out): (Vec<Entry>, Vec<Entry>) = self
+            .legend
+            .iter()
+            .cloned()
+            .partition(|e| e.sample == Sample::Note);
         let mut kinds: Vec<String> = Vec::new();
+        for (l, _) in self.lines.iter().zip(drawn).filter(|(_, &d)| d) {
+            if let Some(k) = &l.kind {
+                if !kinds.contains(k) {
+                    kinds.push(k.clone());
+                    out.push(Entry::new(
+                        k.clone(),
+                        Sample::Line(l.colour, l.width, l.dash),
+                    ));
+                }
+            }
+        }
+        let mut marks: Vec<String> = Vec::new();
         for m in &self.marks {
-            if !kinds.contains(&m.kind) {
-                kinds.push(m.kind.clone());
+            if !marks.contains(&m.kind) {
+                marks.push(m.kind.clone());
                 out.push(Entry::new(m.kind.clone(), Sample::Symbol(m.symbol)));
             }
         }
+        out.extend(notes);
         out
     }
 }
@@ -940,17 +977,46 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             padded(all().map(|p| p.1).chain(plot.with_zero.then_some(0.0))),
         )
     });
-    let entries = plot.entries();
+    // A line is drawn when a piece of it lies inside the axes' ranges.
+    let drawn: Vec<bool> = plot
+        .lines
+        .iter()
+        .map(|l| match plot.ranges {
+            None => l.points.len() > 1,
+            Some(_) => !clip(&l.points, &xr, &yr).is_empty(),
+        })
+        .collect();
+    let entries = plot.entries(&drawn);
+    // A caption line longer than the canvas widens it.
+    let size = (
+        plot.size
+            .0
+            .max(text_size(&plot.caption, SMALL).0.ceil() as u32 + 28),
+        plot.size.1,
+    );
     let mut layout = Layout {
-        width: plot.size.0,
-        height: plot.size.1,
+        width: size.0,
+        height: size.1,
         caption: plot.caption.clone(),
         legend: entries.iter().map(|e| e.text.clone()).collect(),
         ..Layout::default()
     };
+    for (l, _) in plot.lines.iter().zip(&drawn).filter(|(_, &d)| d) {
+        if let Some(k) = &l.kind {
+            if !layout.line_kinds.contains(k) {
+                layout.line_kinds.push(k.clone());
+            }
+        }
+    }
+    let keyed: Vec<&String> = plot.lines.iter().filter_map(|l| l.kind.as_ref()).collect();
+    layout.legend_lines = entries
+        .iter()
+        .filter(|e| keyed.contains(&&e.text))
+        .map(|e| e.text.clone())
+        .collect();
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, plot.size).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         root.fill(&WHITE)?;
         let chart = chart(
             &root,
@@ -974,13 +1040,20 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
             (f64::from(x), f64::from(y))
         };
         let ipx = |p: (f64, f64)| chart.backend_coord(&p);
-        draw_data(&root, plot, &ipx, None)?;
+        // Given ranges cut the lines at the axes.
+        let window = plot.ranges.as_ref().map(|_| (&xr, &yr));
+        draw_data(&root, plot, &ipx, window)?;
 
-        // Where the data are, in pixels: the legend and inset go where they hide least.
+        // Where the data are, in pixels: the legend and inset go where they hide least (the
+        // legend where it hides the fewest marks, then the fewest line samples).
         let lines_px: Vec<Vec<(f64, f64)>> = plot
             .lines
             .iter()
-            .map(|l| l.points.iter().map(|&p| to_px(p)).collect())
+            .flat_map(|l| match window {
+                None => vec![l.points.clone()],
+                Some((xr, yr)) => clip(&l.points, xr, yr),
+            })
+            .map(|l| l.iter().map(|&p| to_px(p)).collect())
             .collect();
         let mut data = samples(&lines_px);
         let mark_px: Vec<(f64, f64)> = plot.marks.iter().map(|m| to_px(m.at)).collect();
@@ -997,7 +1070,7 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
         if !entries.is_empty() {
             let b = *free
                 .iter()
-                .min_by_key(|b| (hidden(b, &data), hidden(b, &polys)))
+                .min_by_key(|b| (hidden(b, &mark_px), hidden(b, &data), hidden(b, &polys)))
                 .unwrap_or(&free[0]);
             layout.legend_box = Some(b);
             used.push(b);
@@ -1078,7 +1151,7 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
         if let Some(b) = layout.legend_box {
             layout.legend_markers = draw_legend(&root, b, &entries)?;
         }
-        draw_caption(&root, &plot.caption, plot.size)?;
+        draw_caption(&root, &plot.caption, size)?;
         root.present()?;
     }
     Ok((svg, layout))
@@ -1445,6 +1518,35 @@ mod tests {
         let (_, layout) = render(&plot).unwrap();
         assert!(layout.marker_kinds.is_empty() && layout.legend_markers.is_empty());
         assert_eq!(layout.legend, ["path"]);
+    }
+
+    #[test]
+    fn keyed_lines_get_a_legend_entry_only_when_drawn() {
+        let mut plot = Plot::new("t", "scene s · mesh: disc, 8 triangles", "x", "y");
+        plot.lines
+            .push(Line::new(vec![(0.0, 0.0), (1.0, 1.0)], BLACK, 2, None).kind("stable (index 0)"));
+        plot.lines.push(
+            Line::new(vec![(0.5, 0.5), (1.0, 0.0)], BLACK, 2, Some((8, 5)))
+                .kind("stable (index 0)"),
+        );
+        plot.lines.push(
+            Line::new(vec![(3.0, 3.0), (4.0, 4.0)], BLACK, 2, Some((8, 5)))
+                .kind("unstable (index 1)"),
+        );
+        // Both inside: an entry each, the first line's style for the shared kind.
+        let (_, layout) = render(&plot).unwrap();
+        assert_eq!(
+            layout.line_kinds,
+            ["stable (index 0)", "unstable (index 1)"]
+        );
+        assert_eq!(layout.legend_lines, layout.line_kinds);
+        assert_eq!(layout.legend, ["stable (index 0)", "unstable (index 1)"]);
+        // The axes cut off the unstable line: no entry for it.
+        plot.ranges = Some((0.0..2.0, 0.0..2.0));
+        let (svg, layout) = render(&plot).unwrap();
+        assert_eq!(layout.line_kinds, ["stable (index 0)"]);
+        assert_eq!(layout.legend_lines, ["stable (index 0)"]);
+        assert!(!svg.contains("unstable"));
     }
 
     #[test]

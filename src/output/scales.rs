@@ -45,16 +45,18 @@ impl Scales {
     /// The scales of the quantities of `scene` and of `report`'s measures (`V/V0` with V0
     /// the first row's volume).
     pub fn of(scene: &Scene, report: &PathReport) -> Self {
-        let mut s = Self::of_scene(scene);
+        let mut s = Self::of_scene(scene, report.mesh.radius);
         s.measures(scene, report);
         s
     }
 
-    /// The scales of the parameters of `scene`.
-    pub fn of_scene(scene: &Scene) -> Self {
+    /// The scales of the parameters of `scene` solved on a mesh of radius `mesh_radius`
+    /// ([`MeshInfo::radius`](crate::results::MeshInfo::radius); used where the scene gives
+    /// none).
+    pub fn of_scene(scene: &Scene, mesh_radius: Option<f64>) -> Self {
         let mut s = Self::default();
         let m = &scene.material;
-        let (a, mu_h, l) = natural(scene);
+        let (a, mu_h, l) = natural(scene, mesh_radius);
         let with = with_values;
         if let Some(k) = m.k.parameter() {
             s.add(k, "k = c2/c1".into(), 1.0);
@@ -80,7 +82,7 @@ impl Scales {
     /// Adds the scales of `report`'s measures.
     fn measures(&mut self, scene: &Scene, report: &PathReport) {
         let s = self;
-        let (a, mu_h, l) = natural(scene);
+        let (a, mu_h, l) = natural(scene, report.mesh.radius);
         let with = with_values;
         if report.measures.iter().any(|m| m == "stretch") {
             s.add("stretch", "λ = (V/V_sf)^(1/3)".into(), 1.0);
@@ -116,8 +118,11 @@ impl Scales {
 }
 
 /// The scene's natural length a (the mesh radius over the prestretch), μH, and the length's
-/// symbol (`R` for a sphere, `a` for a disc), where the scene fixes them.
-fn natural(scene: &Scene) -> (Option<f64>, Option<f64>, &'static str) {
+/// symbol (`R` for a sphere, `a` for a disc), where the scene fixes them. A generated mesh's
+/// radius is the scene's; a mesh read from a file has none in the scene, and its own is taken
+/// (`mesh_radius`: the largest distance of a node from the surface's centroid, the generated
+/// disc's and sphere's radius alike).
+fn natural(scene: &Scene, mesh_radius: Option<f64>) -> (Option<f64>, Option<f64>, &'static str) {
     let m = &scene.material;
     let mu_h = number(&m.mu).zip(number(&m.thickness)).map(|(a, b)| a * b);
     let (radius, length) = match &scene.mesh {
@@ -125,7 +130,7 @@ fn natural(scene: &Scene) -> (Option<f64>, Option<f64>, &'static str) {
         MeshSpec::Icosphere(i) => (Some(i.radius), "R"),
         MeshSpec::TruncatedSphere(t) => (Some(t.radius), "R"),
         MeshSpec::Axisymmetric(a) => (Some(a.radius), "a"),
-        MeshSpec::File(_) => (None, "a"),
+        MeshSpec::File(_) => (mesh_radius, "a"),
     };
     let a = radius.zip(number(&m.prestretch)).map(|(r, l)| r / l);
     (a, mu_h, length)

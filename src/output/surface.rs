@@ -74,7 +74,8 @@ fn check_finite(path: &Path, s: &SurfaceReport) -> Result<(), OutputError> {
 /// `critical_line` (the line's number; −1 for path vertices) and every measure.
 /// `surface.json` is the whole report; `surface.svg` draws the measure against a: the
 /// triangles and the paths coloured by index, the critical lines in black (limit lines
-/// solid, bifurcation lines dashed).
+/// solid, bifurcation lines dashed), the paths cut at [`budget_cut`] where they stopped on
+/// their step budget at different values of a.
 ///
 /// # Errors
 /// [`OutputError::Invalid`] for a non-finite value or a surface without vertices (nothing
@@ -246,7 +247,7 @@ fn write_vtu(
 
 /// The colour of an index: blue for the stable states, then warmer with every negative
 /// eigenvalue; grey where it is unknown.
-fn index_colour(index: Option<usize>) -> RGBColor {
+pub(super) fn index_colour(index: Option<usize>) -> RGBColor {
     match index {
         None => RGBColor(150, 150, 150),
         Some(0) => RGBColor(31, 87, 180),
@@ -256,8 +257,120 @@ fn index_colour(index: Option<usize>) -> RGBColor {
     }
 }
 
+/// Where the surface's figure cuts its paths so that its edge is not ragged where paths
+/// stopped on their step budget: every path's last monotone stretch in a (after its last
+/// turn) is cut at the value of a where the first of them stopped on the budget.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BudgetCut {
+    /// The value of a (unscaled).
+    pub at: f64,
+    /// +1 where the last stretches run towards larger a, −1 towards smaller.
+    pub direction: f64,
+    /// The number of paths shortened by the cut.
+    pub paths: usize,
+}
+
+/// The first vertex of a path's last monotone stretch in a (column `a`) and its direction
+/// (+1 or −1); `None` for a path of fewer than two vertices or one that does not move in a.
+fn last_stretch(p: &crate::results::SurfacePath, a: usize) -> Option<(usize, f64)> {
+    let x: Vec<f64> = p.vertices.iter().map(|v| v.parameters[a]).collect();
+    let steps: Vec<f64> = x
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d != 0.0)
+        .collect();
+    let direction = steps.last()?.signum();
+    let mut start = x.len() - 1;
+    while start > 0 && (x[start] - x[start - 1]) * direction >= 0.0 {
+        start -= 1;
+    }
+    Some((start, direction))
+}
+
+/// The cut of the surface's figure ([`BudgetCut`]): where one or more of its paths stopped on
+/// the step budget, the paths' last stretches all run the same way in a (column `a`) and every
+/// one reaches the value of a where the first budget-stopped path ended. `None` otherwise
+/// (nothing to cut, or a cut that would not give a straight edge): the figure then draws every
+/// point.
+pub fn budget_cut(s: &SurfaceReport, a: usize) -> Option<BudgetCut> {
+    if s.paths.len() < 2 {
+        return None;
+    }
+    let stretches: Vec<(usize, f64)> = s
+        .paths
+        .iter()
+        .map(|p| last_stretch(p, a))
+        .collect::<Option<_>>()?;
+    let direction = stretches[0].1;
+    if stretches.iter().any(|&(_, d)| d != direction) {
+        return None;
+    }
+    let end = |p: &crate::results::SurfacePath| p.vertices.last().map_or(0.0, |v| v.parameters[a]);
+    let at = s
+        .paths
+        .iter()
+        .filter(|p| matches!(p.stop, crate::results::StopReason::StepBudget { .. }))
+        .map(|p| end(p) * direction)
+        .fold(f64::INFINITY, f64::min)
+        * direction;
+    if !at.is_finite() {
+        return None;
+    }
+    // Every path's last stretch must reach back to the cut.
+    let reaches = s
+        .paths
+        .iter()
+        .zip(&stretches)
+        .all(|(p, &(start, _))| p.vertices[start].parameters[a] * direction <= at * direction);
+    if !reaches {
+        return None;
+    }
+    let paths = s
+        .paths
+        .iter()
+        .filter(|p| (end(p) - at) * direction > 0.0)
+        .count();
+    Some(BudgetCut {
+        at,
+        direction,
+        paths,
+    })
+}
+
+/// How far past the cut each vertex lies (positive: cut away), path after path: (a − cut) ×
+/// direction on a path's last stretch, at most 0 elsewhere.
+fn beyond(s: &SurfaceReport, a: usize, cut: &BudgetCut) -> Vec<f64> {
+    let mut out = Vec::with_capacity(s.vertex_count());
+    for p in &s.paths {
+        let start = last_stretch(p, a).map_or(usize::MAX, |(k, _)| k);
+        for (k, v) in p.vertices.iter().enumerate() {
+            let t = (v.parameters[a] - cut.at) * cut.direction;
+            out.push(if k >= start { t } else { t.min(0.0) });
+        }
+    }
+    out
+}
+
+/// The part of the polygon `pts` where `t` ≤ 0 (t linear along its edges).
+fn keep_inside(pts: &[(f64, f64)], t: &[f64]) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for i in 0..pts.len() {
+        let j = (i + 1) % pts.len();
+        let (p, q, tp, tq) = (pts[i], pts[j], t[i], t[j]);
+        if tp <= 0.0 {
+            out.push(p);
+        }
+        if (tp <= 0.0) != (tq <= 0.0) {
+            let f = tp / (tp - tq);
+            out.push((p.0 + f * (q.0 - p.0), p.1 + f * (q.1 - p.1)));
+        }
+    }
+    out
+}
+
 /// The measure (column `m`) against a (column `a`): triangles and paths by index, the
-/// critical lines over them; axes titled and scaled by `scales`.
+/// critical lines over them; axes titled and scaled by `scales`. Where paths stopped on their
+/// step budget the figure is cut at [`budget_cut`], said in the caption.
 fn render(
     s: &SurfaceReport,
     a: usize,
@@ -273,6 +386,8 @@ fn render(
             vertices[i].measures[m] * ys.factor,
         )
     };
+    let cut = budget_cut(s, a).filter(|c| c.paths > 0);
+    let t = cut.map_or_else(|| vec![0.0; vertices.len()], |c| beyond(s, a, &c));
     let (lo, hi) = (
         s.paths.first().map_or(0.0, |p| p.b),
         s.paths.last().map_or(0.0, |p| p.b),
@@ -285,17 +400,31 @@ fn render(
         super::svg::short(lo),
         super::svg::short(hi)
     );
+    // The cut said in the caption: where, and why.
+    let caption = match &cut {
+        Some(c) => format!(
+            "{caption} · {} of {} paths cut at {} = {} (step budget)",
+            c.paths,
+            s.paths.len(),
+            s.a,
+            super::svg::short(c.at)
+        ),
+        None => caption.to_string(),
+    };
     let mut plot = Plot::new(title, caption, &xs.label, &ys.label);
     // A triangle is shaded by the largest index of its corners: stable only where all three
     // are; a region whose index was not computed is grey.
     let mut shaded: Vec<Option<usize>> = Vec::new();
-    for t in &s.triangles {
-        let index = t.iter().map(|&v| vertices[v].index).max().flatten();
+    for tri in &s.triangles {
+        let index = tri.iter().map(|&v| vertices[v].index).max().flatten();
         let c = index_colour(index);
-        plot.polygons.push((
-            t.iter().map(|&v| at(v)).collect(),
-            RGBAColor(c.0, c.1, c.2, REGION_ALPHA),
-        ));
+        let pts: Vec<(f64, f64)> = tri.iter().map(|&v| at(v)).collect();
+        let kept = keep_inside(&pts, &tri.map(|v| t[v]));
+        if kept.len() < 3 {
+            continue;
+        }
+        plot.polygons
+            .push((kept, RGBAColor(c.0, c.1, c.2, REGION_ALPHA)));
         if !shaded.contains(&index) {
             shaded.push(index);
         }
@@ -308,40 +437,56 @@ fn render(
             Sample::Patch(RGBAColor(c.0, c.1, c.2, REGION_ALPHA)),
         ));
     }
-    let mut legend: Vec<Option<usize>> = Vec::new();
+    let mut paths: Vec<(Option<usize>, Line)> = Vec::new();
     for p in &s.paths {
-        // Runs of one index, drawn whole so that a dash runs on across short steps.
+        let first = p.first_vertex;
+        // Runs of one index, drawn whole so that a dash runs on across short steps; a path
+        // ends where the cut crosses it.
         let mut runs: Vec<super::svg::IndexRun> = Vec::new();
-        for pair in p.vertices.windows(2) {
-            let index = pair[0].index;
-            let q = |v: &crate::results::SurfaceVertex| {
-                (v.parameters[a] * xs.factor, v.measures[m] * ys.factor)
+        for k in 1..p.vertices.len() {
+            let (u, v) = (first + k - 1, first + k);
+            if t[u] > 0.0 {
+                break;
+            }
+            let to = if t[v] > 0.0 {
+                let f = t[u] / (t[u] - t[v]);
+                let (p0, p1) = (at(u), at(v));
+                (p0.0 + f * (p1.0 - p0.0), p0.1 + f * (p1.1 - p0.1))
+            } else {
+                at(v)
             };
+            let index = vertices[u].index;
             match runs.last_mut() {
-                Some((i, pts)) if *i == index => pts.push(q(&pair[1])),
-                _ => runs.push((index, vec![q(&pair[0]), q(&pair[1])])),
+                Some((i, pts)) if *i == index => pts.push(to),
+                _ => runs.push((index, vec![at(u), to])),
             }
         }
         for (index, pts) in runs {
             let (c, dash) = (index_colour(index), index_dash(index));
-            plot.lines.push(Line::new(pts, c, 2, dash));
-            if !legend.contains(&index) {
-                legend.push(index);
-            }
+            let line = Line::new(pts, c, 2, dash).kind(super::svg::index_legend(index));
+            paths.push((index, line));
         }
     }
-    legend.sort();
-    for index in legend {
-        plot.legend.push(Entry::new(
-            super::svg::index_legend(index),
-            Sample::Line(index_colour(index), 2, index_dash(index)),
-        ));
-    }
+    // The legend's entries (one per index drawn) in the order of the index.
+    paths.sort_by_key(|(index, _)| *index);
+    plot.lines.extend(paths.into_iter().map(|(_, l)| l));
+    // A critical point past the cut goes with its path: it lies on a path's last stretch
+    // (the vertex after it is cut away) and beyond the cut in a.
+    let past = |p: &crate::results::CriticalLinePoint| {
+        cut.is_some_and(|c| {
+            let path = &s.paths[p.path];
+            let after = path.critical[p.critical].after_step + 1;
+            let next = path.vertices.iter().position(|v| v.step == after);
+            next.is_some_and(|k| t[path.first_vertex + k] > 0.0)
+                && (p.parameters[a] - c.at) * c.direction > 0.0
+        })
+    };
     let (mut limit, mut bifurcation) = (false, false);
     for l in &s.lines {
         let points: Vec<(f64, f64)> = l
             .points
             .iter()
+            .filter(|p| !past(p))
             .map(|p| (p.parameters[a] * xs.factor, p.measures[m] * ys.factor))
             .collect();
         for &p in &points {
@@ -351,6 +496,9 @@ fn render(
                 kind: "critical point of a path".to_string(),
                 label: String::new(),
             });
+        }
+        if points.len() < 2 {
+            continue;
         }
         if l.kind == CriticalKind::LimitPoint {
             plot.lines.push(Line::new(points, BLACK, 3, None));
@@ -388,10 +536,106 @@ fn region_legend(index: Option<usize>) -> String {
 }
 
 /// The dash of an index: stable solid, unstable dashed.
-fn index_dash(index: Option<usize>) -> Option<(u32, u32)> {
+pub(super) fn index_dash(index: Option<usize>) -> Option<(u32, u32)> {
     match index {
         Some(0) => None,
         Some(_) => Some((8, 5)),
         None => Some((2, 4)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::results::{StopReason, SurfacePath, SurfaceVertex};
+
+    /// A surface of paths in a (column 0) at b = 0, 1, …, each given by its values of a and
+    /// why it stopped; the measure is a².
+    fn surface(paths: &[(&[f64], StopReason)]) -> SurfaceReport {
+        let mut first = 0;
+        let paths = paths
+            .iter()
+            .enumerate()
+            .map(|(j, (a, stop))| {
+                let vertices: Vec<SurfaceVertex> = a
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &x)| SurfaceVertex {
+                        step: k,
+                        arclength: k as f64,
+                        parameters: vec![x, j as f64],
+                        measures: vec![x * x],
+                        index: Some(0),
+                    })
+                    .collect();
+                let p = SurfacePath {
+                    b: j as f64,
+                    first_vertex: first,
+                    vertices,
+                    critical: Vec::new(),
+                    stop: stop.clone(),
+                };
+                first += a.len();
+                p
+            })
+            .collect();
+        SurfaceReport {
+            a: "a".into(),
+            b: "b".into(),
+            measure: "m".into(),
+            parameters: vec!["a".into(), "b".into()],
+            measures: vec!["m".into()],
+            paths,
+            triangles: Vec::new(),
+            lines: Vec::new(),
+            warnings: Vec::new(),
+        }
+    }
+
+    const BUDGET: StopReason = StopReason::StepBudget { steps: 5 };
+
+    #[test]
+    fn paths_stopped_on_their_budget_are_cut_where_the_first_ended() {
+        // Three paths run up in a; the one that stopped first on its budget ends at 1.2.
+        let s = surface(&[
+            (&[0.0, 0.5, 1.0, 1.5], BUDGET),
+            (&[0.0, 0.6, 1.2], BUDGET),
+            (&[0.0, 0.4, 0.8, 1.2, 1.6, 2.0], StopReason::Bounds),
+        ]);
+        let cut = budget_cut(&s, 0).expect("a cut");
+        assert_eq!(cut.at, 1.2);
+        assert_eq!(cut.direction, 1.0);
+        assert_eq!(cut.paths, 2);
+        // Past the cut: the last two points of the third path and the last of the first.
+        let t = beyond(&s, 0, &cut);
+        let past: Vec<usize> = (0..t.len()).filter(|&i| t[i] > 0.0).collect();
+        assert_eq!(past, [3, 11, 12]);
+        // A triangle across the cut keeps its part before it.
+        let kept = keep_inside(&[(1.0, 0.0), (1.5, 0.0), (1.0, 1.0)], &[-0.2, 0.3, -0.2]);
+        assert_eq!(kept.len(), 4);
+        assert!(kept.iter().all(|p| p.0 <= 1.2 + 1e-12), "{kept:?}");
+        // Running down in a: cut at the largest end of a budget-stopped path.
+        let s = surface(&[(&[2.0, 1.0, 0.5], BUDGET), (&[2.0, 1.5, 0.8], BUDGET)]);
+        let cut = budget_cut(&s, 0).expect("a cut");
+        assert_eq!((cut.at, cut.direction, cut.paths), (0.8, -1.0, 1));
+    }
+
+    #[test]
+    fn no_cut_without_a_budget_stop_or_a_straight_edge() {
+        // Every path left the range: its edge is the range's.
+        let s = surface(&[
+            (&[0.0, 1.0, 2.0], StopReason::Bounds),
+            (&[0.0, 1.5, 2.1], StopReason::Bounds),
+        ]);
+        assert_eq!(budget_cut(&s, 0), None);
+        // A path whose last stretch (after its fold at 1.6) starts past the other's end: a
+        // cut would take away more than the ragged edge.
+        let s = surface(&[(&[0.0, 0.5, 1.0], BUDGET), (&[0.0, 1.6, 1.3, 1.4], BUDGET)]);
+        assert_eq!(budget_cut(&s, 0), None);
+        // Last stretches running opposite ways.
+        let s = surface(&[(&[0.0, 0.5, 1.0], BUDGET), (&[0.0, 1.0, 0.7], BUDGET)]);
+        assert_eq!(budget_cut(&s, 0), None);
+        // A single path.
+        assert_eq!(budget_cut(&surface(&[(&[0.0, 1.0], BUDGET)]), 0), None);
     }
 }

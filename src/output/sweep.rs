@@ -1,7 +1,7 @@
 //! A sweep's collected table ([`SweepTable`]): `collected.csv` (a row per turning or critical
 //! point of every finished run, the swept values as columns), `collected_runs.csv` (a row per
 //! run with its status) and `collected.svg` (the points' control values against a swept
-//! value, one colour per irrep and wave number).
+//! value, one colour per irrep and wave number, the caption naming the runs' meshes).
 
 use super::csv::quote;
 use super::figure::{self, Line, Mark, Plot, Symbol};
@@ -145,6 +145,36 @@ pub fn write_sweep_table(
     Ok(vec![csv, runs, svg_path])
 }
 
+/// The meshes of a sweep's finished runs for its caption: `mesh: disc, 1792 triangles, group
+/// C7v` when all ran on one, `meshes: disc, 72 to 648 triangles, group C7v` for one generator
+/// and group at several sizes, else each mesh.
+fn meshes(table: &SweepTable) -> String {
+    let mut all: Vec<&crate::results::MeshInfo> =
+        table.runs.iter().filter_map(|r| r.mesh.as_ref()).collect();
+    all.sort_by(|a, b| {
+        (&a.generator, &a.group, a.elements).cmp(&(&b.generator, &b.group, b.elements))
+    });
+    all.dedup_by(|a, b| a.describe() == b.describe());
+    match all.as_slice() {
+        [] => "mesh: not read (no finished run)".to_string(),
+        [one] => format!("mesh: {}", one.describe()),
+        [first, .., last]
+            if all
+                .iter()
+                .all(|m| m.generator == first.generator && m.group == first.group) =>
+        {
+            format!(
+                "meshes: {}, {} to {} triangles, group {}",
+                first.generator, first.elements, last.elements, first.group
+            )
+        }
+        _ => {
+            let each: Vec<String> = all.iter().map(|m| m.describe()).collect();
+            format!("meshes: {}", each.join("; "))
+        }
+    }
+}
+
 /// A point's legend label: the irrep and wave number of a critical point, `maximum`/`minimum`
 /// of a turning point.
 fn label(p: &SweepPoint) -> String {
@@ -209,7 +239,12 @@ fn render(table: &SweepTable, axis: Option<usize>) -> Result<String, Box<dyn std
     let y_title = table.control.as_deref().unwrap_or("control");
     let mut plot = Plot::new(
         format!("{}: critical and turning values", table.name),
-        format!("sweep {} · {} runs", table.name, table.runs.len()),
+        format!(
+            "sweep {} · {} runs · {}",
+            table.name,
+            table.runs.len(),
+            meshes(table)
+        ),
         x_title,
         y_title,
     );

@@ -5,7 +5,7 @@ use super::{CriticalPoint, Extremum, Spectra, StopReason};
 use serde::Serialize;
 
 /// The mesh a run used.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct MeshInfo {
     /// Generator name (`disc`, `icosphere`, `truncated-sphere`).
     pub generator: String,
@@ -17,9 +17,46 @@ pub struct MeshInfo {
     pub group: String,
     /// Its order.
     pub order: usize,
+    /// The largest distance of a node from the centroid of the mesh's surface (its triangles'
+    /// centroids weighted by their areas), in the mesh's coordinates (a 3-D mesh's; the
+    /// length a figure of a mesh read from a file is scaled by).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
 }
 
 impl MeshInfo {
+    /// The largest distance of one of `nodes` from the centroid of the surface of
+    /// `triangles` (each triangle's centroid weighted by its area: on an irregular mesh of a
+    /// disc or sphere the centre up to the discretisation, where the nodes' mean is off by
+    /// their uneven spacing); `None` without triangles or area.
+    pub fn radius_of(nodes: &[[f64; 3]], triangles: &[[usize; 3]]) -> Option<f64> {
+        let (mut c, mut total) = ([0.0; 3], 0.0);
+        for t in triangles {
+            let [a, b, d] = t.map(|i| nodes[i]);
+            let (u, v) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [d[0] - a[0], d[1] - a[1], d[2] - a[2]],
+            );
+            let area = 0.5
+                * (u[1] * v[2] - u[2] * v[1])
+                    .hypot(u[2] * v[0] - u[0] * v[2])
+                    .hypot(u[0] * v[1] - u[1] * v[0]);
+            for k in 0..3 {
+                c[k] += area * (a[k] + b[k] + d[k]) / 3.0;
+            }
+            total += area;
+        }
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let c = c.map(|x| x / total);
+        let r = nodes
+            .iter()
+            .map(|p| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt())
+            .fold(0.0, f64::max);
+        r.is_finite().then_some(r)
+    }
+
     /// `disc, 1792 triangles, group C7v`: the mesh as a figure's caption names it.
     pub fn describe(&self) -> String {
         format!(
@@ -273,6 +310,25 @@ mod tests {
     }
 
     #[test]
+    fn a_mesh_radius_is_taken_about_the_centroid_of_its_surface() {
+        // The square [-1, 1]² with three extra nodes on its right edge: the nodes' mean lies
+        // at x = 3/7, the surface's centroid at the centre.
+        let nodes = [
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+            [1.0, -0.5, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 0.5, 0.0],
+        ];
+        let triangles = [[0, 1, 4], [0, 4, 5], [0, 5, 6], [0, 6, 2], [0, 2, 3]];
+        let r = MeshInfo::radius_of(&nodes, &triangles).unwrap();
+        assert!((r - 2f64.sqrt()).abs() < 1e-12, "{r}");
+        assert_eq!(MeshInfo::radius_of(&nodes, &[]), None);
+    }
+
+    #[test]
     fn the_index_range_covers_every_row() {
         let mut r = PathReport {
             scene: String::new(),
@@ -284,6 +340,7 @@ mod tests {
                 elements: 0,
                 group: String::new(),
                 order: 1,
+                radius: None,
             },
             group: String::new(),
             group_order: 1,

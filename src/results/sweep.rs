@@ -54,6 +54,9 @@ pub struct SweepRun {
     pub stop: Option<String>,
     /// Why it failed or counts as cut short (one line).
     pub message: Option<String>,
+    /// The mesh it ran on (a finished run's, from its `path.json`).
+    #[serde(default)]
+    pub mesh: Option<super::MeshInfo>,
 }
 
 /// Which list of a run a [`SweepPoint`] comes from.

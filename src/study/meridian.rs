@@ -276,6 +276,7 @@ impl MeridianStudy {
                 elements: model.meridian.elements(),
                 group: MERIDIAN_GROUP.into(),
                 order: 0,
+                radius: None,
             },
             group: MERIDIAN_GROUP.into(),
             group_order: 0,

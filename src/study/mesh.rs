@@ -415,6 +415,15 @@ impl MeshStudy {
                 elements: mesh.mesh.triangles.len(),
                 group: mesh.group().name().to_string(),
                 order: mesh.group().order(),
+                radius: MeshInfo::radius_of(
+                    &mesh
+                        .mesh
+                        .nodes
+                        .iter()
+                        .map(|p| [p[0], p[1], p[2]])
+                        .collect::<Vec<_>>(),
+                    &mesh.mesh.triangles,
+                ),
             },
             group: action.group().name().to_string(),
             group_order: action.group().order(),

@@ -43,6 +43,18 @@ struct SummaryIn {
     critical: Vec<CriticalIn>,
 }
 
+/// The part of a run's `path.json` that names its mesh.
+#[derive(Deserialize)]
+struct PathIn {
+    mesh: crate::results::MeshInfo,
+}
+
+/// The mesh of the finished run in `run` (its `path.json`), if it can be read.
+fn mesh_of(run: &Path) -> Option<crate::results::MeshInfo> {
+    let text = crate::output::read_regular_string(&run.join("path.json")).ok()?;
+    serde_json::from_str::<PathIn>(&text).ok().map(|p| p.mesh)
+}
+
 /// Collects the sweep in `dir` ([`super::open`]): a run whose summary cannot be read counts
 /// as cut short, with the reason.
 pub fn collect(dir: &Path) -> Result<SweepTable, SweepError> {
@@ -56,7 +68,9 @@ pub fn collect(dir: &Path) -> Result<SweepTable, SweepError> {
     };
     for task in &expanded.tasks {
         let mut s = status(dir, task);
+        let mut mesh = None;
         if s.status == RunStatus::Finished {
+            mesh = mesh_of(&dir.join(&task.dir));
             let file = dir.join(&task.dir).join(SUMMARY_JSON);
             let read = crate::output::read_regular_string(&file)
                 .map_err(|e| e.to_string())
@@ -113,6 +127,7 @@ pub fn collect(dir: &Path) -> Result<SweepTable, SweepError> {
             status: s.status,
             stop: s.stop,
             message: s.message,
+            mesh,
         });
     }
     Ok(table)

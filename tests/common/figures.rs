@@ -3,8 +3,8 @@
 //! builder into the SVG as `<metadata>`) has no two labels overlapping, none on the legend or
 //! (outside it) on the inset, none off the canvas or left out, every label drawn as a
 //! `<text>`, a label without a leader line nearer its own point than any other, a legend
-//! entry for every marker kind drawn and none for a kind not drawn, and a caption naming the
-//! mesh.
+//! entry for every marker kind and every keyed line kind drawn and none for a kind not drawn,
+//! and a caption naming the mesh.
 #![allow(dead_code)]
 
 use memstab::output::{read_layout, Layout};
@@ -178,16 +178,22 @@ pub fn check_layout(layout: &Layout, texts: &[String], what: &str) {
             layout.legend
         );
     }
+    // Keyed lines (what a line is, as its legend says): an entry for each kind drawn inside
+    // the plot, none for a kind not drawn there.
+    let mut drawn = layout.line_kinds.clone();
+    let mut shown = layout.legend_lines.clone();
+    drawn.sort();
+    shown.sort();
+    assert_eq!(drawn, shown, "{what}: keyed lines drawn and in the legend");
     for entry in &layout.legend {
         assert!(
             texts.iter().any(|t| t == entry),
             "{what}: legend entry {entry:?} not drawn"
         );
     }
-    // (A sweep's figure gathers runs whose meshes may differ: its caption names the sweep.)
+    // (A sweep's figure gathers runs whose meshes may differ: its caption names each size.)
     assert!(
-        (layout.caption.contains("triangles") || layout.caption.starts_with("sweep "))
-            && texts.contains(&layout.caption),
+        layout.caption.contains(" triangles") && texts.contains(&layout.caption),
         "{what}: caption {:?}",
         layout.caption
     );
