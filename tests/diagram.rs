@@ -663,3 +663,53 @@ fn an_interrupted_memstab_diagram_exits_130_with_a_manifest_that_verifies() {
         text(&o.stderr)
     );
 }
+
+/// The upward disc's E1 double point (C7v, m = 1): on the C1v− branch the other half of the
+/// kernel (the pattern's orientation, neutral in the axisymmetric continuum) has an
+/// eigenvalue at round-off at the branch's first point, so the index counts an A2 crossing
+/// there (h = 4.14106, 2·10⁻⁴ below the double). Its eigenvalue does not cross: its rate
+/// along the branch is below what moves it off zero over a step, so no branch is switched to
+/// (before, a C1 branch was tried and could not take its first step); the E1 point itself is
+/// transversal and has its two branches.
+#[test]
+fn a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation() {
+    use memstab::results::{Node, Skip};
+    let text = bundled("disc_upward.toml")
+        .replace("depth = 1 ", "depth = 2 ")
+        .replace("steps = 30 ", "steps = 4 ");
+    let scene = Scene::from_toml_str(&text, "disc").unwrap();
+    let mut study = memstab::study::build(scene).unwrap();
+    let result = run(&mut *study, |_, _| {}).unwrap();
+    let g = &result.branches.as_ref().expect("branches").graph;
+    assert_eq!(g.branches.len(), 2, "only the double's two halves leave");
+    assert!(g.branches.iter().all(|b| b.isotropy == "C1v"));
+    let mut touched = 0;
+    for n in g.graph.node_indices() {
+        let Node::Critical {
+            on, point, skipped, ..
+        } = &g.graph[n]
+        else {
+            continue;
+        };
+        match on {
+            None => {
+                assert_eq!(point.irrep, "E1");
+                assert_eq!(g.leaving(n).len(), 2);
+                let b = g.branches[0].reduced.path_slope.abs();
+                assert!(b > 1e-4, "the double crosses transversally: {b}");
+            }
+            Some(_) => {
+                let Some(Skip::NotTransversal(rate)) = skipped else {
+                    panic!("{} on a branch: {skipped:?}", point.irrep);
+                };
+                assert_eq!(point.irrep, "A2");
+                assert!(g.leaving(n).is_empty());
+                // At the branch's first point, orders of magnitude slower than the double.
+                assert!(point.after_step <= 1, "{}", point.after_step);
+                assert!(rate.abs() < 1e-9, "{rate}");
+                touched += 1;
+            }
+        }
+    }
+    assert_eq!(touched, 1, "the A2 point of the C1v− branch");
+}

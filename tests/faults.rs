@@ -1060,38 +1060,47 @@ fn twenty_concurrent_runs_into_one_directory_complete_or_are_refused() {
     assert!(!out.join(memstab::output::LOCK).exists());
 }
 
-/// A branch that cannot leave its point gets the same one line as a stalled path: on the
-/// upward disc the C1 branch of the A2 point at h = 4.14106 on a C1v branch, 2·10⁻⁴ below the
-/// E1 double, stalls at its first step, and says so and what to try.
+/// A branch that cannot leave its point gets one line naming the cause and what to try, in the
+/// branches' own keys; one that stalls later gets the path's line for the kind of its
+/// failure, about the branch. (The upward disc's A2 point at h = 4.14106 on a C1v branch,
+/// whose C1 branch used to stall at its first step, is no bifurcation and is not switched at:
+/// `diagram::a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation`.)
 #[test]
 fn a_stalled_branch_names_the_cause() {
-    use memstab::results::StopReason;
+    use memstab::results::{Stalled, StepFailure};
     let text = std::fs::read_to_string(scene("disc_upward.toml")).unwrap();
-    assert!(text.contains("\ndepth = 1 "), "the bundled scene's depth");
-    let text = text.replacen("\ndepth = 1 ", "\ndepth = 2 ", 1);
-    let scene = memstab::scene::Scene::from_toml_str(&text, "cap").unwrap();
-    let mut study = memstab::study::build(scene).unwrap();
-    let result = memstab::analysis::run(&mut *study, |_, _| {}).unwrap();
-    let branches = result.branches.expect("branches");
-    let stalled: Vec<_> = branches
-        .graph
-        .branches
-        .iter()
-        .filter(|b| matches!(b.stop, StopReason::Stalled(_)))
-        .collect();
-    assert!(!stalled.is_empty(), "no stalled branch");
-    for b in stalled {
-        let hints: Vec<_> = b
-            .warnings
-            .iter()
-            .filter(|w| w.contains("likely cause"))
-            .collect();
-        assert_eq!(hints.len(), 1, "{:?}", b.warnings);
-        assert!(
-            hints[0].contains("the branch could not leave its critical point")
-                && hints[0].contains("[analysis.branches]"),
-            "{}",
-            hints[0]
-        );
-    }
+    let scene = memstab::scene::Scene::from_toml_str(&text, "disc").unwrap();
+    let opts = memstab::continuation::PathOptions::default();
+    let stalled = |after: usize, kind: StepFailure| Stalled {
+        min_step: 1e-6,
+        after,
+        control: 4.141061160117826,
+        why: "the corrector did not converge in 25 iterations".into(),
+        kind,
+    };
+    let first = memstab::study::branch_stall_hint(
+        &scene,
+        &stalled(0, StepFailure::NotConverged),
+        "h",
+        &opts,
+    );
+    assert!(
+        first.contains("the branch could not leave its critical point (h = 4.141061160117826")
+            && first.contains("likely cause")
+            && first.contains("[analysis.branches]")
+            && first.contains("the corrector did not converge"),
+        "{first}"
+    );
+    let later = memstab::study::branch_stall_hint(
+        &scene,
+        &stalled(13, StepFailure::BranchJump),
+        "h",
+        &opts,
+    );
+    assert!(
+        later.contains("the branch stopped")
+            && !later.contains("the path stopped")
+            && later.contains("likely cause"),
+        "{later}"
+    );
 }

@@ -18,7 +18,7 @@ use super::CliError;
 use clap::Args;
 use memstab::analysis::branch;
 use memstab::output::{write_branches, BranchesWritten};
-use memstab::results::{directory, Branches, Node, StopReason};
+use memstab::results::{directory, Branches, Node, Skip, StopReason};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -146,7 +146,7 @@ pub(crate) fn print_branches(b: &Branches, written: &BranchesWritten, control: &
         let on = on.map_or_else(|| "path".to_string(), directory);
         match skipped {
             Some(why) if leaving.is_empty() => {
-                if on == "path" {
+                if on == "path" || matches!(why, Skip::NotTransversal(_)) {
                     println!("  {on} #{number} {} in {}: {why}", point.kind, point.irrep);
                 }
                 continue;

@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 /// Relative size below which a localised eigenvalue counts as zero.
-const ZERO_EIGENVALUE: f64 = 1e-10;
+pub(crate) const ZERO_EIGENVALUE: f64 = 1e-10;
 /// The narrowest bracket, relative to the step, in which a crossing is localised: states that
 /// close differ in an eigenvalue by far less than [`ZERO_EIGENVALUE`] unless it jumps.
 const LOCATE_WIDTH: f64 = 1e-10;

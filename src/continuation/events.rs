@@ -16,6 +16,9 @@ use crate::results::{BranchTimes, CriticalPoint, Extremum, StopReason};
 pub const REJECTED_STEP_FACTOR: f64 = 0.25;
 /// The control's component of the unit tangent below which a turning point is localised.
 const TURNING_TOLERANCE: f64 = 1e-12;
+/// Trials in a row without a smaller tangent component after which a turning point's search
+/// by whole steps stops at its best point ([`localise_turning`]).
+const TURNING_PATIENCE: usize = 4;
 
 /// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
 /// by the Illinois variant of regula falsi. Stops when |g| ≤ `tol` or after 60 evaluations;
@@ -36,13 +39,31 @@ pub fn locate(
 /// As [`locate`], stopping also when the bracket is narrower than `width` · |s1| (a jump of
 /// `g` rather than a zero then shows as a bracket that shrinks while |g| does not).
 pub fn locate_within(
-    mut g: impl FnMut(f64) -> Option<f64>,
+    g: impl FnMut(f64) -> Option<f64>,
     g0: f64,
     s1: f64,
     g1: f64,
     tol: f64,
     width: f64,
 ) -> Option<(f64, f64)> {
+    locate_to_noise(g, g0, s1, g1, tol, width, usize::MAX)
+}
+
+/// As [`locate_within`], stopping also after `patience` trials in a row that do not improve
+/// the best |g| once a trial inside the bracket has been the best: `g` is then at its noise
+/// (regula falsi on a smooth zero improves at every trial), and narrowing the bracket
+/// further moves the best point only within that noise. The best point returned is then a
+/// trial, never an end of the bracket.
+fn locate_to_noise(
+    mut g: impl FnMut(f64) -> Option<f64>,
+    g0: f64,
+    s1: f64,
+    g1: f64,
+    tol: f64,
+    width: f64,
+    patience: usize,
+) -> Option<(f64, f64)> {
+    let (mut stale, mut inside) = (0, false);
     let (mut a, mut fa, mut b, mut fb) = (0.0, g0, s1, g1);
     let (mut best, mut fbest) = if fa.abs() < fb.abs() {
         (a, fa)
@@ -52,7 +73,7 @@ pub fn locate_within(
     let mut side = 0i8;
     // Every earlier iteration evaluated a trial point.
     for evaluated in 0..60 {
-        if fbest.abs() <= tol || (b - a).abs() <= width * s1.abs() {
+        if fbest.abs() <= tol || (b - a).abs() <= width * s1.abs() || stale >= patience {
             break;
         }
         let s = (a * fb - b * fa) / (fb - fa);
@@ -74,6 +95,10 @@ pub fn locate_within(
         };
         if fs.abs() < fbest.abs() {
             (best, fbest) = (s, fs);
+            stale = 0;
+            inside = true;
+        } else if inside {
+            stale += 1;
         }
         if fs.signum() == fb.signum() {
             (b, fb) = (s, fs);
@@ -320,12 +345,18 @@ fn localise_turning<P: Problem>(
     {
         return Some(zero.point);
     }
-    let (s, _) = locate(
+    // Each trial is a whole step. Where the path is resolved only to the corrector's
+    // tolerance (a branch along a nearly neutral direction, whose control wanders by 10⁻⁷)
+    // the component is noise long before TURNING_TOLERANCE, and the bracket would be halved
+    // to 10⁻¹⁴ of the step: the search stops once trials stop improving it.
+    let (s, _) = locate_to_noise(
         |s| driver.step_from(from, s).ok().map(|p| p.tangent[k]),
         from.tangent[k],
         s_hi,
         t_hi,
         TURNING_TOLERANCE,
+        1e-14,
+        TURNING_PATIENCE,
     )?;
     driver.step_from(from, s).ok()
 }
@@ -389,3 +420,81 @@ impl<S: States + ?Sized> States for Box<S> {
 
 /// The measures of a state (u, every parameter), in the report's order.
 pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
+
+#[cfg(test)]
+mod tests {
+    use super::{locate_to_noise, locate_within};
+
+    /// On a smooth zero the search with patience is the search without it: regula falsi
+    /// improves at every trial and stops at the tolerance.
+    #[test]
+    fn patience_changes_nothing_on_a_smooth_zero() {
+        let g = |s: f64| Some((s - 0.3) * (1.0 + s * s));
+        let (g0, g1) = (g(0.0).unwrap(), g(1.0).unwrap());
+        let plain = locate_within(g, g0, 1.0, g1, 1e-12, 1e-14).unwrap();
+        let mut trials = 0;
+        let patient = locate_to_noise(
+            |s| {
+                trials += 1;
+                g(s)
+            },
+            g0,
+            1.0,
+            g1,
+            1e-12,
+            1e-14,
+            4,
+        )
+        .unwrap();
+        assert_eq!(plain, patient);
+        assert!(
+            patient.1.abs() <= 1e-12 && trials < 15,
+            "{patient:?} in {trials}"
+        );
+    }
+
+    /// A zero resolved only to a noise of 10⁻⁷ (below it the sign is random): the search
+    /// stops a few trials after it reaches the noise, at a trial inside the bracket within
+    /// the noise's span of the zero, instead of using its whole budget.
+    #[test]
+    fn a_zero_in_noise_is_left_a_few_trials_after_the_noise_is_reached() {
+        let noisy = |s: f64| {
+            let hash = ((s * 1e12) as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 11;
+            let r = hash as f64 / (1u64 << 53) as f64 - 0.5;
+            (s - 0.3) + 2e-7 * r
+        };
+        let (mut plain_trials, mut patient_trials) = (0, 0);
+        let plain = locate_within(
+            |s| {
+                plain_trials += 1;
+                Some(noisy(s))
+            },
+            -0.3,
+            1.0,
+            0.7,
+            1e-12,
+            1e-14,
+        )
+        .unwrap();
+        let patient = locate_to_noise(
+            |s| {
+                patient_trials += 1;
+                Some(noisy(s))
+            },
+            -0.3,
+            1.0,
+            0.7,
+            1e-12,
+            1e-14,
+            4,
+        )
+        .unwrap();
+        assert!((plain.0 - 0.3).abs() < 2e-7, "{plain:?}");
+        assert!((patient.0 - 0.3).abs() < 2e-7, "{patient:?}");
+        assert!(patient.0 > 0.0 && patient.0 < 1.0);
+        assert!(
+            patient_trials + 10 < plain_trials,
+            "{patient_trials} trials against {plain_trials}"
+        );
+    }
+}

@@ -103,6 +103,13 @@ pub enum Skip {
     /// Every branch the lemma predicts here is one already followed, up to symmetry: a
     /// branch that passed through this point along the same direction (by index).
     Known(Vec<usize>),
+    /// The critical eigenvalue touches zero instead of crossing it: its rate of change along
+    /// the path (b/‖K‖ per unit scaled arclength, given) moves it by less than what counts as
+    /// zero over the longest step, so the branching lemma's transversality fails and no
+    /// branch is predicted. On a branch leaving a double point this is the other half of
+    /// that point's kernel (the pattern's orientation, neutral where the mesh is
+    /// axisymmetric), whose sign at the branch's first point is round-off.
+    NotTransversal(f64),
 }
 
 impl std::fmt::Display for Skip {
@@ -126,6 +133,10 @@ impl std::fmt::Display for Skip {
             Skip::Jump(r) => write!(
                 f,
                 "its eigenvalue jumps across zero (|eigenvalue|/|K| = {r:.0e} at the point): no branch is switched to at a jump"
+            ),
+            Skip::NotTransversal(b) => write!(
+                f,
+                "its eigenvalue touches zero without crossing it (rate {b:.1e} of |K| per unit arclength: below zero over a whole step): not a bifurcation by the branching lemma, nothing is switched to"
             ),
             Skip::Known(b) => write!(
                 f,

@@ -82,6 +82,20 @@ pub enum StopReason {
         /// Where its amplitude's law through its last states reaches zero.
         estimate: f64,
     },
+    /// A branch stalled within one longest step of a state of another branch of its isotropy
+    /// class (up to symmetry), one from another critical point: the two meet there, and
+    /// neither could be followed through the other's states.
+    Met {
+        /// The stall itself.
+        stalled: Stalled,
+        /// The other branch's directory.
+        branch: String,
+        /// Its point nearest the stall.
+        point: usize,
+        /// Their distance in scaled arclength (state over the state scale, control over
+        /// its scale).
+        distance: f64,
+    },
     /// The path of a finished run read back, which ended as its `path.json` says (in its
     /// words).
     Recorded(String),
@@ -117,6 +131,15 @@ impl std::fmt::Display for StopReason {
                 f,
                 "it returned to the states of the path it left between {:.6} and {:.6} (its amplitude vanishing at about {estimate:.6}), where that path has no known critical point",
                 between[0], between[1]
+            ),
+            Self::Met {
+                stalled,
+                branch,
+                point,
+                distance,
+            } => write!(
+                f,
+                "{stalled}; there it meets {branch}: a group image of its last state lies {distance:.1e} (scaled arclength) from that branch's point {point}, within one step"
             ),
             Self::Recorded(words) => f.write_str(words),
         }

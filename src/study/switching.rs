@@ -58,6 +58,10 @@ const MODE_DELTA: f64 = 1e-4;
 const QUADRATIC_ZERO: f64 = 1e-9;
 /// |b| / ‖K‖ below which the critical eigenvalue does not cross transversally.
 const TRANSVERSAL_ZERO: f64 = 1e-10;
+/// |eigenvalue|/‖K‖ that counts as zero where a crossing is localised: a critical
+/// eigenvalue whose rate along the path moves it by less than this over the longest step
+/// does not cross transversally.
+const CROSSING_ZERO: f64 = crate::continuation::crossings::ZERO_EIGENVALUE;
 /// Tolerance of the checks that a kernel direction is what the representation theory says.
 const DIRECTION_TOL: f64 = 1e-6;
 /// Two critical points are one (up to symmetry) when their controls and a group image of
@@ -343,7 +347,81 @@ impl Switching<'_> {
             }
             self.switch_at(self.top, None, node, cp, 1, 1.0, &mut g);
         }
+        self.meetings(&mut g);
         g
+    }
+
+    /// Every branch that stalled within one longest step (scaled arclength) of a state of
+    /// another branch of its isotropy class, up to the scene's symmetry, ends as
+    /// [`StopReason::Met`]: the two branches, followed from different points, meet there
+    /// (a branch followed from both of its ends). The halves of one point are not compared
+    /// (they share their first state), nor a branch that did not leave its point.
+    fn meetings(&self, g: &mut BranchGraph) {
+        let Some(control) = self.control else {
+            return;
+        };
+        let opts = &self.options.path;
+        let layout = self.model.layout();
+        let order = self.top.action.group().order();
+        let reach = opts.max_step;
+        let mut met = Vec::new();
+        for (i, b) in g.branches.iter().enumerate() {
+            let StopReason::Stalled(stalled) = &b.stop else {
+                continue;
+            };
+            if b.points.len() < 2 {
+                continue;
+            }
+            let last = &b.points[b.points.len() - 1];
+            let images: Vec<Vec<f64>> = (0..order)
+                .map(|e| act(&self.top.action, layout, e, &last.u))
+                .collect();
+            let mut best: Option<(usize, usize, f64)> = None;
+            for (j, other) in g.branches.iter().enumerate() {
+                if j == i || other.from == b.from || other.isotropy != b.isotropy {
+                    continue;
+                }
+                for (k, p) in other.points.iter().enumerate() {
+                    let dl = (p.parameters[control] - last.parameters[control]).abs()
+                        / opts.parameter_scale(0);
+                    if dl > reach {
+                        continue;
+                    }
+                    for image in &images {
+                        let du = image
+                            .iter()
+                            .zip(&p.u)
+                            .map(|(a, b)| (a - b) * (a - b))
+                            .sum::<f64>()
+                            .sqrt()
+                            / opts.state_scale;
+                        let d = du.hypot(dl);
+                        if d <= reach && best.is_none_or(|(_, _, e)| d < e) {
+                            best = Some((j, k, d));
+                        }
+                    }
+                }
+            }
+            if let Some((j, point, distance)) = best {
+                met.push((i, stalled.clone(), j, point, distance));
+            }
+        }
+        for (i, stalled, j, point, distance) in met {
+            let stop = StopReason::Met {
+                stalled,
+                branch: directory(j),
+                point,
+                distance,
+            };
+            for n in g.graph.node_indices() {
+                if let Node::End { branch, stop: s } = &mut g.graph[n] {
+                    if *branch == i {
+                        *s = stop.clone();
+                    }
+                }
+            }
+            g.branches[i].stop = stop;
+        }
     }
 
     /// Switches at `cp`, a critical point of a path in Fix(level's group) (the branch
@@ -405,6 +483,12 @@ impl Switching<'_> {
                     continue;
                 }
             };
+            // Transversality (the lemma's hypothesis): over the longest step the eigenvalue
+            // must move by more than what the localisation counts as zero.
+            if reduced.path_slope.abs() * self.options.path.max_step < CROSSING_ZERO {
+                set_skip(g, node, Skip::NotTransversal(reduced.path_slope));
+                continue;
+            }
             let halves = match dir.halves {
                 Halves::Conjugate => vec![Half::Plus],
                 Halves::Distinct => vec![Half::Plus, Half::Minus],
