@@ -193,6 +193,30 @@ fn check(name: &str, action: &GroupAction, model: &FeModel) {
             o += 2 * m;
             continue;
         }
+        // The sparse block (its triangles computed on and below the diagonal of orbits and
+        // mirrored) is the dense one without the rank-one terms.
+        let m = b.multiplicity;
+        let (pattern, values) = b
+            .first()
+            .restrict_tangent_sparse(layout, &eval)
+            .expect("a block built from the action has an orbit-local form");
+        let sparse = pattern.to_dense(&values);
+        let mut sparse = DMatrix::from_fn(m, m, |i, j| sparse[(i, j)]);
+        for (cr, av) in &eval.rank_one {
+            let ar = b.first().restrict(av);
+            sparse += &ar * ar.transpose() * *cr;
+        }
+        assert!(
+            (&k0 - &sparse).amax() < 1e-12 * scale,
+            "{name}: sparse {} differs from the dense block by {:e}",
+            b.name,
+            (&k0 - &sparse).amax() / scale
+        );
+        assert!(
+            (&sparse - sparse.transpose()).amax() == 0.0,
+            "{name}: sparse {} is not symmetric",
+            b.name
+        );
         for a in 0..b.dim {
             let ka = kt.view(
                 (o + a * b.multiplicity, o + a * b.multiplicity),

@@ -44,7 +44,7 @@ use crate::linalg::SymmetricPattern;
 use crate::model::{Evaluation, Layout};
 use meshes::GroupAction;
 use nalgebra::{DMatrix, DVector, Vector3};
-use orbit::{orbit_basis, ColumnScratch, OrbitFrame, Seeds};
+use orbit::{orbit_basis, ColumnScratch, OrbitFrame, OrbitScratch, Seeds};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -353,7 +353,27 @@ impl SparseBasis {
         let pattern = pattern.clone();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let columns: Vec<Vec<f64>> = match (&self.seeds, &self.complex) {
-            (Some(seeds), _) => self.seeded_columns(seeds, &pattern, layout, eval),
+            (Some(seeds), _) => {
+                let raw = self.seeded_lower(seeds, &pattern, layout, eval);
+                // Entries above the diagonal of orbits are the transposes of computed ones;
+                // on it both triangles are computed and agree up to round-off.
+                let mut values = vec![0.0; raw.len()];
+                for cols in &seeds.by_orbit {
+                    let (start, end) = (cols.start as usize, cols.end as usize);
+                    for p in col_ptr[start]..col_ptr[end] {
+                        let r = row_idx[p];
+                        let q = transpose[p] as usize;
+                        values[p] = if r < start {
+                            raw[q]
+                        } else if r < end {
+                            0.5 * (raw[p] + raw[q])
+                        } else {
+                            raw[p]
+                        };
+                    }
+                }
+                return Some((pattern, values));
+            }
             (None, Some(complex)) => {
                 // Column e of H gives the real columns e and m + e of R.
                 let mc = complex.len();
@@ -400,29 +420,50 @@ impl SparseBasis {
         Some((pattern, values))
     }
 
-    /// The columns of the sparse Bᵀ K B of a real seeded block on its `pattern`.
-    fn seeded_columns(
+    /// The values of the sparse Bᵀ K B of a real seeded block on its `pattern`, on and below
+    /// the diagonal of orbits ([`Seeds::tangent_orbit_lower`]; the entries above it are left
+    /// zero), one rayon task per orbit.
+    fn seeded_lower(
         &self,
         seeds: &Seeds,
         pattern: &SymmetricPattern,
         layout: &Layout,
         eval: &Evaluation,
-    ) -> Vec<Vec<f64>> {
+    ) -> Vec<f64> {
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let m = self.dim();
-        (0..m)
+        let flat = seeds.flat_seeds();
+        let parts: Vec<Vec<f64>> = (0..seeds.by_orbit.len())
             .into_par_iter()
             .map_init(
-                || (ColumnScratch::new(seeds.d), vec![0.0; m]),
-                |(scratch, dense), e| {
-                    seeds.tangent_column(e, layout, &eval.tangent, scratch, dense);
-                    let rows = &row_idx[col_ptr[e]..col_ptr[e + 1]];
-                    let values = rows.iter().map(|&r| dense[r]).collect();
-                    rows.iter().for_each(|&r| dense[r] = 0.0);
+                || (OrbitScratch::new(seeds.d), Vec::new()),
+                |(scratch, dense), o| {
+                    let cols = seeds.by_orbit[o].clone();
+                    let (start, end) = (cols.start as usize, cols.end as usize);
+                    if start == end {
+                        return Vec::new();
+                    }
+                    if dense.len() < (end - start) * m {
+                        dense.resize((end - start) * m, 0.0);
+                    }
+                    let dense = &mut dense[..(end - start) * m];
+                    seeds.tangent_orbit_lower(o, layout, &eval.tangent, &flat, scratch, dense);
+                    let mut values = Vec::with_capacity(col_ptr[end] - col_ptr[start]);
+                    for (e, col) in (start..end).zip(dense.chunks_exact_mut(m)) {
+                        let rows = &row_idx[col_ptr[e]..col_ptr[e + 1]];
+                        values.extend(rows.iter().map(|&r| col[r]));
+                        rows.iter().for_each(|&r| col[r] = 0.0);
+                    }
                     values
                 },
             )
-            .collect()
+            .collect();
+        let mut raw = vec![0.0; pattern.nnz()];
+        for (cols, part) in seeds.by_orbit.iter().zip(parts) {
+            let (start, end) = (cols.start as usize, cols.end as usize);
+            raw[col_ptr[start]..col_ptr[end]].copy_from_slice(&part);
+        }
+        raw
     }
 
     /// The columns containing each unknown.

@@ -208,6 +208,121 @@ impl Seeds {
         }
     }
 
+    /// The columns E = `by_orbit[o]` of Bᵀ K B at once, on or below the diagonal of orbits:
+    /// only the rows f on orbits whose columns start at or after E's (the others are the
+    /// transposes of entries computed for those orbits' columns). Column e of E is added into
+    /// `out[e_local * m..][..m]`, m = `out.len() / |E|`.
+    ///
+    /// The formula of [`Seeds::tangent_column`] with its sums reordered: the columns of E
+    /// share the representative i₀, so K's 3 × 3 blocks K_{j i₀} are gathered once, each
+    /// A = R_g K_{j i₀} is formed once for all of E, and U_e = Σ_{(j, g)} Σ_b D_{·b}(g) A s_{e,b}
+    /// is summed over every (j, g) that lands on the same orbit before the seeds s_f of that
+    /// orbit are applied: (Bᵀ K B)_{fe} = (d/|G|) ⟨s_f, U_e⟩ over f's 3d seed components.
+    /// `flat` is the seeds as one slice (3d numbers per column).
+    pub(super) fn tangent_orbit_lower(
+        &self,
+        o: usize,
+        layout: &Layout,
+        tangent: &[f64],
+        flat: &[f64],
+        scratch: &mut OrbitScratch,
+        out: &mut [f64],
+    ) {
+        let cols_e = self.by_orbit[o].clone();
+        let ne = cols_e.len();
+        if ne == 0 {
+            return;
+        }
+        let frame = &*self.frame;
+        let d = self.d;
+        let w3 = 3 * d;
+        let m = out.len() / ne;
+        let coef = d as f64 / frame.order as f64;
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let i0 = self.rep[cols_e.start as usize] as usize;
+        let OrbitScratch {
+            touched,
+            blocks,
+            targets,
+            sums,
+            v,
+        } = scratch;
+        touched.clear();
+        blocks.clear();
+        for c in 0..3 {
+            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+            let range = col_ptr[dof]..col_ptr[dof + 1];
+            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
+                let (j, comp) = frame.node_of[r];
+                let t = match touched.iter().position(|&n| n == j) {
+                    Some(t) => t,
+                    None => {
+                        touched.push(j);
+                        blocks.push(Matrix3::zeros());
+                        touched.len() - 1
+                    }
+                };
+                blocks[t][(comp as usize, c)] += k;
+            }
+        }
+        targets.clear();
+        sums.clear();
+        for (t, &j) in touched.iter().enumerate() {
+            let target = frame.orbit_of[j as usize];
+            let cols_f = self.by_orbit[target as usize].clone();
+            if cols_f.is_empty() || cols_f.start < cols_e.start {
+                continue;
+            }
+            let slot = match targets.iter().position(|&x| x == target) {
+                Some(s) => s,
+                None => {
+                    targets.push(target);
+                    sums.resize(sums.len() + ne * w3, 0.0);
+                    targets.len() - 1
+                }
+            };
+            let sum = &mut sums[slot * ne * w3..(slot + 1) * ne * w3];
+            for &g in frame.to_rep(j as usize) {
+                let a = frame.rotations[g as usize] * blocks[t];
+                let dm = self.dmat(g as usize);
+                for (le, e) in cols_e.clone().enumerate() {
+                    let s_e = &self.seeds[e as usize * d..(e as usize + 1) * d];
+                    for (vb, s) in v.iter_mut().zip(s_e) {
+                        *vb = a * s;
+                    }
+                    let u_e = &mut sum[le * w3..(le + 1) * w3];
+                    for (b2, u) in u_e.chunks_exact_mut(3).enumerate() {
+                        let row = &dm[b2 * d..(b2 + 1) * d];
+                        let x = v
+                            .iter()
+                            .zip(row)
+                            .fold(Vector3::zeros(), |acc, (vb, &dd)| acc + vb * dd);
+                        u[0] += x[0];
+                        u[1] += x[1];
+                        u[2] += x[2];
+                    }
+                }
+            }
+        }
+        for (slot, &target) in targets.iter().enumerate() {
+            let cols_f = self.by_orbit[target as usize].clone();
+            let s_f = &flat[cols_f.start as usize * w3..cols_f.end as usize * w3];
+            let sum = &sums[slot * ne * w3..(slot + 1) * ne * w3];
+            for (le, u_e) in sum.chunks_exact(w3).enumerate() {
+                let col = &mut out[le * m + cols_f.start as usize..le * m + cols_f.end as usize];
+                for (x, s) in col.iter_mut().zip(s_f.chunks_exact(w3)) {
+                    *x += coef * s.iter().zip(u_e).map(|(a, b)| a * b).sum::<f64>();
+                }
+            }
+        }
+    }
+
+    /// The seeds as one slice, 3d numbers per column (for [`Seeds::tangent_orbit_lower`]).
+    pub(super) fn flat_seeds(&self) -> Vec<f64> {
+        self.seeds.iter().flat_map(|s| s.iter().copied()).collect()
+    }
+
     /// The pattern of Bᵀ K B: column e meets every column on an orbit that holds a
     /// neighbour of e's representative (by K's pattern).
     pub(super) fn block_pattern(&self, layout: &Layout) -> SymmetricPattern {
@@ -272,6 +387,28 @@ impl ColumnScratch {
             w: Vec::new(),
             v: vec![Vector3::zeros(); d],
             u: vec![Vector3::zeros(); d],
+        }
+    }
+}
+
+/// Per-thread scratch of [`Seeds::tangent_orbit_lower`]: the nodes next to the
+/// representative, K's 3 × 3 blocks there, the orbits they land on and the sums U_e for each.
+pub(super) struct OrbitScratch {
+    touched: Vec<u32>,
+    blocks: Vec<Matrix3<f64>>,
+    targets: Vec<u32>,
+    sums: Vec<f64>,
+    v: Vec<Vector3<f64>>,
+}
+
+impl OrbitScratch {
+    pub(super) fn new(d: usize) -> Self {
+        Self {
+            touched: Vec::new(),
+            blocks: Vec::new(),
+            targets: Vec::new(),
+            sums: Vec::new(),
+            v: vec![Vector3::zeros(); d],
         }
     }
 }

@@ -11,8 +11,13 @@
 //!   our own buffers, with Bunch–Kaufman pivoting (1×1 and 2×2 pivots) *within each
 //!   supernode's dense diagonal block*. It never fails by itself: a zero pivot gives
 //!   infinities, which [`SymmetricFactorization::factorize`] detects and reports.
-//! - [`IntranodeLbltRef::solve_in_place_with_conj`]: the solve, applying both the AMD and the
-//!   pivoting permutations.
+//! - The numeric factorisation works on P A Pᵀ (P the elimination order of the symbolic
+//!   analysis of A) gathered by us into the lower triangle of its own pattern, analysed a
+//!   second time with the identity ordering: faer would otherwise permute the whole matrix at
+//!   every numeric factorisation, a sizeable part of its cost for the small, fairly dense
+//!   blocks of the stability analysis.
+//! - [`IntranodeLbltRef::solve_in_place_with_conj`]: the solve of the permuted system, which
+//!   applies the pivoting permutation; the elimination order is applied around it.
 //!
 //! Plain `LDLᵀ` (`factorize_numeric_ldlt`) was not chosen: without pivoting an indefinite
 //! matrix with a zero leading pivot (a bordered system, a saddle point) breaks down.
@@ -46,6 +51,7 @@ use faer::sparse::linalg::cholesky::{
     SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
 use super::sparse::SymmetricPattern;
@@ -121,14 +127,25 @@ struct PivotSummary {
 /// solves allocate.
 pub struct SymmetricFactorization {
     pattern: SymmetricPattern,
+    /// The symbolic analysis of the permuted lower triangle (identity ordering).
     symbolic: SymbolicCholesky<usize>,
+    /// The elimination order: position k eliminates unknown `order_fwd[k]`.
+    order_fwd: Vec<usize>,
+    /// The lower triangle of P A Pᵀ: its pattern, for each of its entries the index of the
+    /// value in A's `values`, and the buffer its values are gathered into.
+    permuted: SymbolicSparseColMat<usize>,
+    gather: Vec<usize>,
+    permuted_values: Vec<f64>,
     options: FactorOptions,
     l_values: Vec<f64>,
     subdiag: Vec<f64>,
+    /// The pivoting permutation of the numeric factorisation (within supernodes, in the
+    /// elimination order).
     perm_fwd: Vec<usize>,
     perm_inv: Vec<usize>,
     factor_mem: MemBuffer,
-    solve_mem: Mutex<MemBuffer>,
+    /// The solves' scratch: faer's, and the permuted right-hand sides.
+    solve_mem: Mutex<(MemBuffer, Vec<f64>)>,
     /// `None` until a numeric factorisation was done (or when the last one had a non-finite
     /// pivot).
     pivots: Option<PivotSummary>,
@@ -185,9 +202,24 @@ impl SymmetricFactorization {
             supernodal_flop_ratio_threshold: SupernodalThreshold(f64::NEG_INFINITY),
             ..Default::default()
         };
-        let symbolic =
+        // The ordering (fill-reducing, and the elimination tree's postorder) from faer's
+        // analysis of A; the numeric factorisations then work on P A Pᵀ gathered by us, with
+        // an identity ordering (faer would otherwise permute the whole matrix at every
+        // factorisation, a sizeable part of it for the small, dense-ish blocks).
+        let order_fwd: Vec<usize> =
             factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
-                .map_err(|e| FactorError::Symbolic(faer_error_name(e)))?;
+                .map_err(|e| FactorError::Symbolic(faer_error_name(e)))?
+                .perm()
+                .map_or_else(|| (0..n).collect(), |p| p.arrays().0.to_vec());
+        let (permuted, gather) = permuted_lower(pattern, &order_fwd);
+        // faer analyses the upper triangle of a matrix it is given unpermuted.
+        let symbolic = factorize_symbolic_cholesky(
+            transposed(&permuted).as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Identity,
+            params,
+        )
+        .map_err(|e| FactorError::Symbolic(faer_error_name(e)))?;
         let par = options.par;
         let factor_req =
             symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Spec::default());
@@ -197,8 +229,12 @@ impl SymmetricFactorization {
             subdiag: vec![0.0; n],
             perm_fwd: (0..n).collect(),
             perm_inv: (0..n).collect(),
+            order_fwd,
+            permuted_values: vec![0.0; gather.len()],
+            permuted,
+            gather,
             factor_mem: MemBuffer::new(factor_req),
-            solve_mem: Mutex::new(MemBuffer::new(solve_req)),
+            solve_mem: Mutex::new((MemBuffer::new(solve_req), vec![0.0; n * SOLVE_BLOCK])),
             pattern: pattern.clone(),
             symbolic,
             options,
@@ -276,12 +312,15 @@ impl SymmetricFactorization {
         // faer's Bunch–Kaufman leaves `subdiag` untouched for a 1×1 pivot with nothing to
         // eliminate, so stale 2×2 markers from a previous factorisation must be cleared.
         self.subdiag.fill(0.0);
+        for (x, &k) in self.permuted_values.iter_mut().zip(&self.gather) {
+            *x = values[k];
+        }
         let _ = self.symbolic.factorize_numeric_intranode_lblt(
             &mut self.l_values,
             &mut self.subdiag,
             &mut self.perm_fwd,
             &mut self.perm_inv,
-            self.pattern.as_faer(values),
+            SparseColMatRef::new(self.permuted.as_ref(), &self.permuted_values),
             Side::Lower,
             self.options.par,
             MemStack::new(&mut self.factor_mem),
@@ -324,10 +363,7 @@ impl SymmetricFactorization {
                 .filter(move |&p| values[p] != 0.0 && row_idx[p] != v)
                 .map(|p| row_idx[p])
         };
-        let current: Vec<usize> = match self.symbolic.perm() {
-            Some(p) => p.arrays().0.to_vec(),
-            None => (0..n).collect(),
-        };
+        let current = self.order_fwd.clone();
         // `free[v]`: v is placed, has a nonzero diagonal and partners nobody yet.
         let (mut placed, mut free, mut waiting) = (vec![false; n], vec![false; n], vec![false; n]);
         let mut order = Vec::with_capacity(n);
@@ -367,12 +403,8 @@ impl SymmetricFactorization {
             debug_assert_eq!(self.n(), 0);
             return out;
         };
-        // Unknown (original numbering) eliminated at permuted position i.
-        let amd_fwd = self.symbolic.perm().map(|p| p.arrays().0);
-        let original = |i: usize| {
-            let i = self.perm_fwd[i];
-            amd_fwd.map_or(i, |fwd| fwd[i])
-        };
+        // Unknown (original numbering) eliminated at pivot position i.
+        let original = |i: usize| self.order_fwd[self.perm_fwd[i]];
         let mut record = |lambda: f64, index: usize| {
             if !lambda.is_finite() {
                 // The first non-finite pivot wins over any zero pivot: no inertia then.
@@ -473,25 +505,107 @@ impl SymmetricFactorization {
             }) => return Err(err),
             Some(_) => {}
         }
+        // The factor is of P A Pᵀ (the elimination order); faer applies the pivoting.
         let perm = PermRef::new_checked(&self.perm_fwd, &self.perm_inv, n);
         let lblt = IntranodeLbltRef::new(&self.symbolic, &self.l_values, &self.subdiag, perm);
-        let mut mem = self
+        let mut guard = self
             .solve_mem
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
+        let (mem, work) = &mut *guard;
         let mut j = 0;
         while j < rhs.ncols() {
             let k = SOLVE_BLOCK.min(rhs.ncols() - j);
+            let mut x = MatMut::from_column_major_slice_mut(&mut work[..n * k], n, k);
+            for c in 0..k {
+                for (i, &unknown) in self.order_fwd.iter().enumerate() {
+                    x[(i, c)] = rhs[(unknown, j + c)];
+                }
+            }
             lblt.solve_in_place_with_conj(
                 Conj::No,
-                rhs.rb_mut().subcols_mut(j, k),
+                x.rb_mut(),
                 self.options.par,
-                MemStack::new(&mut mem),
+                MemStack::new(mem),
             );
+            for c in 0..k {
+                for (i, &unknown) in self.order_fwd.iter().enumerate() {
+                    rhs[(unknown, j + c)] = x[(i, c)];
+                }
+            }
             j += k;
         }
         Ok(())
     }
+}
+
+/// The lower triangle of P A Pᵀ for the elimination order `fwd` (position k eliminates
+/// unknown `fwd[k]`), A given by its full symmetric `pattern`: its CSC pattern (rows sorted)
+/// and, for each entry, the index of its value in A's values.
+fn permuted_lower(
+    pattern: &SymmetricPattern,
+    fwd: &[usize],
+) -> (SymbolicSparseColMat<usize>, Vec<usize>) {
+    let n = pattern.n();
+    let mut inv = vec![0; n];
+    for (k, &i) in fwd.iter().enumerate() {
+        inv[i] = k;
+    }
+    let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+    // Entry (r, c) of A goes to (inv r, inv c); kept where inv r >= inv c, in column inv c.
+    let mut new_ptr = vec![0usize; n + 1];
+    for c in 0..n {
+        let count = row_idx[col_ptr[c]..col_ptr[c + 1]]
+            .iter()
+            .filter(|&&r| inv[r] >= inv[c])
+            .count();
+        new_ptr[inv[c] + 1] = count;
+    }
+    for k in 0..n {
+        new_ptr[k + 1] += new_ptr[k];
+    }
+    let mut entries: Vec<(usize, usize)> = Vec::with_capacity(new_ptr[n]);
+    let mut gather = vec![0usize; new_ptr[n]];
+    let mut rows = vec![0usize; new_ptr[n]];
+    for k in 0..n {
+        let c = fwd[k];
+        entries.clear();
+        entries.extend(
+            (col_ptr[c]..col_ptr[c + 1])
+                .filter(|&p| inv[row_idx[p]] >= k)
+                .map(|p| (inv[row_idx[p]], p)),
+        );
+        entries.sort_unstable();
+        for (slot, &(r, p)) in (new_ptr[k]..new_ptr[k + 1]).zip(&entries) {
+            rows[slot] = r;
+            gather[slot] = p;
+        }
+    }
+    // The column pointers are nondecreasing, the rows sorted and in range by construction.
+    let symbolic = SymbolicSparseColMat::new_checked(n, n, new_ptr, None, rows);
+    (symbolic, gather)
+}
+
+/// The transpose of an n × n sparsity pattern (rows sorted).
+fn transposed(a: &SymbolicSparseColMat<usize>) -> SymbolicSparseColMat<usize> {
+    let n = a.ncols();
+    let (col_ptr, row_idx) = (a.col_ptr(), a.row_idx());
+    let mut ptr = vec![0usize; n + 1];
+    for &r in row_idx {
+        ptr[r + 1] += 1;
+    }
+    for k in 0..n {
+        ptr[k + 1] += ptr[k];
+    }
+    let mut next = ptr[..n].to_vec();
+    let mut rows = vec![0usize; row_idx.len()];
+    for c in 0..n {
+        for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+            rows[next[r]] = c;
+            next[r] += 1;
+        }
+    }
+    SymbolicSparseColMat::new_checked(n, n, ptr, None, rows)
 }
 
 /// Eigenvalues of the symmetric 2×2 matrix `[[a, b], [b, c]]`, the smaller in magnitude
