@@ -232,12 +232,24 @@ pub fn start_cause(scene: &Scene, error: &SolveError) -> Option<String> {
         .iter()
         .any(|e| e.get::<scene::PlaneEffect>().is_some());
     let unheld = unheld(scene);
+    // A body on planes that nothing else holds has no equilibrium until it touches one: its
+    // tangent is singular along the free translation, and whether the factorisation sees an
+    // exact zero pivot or Newton wanders is round-off.
+    let free_over_planes = planes
+        && scene.start.hold_translation.is_none()
+        && scene.boundary.fixed.is_empty()
+        && scene.boundary.slide.is_empty();
     let cause = match error {
         SolveError::NotConverged {
             residual,
             tolerance,
             ..
         } if *residual <= *tolerance => format!("likely cause: {unheld}"),
+        SolveError::NotConverged { .. } | SolveError::Diverged { .. } | SolveError::Model(_)
+            if free_over_planes =>
+        {
+            format!("likely cause: {unheld}")
+        }
         SolveError::NotConverged { .. } | SolveError::Diverged { .. } => "likely cause: no \
              equilibrium near the start (a load past its fold, e.g. a fluid level above the \
              highest one held); start at a smaller load and follow a path, or `[start] from`"
