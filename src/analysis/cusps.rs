@@ -18,7 +18,7 @@
 
 use super::curve::Curve;
 use super::path::record_branch;
-use super::surface::{carry, carry_outwards};
+use super::surface::{carry, carry_outwards, Carried};
 use super::{Analysis, Context, RunError};
 use crate::continuation::PathOptions;
 use crate::output::{self, Described, OutputError};
@@ -34,9 +34,6 @@ use std::time::Instant;
 
 /// `type = "cusp-curve"`.
 pub struct Cusps(pub CuspCurveAnalysis);
-
-/// A converged state and its parameters.
-type Carried = (Vec<f64>, Vec<f64>);
 
 impl Cusps {
     /// The curve of one slice with the scene's steps and largest step.

@@ -176,6 +176,9 @@ pub(super) fn carry(
     Ok((u, params))
 }
 
+/// A converged state and its parameters.
+pub(super) type Carried = (Vec<f64>, Vec<f64>);
+
 /// The start state carried to each of `values` (ascending) of parameter `b`, outwards from
 /// the start's own value in both directions, each from its neighbour; a value that cannot be
 /// reached (and every value beyond it) is `None`, with a warning.
@@ -185,7 +188,7 @@ pub(super) fn carry_outwards(
     start: &Point,
     b: usize,
     values: &[f64],
-) -> (Vec<Option<(Vec<f64>, Vec<f64>)>>, Vec<String>) {
+) -> (Vec<Option<Carried>>, Vec<String>) {
     let mut warnings = Vec::new();
     let mut starts = vec![None; values.len()];
     let split = values.partition_point(|&v| v < start.params[b]);
