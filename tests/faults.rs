@@ -378,6 +378,30 @@ fn an_interrupt_while_branches_are_followed_exits_130() {
     assert!(branch_out.join("branches.json").is_file());
 }
 
+/// A signal during a cusp curve's slices ends the run with exit 130: in its first slice's
+/// path with that path written, later with the slices so far in `cusp_curve.json`.
+#[test]
+fn an_interrupt_in_a_cusp_curve_exits_130_with_what_it_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/thesis/paper1_disc_swallowtail.toml"
+    );
+    // The first slice's path takes about 140 points, its curve 120.
+    let out = dir.path().join("early");
+    let o = run(scene, &out, Some(20));
+    assert_interrupted(&o, &out);
+    assert!(out.join("path.csv").is_file());
+    let out = dir.path().join("later");
+    let o = run(scene, &out, Some(600));
+    assert_interrupted(&o, &out);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("cusp_curve.json")).unwrap())
+            .unwrap();
+    let slices = report["slices"].as_array().unwrap().len();
+    assert!((1..10).contains(&slices), "{slices} slices: cut short");
+}
+
 /// A signal in a surface's later paths, and in a critical curve's curve phase, ends the run
 /// with exit 130 and the analysis' own files written; in the curve's path phase, with the
 /// path so far.

@@ -82,7 +82,10 @@ impl Cusps {
         };
         cx.times.steps.steps += located.branch.times.steps;
         cx.times.index += located.index_time;
-        if recorded.is_none() && located.branch.stop == StopReason::CriticalPoint {
+        // The first path that found its point is the run's; so is one a signal cut short
+        // before any did (the run then ends interrupted with it).
+        let cut = located.branch.stop == StopReason::Interrupted;
+        if recorded.is_none() && (located.branch.stop == StopReason::CriticalPoint || cut) {
             record_branch(
                 study,
                 &mut cx.record,
