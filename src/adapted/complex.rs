@@ -74,6 +74,7 @@ pub(super) struct ComplexSeeds {
 #[derive(Default)]
 pub(super) struct HermitianScratch {
     touched: Vec<u32>,
+    blocks: Vec<Matrix3<f64>>,
     w: Vec<Vector3<C64>>,
 }
 
@@ -93,29 +94,12 @@ impl ComplexSeeds {
         out: &mut [C64],
     ) {
         let frame = &*self.frame;
-        let pattern = layout.pattern();
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let i0 = self.rep[e] as usize;
         let s = self.seeds[e];
-        let HermitianScratch { touched, w } = scratch;
-        touched.clear();
+        let HermitianScratch { touched, blocks, w } = scratch;
+        frame.neighbour_blocks(layout, tangent, i0, touched, blocks);
         w.clear();
-        for c in 0..3 {
-            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
-            let range = col_ptr[dof]..col_ptr[dof + 1];
-            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
-                let (j, comp) = frame.node_of[r];
-                let t = match touched.iter().position(|&n| n == j) {
-                    Some(t) => t,
-                    None => {
-                        touched.push(j);
-                        w.push(Vector3::zeros());
-                        touched.len() - 1
-                    }
-                };
-                w[t][comp as usize] += s[c] * k;
-            }
-        }
+        w.extend(blocks.iter().map(|b| b.map(C64::from) * s));
         for (t, &j) in touched.iter().enumerate() {
             let cols = self.by_orbit[frame.orbit_of[j as usize] as usize].clone();
             if cols.is_empty() {

@@ -33,6 +33,39 @@ pub(super) struct OrbitFrame {
 }
 
 impl OrbitFrame {
+    /// The 3×3 blocks of K between the node `i0` (columns) and each of its neighbours j (rows)
+    /// by K's pattern: `touched` the neighbours in the order met, `blocks[t]` the block of
+    /// `touched[t]` (row component, column component).
+    pub(super) fn neighbour_blocks(
+        &self,
+        layout: &Layout,
+        tangent: &[f64],
+        i0: usize,
+        touched: &mut Vec<u32>,
+        blocks: &mut Vec<Matrix3<f64>>,
+    ) {
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        touched.clear();
+        blocks.clear();
+        for c in 0..3 {
+            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
+            let range = col_ptr[dof]..col_ptr[dof + 1];
+            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
+                let (j, comp) = self.node_of[r];
+                let t = match touched.iter().position(|&n| n == j) {
+                    Some(t) => t,
+                    None => {
+                        touched.push(j);
+                        blocks.push(Matrix3::zeros());
+                        touched.len() - 1
+                    }
+                };
+                blocks[t][(comp as usize, c)] += k;
+            }
+        }
+    }
+
     /// The (row, column) pairs of a block whose column e has its seed at node `rep[e]` and
     /// whose columns on orbit o are `by_orbit[o]`: column e meets every column on an orbit
     /// that holds a neighbour of e's representative (by K's pattern).
@@ -160,30 +193,19 @@ impl Seeds {
         let frame = &*self.frame;
         let d = self.d;
         let coef = d as f64 / frame.order as f64;
-        let pattern = layout.pattern();
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let i0 = self.rep[e] as usize;
         let s_e = &self.seeds[e * d..(e + 1) * d];
-        let ColumnScratch { touched, w, v, u } = scratch;
-        touched.clear();
+        let ColumnScratch {
+            touched,
+            blocks,
+            w,
+            v,
+            u,
+        } = scratch;
+        frame.neighbour_blocks(layout, tangent, i0, touched, blocks);
         w.clear();
-        for c in 0..3 {
-            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
-            let range = col_ptr[dof]..col_ptr[dof + 1];
-            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
-                let (j, comp) = frame.node_of[r];
-                let t = match touched.iter().position(|&n| n == j) {
-                    Some(t) => t,
-                    None => {
-                        touched.push(j);
-                        w.resize(w.len() + d, Vector3::zeros());
-                        touched.len() - 1
-                    }
-                };
-                for (b, s) in s_e.iter().enumerate() {
-                    w[t * d + b][comp as usize] += k * s[c];
-                }
-            }
+        for block in blocks.iter() {
+            w.extend(s_e.iter().map(|s| block * s));
         }
         for (t, &j) in touched.iter().enumerate() {
             let cols = self.by_orbit[frame.orbit_of[j as usize] as usize].clone();
@@ -238,8 +260,6 @@ impl Seeds {
         let w3 = 3 * d;
         let m = out.len() / ne;
         let coef = d as f64 / frame.order as f64;
-        let pattern = layout.pattern();
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let i0 = self.rep[cols_e.start as usize] as usize;
         let OrbitScratch {
             touched,
@@ -248,24 +268,7 @@ impl Seeds {
             sums,
             v,
         } = scratch;
-        touched.clear();
-        blocks.clear();
-        for c in 0..3 {
-            let dof = layout.dof(i0, c).expect("a free orbit has unknowns");
-            let range = col_ptr[dof]..col_ptr[dof + 1];
-            for (&r, &k) in row_idx[range.clone()].iter().zip(&tangent[range]) {
-                let (j, comp) = frame.node_of[r];
-                let t = match touched.iter().position(|&n| n == j) {
-                    Some(t) => t,
-                    None => {
-                        touched.push(j);
-                        blocks.push(Matrix3::zeros());
-                        touched.len() - 1
-                    }
-                };
-                blocks[t][(comp as usize, c)] += k;
-            }
-        }
+        frame.neighbour_blocks(layout, tangent, i0, touched, blocks);
         targets.clear();
         sums.clear();
         for (t, &j) in touched.iter().enumerate() {
@@ -375,6 +378,7 @@ impl Seeds {
 /// Per-thread scratch of [`Seeds::tangent_column`].
 pub(super) struct ColumnScratch {
     pub(super) touched: Vec<u32>,
+    pub(super) blocks: Vec<Matrix3<f64>>,
     pub(super) w: Vec<Vector3<f64>>,
     pub(super) v: Vec<Vector3<f64>>,
     pub(super) u: Vec<Vector3<f64>>,
@@ -384,6 +388,7 @@ impl ColumnScratch {
     pub(super) fn new(d: usize) -> Self {
         Self {
             touched: Vec::new(),
+            blocks: Vec::new(),
             w: Vec::new(),
             v: vec![Vector3::zeros(); d],
             u: vec![Vector3::zeros(); d],
