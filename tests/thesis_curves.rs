@@ -105,6 +105,31 @@ fn cap_hilltop(from: &str) -> (f64, f64) {
     (e.parameters[index("w2")], e.parameters[index("k")])
 }
 
+/// On the thesis-size cap (26 divisions, 5 408 triangles) the m = 4 pair is split by only
+/// 1.6e-3 in w2, and one path step crosses both of its blocks: the curve must start at the
+/// point `from` names, not at the last one the step found (B1, which the step meets after B2).
+#[test]
+fn a_curve_starts_from_the_point_asked_for_when_one_step_crosses_two_blocks() {
+    for irrep in ["B2"] {
+        let text = std::fs::read_to_string(format!(
+            "{}/scenes/thesis/paper4_hilltop_k.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap()
+        .replace("divisions = 12 ", "divisions = 26 ")
+        .replace("from = \"B2\"", &format!("from = \"{irrep}\""))
+        .replace("steps = 60", "steps = 1");
+        let scene = Scene::from_toml_str(&text, "cap26.toml").unwrap();
+        let mut study = MeshStudy::build(scene).unwrap();
+        let curve = run(&mut study, |_, _| {})
+            .expect("the curve runs")
+            .outcome::<memstab::results::CurveReport>()
+            .cloned()
+            .unwrap();
+        assert_eq!(curve.irrep, irrep, "asked for {irrep}");
+    }
+}
+
 /// Paper 4's hilltop: followed to smaller k, each of the two simple bifurcations into which
 /// the C8v mesh splits the m = 4 pair meets the limit curve (the trivial block singular too),
 /// at two close points; the limit curve, followed with its constraint active, has a cusp and

@@ -283,13 +283,18 @@ struct FirstCritical<'a> {
 
 impl FirstCritical<'_> {
     fn wanted(&mut self, cp: &CriticalPoint) -> bool {
-        let hit = match &self.from {
-            CurveStart::Limit => cp.kind == CriticalKind::LimitPoint,
-            CurveStart::Irrep(name) => cp.irrep == *name,
-            CurveStart::Index(i) => self.seen == *i,
-        };
+        let hit = asks_for(&self.from, cp, self.seen);
         self.seen += 1;
         hit
+    }
+}
+
+/// Whether `from` asks for `cp`, the path's critical point number `seen` (0 the first).
+fn asks_for(from: &CurveStart, cp: &CriticalPoint, seen: usize) -> bool {
+    match from {
+        CurveStart::Limit => cp.kind == CriticalKind::LimitPoint,
+        CurveStart::Irrep(name) => cp.irrep == *name,
+        CurveStart::Index(i) => seen == *i,
     }
 }
 
@@ -503,7 +508,14 @@ impl Located<'_> {
     /// The critical point the path stopped at, or an error saying what it found instead.
     pub fn point(&self, control: &str, from: &CurveStart) -> Result<CriticalPoint, RunError> {
         match self.branch.stop {
-            StopReason::CriticalPoint => self.branch.critical_points().last().cloned(),
+            // The first point `from` asks for: one step may cross several blocks at once
+            // (a pair split by the mesh), and the one asked for need not be the last.
+            StopReason::CriticalPoint => self
+                .branch
+                .critical_points()
+                .enumerate()
+                .find(|(seen, cp)| asks_for(from, cp, *seen))
+                .map(|(_, cp)| cp.clone()),
             _ => None,
         }
         .ok_or_else(|| {
