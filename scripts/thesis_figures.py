@@ -158,7 +158,8 @@ def caption(fig, run_dirs, legend_of=None):
             continue
         r = json.loads((run_dir / "path.json").read_text())
         m = r["mesh"]
-        parts.append(f"scene {r['scene']} · mesh: {m['generator']}, {m['elements']} triangles, "
+        unit = "elements" if m["generator"] == "axisymmetric" else "triangles"
+        parts.append(f"scene {r['scene']} · mesh: {m['generator']}, {m['elements']} {unit}, "
                      f"group {m['group']} · solved in group {r['group']}")
     parts = list(dict.fromkeys(parts))
     fig.text(0.01, 0.005, "\n".join(parts), fontsize=6.5, color="0.3", ha="left", va="bottom")
@@ -571,7 +572,7 @@ def cusp_figure(runs, title, file):
     dax.set_ylabel(f"the pair's distance in {first['second']}")
     dax.set_title("the pair of cusps draws together and vanishes", fontsize=10)
     dax.grid(alpha=0.3)
-    dax.legend(fontsize=7, loc="lower left")
+    dax.legend(fontsize=7, loc="upper right")
     caption(fig, [r for r, _ in runs], legend_of=ax)
     check_labels(fig, file)
     fig.savefig(file, dpi=130)
@@ -776,47 +777,67 @@ def main(memstab, out, figures):
                  "Paper 1: the disc's limit point and first double point followed in k",
                  figures / "paper1_disc_limit_curve_k.png")
 
-    swallowtail = run(memstab, "scenes/thesis/paper1_disc_swallowtail.toml",
-                      out / "paper1_swallowtail")
+    # The thesis's own mesh sizes, unless QUICK=1 (CI's form): the disc's 1 792 triangles, the
+    # f = 16 icosphere, and 26 divisions (5 408 triangles) for the caps of Papers 3 and 4.
+    quick = os.environ.get("QUICK") == "1"
+
+    scene = "scenes/thesis/paper1_disc_swallowtail.toml"
+    if quick:
+        swallowtail, disc = run(memstab, scene, out / "paper1_swallowtail"), "448"
+    else:
+        scene = variant(scene, out, "paper1_swallowtail_1792", DISC_1792)
+        swallowtail, disc = run(memstab, scene, out / "paper1_swallowtail_1792"), "1 792"
     meridian = run(memstab, "scenes/axisymmetric/paper1_disc_swallowtail.toml",
                    out / "paper1_swallowtail_meridian")
-    cusp_figure([(swallowtail, "C7v, 448 triangles"), (meridian, "meridian, 32 elements")],
+    cusp_figure([(swallowtail, f"C7v, {disc} triangles"), (meridian, "meridian, 32 elements")],
                 "Paper 1: the disc's cusps in (k, h) as the density varies",
                 figures / "paper1_disc_swallowtail.png")
 
-    # FULL=1: Paper 2's fold line on the thesis's icosphere (f = 16, 5120 triangles) instead
-    # of f = 8; the numbers docs/thesis.md quotes beside the figure are f = 8's.
-    full = os.environ.get("FULL") == "1"
-    fold_scene = ("scenes/thesis/paper2_gas_pressure_fold.toml" if full
-                  else "scenes/thesis/paper2_gas_pressure_fold_f8.toml")
+    fold_scene = ("scenes/thesis/paper2_gas_pressure_fold_f8.toml" if quick
+                  else "scenes/thesis/paper2_gas_pressure_fold.toml")
     fold = run(memstab, fold_scene, out / "paper2_fold")
     curve_figure([fold], "V", "p",
                  "Paper 2: the gas pressure's maximum followed in the fluid volume",
                  figures / "paper2_gas_pressure_fold.png")
 
-    # FULL=1: the surface on f = 16 too (60 steps per path, both fold lines over every path).
-    surface_scene = ("scenes/thesis/paper2_solution_surface.toml" if full
-                     else "scenes/thesis/paper2_solution_surface_f8.toml")
+    surface_scene = ("scenes/thesis/paper2_solution_surface_f8.toml" if quick
+                     else "scenes/thesis/paper2_solution_surface.toml")
     surface = run(memstab, surface_scene, out / "paper2_surface")
     surface_figure(surface, "p", "V", "stretch",
                    "Paper 2: the solution surface of the sphere on a plane",
                    figures / "paper2_solution_surface.png")
 
-    cubic = run(memstab, "scenes/thesis/paper3_gas_fluid_squeeze.toml", out / "paper3_cubic")
-    linear = run(memstab, "scenes/thesis/paper3_gas_fluid_squeeze_linear.toml",
-                 out / "paper3_linear")
-    path_figure([(cubic, "cubic penalty, κ = 1e3"), (linear, "linear penalty, κ = 1e3")],
-                "volume", "d",
+    # Paper 3 on the 1 152-triangle mesh, where the linear law's penalty-induced points lie in
+    # the range; and (unless QUICK=1) on the thesis's 5 408 triangles, where they have moved out.
+    names = [("paper3_gas_fluid_squeeze", "cubic"), ("paper3_gas_fluid_squeeze_linear", "linear")]
+    laws = [(run(memstab, f"scenes/thesis/{name}.toml", out / f"paper3_{law}"),
+             f"{law} penalty, κ = 1e3") for name, law in names]
+    path_figure(laws, "volume", "d",
                 "Paper 3: gas above fluid squeezed between two planes x = ±a",
                 figures / "paper3_penalty_laws.png")
+    if not quick:
+        laws = [(run(memstab, variant(f"scenes/thesis/{name}.toml", out, f"paper3_{law}_5408",
+                                      CAP_5408), out / f"paper3_{law}_5408"),
+                 f"{law} penalty, κ = 1e3") for name, law in names]
+        path_figure(laws, "volume", "d",
+                    "Paper 3: the same on the thesis's mesh size (5 408 triangles)",
+                    figures / "paper3_penalty_laws_5408.png")
 
-    cap = run(memstab, "scenes/thesis/paper4_spinning_cap.toml", out / "paper4_c8v")
-    path_figure([(cap, "C8v")], "max_displacement", "w2",
-                "Paper 4: the filled cap spinning on the floor (C8v mesh)",
+    scene = "scenes/thesis/paper4_spinning_cap.toml"
+    if quick:
+        cap, cap_mesh = run(memstab, scene, out / "paper4_c8v"), "C8v, 1 152 triangles"
+    else:
+        scene = variant(scene, out, "paper4_c8v_5408", CAP_5408)
+        cap, cap_mesh = run(memstab, scene, out / "paper4_c8v_5408"), "C8v, 5 408 triangles"
+    path_figure([(cap, cap_mesh)], "max_displacement", "w2",
+                f"Paper 4: the filled cap spinning on the floor ({cap_mesh})",
                 figures / "paper4_spinning_cap_path.png")
     mode_figure(cap, "Paper 4: critical modes of the spinning cap (normal component)",
                 figures / "paper4_spinning_cap_modes.png")
 
+    # The hilltop on 1 152 triangles at every size: on 5 408 the limit curve, a fold of the
+    # floor's penalty contact, zig-zags through pairs of cusps and needs hundreds more steps to
+    # reach the m = 4 curves (docs/thesis.md, Paper 4).
     scene = "scenes/thesis/paper4_hilltop_k.toml"
     b2 = run(memstab, scene, out / "paper4_hilltop_b2")
     b1 = run(memstab, variant(scene, out, "paper4_hilltop_b1", ('from = "B2"', 'from = "B1"')),
@@ -827,6 +848,11 @@ def main(memstab, out, figures):
     curve_figure([limit, b2, b1], "k", "w2",
                  "Paper 4: the limit curve's cusp, and the m = 4 pair's curves meeting it",
                  figures / "paper4_hilltop_k.png")
+
+
+# Scene lines replaced for the thesis's mesh sizes.
+DISC_1792 = ("divisions = 8              # 448 triangles", "divisions = 16             # 1792 triangles")
+CAP_5408 = ("divisions = 12             # 1152 triangles", "divisions = 26             # 5408 triangles")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Renders the figures of docs/thesis.md from memstab's own runs into docs/figures/ (PNG),
-# with scripts/thesis_figures.py (matplotlib and meshio). Each run takes seconds; the whole
-# script about half a minute after the release build.
+# with scripts/thesis_figures.py (matplotlib and meshio), on the thesis's mesh sizes: the disc's
+# 1 792 triangles, the f = 16 icosphere, the caps' 5 408 triangles. About five minutes on
+# 2 cores after the release build; QUICK=1 takes under a minute.
 #
 # Usage: bash scripts/thesis_figures.sh
 #
@@ -11,9 +12,9 @@
 #   PYTHON       interpreter that creates it (default: python3)
 #   OUT          where the runs are written (default: <repo>/target/thesis-figures)
 #   FIGURES      where the PNG figures go (default: <repo>/docs/figures)
-#   FULL         1: Paper 2's fold line and solution surface on the thesis's mesh (f = 16;
-#                about 25 s more) instead of f = 8 (CI's form and docs/figures). The other
-#                figures' scenes already run on the thesis's mesh sizes or near them.
+#   QUICK        1: the bundled scenes' smaller meshes where they differ from the thesis's
+#                (the swallowtail on 448 triangles, Paper 2 on f = 8, the caps on 1 152
+#                triangles): CI's form, a check that every figure still draws.
 #
 # Each figure is checked before it is written (no two labels overlap, none lies on a legend or
 # an inset); the script fails naming the figure and the labels otherwise.

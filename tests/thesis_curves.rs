@@ -703,3 +703,67 @@ fn the_solution_surface_on_the_thesis_mesh_folds_along_both_lines_over_every_pat
         assert_eq!(line.points.len(), 7, "a critical line over every path");
     }
 }
+
+/// The swallowtail found again in the disc's radius R at a fixed density, against the density
+/// scene's on the same mesh: the load enters only through ρ g a²/(μH) with a = R/1.1, so the
+/// pair of cusps must vanish at R* = 1.1 √(ρ*/0.3), each end to within its stated error.
+#[test]
+fn the_swallowtail_in_the_radius_is_the_one_in_the_density_by_dimensions() {
+    use memstab::results::{CuspCurveReport, PairEndKind};
+    let end = |name: &str| {
+        let mut study = MeshStudy::build(bundled(name)).unwrap();
+        let report = run(&mut study, |_, _| {})
+            .expect("the cusp curve runs")
+            .outcome::<CuspCurveReport>()
+            .cloned()
+            .unwrap();
+        assert!(report.warnings.is_empty(), "{name}: {:?}", report.warnings);
+        let [end] = report.ends.as_slice() else {
+            panic!("{name}: one end of a pair: {:?}", report.ends);
+        };
+        assert_eq!(end.kind, PairEndKind::Swallowtail, "{name}: {end:?}");
+        (end.estimate.unwrap(), end.error.unwrap())
+    };
+    let (rho, rho_error) = end("thesis/paper1_disc_swallowtail.toml");
+    let (r, r_error) = end("thesis/paper1_disc_swallowtail_radius.toml");
+    let predicted = 1.1 * (rho / 0.3).sqrt();
+    let predicted_error = 0.5 * predicted * rho_error / rho;
+    assert!(
+        (r - predicted).abs() <= r_error + predicted_error,
+        "R* = {r} ± {r_error}, 1.1 √(ρ*/0.3) = {predicted} ± {predicted_error}"
+    );
+    // Not a coincidence of wide errors: both are tighter than a tenth of a per cent.
+    assert!(r_error < 1e-3 * r && predicted_error < 1e-3 * predicted);
+}
+
+/// In the prestretch, at ρ = 0.3 and s = 1.05 … 3.05, the pair of cusps persists: every slice
+/// has its maximum and minimum of k, no pair ends, and the two draw together in k as s grows.
+#[test]
+fn the_disc_keeps_its_pair_of_cusps_over_the_prestretch_range() {
+    use memstab::results::{CuspCurveReport, Extremum};
+    let mut study = MeshStudy::build(bundled("thesis/paper1_disc_cusps_prestretch.toml")).unwrap();
+    let report = run(&mut study, |_, _| {})
+        .expect("the cusp curve runs")
+        .outcome::<CuspCurveReport>()
+        .cloned()
+        .unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    assert!(report.ends.is_empty(), "{:?}", report.ends);
+    let k = report.parameters.iter().position(|p| p == "k").unwrap();
+    assert_eq!(report.slices.len(), 11);
+    let mut last_gap = f64::INFINITY;
+    for slice in &report.slices {
+        let [max, min] = slice.cusps.as_slice() else {
+            panic!("two cusps at s = {}: {:?}", slice.third, slice.cusps);
+        };
+        assert_eq!(max.extremum, Some(Extremum::Maximum));
+        assert_eq!(min.extremum, Some(Extremum::Minimum));
+        let gap = max.parameters[k] - min.parameters[k];
+        assert!(
+            gap > 0.0 && gap < last_gap,
+            "s = {}: gap {gap}",
+            slice.third
+        );
+        last_gap = gap;
+    }
+}

@@ -45,7 +45,8 @@ impl Cusps {
     }
 
     /// The slice at the third parameter `value` from the carried state `start`, its curve
-    /// stepping at most `max_step` for `steps` steps; the path of the first slice that finds
+    /// stepping at most `max_step` for `steps` steps (its path to the point as the scene
+    /// says); the path of the first slice that finds
     /// its point is recorded as the run's.
     #[allow(clippy::too_many_arguments)]
     fn slice(
@@ -76,7 +77,12 @@ impl Cusps {
             times: Default::default(),
         };
         let t = Instant::now();
-        let located = match curve.locate(study, &mut cx.crossings, &point, &mut *cx.observer) {
+        // The path to the point steps as the scene says: a refined slice's finer step is
+        // for its curve, near the cusps, not for the path's way up to the fold.
+        let located = match self
+            .curve()
+            .locate(study, &mut cx.crossings, &point, &mut *cx.observer)
+        {
             Ok(l) => l,
             Err(e) => return failed(e.to_string()),
         };

@@ -250,6 +250,10 @@ pub fn thesis_table(runs: &[ThesisRun]) -> String {
 /// text). `memstab bench --thesis` runs these, so an installed binary needs no source tree.
 pub const THESIS_SCENES: &[(&str, &str)] = &[
     (
+        "paper1_disc_cusps_prestretch.toml",
+        include_str!("../../scenes/thesis/paper1_disc_cusps_prestretch.toml"),
+    ),
+    (
         "paper1_disc_irregular.toml",
         include_str!("../../scenes/thesis/paper1_disc_irregular.toml"),
     ),
@@ -268,6 +272,10 @@ pub const THESIS_SCENES: &[(&str, &str)] = &[
     (
         "paper1_disc_swallowtail.toml",
         include_str!("../../scenes/thesis/paper1_disc_swallowtail.toml"),
+    ),
+    (
+        "paper1_disc_swallowtail_radius.toml",
+        include_str!("../../scenes/thesis/paper1_disc_swallowtail_radius.toml"),
     ),
     (
         "paper2_gas_pressure_fold.toml",

@@ -57,10 +57,16 @@ impl MeshInfo {
         r.is_finite().then_some(r)
     }
 
-    /// `disc, 1792 triangles, group C7v`: the mesh as a figure's caption names it.
+    /// `disc, 1792 triangles, group C7v` (a meridian's `axisymmetric, 64 elements, group
+    /// O(2)`): the mesh as a figure's caption names it.
     pub fn describe(&self) -> String {
+        let unit = if self.generator == "axisymmetric" {
+            "elements"
+        } else {
+            "triangles"
+        };
         format!(
-            "{}, {} triangles, group {}",
+            "{}, {} {unit}, group {}",
             self.generator, self.elements, self.group
         )
     }

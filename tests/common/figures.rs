@@ -193,7 +193,8 @@ pub fn check_layout(layout: &Layout, texts: &[String], what: &str) {
     }
     // (A sweep's figure gathers runs whose meshes may differ: its caption names each size.)
     assert!(
-        layout.caption.contains(" triangles") && texts.contains(&layout.caption),
+        (layout.caption.contains(" triangles") || layout.caption.contains(" elements"))
+            && texts.contains(&layout.caption),
         "{what}: caption {:?}",
         layout.caption
     );
