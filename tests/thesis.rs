@@ -1348,3 +1348,181 @@ fn squeezed_closer_the_linear_penalty_bifurcates_where_the_cubic_one_does_not_ye
     let cub5 = first_b1(&paper3_gas_fluid(name, 3, 1e5, &edits));
     assert!((cub5 - 0.0900).abs() < 1e-3, "{cub5}");
 }
+
+// ---- Paper 3: the fluid level as the control, and the fold line of each penalty law ----
+
+/// The lower fold of the level at planes x = ±a under the penalty of `exponent`
+/// (`scenes/thesis/paper3_fluid_level_linear.toml`): the lowest h past the level's maximum
+/// among the path's turning minima and A1 critical points; the contact nodes there; and
+/// whether the fold is pinned to a change of the contact set (the critical point's two
+/// bracket states have different contact sets: an eigenvalue that jumps across zero).
+fn level_fold(exponent: u32, a: f64) -> (f64, f64, bool) {
+    let text = bundled("thesis/paper3_fluid_level_linear.toml")
+        .replace("start = -1.7 ", &format!("start = {:?} ", -a))
+        .replace("\nexponent = 1", &format!("\nexponent = {exponent}"));
+    assert_eq!(text.matches(&format!("\nexponent = {exponent}")).count(), 2);
+    let mut s = study(&text);
+    let r = run(&mut s, |_, _| {}).unwrap().report;
+    let (h, contact) = (parameter(&r, "h"), column(&r, "contact_nodes"));
+    let max = r
+        .turning_points
+        .iter()
+        .find(|t| t.kind == memstab::results::Extremum::Maximum)
+        .unwrap_or_else(|| panic!("a = {a}: no maximum of the level"));
+    let minima = r
+        .turning_points
+        .iter()
+        .filter(|t| t.kind == memstab::results::Extremum::Minimum)
+        .map(|t| (t.parameters[h], t.measures[contact], false));
+    let critical: Vec<_> = r
+        .critical
+        .iter()
+        .filter(|c| c.irrep == "A1" && c.after_step >= max.after_step)
+        .filter(|c| c.parameters[h] < max.parameters[h] - 1e-6)
+        .map(|c| {
+            let pinned = c.bracket.as_ref().is_some_and(|b| {
+                let [(u0, p0), (u1, p1)] = &b.ends;
+                s.measure(u0, p0)[contact] != s.measure(u1, p1)[contact]
+            });
+            (c.parameters[h], c.measures[contact], pinned)
+        })
+        .collect();
+    let lowest = minima
+        .chain(critical.iter().copied())
+        .min_by(|x, y| x.0.total_cmp(&y.0))
+        .unwrap_or_else(|| panic!("a = {a}: no lower fold of the level"));
+    // The turning point and the critical point of one fold agree to round-off; the critical
+    // point says whether it is pinned.
+    critical
+        .into_iter()
+        .find(|c| (c.0 - lowest.0).abs() < 1e-8)
+        .unwrap_or(lowest)
+}
+
+/// The curvature h'' of the fold line h(a) sampled at `a0 + i δ` by second differences
+/// (index i - 1 for the sample i), and its largest jump between neighbours with where.
+fn curvature(h: &[f64], delta: f64) -> (Vec<f64>, f64, usize) {
+    let c: Vec<f64> = h
+        .windows(3)
+        .map(|w| (w[2] - 2.0 * w[1] + w[0]) / (delta * delta))
+        .collect();
+    let (at, jump) = c
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .enumerate()
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+        .unwrap();
+    (c, jump, at)
+}
+
+#[test]
+fn the_linear_penaltys_fold_line_bends_where_its_contact_set_changes_and_the_cubic_ones_does_not() {
+    // The level's lower fold past its maximum, for planes a ∈ [2.05, 2.11] at δ = 0.0025,
+    // and from every other sample at 2δ. Along it the contact set at the fold changes under
+    // both laws. The linear law's fold is pinned to four nodes entering contact (a corner of
+    // the path) on part of the range and a smooth limit point on the rest; where that changes
+    // the curvature of the fold line jumps by as much as the curvature itself, at δ and 2δ
+    // alike, while its slope stays continuous (the curvature does not grow as δ halves). The
+    // cubic law's fold is a smooth limit point everywhere and its curvature varies by a few
+    // per cent of itself across its contact changes.
+    let (a0, delta, n) = (2.05, 0.0025, 24);
+    let sample = |exponent| -> Vec<(f64, f64, bool)> {
+        (0..=n)
+            .map(|i| level_fold(exponent, a0 + i as f64 * delta))
+            .collect()
+    };
+    let smoothness = |folds: &[(f64, f64, bool)], law: &str| {
+        let h: Vec<f64> = folds.iter().map(|f| f.0).collect();
+        let coarse: Vec<f64> = h.iter().step_by(2).copied().collect();
+        let (c, jump, at) = curvature(&h, delta);
+        let (c2, jump2, _) = curvature(&coarse, 2.0 * delta);
+        let peak = c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let peak2 = c2.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        eprintln!(
+            "{law}: contact nodes at the fold {:?}; pinned {:?}; curvature h'' {:.3?}; \
+             largest jump {jump:.4} (δ = {delta}) and {jump2:.4} (2δ), largest |h''| \
+             {peak:.4} and {peak2:.4}",
+            folds.iter().map(|f| f.1).collect::<Vec<_>>(),
+            folds.iter().map(|f| f.2).collect::<Vec<_>>(),
+            c
+        );
+        (jump, jump2, peak, peak2, at)
+    };
+    let linear = sample(1);
+    let cubic = sample(3);
+    let (lj, lj2, lpeak, lpeak2, at) = smoothness(&linear, "linear");
+    let (cj, cj2, cpeak, _, _) = smoothness(&cubic, "cubic");
+    // Linear: pinned and smooth folds both occur, and the largest curvature jump lies where
+    // that changes (the jump between c[at] and c[at + 1] uses samples at ..= at + 3).
+    assert!(linear.iter().any(|f| f.2) && linear.iter().any(|f| !f.2));
+    assert!(
+        (at..at + 3).any(|i| linear[i].2 != linear[i + 1].2),
+        "{at}: {linear:?}"
+    );
+    // ... a jump of the order of the curvature that does not shrink as the step halves ...
+    assert!(
+        lj > 0.5 * lpeak && lj2 > 0.5 * lpeak2,
+        "{lj} {lpeak} {lj2} {lpeak2}"
+    );
+    assert!(lj > 0.5 * lj2, "{lj} {lj2}");
+    // ... while the slope is continuous: no kink, whose second difference would double.
+    assert!(lpeak < 1.5 * lpeak2, "{lpeak} {lpeak2}");
+    // Cubic: the contact set at the fold changes too, but every fold is a smooth limit point
+    // and the curvature is continuous across the change.
+    assert!(cubic.iter().all(|f| !f.2), "{cubic:?}");
+    assert!(cubic.windows(2).any(|w| w[0].1 != w[1].1), "{cubic:?}");
+    assert!(cj < 0.1 * cpeak && cj2 < 0.1 * cpeak, "{cj} {cj2} {cpeak}");
+    assert!(lj > 10.0 * cj, "{lj} {cj}");
+}
+
+#[test]
+fn the_filled_cap_between_planes_has_limit_points_of_the_fluid_level_in_taut_states() {
+    // The bundled scene (linear law, a = 1.7) and the cubic law: the level's maximum is the
+    // free cap's (no node in contact, the same under both laws); its minimum lies where the
+    // cap presses on the planes: a smooth limit point under the cubic law, a corner where
+    // nodes enter contact under the linear one. Every triangle is in tension along both paths.
+    // Planes at a = 1.4 leave no limit point: the two folds have merged.
+    let run_law = |exponent: u32, a: f64| {
+        let text = bundled("thesis/paper3_fluid_level_linear.toml")
+            .replace("start = -1.7 ", &format!("start = {:?} ", -a))
+            .replace("\nexponent = 1", &format!("\nexponent = {exponent}"));
+        let mut s = study(&text);
+        assert_eq!(s.action.group().name(), "C2v");
+        let mut result = run(&mut s, |_, _| {}).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        memstab::output::write_run(&s, &s.scene, &mut result, dir.path()).unwrap();
+        result.report
+    };
+    let mut maxima = Vec::new();
+    for exponent in [1, 3] {
+        let r = run_law(exponent, 1.7);
+        let (h, contact) = (parameter(&r, "h"), column(&r, "contact_nodes"));
+        let w = r.wrinkling.as_ref().expect("the run was written");
+        assert!(w.first.is_none(), "{exponent}: {:?}", w.first);
+        let limits: Vec<_> = r
+            .critical
+            .iter()
+            .filter(|c| c.kind == CriticalKind::LimitPoint && c.irrep == "A1")
+            .collect();
+        assert_eq!(limits.len(), 2, "{exponent}: {limits:?}");
+        assert!(r.critical.iter().all(|c| c.irrep == "A1"));
+        assert!(limits[0].parameters[h] > limits[1].parameters[h]);
+        assert_eq!(limits[0].measures[contact], 0.0);
+        assert!(limits[1].measures[contact] > 0.0);
+        let jump = limits[1].residual_eigenvalue > 1e-8;
+        assert_eq!(
+            jump,
+            exponent == 1,
+            "{exponent}: {}",
+            limits[1].residual_eigenvalue
+        );
+        maxima.push(limits[0].parameters[h]);
+        let r = run_law(exponent, 1.4);
+        assert!(
+            r.critical.is_empty() && r.turning_points.is_empty(),
+            "{exponent}"
+        );
+        assert!(r.rows.iter().all(|row| row.index == Some(0)));
+    }
+    assert!((maxima[0] - maxima[1]).abs() < 1e-9, "{maxima:?}");
+}

@@ -5,7 +5,9 @@
 //! the sphere on a plane followed in the fluid volume (Paper 2,
 //! `scenes/thesis/paper2_gas_pressure_fold_f8.toml`) and its solution surface in (p, V)
 //! (`scenes/thesis/paper2_solution_surface_f8.toml`), and the spinning filled cap's hilltop
-//! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`).
+//! (Paper 4, `scenes/thesis/paper4_hilltop_k.toml`), and the fluid level's fold line of the cap
+//! between two planes under both penalty laws (Paper 3,
+//! `scenes/thesis/paper3_fluid_level_fold_line.toml`).
 
 use memstab::analysis::run;
 use memstab::results::{CriticalKind, CurveEvent, CurveEventKind, CurveReport};
@@ -766,4 +768,83 @@ fn the_disc_keeps_its_pair_of_cusps_over_the_prestretch_range() {
         );
         last_gap = gap;
     }
+}
+
+/// The fluid-filled cap between two planes x = ±a, the fluid level's limit point followed in
+/// (h, d = −a) (Paper 3, `scenes/thesis/paper3_fluid_level_fold_line.toml`). Under the cubic
+/// penalty the curve rises at the free cap's maximum until the planes reach its state, turns
+/// in a cusp and follows the minimum that contact makes through every change of its contact
+/// set, back to the free cap's minimum. Under the linear penalty the follower stops where the
+/// planes first reach the fold's state: σ jumps across zero there, and the run says so.
+#[test]
+fn the_level_fold_line_passes_contact_changes_under_the_cubic_law_and_stops_at_the_first_under_the_linear_one(
+) {
+    let follow = |exponent: u32| {
+        let text = std::fs::read_to_string(format!(
+            "{}/scenes/thesis/paper3_fluid_level_fold_line.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .unwrap()
+        .replace("\nexponent = 3", &format!("\nexponent = {exponent}"));
+        assert_eq!(text.matches(&format!("\nexponent = {exponent}")).count(), 2);
+        let scene = Scene::from_toml_str(&text, "test").expect("the scene loads");
+        let mut s = MeshStudy::build(scene).unwrap();
+        run(&mut s, |_, _| {})
+            .unwrap()
+            .outcome::<CurveReport>()
+            .cloned()
+            .expect("a critical curve")
+    };
+    let cubic = follow(3);
+    let (h, d) = (
+        index_of(&cubic.parameters, "h"),
+        index_of(&cubic.parameters, "d"),
+    );
+    let contact = index_of(&cubic.measures, "contact_nodes");
+    let kinds: Vec<_> = cubic.events.iter().map(|e| e.kind).collect();
+    assert_eq!(
+        kinds,
+        [
+            CurveEventKind::Start,
+            CurveEventKind::Cusp,
+            CurveEventKind::End
+        ]
+    );
+    let counts: Vec<f64> = cubic.rows.iter().map(|r| r.measures[contact]).collect();
+    let changes = counts.windows(2).filter(|w| w[0] != w[1]).count();
+    assert!(changes >= 4, "{counts:?}");
+    assert_eq!((counts[0], counts[counts.len() - 1]), (0.0, 0.0));
+    // The cusp lies where contact begins; the curve ends on the free cap's minimum, below
+    // the maximum it started at.
+    let cusp = &cubic.events[1];
+    let first_contact = cubic
+        .rows
+        .iter()
+        .find(|r| r.measures[contact] > 0.0)
+        .unwrap();
+    assert!((cusp.parameters[d] - first_contact.parameters[d]).abs() < 2e-3);
+    let (start, end) = (&cubic.rows[0], &cubic.rows[cubic.rows.len() - 1]);
+    assert!(end.parameters[h] < start.parameters[h] - 0.1);
+    assert!(cubic.warnings.is_empty(), "{:?}", cubic.warnings);
+    let linear = follow(1);
+    assert!(
+        matches!(linear.stop, memstab::results::StopReason::Stalled(_)),
+        "{}",
+        linear.stop
+    );
+    let last = &linear.rows[linear.rows.len() - 1];
+    assert!((last.parameters[h] - start.parameters[h]).abs() < 1e-9);
+    assert!(last.parameters[d] < cusp.parameters[d]);
+    assert!(
+        linear
+            .warnings
+            .iter()
+            .any(|w| w.contains("switches (nodes in contact) change")),
+        "{:?}",
+        linear.warnings
+    );
+}
+
+fn index_of(names: &[String], name: &str) -> usize {
+    names.iter().position(|n| n == name).unwrap()
 }

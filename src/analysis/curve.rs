@@ -675,6 +675,43 @@ impl Curve {
                 })
                 .collect(),
         };
+        if let (StopReason::Stalled(_), [.., before, last]) = (&branch.stop, &branch.points[..]) {
+            // A stall where the model is only piecewise smooth: ahead of the last point, along
+            // the last step, the switches (nodes in contact) change within one longest step.
+            // K jumps there and σ with it (its derivatives, by differences over states a
+            // small step apart, already see the jump before it), so σ = 0 may have no
+            // solution past it: the curve continues pinned to the switch (docs/theory.md
+            // §11.13), which this follower does not follow. Probed at doubling distances.
+            let length = last.arclength - before.arclength;
+            let max_step = self.settings().max_step;
+            let at = |t: f64| {
+                let ahead = |x: &DVector<f64>, y: &DVector<f64>| y + (y - x) * (t / length);
+                (
+                    problem.displacement(&ahead(&before.q, &last.q)),
+                    problem.parameters(&ahead(&before.lambda, &last.lambda)),
+                )
+            };
+            let (u0, p0) = at(0.0);
+            let probes = std::iter::successors(Some(length), |t| Some(2.0 * t))
+                .take_while(|&t| length > 0.0 && t <= max_step);
+            let change = probes.into_iter().find_map(|t| {
+                let (u1, p1) = at(t);
+                crossings
+                    .switched((&u0, &p0), (&u1, &p1))
+                    .filter(|&n| n > 0)
+                    .map(|n| (n, t))
+            });
+            if let Some((n, t)) = change {
+                report.warnings.push(format!(
+                    "the curve stalls where the tangent jumps: {n} of the model's switches \
+                     (nodes in contact) change within {t:.1e} ahead of point {} along the \
+                     curve; its test function jumps there, and the critical curve may \
+                     continue pinned to that change, which σ = 0 does not follow \
+                     (docs/theory.md §11.13)",
+                    branch.points.len() - 1
+                ));
+            }
+        }
         for (i, p) in branch.points.iter().enumerate() {
             let u = problem.displacement(&p.q);
             let params = problem.parameters(&p.lambda);

@@ -302,6 +302,14 @@ pub const THESIS_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/thesis/paper2_sphere_on_plane_f8.toml"),
     ),
     (
+        "paper3_fluid_level_fold_line.toml",
+        include_str!("../../scenes/thesis/paper3_fluid_level_fold_line.toml"),
+    ),
+    (
+        "paper3_fluid_level_linear.toml",
+        include_str!("../../scenes/thesis/paper3_fluid_level_linear.toml"),
+    ),
+    (
         "paper3_gas_fluid_pressure.toml",
         include_str!("../../scenes/thesis/paper3_gas_fluid_pressure.toml"),
     ),

@@ -266,6 +266,12 @@ impl<'a> Crossings<'a> {
         self.blocks.names().iter().position(|n| n == name)
     }
 
+    /// How many of the model's switches differ between the states `a` and `b` (u, params);
+    /// `None` for a smooth model ([`Blocks::switched`]).
+    pub fn switched(&self, a: (&[f64], &[f64]), b: (&[f64], &[f64])) -> Option<usize> {
+        self.blocks.switched(a, b)
+    }
+
     /// The negative count of every block only: what every path point needs to detect a
     /// change of stability.
     pub fn index(&mut self, u: &[f64], params: &[f64]) -> Option<Spectrum> {

@@ -71,6 +71,9 @@ pub enum Measure {
     WrinkledArea,
     /// The current area of the slack triangles (relaxed energy).
     SlackArea,
+    /// The number of nodes in contact with a penalty plane (its gap negative): the pieces of a
+    /// piecewise-smooth Π ([`Model::switches`]) that are on.
+    ContactNodes,
 }
 
 /// A scene on a 3-D mesh, ready to solve.
@@ -369,9 +372,6 @@ impl MeshStudy {
             measures.push(("wrinkled_area".into(), Measure::WrinkledArea));
             measures.push(("slack_area".into(), Measure::SlackArea));
         }
-        let names: Vec<String> = measures.iter().map(|(n, _)| n.clone()).collect();
-        super::check_measure(&scene, &names)
-            .map_err(|e| StudyError::Unsupported(format!("{}: {e}", scene.origin)))?;
         let model = FeModel::new(
             m.nodes.clone(),
             m.triangles.clone(),
@@ -380,6 +380,15 @@ impl MeshStudy {
             parameters.clone(),
         )
         .with_sliding(&sliding);
+        if model
+            .switches(&vec![0.0; model.layout().unknowns()], &start)
+            .is_some()
+        {
+            measures.push(("contact_nodes".into(), Measure::ContactNodes));
+        }
+        let names: Vec<String> = measures.iter().map(|(n, _)| n.clone()).collect();
+        super::check_measure(&scene, &names)
+            .map_err(|e| StudyError::Unsupported(format!("{}: {e}", scene.origin)))?;
         // Held nodes scale with the reference radius (docs/theory.md §2.8).
         let model = match radius {
             Some((Quantity::Parameter(p), r0)) if !fixed.is_empty() || !sliding.is_empty() => {
@@ -508,6 +517,11 @@ impl MeshStudy {
                 Measure::GasPressure(i) => self.gases[i].over_pressure(tris, &x, params),
                 Measure::WrinkledArea => self.area_in_state(u, params, &x, 1.0),
                 Measure::SlackArea => self.area_in_state(u, params, &x, 2.0),
+                Measure::ContactNodes => self
+                    .model
+                    .switches(u, params)
+                    .map_or(0, |on| on.iter().filter(|&&s| s).count())
+                    as f64,
             })
             .collect()
     }
