@@ -1272,6 +1272,9 @@ pub struct Stalled {
     pub control: f64,
     /// Why the last attempt failed.
     pub why: StepError,
+    /// The end of the control's range that the last attempt's predictor crossed, where the
+    /// model could not be evaluated, if it did.
+    pub bound: Option<f64>,
 }
 
 impl From<Stalled> for crate::results::Stalled {
@@ -1403,7 +1406,12 @@ impl<P: Problem> Continuation<P> {
                 Err(why) => {
                     self.next_step = s * 0.5;
                     if self.next_step < self.opts.min_step {
+                        // Only a model that cannot be evaluated there ends at the bound.
+                        let bound = matches!(why, StepError::Model(_))
+                            .then(|| self.bound_ahead(s))
+                            .flatten();
                         return Err(Stalled {
+                            bound,
                             min_step: self.opts.min_step,
                             after: self.accepted - 1,
                             control: self.point.lambda[0],
@@ -1412,6 +1420,21 @@ impl<P: Problem> Continuation<P> {
                     }
                 }
             }
+        }
+    }
+
+    /// The end of the control's range that a step of arclength `s` from the current point
+    /// would cross on its predictor, if any.
+    fn bound_ahead(&self, s: f64) -> Option<f64> {
+        let p = &self.point;
+        let ahead = p.lambda[0] + s * p.tangent[p.q.len()] * self.opts.parameter_scale(0);
+        let (lo, hi) = self.opts.bounds;
+        if ahead < lo {
+            Some(lo)
+        } else if ahead > hi {
+            Some(hi)
+        } else {
+            None
         }
     }
 
@@ -1579,6 +1602,7 @@ mod tests {
                 after: 17,
                 control: 0.1 + 0.2,
                 why,
+                bound: None,
             };
             let words = stalled.to_string();
             assert_eq!(crate::results::Stalled::from(stalled).to_string(), words);

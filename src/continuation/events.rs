@@ -237,7 +237,14 @@ pub fn follow<P: Problem>(
         let step = match step {
             Ok(step) => step,
             Err(stalled) => {
-                branch.stop = StopReason::Stalled(stalled.into());
+                // Every step across an end of the range failed: the path ends at it.
+                branch.stop = match stalled.bound {
+                    Some(bound) => StopReason::AtBound {
+                        bound,
+                        control: stalled.control,
+                    },
+                    None => StopReason::Stalled(stalled.into()),
+                };
                 return branch;
             }
         };
@@ -423,7 +430,80 @@ pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
 
 #[cfg(test)]
 mod tests {
-    use super::{locate_to_noise, locate_within};
+    use super::{locate_to_noise, locate_within, trace};
+    use crate::continuation::driver::{Continuation, Linearization, PathOptions, Problem, Tangent};
+    use crate::model::ModelError;
+    use crate::results::StopReason;
+    use nalgebra::{DMatrix, DVector};
+
+    /// R(q, λ) = q − λ, which the model cannot evaluate for λ < 0 (a material constant
+    /// below its range), or nowhere below `floor` when one is given.
+    struct HalfLine {
+        floor: f64,
+    }
+
+    impl Problem for HalfLine {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn free_parameters(&self) -> usize {
+            1
+        }
+        fn evaluate(
+            &mut self,
+            q: &DVector<f64>,
+            lambda: &DVector<f64>,
+        ) -> Result<Linearization, ModelError> {
+            if lambda[0] < self.floor {
+                return Err(ModelError::Global {
+                    effect: "line".into(),
+                    what: format!("λ = {} is out of its range", lambda[0]),
+                });
+            }
+            Ok(Linearization {
+                residual: DVector::from_element(1, q[0] - lambda[0]),
+                tangent: Tangent::Dense(DMatrix::from_element(1, 1, 1.0)),
+                loads: DMatrix::from_element(1, 1, -1.0),
+                constraints: DVector::zeros(0),
+                constraint_q: DMatrix::zeros(0, 1),
+                constraint_lambda: DMatrix::zeros(0, 1),
+            })
+        }
+    }
+
+    /// A path run into an end of its range where the model cannot be evaluated ends there,
+    /// within the minimum step, as reaching that end, not as a stall; a model that fails
+    /// inside the range still stalls.
+    #[test]
+    fn a_path_that_cannot_step_past_the_end_of_its_range_ends_at_it() {
+        let follow_down = |floor: f64| {
+            let opts = PathOptions {
+                bounds: (0.0, 10.0),
+                direction: -1.0,
+                max_step: 0.1,
+                ..PathOptions::default()
+            };
+            let one = DVector::from_element(1, 1.0);
+            let mut driver = Continuation::start(HalfLine { floor }, &one, &one, opts).unwrap();
+            trace(&mut driver, 100, |_, _| None, &mut [], |_, _| {})
+        };
+        let at_end = follow_down(0.0);
+        let last = at_end.points.last().unwrap().lambda[0];
+        match at_end.stop {
+            StopReason::AtBound { bound, control } => {
+                assert_eq!(bound, 0.0);
+                assert_eq!(control, last);
+                assert!((0.0..1e-6).contains(&last), "{last}");
+            }
+            other => panic!("{other}"),
+        }
+        let inside = follow_down(0.5);
+        assert!(
+            matches!(inside.stop, StopReason::Stalled(_)),
+            "{}",
+            inside.stop
+        );
+    }
 
     /// On a smooth zero the search with patience is the search without it: regula falsi
     /// improves at every trial and stops at the tolerance.

@@ -32,6 +32,15 @@ impl Serialize for Extremum {
 pub enum StopReason {
     /// The control left its `[min, max]` range; the last point is the first beyond it.
     Bounds,
+    /// The control reached an end of its `[min, max]` range where the model cannot be
+    /// evaluated beyond it (a material constant at 0): every step across the end failed, and
+    /// the last point is within the minimum step of it.
+    AtBound {
+        /// The end of the range.
+        bound: f64,
+        /// The control at the last point.
+        control: f64,
+    },
     /// The budget of accepted steps was used.
     StepBudget {
         /// The budget.
@@ -106,6 +115,13 @@ impl std::fmt::Display for StopReason {
         match self {
             Self::Bounds => f.write_str(
                 "the control parameter left its [min, max] range (the last point is the first beyond it)",
+            ),
+            Self::AtBound { bound, control } => write!(
+                f,
+                "the control reached the end {} of its [min, max] range (the last point at {}), \
+                 past which the model is not defined",
+                num(*bound),
+                num(*control)
             ),
             Self::StepBudget { steps } => write!(f, "the step budget ({steps}) was used"),
             Self::Stretch { target } => write!(f, "the stretch reached {}", num(*target)),

@@ -401,6 +401,7 @@ impl<'a> Switch<'a> {
                     after: 0,
                     control: cp.parameters[c],
                     why: why.expect("a failed step has its reason"),
+                    bound: None,
                 }
                 .into(),
             );

@@ -972,6 +972,7 @@ impl Switching<'_> {
                                 after: 0,
                                 control: self.control.map_or(0.0, |c| cp.parameters[c]),
                                 why,
+                                bound: None,
                             }
                             .into(),
                         );
