@@ -338,14 +338,17 @@ impl SparseBasis {
                 (None, Some(complex)) => complex.real_pattern(layout),
                 (None, None) => unreachable!("checked above"),
             };
+            // The transpose of entry (r, e) is (e, r): going through the columns in order,
+            // column r meets its rows e in increasing order, one after the other.
             let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
             let mut transpose = vec![0u32; pattern.nnz()];
+            let mut next = col_ptr[..pattern.n()].to_vec();
             for e in 0..pattern.n() {
                 for p in col_ptr[e]..col_ptr[e + 1] {
-                    transpose[p] = pattern
-                        .position(e, row_idx[p])
-                        .expect("the block pattern is symmetric")
-                        as u32;
+                    let r = row_idx[p];
+                    assert_eq!(row_idx[next[r]], e, "the block pattern is symmetric");
+                    transpose[p] = next[r] as u32;
+                    next[r] += 1;
                 }
             }
             (Arc::new(pattern), transpose)
@@ -433,8 +436,13 @@ impl SparseBasis {
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let m = self.dim();
         let flat = seeds.flat_seeds();
+        // Orbits in tasks of at least ORBITS_PER_TASK: the blocks are themselves restricted in
+        // parallel, and a task per few orbits costs more (its scratch, rayon's splitting)
+        // than the orbits of a small block.
+        const ORBITS_PER_TASK: usize = 64;
         let parts: Vec<Vec<f64>> = (0..seeds.by_orbit.len())
             .into_par_iter()
+            .with_min_len(ORBITS_PER_TASK)
             .map_init(
                 || (OrbitScratch::new(seeds.d), Vec::new()),
                 |(scratch, dense), o| {

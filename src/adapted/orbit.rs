@@ -327,12 +327,50 @@ impl Seeds {
     }
 
     /// The pattern of Bᵀ K B: column e meets every column on an orbit that holds a
-    /// neighbour of e's representative (by K's pattern).
+    /// neighbour of e's representative (by K's pattern), and (the transpose) every column
+    /// whose representative has a neighbour on e's orbit.
+    ///
+    /// All columns of one orbit share their representative, so the pattern is the graph of
+    /// orbits (with columns in this block) expanded by their column ranges: the orbits met
+    /// are found once per orbit, and each column's rows are the ranges of its orbit's
+    /// neighbours in column order, already sorted and distinct.
     pub(super) fn block_pattern(&self, layout: &Layout) -> SymmetricPattern {
-        let entries = self
-            .frame
-            .column_neighbours(layout, &self.rep, &self.by_orbit);
-        SymmetricPattern::from_entries(self.rep.len(), entries)
+        let frame = &*self.frame;
+        let pattern = layout.pattern();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let orbits = self.by_orbit.len();
+        let used = |o: usize| !self.by_orbit[o].is_empty();
+        let mut met: Vec<Vec<u32>> = vec![Vec::new(); orbits];
+        for o in (0..orbits).filter(|&o| used(o)) {
+            met[o].push(o as u32);
+            let e = self.by_orbit[o].start as usize;
+            for &dof in &self.rep_dofs[e] {
+                let dof = dof as usize;
+                for &r in &row_idx[col_ptr[dof]..col_ptr[dof + 1]] {
+                    let t = frame.orbit_of[frame.node_of[r].0 as usize];
+                    if used(t as usize) {
+                        met[o].push(t);
+                        met[t as usize].push(o as u32);
+                    }
+                }
+            }
+        }
+        for list in &mut met {
+            list.sort_unstable_by_key(|&t| self.by_orbit[t as usize].start);
+            list.dedup();
+        }
+        let m = self.rep.len();
+        let mut starts = Vec::with_capacity(m + 1);
+        starts.push(0usize);
+        let mut rows = Vec::new();
+        for &i0 in &self.rep {
+            let o = frame.orbit_of[i0 as usize] as usize;
+            for &t in &met[o] {
+                rows.extend(self.by_orbit[t as usize].clone().map(|f| f as usize));
+            }
+            starts.push(rows.len());
+        }
+        SymmetricPattern::from_sorted_columns(m, starts, rows)
     }
 
     /// Partner a of column e, Σ_b P_{ab} s_{e,b}, summed over the whole group.
@@ -503,4 +541,53 @@ pub(super) fn orbit_basis(
         seeds.by_orbit.push(start..seeds.rep.len() as u32);
     }
     SparseBasis::with_seeds(layout.unknowns(), seeds)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::adapted::AdaptedBasis;
+    use crate::linalg::SymmetricPattern;
+    use crate::model::Layout;
+    use meshes::generators::{disc, icosphere, DiscOptions, IcosphereOptions};
+
+    /// Every block's pattern, built from the graph of orbits, is the one from its columns'
+    /// pairs (each column's neighbouring orbits, with the transposes added).
+    fn same_patterns(action: &meshes::GroupAction, layout: &Layout) {
+        let basis = AdaptedBasis::new(action, layout).unwrap();
+        for ib in &basis.irreps {
+            let Some(seeds) = &ib.first().seeds else {
+                continue;
+            };
+            let fast = seeds.block_pattern(layout);
+            let entries = seeds
+                .frame
+                .column_neighbours(layout, &seeds.rep, &seeds.by_orbit);
+            let slow = SymmetricPattern::from_entries(seeds.rep.len(), entries);
+            assert_eq!(fast.col_ptr(), slow.col_ptr(), "{}", ib.name);
+            assert_eq!(fast.row_idx(), slow.row_idx(), "{}", ib.name);
+        }
+    }
+
+    #[test]
+    fn block_pattern_from_the_orbit_graph() {
+        let sym = icosphere(&IcosphereOptions {
+            radius: 1.0,
+            frequency: 4,
+        })
+        .unwrap();
+        let layout = Layout::new(sym.mesh.nodes.len(), sym.mesh.triangles.clone(), &[]);
+        same_patterns(&sym.action, &layout);
+        // A clamped rim: orbits of fixed nodes hold no columns.
+        let sym = disc(&DiscOptions {
+            sectors: 6,
+            divisions: 5,
+            ..Default::default()
+        })
+        .unwrap();
+        let fixed: Vec<usize> = (0..sym.mesh.nodes.len())
+            .filter(|&i| sym.mesh.nodes[i].xy().norm() > 1.0 - 1e-9)
+            .collect();
+        let layout = Layout::new(sym.mesh.nodes.len(), sym.mesh.triangles.clone(), &fixed);
+        same_patterns(&sym.action, &layout);
+    }
 }

@@ -238,15 +238,23 @@ impl Complement {
 
 /// The pattern of [[K, U], [Uᵀ, E]] for a sparse K and `border` dense columns U and E.
 pub fn bordered_pattern(k: &SymmetricPattern, border: usize) -> SymmetricPattern {
+    // Column j < m: K's rows, then every border row; a border column: every row. K's rows
+    // are below m and sorted, so each column comes out sorted.
     let (m, col_ptr, row_idx) = (k.n(), k.col_ptr(), k.row_idx());
-    let entries = (0..m)
-        .flat_map(|j| {
-            row_idx[col_ptr[j]..col_ptr[j + 1]]
-                .iter()
-                .map(move |&i| (i, j))
-        })
-        .chain((m..m + border).flat_map(|j| (0..m + border).map(move |i| (i, j))));
-    SymmetricPattern::from_entries(m + border, entries)
+    let n = m + border;
+    let mut starts = Vec::with_capacity(n + 1);
+    let mut rows = Vec::with_capacity(k.nnz() + 2 * border * m + border * border);
+    starts.push(0);
+    for j in 0..m {
+        rows.extend_from_slice(&row_idx[col_ptr[j]..col_ptr[j + 1]]);
+        rows.extend(m..n);
+        starts.push(rows.len());
+    }
+    for _ in m..n {
+        rows.extend(0..n);
+        starts.push(rows.len());
+    }
+    SymmetricPattern::from_sorted_columns(n, starts, rows)
 }
 
 impl BorderedBlock {
@@ -265,5 +273,30 @@ impl BorderedBlock {
         let mut family = BlockFamily { block: self, fact };
         let found = eigen::lowest_eigenpairs(&mut family, wanted, shift, shift.abs(), vectors);
         (found, family.rank())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bordered pattern is K's pattern with `border` full rows and columns appended.
+    #[test]
+    fn bordered_pattern_appends_full_rows_and_columns() {
+        let k = SymmetricPattern::from_entries(6, [(1, 0), (3, 1), (5, 2), (4, 4), (5, 3)]);
+        for border in [0, 1, 3] {
+            let n = 6 + border;
+            let entries = (0..6)
+                .flat_map(|j| {
+                    k.row_idx()[k.col_ptr()[j]..k.col_ptr()[j + 1]]
+                        .iter()
+                        .map(move |&i| (i, j))
+                })
+                .chain((6..n).flat_map(|j| (0..n).map(move |i| (i, j))));
+            let expected = SymmetricPattern::from_entries(n, entries);
+            let got = bordered_pattern(&k, border);
+            assert_eq!(got.col_ptr(), expected.col_ptr(), "border {border}");
+            assert_eq!(got.row_idx(), expected.row_idx(), "border {border}");
+        }
     }
 }

@@ -84,6 +84,24 @@ impl SymmetricPattern {
         }
     }
 
+    /// The pattern with column j's rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, given sorted
+    /// and distinct, both triangles and every diagonal entry present (the caller's
+    /// invariants; the symmetry is checked in debug builds).
+    ///
+    /// # Panics
+    /// If faer rejects the structure (`SymbolicSparseColMat::new_checked`).
+    pub fn from_sorted_columns(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Self {
+        let pattern = Self {
+            symbolic: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+        };
+        debug_assert!((0..n).all(|j| pattern.position(j, j).is_some()));
+        debug_assert!((0..n).all(|j| pattern.row_idx()
+            [pattern.col_ptr()[j]..pattern.col_ptr()[j + 1]]
+            .iter()
+            .all(|&i| pattern.position(j, i).is_some())));
+        pattern
+    }
+
     /// The pattern of a sum of dense symmetric element matrices: entry (i, j) is present iff
     /// i and j belong to one clique (or i = j). Entries equal to `absent` are skipped (held
     /// unknowns of a finite element).
