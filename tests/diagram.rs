@@ -713,3 +713,81 @@ fn a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation() {
     }
     assert_eq!(touched, 1, "the A2 point of the C1v− branch");
 }
+
+/// Paper 4's cap (C8v) at depth 3: the C1 branches leaving the A2 points of the E3 branches
+/// (ω² ≈ 15.2587 on C1v, 15.2814 on C1v′) are one branch between the two points, and those of
+/// the E1 branches' A2 points (ω² ≈ 18.0548) another. Each half, followed from its own end,
+/// reaches the other end — the point, on a branch of higher symmetry, from which the other
+/// half of its class leaves — as a fold or crossing within one step of it, and ends there as
+/// a connection instead of running its whole budget past it into a group image of itself
+/// (docs/theory.md §14.8).
+#[test]
+fn the_caps_c1_branches_end_where_they_reach_the_other_end_of_their_branch() {
+    let text = bundled("thesis/paper4_spinning_cap.toml") + "\n[analysis.branches]\ndepth = 3\n";
+    let scene = Scene::from_toml_str(&text, "cap").unwrap();
+    let mut study = memstab::study::build(scene).unwrap();
+    let result = run(&mut *study, |_, _| {}).unwrap();
+    let b = result.branches.as_ref().expect("branches");
+    let g = &b.graph;
+    let w2 = |p: &[f64]| {
+        p[result
+            .report
+            .parameters
+            .iter()
+            .position(|n| n == "w2")
+            .unwrap()]
+    };
+    let point = |n: petgraph::graph::NodeIndex| match &g.graph[n] {
+        memstab::results::Node::Critical { point, .. } => w2(&point.parameters),
+        _ => panic!("not a critical point"),
+    };
+    let c1: Vec<usize> = (0..g.branches.len())
+        .filter(|&i| g.branches[i].isotropy == "C1")
+        .collect();
+    assert_eq!(c1.len(), 4, "{c1:?}");
+    let budget = 41;
+    for &i in &c1 {
+        let br = &g.branches[i];
+        let from = point(br.from);
+        let conn = g
+            .connections
+            .iter()
+            .find(|c| c.branch == i)
+            .unwrap_or_else(|| panic!("C1 branch from {from} ends {}", br.stop));
+        let to = point(conn.to);
+        assert!(
+            matches!(br.stop, memstab::results::StopReason::Connected { .. }),
+            "{}",
+            br.stop
+        );
+        assert!(
+            br.points.len() < budget,
+            "{from}: {} points",
+            br.points.len()
+        );
+        // The other end is the start of the other C1 branch of the pair.
+        let other = c1
+            .iter()
+            .find(|&&j| j != i && g.branches[j].from == conn.to)
+            .unwrap_or_else(|| panic!("{from} → {to}: no C1 branch leaves there"));
+        assert_eq!(
+            g.connections
+                .iter()
+                .find(|c| c.branch == *other)
+                .map(|c| c.to),
+            Some(br.from),
+            "{from} and {to} are each other's ends"
+        );
+        let pair = if from < 17.0 {
+            [15.2587, 15.2814]
+        } else {
+            [18.05475, 18.05477]
+        };
+        for x in [from, to] {
+            assert!(
+                pair.iter().any(|p| (x - p).abs() < 2e-4),
+                "{from} → {to} against {pair:?}"
+            );
+        }
+    }
+}

@@ -387,7 +387,7 @@ fn tangent_at(
 
 /// The path's states at the control `value`: for every row whose step crosses it, the row
 /// and the state there (q and the free parameters), solved at the value from the row's.
-fn path_states_at<'a>(
+pub(super) fn path_states_at<'a>(
     study: &'a dyn Study,
     (rows, points): (&'a [PathRow], &'a [PointState]),
     opts: &'a PathOptions,

@@ -4,7 +4,7 @@
 //! docs/theory.md §14.8), then beside every fold of the path the second piece of an
 //! imperfect bifurcation, if there is one ([`super::partner`], docs/theory.md §16.4).
 
-use super::partner::{partners, Follow};
+use super::partner::{near_misses, partners, Follow};
 use super::path::Path;
 use super::{after_finished, AfterError, Analysis, Context, Observer, RunError};
 use crate::continuation::{interrupt, PathOptions};
@@ -41,7 +41,7 @@ impl Diagram {
                 save_every: self.0.settings.save_every,
                 limits: self.path().limits(study),
             };
-            let found = partners(
+            let mut found = partners(
                 study,
                 &opts,
                 cx.record.path(),
@@ -50,6 +50,17 @@ impl Diagram {
                 &follow,
                 &|_| true,
             );
+            if self.0.near_misses && !interrupt::requested() {
+                let first = found.iter().filter(|p| p.piece.is_some()).count() + 1;
+                found.extend(near_misses(
+                    study,
+                    &opts,
+                    cx.record.path(),
+                    &mut cx.crossings,
+                    &follow,
+                    first,
+                ));
+            }
             cx.record.outcome = Some(Outcome::new(found));
         }
         Ok(())
@@ -229,16 +240,30 @@ fn partner_summary(result: &RunResult) -> Vec<String> {
     };
     let control = &result.report.control;
     let mut lines = vec![format!(
-        "second pieces: {} of the path's {} folds have one beside them",
-        found.iter().filter(|p| p.piece.is_some()).count(),
-        found.len()
+        "second pieces: {} of the path's {} folds have one beside them; {} beside its {} dips",
+        found
+            .iter()
+            .filter(|p| p.dip.is_none() && p.piece.is_some())
+            .count(),
+        found.iter().filter(|p| p.dip.is_none()).count(),
+        found
+            .iter()
+            .filter(|p| p.dip.is_some() && p.piece.is_some())
+            .count(),
+        found.iter().filter(|p| p.dip.is_some()).count(),
     )];
     for p in found {
-        let at = format!(
-            "  fold {} at {control} = {}",
-            p.fold,
-            sig_digits(p.value, 6)
-        );
+        let at = match p.dip {
+            Some(step) => format!(
+                "  dip at step {step}, {control} = {}",
+                sig_digits(p.value, 6)
+            ),
+            None => format!(
+                "  fold {} at {control} = {}",
+                p.fold,
+                sig_digits(p.value, 6)
+            ),
+        };
         let Some(piece) = &p.piece else {
             lines.push(format!(
                 "{at}: {}",
@@ -265,10 +290,14 @@ fn partner_summary(result: &RunResult) -> Vec<String> {
         } else {
             points.join(", ")
         };
+        let (to, followed) = if p.dip.is_some() {
+            ("the path's state at its first", "points towards the dip")
+        } else {
+            ("the fold's state at the same", "points beyond the fold")
+        };
         lines.push(format!(
             "{at}: a second piece, not reached by the path, at an RMS distance {} from \
-                 the fold's state at the same {control} (the gap); {}: {} points beyond the \
-                 fold, {critical}; stopped: {}",
+                 {to} {control} (the gap); {}: {} {followed}, {critical}; stopped: {}",
             sig_digits(piece.gap, 4),
             piece.run.directory,
             r.rows.len(),

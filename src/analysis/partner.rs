@@ -14,11 +14,12 @@
 //! 3s in the normal form — and the piece is followed from it beyond the fold with its index
 //! and its critical points, as the path is.
 
-use super::deflation::on_path;
+use super::deflation::{on_path, path_states_at};
 use super::path::{measure_stops, record_branch, start_driver, trace_indexed};
 use super::{Record, RunError};
 use crate::continuation::crossings::Crossings;
 use crate::continuation::deflation::{deflated_solve_at, scaled, Deflation};
+use crate::continuation::near_miss::{beside_dip, dips};
 use crate::continuation::{interrupt, solve_on_plane, PathOptions};
 use crate::results::partner::{Partner, PartnerPiece};
 use crate::results::{
@@ -85,6 +86,89 @@ pub fn partners(
     found
 }
 
+/// The second piece beside every dip of the path (docs/theory.md §16.7): a clear local
+/// minimum of the |eigenvalue| nearest zero of the path's own (trivial) block with no change
+/// of its negative count, whose mode has a wave number m ≥ 1 — a double broken into the
+/// path's block that the path passes without a fold. Beside each, solves at fixed amplitude
+/// along the mode ([`beside_dip`]) seek a state the path does not have, with the control
+/// within the path's range, and the piece through it is followed towards the dip's control
+/// (where its fold lies) as `follow` says; its directories are numbered from `first`.
+pub fn near_misses(
+    study: &dyn Study,
+    opts: &PathOptions,
+    path: (&[PathRow], &[PointState]),
+    crossings: &mut Option<Crossings<'_>>,
+    follow: &Follow,
+    first: usize,
+) -> Vec<Partner> {
+    let (rows, points) = path;
+    let Some(c) = study.control().map(|c| c.index) else {
+        return Vec::new();
+    };
+    let Some(cr) = crossings.as_mut() else {
+        return Vec::new();
+    };
+    if rows.len() < 3 || points.len() < rows.len() {
+        return Vec::new();
+    }
+    let free = Free::path(Some(c));
+    let displacer = study.problem(&rows[0].parameters, &free);
+    let mut sigma = Vec::with_capacity(rows.len());
+    let mut negatives = Vec::with_capacity(rows.len());
+    for (row, point) in rows.iter().zip(points) {
+        if interrupt::requested() {
+            return Vec::new();
+        }
+        let u = displacer.displacement(&DVector::from_vec(point.q.clone()));
+        match cr.nearest_zero(&u, &row.parameters, 0, false, row.step) {
+            Some((s, n, _)) => {
+                sigma.push(s);
+                negatives.push(n);
+            }
+            None => {
+                sigma.push(f64::NAN);
+                negatives.push(usize::MAX);
+            }
+        }
+    }
+    drop(displacer);
+    let (lo, hi) = rows
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+            (lo.min(r.parameters[c]), hi.max(r.parameters[c]))
+        });
+    let mut found: Vec<Partner> = Vec::new();
+    for k in dips(&sigma, &negatives) {
+        if interrupt::requested() {
+            break;
+        }
+        let row = &rows[k];
+        let problem = study.problem(&row.parameters, &free);
+        let u = problem.displacement(&DVector::from_vec(points[k].q.clone()));
+        drop(problem);
+        let Some((_, _, Some(mode))) = crossings
+            .as_mut()
+            .and_then(|cr| cr.nearest_zero(&u, &row.parameters, 0, true, k))
+        else {
+            continue;
+        };
+        if study.wave_number(&mode).is_none_or(|m| m == 0) {
+            continue;
+        }
+        let pieces = found.iter().filter(|p| p.piece.is_some()).count();
+        let search = Search {
+            study,
+            opts,
+            path,
+            c,
+            follow: follow.clone(),
+            directory: format!("partner_{:02}", first + pieces),
+        };
+        found.push(search.at_dip(crossings, k, &u, &mode, (lo, hi), &free));
+    }
+    found
+}
+
 /// One fold's search: the study, the path it lies on, the control and how a piece is
 /// followed and named.
 struct Search<'s> {
@@ -108,6 +192,7 @@ impl Search<'_> {
         let value = cp.parameters[c];
         let mut partner = Partner {
             fold: number,
+            dip: None,
             value,
             tried: 0,
             piece: None,
@@ -242,6 +327,120 @@ impl Search<'_> {
              path's own piece or did not converge (a fold of the path alone)",
             partner.tried
         ));
+        partner
+    }
+
+    /// The search beside the dip at row `k` of the path (state `u`, its mode carried by
+    /// `dip` as a critical point's), accepting states whose control lies in `range`.
+    fn at_dip(
+        &self,
+        crossings: &mut Option<Crossings<'_>>,
+        k: usize,
+        u: &[f64],
+        dip: &CriticalPoint,
+        range: (f64, f64),
+        free: &Free,
+    ) -> Partner {
+        let (study, opts, c) = (self.study, self.opts, self.c);
+        let rows = self.path.0;
+        let value = rows[k].parameters[c];
+        let mut partner = Partner {
+            fold: 0,
+            dip: Some(k),
+            value,
+            tried: 0,
+            piece: None,
+            note: None,
+        };
+        // The path's direction in the control there: the piece's fold lies ahead.
+        let ahead = (rows[k + 1].parameters[c] - rows[k - 1].parameters[c]).signum();
+        if ahead == 0.0 || !ahead.is_finite() {
+            partner.note = Some("the path's direction at the dip is not known".into());
+            return partner;
+        }
+        let h = rows[k + 1].arclength - rows[k].arclength;
+        let h = if h > 0.0 { h } else { opts.initial_step };
+        let at = Point {
+            u: u.to_vec(),
+            params: rows[k].parameters.clone(),
+            iterations: 0,
+            times: Default::default(),
+        };
+        let driver = match start_driver(study, &at, opts.clone()) {
+            Ok(d) => d,
+            Err(e) => {
+                partner.note = Some(format!("the dip's state could not be solved again: {e}"));
+                return partner;
+            }
+        };
+        let from = driver.point().clone();
+        let mut problem = driver.into_problem();
+        let m = from.q.len();
+        let q_mode = problem.coordinates(&dip.mode);
+        let mut phi = DVector::zeros(from.tangent.len());
+        if q_mode.len() != m {
+            partner.note = Some("the dip's mode is not over the path's unknowns".into());
+            return partner;
+        }
+        phi.rows_mut(0, m).copy_from(&q_mode);
+        let norm = phi.norm();
+        if norm == 0.0 || !norm.is_finite() {
+            partner.note = Some("the dip's mode vanishes on the path's unknowns".into());
+            return partner;
+        }
+        phi /= norm;
+        let mut accept = |problem: &mut Box<dyn crate::continuation::Followed + '_>,
+                          p: &crate::continuation::PathPoint| {
+            let l = p.lambda[0];
+            let z = scaled(&p.q, &p.lambda, opts);
+            let _ = problem;
+            (range.0..=range.1).contains(&l)
+                && on_path(study, self.path, opts, free, &z, l).is_none()
+        };
+        let beside = beside_dip(&mut problem, &from, &phi, h, opts, &mut accept);
+        partner.tried = beside.tried;
+        let Some((p, amplitude)) = beside.found else {
+            partner.note = Some(format!(
+                "no second piece: the {} fixed-amplitude solves on both sides of the dip met \
+                 the path's own piece, left the path's range or did not converge",
+                partner.tried
+            ));
+            return partner;
+        };
+        let piece_u = problem.displacement(&p.q);
+        let params = problem.parameters(&p.lambda);
+        drop(problem);
+        // The gap: to the path's state at the piece's first control value.
+        let gap = path_states_at(study, self.path, opts, free, p.lambda[0])
+            .map(|(_, problem, q, _)| rms_difference(&piece_u, &problem.displacement(&q)))
+            .fold(f64::INFINITY, f64::min);
+        let start = Point {
+            u: piece_u,
+            params,
+            iterations: 0,
+            times: Default::default(),
+        };
+        match self.piece(crossings, &start, -ahead) {
+            Ok(run) if gap.is_finite() => {
+                partner.piece = Some(PartnerPiece {
+                    amplitude,
+                    gap,
+                    run,
+                })
+            }
+            Ok(_) => {
+                partner.note = Some(
+                    "a second piece was met, but the path's state at its control could not \
+                     be solved for the gap"
+                        .into(),
+                )
+            }
+            Err(e) => {
+                partner.note = Some(format!(
+                    "a second piece was met beside the dip, but it could not be followed: {e}"
+                ))
+            }
+        }
         partner
     }
 

@@ -294,6 +294,55 @@ impl<'a> Crossings<'a> {
         self.blocks.block_eigen(u, params, mu, lowest, vectors)
     }
 
+    /// The eigenvalue of block `block` nearest zero at (u, params), the block's negative
+    /// count, and (when `mode`) a point carrying that eigenvalue's mode, irrep and isotropy
+    /// as a critical point does (`after_step` its step; no bracket): what names the mode of
+    /// a dip of the path (docs/theory.md §16.7). `None` where the eigenvalues could not be
+    /// computed.
+    pub fn nearest_zero(
+        &mut self,
+        u: &[f64],
+        params: &[f64],
+        block: usize,
+        mode: bool,
+        after_step: usize,
+    ) -> Option<(f64, usize, Option<CriticalPoint>)> {
+        let mut sp = self.block_eigen(u, params, block, 1, mode)?;
+        let negative = sp.blocks.get(block)?.negative;
+        if negative > 0 && sp.blocks[block].eigenvalues.len() <= negative {
+            sp = self.block_eigen(u, params, block, negative + 1, mode)?;
+        }
+        let b = sp.blocks.get(block)?;
+        let (k, sigma) = b
+            .eigenvalues
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|(_, e)| e.is_finite())
+            .min_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))?;
+        if !mode {
+            return Some((sigma, b.negative, None));
+        }
+        let point = self
+            .critical_point(
+                block,
+                k,
+                (u.to_vec(), params.to_vec(), &sp, sigma),
+                Bracket {
+                    width: 0.0,
+                    ends: [(u.to_vec(), params.to_vec()), (u.to_vec(), params.to_vec())],
+                },
+                after_step,
+                false,
+            )
+            .ok()
+            .map(|mut cp| {
+                cp.bracket = None;
+                cp
+            });
+        Some((sigma, b.negative, point))
+    }
+
     /// Localises every eigenvalue of every block whose negative count differs between the
     /// ends `a` and `b` of a step (index spectra, with or without eigenvalues, and their
     /// states), with `state(s)` giving (u, params) for s ∈ [0, s1] (s = 0 at a, s1 at b): a

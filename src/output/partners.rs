@@ -32,11 +32,15 @@ struct PieceCritical<'a> {
     flags: Vec<Flag>,
 }
 
-/// One fold's search, as `diagram.json` lists it.
+/// One fold's (or dip's) search, as `diagram.json` lists it.
 #[derive(Serialize)]
 struct PartnerJson<'a> {
-    /// The fold's number among the path's critical points.
-    fold: usize,
+    /// The fold's number among the path's critical points (absent beside a dip).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fold: Option<usize>,
+    /// The path's step at the dip the search was made beside (docs/theory.md §16.7).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dip: Option<usize>,
     /// The control's value there.
     value: f64,
     /// Fixed-amplitude solves tried.
@@ -95,7 +99,8 @@ fn json_of(p: &Partner) -> PartnerJson<'_> {
             .collect()
     });
     PartnerJson {
-        fold: p.fold,
+        fold: (p.dip.is_none()).then_some(p.fold),
+        dip: p.dip,
         value: p.value,
         tried: p.tried,
         found: piece.is_some(),
@@ -144,12 +149,16 @@ pub fn write_partners(
             outcome: None,
         };
         let written = write_run(drawing, scene, &mut result, &dir).map_err(|e| e.error)?;
+        let beside = match p.dip {
+            Some(step) => format!("the dip at step {step}"),
+            None => format!("critical point {} (a fold", p.fold),
+        };
         let what = format!(
-            "the second piece beside critical point {} (a fold at {} = {}): gap {}, {} points, \
-             {} critical points; the files of a path",
-            p.fold,
+            "the second piece beside {beside} at {} = {}{}: gap {}, {} points, {} critical \
+             points; the files of a path",
             path.control,
             super::svg::short(p.value),
+            if p.dip.is_some() { "" } else { ")" },
             super::svg::short(piece.gap),
             piece.run.report.rows.len(),
             piece.run.report.critical.len()
@@ -240,7 +249,15 @@ fn picture(partners: &[Partner], path: &PathReport) -> BifurcationDiagram {
     let mut lines = vec![line(path, "path through the start".into(), true)];
     let mut marks = Vec::new();
     for p in partners {
-        if let Some(cp) = path.critical.get(p.fold - 1) {
+        if let Some(row) = p.dip.and_then(|k| path.rows.get(k)) {
+            let (x, y) = at(&row.parameters, &row.measures);
+            marks.push(DiagramMark {
+                x,
+                y,
+                label: format!("dip at step {}", row.step),
+                kind: "dip of the path".to_string(),
+            });
+        } else if let Some(cp) = p.fold.checked_sub(1).and_then(|f| path.critical.get(f)) {
             let (x, y) = at(&cp.parameters, &cp.measures);
             marks.push(DiagramMark {
                 x,

@@ -5,12 +5,16 @@
 
 use super::BranchRun;
 
-/// The search for a second piece at one fold (limit point) of the path.
+/// The search for a second piece at one fold (limit point) of the path, or at one dip.
 #[derive(Debug, Clone)]
 pub struct Partner {
-    /// The fold: its number among the path's critical points (from 1, as in `critical.json`).
+    /// The fold: its number among the path's critical points (from 1, as in `critical.json`);
+    /// 0 for a search beside a dip ([`Partner::dip`]).
     pub fold: usize,
-    /// The control's value at the fold.
+    /// The path's step at a dip (docs/theory.md §16.7) the search was made beside, instead of
+    /// a fold: a minimum of the |eigenvalue| of the path's own block with no change of index.
+    pub dip: Option<usize>,
+    /// The control's value at the fold (or the dip).
     pub value: f64,
     /// The fixed-amplitude solves tried.
     pub tried: usize,

@@ -73,6 +73,10 @@ const SAME_POINT: f64 = 1e-6;
 /// is not its tangent).
 const SAME_DIRECTION: f64 = 0.9;
 
+/// An event along a branch in step order: the step before it, which (`Ok(k)` its k-th
+/// critical point, `Err(k)` its k-th turning point), its state and its parameters.
+type Reach<'a> = (usize, Result<usize, usize>, &'a [f64], &'a [f64]);
+
 /// A group acting on the model, with what switching at a critical point of a path in its
 /// fixed-point space needs: the fixed-point basis, the symmetry-adapted basis (for stability
 /// by its irreps), its subgroup lattice, and where its elements are in the scene's group.
@@ -347,8 +351,103 @@ impl Switching<'_> {
             }
             self.switch_at(self.top, None, node, cp, 1, 1.0, &mut g);
         }
+        self.late_connections(&mut g);
         self.meetings(&mut g);
         g
+    }
+
+    /// A branch followed before the point at its other end was known (depth first, the
+    /// point lies on a branch switched later) is ended there now, as [`Self::connect`] would
+    /// have ended it ([`Self::reached_known`]): the branch followed from that point is the
+    /// same branch from its other end. Its points beyond are dropped, and its critical
+    /// points there with them — unless a branch was followed from one of those, when it is
+    /// left whole.
+    fn late_connections(&self, g: &mut BranchGraph) {
+        for i in 0..g.branches.len() {
+            if matches!(
+                g.branches[i].stop,
+                StopReason::Connected { .. } | StopReason::Rejoined { .. }
+            ) {
+                continue;
+            }
+            let own: Vec<NodeIndex> = g
+                .graph
+                .node_indices()
+                .filter(|&n| matches!(g.graph[n], Node::Critical { on: Some(k), .. } if k == i))
+                .collect();
+            let mut except = own.clone();
+            except.push(g.branches[i].from);
+            let mut b = g.branches[i].clone();
+            let same = self.connect_except(g, &mut b, &except, false);
+            let Some(to) = same.last().copied().flatten() else {
+                continue;
+            };
+            let kept = b.critical.len();
+            let dropped: Vec<NodeIndex> = own
+                .iter()
+                .copied()
+                .filter(|&n| matches!(g.graph[n], Node::Critical { number, .. } if number >= kept))
+                .collect();
+            if dropped.iter().any(|&n| g.graph.edges(n).next().is_some()) {
+                continue;
+            }
+            // The point itself: its node when it is one of the branch's critical points
+            // (number `kept`), else a new node.
+            let reused = g.branches[i]
+                .critical
+                .get(kept - 1)
+                .is_some_and(|c| c.state == b.critical[kept - 1].state);
+            let at = own.iter().copied().find(|&n| {
+                reused && matches!(g.graph[n], Node::Critical { number, .. } if number == kept)
+            });
+            let mut dropped: Vec<NodeIndex> =
+                dropped.into_iter().filter(|&n| Some(n) != at).collect();
+            dropped.sort_unstable_by(|a, b| b.cmp(a));
+            let mut to = to;
+            let mut at = at;
+            for n in dropped {
+                let last = NodeIndex::new(g.graph.node_count() - 1);
+                g.graph.remove_node(n);
+                let moved = |x: &mut NodeIndex| {
+                    if *x == last {
+                        *x = n;
+                    }
+                };
+                for br in &mut g.branches {
+                    moved(&mut br.from);
+                }
+                for c in &mut g.connections {
+                    moved(&mut c.at);
+                    moved(&mut c.to);
+                }
+                moved(&mut to);
+                if let Some(a) = at.as_mut() {
+                    moved(a);
+                }
+                moved(&mut b.from);
+            }
+            let point = b.critical[kept - 1].clone();
+            let at = at.unwrap_or_else(|| {
+                g.graph.add_node(Node::Critical {
+                    on: Some(i),
+                    number: kept,
+                    point: Box::new(point),
+                    skipped: None,
+                })
+            });
+            if let Node::Critical { on, number, .. } = g.graph[to] {
+                set_skip(g, at, Skip::Connection { on, number });
+            }
+            g.connections.push(Connection { branch: i, at, to });
+            for n in g.graph.node_indices() {
+                if let Node::End { branch, stop } = &mut g.graph[n] {
+                    if *branch == i {
+                        *stop = b.stop.clone();
+                    }
+                }
+            }
+            g.branches[i] = b;
+        }
     }
 
     /// Every branch that stalled within one longest step (scaled arclength) of a state of
@@ -558,9 +657,22 @@ impl Switching<'_> {
     /// critical points there (every block singular at it) kept, the later ones dropped.
     /// Returns, for each critical point kept, the known point it is.
     fn connect(&self, g: &BranchGraph, branch: &mut SwitchedBranch) -> Vec<Option<NodeIndex>> {
+        self.connect_except(g, branch, &[branch.from], true)
+    }
+
+    /// As [`Self::connect`], the nodes `except` not counted as known (the point the branch
+    /// left, and its own points when it is already in the graph); with `strict`, the
+    /// identity check of its critical points and the return to its parent first.
+    fn connect_except(
+        &self,
+        g: &BranchGraph,
+        branch: &mut SwitchedBranch,
+        except: &[NodeIndex],
+        strict: bool,
+    ) -> Vec<Option<NodeIndex>> {
         let order = branch.elements.len();
         let mut same: Vec<Option<NodeIndex>> = Vec::new();
-        for c in &branch.critical {
+        for c in branch.critical.iter().filter(|_| strict) {
             let known = self.same_as(g, c, order);
             // The first connection ends the branch, with its other blocks singular there.
             if same
@@ -573,7 +685,7 @@ impl Switching<'_> {
             }
             same.push(known);
         }
-        if !same.iter().any(Option::is_some) {
+        if strict && !same.iter().any(Option::is_some) {
             if let Some(to) = self.rejoined_at(g, branch) {
                 // The branch ends on the known point it returned to: its junction with the
                 // path it left, a closed circuit.
@@ -582,6 +694,45 @@ impl Switching<'_> {
                     c.after_step = branch.points.len() - 1;
                     branch.critical.push(c);
                     same.push(Some(to));
+                }
+            }
+        }
+        let mut near = None;
+        if !same.iter().any(Option::is_some) {
+            if let Some((which, to, distance)) = self.reached_known(g, branch, except) {
+                // The branch reaches a known point of a path at least as symmetric, to its
+                // own resolution: the pitchfork where it meets that path, seen from the
+                // branch as a crossing or a fold of its control near the point. Beyond it
+                // the branch would retrace a group image of a known branch; it ends there,
+                // connected, its critical points before it kept.
+                match which {
+                    Ok(k) => {
+                        branch.critical.truncate(k + 1);
+                        same.truncate(k);
+                        same.resize(k, None);
+                        same.push(Some(to));
+                        near = Some(("critical point", distance));
+                    }
+                    Err(t) => {
+                        if let Node::Critical { point, .. } = &g.graph[to] {
+                            let turning = &branch.turning[t];
+                            let keep = branch
+                                .critical
+                                .iter()
+                                .take_while(|c| c.after_step < turning.after_step)
+                                .count();
+                            branch.critical.truncate(keep);
+                            same.truncate(keep);
+                            same.resize(keep, None);
+                            let mut c = (**point).clone();
+                            c.after_step = turning.after_step;
+                            c.state = turning.u.clone();
+                            c.parameters = turning.parameters.clone();
+                            branch.critical.push(c);
+                            same.push(Some(to));
+                            near = Some(("fold of its control", distance));
+                        }
+                    }
                 }
             }
         }
@@ -598,10 +749,13 @@ impl Switching<'_> {
         branch.points.push(end);
         branch.turning.retain(|t| t.after_step < j);
         if let Node::Critical { on, number, .. } = &g.graph[to] {
-            let returned = match branch.stop {
-                StopReason::Rejoined { between, estimate } => format!(
+            let returned = match (&branch.stop, near) {
+                (StopReason::Rejoined { between, estimate }, _) => format!(
                     " (it returned to that path's states between {:.6} and {:.6}, its amplitude vanishing at about {estimate:.6})",
                     between[0], between[1]
+                ),
+                (_, Some((event, distance))) => format!(
+                    " (at a {event} of its own, a group image of whose state lies {distance:.1e} from it in scaled arclength, within one step)"
                 ),
                 _ => String::new(),
             };
@@ -613,6 +767,105 @@ impl Switching<'_> {
             };
         }
         same
+    }
+
+    /// The first critical point or turning point of the control along `branch` (by step)
+    /// that lies within one longest step of a known critical point of a path at least as
+    /// symmetric ([`Self::nearest_known`]), other than the point it left, from which a branch
+    /// of `branch`'s isotropy class was followed: the pitchfork where it meets that branch
+    /// followed from its other end, which `branch`, resolved to its step, sees as a crossing
+    /// or a fold near the point. Returns the event (`Ok(k)` its k-th critical point, `Err(k)` its
+    /// k-th turning point), the known node and their distance.
+    fn reached_known(
+        &self,
+        g: &BranchGraph,
+        branch: &SwitchedBranch,
+        except: &[NodeIndex],
+    ) -> Option<(Result<usize, usize>, NodeIndex, f64)> {
+        let order = branch.elements.len();
+        let mut events: Vec<Reach<'_>> = branch
+            .critical
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                (
+                    c.after_step,
+                    Ok(k),
+                    c.state.as_slice(),
+                    c.parameters.as_slice(),
+                )
+            })
+            .chain(branch.turning.iter().enumerate().map(|(k, t)| {
+                (
+                    t.after_step,
+                    Err(k),
+                    t.u.as_slice(),
+                    t.parameters.as_slice(),
+                )
+            }))
+            .collect();
+        events.sort_by_key(|e| e.0);
+        events.into_iter().find_map(|(_, which, u, params)| {
+            self.nearest_known(g, u, params, order, except)
+                .filter(|&(n, _)| {
+                    g.branches.iter().any(|b| {
+                        b.from == n && b.isotropy == branch.isotropy && b.from != branch.from
+                    })
+                })
+                .map(|(n, d)| (which, n, d))
+        })
+    }
+
+    /// The known critical point nearest (u, params) up to the scene's group, other than those
+    /// in `except`, on a path at least as symmetric as `order`, with its distance in scaled
+    /// arclength (state over the state scale, control over its scale), if within one longest
+    /// step.
+    fn nearest_known(
+        &self,
+        g: &BranchGraph,
+        u: &[f64],
+        params: &[f64],
+        order: usize,
+        except: &[NodeIndex],
+    ) -> Option<(NodeIndex, f64)> {
+        let control = self.control?;
+        let opts = &self.options.path;
+        let layout = self.model.layout();
+        let group = self.top.action.group().order();
+        let reach = opts.max_step;
+        let images: Vec<Vec<f64>> = (0..group)
+            .map(|e| act(&self.top.action, layout, e, u))
+            .collect();
+        let mut best: Option<(NodeIndex, f64)> = None;
+        for n in g.graph.node_indices() {
+            if except.contains(&n) {
+                continue;
+            }
+            let Node::Critical { point, on, .. } = &g.graph[n] else {
+                continue;
+            };
+            if on.map_or(group, |k| g.branches[k].elements.len()) < order {
+                continue;
+            }
+            let dl = (point.parameters[control] - params[control]).abs() / opts.parameter_scale(0);
+            if dl > reach {
+                continue;
+            }
+            for image in &images {
+                let du = image
+                    .iter()
+                    .zip(&point.state)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt()
+                    / opts.state_scale;
+                let d = du.hypot(dl);
+                if d <= reach && best.is_none_or(|(_, e)| d < e) {
+                    best = Some((n, d));
+                }
+            }
+        }
+        best
     }
 
     /// The critical point of the path `branch` left that it returned to
@@ -662,11 +915,28 @@ impl Switching<'_> {
     /// the branch `c` lies on) count: a branch crossing a point of a less symmetric one goes
     /// on into states nothing has followed.
     fn same_as(&self, g: &BranchGraph, c: &CriticalPoint, order: usize) -> Option<NodeIndex> {
+        self.known_state(g, &c.state, &c.parameters, order, &[])
+    }
+
+    /// The node of a critical point already in the graph, other than those in `except`,
+    /// whose control and state (up to the scene's group) are `params`' and `u`'s, both to
+    /// [`SAME_POINT`] of the path's scales, on a path at least as symmetric as `order`.
+    fn known_state(
+        &self,
+        g: &BranchGraph,
+        u: &[f64],
+        params: &[f64],
+        order: usize,
+        except: &[NodeIndex],
+    ) -> Option<NodeIndex> {
         let control = self.control?;
         let opts = &self.options.path;
         let layout = self.model.layout();
         let group = self.top.action.group().order();
         g.graph.node_indices().find(|&n| {
+            if except.contains(&n) {
+                return false;
+            }
             let Node::Critical { point, on, .. } = &g.graph[n] else {
                 return false;
             };
@@ -674,11 +944,10 @@ impl Switching<'_> {
             if symmetry < order {
                 return false;
             }
-            let dl =
-                (point.parameters[control] - c.parameters[control]).abs() / opts.parameter_scale(0);
+            let dl = (point.parameters[control] - params[control]).abs() / opts.parameter_scale(0);
             dl <= SAME_POINT
                 && (0..group).any(|e| {
-                    let image = act(&self.top.action, layout, e, &c.state);
+                    let image = act(&self.top.action, layout, e, u);
                     let d: f64 = image
                         .iter()
                         .zip(&point.state)

@@ -37,6 +37,11 @@ pub struct DiagramAnalysis {
     /// Seek the second piece beside every fold of the path. Default true.
     #[serde(default = "default_partners")]
     pub partners: bool,
+    /// Seek the second piece also beside every dip of the path: a minimum of the |eigenvalue|
+    /// of its own block with no change of index, whose mode has a wave number m ≥ 1 (a
+    /// double broken without a fold, docs/theory.md §16.7). Default true.
+    #[serde(default = "default_partners")]
+    pub near_misses: bool,
     /// Points of each second piece beyond its fold. Default 60.
     #[serde(default = "default_partner_steps")]
     pub partner_steps: usize,
@@ -72,6 +77,7 @@ impl DiagramAnalysis {
             branch_steps: b.map_or(default_branch_steps(), |b| b.steps),
             branch_max_step: b.and_then(|b| b.max_step),
             partners: default_partners(),
+            near_misses: default_partners(),
             partner_steps: default_partner_steps(),
             settings: p.settings.clone(),
         }
