@@ -56,6 +56,7 @@ fn report() -> PathReport {
         after_step,
         parameters: vec![p, 9.81],
         measures: measures(l),
+        corner: None,
     };
     PathReport {
         scene: "balloon".to_string(),

@@ -14,7 +14,7 @@ use memstab::effects::Quantity;
 use memstab::model::check::check_derivatives;
 use memstab::model::constraint::Constraint;
 use memstab::model::{Effect, Evaluation, FeModel, Layout, Model, ModelError, Request, Vec3};
-use memstab::results::{CriticalKind, PathReport, StopReason};
+use memstab::results::{CriticalKind, Extremum, PathReport, StopReason};
 use memstab::scene::Scene;
 use memstab::stability::{Detail, Stability};
 use memstab::study::mesh::MeshStudy;
@@ -1525,4 +1525,66 @@ fn the_filled_cap_between_planes_has_limit_points_of_the_fluid_level_in_taut_sta
         assert!(r.rows.iter().all(|row| row.index == Some(0)));
     }
     assert!((maxima[0] - maxima[1]).abs() < 1e-9, "{maxima:?}");
+}
+
+#[test]
+fn the_linear_penalty_turns_the_fluid_level_at_the_contact_jump() {
+    // Under the linear law the level's minimum is a corner of the path: four nodes enter
+    // contact and the control's tangent jumps across zero there without passing through it.
+    // The turning point is at the jump (the critical point flagged contact-jump, to its
+    // bracket), at the lowest level the path reaches, and flagged contact-jump itself; under
+    // the cubic law the minimum is a smooth turning point, unflagged.
+    let run_law = |exponent: u32| {
+        let text = bundled("thesis/paper3_fluid_level_linear.toml")
+            .replace("\nexponent = 1", &format!("\nexponent = {exponent}"));
+        let mut s = study(&text);
+        let mut result = run(&mut s, |_, _| {}).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        memstab::output::write_run(&s, &s.scene, &mut result, dir.path()).unwrap();
+        result.report
+    };
+    for exponent in [1, 3] {
+        let r = run_law(exponent);
+        let h = parameter(&r, "h");
+        let minima: Vec<usize> = (0..r.turning_points.len())
+            .filter(|&t| r.turning_points[t].kind == Extremum::Minimum)
+            .collect();
+        assert_eq!(minima.len(), 1, "{exponent}: {:?}", r.turning_points);
+        let t = minima[0];
+        let h_min = r.turning_points[t].parameters[h];
+        let flags: Vec<&str> = r.turning_flags(t).iter().map(|f| f.name()).collect();
+        let maximum = r
+            .turning_points
+            .iter()
+            .find(|p| p.kind == Extremum::Maximum)
+            .expect("a maximum");
+        // The lowest level over the rows past the maximum (the path starts lower, at h = 3).
+        let lowest_row = r.rows[maximum.after_step + 1..]
+            .iter()
+            .map(|row| row.parameters[h])
+            .fold(f64::INFINITY, f64::min);
+        assert!(r.turning_flags(0).is_empty() && maximum.corner.is_none());
+        if exponent == 1 {
+            let k = r
+                .critical
+                .iter()
+                .position(|c| c.parameters[h] < 7.8)
+                .expect("the jump");
+            assert!(r.flags(k).iter().any(|f| f.name() == "contact-jump"));
+            let jump = r.critical[k].parameters[h];
+            // Both are bisected to 1e-10 of a step of 0.01 in arclength, where |dh/ds| < 1.
+            assert!((h_min - jump).abs() < 1e-11, "{h_min} {jump}");
+            assert!((h_min - 7.72412).abs() < 5e-6, "{h_min}");
+            // The lowest level reached: below every row (the corner lies inside a step).
+            assert!(h_min <= lowest_row, "{h_min} {lowest_row}");
+            assert!(lowest_row - h_min < 1e-3, "{h_min} {lowest_row}");
+            assert_eq!(flags, ["contact-jump"], "{:?}", r.turning_flags(t));
+            assert!(r.turning_points[t].corner.is_some());
+        } else {
+            assert!((h_min - 7.70640).abs() < 5e-6, "{h_min}");
+            assert!(h_min <= lowest_row, "{h_min} {lowest_row}");
+            assert!(flags.is_empty(), "{flags:?}");
+            assert!(r.turning_points[t].corner.is_none());
+        }
+    }
 }

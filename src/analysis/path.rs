@@ -9,7 +9,7 @@ use super::{Analysis, Context, Record, RunError};
 use crate::continuation::crossings::{Crossings, IndexChanges};
 use crate::continuation::events::{trace, Branch, Detector, Event};
 use crate::continuation::{Continuation, PathOptions, PathPoint, Settings};
-use crate::results::{StateKind, StopReason, TurningRow};
+use crate::results::{Bracket, StateKind, StopReason, TurningRow};
 use crate::scene::AnalysisSpec as _;
 use crate::scene::{BranchesAnalysis, PathAnalysis};
 use crate::study::{BranchOptions, Followed, Free, Point, Study};
@@ -351,11 +351,20 @@ pub(super) fn record_branch(
         let u = problem.displacement(&t.point.q);
         let params = problem.parameters(&t.point.lambda);
         record.state(t.after_step, StateKind::Turning(t.kind), u.clone(), &params);
+        let corner = t.corner.as_ref().map(|c| {
+            let [a, b] = &c.sides;
+            let state = |p: &PathPoint| (problem.displacement(&p.q), problem.parameters(&p.lambda));
+            Bracket {
+                width: c.width,
+                ends: [state(a), state(b)],
+            }
+        });
         record.turning.push(TurningRow {
             kind: t.kind,
             after_step: t.after_step,
             measures: study.measure(&u, &params),
             parameters: params,
+            corner,
         });
     }
 }

@@ -56,6 +56,16 @@ pub trait Problem {
     fn defect(&self, _q: &DVector<f64>, _lambda: &DVector<f64>) -> Option<StateDefect> {
         None
     }
+    /// How many of the model's switches (nodes in contact with a penalty plane …) differ
+    /// between the states `a` and `b`, each (q, λ): where the tangent, and the path's
+    /// direction with it, may jump. `None` (the default) for a smooth problem.
+    fn switched(
+        &self,
+        _a: (&DVector<f64>, &DVector<f64>),
+        _b: (&DVector<f64>, &DVector<f64>),
+    ) -> Option<usize> {
+        None
+    }
 }
 
 impl<P: Problem + ?Sized> Problem for Box<P> {
@@ -78,6 +88,13 @@ impl<P: Problem + ?Sized> Problem for Box<P> {
     fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<StateDefect> {
         (**self).defect(q, lambda)
     }
+    fn switched(
+        &self,
+        a: (&DVector<f64>, &DVector<f64>),
+        b: (&DVector<f64>, &DVector<f64>),
+    ) -> Option<usize> {
+        (**self).switched(a, b)
+    }
 }
 
 impl<P: Problem + ?Sized> Problem for &mut P {
@@ -99,6 +116,13 @@ impl<P: Problem + ?Sized> Problem for &mut P {
     }
     fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<StateDefect> {
         (**self).defect(q, lambda)
+    }
+    fn switched(
+        &self,
+        a: (&DVector<f64>, &DVector<f64>),
+        b: (&DVector<f64>, &DVector<f64>),
+    ) -> Option<usize> {
+        (**self).switched(a, b)
     }
 }
 

@@ -19,6 +19,12 @@ const TURNING_TOLERANCE: f64 = 1e-12;
 /// Trials in a row without a smaller tangent component after which a turning point's search
 /// by whole steps stops at its best point ([`localise_turning`]).
 const TURNING_PATIENCE: usize = 4;
+/// The width, as a share of the step, to which a corner of the path is bisected: that of a
+/// contact jump's bracket ([`super::crossings`]).
+const CORNER_WIDTH: f64 = 1e-10;
+/// How far off a corner, as a share of the step, the direction of the parameter on either
+/// side of it is taken: far above [`CORNER_WIDTH`], far below a step.
+const CORNER_SIDE: f64 = 1e-6;
 
 /// Finds s in (0, s1) where `g` changes sign, given g(0) = g0 and g(s1) = g1 of opposite signs,
 /// by the Illinois variant of regula falsi. Stops when |g| ≤ `tol` or after 60 evaluations;
@@ -128,6 +134,19 @@ pub struct TurningPoint {
     pub point: PathPoint,
     /// The index of the accepted point just before it.
     pub after_step: usize,
+    /// Where the path turns at a corner (a change of the model's switches) rather than
+    /// through a zero of the tangent's component: the two states either side of the switch.
+    pub corner: Option<Corner>,
+}
+
+/// The bracket of a corner of the path (docs/theory.md §8.9): the nearest states found on
+/// either side of the change of the model's switches, the earlier one first.
+#[derive(Debug, Clone)]
+pub struct Corner {
+    /// The bracket's width, as a share of the step.
+    pub width: f64,
+    /// The states on either side, the earlier first.
+    pub sides: [PathPoint; 2],
 }
 
 /// Something a detector found between two accepted points (or at the start).
@@ -317,17 +336,82 @@ impl<P: Problem> Detector<P> for TurningPoints {
             } else {
                 Extremum::Minimum
             };
-            if let Some(point) = localise_turning(driver, &step.from, step.step, m + j, t1) {
+            let corner = locate_corner(driver, &step.from, step.step, m + j);
+            if let Some(corner) = corner {
+                // The extreme value of the parameter actually reached: the side of the switch
+                // farther in the direction the parameter had before it turned.
+                let [a, b] = &corner.sides;
+                let beyond = (b.lambda[j] - a.lambda[j]) * t0 > 0.0;
+                let point = if beyond { b.clone() } else { a.clone() };
                 found.push(Event::Turning(TurningPoint {
                     parameter: j,
                     kind,
                     point,
                     after_step: after,
+                    corner: Some(corner),
+                }));
+            } else if let Some(point) = localise_turning(driver, &step.from, step.step, m + j, t1) {
+                found.push(Event::Turning(TurningPoint {
+                    parameter: j,
+                    kind,
+                    point,
+                    after_step: after,
+                    corner: None,
                 }));
             }
         }
         found
     }
+}
+
+/// The corner of a step over which component `k` of the tangent changes sign, if it turns at
+/// one (docs/theory.md §8.9): where the model's switches differ between `from` and the
+/// driver's point (a node enters or leaves contact, the tangent jumps), the first change of
+/// the switches is bisected on the step length to [`CORNER_WIDTH`] of the step, each trial a
+/// step from `from`; the step turns at that corner when the component has the sign of
+/// `from`'s on its earlier side and the other sign on its later side. `None` for a step whose
+/// switches do not change (a smooth problem always), whose component changes sign elsewhere,
+/// or whose trial states could not be found: the turning point is then a zero of the
+/// component ([`localise_turning`]).
+fn locate_corner<P: Problem>(
+    driver: &mut Continuation<P>,
+    from: &PathPoint,
+    s_hi: f64,
+    k: usize,
+) -> Option<Corner> {
+    let to = driver.point().clone();
+    let key = |p: &PathPoint| (p.q.clone(), p.lambda.clone());
+    let switched = |driver: &Continuation<P>, p: &PathPoint| {
+        let (a, b) = (key(from), key(p));
+        driver.problem().switched((&a.0, &a.1), (&b.0, &b.1))
+    };
+    if switched(driver, &to)? == 0 {
+        return None;
+    }
+    let (mut lo, mut hi) = ((0.0, from.clone()), (s_hi, to));
+    while hi.0 - lo.0 > CORNER_WIDTH * s_hi {
+        let s = 0.5 * (lo.0 + hi.0);
+        let trial = driver.step_from(from, s).ok()?;
+        if switched(driver, &trial)? > 0 {
+            hi = (s, trial);
+        } else {
+            lo = (s, trial);
+        }
+    }
+    // The direction of the parameter on either side, from states a little off the corner
+    // (the tangent at a state next to it may be that of the other piece): it keeps the sign
+    // of `from`'s before and has the other after.
+    let j = k - driver.problem().dim();
+    let off = CORNER_SIDE * s_hi;
+    let before = driver.step_from(from, lo.0 - off).ok()?;
+    let after = driver.step_from(from, hi.0 + off).ok()?;
+    let sign = from.tangent[k].signum();
+    let turns = (lo.1.lambda[j] - before.lambda[j]).signum() == sign
+        && (after.lambda[j] - hi.1.lambda[j]).signum() == -sign;
+    turns.then(|| Corner {
+        width: (hi.0 - lo.0) / s_hi,
+        sides: [lo.1, hi.1],
+    })
 }
 
 /// Localises the turning point between `from` (tangent component `k` of one sign) and the

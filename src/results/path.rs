@@ -106,6 +106,11 @@ pub struct TurningRow {
     pub parameters: Vec<f64>,
     /// Measures at the localised point.
     pub measures: Vec<f64>,
+    /// Where the control turns at a corner of the path, a change of the model's switches
+    /// (docs/theory.md §8.9): the states either side of it, the point the one at the extreme
+    /// control (`None` for a smooth turning point, a zero of the control's tangent).
+    #[serde(skip)]
+    pub corner: Option<super::Bracket>,
 }
 
 /// A state written as a VTU file.

@@ -140,7 +140,8 @@ pub struct StateCheck {
     /// The largest principal stretch of its triangles.
     pub stretch: Option<f64>,
     /// A critical point's contact: how the contact set changed within its localisation
-    /// bracket (with a contact effect and a bracket).
+    /// bracket (with a contact effect and a bracket); a turning point's within the bracket
+    /// of the corner it turns at.
     pub contact: Option<ContactChange>,
 }
 
@@ -231,14 +232,22 @@ impl PathReport {
         flags
     }
 
-    /// The flags of turning point `t` (from 0, path order): its state's (`wrinkled`,
-    /// `stretch`) and, with `--refine`, `not-mesh-converged`.
+    /// The flags of turning point `t` (from 0, path order): `contact-jump` where the control
+    /// turns at a corner of the path, a change of the contact set (docs/theory.md §8.9), its
+    /// state's (`wrinkled`, `stretch`) and, with `--refine`, `not-mesh-converged`.
     pub fn turning_flags(&self, t: usize) -> Vec<Flag> {
         let mut flags = match self.checks.as_ref() {
-            Some(c) => c
-                .turning
-                .get(t)
-                .map_or_else(Vec::new, |check| c.state_flags(check, None)),
+            Some(c) => c.turning.get(t).map_or_else(Vec::new, |check| {
+                let jump = check
+                    .contact
+                    .filter(|c| c.changed > 0)
+                    .map(|c| Flag::ContactJump {
+                        nodes: c.changed,
+                        penetration: c.penetration,
+                        bracket: c.bracket,
+                    });
+                jump.into_iter().chain(c.state_flags(check, None)).collect()
+            }),
             None => Vec::new(),
         };
         if let Some(r) = &self.refinement {

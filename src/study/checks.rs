@@ -7,7 +7,7 @@
 
 use super::Study;
 use crate::results::validity::{Checks, ContactChange, Flag, StateCheck};
-use crate::results::{CriticalPoint, RunResult, StateKind};
+use crate::results::{Bracket, CriticalPoint, RunResult, StateKind};
 
 /// The checks' frame of a study: the material's stated range, the elements, the energy.
 fn frame<S: Study + ?Sized>(study: &S) -> Checks {
@@ -30,8 +30,17 @@ pub fn state_flags<S: Study + ?Sized>(study: &S, u: &[f64], params: &[f64]) -> V
 /// in contact (penetration > 0) at one end and not at the other, the deepest penetration at
 /// the point over the element size there; `None` without a contact effect or a bracket.
 pub fn contact_change<S: Study + ?Sized>(study: &S, cp: &CriticalPoint) -> Option<ContactChange> {
-    let bracket = cp.bracket.as_ref()?;
-    let (at, h) = study.penetrations(&cp.state, &cp.parameters)?;
+    contact_within(study, (&cp.state, &cp.parameters), cp.bracket.as_ref()?)
+}
+
+/// How the contact set changed within `bracket` about the state `at` (u, Λ), as
+/// [`contact_change`] for a critical point's.
+fn contact_within<S: Study + ?Sized>(
+    study: &S,
+    (u, params): (&[f64], &[f64]),
+    bracket: &Bracket,
+) -> Option<ContactChange> {
+    let (at, h) = study.penetrations(u, params)?;
     let [(u0, p0), (u1, p1)] = &bracket.ends;
     let (before, _) = study.penetrations(u0, p0)?;
     let (after, _) = study.penetrations(u1, p1)?;
@@ -62,11 +71,25 @@ pub fn checks<S: Study + ?Sized>(study: &S, result: &RunResult) -> Checks {
     } else {
         Vec::new()
     };
+    // A turning point at a corner of the path has the corner's bracket: the contact's change
+    // within it, as a critical point's.
     let turning: Vec<StateCheck> = result
         .states
         .iter()
         .filter(|s| matches!(s.kind, StateKind::Turning(_)))
-        .map(|s| study.state_check(&s.u, &s.params))
+        .zip(
+            report
+                .turning_points
+                .iter()
+                .map(Some)
+                .chain(std::iter::repeat(None)),
+        )
+        .map(|(s, t)| StateCheck {
+            contact: t
+                .and_then(|t| t.corner.as_ref())
+                .and_then(|b| contact_within(study, (&s.u, &s.params), b)),
+            ..study.state_check(&s.u, &s.params)
+        })
         .collect();
     let turning = if turning.len() == report.turning_points.len() {
         turning

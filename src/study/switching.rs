@@ -1623,6 +1623,7 @@ pub fn branch_run(
             after_step: t.after_step,
             measures: measures(&t.u, &t.parameters, asym_of(&t.u)),
             parameters: t.parameters.clone(),
+            corner: None,
         });
     }
     let mut critical = b.critical.clone();

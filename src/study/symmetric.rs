@@ -458,6 +458,21 @@ impl Problem for SymmetricProblem<'_> {
         self.model
             .state_defect(&self.displacement(q), &self.parameters(lambda))
     }
+
+    /// The model's switches (nodes in contact with a penalty plane) that differ.
+    fn switched(
+        &self,
+        a: (&DVector<f64>, &DVector<f64>),
+        b: (&DVector<f64>, &DVector<f64>),
+    ) -> Option<usize> {
+        let before = self
+            .model
+            .switches(&self.displacement(a.0), &self.parameters(a.1))?;
+        let after = self
+            .model
+            .switches(&self.displacement(b.0), &self.parameters(b.1))?;
+        Some(before.iter().zip(&after).filter(|(x, y)| x != y).count())
+    }
 }
 
 impl crate::continuation::events::States for SymmetricProblem<'_> {
