@@ -560,7 +560,7 @@ fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
 /// bracket's width.
 #[test]
 fn the_disc_from_below_has_a_swallowtail_where_its_pair_of_cusps_vanishes_with_the_density() {
-    use memstab::results::{CuspCurveReport, Extremum, PairEndKind};
+    use memstab::results::{CuspCurveReport, PairEndKind};
     let mut study = MeshStudy::build(bundled("thesis/paper1_disc_swallowtail.toml")).unwrap();
     let report = run(&mut study, |_, _| {})
         .expect("the cusp curve runs")
@@ -585,26 +585,7 @@ fn the_disc_from_below_has_a_swallowtail_where_its_pair_of_cusps_vanishes_with_t
         assert!((order - 1.5).abs() < 0.1, "{end:?}");
     }
     assert!(end.self_crossing);
-    let mut last_gap = f64::INFINITY;
-    for slice in &report.slices {
-        assert!(slice.failure.is_none(), "{slice:?}");
-        if slice.third < rho {
-            let [max, min] = slice.cusps.as_slice() else {
-                panic!("two cusps at rho = {}: {:?}", slice.third, slice.cusps);
-            };
-            assert_eq!(max.extremum, Some(Extremum::Maximum));
-            assert_eq!(min.extremum, Some(Extremum::Minimum));
-            let gap = max.parameters[k] - min.parameters[k];
-            assert!(
-                gap > 0.0 && gap < last_gap,
-                "rho = {}: gap {gap}",
-                slice.third
-            );
-            last_gap = gap;
-        } else {
-            assert!(slice.cusps.is_empty(), "cusps at rho = {}", slice.third);
-        }
-    }
+    a_pair_drawing_together(&report, k, rho);
 }
 
 /// Paper 1's disc from below past its fold: on the meridian (32 elements) the level turns
@@ -742,7 +723,7 @@ fn the_swallowtail_in_the_radius_is_the_one_in_the_density_by_dimensions() {
 /// has its maximum and minimum of k, no pair ends, and the two draw together in k as s grows.
 #[test]
 fn the_disc_keeps_its_pair_of_cusps_over_the_prestretch_range() {
-    use memstab::results::{CuspCurveReport, Extremum};
+    use memstab::results::CuspCurveReport;
     let mut study = MeshStudy::build(bundled("thesis/paper1_disc_cusps_prestretch.toml")).unwrap();
     let report = run(&mut study, |_, _| {})
         .expect("the cusp curve runs")
@@ -753,19 +734,28 @@ fn the_disc_keeps_its_pair_of_cusps_over_the_prestretch_range() {
     assert!(report.ends.is_empty(), "{:?}", report.ends);
     let k = report.parameters.iter().position(|p| p == "k").unwrap();
     assert_eq!(report.slices.len(), 11);
+    a_pair_drawing_together(&report, k, f64::INFINITY);
+}
+
+/// Every slice of `report` below `end` of its third parameter has its maximum and minimum of
+/// k (index `k`), the two closer in k at each slice; every slice from `end` on has none.
+fn a_pair_drawing_together(report: &memstab::results::CuspCurveReport, k: usize, end: f64) {
+    use memstab::results::Extremum;
     let mut last_gap = f64::INFINITY;
     for slice in &report.slices {
+        let at = format!("{} = {}", report.third, slice.third);
+        assert!(slice.failure.is_none(), "{at}: {slice:?}");
+        if slice.third >= end {
+            assert!(slice.cusps.is_empty(), "cusps at {at}");
+            continue;
+        }
         let [max, min] = slice.cusps.as_slice() else {
-            panic!("two cusps at s = {}: {:?}", slice.third, slice.cusps);
+            panic!("two cusps at {at}: {:?}", slice.cusps);
         };
-        assert_eq!(max.extremum, Some(Extremum::Maximum));
-        assert_eq!(min.extremum, Some(Extremum::Minimum));
+        assert_eq!(max.extremum, Some(Extremum::Maximum), "{at}");
+        assert_eq!(min.extremum, Some(Extremum::Minimum), "{at}");
         let gap = max.parameters[k] - min.parameters[k];
-        assert!(
-            gap > 0.0 && gap < last_gap,
-            "s = {}: gap {gap}",
-            slice.third
-        );
+        assert!(gap > 0.0 && gap < last_gap, "{at}: gap {gap}");
         last_gap = gap;
     }
 }

@@ -20,7 +20,7 @@ use super::{Record, RunError};
 use crate::continuation::crossings::Crossings;
 use crate::continuation::deflation::{deflated_solve_at, scaled, Deflation};
 use crate::continuation::near_miss::{beside_dip, dips};
-use crate::continuation::{interrupt, solve_on_plane, PathOptions};
+use crate::continuation::{interrupt, solve_on_plane, Followed, PathOptions, PathPoint};
 use crate::results::partner::{Partner, PartnerPiece};
 use crate::results::{
     BranchRun, CriticalKind, CriticalPoint, PathRow, PointState, RunResult, RunTimes, StopReason,
@@ -222,21 +222,13 @@ impl Search<'_> {
             (Some(a), Some(b)) if b.arclength > a.arclength => b.arclength - a.arclength,
             _ => opts.initial_step,
         };
-        let fold = Point {
-            u: cp.state.clone(),
-            params: cp.parameters.clone(),
-            iterations: 0,
-            times: Default::default(),
-        };
-        let driver = match start_driver(study, &fold, opts.clone()) {
-            Ok(d) => d,
+        let (from, mut problem) = match solved_again(study, &cp.state, &cp.parameters, opts) {
+            Ok(again) => again,
             Err(e) => {
                 partner.note = Some(format!("the fold's state could not be solved again: {e}"));
                 return partner;
             }
         };
-        let from = driver.point().clone();
-        let mut problem = driver.into_problem();
         // The fold's mode: the state part of its tangent (the control's part vanishes there).
         let m = from.q.len();
         let mut phi = DVector::zeros(from.tangent.len());
@@ -360,21 +352,13 @@ impl Search<'_> {
         }
         let h = rows[k + 1].arclength - rows[k].arclength;
         let h = if h > 0.0 { h } else { opts.initial_step };
-        let at = Point {
-            u: u.to_vec(),
-            params: rows[k].parameters.clone(),
-            iterations: 0,
-            times: Default::default(),
-        };
-        let driver = match start_driver(study, &at, opts.clone()) {
-            Ok(d) => d,
+        let (from, mut problem) = match solved_again(study, u, &rows[k].parameters, opts) {
+            Ok(again) => again,
             Err(e) => {
                 partner.note = Some(format!("the dip's state could not be solved again: {e}"));
                 return partner;
             }
         };
-        let from = driver.point().clone();
-        let mut problem = driver.into_problem();
         let m = from.q.len();
         let q_mode = problem.coordinates(&dip.mode);
         let mut phi = DVector::zeros(from.tangent.len());
@@ -529,4 +513,23 @@ pub fn partners_of_run(
         &follow,
         which,
     )
+}
+
+/// The state (u, params) of the path solved again as the first point of a path: that point,
+/// with its tangent, and the problem it was solved in.
+fn solved_again<'a>(
+    study: &'a dyn Study,
+    u: &[f64],
+    params: &[f64],
+    opts: &PathOptions,
+) -> Result<(PathPoint, Box<dyn Followed + 'a>), RunError> {
+    let at = Point {
+        u: u.to_vec(),
+        params: params.to_vec(),
+        iterations: 0,
+        times: Default::default(),
+    };
+    let driver = start_driver(study, &at, opts.clone())?;
+    let from = driver.point().clone();
+    Ok((from, driver.into_problem()))
 }

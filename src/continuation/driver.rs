@@ -143,6 +143,22 @@ pub struct Linearization {
     pub constraint_lambda: DMatrix<f64>,
 }
 
+#[cfg(test)]
+impl Linearization {
+    /// One unknown q and one parameter λ, no augmenting equation: R, ∂R/∂q and ∂R/∂λ (the
+    /// scalar problems of the tests).
+    pub(crate) fn scalar(residual: f64, r_q: f64, r_lambda: f64) -> Self {
+        Self {
+            residual: DVector::from_element(1, residual),
+            tangent: Tangent::Dense(DMatrix::from_element(1, 1, r_q)),
+            loads: DMatrix::from_element(1, 1, r_lambda),
+            constraints: DVector::zeros(0),
+            constraint_q: DMatrix::zeros(0, 1),
+            constraint_lambda: DMatrix::zeros(0, 1),
+        }
+    }
+}
+
 /// ∂R/∂q: dense for small problems; for large ones sparse, plus rank-one terms
 /// Σ c a aᵀ (a gas amount's stiffness) kept apart so that they do not fill the matrix.
 #[derive(Debug, Clone)]
@@ -1497,11 +1513,10 @@ impl<P: Problem> Continuation<P> {
 #[cfg(test)]
 mod tests {
     use super::{
-        point_at, zero_on_step, Linearization, PathOptions, Problem, SignChange, Stalled,
-        StepError, Tangent,
+        point_at, zero_on_step, Linearization, PathOptions, Problem, SignChange, Stalled, StepError,
     };
     use crate::model::ModelError;
-    use nalgebra::{DMatrix, DVector};
+    use nalgebra::DVector;
 
     /// R(q, λ) = q² + λ² − 1 (one unknown): a circle, whose λ turns at q = 0, λ = 1.
     struct Circle;
@@ -1518,14 +1533,11 @@ mod tests {
             q: &DVector<f64>,
             lambda: &DVector<f64>,
         ) -> Result<Linearization, ModelError> {
-            Ok(Linearization {
-                residual: DVector::from_element(1, q[0] * q[0] + lambda[0] * lambda[0] - 1.0),
-                tangent: Tangent::Dense(DMatrix::from_element(1, 1, 2.0 * q[0])),
-                loads: DMatrix::from_element(1, 1, 2.0 * lambda[0]),
-                constraints: DVector::zeros(0),
-                constraint_q: DMatrix::zeros(0, 1),
-                constraint_lambda: DMatrix::zeros(0, 1),
-            })
+            Ok(Linearization::scalar(
+                q[0] * q[0] + lambda[0] * lambda[0] - 1.0,
+                2.0 * q[0],
+                2.0 * lambda[0],
+            ))
         }
     }
 

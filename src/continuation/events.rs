@@ -515,10 +515,10 @@ pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
 #[cfg(test)]
 mod tests {
     use super::{locate_to_noise, locate_within, trace};
-    use crate::continuation::driver::{Continuation, Linearization, PathOptions, Problem, Tangent};
+    use crate::continuation::driver::{Continuation, Linearization, PathOptions, Problem};
     use crate::model::ModelError;
     use crate::results::StopReason;
-    use nalgebra::{DMatrix, DVector};
+    use nalgebra::DVector;
 
     /// R(q, λ) = q − λ, which the model cannot evaluate for λ < 0 (a material constant
     /// below its range), or nowhere below `floor` when one is given.
@@ -544,14 +544,7 @@ mod tests {
                     what: format!("λ = {} is out of its range", lambda[0]),
                 });
             }
-            Ok(Linearization {
-                residual: DVector::from_element(1, q[0] - lambda[0]),
-                tangent: Tangent::Dense(DMatrix::from_element(1, 1, 1.0)),
-                loads: DMatrix::from_element(1, 1, -1.0),
-                constraints: DVector::zeros(0),
-                constraint_q: DMatrix::zeros(0, 1),
-                constraint_lambda: DMatrix::zeros(0, 1),
-            })
+            Ok(Linearization::scalar(q[0] - lambda[0], 1.0, -1.0))
         }
     }
 

@@ -107,10 +107,9 @@ pub fn beside_dip<P: Problem + ?Sized>(
 mod tests {
     use super::*;
     use crate::continuation::events::trace;
-    use crate::continuation::{Continuation, Linearization, Tangent};
+    use crate::continuation::{Continuation, Linearization};
     use crate::model::ModelError;
     use crate::results::Extremum;
-    use nalgebra::DMatrix;
 
     /// R(x, λ) = x³ − λx − ε: the gradient of V = x⁴/4 − λx²/2 − εx, the supercritical
     /// pitchfork broken by ε > 0.
@@ -131,14 +130,11 @@ mod tests {
             lambda: &DVector<f64>,
         ) -> Result<Linearization, ModelError> {
             let (x, l) = (q[0], lambda[0]);
-            Ok(Linearization {
-                residual: DVector::from_element(1, x * x * x - l * x - self.eps),
-                tangent: Tangent::Dense(DMatrix::from_element(1, 1, 3.0 * x * x - l)),
-                loads: DMatrix::from_element(1, 1, -x),
-                constraints: DVector::zeros(0),
-                constraint_q: DMatrix::zeros(0, 1),
-                constraint_lambda: DMatrix::zeros(0, 1),
-            })
+            Ok(Linearization::scalar(
+                x * x * x - l * x - self.eps,
+                3.0 * x * x - l,
+                -x,
+            ))
         }
     }
 
