@@ -133,9 +133,6 @@ struct ConnectionJson {
     branch: String,
     at: usize,
     to: usize,
-    /// The branch that is this one followed from its other end: the two are one branch.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    other_end: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -338,7 +335,6 @@ fn graph_json<'a>(
                 branch: crate::results::directory(c.branch),
                 at: c.at.index(),
                 to: c.to.index(),
-                other_end: g.other_end(c.branch).map(crate::results::directory),
             })
             .collect(),
         branches: list,

@@ -385,25 +385,6 @@ impl BranchGraph {
         b
     }
 
-    /// The branch that is branch `i` followed from its other end, if any: `i` ends as a
-    /// connection at the point the other leaves from, and the other ends at the point `i`
-    /// leaves from. The two are one branch between two points, met from both.
-    pub fn other_end(&self, i: usize) -> Option<usize> {
-        let to = |b: usize| {
-            self.connections
-                .iter()
-                .find(|c| c.branch == b)
-                .map(|c| c.to)
-        };
-        let reached = to(i)?;
-        (0..self.branches.len()).find(|&j| {
-            j != i
-                && self.branches[j].from == reached
-                && self.branches[j].isotropy == self.branches[i].isotropy
-                && to(j) == Some(self.branches[i].from)
-        })
-    }
-
     /// The node of the path's critical point number `k` (1-based).
     pub fn path_point(&self, k: usize) -> Option<NodeIndex> {
         self.graph.node_indices().find(

@@ -353,7 +353,6 @@ impl Switching<'_> {
         }
         self.late_connections(&mut g);
         self.meetings(&mut g);
-        both_ends(&mut g);
         g
     }
 
@@ -1733,26 +1732,4 @@ fn asymmetry(study: &MeshStudy, u: &[f64]) -> f64 {
         .sum::<f64>()
         .sqrt()
         / free.max(1.0).sqrt()
-}
-
-/// Two branches that are each other's other end ([`BranchGraph::other_end`]) say so in their
-/// stop: one branch between two points, followed from both.
-fn both_ends(g: &mut BranchGraph) {
-    for i in 0..g.branches.len() {
-        if let Some(j) = g.other_end(i) {
-            g.branches[i].stop = StopReason::Connected {
-                to: format!(
-                    "the point {} leaves from: the same branch, followed from its other end",
-                    directory(j)
-                ),
-            };
-            for n in g.graph.node_indices() {
-                if let Node::End { branch, stop } = &mut g.graph[n] {
-                    if *branch == i {
-                        *stop = g.branches[i].stop.clone();
-                    }
-                }
-            }
-        }
-    }
 }
