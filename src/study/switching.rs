@@ -602,6 +602,16 @@ impl Switching<'_> {
                     known.push(b);
                     continue;
                 }
+                // A branch of this class followed earlier from another point that reaches this
+                // one within a step (its other end, resolved to its step): where the halves are
+                // group images of each other, the one half here is that branch (§14.8). It is
+                // cut here after all switching ([`Self::late_connections`]).
+                if matches!(dir.halves, Halves::Conjugate) {
+                    if let Some(b) = self.reaching(g, node, &class) {
+                        known.push(b);
+                        continue;
+                    }
+                }
                 let t1 = std::time::Instant::now();
                 let mut branch = self.follow(level, &child, cp, dir, &reduced, half);
                 branch.from = node;
@@ -782,6 +792,19 @@ impl Switching<'_> {
         branch: &SwitchedBranch,
         except: &[NodeIndex],
     ) -> Option<(Result<usize, usize>, NodeIndex, f64)> {
+        self.first_near(g, branch, except)
+            .filter(|&(_, n, _)| n != branch.from && leaves(g, n, &branch.isotropy))
+    }
+
+    /// The first event of `branch` (by step; a critical point or a turning point of the
+    /// control) within one longest step of a known critical point other than those in
+    /// `except` ([`Self::nearest_known`]), with that point and the distance.
+    fn first_near(
+        &self,
+        g: &BranchGraph,
+        branch: &SwitchedBranch,
+        except: &[NodeIndex],
+    ) -> Option<(Result<usize, usize>, NodeIndex, f64)> {
         let order = branch.elements.len();
         let mut events: Vec<Reach<'_>> = branch
             .critical
@@ -807,12 +830,23 @@ impl Switching<'_> {
         events.sort_by_key(|e| e.0);
         events.into_iter().find_map(|(_, which, u, params)| {
             self.nearest_known(g, u, params, order, except)
-                .filter(|&(n, _)| {
-                    g.branches.iter().any(|b| {
-                        b.from == n && b.isotropy == branch.isotropy && b.from != branch.from
-                    })
-                })
                 .map(|(n, d)| (which, n, d))
+        })
+    }
+
+    /// The branch of class `class`, followed earlier from another point and not yet ended,
+    /// whose first event near a known point ([`Self::reached_known`]'s test) is `node`.
+    fn reaching(&self, g: &BranchGraph, node: NodeIndex, class: &str) -> Option<usize> {
+        let except: Vec<NodeIndex> = g.graph.node_indices().filter(|&n| n != node).collect();
+        (0..g.branches.len()).find(|&i| {
+            let b = &g.branches[i];
+            b.isotropy == class
+                && b.from != node
+                && !matches!(
+                    b.stop,
+                    StopReason::Connected { .. } | StopReason::Rejoined { .. }
+                )
+                && self.first_near(g, b, &except).is_some()
         })
     }
 
@@ -1732,4 +1766,14 @@ fn asymmetry(study: &MeshStudy, u: &[f64]) -> f64 {
         .sum::<f64>()
         .sqrt()
         / free.max(1.0).sqrt()
+}
+
+/// Whether a branch of class `class` leaves node `n`, or is known there: followed from
+/// another point, it is the one half of its class at `n` ([`Skip::Known`]).
+fn leaves(g: &BranchGraph, n: NodeIndex, class: &str) -> bool {
+    g.branches
+        .iter()
+        .any(|b| b.from == n && b.isotropy == class)
+        || matches!(&g.graph[n], Node::Critical { skipped: Some(Skip::Known(known)), .. }
+            if known.iter().any(|&k| g.branches[k].isotropy == class))
 }
