@@ -486,18 +486,9 @@ impl Switching<'_> {
                     if dl > reach {
                         continue;
                     }
-                    for image in &images {
-                        let du = image
-                            .iter()
-                            .zip(&p.u)
-                            .map(|(a, b)| (a - b) * (a - b))
-                            .sum::<f64>()
-                            .sqrt()
-                            / opts.state_scale;
-                        let d = du.hypot(dl);
-                        if d <= reach && best.is_none_or(|(_, _, e)| d < e) {
-                            best = Some((j, k, d));
-                        }
+                    let d = nearest_image(&images, &p.u, opts.state_scale).hypot(dl);
+                    if d <= reach && best.is_none_or(|(_, _, e)| d < e) {
+                        best = Some((j, k, d));
                     }
                 }
             }
@@ -885,18 +876,9 @@ impl Switching<'_> {
             if dl > reach {
                 continue;
             }
-            for image in &images {
-                let du = image
-                    .iter()
-                    .zip(&point.state)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum::<f64>()
-                    .sqrt()
-                    / opts.state_scale;
-                let d = du.hypot(dl);
-                if d <= reach && best.is_none_or(|(_, e)| d < e) {
-                    best = Some((n, d));
-                }
+            let d = nearest_image(&images, &point.state, opts.state_scale).hypot(dl);
+            if d <= reach && best.is_none_or(|(_, e)| d < e) {
+                best = Some((n, d));
             }
         }
         best
@@ -1766,6 +1748,23 @@ fn asymmetry(study: &MeshStudy, u: &[f64]) -> f64 {
         .sum::<f64>()
         .sqrt()
         / free.max(1.0).sqrt()
+}
+
+/// The distance of `u` from the nearest of `images` (group images of a state), over
+/// `state_scale`.
+fn nearest_image(images: &[Vec<f64>], u: &[f64], state_scale: f64) -> f64 {
+    images
+        .iter()
+        .map(|image| {
+            image
+                .iter()
+                .zip(u)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(f64::INFINITY, f64::min)
+        / state_scale
 }
 
 /// Whether a branch of class `class` leaves node `n`, or is known there: followed from
