@@ -389,3 +389,24 @@ fn a_mesh_read_from_a_file_is_scaled_by_its_own_radius() {
         assert!((file.factor - 1.1 / radius).abs() < 1e-12, "{file:?}");
     }
 }
+
+/// The closed circuit of the squeezed cap: the branch's own point where it reaches the path's
+/// jump is drawn as a connection, with its legend entry, apart from the critical points.
+#[test]
+fn a_connection_has_its_own_mark_in_the_diagram() {
+    let (_, layouts) = figures_of("thesis/paper3_gas_fluid_squeeze_linear_diagram.toml");
+    let (_, diagram) = layouts
+        .iter()
+        .find(|(name, _)| name == "diagram.svg")
+        .expect("diagram.svg");
+    for entry in [
+        "connection: a branch reaching a known point",
+        "critical point",
+    ] {
+        assert!(
+            diagram.legend.iter().any(|l| l == entry),
+            "{entry:?} not in {:?}",
+            diagram.legend
+        );
+    }
+}

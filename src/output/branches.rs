@@ -374,8 +374,10 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
         });
     }
     let mut marks = Vec::new();
-    for n in g.graph.node_weights() {
-        if let Node::Critical { on, point, .. } = n {
+    for n in g.graph.node_indices() {
+        // A branch's own point where it reaches a known one: a connection, its own symbol.
+        let connects = g.connections.iter().any(|c| c.at == n);
+        if let Node::Critical { on, point, .. } = &g.graph[n] {
             let y = match on {
                 None => 0.0,
                 Some(b) => {
@@ -394,7 +396,11 @@ pub fn diagram(branches: &Branches, primary: &PrimaryPath) -> BifurcationDiagram
                 x: control(&point.parameters),
                 y,
                 label: format!("{} {}", point.kind.short(), point.irrep),
-                kind: "critical point".to_string(),
+                kind: if connects {
+                    "connection: a branch reaching a known point".to_string()
+                } else {
+                    "critical point".to_string()
+                },
             });
         }
     }
