@@ -560,14 +560,8 @@ fn the_disc_limit_point_followed_in_the_radius_agrees_with_the_meridian() {
 /// bracket's width.
 #[test]
 fn the_disc_from_below_has_a_swallowtail_where_its_pair_of_cusps_vanishes_with_the_density() {
-    use memstab::results::{CuspCurveReport, PairEndKind};
-    let mut study = MeshStudy::build(bundled("thesis/paper1_disc_swallowtail.toml")).unwrap();
-    let report = run(&mut study, |_, _| {})
-        .expect("the cusp curve runs")
-        .outcome::<CuspCurveReport>()
-        .cloned()
-        .unwrap();
-    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    use memstab::results::PairEndKind;
+    let report = cusp_curve("thesis/paper1_disc_swallowtail.toml");
     let k = report.parameters.iter().position(|p| p == "k").unwrap();
     let [end] = report.ends.as_slice() else {
         panic!("one end of a pair: {:?}", report.ends);
@@ -692,15 +686,9 @@ fn the_solution_surface_on_the_thesis_mesh_folds_along_both_lines_over_every_pat
 /// pair of cusps must vanish at R* = 1.1 √(ρ*/0.3), each end to within its stated error.
 #[test]
 fn the_swallowtail_in_the_radius_is_the_one_in_the_density_by_dimensions() {
-    use memstab::results::{CuspCurveReport, PairEndKind};
+    use memstab::results::PairEndKind;
     let end = |name: &str| {
-        let mut study = MeshStudy::build(bundled(name)).unwrap();
-        let report = run(&mut study, |_, _| {})
-            .expect("the cusp curve runs")
-            .outcome::<CuspCurveReport>()
-            .cloned()
-            .unwrap();
-        assert!(report.warnings.is_empty(), "{name}: {:?}", report.warnings);
+        let report = cusp_curve(name);
         let [end] = report.ends.as_slice() else {
             panic!("{name}: one end of a pair: {:?}", report.ends);
         };
@@ -723,14 +711,7 @@ fn the_swallowtail_in_the_radius_is_the_one_in_the_density_by_dimensions() {
 /// has its maximum and minimum of k, no pair ends, and the two draw together in k as s grows.
 #[test]
 fn the_disc_keeps_its_pair_of_cusps_over_the_prestretch_range() {
-    use memstab::results::CuspCurveReport;
-    let mut study = MeshStudy::build(bundled("thesis/paper1_disc_cusps_prestretch.toml")).unwrap();
-    let report = run(&mut study, |_, _| {})
-        .expect("the cusp curve runs")
-        .outcome::<CuspCurveReport>()
-        .cloned()
-        .unwrap();
-    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    let report = cusp_curve("thesis/paper1_disc_cusps_prestretch.toml");
     assert!(report.ends.is_empty(), "{:?}", report.ends);
     let k = report.parameters.iter().position(|p| p == "k").unwrap();
     assert_eq!(report.slices.len(), 11);
@@ -837,4 +818,16 @@ fn the_level_fold_line_passes_contact_changes_under_the_cubic_law_and_stops_at_t
 
 fn index_of(names: &[String], name: &str) -> usize {
     names.iter().position(|n| n == name).unwrap()
+}
+
+/// The cusp curve of the bundled scene `name`, run without a warning.
+fn cusp_curve(name: &str) -> memstab::results::CuspCurveReport {
+    let mut study = MeshStudy::build(bundled(name)).unwrap();
+    let report = run(&mut study, |_, _| {})
+        .expect("the cusp curve runs")
+        .outcome::<memstab::results::CuspCurveReport>()
+        .cloned()
+        .unwrap();
+    assert!(report.warnings.is_empty(), "{name}: {:?}", report.warnings);
+    report
 }
