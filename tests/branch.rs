@@ -3,6 +3,7 @@
 //! the reflection classes of E1, E2, E3 (and the kernels of B1, A2) on a C8v disc, and a split
 //! pair on a C2v disc whose branches approach the C8v double's under refinement.
 
+use crate::common::identity::act;
 use memstab::analysis::run;
 use memstab::bench::branching::{ih_branches, ih_problem, IH_COEFFICIENTS};
 use memstab::model::Model;
@@ -47,21 +48,6 @@ fn upward(
         text.truncate(cut);
     }
     text
-}
-
-/// T(g) u of the study's action (independent of the library's).
-fn act(study: &MeshStudy, g: usize, u: &[f64]) -> Vec<f64> {
-    let layout = study.model.layout();
-    let r = study.action.group().element(g);
-    let mut out = vec![0.0; u.len()];
-    for (i, &j) in study.action.node_perm(g).iter().enumerate() {
-        let (Some(a), Some(b)) = (layout.dof(i, 0), layout.dof(j, 0)) else {
-            continue;
-        };
-        let v = r * nalgebra::Vector3::new(u[a], u[a + 1], u[a + 2]);
-        out[b..b + 3].copy_from_slice(v.as_slice());
-    }
-    out
 }
 
 /// The elements of the study's group that map u to itself (to 1e-9 relative).

@@ -4,11 +4,13 @@
 //! critical points; a fold of the path alone has none. `compare` lists the second piece's
 //! points as the images of the symmetric mesh's doubles.
 
+use crate::common::identity::{act, common_stretches};
 use crate::common::{memstab, text};
 use memstab::analysis::run;
 use memstab::results::partner::Partner;
 use memstab::results::{CriticalKind, RunResult};
 use memstab::scene::Scene;
+use memstab::study::mesh::MeshStudy;
 
 fn bundled(name: &str) -> String {
     std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -719,15 +721,25 @@ fn a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation() {
 /// (ω² ≈ 18.0548) are each followed once. Followed from the point switched first, the branch
 /// reaches the other as a fold or crossing within one step of it and ends there as a
 /// connection; at the other point that one half of its class is known as this branch and not
-/// followed again (docs/theory.md §14.8).
+/// followed again (docs/theory.md §14.8). Over the whole diagram no branch runs along a group
+/// image of another.
 #[test]
-fn the_caps_c1_branches_are_followed_once_between_their_two_points() {
+fn the_caps_depth_three_diagram_follows_every_branch_once_its_c1_branches_between_two_points() {
     let text = bundled("thesis/paper4_spinning_cap.toml") + "\n[analysis.branches]\ndepth = 3\n";
     let scene = Scene::from_toml_str(&text, "cap").unwrap();
-    let mut study = memstab::study::build(scene).unwrap();
-    let result = run(&mut *study, |_, _| {}).unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
     let b = result.branches.as_ref().expect("branches");
     let g = &b.graph;
+    // No two of its branches are one branch up to the group (docs/theory.md §14.8).
+    let control = result
+        .report
+        .parameters
+        .iter()
+        .position(|n| n == "w2")
+        .unwrap();
+    let common = common_stretches(&study, &g.branches, control);
+    assert!(common.is_empty(), "branches followed twice: {common:?}");
     let w2 = |p: &[f64]| {
         p[result
             .report
@@ -784,4 +796,63 @@ fn the_caps_c1_branches_are_followed_once_between_their_two_points() {
             );
         }
     }
+}
+
+/// The upward disc's diagram to depth 3 (the bundled 1 792-triangle C7v disc): its two C1v
+/// branches, one per half of the E1 double, which C7v does not map onto each other, are
+/// followed once each and run along no image of the other. The check itself finds a branch
+/// followed twice: a group image of one branch, sampled at other points, runs along it.
+#[test]
+fn the_upward_discs_depth_three_diagram_follows_every_branch_once() {
+    let text = bundled("disc_upward.toml").replace("depth = 1 ", "depth = 3 ");
+    let scene = Scene::from_toml_str(&text, "disc").unwrap();
+    let mut study = MeshStudy::build(scene).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
+    let g = &result.branches.as_ref().expect("branches").graph;
+    let control = result
+        .report
+        .parameters
+        .iter()
+        .position(|n| n == "h")
+        .unwrap();
+    let classes: Vec<&str> = g.branches.iter().map(|b| b.isotropy.as_str()).collect();
+    assert_eq!(classes, ["C1v", "C1v"], "one branch per half of E1");
+    let common = common_stretches(&study, &g.branches, control);
+    assert!(common.is_empty(), "branches followed twice: {common:?}");
+
+    // A copy of the first branch moved by a rotation of the group and sampled half-way
+    // between its points: the check must say it runs along the first.
+    let first = &g.branches[0];
+    let mid = &first.points[first.points.len() / 2].u;
+    let rotation = (1..study.action.group().order())
+        .find(|&e| {
+            let moved = act(&study, e, mid);
+            let d: f64 = moved.iter().zip(mid).map(|(a, b)| (a - b).abs()).sum();
+            d > 1e-3 * mid.iter().map(|v| v.abs()).sum::<f64>()
+        })
+        .expect("an element that moves the branch");
+    let mut copy = first.clone();
+    copy.points = first
+        .points
+        .windows(2)
+        .map(|w| {
+            let half = |a: &[f64], b: &[f64]| -> Vec<f64> {
+                a.iter().zip(b).map(|(a, b)| 0.5 * (a + b)).collect()
+            };
+            let mut p = w[0].clone();
+            p.u = act(&study, rotation, &half(&w[0].u, &w[1].u));
+            p.parameters = half(&w[0].parameters, &w[1].parameters);
+            p
+        })
+        .collect();
+    let mut with_copy = g.branches.clone();
+    with_copy.push(copy);
+    let common = common_stretches(&study, &with_copy, control);
+    let n = with_copy.len() - 1;
+    assert!(
+        common
+            .iter()
+            .any(|c| c.branch == n && c.along == 0 && c.points == (1..first.points.len() - 2)),
+        "the copy runs along the first branch: {common:?}"
+    );
 }

@@ -2,6 +2,7 @@
 //! bundled balloon's variants with their closed form; the checks of every figure (`figures`).
 
 pub mod figures;
+pub mod identity;
 
 /// The `<polyline>`s of an SVG: stroke colour and points.
 #[allow(dead_code)]
