@@ -600,7 +600,7 @@ class Comparison:
     unknowns, critical, seconds, stop). ``critical``: every critical point of every mesh
     (label, level, kind, irrep, multiplicity, m, value, isotropy, flagged). ``rungs``: the
     matched critical points, a row per rung, mesh and level (rung, m, mesh, irreps, values,
-    gap, verdict, distances). ``unmatched``: points without a counterpart on the reference
+    gap, piece_gap, verdict, distances). ``unmatched``: points without a counterpart on the reference
     mesh. ``data``: what ``memstab compare --json`` prints."""
 
     def __init__(self, data: dict):
@@ -631,7 +631,7 @@ class Comparison:
                     rungs.append({
                         "rung": n, "m": r.get("m"), "mesh": im["mesh"], "level": level,
                         "irreps": " + ".join(lv["irreps"]), "values": lv["values"],
-                        "gap": lv.get("gap"),
+                        "gap": lv.get("gap"), "piece_gap": lv.get("piece_gap"),
                         "verdict": lv["verdict"].get("kind") if isinstance(lv["verdict"], dict) else lv["verdict"],
                         "distances": lv.get("distances", []),
                     })

@@ -144,7 +144,9 @@ pub struct Image {
     pub gap: Option<f64>,
     /// Gap above round-off, for two or more points; `null` for one point (in every entry).
     pub split: Option<bool>,
-    /// What the images say.
+    /// What the images say: `verdict`, its sentence, and `piece_gap`, the RMS distance of an
+    /// imperfect fold's second piece where one was found (`null` otherwise, in every entry).
+    #[serde(flatten)]
     pub verdict: Verdict,
     /// Each value's distance from the continuum's (value − continuum, in the order of
     /// `values`); empty without an axisymmetric mesh or without its image.
@@ -247,9 +249,15 @@ impl std::fmt::Display for Verdict {
     }
 }
 
+/// Two entries of its image: `verdict`, the sentence, and `piece_gap`, the measured
+/// distance of a second piece (a number, not only words in the sentence).
 impl Serialize for Verdict {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(2))?;
+        map.serialize_entry("verdict", &self.to_string())?;
+        map.serialize_entry("piece_gap", &self.piece_gap)?;
+        map.end()
     }
 }
 
