@@ -831,3 +831,99 @@ fn cusp_curve(name: &str) -> memstab::results::CuspCurveReport {
     assert!(report.warnings.is_empty(), "{name}: {:?}", report.warnings);
     report
 }
+
+/// The cusp of a curve run of `scene` (one cusp: a minimum of L), as (L, ρ), with the curve.
+fn level_cusp(
+    study: &mut dyn memstab::study::Study,
+) -> ((f64, f64), memstab::results::CurveReport) {
+    let curve = run(study, |_, _| {})
+        .expect("the curve runs")
+        .outcome::<CurveReport>()
+        .cloned()
+        .unwrap();
+    let (l, rho) = (
+        index_of(&curve.parameters, "L"),
+        index_of(&curve.parameters, "rho"),
+    );
+    let cusps: Vec<&CurveEvent> = curve
+        .events
+        .iter()
+        .filter(|e| e.kind == CurveEventKind::Cusp)
+        .collect();
+    assert_eq!(cusps.len(), 1, "{:?}", curve.events);
+    assert_eq!(cusps[0].extremum, Some(memstab::results::Extremum::Minimum));
+    let at = (cusps[0].parameters[l], cusps[0].parameters[rho]);
+    (at, curve)
+}
+
+/// Paper 1's other loading (`scenes/thesis/paper1_disc_above_cusp_level.toml`): the disc as
+/// the floor of a fluid container, its limit density followed in the fill level L. As the
+/// level falls below the rim the maximum of ρ meets a minimum in a cusp at L* < 0, which
+/// converges at order 2 (4 and 8 divisions) to the meridian's; past it the fold line runs
+/// back to L = 0 and ends on the flat state: its last state is flat, at the mesh's first
+/// ponding density (`scenes/ponding.toml` on the same mesh).
+#[test]
+fn the_disc_from_above_has_a_cusp_in_the_fill_level_that_converges_to_the_meridians() {
+    use memstab::study::meridian::MeridianStudy;
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!(
+        "{dir}/scenes/thesis/paper1_disc_above_cusp_level.toml"
+    ))
+    .unwrap();
+    let with = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        Scene::from_toml_str(&text.replacen(from, to, 1), "variant").unwrap()
+    };
+    let mut fine = MeshStudy::build(bundled("thesis/paper1_disc_above_cusp_level.toml")).unwrap();
+    let ((l8, rho8), curve) = level_cusp(&mut fine);
+    let mut coarse = MeshStudy::build(with("divisions = 8 ", "divisions = 4 ")).unwrap();
+    let ((l4, rho4), _) = level_cusp(&mut coarse);
+    // The meridian of 32 elements, to just past the cusp.
+    let mut axi = text.clone();
+    for (from, to) in [
+        (
+            "generator = \"disc\"",
+            "generator = \"axisymmetric\"\nshape = \"disc\"",
+        ),
+        ("sectors = 7 ", "elements = 32\nmodes = 1\n# "),
+        ("divisions = 8 ", "# "),
+        ("steps = 50 ", "steps = 20 "),
+    ] {
+        assert!(axi.contains(from), "{from}");
+        axi = axi.replacen(from, to, 1);
+    }
+    let meridian = Scene::from_toml_str(&axi, "meridian").unwrap();
+    let mut meridian = MeridianStudy::build(meridian).unwrap();
+    let ((la, rhoa), _) = level_cusp(&mut meridian);
+    assert!(la < -0.05 && la > -0.06, "L* = {la}");
+    for (name, coarse, fine, continuum) in [("L*", l4, l8, la), ("rho*", rho4, rho8, rhoa)] {
+        let order = ((coarse - continuum) / (fine - continuum)).abs().log2();
+        eprintln!("{name}: {coarse} (4), {fine} (8), meridian {continuum}: order {order:.2}");
+        assert!((1.7..2.3).contains(&order), "{name}: order {order}");
+    }
+    // The fold line's other end: the flat state at L = 0 and the first ponding density.
+    let last = curve.rows.last().unwrap();
+    let (l, rho) = (
+        index_of(&curve.parameters, "L"),
+        index_of(&curve.parameters, "rho"),
+    );
+    let sag = curve
+        .measures
+        .iter()
+        .position(|m| m == "max_displacement")
+        .unwrap();
+    assert!(last.measures[sag] < 1e-3, "{:?}", last);
+    assert!(last.parameters[l].abs() < 1e-9, "{:?}", last);
+    let ponding = std::fs::read_to_string(format!("{dir}/scenes/ponding.toml")).unwrap();
+    assert!(ponding.contains("divisions = 16 "));
+    let ponding = ponding.replacen("divisions = 16 ", "divisions = 8 ", 1);
+    let mut flat = MeshStudy::build(Scene::from_toml_str(&ponding, "flat").unwrap()).unwrap();
+    let first = run(&mut flat, |_, _| {}).unwrap().report.critical[0].clone();
+    assert_eq!(first.irrep, "A1");
+    let rung = first.parameters[0];
+    assert!(
+        (last.parameters[rho] - rung).abs() < 1e-5 * rung,
+        "{} vs the ponding rung {rung}",
+        last.parameters[rho]
+    );
+}

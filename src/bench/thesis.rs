@@ -250,6 +250,10 @@ pub fn thesis_table(runs: &[ThesisRun]) -> String {
 /// text). `memstab bench --thesis` runs these, so an installed binary needs no source tree.
 pub const THESIS_SCENES: &[(&str, &str)] = &[
     (
+        "paper1_disc_above_cusp_level.toml",
+        include_str!("../../scenes/thesis/paper1_disc_above_cusp_level.toml"),
+    ),
+    (
         "paper1_disc_cusps_prestretch.toml",
         include_str!("../../scenes/thesis/paper1_disc_cusps_prestretch.toml"),
     ),

@@ -9,7 +9,8 @@
 //! - marker labels placed without overlapping each other, the legend, the marks or the
 //!   inset, joined to their point by a leader line when placed away from it;
 //! - an inset that zooms on the largest cluster of marks closer together than a label's
-//!   height, where their labels are placed instead.
+//!   height, where their labels are placed instead, in a free corner that covers no mark
+//!   (none left: no inset, the labels placed with leaders).
 //!
 //! The layout (label boxes, legend entries and box, marker kinds drawn, inset) is computed
 //! here, not by the plotting library, and is written into the SVG as a `<metadata>` element
@@ -1098,11 +1099,11 @@ pub fn render(plot: &Plot) -> Result<(String, Layout), Box<dyn Error>> {
                 ((frame.x1 - frame.x0) * 0.46).round(),
                 ((frame.y1 - frame.y0) * 0.46).round(),
             );
-            let cpx: Vec<(f64, f64)> = cluster.iter().map(|&i| mark_px[i]).collect();
+            // Never over a mark: the cluster's, or any other the inset would hide.
             let choices: Vec<Rect> = corners(frame, inset_size)
                 .into_iter()
                 .filter(|b| !used.iter().any(|u| u.overlaps(b)))
-                .filter(|b| !cpx.iter().any(|p| b.contains(*p)))
+                .filter(|b| !mark_px.iter().any(|p| b.contains(*p)))
                 .collect();
             if let Some(b) = choices.iter().min_by_key(|b| hidden(b, &data)).copied() {
                 layout.inset = Some(b);
