@@ -21,6 +21,34 @@ pub struct Overrides {
     pub max_step: Option<f64>,
 }
 
+impl Overrides {
+    /// Refuses a value no scene could hold, in one line naming its flag: a depth outside
+    /// [1, [`crate::scene::MAX_BRANCH_DEPTH`]], no steps, a step that is not a positive
+    /// number.
+    ///
+    /// # Errors
+    /// The line naming the flag and its value.
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(d) = self.depth {
+            if !(1..=crate::scene::MAX_BRANCH_DEPTH).contains(&d) {
+                return Err(format!(
+                    "--depth {d}: must lie within [1, {}]",
+                    crate::scene::MAX_BRANCH_DEPTH
+                ));
+            }
+        }
+        if self.steps == Some(0) {
+            return Err("--steps 0: must be >= 1".into());
+        }
+        if let Some(m) = self.max_step {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(format!("--max-step {m}: must be > 0"));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Why branches could not be switched from a finished run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BranchError {

@@ -70,12 +70,8 @@ impl Diagram {
 /// What `memstab diagram RUN_DIR` changes of the diagram's settings.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
-    /// Levels of branches.
-    pub depth: Option<usize>,
-    /// Points of each branch.
-    pub steps: Option<usize>,
-    /// The largest arclength step along a branch.
-    pub max_step: Option<f64>,
+    /// The branches' depth, points and largest step (as `memstab branch`'s).
+    pub branches: super::branch::Overrides,
     /// Seek the second piece beside every fold.
     pub partners: Option<bool>,
     /// Points of each second piece.
@@ -103,29 +99,20 @@ pub fn settings_for(
             ))
         }
     };
-    if let Some(depth) = overrides.depth {
-        if !(1..=crate::scene::MAX_BRANCH_DEPTH).contains(&depth) {
-            return Err(format!(
-                "--depth {depth}: must lie within [1, {}]",
-                crate::scene::MAX_BRANCH_DEPTH
-            ));
-        }
+    let branches = &overrides.branches;
+    branches.check()?;
+    if let Some(depth) = branches.depth {
         d.depth = depth;
     }
-    match overrides.steps {
-        Some(0) => return Err("--steps 0: must be >= 1".into()),
-        Some(s) => d.branch_steps = s,
-        None => {}
+    if let Some(s) = branches.steps {
+        d.branch_steps = s;
     }
     match overrides.partner_steps {
         Some(0) => return Err("--partner-steps 0: must be >= 1".into()),
         Some(s) => d.partner_steps = s,
         None => {}
     }
-    if let Some(m) = overrides.max_step {
-        if !(m.is_finite() && m > 0.0) {
-            return Err(format!("--max-step {m}: must be > 0"));
-        }
+    if let Some(m) = branches.max_step {
         d.branch_max_step = Some(m);
     }
     if let Some(p) = overrides.partners {

@@ -28,18 +28,8 @@ pub(crate) struct BranchArgs {
     /// The critical point to switch at: N of critical_NN.vtu (the N-th of critical.json).
     #[arg(long)]
     critical: usize,
-    /// The scene file (default: the one recorded in RUN_DIR/path.json).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// 1: the point's branches; 2: also the branches of their critical points (at most 3).
-    #[arg(long)]
-    depth: Option<usize>,
-    /// Points of each branch (default: the scene's [analysis.branches] steps, else 40).
-    #[arg(long)]
-    steps: Option<usize>,
-    /// Largest arclength step along a branch (default: the scene's, else its path's).
-    #[arg(long)]
-    max_step: Option<f64>,
+    #[command(flatten)]
+    flags: super::common::BranchFlags,
     /// Output directory (default RUN_DIR; it must exist).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -50,36 +40,14 @@ pub(crate) struct BranchArgs {
 
 pub(crate) fn run(args: &BranchArgs) -> Result<(), CliError> {
     let (finished, out) = super::common::finished_run(&args.run_dir, args.out.as_deref())?;
-    if let Some(d) = args.depth {
-        if !(1..=memstab::scene::MAX_BRANCH_DEPTH).contains(&d) {
-            return Err(CliError::Input(format!(
-                "--depth {d}: must lie within [1, {}]",
-                memstab::scene::MAX_BRANCH_DEPTH
-            )));
-        }
-    }
-    if args.steps == Some(0) {
-        return Err(CliError::Input("--steps 0: must be >= 1".into()));
-    }
-    if let Some(m) = args.max_step {
-        if !(m.is_finite() && m > 0.0) {
-            return Err(CliError::Input(format!("--max-step {m}: must be > 0")));
-        }
-    }
+    let overrides = args.flags.overrides();
+    overrides.check().map_err(CliError::Input)?;
     super::common::check_writable("--out", &out, &out)?;
     // Refused up front when another run writes into the directory.
     let _lock = super::common::lock(&out)?;
-    let scene_file = args
-        .scene
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(&finished.origin));
+    let scene_file = args.flags.scene_file(&finished.origin);
     let mut study = memstab::study::build(load_scene(&scene_file)?)
         .map_err(|e| CliError::Input(one_line(&e)))?;
-    let overrides = branch::Overrides {
-        depth: args.depth,
-        steps: args.steps,
-        max_step: args.max_step,
-    };
     let branches = branch::from_run(&mut *study, &finished, args.critical, &overrides).map_err(
         |e| match e {
             branch::BranchError::Input(why) => CliError::Input(one_line(&why)),

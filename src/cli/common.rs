@@ -270,3 +270,40 @@ pub(crate) fn finished_run(
     }
     Ok((finished, out))
 }
+
+/// The flags `memstab branch` and `memstab diagram` share: the scene, and what they change of
+/// its branch settings.
+#[derive(Debug, clap::Args)]
+pub(crate) struct BranchFlags {
+    /// The scene file (default: the one recorded in RUN_DIR/path.json).
+    #[arg(long)]
+    pub scene: Option<std::path::PathBuf>,
+    /// Levels of branches: 1, the branches of the point (or the path); 2, also those of their
+    /// critical points; at most 3 (default: the scene's, else 1 for `branch`, 2 for `diagram`).
+    #[arg(long)]
+    pub depth: Option<usize>,
+    /// Points of each branch (default: the scene's, else 40).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Largest arclength step along a branch (default: the scene's, else its path's).
+    #[arg(long)]
+    pub max_step: Option<f64>,
+}
+
+impl BranchFlags {
+    /// The scene file: `--scene`, else the one the run recorded.
+    pub(crate) fn scene_file(&self, recorded: &str) -> std::path::PathBuf {
+        self.scene
+            .clone()
+            .unwrap_or_else(|| std::path::PathBuf::from(recorded))
+    }
+
+    /// What they change of the scene's branch settings.
+    pub(crate) fn overrides(&self) -> memstab::analysis::branch::Overrides {
+        memstab::analysis::branch::Overrides {
+            depth: self.depth,
+            steps: self.steps,
+            max_step: self.max_step,
+        }
+    }
+}

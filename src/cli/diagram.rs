@@ -25,18 +25,8 @@ use std::path::PathBuf;
 pub(crate) struct DiagramArgs {
     /// The output directory of a finished `memstab run` of a path (or a diagram).
     run_dir: PathBuf,
-    /// The scene file (default: the one recorded in RUN_DIR/path.json).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Levels of branches: 1, the path's; 2, also the branches' own; 3 at most (default 2).
-    #[arg(long)]
-    depth: Option<usize>,
-    /// Points of each branch (default: the scene's, else 40).
-    #[arg(long)]
-    steps: Option<usize>,
-    /// Largest arclength step along a branch (default: the scene's, else its path's).
-    #[arg(long)]
-    max_step: Option<f64>,
+    #[command(flatten)]
+    flags: super::common::BranchFlags,
     /// Points of each second piece beyond its fold (default: the scene's, else 60).
     #[arg(long)]
     partner_steps: Option<usize>,
@@ -53,15 +43,10 @@ pub(crate) struct DiagramArgs {
 
 pub(crate) fn run(args: &DiagramArgs) -> Result<(), CliError> {
     let (finished, out) = super::common::finished_run(&args.run_dir, args.out.as_deref())?;
-    let scene_file = args
-        .scene
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(&finished.origin));
+    let scene_file = args.flags.scene_file(&finished.origin);
     let scene = load_scene(&scene_file)?;
     let overrides = diagram::Overrides {
-        depth: args.depth,
-        steps: args.steps,
-        max_step: args.max_step,
+        branches: args.flags.overrides(),
         partners: args.no_partners.then_some(false),
         partner_steps: args.partner_steps,
     };
