@@ -821,14 +821,28 @@ fn index_of(names: &[String], name: &str) -> usize {
 }
 
 /// The cusp curve of the bundled scene `name`, run without a warning.
+/// The cusp curve of the bundled scene `name`; its progress follows the third parameter:
+/// every point is reported at a slice's value, within the slices' range.
 fn cusp_curve(name: &str) -> memstab::results::CuspCurveReport {
     let mut study = MeshStudy::build(bundled(name)).unwrap();
-    let report = run(&mut study, |_, _| {})
+    let (axis, range) = memstab::analysis::progress_control(&study);
+    let (lo, hi) = range.expect("the slices' range");
+    let mut reported = Vec::new();
+    let report = run(&mut study, |_, value| reported.push(value))
         .expect("the cusp curve runs")
         .outcome::<memstab::results::CuspCurveReport>()
         .cloned()
         .unwrap();
     assert!(report.warnings.is_empty(), "{name}: {:?}", report.warnings);
+    assert_eq!(report.third, axis, "{name}");
+    assert!(!reported.is_empty());
+    for v in reported {
+        assert!(v >= lo && v <= hi, "{name}: progress at {axis} = {v}");
+        assert!(
+            report.slices.iter().any(|s| s.third == v),
+            "{name}: {axis} = {v} is no slice"
+        );
+    }
     report
 }
 

@@ -77,11 +77,15 @@ impl Cusps {
             times: Default::default(),
         };
         let t = Instant::now();
+        let observer = &mut AtThird {
+            inner: &mut *cx.observer,
+            third: value,
+        };
         // The path to the point steps as the scene says: a refined slice's finer step is
         // for its curve, near the cusps, not for the path's way up to the fold.
         let located = match self
             .curve()
-            .locate(study, &mut cx.crossings, &point, &mut *cx.observer)
+            .locate(study, &mut cx.crossings, &point, &mut *observer)
         {
             Ok(l) => l,
             Err(e) => return failed(e.to_string()),
@@ -107,11 +111,29 @@ impl Cusps {
             Ok(cp) => cp,
             Err(e) => return failed(e.to_string()),
         };
-        let report = match curve.follow(study, &mut cx.crossings, &cp, &mut *cx.observer) {
+        let report = match curve.follow(study, &mut cx.crossings, &cp, observer) {
             Ok(r) => r,
             Err(e) => return failed(e.to_string()),
         };
         slice_of(&report, value, max_step, refined)
+    }
+}
+
+/// The caller's observer during one slice: every point reported at the slice's value of the
+/// third parameter, so that a progress display moves along the slices, not back and forth in
+/// each slice's control.
+struct AtThird<'o> {
+    inner: &'o mut dyn super::Observer,
+    third: f64,
+}
+
+impl super::Observer for AtThird<'_> {
+    fn progress(&mut self, point: usize, _control: f64) {
+        self.inner.progress(point, self.third);
+    }
+
+    fn state(&mut self, u: &[f64], params: &[f64]) {
+        self.inner.state(u, params);
     }
 }
 
@@ -282,6 +304,15 @@ impl Analysis for Cusps {
     /// The path that finds each slice's point, as for `critical-curve`.
     fn options(&self, study: &dyn Study) -> PathOptions {
         self.curve().options(study)
+    }
+
+    /// The third parameter over the slices' range.
+    fn progress_axis(&self) -> Option<(String, Option<(f64, f64)>)> {
+        let range = match self.0.range[..] {
+            [a, b] if a.is_finite() && b.is_finite() => Some((a.min(b), a.max(b))),
+            _ => None,
+        };
+        Some((self.0.third.clone(), range))
     }
 
     /// Every slice of the grid, the slices added where a pair of cusps ends, and the ends;

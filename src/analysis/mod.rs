@@ -93,8 +93,12 @@ pub trait Observer {
 pub struct Progress<F>(pub F);
 
 /// The control a progress display of `study`'s run follows: its name (`control` without one)
-/// and its bounds when both are finite.
+/// and its bounds when both are finite; or what its analysis reports instead
+/// ([`Analysis::progress_axis`]).
 pub fn progress_control(study: &dyn Study) -> (String, Option<(f64, f64)>) {
+    if let Some(axis) = analysis_of(&study.scene().analysis).progress_axis() {
+        return axis;
+    }
     let handle = study.control();
     let control = handle.map_or_else(|| "control".to_string(), |c| c.name.clone());
     let range = handle
@@ -123,6 +127,12 @@ pub trait Analysis {
     /// The finished run and the number (from 0) of its critical point the analysis starts
     /// from, if it starts from one (a critical curve's `from-run`).
     fn restarts_from(&self) -> Option<(std::path::PathBuf, usize)> {
+        None
+    }
+    /// What a progress display of its run follows when it is not the control, by name and
+    /// range: the parameter its [`Observer::progress`] reports (a cusp curve's third, one
+    /// slice after another).
+    fn progress_axis(&self) -> Option<(String, Option<(f64, f64)>)> {
         None
     }
     /// Runs from the converged start state in `cx`, recording into it; returns why it
