@@ -777,3 +777,50 @@ fn meridian_run_json_has_the_keys_of_a_3d_run() {
         .collect();
     assert_eq!(files, listing(&dir).into_iter().collect());
 }
+
+/// The meridian's path problem reports its switches as the 3-D one does: the rings whose
+/// contact with a penalty plane differs between two states (none between a state and
+/// itself; every ring pushed below the floor), and `None` without a plane — so a turn of
+/// the path at a change of contact is located at the switch there too.
+#[test]
+fn the_meridians_path_problem_counts_the_rings_that_change_contact() {
+    use memstab::study::{Free, Study};
+    use nalgebra::DVector;
+    let floor = std::fs::read_to_string(format!(
+        "{}/scenes/axisymmetric/paper4_spinning_cap.toml",
+        manifest_dir()
+    ))
+    .unwrap()
+    .replacen("elements = 128", "elements = 8", 1);
+    let study = MeridianStudy::build(Scene::from_toml_str(&floor, "floor").unwrap()).unwrap();
+    let params = study.start_values().to_vec();
+    let control = study.control().map(|c| c.index);
+    let problem = study.problem(&params, &Free::path(control));
+    let n = problem.dim();
+    let lambda = DVector::from_element(problem.free_parameters(), params[control.unwrap()]);
+    let rest = DVector::zeros(n);
+    let below = DVector::from_element(n, -2.0);
+    assert_eq!(
+        problem.switched((&rest, &lambda), (&rest, &lambda)),
+        Some(0)
+    );
+    let (depth, _) = study
+        .penetrations(&study.expand(below.as_slice()), &params)
+        .expect("a plane");
+    let pushed = depth.iter().filter(|&&d| d > 0.0).count();
+    assert!(pushed > 0);
+    assert_eq!(
+        problem.switched((&rest, &lambda), (&below, &lambda)),
+        Some(pushed)
+    );
+    let balloon = Scene::load(format!(
+        "{}/scenes/axisymmetric/balloon.toml",
+        manifest_dir()
+    ));
+    let study = MeridianStudy::build(balloon.unwrap()).unwrap();
+    let params = study.start_values().to_vec();
+    let problem = study.problem(&params, &Free::path(study.control().map(|c| c.index)));
+    let rest = DVector::zeros(problem.dim());
+    let lambda = DVector::zeros(problem.free_parameters());
+    assert_eq!(problem.switched((&rest, &lambda), (&rest, &lambda)), None);
+}

@@ -301,6 +301,29 @@ impl Problem for AxisymProblem {
         let v = self.model.volume(&self.model.positions(q.as_slice()));
         (v0 != 0.0 && v * v0.signum() <= 0.0).then_some(StateDefect::InsideOut { volume: v })
     }
+
+    /// The nodes (rings) whose contact with a penalty plane differs between `a` and `b`, as
+    /// the 3-D model's: where the tangent and the path's direction may jump (a turn there is
+    /// located at the switch, docs/theory.md §7.6); `None` without a plane.
+    fn switched(
+        &self,
+        a: (&DVector<f64>, &DVector<f64>),
+        b: (&DVector<f64>, &DVector<f64>),
+    ) -> Option<usize> {
+        let (before, _) = self
+            .model
+            .penetrations(a.0.as_slice(), &self.all_parameters(a.1))?;
+        let (after, _) = self
+            .model
+            .penetrations(b.0.as_slice(), &self.all_parameters(b.1))?;
+        Some(
+            before
+                .iter()
+                .zip(&after)
+                .filter(|(x, y)| (**x > 0.0) != (**y > 0.0))
+                .count(),
+        )
+    }
 }
 
 impl States for AxisymProblem {
