@@ -3,7 +3,8 @@
 //! without redoing anything, handed to the schedulers' scripts and run task by task; a sweep
 //! interrupted from inside (the test hook `MEMSTAB_INTERRUPT_AFTER_STEPS`) resumed without
 //! redoing its finished runs; failed, cut-short and edited runs listed by `collect`, not merged;
-//! bad sweep files refused with one line naming the key and value, nothing written.
+//! the ends of pairs of cusps of `cusp-curve` runs collected; bad sweep files refused with one
+//! line naming the key and value, nothing written.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -541,4 +542,101 @@ fn the_bundled_sweep_expands_into_its_tasks() {
     assert!(std::fs::read_to_string(out.join("sweep.slurm"))
         .unwrap()
         .contains("--array=1-5"));
+}
+
+#[test]
+fn collect_gathers_where_the_pairs_of_cusps_of_a_cusp_curve_run_end() {
+    // The swallowtail of the disc pushed up by fluid from below, on two small meshes: each
+    // run's pair of cusps ends between its slices in the fluid's density. The collected
+    // table has a `cusp-end` row per end with its kind, the curve's irrep and the run's
+    // estimate of where it ends (the value is the third parameter, named in the table's
+    // `third`); the figure, drawn against the control, leaves them out. An edited
+    // `cusp_curve.json` makes its run cut short, nothing of it merged.
+    let dir = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(scene("thesis/paper1_disc_swallowtail.toml")).unwrap();
+    let cheap = [
+        ("divisions = 8 ", "divisions = 3 "),
+        ("range = [0.3, 0.55] ", "range = [0.4, 0.8] "),
+        ("slices = 6\n", "slices = 5\n"),
+        ("bisections = 4 ", "bisections = 1 "),
+    ]
+    .iter()
+    .fold(base, |t, (a, b)| {
+        assert!(t.contains(a), "{a}");
+        t.replace(a, b)
+    });
+    std::fs::write(dir.path().join("disc.toml"), cheap).unwrap();
+    let file = dir.path().join("cusps.toml");
+    std::fs::write(
+        &file,
+        "[sweep]\nscene = \"disc.toml\"\nname = \"swallowtail\"\n\n[grid]\n\
+         \"mesh.divisions\" = [3, 4]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("cusps");
+    let o = sweep(&file, &out, &["--jobs", "2"], None);
+    assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
+    let o = collect(&out);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    assert!(
+        stdout.contains("and 2 ends of pairs of cusps (their value: rho)"),
+        "{stdout}"
+    );
+    let rows = csv(&out.join("collected.csv"));
+    let header = &rows[0];
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let ends: Vec<&Vec<String>> = rows[1..]
+        .iter()
+        .filter(|r| r[col("point")] == "cusp-end")
+        .collect();
+    assert_eq!(ends.len(), 2, "{rows:?}");
+    for (n, row) in ends.iter().enumerate() {
+        let task = n + 1;
+        assert_eq!(row[col("task")], task.to_string());
+        let report = json(&out.join(format!("run_{task:04}/cusp_curve.json")));
+        let end = &report["ends"][0];
+        assert_eq!(report["ends"].as_array().unwrap().len(), 1);
+        assert_eq!(row[col("kind")], end["kind"].as_str().unwrap());
+        assert_eq!(row[col("kind")], "swallowtail");
+        assert_eq!(row[col("irrep")], report["irrep"].as_str().unwrap());
+        assert_eq!(row[col("step")], "");
+        let value: f64 = row[col("value")].parse().unwrap();
+        assert_eq!(value, end["estimate"].as_f64().unwrap());
+        let bracket = end["bracket"].as_array().unwrap();
+        assert!(value >= bracket[0].as_f64().unwrap() && value <= bracket[1].as_f64().unwrap());
+        assert_eq!(row[col("valid")], "true");
+    }
+    let o = memstab(&["collect", out.to_str().unwrap(), "--json"], None);
+    let table = &serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["table"];
+    assert_eq!(table["third"], "rho");
+    assert_eq!(table["control"], "h");
+    let svg = std::fs::read_to_string(out.join("collected.svg")).unwrap();
+    assert!(svg.contains("A1, m = 0"), "the limit points are drawn");
+    assert!(!svg.contains("cusp end"), "the ends are not");
+
+    // Run 2's report edited: cut short, naming the file, and none of its rows merged.
+    let report = out.join("run_0002/cusp_curve.json");
+    let edited = std::fs::read_to_string(&report)
+        .unwrap()
+        .replacen("\"ends\"", "\"ends\" ", 1);
+    std::fs::write(&report, edited).unwrap();
+    let (stdout, _) = text(&collect(&out));
+    assert!(
+        stdout.contains("2 runs: 1 finished, 0 failed, 1 cut short"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("cusp_curve.json: does not match its checksum"),
+        "{stdout}"
+    );
+    let rows = csv(&out.join("collected.csv"));
+    assert!(rows[1..].iter().all(|r| r[0] == "1"), "{rows:?}");
+    assert_eq!(
+        rows[1..]
+            .iter()
+            .filter(|r| r[col("point")] == "cusp-end")
+            .count(),
+        1
+    );
 }

@@ -1588,3 +1588,83 @@ fn the_linear_penalty_turns_the_fluid_level_at_the_contact_jump() {
         }
     }
 }
+
+#[test]
+fn close_planes_give_the_fluid_level_a_b1_bifurcation_that_moves_with_the_mesh_and_the_law() {
+    // The filled cap between planes at a = 0.55 (the bundled scene), the level raised: the
+    // linear law meets a simple bifurcation in B1 (m = 1, isotropy C1v) in a taut state, its
+    // eigenvalue crossing zero smoothly (the point is valid: not wrinkled, localised, no
+    // contact change), and the path is unstable in B1 only up to the next change of the
+    // contact set, a B1 point flagged contact-jump. It is penalty- and mesh-induced: it moves
+    // from h = 17.2602 (512 triangles) to 18.4818 (1 152), and the cubic law at the same κ
+    // has no critical point, index 0 in every block along its path.
+    let run_scene = |divisions: usize, exponent: u32| {
+        let text = bundled("thesis/paper3_fluid_level_bifurcation.toml")
+            .replace("divisions = 8 ", &format!("divisions = {divisions} "))
+            .replace("\nexponent = 1", &format!("\nexponent = {exponent}"));
+        let mut s = study(&text);
+        assert_eq!(s.action.group().name(), "C2v");
+        let mut result = run(&mut s, |_, _| {}).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        memstab::output::write_run(&s, &s.scene, &mut result, dir.path()).unwrap();
+        result.report
+    };
+    let mut onsets = Vec::new();
+    for divisions in [8, 12] {
+        let r = run_scene(divisions, 1);
+        let (h, contact) = (parameter(&r, "h"), column(&r, "contact_nodes"));
+        let b1 = r.irreps.iter().position(|i| i == "B1").unwrap();
+        assert!(r.critical.iter().all(|c| c.irrep == "B1"), "{divisions}");
+        assert!(r.critical.len() >= 2, "{divisions}: {}", r.critical.len());
+        let (onset, end) = (&r.critical[0], &r.critical[1]);
+        assert_eq!(
+            (onset.kind, onset.multiplicity, onset.isotropy.name.as_str()),
+            (CriticalKind::SimpleBifurcation, 1, "C1v"),
+            "{divisions}"
+        );
+        assert!(r.flags(0).is_empty(), "{divisions}: {:?}", r.flags(0));
+        let end_flags: Vec<&str> = r.flags(1).iter().map(|f| f.name()).collect();
+        assert!(
+            end_flags.contains(&"contact-jump"),
+            "{divisions}: {end_flags:?}"
+        );
+        assert!(
+            !end_flags.contains(&"wrinkled"),
+            "{divisions}: {end_flags:?}"
+        );
+        // The path point past the jump has more nodes in contact than the onset's state.
+        let past = &r.rows[end.after_step + 1];
+        assert_eq!(past.step, end.after_step + 1);
+        assert!(
+            past.measures[contact] > onset.measures[contact],
+            "{divisions}: {} {}",
+            past.measures[contact],
+            onset.measures[contact]
+        );
+        // Unstable in B1 exactly between the two points, stable in every other block.
+        let (h0, h1) = (onset.parameters[h], end.parameters[h]);
+        let unstable: Vec<f64> = r
+            .rows
+            .iter()
+            .filter(|row| row.negative.as_ref().unwrap()[b1] > 0)
+            .map(|row| row.parameters[h])
+            .collect();
+        assert!(!unstable.is_empty(), "{divisions}");
+        assert!(
+            unstable.iter().all(|&v| v > h0 && v < h1),
+            "{divisions}: {unstable:?}"
+        );
+        assert!(r
+            .rows
+            .iter()
+            .all(|row| row.index == row.negative.as_ref().map(|n| n[b1])));
+        onsets.push(h0);
+    }
+    assert!((onsets[0] - 17.2602).abs() < 1e-3, "{onsets:?}");
+    assert!((onsets[1] - 18.4818).abs() < 1e-3, "{onsets:?}");
+    assert!(onsets[1] - onsets[0] > 1.0, "{onsets:?}");
+    let cubic = run_scene(8, 3);
+    assert!(cubic.critical.is_empty(), "{:?}", cubic.critical.len());
+    assert!(cubic.rows.iter().all(|row| row.index == Some(0)));
+    assert!(cubic.rows.len() > 50);
+}

@@ -306,6 +306,10 @@ pub const THESIS_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/thesis/paper2_sphere_on_plane_f8.toml"),
     ),
     (
+        "paper3_fluid_level_bifurcation.toml",
+        include_str!("../../scenes/thesis/paper3_fluid_level_bifurcation.toml"),
+    ),
+    (
         "paper3_fluid_level_fold_line.toml",
         include_str!("../../scenes/thesis/paper3_fluid_level_fold_line.toml"),
     ),

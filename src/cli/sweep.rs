@@ -9,7 +9,7 @@
 
 use super::CliError;
 use clap::{Args, ValueEnum};
-use memstab::results::sweep::RunStatus;
+use memstab::results::sweep::{RunStatus, SweepPointKind};
 use memstab::sweep::{Expanded, SweepError, TaskOutcome};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -297,10 +297,20 @@ pub(crate) fn collect(args: &CollectArgs) -> Result<(), CliError> {
         count(RunStatus::CutShort),
         count(RunStatus::NotRun)
     );
-    let critical = table.points.iter().filter(|p| p.irrep.is_some()).count();
+    let of = |k: SweepPointKind| table.points.iter().filter(|p| p.point == k).count();
+    let ends = of(SweepPointKind::CuspEnd);
     out!(
-        "merged: {critical} critical and {} turning points of the finished runs",
-        table.points.len() - critical
+        "merged: {} critical and {} turning points of the finished runs{}",
+        of(SweepPointKind::Critical),
+        of(SweepPointKind::Turning),
+        if ends > 0 {
+            format!(
+                ", and {ends} ends of pairs of cusps (their value: {})",
+                table.third.as_deref().unwrap_or("the third parameter")
+            )
+        } else {
+            String::new()
+        }
     );
     let unfinished: Vec<_> = table.unfinished().collect();
     if !unfinished.is_empty() {

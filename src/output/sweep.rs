@@ -1,7 +1,8 @@
 //! A sweep's collected table ([`SweepTable`]): `collected.csv` (a row per turning or critical
-//! point of every finished run, the swept values as columns), `collected_runs.csv` (a row per
-//! run with its status) and `collected.svg` (the points' control values against a swept
-//! value, one colour per irrep and wave number, the caption naming the runs' meshes).
+//! point of every finished run and per end of a pair of cusps of a `cusp-curve` run, the
+//! swept values as columns), `collected_runs.csv` (a row per run with its status) and
+//! `collected.svg` (the turning and critical points' control values against a swept value,
+//! one colour per irrep and wave number, the caption naming the runs' meshes).
 
 use super::csv::quote;
 use super::figure::{self, Line, Mark, Plot, Symbol};
@@ -115,7 +116,7 @@ pub fn write_sweep_table(
                 opt(p.multiplicity.map(|m| m.to_string())),
                 opt(p.isotropy.clone()),
                 opt(p.m.map(|m| m.to_string())),
-                p.step,
+                opt(p.step.map(|s| s.to_string())),
                 Num(p.value),
                 p.valid,
                 quote(&p.flags.join(";")),
@@ -175,11 +176,21 @@ fn meshes(table: &SweepTable) -> String {
     }
 }
 
+/// The points the figure draws: the turning and critical points, whose values are the
+/// control's.
+fn plotted(table: &SweepTable) -> impl Iterator<Item = &SweepPoint> {
+    table
+        .points
+        .iter()
+        .filter(|p| p.point != SweepPointKind::CuspEnd)
+}
+
 /// A point's legend label: the irrep and wave number of a critical point, `maximum`/`minimum`
 /// of a turning point.
 fn label(p: &SweepPoint) -> String {
     match p.point {
         SweepPointKind::Turning => format!("{} (turning)", p.kind),
+        SweepPointKind::CuspEnd => format!("{} (cusp end)", p.kind),
         SweepPointKind::Critical => {
             let irrep = p.irrep.as_deref().unwrap_or("?");
             match p.m {
@@ -219,14 +230,15 @@ fn render(table: &SweepTable, axis: Option<usize>) -> Result<String, Box<dyn std
         })
     };
     let labels: Vec<String> = {
-        let mut l: Vec<String> = table.points.iter().map(label).collect();
+        let mut l: Vec<String> = plotted(table).map(label).collect();
         l.sort();
         l.dedup();
         l
     };
     let mut series: BTreeMap<SeriesKey, Vec<(f64, f64, bool)>> = BTreeMap::new();
     let mut rank: BTreeMap<(usize, usize), usize> = BTreeMap::new();
-    for p in &table.points {
+    // A cusp end's value is its third parameter, not the control of the figure's axis.
+    for p in plotted(table) {
         let l = labels.iter().position(|l| *l == label(p)).unwrap_or(0);
         let r = rank.entry((p.task, l)).or_insert(0);
         series

@@ -67,6 +67,9 @@ pub enum SweepPointKind {
     Critical,
     /// A turning point of the control.
     Turning,
+    /// Where a pair of cusps ends, from a `cusp-curve` run: its value is the run's third
+    /// parameter there, not the control.
+    CuspEnd,
 }
 
 impl std::fmt::Display for SweepPointKind {
@@ -74,20 +77,23 @@ impl std::fmt::Display for SweepPointKind {
         f.write_str(match self {
             Self::Critical => "critical",
             Self::Turning => "turning",
+            Self::CuspEnd => "cusp-end",
         })
     }
 }
 
-/// One turning or critical point of a finished run.
+/// One turning or critical point of a finished run, or the end of a pair of cusps of a
+/// `cusp-curve` run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SweepPoint {
     /// The run's task number.
     pub task: usize,
     /// Critical or turning.
     pub point: SweepPointKind,
-    /// Its kind: `maximum`/`minimum` for a turning point, the critical kind otherwise.
+    /// Its kind: `maximum`/`minimum` for a turning point, what the pair ends in for a cusp end
+    /// (`swallowtail`, `lips-or-beaks`, `undecided`), the critical kind otherwise.
     pub kind: String,
-    /// The irrep of the singular block (critical points).
+    /// The irrep of the singular block (critical points; a cusp end: its curve's).
     pub irrep: Option<String>,
     /// The multiplicity of the zero eigenvalue in K (critical points).
     pub multiplicity: Option<usize>,
@@ -95,9 +101,10 @@ pub struct SweepPoint {
     pub isotropy: Option<String>,
     /// The mode's wave number about z, where the mesh has an axis.
     pub m: Option<usize>,
-    /// The path step before it.
-    pub step: usize,
-    /// The control's value there.
+    /// The path step before it (none for a cusp end).
+    pub step: Option<usize>,
+    /// The control's value there; a cusp end's: the third parameter's where the pair ends
+    /// (its estimate, or the middle of its bracket where there is none).
     pub value: f64,
     /// No flag raised.
     pub valid: bool,
@@ -114,6 +121,10 @@ pub struct SweepTable {
     pub keys: Vec<String>,
     /// The control parameter of the runs (the first finished run's).
     pub control: Option<String>,
+    /// The third parameter of the `cusp-curve` runs (the first one's): the value of their
+    /// cusp ends.
+    #[serde(default)]
+    pub third: Option<String>,
     /// Every run, in task order.
     pub runs: Vec<SweepRun>,
     /// The points of the finished runs, in task order.
