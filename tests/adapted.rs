@@ -265,6 +265,8 @@ fn discs_of_every_symmetry() {
         (8, 3, Some("C2v")),
         (6, 3, Some("C1v")),
         (6, 3, Some("C3v")),
+        // The trivial group: its one block is the identity basis, K as assembled.
+        (6, 3, Some("C1")),
     ] {
         let sym = disc(&DiscOptions {
             radius: 1.0,

@@ -78,6 +78,8 @@ pub struct SparseBasis {
     /// The sparsity pattern of Bᵀ K B (built on first use),
     /// and for each stored entry the slot of its transpose.
     pattern: std::sync::OnceLock<(Arc<SymmetricPattern>, Vec<u32>)>,
+    /// Whether the basis is the identity (decided on first use).
+    identity: std::sync::OnceLock<bool>,
 }
 
 impl SparseBasis {
@@ -100,6 +102,7 @@ impl SparseBasis {
             seeds: Some(seeds),
             complex: None,
             pattern: std::sync::OnceLock::new(),
+            identity: std::sync::OnceLock::new(),
         }
     }
 
@@ -116,6 +119,7 @@ impl SparseBasis {
             seeds: None,
             complex: Some(complex),
             pattern: std::sync::OnceLock::new(),
+            identity: std::sync::OnceLock::new(),
         }
     }
 
@@ -135,6 +139,7 @@ impl SparseBasis {
             seeds: None,
             complex: None,
             pattern: std::sync::OnceLock::new(),
+            identity: std::sync::OnceLock::new(),
         }
     }
 
@@ -146,6 +151,20 @@ impl SparseBasis {
     /// Number of rows (the model's unknowns).
     pub fn unknowns(&self) -> usize {
         self.unknowns
+    }
+
+    /// Whether the basis is the identity: a column per unknown, column i the unit vector e_i
+    /// (the trivial group on every unknown). Builds the columns only when there are as many
+    /// as unknowns.
+    pub fn is_identity(&self) -> bool {
+        *self.identity.get_or_init(|| {
+            self.dim == self.unknowns
+                && self
+                    .columns()
+                    .iter()
+                    .enumerate()
+                    .all(|(i, c)| c.as_slice() == [(i, 1.0)])
+        })
     }
 
     /// The sparse columns (built from the seeds on first use, in parallel).
@@ -323,7 +342,9 @@ impl SparseBasis {
     /// The sparse part of Bᵀ K B (without `eval`'s rank-one terms) on its own pattern, for
     /// a basis built from a group action (`None` otherwise). The pattern — column e meets
     /// the columns on the orbits next to e's representative — is computed on first use.
-    /// A complex-type block gives its real R = [[A, C], [−C, A]] (complex.rs).
+    /// A complex-type block gives its real R = [[A, C], [−C, A]] (complex.rs). The identity
+    /// (the trivial group's only block) gives K as assembled, on the model's pattern: the
+    /// same values and pattern as the restriction, without the work.
     pub fn restrict_tangent_sparse(
         &self,
         layout: &Layout,
@@ -331,6 +352,12 @@ impl SparseBasis {
     ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
         if self.seeds.is_none() && self.complex.is_none() {
             return None;
+        }
+        if self.is_identity() {
+            let (pattern, _) = self
+                .pattern
+                .get_or_init(|| (Arc::new(layout.pattern().clone()), Vec::new()));
+            return Some((pattern.clone(), eval.tangent.clone()));
         }
         let (pattern, transpose) = self.pattern.get_or_init(|| {
             let pattern = match (&self.seeds, &self.complex) {

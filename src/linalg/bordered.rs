@@ -72,9 +72,10 @@ pub fn bordered_solve_all(
         }
     }
     let k = shifted.len();
-    let (b, c, d) = if k == 0 {
-        (b.clone(), c.clone(), d.clone())
-    } else {
+    if k == 0 {
+        return batched((pattern, values, b, c, d), fact, all);
+    }
+    let (b, c, d) = {
         let (mut b2, mut c2) = (DMatrix::zeros(m, nb + k), DMatrix::zeros(nb + k, m));
         b2.view_mut((0, 0), (m, nb)).copy_from(b);
         c2.view_mut((0, 0), (nb, m)).copy_from(c);
@@ -96,7 +97,7 @@ pub fn bordered_solve_all(
     // With shifted pivots J is singular exactly when the Schur complement is (det J = det A′
     // det S): a system the border leaves singular is refused here, not solved into a huge
     // step.
-    if k > 0 && !regular(&schur) {
+    if !regular(&schur) {
         return None;
     }
     let lu = schur.lu();
@@ -120,10 +121,88 @@ pub fn bordered_solve_all(
         .map(|rhs| {
             let mut padded = DVector::zeros(m + nk);
             padded.rows_mut(0, m + nb).copy_from(rhs);
-            let sol = refined((pattern, values, &b, &c, &d), &solve, &padded, k > 0, norm)?;
+            let sol = refined((pattern, values, &b, &c, &d), &solve, &padded, true, norm)?;
             Some(sol.rows(0, m + nb).into_owned())
         })
         .collect()
+}
+
+/// The block elimination of [`bordered_solve_all`] on a regular A (no shifted pivot) for
+/// every right-hand side at once, refined once: A⁻¹ [B, r₁, …, r_k] (the top rows of each
+/// right-hand side) in one multi-column solve, the Schur complement and each solution from
+/// it, then the residuals of the whole system and their corrections, again in one solve.
+/// The same arithmetic as solving each right-hand side on its own, but the factor is read
+/// twice in all instead of once per column and solve: the solves were a tenth of a path
+/// step on the 7 803-unknown caps (BENCHMARKS.md §7.4).
+#[allow(clippy::type_complexity)]
+fn batched(
+    (pattern, values, b, c, d): (
+        &SymmetricPattern,
+        &[f64],
+        &DMatrix<f64>,
+        &DMatrix<f64>,
+        &DMatrix<f64>,
+    ),
+    fact: &SymmetricFactorization,
+    all: &[&DVector<f64>],
+) -> Option<Vec<DVector<f64>>> {
+    let (m, nb, k) = (pattern.n(), d.nrows(), all.len());
+    let mut stack = vec![0.0; m * (nb + k)];
+    stack[..m * nb].copy_from_slice(b.as_slice());
+    for (j, r) in all.iter().enumerate() {
+        stack[m * (nb + j)..m * (nb + j + 1)].copy_from_slice(&r.as_slice()[..m]);
+    }
+    fact.solve_many_in_place(&mut stack).ok()?;
+    let x_b = DMatrix::from_column_slice(m, nb, &stack[..m * nb]);
+    let lu = (d - c * &x_b).lu();
+    // The solutions [x; z] from A⁻¹ of their top rows (`tops`, column-major) and the
+    // right-hand sides' bottom rows.
+    let finish = |tops: &[f64], rs: &[&DVector<f64>]| -> Option<Vec<DVector<f64>>> {
+        rs.iter()
+            .zip(tops.chunks_exact(m))
+            .map(|(r, y)| {
+                let y = DVector::from_column_slice(y);
+                let z = lu.solve(&(r.rows(m, nb) - c * &y))?;
+                let mut out = DVector::zeros(m + nb);
+                out.rows_mut(0, m).copy_from(&(y - &x_b * &z));
+                out.rows_mut(m, nb).copy_from(&z);
+                Some(out)
+            })
+            .collect()
+    };
+    let mut sols = finish(&stack[m * nb..], all)?;
+    // One refinement step: r = rhs − M sol for every solution, corrected together.
+    let residuals: Vec<DVector<f64>> = all
+        .iter()
+        .zip(&sols)
+        .map(|(rhs, sol)| {
+            let (xs, zs) = (sol.rows(0, m), sol.rows(m, nb));
+            let mut ax = vec![0.0; m];
+            pattern.matvec(values, xs.as_slice(), &mut ax);
+            let (top, bottom) = (b * zs, c * xs + d * zs);
+            let mut r = (*rhs).clone();
+            for i in 0..m {
+                r[i] -= ax[i];
+            }
+            for i in 0..m {
+                r[i] -= top[i];
+            }
+            for i in 0..nb {
+                r[m + i] -= bottom[i];
+            }
+            r
+        })
+        .collect();
+    let mut tops = vec![0.0; m * k];
+    for (r, top) in residuals.iter().zip(tops.chunks_exact_mut(m)) {
+        top.copy_from_slice(&r.as_slice()[..m]);
+    }
+    fact.solve_many_in_place(&mut tops).ok()?;
+    let refs: Vec<&DVector<f64>> = residuals.iter().collect();
+    for (sol, correction) in sols.iter_mut().zip(finish(&tops, &refs)?) {
+        *sol += correction;
+    }
+    Some(sols)
 }
 
 /// Whether the small dense `s` is regular to working precision: its singular values' ratio
