@@ -756,6 +756,19 @@ fn a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation() {
     assert_eq!(touched, 1, "the A2 point of the C1v− branch");
 }
 
+/// Runs the diagram of `scene` (a path with `[analysis.branches]`) and checks that no two
+/// of its branches are one branch up to the group, over two or more points (docs/theory.md
+/// §14.8; `control` names the path's control).
+fn followed_once(scene: Scene, control: &str) -> (MeshStudy, RunResult) {
+    let mut study = MeshStudy::build(scene).unwrap();
+    let result = run(&mut study, |_, _| {}).unwrap();
+    let g = &result.branches.as_ref().expect("branches").graph;
+    let c = result.report.parameters.iter().position(|n| n == control);
+    let common = common_stretches(&study, &g.branches, c.unwrap());
+    assert!(common.is_empty(), "branches followed twice: {common:?}");
+    (study, result)
+}
+
 /// Paper 4's cap (C8v) at depth 3: the C1 branch between the A2 points of the E3 branches
 /// (ω² ≈ 15.2587 on C1v, 15.2814 on C1v′) and the one between the E1 branches' A2 points
 /// (ω² ≈ 18.0548) are each followed once. Followed from the point switched first, the branch
@@ -767,19 +780,9 @@ fn a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation() {
 fn the_caps_depth_three_diagram_follows_every_branch_once_its_c1_branches_between_two_points() {
     let text = bundled("thesis/paper4_spinning_cap.toml") + "\n[analysis.branches]\ndepth = 3\n";
     let scene = Scene::from_toml_str(&text, "cap").unwrap();
-    let mut study = MeshStudy::build(scene).unwrap();
-    let result = run(&mut study, |_, _| {}).unwrap();
+    let (_, result) = followed_once(scene, "w2");
     let b = result.branches.as_ref().expect("branches");
     let g = &b.graph;
-    // No two of its branches are one branch up to the group (docs/theory.md §14.8).
-    let control = result
-        .report
-        .parameters
-        .iter()
-        .position(|n| n == "w2")
-        .unwrap();
-    let common = common_stretches(&study, &g.branches, control);
-    assert!(common.is_empty(), "branches followed twice: {common:?}");
     let w2 = |p: &[f64]| {
         p[result
             .report
@@ -846,19 +849,12 @@ fn the_caps_depth_three_diagram_follows_every_branch_once_its_c1_branches_betwee
 fn the_upward_discs_depth_three_diagram_follows_every_branch_once() {
     let text = bundled("disc_upward.toml").replace("depth = 1 ", "depth = 3 ");
     let scene = Scene::from_toml_str(&text, "disc").unwrap();
-    let mut study = MeshStudy::build(scene).unwrap();
-    let result = run(&mut study, |_, _| {}).unwrap();
+    let (study, result) = followed_once(scene, "h");
     let g = &result.branches.as_ref().expect("branches").graph;
-    let control = result
-        .report
-        .parameters
-        .iter()
-        .position(|n| n == "h")
-        .unwrap();
+    let control = result.report.parameters.iter().position(|n| n == "h");
+    let control = control.unwrap();
     let classes: Vec<&str> = g.branches.iter().map(|b| b.isotropy.as_str()).collect();
     assert_eq!(classes, ["C1v", "C1v"], "one branch per half of E1");
-    let common = common_stretches(&study, &g.branches, control);
-    assert!(common.is_empty(), "branches followed twice: {common:?}");
 
     // A copy of the first branch moved by a rotation of the group and sampled half-way
     // between its points: the check must say it runs along the first.

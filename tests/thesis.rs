@@ -1475,6 +1475,17 @@ fn the_linear_penaltys_fold_line_bends_where_its_contact_set_changes_and_the_cub
     assert!(lj > 10.0 * cj, "{lj} {cj}");
 }
 
+/// The filled cap between two planes of `text` (C2v) run and written, as its report (the
+/// writing adds the wrinkling summary and the validity flags).
+fn between_planes(text: &str) -> memstab::results::PathReport {
+    let mut s = study(text);
+    assert_eq!(s.action.group().name(), "C2v");
+    let mut result = run(&mut s, |_, _| {}).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    memstab::output::write_run(&s, &s.scene, &mut result, dir.path()).unwrap();
+    result.report
+}
+
 #[test]
 fn the_filled_cap_between_planes_has_limit_points_of_the_fluid_level_in_taut_states() {
     // The bundled scene (linear law, a = 1.7) and the cubic law: the level's maximum is the
@@ -1483,15 +1494,11 @@ fn the_filled_cap_between_planes_has_limit_points_of_the_fluid_level_in_taut_sta
     // nodes enter contact under the linear one. Every triangle is in tension along both paths.
     // Planes at a = 1.4 leave no limit point: the two folds have merged.
     let run_law = |exponent: u32, a: f64| {
-        let text = bundled("thesis/paper3_fluid_level_linear.toml")
-            .replace("start = -1.7 ", &format!("start = {:?} ", -a))
-            .replace("\nexponent = 1", &format!("\nexponent = {exponent}"));
-        let mut s = study(&text);
-        assert_eq!(s.action.group().name(), "C2v");
-        let mut result = run(&mut s, |_, _| {}).unwrap();
-        let dir = tempfile::tempdir().unwrap();
-        memstab::output::write_run(&s, &s.scene, &mut result, dir.path()).unwrap();
-        result.report
+        between_planes(
+            &bundled("thesis/paper3_fluid_level_linear.toml")
+                .replace("start = -1.7 ", &format!("start = {:?} ", -a))
+                .replace("\nexponent = 1", &format!("\nexponent = {exponent}")),
+        )
     };
     let mut maxima = Vec::new();
     for exponent in [1, 3] {
@@ -1599,15 +1606,11 @@ fn close_planes_give_the_fluid_level_a_b1_bifurcation_that_moves_with_the_mesh_a
     // from h = 17.2602 (512 triangles) to 18.4818 (1 152), and the cubic law at the same κ
     // has no critical point, index 0 in every block along its path.
     let run_scene = |divisions: usize, exponent: u32| {
-        let text = bundled("thesis/paper3_fluid_level_bifurcation.toml")
-            .replace("divisions = 8 ", &format!("divisions = {divisions} "))
-            .replace("\nexponent = 1", &format!("\nexponent = {exponent}"));
-        let mut s = study(&text);
-        assert_eq!(s.action.group().name(), "C2v");
-        let mut result = run(&mut s, |_, _| {}).unwrap();
-        let dir = tempfile::tempdir().unwrap();
-        memstab::output::write_run(&s, &s.scene, &mut result, dir.path()).unwrap();
-        result.report
+        between_planes(
+            &bundled("thesis/paper3_fluid_level_bifurcation.toml")
+                .replace("divisions = 8 ", &format!("divisions = {divisions} "))
+                .replace("\nexponent = 1", &format!("\nexponent = {exponent}")),
+        )
     };
     let mut onsets = Vec::new();
     for divisions in [8, 12] {

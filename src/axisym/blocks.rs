@@ -285,15 +285,7 @@ impl Blocks for MeridianBlocks {
     /// (a linear penalty's stiffness starts there, docs/theory.md §8.9); `None` without a
     /// plane.
     fn switched(&self, a: (&[f64], &[f64]), b: (&[f64], &[f64])) -> Option<usize> {
-        let (before, _) = self.model.penetrations(a.0, a.1)?;
-        let (after, _) = self.model.penetrations(b.0, b.1)?;
-        Some(
-            before
-                .iter()
-                .zip(&after)
-                .filter(|(x, y)| (**x > 0.0) != (**y > 0.0))
-                .count(),
-        )
+        self.model.contact_changes(a, b)
     }
 
     /// A meridian block costs a few hundred element evaluations: crossings are localised to

@@ -434,6 +434,20 @@ impl AxisymModel {
         Some((depth, chords / (x.len() - 1).max(1) as f64))
     }
 
+    /// How many nodes (rings) are in contact with a plane at one of the states `a` and `b`,
+    /// each (q, params), and not at the other; `None` without a plane.
+    pub fn contact_changes(&self, a: (&[f64], &[f64]), b: (&[f64], &[f64])) -> Option<usize> {
+        let (before, _) = self.penetrations(a.0, a.1)?;
+        let (after, _) = self.penetrations(b.0, b.1)?;
+        Some(
+            before
+                .iter()
+                .zip(&after)
+                .filter(|(x, y)| (**x > 0.0) != (**y > 0.0))
+                .count(),
+        )
+    }
+
     /// Π, gradient, tangent and parameter loads at displacement `q`, parameters `params`.
     pub fn evaluate(&self, q: &[f64], params: &[f64]) -> Result<Evaluated, AxisymError> {
         let nq = self.dim();

@@ -310,18 +310,9 @@ impl Problem for AxisymProblem {
         a: (&DVector<f64>, &DVector<f64>),
         b: (&DVector<f64>, &DVector<f64>),
     ) -> Option<usize> {
-        let (before, _) = self
-            .model
-            .penetrations(a.0.as_slice(), &self.all_parameters(a.1))?;
-        let (after, _) = self
-            .model
-            .penetrations(b.0.as_slice(), &self.all_parameters(b.1))?;
-        Some(
-            before
-                .iter()
-                .zip(&after)
-                .filter(|(x, y)| (**x > 0.0) != (**y > 0.0))
-                .count(),
+        self.model.contact_changes(
+            (a.0.as_slice(), &self.all_parameters(a.1)),
+            (b.0.as_slice(), &self.all_parameters(b.1)),
         )
     }
 }

@@ -127,6 +127,15 @@ pub fn bordered_solve_all(
         .collect()
 }
 
+/// The bordered system [[A, B], [C, D]]: A's pattern and values, then B, C and D.
+type System<'a> = (
+    &'a SymmetricPattern,
+    &'a [f64],
+    &'a DMatrix<f64>,
+    &'a DMatrix<f64>,
+    &'a DMatrix<f64>,
+);
+
 /// The block elimination of [`bordered_solve_all`] on a regular A (no shifted pivot) for
 /// every right-hand side at once, refined once: A⁻¹ [B, r₁, …, r_k] (the top rows of each
 /// right-hand side) in one multi-column solve, the Schur complement and each solution from
@@ -134,15 +143,8 @@ pub fn bordered_solve_all(
 /// The same arithmetic as solving each right-hand side on its own, but the factor is read
 /// twice in all instead of once per column and solve: the solves were a tenth of a path
 /// step on the 7 803-unknown caps (BENCHMARKS.md §7.4).
-#[allow(clippy::type_complexity)]
 fn batched(
-    (pattern, values, b, c, d): (
-        &SymmetricPattern,
-        &[f64],
-        &DMatrix<f64>,
-        &DMatrix<f64>,
-        &DMatrix<f64>,
-    ),
+    (pattern, values, b, c, d): System<'_>,
     fact: &SymmetricFactorization,
     all: &[&DVector<f64>],
 ) -> Option<Vec<DVector<f64>>> {
@@ -225,15 +227,8 @@ const MAX_SHIFTED_PIVOTS: usize = 8;
 /// The solution of [[A, B], [C, D]] x = rhs from `solve` (block elimination), refined once
 /// (twice after zero pivots were shifted, where it is kept only at a normwise backward error
 /// below [`NEAR_SINGULAR_BACKWARD_ERROR`]; `norm` = max|M_ij|).
-#[allow(clippy::type_complexity)]
 fn refined(
-    (pattern, values, b, c, d): (
-        &SymmetricPattern,
-        &[f64],
-        &DMatrix<f64>,
-        &DMatrix<f64>,
-        &DMatrix<f64>,
-    ),
+    (pattern, values, b, c, d): System<'_>,
     solve: &dyn Fn(&DVector<f64>) -> Option<DVector<f64>>,
     rhs: &DVector<f64>,
     near_singular: bool,
