@@ -76,14 +76,18 @@ def test_the_library_interrupt_raises_keyboard_interrupt_with_the_path_written(t
 
 def test_ctrl_c_stops_a_run_promptly_and_raises_keyboard_interrupt(tmp_path):
     # The balloon at frequency 8 follows 400 steps past its pressure maximum and minimum;
-    # SIGINT after its first point must end it within a few seconds.
+    # SIGINT after its first points must end it within a few seconds.
     out = tmp_path / "balloon"
     script = f"""
         import sys, time
         import memstab
         scene = memstab.Scene.load("scenes/balloon.toml")
+        said = []
         def tick(points, fraction, message):
-            if points == 2:
+            # Updates coming faster than the binding's 50 ms poll reach it merged (the
+            # latest only), so the second point may be seen as a later one.
+            if points >= 2 and not said:
+                said.append(points)
                 print("running", flush=True)
         try:
             memstab.run(scene, out={str(out)!r}, progress=tick)
