@@ -159,6 +159,29 @@ impl Linearization {
     }
 }
 
+/// A problem of one unknown and one parameter, R(q, λ) given by a function returning
+/// (R, ∂R/∂q, ∂R/∂λ) or the model's error: the closed forms the continuation is tested on.
+#[cfg(test)]
+pub(crate) struct Scalar<F>(pub F);
+
+#[cfg(test)]
+impl<F: FnMut(f64, f64) -> Result<(f64, f64, f64), ModelError>> Problem for Scalar<F> {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn free_parameters(&self) -> usize {
+        1
+    }
+    fn evaluate(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<Linearization, ModelError> {
+        let (r, r_q, r_lambda) = (self.0)(q[0], lambda[0])?;
+        Ok(Linearization::scalar(r, r_q, r_lambda))
+    }
+}
+
 /// ∂R/∂q: dense for small problems; for large ones sparse, plus rank-one terms
 /// Σ c a aᵀ (a gas amount's stiffness) kept apart so that they do not fill the matrix.
 #[derive(Debug, Clone)]
@@ -1512,33 +1535,12 @@ impl<P: Problem> Continuation<P> {
 
 #[cfg(test)]
 mod tests {
-    use super::{
-        point_at, zero_on_step, Linearization, PathOptions, Problem, SignChange, Stalled, StepError,
-    };
-    use crate::model::ModelError;
+    use super::{point_at, zero_on_step, PathOptions, Problem, SignChange, Stalled, StepError};
     use nalgebra::DVector;
 
     /// R(q, λ) = q² + λ² − 1 (one unknown): a circle, whose λ turns at q = 0, λ = 1.
-    struct Circle;
-
-    impl Problem for Circle {
-        fn dim(&self) -> usize {
-            1
-        }
-        fn free_parameters(&self) -> usize {
-            1
-        }
-        fn evaluate(
-            &mut self,
-            q: &DVector<f64>,
-            lambda: &DVector<f64>,
-        ) -> Result<Linearization, ModelError> {
-            Ok(Linearization::scalar(
-                q[0] * q[0] + lambda[0] * lambda[0] - 1.0,
-                2.0 * q[0],
-                2.0 * lambda[0],
-            ))
-        }
+    fn circle() -> impl Problem {
+        super::Scalar(|q: f64, l: f64| Ok((q * q + l * l - 1.0, 2.0 * q, 2.0 * l)))
     }
 
     /// Newton on the path's equation and a test function together finds the test function's
@@ -1548,7 +1550,7 @@ mod tests {
     #[test]
     fn zero_on_step_solves_for_a_state_functions_zero_and_for_a_turning_point() {
         let opts = PathOptions::default();
-        let mut circle = Circle;
+        let mut circle = circle();
         let (q0, l0) = (-0.8f64, 0.6f64);
         let from = point_at(
             &mut circle,

@@ -515,37 +515,23 @@ pub type MeasureFn<'a> = &'a (dyn Fn(&[f64], &[f64]) -> Vec<f64> + Sync);
 #[cfg(test)]
 mod tests {
     use super::{locate_to_noise, locate_within, trace};
-    use crate::continuation::driver::{Continuation, Linearization, PathOptions, Problem};
+    use crate::continuation::driver::{Continuation, PathOptions, Problem};
     use crate::model::ModelError;
     use crate::results::StopReason;
     use nalgebra::DVector;
 
     /// R(q, λ) = q − λ, which the model cannot evaluate for λ < 0 (a material constant
     /// below its range), or nowhere below `floor` when one is given.
-    struct HalfLine {
-        floor: f64,
-    }
-
-    impl Problem for HalfLine {
-        fn dim(&self) -> usize {
-            1
-        }
-        fn free_parameters(&self) -> usize {
-            1
-        }
-        fn evaluate(
-            &mut self,
-            q: &DVector<f64>,
-            lambda: &DVector<f64>,
-        ) -> Result<Linearization, ModelError> {
-            if lambda[0] < self.floor {
+    fn half_line(floor: f64) -> impl Problem {
+        crate::continuation::driver::Scalar(move |q: f64, l: f64| {
+            if l < floor {
                 return Err(ModelError::Global {
                     effect: "line".into(),
-                    what: format!("λ = {} is out of its range", lambda[0]),
+                    what: format!("λ = {l} is out of its range"),
                 });
             }
-            Ok(Linearization::scalar(q[0] - lambda[0], 1.0, -1.0))
-        }
+            Ok((q - l, 1.0, -1.0))
+        })
     }
 
     /// A path run into an end of its range where the model cannot be evaluated ends there,
@@ -561,7 +547,7 @@ mod tests {
                 ..PathOptions::default()
             };
             let one = DVector::from_element(1, 1.0);
-            let mut driver = Continuation::start(HalfLine { floor }, &one, &one, opts).unwrap();
+            let mut driver = Continuation::start(half_line(floor), &one, &one, opts).unwrap();
             trace(&mut driver, 100, |_, _| None, &mut [], |_, _| {})
         };
         let at_end = follow_down(0.0);

@@ -107,35 +107,15 @@ pub fn beside_dip<P: Problem + ?Sized>(
 mod tests {
     use super::*;
     use crate::continuation::events::trace;
-    use crate::continuation::{Continuation, Linearization};
-    use crate::model::ModelError;
+    use crate::continuation::Continuation;
     use crate::results::Extremum;
 
     /// R(x, λ) = x³ − λx − ε: the gradient of V = x⁴/4 − λx²/2 − εx, the supercritical
     /// pitchfork broken by ε > 0.
-    struct Broken {
-        eps: f64,
-    }
-
-    impl Problem for Broken {
-        fn dim(&self) -> usize {
-            1
-        }
-        fn free_parameters(&self) -> usize {
-            1
-        }
-        fn evaluate(
-            &mut self,
-            q: &DVector<f64>,
-            lambda: &DVector<f64>,
-        ) -> Result<Linearization, ModelError> {
-            let (x, l) = (q[0], lambda[0]);
-            Ok(Linearization::scalar(
-                x * x * x - l * x - self.eps,
-                3.0 * x * x - l,
-                -x,
-            ))
-        }
+    fn broken(eps: f64) -> impl Problem {
+        crate::continuation::driver::Scalar(move |x: f64, l: f64| {
+            Ok((x * x * x - l * x - eps, 3.0 * x * x - l, -x))
+        })
     }
 
     fn options(direction: f64) -> PathOptions {
@@ -166,7 +146,7 @@ mod tests {
             x -= (x * x * x + x - eps) / (3.0 * x * x + 1.0);
         }
         let mut driver = Continuation::start(
-            Broken { eps },
+            broken(eps),
             &DVector::from_element(1, x),
             &DVector::from_element(1, -1.0),
             opts.clone(),
@@ -209,7 +189,7 @@ mod tests {
                     }
                 })
         };
-        let mut problem = Broken { eps };
+        let mut problem = broken(eps);
         let beside = beside_dip(&mut problem, at, &phi, step, &opts, &mut |_, p| !on_path(p));
         let (start, amplitude) = beside.found.expect("the other piece");
         assert!(amplitude < 0.0 && start.q[0] < 0.0, "{amplitude} {start:?}");
@@ -219,7 +199,7 @@ mod tests {
         // Followed towards lower λ it turns at its fold.
         let back = options(-1.0);
         let mut piece =
-            Continuation::start(Broken { eps }, &start.q, &start.lambda, back.clone()).unwrap();
+            Continuation::start(broken(eps), &start.q, &start.lambda, back.clone()).unwrap();
         let branch = trace(&mut piece, back.max_steps, |_, _| None, &mut [], |_, _| {});
         let folds: Vec<_> = branch.turning_points().collect();
         assert_eq!(folds.len(), 1, "{} folds", folds.len());
