@@ -639,4 +639,12 @@ fn collect_gathers_where_the_pairs_of_cusps_of_a_cusp_curve_run_end() {
             .count(),
         1
     );
+    // The sweep run again runs that task again (the others stay), and all is collected.
+    let o = sweep(&file, &out, &["--jobs", "2"], None);
+    assert!(o.status.success(), "{}", text(&o).1);
+    let (stdout, _) = text(&collect(&out));
+    assert!(
+        stdout.contains("2 runs: 2 finished, 0 failed, 0 cut short"),
+        "{stdout}"
+    );
 }

@@ -61,7 +61,7 @@ struct CuspCurveIn {
 }
 
 /// A `cusp-curve` run's report.
-const CUSP_CURVE_JSON: &str = "cusp_curve.json";
+pub(crate) const CUSP_CURVE_JSON: &str = "cusp_curve.json";
 
 /// The part of a run's `path.json` that names its mesh.
 #[derive(Deserialize)]
@@ -76,7 +76,7 @@ fn mesh_of(run: &Path) -> Option<crate::results::MeshInfo> {
 }
 
 /// Whether the manifest of the run in `run` lists `name` (a file the run wrote).
-fn listed(run: &Path, name: &str) -> bool {
+pub(crate) fn listed(run: &Path, name: &str) -> bool {
     crate::output::read_regular_string(&run.join(crate::output::MANIFEST))
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())

@@ -57,7 +57,13 @@ pub fn status(dir: &Path, task: &Task) -> TaskStatus {
             .as_ref()
             .and_then(|m| m["stop"].as_str())
             .map(str::to_string);
-        if let Err(e) = crate::output::verify(&run, &["path.json", SUMMARY_JSON, TASK_SCENE]) {
+        // Every file `collect` reads: a run with one of them edited or gone is run again.
+        let mut read = vec!["path.json", SUMMARY_JSON, TASK_SCENE];
+        let cusps = super::collect::CUSP_CURVE_JSON;
+        if super::collect::listed(&run, cusps) || run.join(cusps).exists() {
+            read.push(cusps);
+        }
+        if let Err(e) = crate::output::verify(&run, &read) {
             return of(RunStatus::CutShort, stop, Some(e));
         }
         if crate::output::read_regular_string(&run.join(TASK_SCENE))
