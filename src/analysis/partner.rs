@@ -73,14 +73,7 @@ pub fn partners(
             break;
         }
         let pieces = found.iter().filter(|p| p.piece.is_some()).count();
-        let search = Search {
-            study,
-            opts,
-            path,
-            c,
-            follow: follow.clone(),
-            directory: format!("partner_{:02}", pieces + 1),
-        };
+        let search = Search::new(study, opts, path, c, follow, pieces + 1);
         found.push(search.at(crossings, k + 1, cp));
     }
     found
@@ -156,14 +149,7 @@ pub fn near_misses(
             continue;
         }
         let pieces = found.iter().filter(|p| p.piece.is_some()).count();
-        let search = Search {
-            study,
-            opts,
-            path,
-            c,
-            follow: follow.clone(),
-            directory: format!("partner_{:02}", first + pieces),
-        };
+        let search = Search::new(study, opts, path, c, follow, first + pieces);
         found.push(search.at_dip(crossings, k, &u, &mode, (lo, hi), &free));
     }
     found
@@ -180,7 +166,27 @@ struct Search<'s> {
     directory: String,
 }
 
-impl Search<'_> {
+impl<'s> Search<'s> {
+    /// The search for the `number`-th second piece (1-based: its directory
+    /// `partner_NN`) beside the `path` in control `c`.
+    fn new(
+        study: &'s dyn Study,
+        opts: &'s PathOptions,
+        path: (&'s [PathRow], &'s [PointState]),
+        c: usize,
+        follow: &Follow,
+        number: usize,
+    ) -> Self {
+        Self {
+            study,
+            opts,
+            path,
+            c,
+            follow: follow.clone(),
+            directory: format!("partner_{number:02}"),
+        }
+    }
+
     /// The search beside the fold `cp`, critical point `number` of the path.
     fn at(
         &self,
