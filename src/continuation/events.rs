@@ -380,10 +380,10 @@ fn locate_corner<P: Problem>(
     k: usize,
 ) -> Option<Corner> {
     let to = driver.point().clone();
-    let key = |p: &PathPoint| (p.q.clone(), p.lambda.clone());
     let switched = |driver: &Continuation<P>, p: &PathPoint| {
-        let (a, b) = (key(from), key(p));
-        driver.problem().switched((&a.0, &a.1), (&b.0, &b.1))
+        driver
+            .problem()
+            .switched((&from.q, &from.lambda), (&p.q, &p.lambda))
     };
     if switched(driver, &to)? == 0 {
         return None;

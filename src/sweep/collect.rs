@@ -76,16 +76,18 @@ fn mesh_of(run: &Path) -> Option<crate::results::MeshInfo> {
 }
 
 /// Whether the manifest of the run in `run` lists `name` (a file the run wrote).
-pub(crate) fn listed(run: &Path, name: &str) -> bool {
+fn listed(run: &Path, name: &str) -> bool {
     crate::output::read_regular_string(&run.join(crate::output::MANIFEST))
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .and_then(|m| {
-            m["files"]
-                .as_array()
-                .map(|f| f.iter().any(|e| e["file"] == *name))
-        })
-        .unwrap_or(false)
+        .is_some_and(|m| lists(&m, name))
+}
+
+/// Whether the parsed `manifest` lists `name`.
+pub(crate) fn lists(manifest: &serde_json::Value, name: &str) -> bool {
+    manifest["files"]
+        .as_array()
+        .is_some_and(|f| f.iter().any(|e| e["file"] == *name))
 }
 
 /// The pair ends of the `cusp-curve` run in `run`, checked against its manifest; `None` for

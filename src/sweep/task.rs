@@ -60,7 +60,10 @@ pub fn status(dir: &Path, task: &Task) -> TaskStatus {
         // Every file `collect` reads: a run with one of them edited or gone is run again.
         let mut read = vec!["path.json", SUMMARY_JSON, TASK_SCENE];
         let cusps = super::collect::CUSP_CURVE_JSON;
-        if super::collect::listed(&run, cusps) || run.join(cusps).exists() {
+        let lists = manifest
+            .as_ref()
+            .is_some_and(|m| super::collect::lists(m, cusps));
+        if lists || run.join(cusps).exists() {
             read.push(cusps);
         }
         if let Err(e) = crate::output::verify(&run, &read) {
