@@ -22,7 +22,7 @@
 //! below `min_step` the driver reports where and why it stalled.
 
 use crate::linalg::bordered::{
-    bordered_solve_all, solve_dense, sparse_lu_solve, SharedFactorization,
+    bordered_resolve_all, bordered_solve_all, solve_dense, sparse_lu_solve, SharedFactorization,
 };
 use crate::linalg::SymmetricPattern;
 use crate::model::{ModelError, StateDefect};
@@ -47,6 +47,18 @@ pub trait Problem {
         q: &DVector<f64>,
         lambda: &DVector<f64>,
     ) -> Result<Linearization, ModelError>;
+    /// R and g alone at (q, λ), without their derivatives: what the corrector's check of an
+    /// iterate it expects to be converged needs (a chord step takes the derivatives of the
+    /// iteration before). By default from [`Problem::evaluate`]; a problem whose derivatives
+    /// cost more than R and g says so by computing these alone.
+    fn residual(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DVector<f64>), ModelError> {
+        let lin = self.evaluate(q, lambda)?;
+        Ok((lin.residual, lin.constraints))
+    }
     /// Where the evaluations' time went so far (zero unless the problem keeps count).
     fn phase_times(&self) -> PhaseTimes {
         PhaseTimes::default()
@@ -82,6 +94,13 @@ impl<P: Problem + ?Sized> Problem for Box<P> {
     ) -> Result<Linearization, ModelError> {
         (**self).evaluate(q, lambda)
     }
+    fn residual(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DVector<f64>), ModelError> {
+        (**self).residual(q, lambda)
+    }
     fn phase_times(&self) -> PhaseTimes {
         (**self).phase_times()
     }
@@ -110,6 +129,13 @@ impl<P: Problem + ?Sized> Problem for &mut P {
         lambda: &DVector<f64>,
     ) -> Result<Linearization, ModelError> {
         (**self).evaluate(q, lambda)
+    }
+    fn residual(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DVector<f64>), ModelError> {
+        (**self).residual(q, lambda)
     }
     fn phase_times(&self) -> PhaseTimes {
         (**self).phase_times()
@@ -379,17 +405,28 @@ enum Extended {
 impl Extended {
     /// Solves A x = rhs (rhs of the extended system's size); `None` if A is singular.
     fn solve(self, rhs: &DVector<f64>) -> Option<DVector<f64>> {
-        self.solve_all(&[rhs])?.pop()
+        match self {
+            Extended::Dense(a) => solve_dense(a, rhs),
+            sparse => sparse.solve_all(&[rhs])?.pop(),
+        }
     }
 
     /// Solves A x = rhs for every rhs in `all` from one factorisation of A; `None` if A is
     /// singular.
-    fn solve_all(self, all: &[&DVector<f64>]) -> Option<Vec<DVector<f64>>> {
+    fn solve_all(&self, all: &[&DVector<f64>]) -> Option<Vec<DVector<f64>>> {
+        self.solve_with(all, false)
+    }
+
+    /// As [`Extended::solve_all`], from the factorisation the last solve of this system left
+    /// (a chord step: no factorisation), kept only at a backward error at round-off; a dense
+    /// A is factorised again (it is small). `None` where that fails.
+    fn resolve_all(&self, all: &[&DVector<f64>]) -> Option<Vec<DVector<f64>>> {
+        self.solve_with(all, true)
+    }
+
+    fn solve_with(&self, all: &[&DVector<f64>], again: bool) -> Option<Vec<DVector<f64>>> {
         match self {
-            Extended::Dense(a) => match all {
-                [rhs] => Some(vec![solve_dense(a, rhs)?]),
-                _ => all.iter().map(|rhs| solve_dense(a.clone(), rhs)).collect(),
-            },
+            Extended::Dense(a) => all.iter().map(|rhs| solve_dense(a.clone(), rhs)).collect(),
             Extended::Sparse {
                 pattern,
                 values,
@@ -399,6 +436,7 @@ impl Extended {
                 extra,
                 solver,
             } => {
+                let extra = *extra;
                 let m = pattern.n();
                 let nb = d.nrows();
                 let full: Vec<DVector<f64>> = all
@@ -411,12 +449,16 @@ impl Extended {
                     })
                     .collect();
                 let refs: Vec<&DVector<f64>> = full.iter().collect();
-                let xs = match bordered_solve_all(&pattern, &values, &b, &c, &d, &solver, &refs) {
-                    Some(xs) => xs,
-                    None => full
-                        .iter()
-                        .map(|f| sparse_lu_solve(&pattern, &values, &b, &c, &d, f))
-                        .collect::<Option<Vec<_>>>()?,
+                let xs = if again {
+                    bordered_resolve_all(pattern, values, b, c, d, solver, &refs)?
+                } else {
+                    match bordered_solve_all(pattern, values, b, c, d, solver, &refs) {
+                        Some(xs) => xs,
+                        None => full
+                            .iter()
+                            .map(|f| sparse_lu_solve(pattern, values, b, c, d, f))
+                            .collect::<Option<Vec<_>>>()?,
+                    }
                 };
                 xs.into_iter()
                     .map(|x| {
@@ -497,6 +539,12 @@ impl Linearization {
     /// |R| small against the forces a unit scaled change of q or λ makes (‖K‖ σ_q and
     /// ‖L‖ σ_λ), and |g| small against its derivatives.
     fn converged(&self, opts: &PathOptions) -> bool {
+        self.converges(&self.residual, &self.constraints, opts)
+    }
+
+    /// Whether R and g (of this point or of one close to it) pass [`Linearization::converged`]
+    /// with this point's scales of force and of g.
+    fn converges(&self, residual: &DVector<f64>, g: &DVector<f64>, opts: &PathOptions) -> bool {
         let force = (self.loads.amax() * opts.parameter_scale(0))
             .max(self.tangent.amax() * opts.state_scale)
             .max(1e-300);
@@ -506,8 +554,7 @@ impl Linearization {
             .max(self.constraint_lambda.amax())
             .max(1e-300)
             * opts.state_scale;
-        self.residual.amax() <= opts.tolerance * force
-            && self.constraints.amax() <= opts.tolerance * gscale
+        residual.amax() <= opts.tolerance * force && g.amax() <= opts.tolerance * gscale
     }
 
     /// max |R| relative to the force scale of [`Linearization::converged`].
@@ -1020,27 +1067,82 @@ fn step_on_plane<P: Problem + ?Sized>(
     // The step's own direction is its plane's normal: the tangent at a converged iterate
     // then solves the same bordered system, and comes from the same factorisation.
     let same_plane = guarded && std::ptr::eq(plane, direction);
+    let arclength_of = |q: &DVector<f64>, lambda: &DVector<f64>| {
+        let mut arc = plane.rows(0, m).dot(&(q - &from.q)) / sq - value;
+        for j in 0..nl {
+            arc += plane[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
+        }
+        arc
+    };
+    let mut e = DVector::zeros(0);
+    // The last iteration's system and linearisation, kept when its correction foretells a
+    // converged next iterate, and the size of the correction before it.
+    let mut chord: Option<(Extended, Linearization)> = None;
+    let mut before: Option<f64> = None;
     for it in 1..=opts.max_iterations {
+        if let Some((a, lin)) = chord.take() {
+            // Newton's next correction is foretold to be below the tolerance: check the
+            // iterate on R and g alone and a chord step of the kept factorisation. Where that
+            // fails the iteration goes on as if it had not been tried.
+            let (residual, constraints) = problem.residual(&q, &lambda)?;
+            if lin.converges(&residual, &constraints, opts) {
+                let c = constraints.len();
+                let mut g = DVector::zeros(m + c + 1);
+                g.rows_mut(0, m).copy_from(&residual);
+                g.rows_mut(m, c).copy_from(&constraints);
+                g[m + c] = arclength_of(&q, &lambda);
+                let rhs = -&g;
+                let all: Vec<&DVector<f64>> = if same_plane {
+                    vec![&rhs, &e]
+                } else {
+                    vec![&rhs]
+                };
+                if let Some(mut xs) = a
+                    .resolve_all(&all)
+                    .filter(|xs| xs[0].amax() <= opts.tolerance)
+                {
+                    let tangent = same_plane.then(|| xs.pop()).flatten();
+                    let d = &xs[0];
+                    q += d.rows(0, m) * sq;
+                    for j in 0..nl {
+                        lambda[j] += d[m + j] * sl(j);
+                    }
+                    if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
+                        return Err(StepError::Diverged);
+                    }
+                    return accept(
+                        problem,
+                        from,
+                        t,
+                        (q, lambda),
+                        tangent,
+                        (s, it),
+                        opts,
+                        guarded,
+                    );
+                }
+            }
+        }
         let lin = problem.evaluate(&q, &lambda)?;
         let c = lin.constraints.len();
         let a = lin.extended(opts, plane);
         let mut g = DVector::zeros(m + c + 1);
         g.rows_mut(0, m).copy_from(&lin.residual);
         g.rows_mut(m, c).copy_from(&lin.constraints);
-        let mut arc = plane.rows(0, m).dot(&(&q - &from.q)) / sq - value;
-        for j in 0..nl {
-            arc += plane[m + j] * (lambda[j] - from.lambda[j]) / sl(j);
-        }
-        g[m + c] = arc;
+        g[m + c] = arclength_of(&q, &lambda);
         let converged = lin.converged(opts);
-        let (d, tangent) = if same_plane && converged {
-            let mut e = DVector::zeros(m + c + 1);
+        if e.len() != m + c + 1 {
+            e = DVector::zeros(m + c + 1);
             e[m + c] = 1.0;
-            let mut xs = a.solve_all(&[&(-&g), &e]).ok_or(StepError::Singular)?;
+        }
+        let rhs = -&g;
+        let (d, tangent) = if same_plane && converged {
+            let mut xs = a.solve_all(&[&rhs, &e]).ok_or(StepError::Singular)?;
             let tangent = xs.pop().ok_or(StepError::Singular)?;
             (xs.pop().ok_or(StepError::Singular)?, Some(tangent))
         } else {
-            (a.solve(&(-&g)).ok_or(StepError::Singular)?, None)
+            let mut xs = a.solve_all(&[&rhs]).ok_or(StepError::Singular)?;
+            (xs.pop().ok_or(StepError::Singular)?, None)
         };
         q += d.rows(0, m) * sq;
         for j in 0..nl {
@@ -1049,58 +1151,103 @@ fn step_on_plane<P: Problem + ?Sized>(
         if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
             return Err(StepError::Diverged);
         }
-        if converged && d.amax() <= opts.tolerance && !guarded {
-            return Ok(PathPoint {
-                q,
-                lambda,
-                arclength: from.arclength + s,
-                iterations: it,
-                tangent: t.clone(),
-            });
-        }
         if converged && d.amax() <= opts.tolerance {
-            // The tangent at the converged iterate, before its last correction (within the
-            // corrector's tolerance of the point), from its factorisation; else at the point.
-            let tangent = match tangent {
-                Some(x) if x.norm() > 0.0 => {
-                    let x = &x / x.norm();
-                    if x.dot(t) < 0.0 {
-                        -x
-                    } else {
-                        x
-                    }
-                }
-                _ => {
-                    let lin = problem.evaluate(&q, &lambda)?;
-                    tangent_at(&lin, opts, Some(t)).ok_or(StepError::SingularTangent)?
-                }
-            };
-            // Stay on the branch: the corrector must end near the predictor and the tangent
-            // must not turn sharply; otherwise the step is cut rather than a jump accepted.
-            let mut dist2 = (&q - &from.q - t.rows(0, m) * (s * sq)).norm_squared() / (sq * sq);
-            for j in 0..nl {
-                dist2 += ((lambda[j] - from.lambda[j] - t[m + j] * s * sl(j)) / sl(j)).powi(2);
-            }
-            if dist2.sqrt() > MAX_CORRECTOR_DISTANCE * s || tangent.dot(t) < MIN_TANGENT_COSINE {
-                return Err(StepError::BranchJump {
-                    distance: dist2.sqrt() / s,
-                    angle: tangent.dot(t).clamp(-1.0, 1.0).acos().to_degrees(),
-                });
-            }
-            if let Some(defect) = problem.defect(&q, &lambda) {
-                return Err(StepError::Degenerate(defect));
-            }
-            return Ok(PathPoint {
-                q,
-                lambda,
-                arclength: from.arclength + s,
-                iterations: it,
+            return accept(
+                problem,
+                from,
+                t,
+                (q, lambda),
                 tangent,
-            });
+                (s, it),
+                opts,
+                guarded,
+            );
         }
+        // Quadratic convergence foretells the next correction, |d_{k+1}| ≈ |d_k|³/|d_{k−1}|²
+        // (from |d_{k+1}| ≈ C |d_k|², C ≈ |d_k|/|d_{k−1}|²); a next iterate foretold well
+        // within the tolerance is checked by a chord step instead of a new factorisation.
+        let size = d.amax();
+        if let Some(b) = before.filter(|&b| b > 0.0 && size < b) {
+            if size.powi(3) / (b * b) <= CHORD_MARGIN * opts.tolerance {
+                chord = Some((a, lin));
+            }
+        }
+        before = Some(size);
     }
     Err(StepError::NotConverged {
         iterations: opts.max_iterations,
+    })
+}
+
+/// How far below the corrector's tolerance the next correction must be foretold before the
+/// converged iterate is checked by a chord step (a wrong forecast costs one evaluation of R
+/// and g).
+const CHORD_MARGIN: f64 = 0.1;
+
+/// The converged point (q, λ) of a step of arclength `s` from `from` along `t`, found at
+/// iteration `it`: with the tangent of its last factorisation (`tangent`, or a new one) and
+/// the branch-jump guard when `guarded`, else with `t` as its tangent.
+#[allow(clippy::too_many_arguments)]
+fn accept<P: Problem + ?Sized>(
+    problem: &mut P,
+    from: &PathPoint,
+    t: &DVector<f64>,
+    (q, lambda): (DVector<f64>, DVector<f64>),
+    tangent: Option<DVector<f64>>,
+    (s, it): (f64, usize),
+    opts: &PathOptions,
+    guarded: bool,
+) -> Result<PathPoint, StepError> {
+    let m = q.len();
+    let nl = lambda.len();
+    let sq = opts.state_scale;
+    let sl = |j: usize| opts.parameter_scale(j);
+    if !guarded {
+        return Ok(PathPoint {
+            q,
+            lambda,
+            arclength: from.arclength + s,
+            iterations: it,
+            tangent: t.clone(),
+        });
+    }
+    // The tangent at the converged iterate, before its last correction (within the
+    // corrector's tolerance of the point), from its factorisation; else at the point.
+    let tangent = match tangent {
+        Some(x) if x.norm() > 0.0 => {
+            let x = &x / x.norm();
+            if x.dot(t) < 0.0 {
+                -x
+            } else {
+                x
+            }
+        }
+        _ => {
+            let lin = problem.evaluate(&q, &lambda)?;
+            tangent_at(&lin, opts, Some(t)).ok_or(StepError::SingularTangent)?
+        }
+    };
+    // Stay on the branch: the corrector must end near the predictor and the tangent
+    // must not turn sharply; otherwise the step is cut rather than a jump accepted.
+    let mut dist2 = (&q - &from.q - t.rows(0, m) * (s * sq)).norm_squared() / (sq * sq);
+    for j in 0..nl {
+        dist2 += ((lambda[j] - from.lambda[j] - t[m + j] * s * sl(j)) / sl(j)).powi(2);
+    }
+    if dist2.sqrt() > MAX_CORRECTOR_DISTANCE * s || tangent.dot(t) < MIN_TANGENT_COSINE {
+        return Err(StepError::BranchJump {
+            distance: dist2.sqrt() / s,
+            angle: tangent.dot(t).clamp(-1.0, 1.0).acos().to_degrees(),
+        });
+    }
+    if let Some(defect) = problem.defect(&q, &lambda) {
+        return Err(StepError::Degenerate(defect));
+    }
+    Ok(PathPoint {
+        q,
+        lambda,
+        arclength: from.arclength + s,
+        iterations: it,
+        tangent,
     })
 }
 
@@ -1622,6 +1769,92 @@ mod tests {
             turn.point.lambda[0]
         );
         assert!(turn.point.q[0].abs() <= 1e-6, "{}", turn.point.q[0]);
+    }
+
+    /// The circle R = q² + λ² − 1 counting its evaluations with derivatives and of R alone.
+    struct Counted {
+        evaluations: usize,
+        residuals: usize,
+    }
+
+    impl Problem for Counted {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn free_parameters(&self) -> usize {
+            1
+        }
+        fn evaluate(
+            &mut self,
+            q: &DVector<f64>,
+            lambda: &DVector<f64>,
+        ) -> Result<super::Linearization, crate::model::ModelError> {
+            self.evaluations += 1;
+            let (q, l) = (q[0], lambda[0]);
+            Ok(super::Linearization::scalar(
+                q * q + l * l - 1.0,
+                2.0 * q,
+                2.0 * l,
+            ))
+        }
+        fn residual(
+            &mut self,
+            q: &DVector<f64>,
+            lambda: &DVector<f64>,
+        ) -> Result<(DVector<f64>, DVector<f64>), crate::model::ModelError> {
+            self.residuals += 1;
+            let r = q[0] * q[0] + lambda[0] * lambda[0] - 1.0;
+            Ok((DVector::from_element(1, r), DVector::zeros(0)))
+        }
+    }
+
+    /// The corrector checks an iterate that Newton's convergence foretells converged on R
+    /// alone and a chord step of the last factorisation: the same points as without it (R
+    /// evaluated with its derivatives), to the corrector's tolerance, with fewer evaluations
+    /// of the derivatives than iterations, the iterations counted as before.
+    #[test]
+    fn a_foretold_converged_iterate_is_checked_by_a_chord_step() {
+        let opts = PathOptions::default();
+        let start = |p: &mut dyn Problem| {
+            point_at(
+                p,
+                DVector::from_element(1, -0.8),
+                DVector::from_element(1, 0.6),
+                1,
+                &opts,
+                None,
+            )
+            .unwrap()
+        };
+        let mut counted = Counted {
+            evaluations: 0,
+            residuals: 0,
+        };
+        let from = start(&mut counted);
+        let mut chord = super::Continuation::new(counted, from, opts.clone());
+        let mut plain = circle();
+        let from = start(&mut plain);
+        let mut newton = super::Continuation::new(plain, from, opts.clone());
+        let mut iterations = 0;
+        let before = chord.problem().evaluations;
+        for _ in 0..12 {
+            chord.step().unwrap();
+            newton.step().unwrap();
+            let (a, b) = (chord.point(), newton.point());
+            let (q, l) = (a.q[0], a.lambda[0]);
+            assert!((q * q + l * l - 1.0).abs() <= 1e-10, "{q} {l}");
+            assert_eq!(a.iterations, b.iterations);
+            assert!((a.q[0] - b.q[0]).abs() <= 1e-9 && (a.lambda[0] - b.lambda[0]).abs() <= 1e-9);
+            assert!(a.tangent.dot(&b.tangent) > 1.0 - 1e-9);
+            iterations += a.iterations;
+        }
+        let counted = chord.problem();
+        assert!(counted.residuals > 0);
+        assert!(
+            counted.evaluations - before < iterations,
+            "{} of {iterations}",
+            counted.evaluations - before
+        );
     }
 
     /// A stall recorded as plain data reads as the driver's own.

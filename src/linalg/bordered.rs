@@ -127,6 +127,52 @@ pub fn bordered_solve_all(
         .collect()
 }
 
+/// As [`bordered_solve_all`], but with the factorisation of A that `solver` already holds
+/// from the last [`bordered_solve_all`] of this system, without factorising again: a chord
+/// step of Newton's method, whose matrix is that of an earlier iterate. The solutions are
+/// refined once against the system given (`pattern`, `values`, B, C, D) and kept only where
+/// their normwise backward error on it is at most [`NEAR_SINGULAR_BACKWARD_ERROR`]: the
+/// factors of a matrix close to it serve, those of another one (or of A with shifted
+/// pivots) fail that check. `None` if it fails or nothing is held.
+pub fn bordered_resolve_all(
+    pattern: &Arc<SymmetricPattern>,
+    values: &[f64],
+    b: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    d: &DMatrix<f64>,
+    solver: &SharedFactorization,
+    all: &[&DVector<f64>],
+) -> Option<Vec<DVector<f64>>> {
+    let m = pattern.n();
+    let guard = solver.lock().ok()?;
+    let fact = guard.as_ref().filter(|f| f.n() == m)?;
+    let system = (&**pattern, values, b, c, d);
+    let sols = batched(system, fact, all)?;
+    let norm = values
+        .iter()
+        .chain(b.iter())
+        .chain(c.iter())
+        .chain(d.iter())
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    let nb = d.nrows();
+    for (rhs, sol) in all.iter().zip(&sols) {
+        let (xs, zs) = (sol.rows(0, m), sol.rows(m, nb));
+        let mut ax = vec![0.0; m];
+        pattern.matvec(values, xs.as_slice(), &mut ax);
+        let (top, bottom) = (b * zs, c * xs + d * zs);
+        let r = (0..m)
+            .map(|i| rhs[i] - ax[i] - top[i])
+            .chain((0..nb).map(|i| rhs[m + i] - bottom[i]))
+            .fold(0.0f64, |a, v| a.max(v.abs()));
+        let error = r / (norm * sol.amax() + rhs.amax()).max(1e-300);
+        // NaN (a non-finite solution) is refused too.
+        if error.is_nan() || error > NEAR_SINGULAR_BACKWARD_ERROR {
+            return None;
+        }
+    }
+    Some(sols)
+}
+
 /// The bordered system [[A, B], [C, D]]: A's pattern and values, then B, C and D.
 type System<'a> = (
     &'a SymmetricPattern,
@@ -376,7 +422,7 @@ mod solve_tests {
 
 #[cfg(test)]
 mod bordered_tests {
-    use super::{bordered_solve, sparse_lu_solve, SharedFactorization};
+    use super::{bordered_resolve_all, bordered_solve, sparse_lu_solve, SharedFactorization};
     use crate::linalg::SymmetricPattern;
     use nalgebra::{DMatrix, DVector};
     use std::sync::Arc;
@@ -417,7 +463,7 @@ mod bordered_tests {
         dense.view_mut((0, m), (m, 2)).copy_from(&b);
         dense.view_mut((m, 0), (2, m)).copy_from(&c);
         dense.view_mut((m, m), (2, 2)).copy_from(&d);
-        let expected = dense.lu().solve(&rhs).unwrap();
+        let expected = dense.clone().lu().solve(&rhs).unwrap();
         let solver = SharedFactorization::default();
         let x = bordered_solve(&pattern, &values, &b, &c, &d, &solver, &rhs).unwrap();
         assert!((&x - &expected).amax() < 1e-10 * expected.amax());
@@ -425,6 +471,31 @@ mod bordered_tests {
         assert!(solver.lock().unwrap().is_some());
         let y = sparse_lu_solve(&pattern, &values, &b, &c, &d, &rhs).unwrap();
         assert!((&y - &expected).amax() < 1e-10 * expected.amax());
+        // A chord solve from the kept factorisation: the same solution for another
+        // right-hand side, without factorising.
+        let rhs2 = DVector::from_fn(m + 2, |i, _| (i as f64 * 1.3).cos());
+        let fresh = dense.clone().lu().solve(&rhs2).unwrap();
+        let again = bordered_resolve_all(&pattern, &values, &b, &c, &d, &solver, &[&rhs2])
+            .unwrap()
+            .pop()
+            .unwrap();
+        assert!((&again - &fresh).amax() < 1e-12 * fresh.amax());
+        // The factors of A, refined once, solve a matrix one part in 10⁸ off A to round-off,
+        // and are refused, not returned, for a matrix a tenth off.
+        for (change, kept) in [(1e-8, true), (0.1, false)] {
+            let changed: Vec<f64> = values.iter().map(|v| v * (1.0 + change)).collect();
+            let again = bordered_resolve_all(&pattern, &changed, &b, &c, &d, &solver, &[&rhs2]);
+            assert_eq!(again.is_some(), kept, "{change}");
+            if let Some(mut x) = again {
+                let mut other = dense.clone();
+                other.view_mut((0, 0), (m, m)).scale_mut(1.0 + change);
+                let fresh = other.lu().solve(&rhs2).unwrap();
+                assert!((x.pop().unwrap() - &fresh).amax() < 1e-12 * fresh.amax());
+            }
+        }
+        // Nothing factorised yet: nothing to solve with.
+        let empty = SharedFactorization::default();
+        assert!(bordered_resolve_all(&pattern, &values, &b, &c, &d, &empty, &[&rhs2]).is_none());
     }
 }
 

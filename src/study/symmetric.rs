@@ -454,6 +454,39 @@ impl Problem for SymmetricProblem<'_> {
         Ok(lin)
     }
 
+    /// R and g without K, L or ∂g: the model assembled for its gradient alone, restricted
+    /// and held as in [`Problem::evaluate`].
+    fn residual(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DVector<f64>), crate::model::ModelError> {
+        use crate::model::Request;
+        let t0 = std::time::Instant::now();
+        self.basis.expand(q, &mut self.u);
+        self.params = self.parameters(lambda);
+        self.model
+            .evaluate(&self.u, &self.params, Request::RESIDUAL, &mut self.eval)?;
+        let t1 = std::time::Instant::now();
+        self.times.assembly += t1 - t0;
+        self.times.evaluations += 1;
+        let mut constraints = DVector::zeros(self.constraints.len());
+        if !self.constraints.is_empty() {
+            let x = self.model.positions(&self.u, &self.params);
+            for (k, con) in self.constraints.iter().enumerate() {
+                constraints[k] = con.evaluate(self.model.layout(), &x, &self.params).value;
+            }
+        }
+        let mut residual = self.basis.restrict_invariant(&self.eval.residual);
+        if self.gauge.ncols() > 0 {
+            let w = &self.gauge;
+            self.held = w.transpose() * &residual;
+            residual -= w * &self.held;
+        }
+        self.times.projection += t1.elapsed();
+        Ok((residual, constraints))
+    }
+
     fn defect(&self, q: &DVector<f64>, lambda: &DVector<f64>) -> Option<crate::model::StateDefect> {
         self.model
             .state_defect(&self.displacement(q), &self.parameters(lambda))
