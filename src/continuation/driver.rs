@@ -1255,7 +1255,7 @@ fn accept<P: Problem + ?Sized>(
 /// converged corrector at every trial.
 const ZERO_ITERATIONS: usize = 24;
 
-/// Converged iterates in a row whose test function stays above the tolerance without halving
+/// Settled iterates in a row whose test function stays above the tolerance without halving
 /// after which [`zero_on_step`] gives up.
 const ZERO_STALLS: usize = 3;
 
@@ -1306,14 +1306,17 @@ pub struct ZeroOnStep {
 /// s − τ(y)/τ' — one evaluation and one factorisation per iteration, for the state and the
 /// crossing together, where a search on the arclength converges a whole corrector at every
 /// trial. τ (`test`, at (q, λ) of the problem, with the iterate's unit tangent) is evaluated
-/// at the iterates whose relative residual is within the square root of the corrector's
-/// tolerance (farther off the path its value does not say where along the step the zero
-/// lies); the target is kept inside the bracket of converged states of either sign (regula
-/// falsi of the bracket where the secant leaves it). Returns the first iterate whose residual
-/// passes the corrector's test, whose next correction at a fixed arclength is within the
-/// corrector's tolerance, and whose |τ| is at most `change.tolerance`; `None` if that takes
+/// only at settled iterates: their residual passes the corrector's test and their next
+/// correction at a fixed arclength is within the corrector's tolerance (one correction
+/// farther off the path, τ of a slowly crossing eigenvalue is off by more than its
+/// tolerance); between them the iterates converge the state at the present target. The
+/// secant is taken through the last two settled iterates where they lie apart along the
+/// step, else through the bracket of settled states of either sign, and the target is kept
+/// inside that bracket (regula falsi of the bracket where the secant leaves it). Returns the
+/// first settled iterate whose |τ| is at most `change.tolerance` and whose next secant move
+/// is within `change.width` (or whose |τ| no longer halves: round-off); `None` if that takes
 /// more than [`ZERO_ITERATIONS`] iterations, |τ| stalls above the tolerance for
-/// [`ZERO_STALLS`] converged iterates, or any evaluation or solve fails.
+/// [`ZERO_STALLS`] settled iterates, or any evaluation or solve fails.
 pub fn zero_on_step<P: Problem + ?Sized>(
     problem: &mut P,
     from: &PathPoint,
@@ -1352,9 +1355,9 @@ pub fn zero_on_step<P: Problem + ?Sized>(
     }
     let mut sides: [Option<SideState>; 2] = [None, None];
     let mut previous: Option<(f64, f64)> = None;
-    // |g| at the last converged iterate, and the converged iterates in a row since |g| last
+    // |g| at the last settled iterate, and the settled iterates in a row since |g| last
     // halved.
-    let mut last_converged = f64::INFINITY;
+    let mut last_settled = f64::INFINITY;
     let mut stalled = 0;
     for it in 1..=ZERO_ITERATIONS {
         if super::interrupt::requested() {
@@ -1376,10 +1379,12 @@ pub fn zero_on_step<P: Problem + ?Sized>(
         let mut xs = lin.extended(opts, t).solve_all(&[&r, &e])?;
         let x = xs.pop()?;
         let d0 = xs.pop()?;
-        let mut found = None;
-        // Near enough to the path for the secant (a residual within the square root of the
-        // corrector's tolerance: its next iterate converges), if not yet on it.
-        if converged || lin.relative_residual(opts) <= opts.tolerance.sqrt() {
+        // Settled: on the path to the corrector's tolerance and with its next correction at
+        // this arclength within it — the test the returned point passes. Only there does g
+        // say where along the step the zero lies: at a slow crossing, g of a state one
+        // correction away from the path is off by more than the tolerance (and can have
+        // the other sign), and a secant through it moves the target at random.
+        if converged && d0.amax() <= opts.tolerance {
             let norm = x.norm();
             if !(norm > 0.0 && norm.is_finite()) {
                 return None;
@@ -1393,70 +1398,59 @@ pub fn zero_on_step<P: Problem + ?Sized>(
             if !g.is_finite() {
                 return None;
             }
-            // A state on the path narrows the bracket on its side.
-            if converged {
-                let side = usize::from((g > 0.0) != first_sign);
-                if side == 0 {
-                    lo = (here, g);
-                } else {
-                    hi = (here, g);
-                }
-                sides[side] = Some((here, q.clone(), lambda.clone()));
+            // A settled state narrows the bracket on its side.
+            let side = usize::from((g > 0.0) != first_sign);
+            if side == 0 {
+                lo = (here, g);
+            } else {
+                hi = (here, g);
             }
+            sides[side] = Some((here, q.clone(), lambda.clone()));
+            // The secant through the previous settled state, where the two lie apart along
+            // the step (two states at one arclength differ in g by their corrections only);
+            // else the bracket's.
             let slope = match previous {
-                Some((s0, g0)) if (here - s0).abs() > 0.0 && g != g0 => (g - g0) / (here - s0),
+                Some((s0, g0)) if (here - s0).abs() > change.width && g != g0 => {
+                    (g - g0) / (here - s0)
+                }
                 _ => (hi.1 - lo.1) / (hi.0 - lo.0),
             };
             let next = here - g / slope;
             // Within the tolerance, and either at the zero to the width asked for or at
-            // round-off (|g| no longer halves from one converged iterate to the next).
-            if converged
-                && g.abs() <= change.tolerance
-                && ((next - here).abs() <= change.width || g.abs() > 0.5 * last_converged)
+            // round-off (|g| no longer halves from one settled state to the next).
+            if g.abs() <= change.tolerance
+                && ((next - here).abs() <= change.width || g.abs() > 0.5 * last_settled)
             {
-                found = Some(g);
-            }
-            if converged {
-                // |g| above the tolerance and no longer halving: at the noise of its states,
-                // not at a zero; the caller's search takes over.
-                if g.abs() > change.tolerance && g.abs() > 0.5 * last_converged {
-                    stalled += 1;
-                    if stalled == ZERO_STALLS {
-                        return None;
-                    }
-                } else {
-                    stalled = 0;
+                if problem.defect(&q, &lambda).is_some() {
+                    return None;
                 }
-                last_converged = g.abs();
-            }
-            let inside = next.is_finite() && next > lo.0.min(hi.0) && next < lo.0.max(hi.0);
-            target = if found.is_some() {
-                here
-            } else if inside {
-                next
-            } else {
-                regula_falsi(lo, hi)
-            };
-            previous = Some((here, g));
-            if let Some(value) = found {
-                if d0.amax() <= opts.tolerance {
-                    if problem.defect(&q, &lambda).is_some() {
-                        return None;
-                    }
-                    return Some(ZeroOnStep {
-                        point: PathPoint {
-                            q,
-                            lambda,
-                            arclength: from.arclength + here,
-                            iterations: it,
-                            tangent,
-                        },
-                        value,
-                        sides,
+                return Some(ZeroOnStep {
+                    point: PathPoint {
+                        q,
+                        lambda,
+                        arclength: from.arclength + here,
                         iterations: it,
-                    });
-                }
+                        tangent,
+                    },
+                    value: g,
+                    sides,
+                    iterations: it,
+                });
             }
+            // |g| above the tolerance and no longer halving: at the noise of its states,
+            // not at a zero; the caller's search takes over.
+            if g.abs() > change.tolerance && g.abs() > 0.5 * last_settled {
+                stalled += 1;
+                if stalled == ZERO_STALLS {
+                    return None;
+                }
+            } else {
+                stalled = 0;
+            }
+            last_settled = g.abs();
+            let inside = next.is_finite() && next > lo.0.min(hi.0) && next < lo.0.max(hi.0);
+            target = if inside { next } else { regula_falsi(lo, hi) };
+            previous = Some((here, g));
         }
         let d = d0 + x * (target - here);
         q += d.rows(0, m) * sq;
@@ -1855,6 +1849,76 @@ mod tests {
             "{} of {iterations}",
             counted.evaluations - before
         );
+    }
+
+    /// A slow crossing: g changes by 10⁻⁶ over the whole step, its tolerance spans a hundredth
+    /// of it, and off the path g is off by a multiple `c` of the residual (as the test
+    /// function of a slowly crossing eigenvalue is off by far more than its tolerance at a
+    /// state one correction away from the path). The iteration ends next to the zero, not
+    /// anywhere within the tolerance (a secant through two iterates at one arclength), and
+    /// does not give up where g off the path is larger than g's whole change (its
+    /// unconverged values taken for the zero's).
+    #[test]
+    fn zero_on_step_locates_a_slow_crossing_next_to_its_zero() {
+        let opts = PathOptions::default();
+        let mut circle = circle();
+        let (q0, l0) = (-0.8f64, 0.6f64);
+        let from = point_at(
+            &mut circle,
+            DVector::from_element(1, q0),
+            DVector::from_element(1, l0),
+            1,
+            &opts,
+            None,
+        )
+        .unwrap();
+        let s_at = |theta: f64| {
+            let (q, l) = (-theta.cos(), theta.sin());
+            from.tangent[0] * (q - q0) + from.tangent[1] * (l - l0)
+        };
+        let theta1 = 1.5f64;
+        let s1 = s_at(theta1);
+        for c in [1e-2, 1e-1, 1.0] {
+            // Zero at q = −0.3 on the path.
+            let g = |q: &DVector<f64>, l: &DVector<f64>| {
+                1e-6 * (q[0] + 0.3) + c * (q[0] * q[0] + l[0] * l[0] - 1.0)
+            };
+            let change = SignChange {
+                first: (0.0, 1e-6 * (q0 + 0.3)),
+                second: (s1, 1e-6 * (-theta1.cos() + 0.3)),
+                tolerance: 5e-9,
+                width: 1e-12 * s1,
+            };
+            let mut evaluated = 0;
+            let zero = zero_on_step(
+                &mut circle,
+                &from,
+                change,
+                &mut |_, q, l, _| {
+                    evaluated += 1;
+                    Some(g(q, l))
+                },
+                &opts,
+            )
+            .expect("a zero");
+            let (q, l) = (zero.point.q[0], zero.point.lambda[0]);
+            // Anywhere within the tolerance, |q + 0.3| could be up to 5e-3.
+            assert!((q + 0.3).abs() <= 1e-6, "c = {c}: {q}");
+            assert!(zero.value.abs() <= 1e-10, "c = {c}: {}", zero.value);
+            assert!((q * q + l * l - 1.0).abs() <= 1e-10, "c = {c}: {q} {l}");
+            // g only at settled iterates, not at every one.
+            assert!(
+                evaluated < zero.iterations,
+                "{evaluated} of {}",
+                zero.iterations
+            );
+            let [first, second] = &zero.sides;
+            for (side, positive) in [(first, false), (second, true)] {
+                if let Some((s, q, l)) = side {
+                    assert!((g(q, l) > 0.0) == positive && *s >= 0.0 && *s <= s1);
+                }
+            }
+        }
     }
 
     /// A stall recorded as plain data reads as the driver's own.
