@@ -1529,6 +1529,10 @@ pub struct Continuation<P> {
     accepted: usize,
     /// The next step to try.
     next_step: f64,
+    /// The zeros [`Continuation::zero_on_step`] located on steps from the current point
+    /// (each with the arclength and parameters of the point it stepped from), until the
+    /// driver moves.
+    located: Vec<(f64, DVector<f64>, ZeroOnStep)>,
 }
 
 impl<P: Problem> Continuation<P> {
@@ -1541,6 +1545,7 @@ impl<P: Problem> Continuation<P> {
             opts,
             point,
             accepted: 1,
+            located: Vec::new(),
         }
     }
 
@@ -1603,6 +1608,7 @@ impl<P: Problem> Continuation<P> {
                         self.next_step = s * 0.7;
                     }
                     self.accepted += 1;
+                    self.located.clear();
                     super::interrupt::step_accepted();
                     let from = std::mem::replace(&mut self.point, next);
                     return Ok(Accepted { from, step: s });
@@ -1648,6 +1654,7 @@ impl<P: Problem> Continuation<P> {
         self.next_step = step.step * factor;
         self.point = step.from;
         self.accepted -= 1;
+        self.located.clear();
     }
 
     /// The point reached by one predictor–corrector step of arclength `s` from `from` (for
@@ -1657,14 +1664,44 @@ impl<P: Problem> Continuation<P> {
     }
 
     /// The zero of `test` between `from` and the point `s` along its tangent where it has
-    /// changed sign ([`zero_on_step`]); the driver's state is unchanged.
+    /// changed sign ([`zero_on_step`]); the driver's point and step are unchanged.
+    ///
+    /// A zero located before on a step from the same point is tried first: where `test`
+    /// vanishes there too — to its tolerance, and with the secant of the step's ends moving
+    /// it by less than the width — that state is the zero, found without iterating (a limit
+    /// point is both a turning point of the control and a crossing of the trivial block).
     pub fn zero_on_step(
         &mut self,
         from: &PathPoint,
         change: SignChange,
         test: &mut StepTest<'_, P>,
     ) -> Option<ZeroOnStep> {
-        zero_on_step(&mut self.problem, from, change, test, &self.opts)
+        let (lo, hi) = (
+            change.first.0.min(change.second.0),
+            change.first.0.max(change.second.0),
+        );
+        let slope = (change.second.1 - change.first.1) / (change.second.0 - change.first.0);
+        for (s0, l0, zero) in &self.located {
+            let s = zero.point.arclength - from.arclength;
+            if *s0 != from.arclength || *l0 != from.lambda || !(s > lo && s < hi) {
+                continue;
+            }
+            let p = &zero.point;
+            let Some(g) = test(&self.problem, &p.q, &p.lambda, &p.tangent) else {
+                continue;
+            };
+            if g.abs() <= change.tolerance && (g / slope).abs() <= change.width {
+                return Some(ZeroOnStep {
+                    value: g,
+                    iterations: 0,
+                    ..zero.clone()
+                });
+            }
+        }
+        let found = zero_on_step(&mut self.problem, from, change, test, &self.opts)?;
+        self.located
+            .push((from.arclength, from.lambda.clone(), found.clone()));
+        Some(found)
     }
 
     /// As [`Continuation::step_from`] without the new tangent and the branch-jump guard
@@ -1684,6 +1721,23 @@ mod tests {
         super::Scalar(|q: f64, l: f64| Ok((q * q + l * l - 1.0, 2.0 * q, 2.0 * l)))
     }
 
+    /// The circle's state the tests start from, (q, λ) = (Q0, L0).
+    const Q0: f64 = -0.8;
+    const L0: f64 = 0.6;
+
+    /// The converged point of a circle problem at (Q0, L0), its tangent towards growing λ.
+    fn circle_start(circle: &mut (impl Problem + ?Sized), opts: &PathOptions) -> super::PathPoint {
+        let at = |v: f64| DVector::from_element(1, v);
+        point_at(circle, at(Q0), at(L0), 1, opts, None).unwrap()
+    }
+
+    /// The arclength along the tangent at `from` (the circle's start) to the state at angle θ
+    /// (q = −cos θ, λ = sin θ).
+    fn arclength_to(from: &super::PathPoint, theta: f64) -> f64 {
+        let (q, l) = (-theta.cos(), theta.sin());
+        from.tangent[0] * (q - Q0) + from.tangent[1] * (l - L0)
+    }
+
     /// Newton on the path's equation and a test function together finds the test function's
     /// zero on the path — a function of the state, and the tangent's control component (a
     /// turning point) — to the tolerance and width asked for, in a few iterations, with the
@@ -1692,22 +1746,9 @@ mod tests {
     fn zero_on_step_solves_for_a_state_functions_zero_and_for_a_turning_point() {
         let opts = PathOptions::default();
         let mut circle = circle();
-        let (q0, l0) = (-0.8f64, 0.6f64);
-        let from = point_at(
-            &mut circle,
-            DVector::from_element(1, q0),
-            DVector::from_element(1, l0),
-            1,
-            &opts,
-            None,
-        )
-        .unwrap();
-        // The arclength along the start's tangent to the state at angle θ (q = −cos θ,
-        // λ = sin θ).
-        let s_at = |theta: f64| {
-            let (q, l) = (-theta.cos(), theta.sin());
-            from.tangent[0] * (q - q0) + from.tangent[1] * (l - l0)
-        };
+        let q0 = Q0;
+        let from = circle_start(&mut circle, &opts);
+        let s_at = |theta: f64| arclength_to(&from, theta);
         // q = −0.3 on the way: g = q + 0.3.
         let g = |q: &DVector<f64>| q[0] + 0.3;
         let theta1 = 1.5f64;
@@ -1809,17 +1850,7 @@ mod tests {
     #[test]
     fn a_foretold_converged_iterate_is_checked_by_a_chord_step() {
         let opts = PathOptions::default();
-        let start = |p: &mut dyn Problem| {
-            point_at(
-                p,
-                DVector::from_element(1, -0.8),
-                DVector::from_element(1, 0.6),
-                1,
-                &opts,
-                None,
-            )
-            .unwrap()
-        };
+        let start = |p: &mut dyn Problem| circle_start(p, &opts);
         let mut counted = Counted {
             evaluations: 0,
             residuals: 0,
@@ -1862,20 +1893,9 @@ mod tests {
     fn zero_on_step_locates_a_slow_crossing_next_to_its_zero() {
         let opts = PathOptions::default();
         let mut circle = circle();
-        let (q0, l0) = (-0.8f64, 0.6f64);
-        let from = point_at(
-            &mut circle,
-            DVector::from_element(1, q0),
-            DVector::from_element(1, l0),
-            1,
-            &opts,
-            None,
-        )
-        .unwrap();
-        let s_at = |theta: f64| {
-            let (q, l) = (-theta.cos(), theta.sin());
-            from.tangent[0] * (q - q0) + from.tangent[1] * (l - l0)
-        };
+        let q0 = Q0;
+        let from = circle_start(&mut circle, &opts);
+        let s_at = |theta: f64| arclength_to(&from, theta);
         let theta1 = 1.5f64;
         let s1 = s_at(theta1);
         for c in [1e-2, 1e-1, 1.0] {
@@ -1919,6 +1939,53 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A zero located on a step is kept until the driver moves: a second test function that
+    /// vanishes at the same state (the circle's turning point of λ, where q = 0) takes it
+    /// without iterating; one whose zero lies elsewhere on the step iterates as before.
+    #[test]
+    fn a_second_test_function_with_the_same_zero_takes_the_located_state() {
+        let opts = PathOptions::default();
+        let mut circle = circle();
+        let from = circle_start(&mut circle, &opts);
+        let mut driver = super::Continuation::new(circle, from.clone(), opts);
+        let theta = 2.0f64;
+        let s2 = arclength_to(&from, theta);
+        let turning = SignChange {
+            first: (0.0, from.tangent[1]),
+            second: (s2, theta.cos() * from.tangent[1].signum()),
+            tolerance: 1e-12,
+            width: 1e-14,
+        };
+        let turn = driver
+            .zero_on_step(&from, turning, &mut |_, _, _, t| Some(t[1]))
+            .expect("a turning point");
+        assert!(turn.iterations > 0);
+        // q = −cos θ changes sign at the same state.
+        let crossing = SignChange {
+            first: (0.0, Q0),
+            second: (s2, -theta.cos()),
+            tolerance: 1e-10,
+            width: 1e-10,
+        };
+        let again = driver
+            .zero_on_step(&from, crossing, &mut |_, q, _, _| Some(q[0]))
+            .expect("the same zero");
+        assert_eq!(again.iterations, 0);
+        assert_eq!(again.point.q, turn.point.q);
+        assert!(again.value.abs() <= 1e-10);
+        // q + 0.3 vanishes elsewhere on the step: iterated for.
+        let elsewhere = SignChange {
+            first: (0.0, Q0 + 0.3),
+            second: (s2, -theta.cos() + 0.3),
+            tolerance: 1e-12,
+            width: 1e-12,
+        };
+        let other = driver
+            .zero_on_step(&from, elsewhere, &mut |_, q, _, _| Some(q[0] + 0.3))
+            .expect("a zero");
+        assert!(other.iterations > 0 && (other.point.q[0] + 0.3).abs() <= 1e-12);
     }
 
     /// A stall recorded as plain data reads as the driver's own.

@@ -111,12 +111,7 @@ pub fn bordered_solve_all(
         out.rows_mut(m, nk).copy_from(&z);
         Some(out)
     };
-    let norm = values
-        .iter()
-        .chain(b.iter())
-        .chain(c.iter())
-        .chain(d.iter())
-        .fold(0.0f64, |a, v| a.max(v.abs()));
+    let norm = max_entry((pattern, values, &b, &c, &d));
     all.iter()
         .map(|rhs| {
             let mut padded = DVector::zeros(m + nk);
@@ -148,23 +143,10 @@ pub fn bordered_resolve_all(
     let fact = guard.as_ref().filter(|f| f.n() == m)?;
     let system = (&**pattern, values, b, c, d);
     let sols = batched(system, fact, all)?;
-    let norm = values
-        .iter()
-        .chain(b.iter())
-        .chain(c.iter())
-        .chain(d.iter())
-        .fold(0.0f64, |a, v| a.max(v.abs()));
-    let nb = d.nrows();
+    let norm = max_entry(system);
     for (rhs, sol) in all.iter().zip(&sols) {
-        let (xs, zs) = (sol.rows(0, m), sol.rows(m, nb));
-        let mut ax = vec![0.0; m];
-        pattern.matvec(values, xs.as_slice(), &mut ax);
-        let (top, bottom) = (b * zs, c * xs + d * zs);
-        let r = (0..m)
-            .map(|i| rhs[i] - ax[i] - top[i])
-            .chain((0..nb).map(|i| rhs[m + i] - bottom[i]))
-            .fold(0.0f64, |a, v| a.max(v.abs()));
-        let error = r / (norm * sol.amax() + rhs.amax()).max(1e-300);
+        let error =
+            residual(system, rhs, sol).amax() / (norm * sol.amax() + rhs.amax()).max(1e-300);
         // NaN (a non-finite solution) is refused too.
         if error.is_nan() || error > NEAR_SINGULAR_BACKWARD_ERROR {
             return None;
@@ -223,23 +205,7 @@ fn batched(
     let residuals: Vec<DVector<f64>> = all
         .iter()
         .zip(&sols)
-        .map(|(rhs, sol)| {
-            let (xs, zs) = (sol.rows(0, m), sol.rows(m, nb));
-            let mut ax = vec![0.0; m];
-            pattern.matvec(values, xs.as_slice(), &mut ax);
-            let (top, bottom) = (b * zs, c * xs + d * zs);
-            let mut r = (*rhs).clone();
-            for i in 0..m {
-                r[i] -= ax[i];
-            }
-            for i in 0..m {
-                r[i] -= top[i];
-            }
-            for i in 0..nb {
-                r[m + i] -= bottom[i];
-            }
-            r
-        })
+        .map(|(rhs, sol)| residual((pattern, values, b, c, d), rhs, sol))
         .collect();
     let mut tops = vec![0.0; m * k];
     for (r, top) in residuals.iter().zip(tops.chunks_exact_mut(m)) {
@@ -251,6 +217,37 @@ fn batched(
         *sol += correction;
     }
     Some(sols)
+}
+
+/// rhs − M sol of the bordered system M = [[A, B], [C, D]].
+fn residual(
+    (pattern, values, b, c, d): System<'_>,
+    rhs: &DVector<f64>,
+    sol: &DVector<f64>,
+) -> DVector<f64> {
+    let (m, nb) = (pattern.n(), d.nrows());
+    let (xs, zs) = (sol.rows(0, m), sol.rows(m, nb));
+    let mut ax = vec![0.0; m];
+    pattern.matvec(values, xs.as_slice(), &mut ax);
+    let (top, bottom) = (b * zs, c * xs + d * zs);
+    let mut r = rhs.clone();
+    for i in 0..m {
+        r[i] = r[i] - ax[i] - top[i];
+    }
+    for i in 0..nb {
+        r[m + i] -= bottom[i];
+    }
+    r
+}
+
+/// max|M_ij| of the bordered system M = [[A, B], [C, D]].
+fn max_entry((_, values, b, c, d): System<'_>) -> f64 {
+    values
+        .iter()
+        .chain(b.iter())
+        .chain(c.iter())
+        .chain(d.iter())
+        .fold(0.0f64, |a, v| a.max(v.abs()))
 }
 
 /// Whether the small dense `s` is regular to working precision: its singular values' ratio
@@ -280,26 +277,7 @@ fn refined(
     near_singular: bool,
     norm: f64,
 ) -> Option<DVector<f64>> {
-    let (m, nb) = (pattern.n(), d.nrows());
-    // r = rhs − M sol.
-    let residual_of = |sol: &DVector<f64>| -> DVector<f64> {
-        let (xs, zs) = (sol.rows(0, m).into_owned(), sol.rows(m, nb).into_owned());
-        let mut ax = vec![0.0; m];
-        pattern.matvec(values, xs.as_slice(), &mut ax);
-        let mut residual = rhs.clone();
-        for i in 0..m {
-            residual[i] -= ax[i];
-        }
-        let top = b * &zs;
-        let bottom = c * &xs + d * &zs;
-        for i in 0..m {
-            residual[i] -= top[i];
-        }
-        for i in 0..nb {
-            residual[m + i] -= bottom[i];
-        }
-        residual
-    };
+    let residual_of = |sol: &DVector<f64>| residual((pattern, values, b, c, d), rhs, sol);
     let mut sol = solve(rhs)?;
     // One refinement step (two on a near-singular A).
     for _ in 0..1 + usize::from(near_singular) {

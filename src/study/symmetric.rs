@@ -362,6 +362,25 @@ impl<'a> SymmetricProblem<'a> {
         )
     }
 
+    /// The model evaluated at the state B q and the parameters with the free ones at
+    /// `lambda`, as `request` asks, its time counted as assembly; returns when it ended.
+    fn assemble(
+        &mut self,
+        q: &DVector<f64>,
+        lambda: &DVector<f64>,
+        request: crate::model::Request,
+    ) -> Result<std::time::Instant, crate::model::ModelError> {
+        let t0 = std::time::Instant::now();
+        self.basis.expand(q, &mut self.u);
+        self.params = self.parameters(lambda);
+        self.model
+            .evaluate(&self.u, &self.params, request, &mut self.eval)?;
+        let t1 = std::time::Instant::now();
+        self.times.assembly += t1 - t0;
+        self.times.evaluations += 1;
+        Ok(t1)
+    }
+
     /// The full displacement u = B q.
     pub fn displacement(&self, q: &DVector<f64>) -> Vec<f64> {
         let mut u = vec![0.0; self.basis.unknowns()];
@@ -407,15 +426,7 @@ impl Problem for SymmetricProblem<'_> {
         q: &DVector<f64>,
         lambda: &DVector<f64>,
     ) -> Result<Linearization, crate::model::ModelError> {
-        use crate::model::Request;
-        let t0 = std::time::Instant::now();
-        self.basis.expand(q, &mut self.u);
-        self.params = self.parameters(lambda);
-        self.model
-            .evaluate(&self.u, &self.params, Request::ALL, &mut self.eval)?;
-        let t1 = std::time::Instant::now();
-        self.times.assembly += t1 - t0;
-        self.times.evaluations += 1;
+        let t1 = self.assemble(q, lambda, crate::model::Request::ALL)?;
         let (m, nf, c) = (self.basis.dim(), self.free.len(), self.constraints.len());
         let mut loads = DMatrix::zeros(m, nf);
         for (j, i) in self.free.iter().enumerate() {
@@ -461,15 +472,7 @@ impl Problem for SymmetricProblem<'_> {
         q: &DVector<f64>,
         lambda: &DVector<f64>,
     ) -> Result<(DVector<f64>, DVector<f64>), crate::model::ModelError> {
-        use crate::model::Request;
-        let t0 = std::time::Instant::now();
-        self.basis.expand(q, &mut self.u);
-        self.params = self.parameters(lambda);
-        self.model
-            .evaluate(&self.u, &self.params, Request::RESIDUAL, &mut self.eval)?;
-        let t1 = std::time::Instant::now();
-        self.times.assembly += t1 - t0;
-        self.times.evaluations += 1;
+        let t1 = self.assemble(q, lambda, crate::model::Request::RESIDUAL)?;
         let mut constraints = DVector::zeros(self.constraints.len());
         if !self.constraints.is_empty() {
             let x = self.model.positions(&self.u, &self.params);
