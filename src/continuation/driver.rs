@@ -1091,17 +1091,11 @@ fn step_on_plane<P: Problem + ?Sized>(
                 g.rows_mut(0, m).copy_from(&residual);
                 g.rows_mut(m, c).copy_from(&constraints);
                 g[m + c] = arclength_of(&q, &lambda);
-                let rhs = -&g;
-                let all: Vec<&DVector<f64>> = if same_plane {
-                    vec![&rhs, &e]
-                } else {
-                    vec![&rhs]
-                };
-                if let Some(mut xs) = a
-                    .resolve_all(&all)
+                // Only unguarded solves take the chord: no tangent is wanted at the point.
+                if let Some(xs) = a
+                    .resolve_all(&[&(-&g)])
                     .filter(|xs| xs[0].amax() <= opts.tolerance)
                 {
-                    let tangent = same_plane.then(|| xs.pop()).flatten();
                     let d = &xs[0];
                     q += d.rows(0, m) * sq;
                     for j in 0..nl {
@@ -1110,16 +1104,7 @@ fn step_on_plane<P: Problem + ?Sized>(
                     if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
                         return Err(StepError::Diverged);
                     }
-                    return accept(
-                        problem,
-                        from,
-                        t,
-                        (q, lambda),
-                        tangent,
-                        (s, it),
-                        opts,
-                        guarded,
-                    );
+                    return accept(problem, from, t, (q, lambda), None, (s, it), opts, guarded);
                 }
             }
         }
