@@ -3,9 +3,11 @@
 //! The [`Layout`] is built once per model: the unknown numbers of every node (fixed nodes
 //! have none), the symmetric sparsity pattern of the tangent, and for every triangle the 9
 //! unknowns and 81 value slots its local Hessian scatters into (for every node its 3×3
-//! diagonal block). An evaluation runs an effect's kernel over all triangles in parallel
-//! into a scratch buffer owned by the [`Evaluation`] (allocated once), then scatters the
-//! results in one sequential pass.
+//! diagonal block). An evaluation runs each effect's kernel over all triangles in parallel
+//! and adds the results into per-triangle sums owned by the [`Evaluation`] (allocated once);
+//! after the last effect the sums are scattered once, in parallel over ranges of unknowns
+//! that each own their entries ([`ScatterPlan`]), so the scatter costs one pass however many
+//! effects act on triangles.
 
 use super::Local;
 use super::{ModelError, Vec3};
@@ -35,6 +37,84 @@ pub struct Layout {
     /// The nodes on the rim: on an edge that only one triangle has in its direction
     /// ([`super::validity::edge_summary`]), sorted.
     rim: Vec<usize>,
+    /// How the whole mesh's triangle sums are scattered.
+    plan: ScatterPlan,
+}
+
+/// The scatter of per-triangle sums by ownership: the unknowns are cut into ranges of
+/// consecutive numbers, and every range lists, in order, the triangles with an unknown in it.
+/// A range adds only into its own entries — its rows of the residual and the load vectors,
+/// its columns of the tangent (contiguous in the column-major values) — so the ranges run in
+/// parallel without sharing a write, and every entry receives its terms in triangle order
+/// whatever the number of threads.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct ScatterPlan {
+    /// Range r holds the unknowns `bounds[r]..bounds[r + 1]`.
+    bounds: Vec<u32>,
+    /// The triangles (positions in the evaluation's triangle list) of range r are
+    /// `members[start[r]..start[r + 1]]`.
+    start: Vec<usize>,
+    members: Vec<u32>,
+}
+
+impl ScatterPlan {
+    /// The plan for the triangles `list` (by position) of `tri_dofs`, with the unknowns cut into
+    /// `ranges` ranges of about equal numbers of tangent values (`col_ptr`: the pattern's).
+    fn new(
+        tri_dofs: &[[u32; 9]],
+        list: impl Iterator<Item = usize>,
+        col_ptr: &[usize],
+        ranges: usize,
+    ) -> Self {
+        let unknowns = col_ptr.len() - 1;
+        let nnz = col_ptr[unknowns];
+        let ranges = ranges.clamp(1, unknowns.max(1));
+        let mut bounds = vec![0u32];
+        for r in 1..ranges {
+            let target = nnz * r / ranges;
+            let c = col_ptr.partition_point(|&p| p < target).min(unknowns) as u32;
+            if c > *bounds.last().expect("starts with 0") {
+                bounds.push(c);
+            }
+        }
+        bounds.push(unknowns as u32);
+        let count = bounds.len() - 1;
+        let range_of = |d: u32| bounds.partition_point(|&b| b <= d) - 1;
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); count];
+        for (k, t) in list.enumerate() {
+            let mut seen = [usize::MAX; 9];
+            for (j, &d) in tri_dofs[t].iter().enumerate() {
+                if d == NONE {
+                    continue;
+                }
+                let r = range_of(d);
+                if !seen[..j].contains(&r) {
+                    lists[r].push(k as u32);
+                }
+                seen[j] = r;
+            }
+        }
+        let mut start = vec![0];
+        for l in &lists {
+            start.push(start.last().expect("starts with 0") + l.len());
+        }
+        Self {
+            bounds,
+            start,
+            members: lists.concat(),
+        }
+    }
+
+    /// Number of ranges.
+    fn ranges(&self) -> usize {
+        self.bounds.len() - 1
+    }
+}
+
+/// How many ranges a [`ScatterPlan`] cuts the unknowns into: a few per thread, so that a
+/// thread slowed by other work leaves its share to the others.
+fn scatter_ranges() -> usize {
+    4 * rayon::current_num_threads().max(1)
 }
 
 /// Held coordinates that move with a parameter Λ_p: node i sits at X_i + (Λ_p − Λ_p⁰) r_i,
@@ -96,6 +176,12 @@ impl Layout {
             .iter()
             .map(|d| std::array::from_fn(|k| slot(d[k / 9], d[k % 9])))
             .collect();
+        let plan = ScatterPlan::new(
+            &tri_dofs,
+            0..triangles.len(),
+            pattern.col_ptr(),
+            scatter_ranges(),
+        );
         let node_slots = dof_of
             .iter()
             .map(|d| std::array::from_fn(|k| slot(d[k / 3], d[k % 3])))
@@ -112,6 +198,7 @@ impl Layout {
             node_slots,
             slide: vec![None; nodes],
             held: None,
+            plan,
         }
     }
 
@@ -325,7 +412,24 @@ pub struct Evaluation {
     /// Rank-one terms (c_k, a_k) of K.
     pub rank_one: Vec<(f64, Vec<f64>)>,
     pub(super) positions: Vec<Vec3>,
-    tri_terms: Vec<TriangleTerms>,
+    /// For every triangle assembled, the sum of the triangle effects' value, gradient and
+    /// (when the tangent is requested) Hessian, scattered once by [`Evaluation::finish`].
+    tri_sums: Vec<Local>,
+    /// For every triangle assembled, `load_width` gradients: the sum of the effects' loads
+    /// of parameter p at `k * load_width + p` (when the loads are requested).
+    tri_loads: Vec<[f64; 9]>,
+    load_width: usize,
+    /// Whether `tri_sums` holds this evaluation's terms (else the next effect overwrites).
+    tri_pending: bool,
+    /// For every parameter, whether `tri_loads` holds this evaluation's loads of it.
+    loads_pending: Vec<bool>,
+    /// Whether the tangent still holds the previous evaluation's values: it is cleared
+    /// where it is written first — by the scatter of the triangle sums, range by range in
+    /// parallel, or before a node effect's scatter ([`Evaluation::clear_tangent`]).
+    tangent_stale: bool,
+    /// Whether the scatter has checked every tangent value it could have written for
+    /// finiteness (so that [`Evaluation::check_finite`] need not read the tangent again).
+    tangent_checked: bool,
     node_terms: Vec<NodeTerms>,
     request: Request,
     /// When set, only these triangles and nodes are assembled (see [`Subset`]).
@@ -348,6 +452,8 @@ pub struct Subset {
     nodes: Vec<usize>,
     /// The tangent slots its triangles and nodes write, sorted.
     slots: Vec<u32>,
+    /// How its triangles' sums are scattered.
+    plan: ScatterPlan,
 }
 
 impl Subset {
@@ -371,10 +477,17 @@ impl Subset {
             .collect();
         slots.sort_unstable();
         slots.dedup();
+        let plan = ScatterPlan::new(
+            &layout.tri_dofs,
+            triangles.iter().copied(),
+            layout.pattern.col_ptr(),
+            scatter_ranges(),
+        );
         Self {
             triangles,
             nodes,
             slots,
+            plan,
         }
     }
 
@@ -400,9 +513,15 @@ impl Evaluation {
             rank_one: Vec::new(),
             positions: Vec::with_capacity(layout.dof_of.len()),
             // Sized by the first assembly (`add_triangles`, `add_nodes`), for the whole mesh
-            // or the subset: ≈ 1 kB per triangle, not worth holding in an evaluation that is
-            // restricted or never assembled.
-            tri_terms: Vec::new(),
+            // or the subset: ≈ 0.8 kB per triangle, not worth holding in an evaluation that
+            // is restricted or never assembled.
+            tri_sums: Vec::new(),
+            tri_loads: Vec::new(),
+            load_width: parameters.max(1),
+            tri_pending: false,
+            loads_pending: vec![false; parameters],
+            tangent_stale: false,
+            tangent_checked: false,
             node_terms: Vec::new(),
             request: Request::ALL,
             subset: None,
@@ -411,8 +530,10 @@ impl Evaluation {
 
     /// The same buffer, assembling only `subset` from now on.
     pub fn restricted_to(mut self, subset: std::sync::Arc<Subset>) -> Self {
-        self.tri_terms = Vec::new();
+        self.tri_sums = Vec::new();
+        self.tri_loads = Vec::new();
         self.node_terms = Vec::new();
+        self.tangent_stale = false;
         // Zero outside the subset's slots from now on (fresh, so its pages stay unwritten).
         self.tangent = vec![0.0; self.tangent.len()];
         self.subset = Some(subset);
@@ -428,19 +549,151 @@ impl Evaluation {
         self.request = request;
         self.energy = 0.0;
         self.residual.fill(0.0);
+        self.tri_pending = false;
+        self.loads_pending.fill(false);
+        self.tangent_checked = false;
         if request.tangent {
-            match &self.subset {
-                Some(subset) => subset
-                    .slots
-                    .iter()
-                    .for_each(|&k| self.tangent[k as usize] = 0.0),
-                None => self.tangent.fill(0.0),
-            }
+            self.tangent_stale = true;
             self.rank_one.clear();
         }
         if request.loads {
             self.loads.iter_mut().for_each(|l| l.fill(0.0));
         }
+    }
+
+    /// Zeroes the tangent values an evaluation can write (all, or the subset's), unless done.
+    fn clear_tangent(&mut self) {
+        if !std::mem::take(&mut self.tangent_stale) {
+            return;
+        }
+        match &self.subset {
+            Some(subset) => subset
+                .slots
+                .iter()
+                .for_each(|&k| self.tangent[k as usize] = 0.0),
+            None => self.tangent.fill(0.0),
+        }
+    }
+
+    /// Completes an evaluation after its last effect: scatters the triangle sums
+    /// ([`ScatterPlan`]) into Π, the residual, the tangent and the load vectors, with the
+    /// implicit load of moving held coordinates, Σ_b H_ab r_b, from the summed Hessians.
+    pub(super) fn finish(&mut self, layout: &Layout) {
+        if self.tri_pending {
+            self.scatter_triangles(layout);
+        }
+        if self.request.tangent {
+            self.clear_tangent();
+        }
+    }
+
+    fn scatter_triangles(&mut self, layout: &Layout) {
+        let (want_k, want_l) = (self.request.tangent, self.request.loads);
+        let subset = self.subset.clone();
+        let plan = subset.as_ref().map_or(&layout.plan, |s| &s.plan);
+        let ids = subset.as_ref().map(|s| s.triangles.as_slice());
+        let id = |k: usize| ids.map_or(k, |s| s[k]);
+        self.energy += self.tri_sums.iter().map(|s| s.value).sum::<f64>();
+        let held = layout.held.as_ref().filter(|_| want_l);
+        // The load vectors this scatter adds to: those an effect named, and the held one.
+        let active: Vec<bool> = (0..self.loads.len())
+            .map(|p| want_l && (self.loads_pending[p] || held.is_some_and(|h| h.parameter == p)))
+            .collect();
+        let zero = std::mem::take(&mut self.tangent_stale);
+        let col_ptr = layout.pattern.col_ptr();
+        // Cut every output into the plan's ranges.
+        let mut residual = self.residual.as_mut_slice();
+        let mut tangent = self.tangent.as_mut_slice();
+        let mut loads: Vec<(usize, &mut [f64])> = self
+            .loads
+            .iter_mut()
+            .enumerate()
+            .filter(|(p, _)| active[*p])
+            .map(|(p, l)| (p, l.as_mut_slice()))
+            .collect();
+        let mut pieces = Vec::with_capacity(plan.ranges());
+        for r in 0..plan.ranges() {
+            let (c0, c1) = (plan.bounds[r] as usize, plan.bounds[r + 1] as usize);
+            let (res, rest) = std::mem::take(&mut residual).split_at_mut(c1 - c0);
+            residual = rest;
+            let (tan, rest) = std::mem::take(&mut tangent).split_at_mut(col_ptr[c1] - col_ptr[c0]);
+            tangent = rest;
+            let piece_loads: Vec<(usize, &mut [f64])> = loads
+                .iter_mut()
+                .map(|(p, l)| {
+                    let (head, rest) = std::mem::take(l).split_at_mut(c1 - c0);
+                    *l = rest;
+                    (*p, head)
+                })
+                .collect();
+            pieces.push((r, res, tan, piece_loads));
+        }
+        let (sums, tri_loads, width) = (&self.tri_sums, &self.tri_loads, self.load_width);
+        let pending = &self.loads_pending;
+        let slot_list = subset.as_ref().map(|s| s.slots.as_slice());
+        let finite = pieces
+            .into_par_iter()
+            .map(|(r, residual, tangent, mut loads)| {
+                let c0 = plan.bounds[r];
+                let len = residual.len();
+                let s0 = col_ptr[c0 as usize];
+                // The subset's slots in this range, or all of them.
+                let own = slot_list.map(|slots| {
+                    let a = slots.partition_point(|&k| (k as usize) < s0);
+                    let b = slots.partition_point(|&k| (k as usize) < s0 + tangent.len());
+                    &slots[a..b]
+                });
+                if zero {
+                    match own {
+                        Some(slots) => slots.iter().for_each(|&k| tangent[k as usize - s0] = 0.0),
+                        None => tangent.fill(0.0),
+                    }
+                }
+                for &k in &plan.members[plan.start[r]..plan.start[r + 1]] {
+                    let k = k as usize;
+                    let t = id(k);
+                    let (dofs, sum) = (&layout.tri_dofs[t], &sums[k]);
+                    let slots = &layout.tri_slots[t];
+                    let moving = held.filter(|h| h.moving[t]);
+                    for (a, &d) in dofs.iter().enumerate() {
+                        // NONE (a fixed coordinate) is past every range.
+                        let i = d.wrapping_sub(c0) as usize;
+                        if i >= len {
+                            continue;
+                        }
+                        residual[i] += sum.grad[a];
+                        for (p, l) in loads.iter_mut() {
+                            if pending[*p] {
+                                l[i] += tri_loads[k * width + *p][a];
+                            }
+                            // The implicit load of moving held coordinates: Σ_b H_ab r_b.
+                            if let Some(h) = moving.filter(|h| h.parameter == *p) {
+                                let tri = &layout.triangles[t];
+                                l[i] += (0..9)
+                                    .map(|b| sum.hess[a][b] * h.rates[tri[b / 3]][b % 3])
+                                    .sum::<f64>();
+                            }
+                        }
+                        if want_k {
+                            // Column d: the slots of rows b, values H_ba.
+                            for b in 0..9 {
+                                let slot = slots[9 * b + a];
+                                if slot != NONE {
+                                    tangent[slot as usize - s0] += sum.hess[b][a];
+                                }
+                            }
+                        }
+                    }
+                }
+                !want_k
+                    || match own {
+                        Some(slots) => slots.iter().all(|&k| tangent[k as usize - s0].is_finite()),
+                        None => tangent.iter().all(|v| v.is_finite()),
+                    }
+            })
+            .reduce(|| true, |a, b| a && b);
+        self.tangent_checked = want_k && finite;
+        self.tri_pending = false;
     }
 
     pub(super) fn check_finite(&self) -> Result<(), ModelError> {
@@ -456,12 +709,15 @@ impl Evaluation {
         if !self.residual.iter().all(|v| v.is_finite()) {
             return bad("residual");
         }
-        let tangent_finite = || match &self.subset {
-            Some(subset) => subset
-                .slots
-                .iter()
-                .all(|&k| self.tangent[k as usize].is_finite()),
-            None => self.tangent.iter().all(|v| v.is_finite()),
+        let tangent_finite = || {
+            self.tangent_checked
+                || match &self.subset {
+                    Some(subset) => subset
+                        .slots
+                        .iter()
+                        .all(|&k| self.tangent[k as usize].is_finite()),
+                    None => self.tangent.iter().all(|v| v.is_finite()),
+                }
         };
         if self.request.tangent && !tangent_finite() {
             return bad("tangent");
@@ -525,61 +781,62 @@ impl<'a> Assembler<'a> {
     {
         const { assert!(N <= LOAD_SLOTS, "at most LOAD_SLOTS load parameters") };
         let tris = &self.layout.triangles;
-        let ids = self.out.subset.clone();
+        let (want_k, want_l) = (self.request.tangent, self.request.loads);
+        let effect = self.effect;
+        let out = &mut *self.out;
+        let ids = out.subset.clone();
         let id = |k: usize| ids.as_ref().map_or(k, |s| s.triangles[k]);
         let count = ids.as_ref().map_or(tris.len(), |s| s.triangles.len());
-        self.out.tri_terms.resize(count, TriangleTerms::default());
-        self.out
-            .tri_terms
+        let width = out.load_width;
+        out.tri_sums.resize(count, Local::ZERO);
+        out.tri_loads.resize(count * width, [0.0; 9]);
+        // A load slot writes its parameter's sums if it is the first to name it in this
+        // evaluation, else adds to them.
+        let mut fresh = [false; N];
+        for (s, p) in load_params.iter().enumerate() {
+            if let Some(p) = *p {
+                fresh[s] = !out.loads_pending[p] && !load_params[..s].contains(&Some(p));
+            }
+        }
+        let first = !out.tri_pending;
+        out.tri_sums
             .par_iter_mut()
+            .zip(out.tri_loads.par_chunks_mut(width))
             .enumerate()
-            .try_for_each(|(k, terms)| {
+            .try_for_each_init(TriangleTerms::default, |terms, (k, (sum, loads))| {
                 let t = id(k);
                 let [a, b, c] = tris[t];
                 terms.loads = [[0.0; 9]; LOAD_SLOTS];
                 kernel(t, &[x[a], x[b], x[c]], terms).map_err(|what| ModelError::Element {
-                    effect: self.effect.to_string(),
+                    effect: effect.to_string(),
                     triangle: t,
                     what,
-                })
-            })?;
-        let (want_k, want_l) = (self.request.tangent, self.request.loads);
-        let out = &mut *self.out;
-        for (k, terms) in out.tri_terms.iter().enumerate() {
-            let t = id(k);
-            let dofs = &self.layout.tri_dofs[t];
-            out.energy += terms.local.value;
-            for (a, &d) in dofs.iter().enumerate() {
-                if d == NONE {
-                    continue;
+                })?;
+                if first {
+                    *sum = terms.local;
+                } else {
+                    add_local(sum, &terms.local, want_k);
                 }
-                out.residual[d as usize] += terms.local.grad[a];
                 if want_l {
                     for (s, p) in load_params.iter().enumerate() {
                         if let Some(p) = *p {
-                            out.loads[p][d as usize] += terms.loads[s][a];
+                            if fresh[s] {
+                                loads[p] = terms.loads[s];
+                            } else {
+                                loads[p]
+                                    .iter_mut()
+                                    .zip(&terms.loads[s])
+                                    .for_each(|(l, v)| *l += v);
+                            }
                         }
                     }
                 }
-            }
-            if want_k {
-                let slots = &self.layout.tri_slots[t];
-                for (k, &slot) in slots.iter().enumerate() {
-                    if slot != NONE {
-                        out.tangent[slot as usize] += terms.local.hess[k / 9][k % 9];
-                    }
-                }
-            }
-            // The implicit load of moving held coordinates: Σ_b H_ab r_b.
-            if let Some(h) = self.layout.held.as_ref().filter(|h| want_l && h.moving[t]) {
-                let r: [f64; 9] = std::array::from_fn(|b| h.rates[tris[t][b / 3]][b % 3]);
-                for (a, &d) in dofs.iter().enumerate() {
-                    if d != NONE {
-                        let row = &terms.local.hess[a];
-                        out.loads[h.parameter][d as usize] +=
-                            row.iter().zip(&r).map(|(k, r)| k * r).sum::<f64>();
-                    }
-                }
+                Ok(())
+            })?;
+        out.tri_pending = true;
+        if want_l {
+            for p in load_params.into_iter().flatten() {
+                out.loads_pending[p] = true;
             }
         }
         Ok(())
@@ -617,6 +874,9 @@ impl<'a> Assembler<'a> {
             })?;
         let (want_k, want_l) = (self.request.tangent, self.request.loads);
         let out = &mut *self.out;
+        if want_k {
+            out.clear_tangent();
+        }
         for (k, terms) in out.node_terms.iter().enumerate() {
             let i = id(k);
             out.energy += terms.value;
@@ -704,6 +964,22 @@ impl<'a> Assembler<'a> {
     }
 }
 
+/// Adds the value, gradient and (if `hess`) Hessian of `terms` to `sum`.
+fn add_local(sum: &mut Local, terms: &Local, hess: bool) {
+    sum.value += terms.value;
+    sum.grad
+        .iter_mut()
+        .zip(&terms.grad)
+        .for_each(|(s, g)| *s += g);
+    if hess {
+        sum.hess
+            .iter_mut()
+            .flatten()
+            .zip(terms.hess.iter().flatten())
+            .for_each(|(s, h)| *s += h);
+    }
+}
+
 /// The gradient ∇Q of a global quantity over the unknowns, and its rate along the layout's
 /// held motion, Σ_i ∇_i Q · r_i over every node (fixed ones included; 0 without one).
 #[derive(Debug, Clone, PartialEq)]
@@ -713,3 +989,7 @@ pub struct GlobalGradient {
     /// dQ/dΛ_p through the held coordinates alone.
     pub along_held: f64,
 }
+
+#[cfg(test)]
+#[path = "scatter_tests.rs"]
+mod tests;

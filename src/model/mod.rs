@@ -753,6 +753,7 @@ impl Model for FeModel {
                 let mut asm = Assembler::new(&self.layout, out, request, effect.name());
                 effect.assemble(&x, params, &mut asm)?;
             }
+            out.finish(&self.layout);
             out.check_finite()
         })();
         out.positions = x;
