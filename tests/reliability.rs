@@ -396,6 +396,9 @@ fn messages_name_what_is_wrong() {
 
 /// A spinning body on an icosphere keeps the elements that map the spin axis to itself as a
 /// line: D5d with a vertex down, D2h in the reference orientation (a 2-fold axis along z).
+/// The spin is moderate (ω² = 0.1, a stable state that Newton reaches in a few iterations):
+/// at ω² = 0.5 the balloon's state has an index of 35, and whether Newton finds it from a
+/// uniform stretch is decided by round-off.
 #[test]
 fn spin_on_an_icosphere_keeps_the_axis_stabiliser() {
     let dir = tempfile::tempdir().unwrap();
@@ -404,8 +407,8 @@ fn spin_on_an_icosphere_keeps_the_axis_stabiliser() {
             "[scene]\nname = \"spinning balloon\"\n[mesh]\ngenerator = \"icosphere\"\n\
              frequency = 2\n{down}[material]\nmodel = \"mooney-rivlin\"\nmu = 100.0\nk = 0.1\n\
              thickness = 0.01\n[[effect]]\ntype = \"gas\"\npressure = 1.2\n[[effect]]\n\
-             type = \"spin\"\ndensity = 1.0\nomega2 = 0.5\n[analysis]\ntype = \"equilibrium\"\n\
-             [start]\nstretch = 1.3\n"
+             type = \"spin\"\ndensity = 1.0\nomega2 = 0.1\n[analysis]\ntype = \"equilibrium\"\n\
+             [start]\nstretch = 1.2\n"
         );
         let path = dir.path().join("spin.toml");
         std::fs::write(&path, text).unwrap();
@@ -413,6 +416,7 @@ fn spin_on_an_icosphere_keeps_the_axis_stabiliser() {
         assert!(o.status.success(), "{}", stderr(&o));
         let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         assert_eq!(json["group"], group);
+        assert_eq!(json["index"], 0, "the moderate spin's state is stable");
     }
 }
 
