@@ -709,10 +709,11 @@ fn an_interrupted_memstab_diagram_exits_130_with_a_manifest_that_verifies() {
 /// The upward disc's E1 double point (C7v, m = 1): on the C1v− branch the other half of the
 /// kernel (the pattern's orientation, neutral in the axisymmetric continuum) has an
 /// eigenvalue at round-off at the branch's first point, so the index counts an A2 crossing
-/// there (h = 4.14106, 2·10⁻⁴ below the double). Its eigenvalue does not cross: its rate
-/// along the branch is below what moves it off zero over a step, so no branch is switched to
-/// (before, a C1 branch was tried and could not take its first step); the E1 point itself is
-/// transversal and has its two branches.
+/// there (h = 4.14106, 2·10⁻⁴ below the double). Its eigenvalue has not left zero since the
+/// double: its rate, over the distance back to the double, moves it by less than what counts
+/// as zero (and over a whole step too), so no branch is switched to (before, a C1 branch was
+/// tried and could not take its first step); the E1 point itself is transversal and has its
+/// two branches.
 #[test]
 fn a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation() {
     use memstab::results::{Node, Skip};
@@ -741,9 +742,10 @@ fn a_zero_eigenvalue_that_does_not_cross_is_no_bifurcation() {
                 assert!(b > 1e-4, "the double crosses transversally: {b}");
             }
             Some(_) => {
-                let Some(Skip::NotTransversal(rate)) = skipped else {
+                let Some(Skip::AtOrigin { rate, distance }) = skipped else {
                     panic!("{} on a branch: {skipped:?}", point.irrep);
                 };
+                assert!(rate.abs() * distance < 1e-10, "{rate} over {distance}");
                 assert_eq!(point.irrep, "A2");
                 assert!(g.leaving(n).is_empty());
                 // At the branch's first point, orders of magnitude slower than the double.
@@ -839,6 +841,32 @@ fn the_caps_depth_three_diagram_follows_every_branch_once_its_c1_branches_betwee
             );
         }
     }
+    // The E3 branches' A2 eigenvalue (the other half of the E3 kernel) leaves zero to high
+    // order in the amplitude: the index counts it in the branches' first steps, at a place
+    // round-off decides, and it has not left zero there — on both E3 branches, whatever the
+    // round-off, and nothing is switched to.
+    let at_origin: Vec<f64> = g
+        .graph
+        .node_indices()
+        .filter_map(|n| match &g.graph[n] {
+            memstab::results::Node::Critical {
+                point,
+                skipped: Some(memstab::results::Skip::AtOrigin { .. }),
+                ..
+            } => {
+                assert_eq!(point.irrep, "A2");
+                assert!(point.after_step <= 2, "{}", point.after_step);
+                assert!(g.leaving(n).is_empty());
+                Some(w2(&point.parameters))
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(at_origin.len(), 2, "{at_origin:?}");
+    assert!(
+        at_origin.iter().all(|w| (w - 18.826).abs() < 0.02),
+        "{at_origin:?}"
+    );
 }
 
 /// The upward disc's diagram to depth 3 (the bundled 1 792-triangle C7v disc): its two C1v

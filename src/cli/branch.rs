@@ -114,7 +114,7 @@ pub(crate) fn print_branches(b: &Branches, written: &BranchesWritten, control: &
         let on = on.map_or_else(|| "path".to_string(), directory);
         match skipped {
             Some(why) if leaving.is_empty() => {
-                if on == "path" || matches!(why, Skip::NotTransversal(_)) {
+                if on == "path" || matches!(why, Skip::NotTransversal(_) | Skip::AtOrigin { .. }) {
                     println!("  {on} #{number} {} in {}: {why}", point.kind, point.irrep);
                 }
                 continue;

@@ -106,10 +106,21 @@ pub enum Skip {
     /// The critical eigenvalue touches zero instead of crossing it: its rate of change along
     /// the path (b/‖K‖ per unit scaled arclength, given) moves it by less than what counts as
     /// zero over the longest step, so the branching lemma's transversality fails and no
-    /// branch is predicted. On a branch leaving a double point this is the other half of
-    /// that point's kernel (the pattern's orientation, neutral where the mesh is
-    /// axisymmetric), whose sign at the branch's first point is round-off.
+    /// branch is predicted. (The other half of a double point's kernel, at round-off on the
+    /// branch's first steps, is [`Skip::AtOrigin`].)
     NotTransversal(f64),
+    /// On a branch, the critical eigenvalue has not left zero since the point the branch
+    /// left: its rate here (b/‖K‖ per unit scaled arclength), over the scaled distance back to
+    /// that point, moves it by less than what counts as zero. It is the rest of that point's
+    /// kernel (the other half of a double point), leaving zero to high order along the branch,
+    /// whose sign over the branch's first steps is round-off: not a critical point of its own,
+    /// and nothing is switched to.
+    AtOrigin {
+        /// b/‖K‖ per unit scaled arclength at the point.
+        rate: f64,
+        /// The scaled distance back to the point the branch left.
+        distance: f64,
+    },
 }
 
 impl std::fmt::Display for Skip {
@@ -137,6 +148,10 @@ impl std::fmt::Display for Skip {
             Skip::NotTransversal(b) => write!(
                 f,
                 "its eigenvalue touches zero without crossing it (rate {b:.1e} of |K| per unit arclength: below zero over a whole step): not a bifurcation by the branching lemma, nothing is switched to"
+            ),
+            Skip::AtOrigin { rate, distance } => write!(
+                f,
+                "its eigenvalue has not left zero since the point the branch left (rate {rate:.1e} of |K| per unit arclength over {distance:.1e} back to it: below zero): the rest of that point's kernel, not a critical point of its own, nothing is switched to"
             ),
             Skip::Known(b) => write!(
                 f,

@@ -514,6 +514,31 @@ impl Switching<'_> {
         }
     }
 
+    /// The scaled distance (state and control, as the path's steps measure it) from `cp` to
+    /// the critical point that the branch `parent` left; `None` on the path.
+    fn from_origin(
+        &self,
+        g: &BranchGraph,
+        parent: Option<usize>,
+        cp: &CriticalPoint,
+    ) -> Option<f64> {
+        let control = self.control?;
+        let Node::Critical { point, .. } = &g.graph[g.branches[parent?].from] else {
+            return None;
+        };
+        let opts = &self.options.path;
+        let dl =
+            (cp.parameters[control] - point.parameters[control]).abs() / opts.parameter_scale(0);
+        Some(
+            nearest_image(
+                std::slice::from_ref(&point.state),
+                &cp.state,
+                opts.state_scale,
+            )
+            .hypot(dl),
+        )
+    }
+
     /// Switches at `cp`, a critical point of a path in Fix(level's group) (the branch
     /// `parent`, or the path), and follows every branch; recurses while `depth` is within
     /// the options' depth.
@@ -573,6 +598,24 @@ impl Switching<'_> {
                     continue;
                 }
             };
+            // On a branch: an eigenvalue whose rate here, over the distance back to the point
+            // the branch left, moves it by less than what counts as zero has not left zero
+            // since that point. It is the rest of that point's kernel, leaving zero to high
+            // order along the branch (the other half of a double point), whose sign is
+            // round-off over the branch's first steps: not a critical point of its own.
+            if let Some(distance) = self.from_origin(g, parent, cp) {
+                if reduced.path_slope.abs() * distance < CROSSING_ZERO {
+                    set_skip(
+                        g,
+                        node,
+                        Skip::AtOrigin {
+                            rate: reduced.path_slope,
+                            distance,
+                        },
+                    );
+                    continue;
+                }
+            }
             // Transversality (the lemma's hypothesis): over the longest step the eigenvalue
             // must move by more than what the localisation counts as zero.
             if reduced.path_slope.abs() * self.options.path.max_step < CROSSING_ZERO {
