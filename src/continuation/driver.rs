@@ -1079,36 +1079,76 @@ fn step_on_plane<P: Problem + ?Sized>(
     // converged next iterate, and the size of the correction before it.
     let mut chord: Option<(Extended, Linearization)> = None;
     let mut before: Option<f64> = None;
+    // The iterate's evaluation when a chord check made it and did not end the corrector.
+    let mut evaluated: Option<Linearization> = None;
     for it in 1..=opts.max_iterations {
-        if let Some((a, lin)) = chord.take() {
-            // Newton's next correction is foretold to be below the tolerance: check the
-            // iterate on R and g alone and a chord step of the kept factorisation. Where that
-            // fails the iteration goes on as if it had not been tried.
-            let (residual, constraints) = problem.residual(&q, &lambda)?;
-            if lin.converges(&residual, &constraints, opts) {
-                let c = constraints.len();
-                let mut g = DVector::zeros(m + c + 1);
-                g.rows_mut(0, m).copy_from(&residual);
-                g.rows_mut(m, c).copy_from(&constraints);
-                g[m + c] = arclength_of(&q, &lambda);
-                // Only unguarded solves take the chord: no tangent is wanted at the point.
-                if let Some(xs) = a
-                    .resolve_all(&[&(-&g)])
-                    .filter(|xs| xs[0].amax() <= opts.tolerance)
-                {
-                    let d = &xs[0];
-                    q += d.rows(0, m) * sq;
-                    for j in 0..nl {
-                        lambda[j] += d[m + j] * sl(j);
+        match chord.take() {
+            None => {}
+            Some(_) if same_plane => {
+                // Newton's next correction is foretold to be below the tolerance, and the tangent
+                // is wanted at the point: the iterate's own system, solved with the kept factors
+                // as its preconditioner and refined to round-off, gives the correction and the
+                // tangent its factorisation would, without factorising.
+                let now = problem.evaluate(&q, &lambda)?;
+                if now.converged(opts) {
+                    let c = now.constraints.len();
+                    let mut g = DVector::zeros(m + c + 1);
+                    g.rows_mut(0, m).copy_from(&now.residual);
+                    g.rows_mut(m, c).copy_from(&now.constraints);
+                    g[m + c] = arclength_of(&q, &lambda);
+                    let mut unit = DVector::zeros(m + c + 1);
+                    unit[m + c] = 1.0;
+                    if let Some(mut xs) = now
+                        .extended(opts, plane)
+                        .resolve_all(&[&(-&g), &unit])
+                        .filter(|xs| xs[0].amax() <= opts.tolerance)
+                    {
+                        #[cfg(test)]
+                        CHORD_ENDED_STEPS.with(|c| c.set(c.get() + 1));
+                        let tangent = xs.pop();
+                        let d = xs.pop().ok_or(StepError::Singular)?;
+                        advance(&mut q, &mut lambda, &d, opts)?;
+                        return accept(
+                            problem,
+                            from,
+                            t,
+                            (q, lambda),
+                            tangent,
+                            (s, it),
+                            opts,
+                            guarded,
+                        );
                     }
-                    if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
-                        return Err(StepError::Diverged);
+                }
+                evaluated = Some(now);
+            }
+            Some((a, lin)) => {
+                // Newton's next correction is foretold to be below the tolerance: check the
+                // iterate on R and g alone and a chord step of the kept factorisation. Where that
+                // fails the iteration goes on as if it had not been tried.
+                let (residual, constraints) = problem.residual(&q, &lambda)?;
+                if lin.converges(&residual, &constraints, opts) {
+                    let c = constraints.len();
+                    let mut g = DVector::zeros(m + c + 1);
+                    g.rows_mut(0, m).copy_from(&residual);
+                    g.rows_mut(m, c).copy_from(&constraints);
+                    g[m + c] = arclength_of(&q, &lambda);
+                    // Only unguarded solves take the chord: no tangent is wanted at the point.
+                    if let Some(mut xs) = a
+                        .resolve_all(&[&(-&g)])
+                        .filter(|xs| xs[0].amax() <= opts.tolerance)
+                    {
+                        let d = xs.swap_remove(0);
+                        advance(&mut q, &mut lambda, &d, opts)?;
+                        return accept(problem, from, t, (q, lambda), None, (s, it), opts, guarded);
                     }
-                    return accept(problem, from, t, (q, lambda), None, (s, it), opts, guarded);
                 }
             }
         }
-        let lin = problem.evaluate(&q, &lambda)?;
+        let lin = match evaluated.take() {
+            Some(lin) => lin,
+            None => problem.evaluate(&q, &lambda)?,
+        };
         let c = lin.constraints.len();
         let a = lin.extended(opts, plane);
         let mut g = DVector::zeros(m + c + 1);
@@ -1129,13 +1169,7 @@ fn step_on_plane<P: Problem + ?Sized>(
             let mut xs = a.solve_all(&[&rhs]).ok_or(StepError::Singular)?;
             (xs.pop().ok_or(StepError::Singular)?, None)
         };
-        q += d.rows(0, m) * sq;
-        for j in 0..nl {
-            lambda[j] += d[m + j] * sl(j);
-        }
-        if !(q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite())) {
-            return Err(StepError::Diverged);
-        }
+        advance(&mut q, &mut lambda, &d, opts)?;
         if converged && d.amax() <= opts.tolerance {
             return accept(
                 problem,
@@ -1152,10 +1186,14 @@ fn step_on_plane<P: Problem + ?Sized>(
         // (from |d_{k+1}| ≈ C |d_k|², C ≈ |d_k|/|d_{k−1}|²); a next iterate foretold well
         // within the tolerance is checked by a chord step instead of a new factorisation.
         let size = d.amax();
-        // Only where no tangent is wanted at the point: a tangent from the iterate before
+        // Where no tangent is wanted at the point, or where it comes from the step's own
+        // system (refined against the iterate's matrix: a tangent from the iterate before
         // would move the next predictor and arclength plane, and with them where the path's
-        // points and its branches' points fall.
-        if let Some(b) = before.filter(|&b| !guarded && b > 0.0 && size < b) {
+        // points and its branches' points fall). A dense system is factorised again anyway.
+        let sparse = matches!(lin.tangent, Tangent::Sparse { .. });
+        if let Some(b) =
+            before.filter(|&b| (!guarded || same_plane && sparse) && b > 0.0 && size < b)
+        {
             if size.powi(3) / (b * b) <= CHORD_MARGIN * opts.tolerance {
                 chord = Some((a, lin));
             }
@@ -1165,6 +1203,31 @@ fn step_on_plane<P: Problem + ?Sized>(
     Err(StepError::NotConverged {
         iterations: opts.max_iterations,
     })
+}
+
+/// Adds the scaled correction `d` to (q, λ); an iterate that is not finite has diverged.
+fn advance(
+    q: &mut DVector<f64>,
+    lambda: &mut DVector<f64>,
+    d: &DVector<f64>,
+    opts: &PathOptions,
+) -> Result<(), StepError> {
+    let m = q.len();
+    *q += d.rows(0, m) * opts.state_scale;
+    for j in 0..lambda.len() {
+        lambda[j] += d[m + j] * opts.parameter_scale(j);
+    }
+    if q.iter().all(|v| v.is_finite()) && lambda.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(StepError::Diverged)
+    }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Path steps ended by the preconditioned chord check, on this thread (for the tests).
+    static CHORD_ENDED_STEPS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
 /// How far below the corrector's tolerance the next correction must be foretold before the
@@ -1862,6 +1925,118 @@ mod tests {
             "{} of {iterations}",
             counted.evaluations
         );
+    }
+
+    /// A chain of m unknowns, Π = Σ (q_i⁴/12 + q_i²/2) + ε Σ q_i q_{i+1} − λ Σ w_i q_i: its
+    /// tangent diag(q_i² + 1) + ε (neighbours), sparse or dense.
+    struct Chain {
+        sparse: bool,
+        pattern: std::sync::Arc<crate::linalg::SymmetricPattern>,
+        solver: crate::linalg::bordered::SharedFactorization,
+    }
+
+    impl Chain {
+        const M: usize = 30;
+        const EPS: f64 = 0.3;
+        fn new(sparse: bool) -> Self {
+            let m = Self::M;
+            let entries = (0..m).map(|i| (i, i)).chain((1..m).map(|i| (i, i - 1)));
+            Self {
+                sparse,
+                pattern: std::sync::Arc::new(crate::linalg::SymmetricPattern::from_entries(
+                    m, entries,
+                )),
+                solver: Default::default(),
+            }
+        }
+        fn w(i: usize) -> f64 {
+            1.0 + 0.5 * (i as f64 * 0.7).sin()
+        }
+    }
+
+    impl Problem for Chain {
+        fn dim(&self) -> usize {
+            Self::M
+        }
+        fn free_parameters(&self) -> usize {
+            1
+        }
+        fn evaluate(
+            &mut self,
+            q: &DVector<f64>,
+            lambda: &DVector<f64>,
+        ) -> Result<super::Linearization, crate::model::ModelError> {
+            let m = Self::M;
+            let k = nalgebra::DMatrix::from_fn(m, m, |i, j| {
+                if i == j {
+                    q[i] * q[i] + 1.0
+                } else if i.abs_diff(j) == 1 {
+                    Self::EPS
+                } else {
+                    0.0
+                }
+            });
+            let residual = DVector::from_fn(m, |i, _| {
+                q[i].powi(3) / 3.0 + q[i] - lambda[0] * Self::w(i)
+                    + Self::EPS * (if i > 0 { q[i - 1] } else { 0.0 })
+                    + Self::EPS * (if i + 1 < m { q[i + 1] } else { 0.0 })
+            });
+            let tangent = if self.sparse {
+                let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+                let mut values = vec![0.0; self.pattern.nnz()];
+                for j in 0..m {
+                    for p in cp[j]..cp[j + 1] {
+                        values[p] = k[(ri[p], j)];
+                    }
+                }
+                super::Tangent::Sparse {
+                    pattern: self.pattern.clone(),
+                    values,
+                    rank_one: Vec::new(),
+                    solver: self.solver.clone(),
+                }
+            } else {
+                super::Tangent::Dense(k)
+            };
+            Ok(super::Linearization {
+                residual,
+                tangent,
+                loads: nalgebra::DMatrix::from_fn(m, 1, |i, _| -Self::w(i)),
+                constraints: DVector::zeros(0),
+                constraint_q: nalgebra::DMatrix::zeros(0, m),
+                constraint_lambda: nalgebra::DMatrix::zeros(0, 1),
+            })
+        }
+    }
+
+    /// A path step that wants its tangent at the point checks an iterate that Newton's
+    /// convergence foretells converged with the iterate's own system, solved with the last
+    /// factorisation as preconditioner: the same points and tangents as the dense solves that
+    /// factorise at every iteration, to the corrector's tolerance and to round-off.
+    #[test]
+    fn a_path_step_ended_by_a_preconditioned_chord_keeps_its_point_and_tangent() {
+        let opts = PathOptions::default();
+        let mut sparse = Chain::new(true);
+        let mut dense = Chain::new(false);
+        let zero = DVector::zeros(Chain::M);
+        let start = DVector::from_element(1, 0.0);
+        let mut a = point_at(&mut sparse, zero.clone(), start.clone(), 0, &opts, None).unwrap();
+        let mut b = point_at(&mut dense, zero, start, 0, &opts, None).unwrap();
+        let before = super::CHORD_ENDED_STEPS.with(|c| c.get());
+        for _ in 0..12 {
+            a = super::step_from(&mut sparse, &a, 0.4, &opts).unwrap();
+            b = super::step_from(&mut dense, &b, 0.4, &opts).unwrap();
+            assert_eq!(a.iterations, b.iterations);
+            assert!((&a.q - &b.q).amax() <= 1e-9 && (&a.lambda - &b.lambda).amax() <= 1e-9);
+            assert!(
+                (&a.tangent - &b.tangent).amax() <= 1e-12,
+                "{:e}",
+                (&a.tangent - &b.tangent).amax()
+            );
+        }
+        assert!(a.lambda[0] > 1.0, "the path went on: {}", a.lambda[0]);
+        let ended = super::CHORD_ENDED_STEPS.with(|c| c.get()) - before;
+        assert!(ended > 0, "no step ended by the chord check");
     }
 
     /// A slow crossing: g changes by 10⁻⁶ over the whole step, its tolerance spans a hundredth
