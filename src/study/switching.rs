@@ -516,7 +516,7 @@ impl Switching<'_> {
 
     /// The scaled distance (state and control, as the path's steps measure it) from `cp` to
     /// the critical point that the branch `parent` left; `None` on the path.
-    fn from_origin(
+    fn distance_to_origin(
         &self,
         g: &BranchGraph,
         parent: Option<usize>,
@@ -603,7 +603,7 @@ impl Switching<'_> {
             // since that point. It is the rest of that point's kernel, leaving zero to high
             // order along the branch (the other half of a double point), whose sign is
             // round-off over the branch's first steps: not a critical point of its own.
-            if let Some(distance) = self.from_origin(g, parent, cp) {
+            if let Some(distance) = self.distance_to_origin(g, parent, cp) {
                 if reduced.path_slope.abs() * distance < CROSSING_ZERO {
                     set_skip(
                         g,
