@@ -459,30 +459,6 @@ impl<'a> Stability<'a> {
                 *guard = Some((nb, fact));
             }
         }
-        let col_ptr = pattern.col_ptr();
-        let u = |i: usize, t: usize| {
-            if t < p {
-                constrained[t][i]
-            } else {
-                d_cols[t - p][i]
-            }
-        };
-        let mut e = DMatrix::zeros(nb, nb);
-        for &(i, j, v) in &d_block {
-            e[(p + i, p + j)] = v;
-        }
-        let mut mv = Vec::with_capacity(pattern.nnz() + 2 * nb * m + nb * nb);
-        let mut diagonal = Vec::with_capacity(m);
-        for j in 0..m {
-            let diag = pattern.position(j, j).expect("diagonal in pattern") - col_ptr[j];
-            diagonal.push(mv.len() + diag);
-            mv.extend_from_slice(&values[col_ptr[j]..col_ptr[j + 1]]);
-            mv.extend((0..nb).map(|t| u(j, t)));
-        }
-        for t in 0..nb {
-            mv.extend((0..m).map(|i| u(i, t)));
-            mv.extend((0..nb).map(|t2| e[(t2, t)]));
-        }
         let rigid_residual = if rigid_modes > 0 {
             let mut worst = 0.0f64;
             let mut y = vec![0.0; m];
@@ -503,6 +479,15 @@ impl<'a> Stability<'a> {
         } else {
             0.0
         };
+        let (mv, diagonal) = if nb == 0 {
+            // Without a border the bordered matrix is the block itself.
+            let diagonal = (0..m)
+                .map(|j| pattern.position(j, j).expect("diagonal in pattern"))
+                .collect();
+            (values, diagonal)
+        } else {
+            Self::with_border(&pattern, &values, (&constrained, &d_cols), &d_block)
+        };
         Some(SparseBlock {
             bordered: BorderedBlock {
                 m,
@@ -516,6 +501,45 @@ impl<'a> Stability<'a> {
             held: if paired { deflated / 2 } else { deflated }.saturating_sub(rigid_modes),
             rigid_residual,
         })
+    }
+
+    /// The values of the block on `pattern` (`values`) bordered by the columns u (the
+    /// orthonormal zero-E ones, then the D columns) and E (`d_block`), on
+    /// [`bordered_pattern`], and the positions of the block's diagonal in them.
+    fn with_border(
+        pattern: &crate::linalg::SymmetricPattern,
+        values: &[f64],
+        (constrained, d_cols): (&[Vec<f64>], &[DVector<f64>]),
+        d_block: &[(usize, usize, f64)],
+    ) -> (Vec<f64>, Vec<usize>) {
+        let m = pattern.n();
+        let p = constrained.len();
+        let nb = p + d_cols.len();
+        let col_ptr = pattern.col_ptr();
+        let u = |i: usize, t: usize| {
+            if t < p {
+                constrained[t][i]
+            } else {
+                d_cols[t - p][i]
+            }
+        };
+        let mut e = DMatrix::zeros(nb, nb);
+        for &(i, j, v) in d_block {
+            e[(p + i, p + j)] = v;
+        }
+        let mut mv = Vec::with_capacity(pattern.nnz() + 2 * nb * m + nb * nb);
+        let mut diagonal = Vec::with_capacity(m);
+        for j in 0..m {
+            let diag = pattern.position(j, j).expect("diagonal in pattern") - col_ptr[j];
+            diagonal.push(mv.len() + diag);
+            mv.extend_from_slice(&values[col_ptr[j]..col_ptr[j + 1]]);
+            mv.extend((0..nb).map(|t| u(j, t)));
+        }
+        for t in 0..nb {
+            mv.extend((0..m).map(|i| u(i, t)));
+            mv.extend((0..nb).map(|t2| e[(t2, t)]));
+        }
+        (mv, diagonal)
     }
 
     /// The negative count of block `mu` from the inertia of its bordered sparse LBLᵀ `block`
@@ -591,6 +615,10 @@ impl<'a> Stability<'a> {
     ) -> (DMatrix<f64>, usize, DMatrix<f64>) {
         let (model, layout, b) = (self.model, self.model.layout(), ib.first());
         let m = b.dim();
+        if !b.holds_rigid_motions() {
+            // No rigid or held motion has a component in this block.
+            return (DMatrix::zeros(m, 0), 0, DMatrix::zeros(m, 0));
+        }
         let r = if self.motions.is_empty() {
             DMatrix::zeros(m, 0)
         } else {

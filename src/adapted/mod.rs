@@ -82,6 +82,11 @@ pub struct SparseBasis {
     identity: std::sync::OnceLock<bool>,
 }
 
+/// The size of an entry of `Seeds::rigid_maps` below which it is round-off: the maps are
+/// (d/|G|) Σ_g D_{b0}(g) R_g, of order one where the irrep occurs in the translations or the
+/// rotations and zero by Schur's orthogonality where it does not.
+const RIGID_MAP_ZERO: f64 = 1e-10;
+
 impl SparseBasis {
     /// The fixed-point space of `action` on the unknowns of `layout`: for the orbit of node i
     /// with stabiliser H_i, the vectors v fixed by H_i spread over the orbit as
@@ -214,6 +219,19 @@ impl SparseBasis {
                 .zip(&seeds.seeds)
                 .map(|(dofs, s)| (0..3).map(|c| s[c] * v[dofs[c] as usize]).sum()),
         )
+    }
+
+    /// Whether a rigid motion can have a nonzero restriction to this basis: false for a
+    /// basis with orbit-local form whose irrep occurs in neither the translations nor the
+    /// rotations (its projections of both vanish, `Seeds::rigid_maps`), where
+    /// [`SparseBasis::restrict_rigid`] is zero for every motion at every state.
+    pub fn holds_rigid_motions(&self) -> bool {
+        self.seeds.as_ref().is_none_or(|seeds| {
+            seeds
+                .rigid_maps
+                .iter()
+                .any(|(t, w)| t.amax().max(w.amax()) > RIGID_MAP_ZERO)
+        })
     }
 
     /// Bᵀ v for the rigid motion v_i = t + ω × x_i (`motion` = [t, ω]) at a state x the
@@ -384,22 +402,22 @@ impl SparseBasis {
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let columns: Vec<Vec<f64>> = match (&self.seeds, &self.complex) {
             (Some(seeds), _) => {
-                let raw = self.seeded_lower(seeds, &pattern, layout, eval);
-                // Entries above the diagonal of orbits are the transposes of computed ones;
-                // on it both triangles are computed and agree up to round-off.
-                let mut values = vec![0.0; raw.len()];
+                let mut values = self.seeded_lower(seeds, &pattern, layout, eval);
+                // Entries above the diagonal of orbits are the transposes of computed ones
+                // (below it, never overwritten here); on it both triangles are computed and
+                // agree up to round-off, and each pair takes their mean.
                 for cols in &seeds.by_orbit {
                     let (start, end) = (cols.start as usize, cols.end as usize);
                     for p in col_ptr[start]..col_ptr[end] {
                         let r = row_idx[p];
                         let q = transpose[p] as usize;
-                        values[p] = if r < start {
-                            raw[q]
-                        } else if r < end {
-                            0.5 * (raw[p] + raw[q])
-                        } else {
-                            raw[p]
-                        };
+                        if r < start {
+                            values[p] = values[q];
+                        } else if r < end && p < q {
+                            let mean = 0.5 * (values[p] + values[q]);
+                            values[p] = mean;
+                            values[q] = mean;
+                        }
                     }
                 }
                 return Some((pattern, values));
@@ -463,41 +481,49 @@ impl SparseBasis {
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let m = self.dim();
         let flat = seeds.flat_seeds();
+        // Each orbit's columns are contiguous in the values: one slice per orbit, filled by
+        // its task.
+        let mut raw = vec![0.0; pattern.nnz()];
+        let mut slices: Vec<(usize, &mut [f64])> = Vec::with_capacity(seeds.by_orbit.len());
+        let mut rest: &mut [f64] = &mut raw;
+        for (o, cols) in seeds.by_orbit.iter().enumerate() {
+            let (start, end) = (cols.start as usize, cols.end as usize);
+            let (part, tail) =
+                std::mem::take(&mut rest).split_at_mut(col_ptr[end] - col_ptr[start]);
+            slices.push((o, part));
+            rest = tail;
+        }
         // Orbits in tasks of at least ORBITS_PER_TASK: the blocks are themselves restricted in
         // parallel, and a task per few orbits costs more (its scratch, rayon's splitting)
         // than the orbits of a small block.
         const ORBITS_PER_TASK: usize = 64;
-        let parts: Vec<Vec<f64>> = (0..seeds.by_orbit.len())
+        slices
             .into_par_iter()
             .with_min_len(ORBITS_PER_TASK)
-            .map_init(
+            .for_each_init(
                 || (OrbitScratch::new(seeds.d), Vec::new()),
-                |(scratch, dense), o| {
+                |(scratch, dense), (o, part)| {
                     let cols = seeds.by_orbit[o].clone();
                     let (start, end) = (cols.start as usize, cols.end as usize);
                     if start == end {
-                        return Vec::new();
+                        return;
                     }
                     if dense.len() < (end - start) * m {
                         dense.resize((end - start) * m, 0.0);
                     }
                     let dense = &mut dense[..(end - start) * m];
                     seeds.tangent_orbit_lower(o, layout, &eval.tangent, &flat, scratch, dense);
-                    let mut values = Vec::with_capacity(col_ptr[end] - col_ptr[start]);
+                    let mut at = 0;
                     for (e, col) in (start..end).zip(dense.chunks_exact_mut(m)) {
                         let rows = &row_idx[col_ptr[e]..col_ptr[e + 1]];
-                        values.extend(rows.iter().map(|&r| col[r]));
-                        rows.iter().for_each(|&r| col[r] = 0.0);
+                        for (x, &r) in part[at..at + rows.len()].iter_mut().zip(rows) {
+                            *x = col[r];
+                            col[r] = 0.0;
+                        }
+                        at += rows.len();
                     }
-                    values
                 },
-            )
-            .collect();
-        let mut raw = vec![0.0; pattern.nnz()];
-        for (cols, part) in seeds.by_orbit.iter().zip(parts) {
-            let (start, end) = (cols.start as usize, cols.end as usize);
-            raw[col_ptr[start]..col_ptr[end]].copy_from_slice(&part);
-        }
+            );
         raw
     }
 

@@ -169,6 +169,13 @@ pub(super) struct Seeds {
     pub(super) seeds: Vec<Vector3<f64>>,
     /// The columns on each orbit (contiguous, as they are built orbit by orbit).
     pub(super) by_orbit: Vec<Range<u32>>,
+    /// For each column whose 3d seed numbers have a single nonzero, (its index 3b + c, its
+    /// value): every column of a free orbit, whose seeds are scaled unit vectors (their Gram
+    /// matrix is a multiple of the identity). The restriction then reads one column of each
+    /// 3 × 3 block and one number of each orbit sum instead of contracting with the seeds.
+    pub(super) unit: Vec<Option<(u32, f64)>>,
+    /// Whether every column of the orbit has a unit seed.
+    pub(super) unit_orbit: Vec<bool>,
     /// For each b < d, (d/|G|) Σ_g D_{b0}(g) R_g and (d/|G|) Σ_g D_{b0}(g) det(R_g) R_g: how
     /// P_{b0} acts on the translation and the rotation of a rigid motion.
     pub(super) rigid_maps: Vec<(Matrix3<f64>, Matrix3<f64>)>,
@@ -290,11 +297,23 @@ impl Seeds {
                 let a = frame.rotations[g as usize] * blocks[t];
                 let dm = self.dmat(g as usize);
                 for (le, e) in cols_e.clone().enumerate() {
+                    let u_e = &mut sum[le * w3..(le + 1) * w3];
+                    if let Some((k, value)) = self.unit[e as usize] {
+                        // s_{e,b} = value · e_c for b = b₀ only: U_e,b₂ += D_{b₂b₀} value A e_c.
+                        let (b0, c) = (k as usize / 3, k as usize % 3);
+                        let x = a.column(c) * value;
+                        for (b2, u) in u_e.chunks_exact_mut(3).enumerate() {
+                            let dd = dm[b2 * d + b0];
+                            u[0] += dd * x[0];
+                            u[1] += dd * x[1];
+                            u[2] += dd * x[2];
+                        }
+                        continue;
+                    }
                     let s_e = &self.seeds[e as usize * d..(e as usize + 1) * d];
                     for (vb, s) in v.iter_mut().zip(s_e) {
                         *vb = a * s;
                     }
-                    let u_e = &mut sum[le * w3..(le + 1) * w3];
                     for (b2, u) in u_e.chunks_exact_mut(3).enumerate() {
                         let row = &dm[b2 * d..(b2 + 1) * d];
                         let x = v
@@ -310,8 +329,21 @@ impl Seeds {
         }
         for (slot, &target) in targets.iter().enumerate() {
             let cols_f = self.by_orbit[target as usize].clone();
-            let s_f = &flat[cols_f.start as usize * w3..cols_f.end as usize * w3];
             let sum = &sums[slot * ne * w3..(slot + 1) * ne * w3];
+            if self.unit_orbit[target as usize] {
+                // ⟨s_f, U_e⟩ = value_f · (U_e)_{k_f}.
+                let units = &self.unit[cols_f.start as usize..cols_f.end as usize];
+                for (le, u_e) in sum.chunks_exact(w3).enumerate() {
+                    let col =
+                        &mut out[le * m + cols_f.start as usize..le * m + cols_f.end as usize];
+                    for (x, unit) in col.iter_mut().zip(units) {
+                        let (k, value) = unit.expect("a unit orbit");
+                        *x += coef * value * u_e[k as usize];
+                    }
+                }
+                continue;
+            }
+            let s_f = &flat[cols_f.start as usize * w3..cols_f.end as usize * w3];
             for (le, u_e) in sum.chunks_exact(w3).enumerate() {
                 let col = &mut out[le * m + cols_f.start as usize..le * m + cols_f.end as usize];
                 for (x, s) in col.iter_mut().zip(s_f.chunks_exact(w3)) {
@@ -480,6 +512,8 @@ pub(super) fn orbit_basis(
         rep_dofs: Vec::new(),
         seeds: Vec::new(),
         by_orbit: Vec::with_capacity(orbits.len()),
+        unit: Vec::new(),
+        unit_orbit: Vec::with_capacity(orbits.len()),
         rigid_maps: (0..d)
             .map(|b| {
                 (0..group.order()).fold((Matrix3::zeros(), Matrix3::zeros()), |(t, w), g| {
@@ -495,7 +529,9 @@ pub(super) fn orbit_basis(
         let start = seeds.rep.len() as u32;
         // Gram matrix of the candidates P_{0b} e_{i0,c} (index 3b + c), from the stabiliser.
         let mut gram = DMatrix::<f64>::zeros(3 * d, 3 * d);
+        let mut stabiliser = 0;
         for h in (0..group.order()).filter(|&h| action.node_perm(h)[i0] == i0) {
+            stabiliser += 1;
             let r = group.element(h);
             let dm = &matrices[h];
             for b in 0..d {
@@ -521,7 +557,19 @@ pub(super) fn orbit_basis(
             }
             gram = &lift * gram * &lift;
         }
-        let eig = SymmetricEigen::new((&gram + gram.transpose()) * 0.5);
+        // On a free orbit (the stabiliser is the identity alone, no sliding) the Gram matrix
+        // is (d/|G|) I exactly in theory, and the candidates themselves are orthogonal: the
+        // seeds are the scaled unit vectors, not an eigenbasis of round-off in D(e).
+        let free = stabiliser == 1 && layout.slide_normal(i0).is_none();
+        let eig = if free {
+            let lam = d as f64 / order;
+            SymmetricEigen {
+                eigenvalues: nalgebra::DVector::from_element(3 * d, lam),
+                eigenvectors: DMatrix::identity(3 * d, 3 * d),
+            }
+        } else {
+            SymmetricEigen::new((&gram + gram.transpose()) * 0.5)
+        };
         // Genuine directions have eigenvalues of order d|H|/|G|, round-off ones of 1e-16.
         for (k, &lam) in eig.eigenvalues.iter().enumerate() {
             if lam <= 1e-10 {
@@ -537,7 +585,16 @@ pub(super) fn orbit_basis(
                     .seeds
                     .push(Vector3::new(y[3 * b], y[3 * b + 1], y[3 * b + 2]));
             }
+            let mut nonzero = y.iter().enumerate().filter(|(_, v)| **v != 0.0);
+            seeds.unit.push(match (nonzero.next(), nonzero.next()) {
+                (Some((k, &v)), None) => Some((k as u32, v)),
+                _ => None,
+            });
         }
+        let cols = start as usize..seeds.rep.len();
+        seeds
+            .unit_orbit
+            .push(seeds.unit[cols].iter().all(Option::is_some));
         seeds.by_orbit.push(start..seeds.rep.len() as u32);
     }
     SparseBasis::with_seeds(layout.unknowns(), seeds)
@@ -566,6 +623,60 @@ mod tests {
             assert_eq!(fast.col_ptr(), slow.col_ptr(), "{}", ib.name);
             assert_eq!(fast.row_idx(), slow.row_idx(), "{}", ib.name);
         }
+    }
+
+    /// On an Ih sphere every orbit of trivial stabiliser is a unit orbit (its seeds scaled
+    /// unit vectors, which the restriction reads as such), and the blocks that hold a rigid
+    /// motion are T1u (translations) and T1g (rotations) alone: there the restricted motions
+    /// are of order one, elsewhere they vanish.
+    #[test]
+    fn free_orbits_have_unit_seeds_and_only_the_vector_irreps_hold_rigid_motions() {
+        // Frequency 8: the first with nodes off every mirror plane.
+        let sym = icosphere(&IcosphereOptions {
+            radius: 1.0,
+            frequency: 8,
+        })
+        .unwrap();
+        let layout = Layout::new(sym.mesh.nodes.len(), sym.mesh.triangles.clone(), &[]);
+        let basis = AdaptedBasis::new(&sym.action, &layout).unwrap();
+        let order = sym.action.group().order();
+        let x: Vec<nalgebra::Vector3<f64>> = sym.mesh.nodes.clone();
+        let mut free_orbits = 0;
+        for ib in &basis.irreps {
+            let b = ib.first();
+            let Some(seeds) = &b.seeds else {
+                continue;
+            };
+            for (o, cols) in seeds.by_orbit.iter().enumerate() {
+                let Some(&rep) = seeds.rep.get(cols.start as usize) else {
+                    continue;
+                };
+                let stabiliser = (0..order)
+                    .filter(|&h| sym.action.node_perm(h)[rep as usize] == rep as usize)
+                    .count();
+                if stabiliser == 1 && !cols.is_empty() {
+                    assert!(seeds.unit_orbit[o], "{}: orbit {o}", ib.name);
+                    free_orbits += 1;
+                }
+            }
+            let holds = b.holds_rigid_motions();
+            assert_eq!(holds, ib.name == "T1u" || ib.name == "T1g", "{}", ib.name);
+            let largest = [
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ]
+            .iter()
+            .map(|motion| b.restrict_rigid(motion, &x, &layout).amax())
+            .fold(0.0, f64::max);
+            if holds {
+                assert!(largest > 1e-2, "{}: {largest:e}", ib.name);
+            } else {
+                assert!(largest < 1e-12, "{}: {largest:e}", ib.name);
+            }
+        }
+        assert!(free_orbits > 0);
     }
 
     #[test]
