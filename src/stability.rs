@@ -157,6 +157,8 @@ pub struct Stability<'a> {
     interruptible: bool,
     /// Per block, the sparse factorisation of its bordered matrix and its border size.
     factorizations: Vec<Mutex<Option<(usize, SymmetricFactorization)>>>,
+    /// Per block, the positions of its diagonal in its values (the block's pattern is fixed).
+    diagonals: Vec<std::sync::OnceLock<Vec<usize>>>,
 }
 
 /// A block's bordered sparse matrix with what the stability analysis reports of its
@@ -247,9 +249,15 @@ fn constraint_border(
 /// max|K_ij| of an evaluation (with its rank-one terms c a aᵀ): the scale of "zero" for a
 /// block's eigenvalues.
 fn tangent_scale(eval: &Evaluation) -> f64 {
-    eval.tangent
-        .iter()
-        .fold(0.0f64, |a, b| a.max(b.abs()))
+    // An evaluation of a subset writes only its slots; the others hold zeros.
+    let sparse_part = match eval.subset() {
+        Some(subset) => subset
+            .slots()
+            .iter()
+            .fold(0.0f64, |a, &p| a.max(eval.tangent[p as usize].abs())),
+        None => eval.tangent.iter().fold(0.0f64, |a, b| a.max(b.abs())),
+    };
+    sparse_part
         .max(
             eval.rank_one
                 .iter()
@@ -332,6 +340,7 @@ impl<'a> Stability<'a> {
             method: BlockEigen::ByCost,
             interruptible: false,
             factorizations: basis.irreps.iter().map(|_| Mutex::new(None)).collect(),
+            diagonals: basis.irreps.iter().map(|_| Default::default()).collect(),
         }
     }
 
@@ -368,7 +377,9 @@ impl<'a> Stability<'a> {
     /// Eliminating the invertible part D of E and then the zero part (p columns, full rank)
     /// gives In(M) = In(D) + In(Zᵀ (K + Σ c a aᵀ − L C⁻¹ Lᵀ) Z) + (p, p, 0): the same
     /// matrix the dense path takes eigenvalues of. Makes sure the block's cached
-    /// factorisation has M's pattern. `None` if the block has no orbit-local form.
+    /// factorisation has M's pattern. `None` if the block has no orbit-local form. The rigid
+    /// modes' residual |B_μᵀ K r| is measured only `with_residual` (it is reported with the
+    /// eigenvalues, not with the inertia alone).
     #[allow(clippy::too_many_arguments)]
     fn bordered_block(
         &self,
@@ -378,7 +389,7 @@ impl<'a> Stability<'a> {
         eval: &Evaluation,
         (r, rigid_modes): (&DMatrix<f64>, usize),
         border: Option<&(DMatrix<f64>, DMatrix<f64>)>,
-        scale: f64,
+        (scale, with_residual): (f64, bool),
     ) -> Option<SparseBlock> {
         let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
         let m = b.dim();
@@ -459,7 +470,7 @@ impl<'a> Stability<'a> {
                 *guard = Some((nb, fact));
             }
         }
-        let rigid_residual = if rigid_modes > 0 {
+        let rigid_residual = if rigid_modes > 0 && with_residual {
             let mut worst = 0.0f64;
             let mut y = vec![0.0; m];
             let rank_one: Vec<(f64, DVector<f64>)> = eval
@@ -481,10 +492,12 @@ impl<'a> Stability<'a> {
         };
         let (mv, diagonal) = if nb == 0 {
             // Without a border the bordered matrix is the block itself.
-            let diagonal = (0..m)
-                .map(|j| pattern.position(j, j).expect("diagonal in pattern"))
-                .collect();
-            (values, diagonal)
+            let diagonal = self.diagonals[mu].get_or_init(|| {
+                (0..m)
+                    .map(|j| pattern.position(j, j).expect("diagonal in pattern"))
+                    .collect()
+            });
+            (values, diagonal.clone())
         } else {
             Self::with_border(&pattern, &values, (&constrained, &d_cols), &d_block)
         };
@@ -699,7 +712,7 @@ impl<'a> Stability<'a> {
             eval,
             (&r, rigid_modes),
             constraint.as_ref(),
-            scale,
+            (scale, false),
         ) else {
             return Ok(None);
         };
@@ -891,7 +904,7 @@ impl<'a> Stability<'a> {
                     eval,
                     (&r, rigid_modes),
                     border.as_ref(),
-                    scale,
+                    (scale, !inertia_only),
                 ) {
                     let lanczos = !inertia_only
                         && match self.method {

@@ -50,7 +50,8 @@ pub struct BlockSpectrum {
     /// Mean motions held in this block ([`crate::model::Model::held_motions`]: the rolling of
     /// a spherical reference), deflated like the rigid modes but not zero modes.
     pub held: usize,
-    /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium).
+    /// Largest |B_μᵀ K r| over the rigid modes r, relative to ‖K‖ (≈ 0 at an equilibrium);
+    /// measured with the eigenvalues, 0 where only the inertia was asked for.
     pub rigid_residual: f64,
     /// Eigenvalues on the complement of the rigid modes (and of the constraints' border for the
     /// trivial block), ascending: all of them when [`BlockSpectrum::complete`], else the lowest

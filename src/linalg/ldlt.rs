@@ -312,8 +312,11 @@ impl SymmetricFactorization {
         // faer's Bunch–Kaufman leaves `subdiag` untouched for a 1×1 pivot with nothing to
         // eliminate, so stale 2×2 markers from a previous factorisation must be cleared.
         self.subdiag.fill(0.0);
+        // The lower triangle gathered, and max|a_ij| (of a symmetric A) with it.
+        let mut scale = 0.0f64;
         for (x, &k) in self.permuted_values.iter_mut().zip(&self.gather) {
             *x = values[k];
+            scale = scale.max(x.abs());
         }
         let _ = self.symbolic.factorize_numeric_intranode_lblt(
             &mut self.l_values,
@@ -326,7 +329,7 @@ impl SymmetricFactorization {
             MemStack::new(&mut self.factor_mem),
             Spec::<LbltParams, f64>::default(),
         );
-        let summary = self.scan_pivots(self.zero_threshold(values));
+        let summary = self.scan_pivots(self.options.zero_pivot_tolerance * scale);
         match summary.failure {
             Some(err @ FactorError::NonFinite { .. }) => Err(err),
             failure => {

@@ -500,6 +500,12 @@ impl Subset {
     pub fn nodes(&self) -> &[usize] {
         &self.nodes
     }
+
+    /// The tangent slots its triangles and nodes write (sorted): an evaluation of the subset
+    /// holds zeros in every other slot.
+    pub fn slots(&self) -> &[u32] {
+        &self.slots
+    }
 }
 
 impl Evaluation {
