@@ -1074,6 +1074,18 @@ fn step_on_plane<P: Problem + ?Sized>(
         }
         arc
     };
+    // G = [R; g; the arclength equation] at (q, λ).
+    let stacked = |residual: &DVector<f64>,
+                   constraints: &DVector<f64>,
+                   q: &DVector<f64>,
+                   lambda: &DVector<f64>| {
+        let c = constraints.len();
+        let mut g = DVector::zeros(m + c + 1);
+        g.rows_mut(0, m).copy_from(residual);
+        g.rows_mut(m, c).copy_from(constraints);
+        g[m + c] = arclength_of(q, lambda);
+        g
+    };
     let mut e = DVector::zeros(0);
     // The last iteration's system and linearisation, kept when its correction foretells a
     // converged next iterate, and the size of the correction before it.
@@ -1092,10 +1104,7 @@ fn step_on_plane<P: Problem + ?Sized>(
                 let now = problem.evaluate(&q, &lambda)?;
                 if now.converged(opts) {
                     let c = now.constraints.len();
-                    let mut g = DVector::zeros(m + c + 1);
-                    g.rows_mut(0, m).copy_from(&now.residual);
-                    g.rows_mut(m, c).copy_from(&now.constraints);
-                    g[m + c] = arclength_of(&q, &lambda);
+                    let g = stacked(&now.residual, &now.constraints, &q, &lambda);
                     let mut unit = DVector::zeros(m + c + 1);
                     unit[m + c] = 1.0;
                     if let Some(mut xs) = now
@@ -1128,11 +1137,7 @@ fn step_on_plane<P: Problem + ?Sized>(
                 // fails the iteration goes on as if it had not been tried.
                 let (residual, constraints) = problem.residual(&q, &lambda)?;
                 if lin.converges(&residual, &constraints, opts) {
-                    let c = constraints.len();
-                    let mut g = DVector::zeros(m + c + 1);
-                    g.rows_mut(0, m).copy_from(&residual);
-                    g.rows_mut(m, c).copy_from(&constraints);
-                    g[m + c] = arclength_of(&q, &lambda);
+                    let g = stacked(&residual, &constraints, &q, &lambda);
                     // Only unguarded solves take the chord: no tangent is wanted at the point.
                     if let Some(mut xs) = a
                         .resolve_all(&[&(-&g)])
@@ -1151,10 +1156,7 @@ fn step_on_plane<P: Problem + ?Sized>(
         };
         let c = lin.constraints.len();
         let a = lin.extended(opts, plane);
-        let mut g = DVector::zeros(m + c + 1);
-        g.rows_mut(0, m).copy_from(&lin.residual);
-        g.rows_mut(m, c).copy_from(&lin.constraints);
-        g[m + c] = arclength_of(&q, &lambda);
+        let g = stacked(&lin.residual, &lin.constraints, &q, &lambda);
         let converged = lin.converged(opts);
         if e.len() != m + c + 1 {
             e = DVector::zeros(m + c + 1);
