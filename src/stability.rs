@@ -159,6 +159,8 @@ pub struct Stability<'a> {
     factorizations: Vec<Mutex<Option<(usize, SymmetricFactorization)>>>,
     /// Per block, the positions of its diagonal in its values (the block's pattern is fixed).
     diagonals: Vec<std::sync::OnceLock<Vec<usize>>>,
+    /// Per block, the buffer its values are restricted into, kept from one point to the next.
+    buffers: Vec<Mutex<Vec<f64>>>,
 }
 
 /// A block's bordered sparse matrix with what the stability analysis reports of its
@@ -341,6 +343,7 @@ impl<'a> Stability<'a> {
             interruptible: false,
             factorizations: basis.irreps.iter().map(|_| Mutex::new(None)).collect(),
             diagonals: basis.irreps.iter().map(|_| Default::default()).collect(),
+            buffers: basis.irreps.iter().map(|_| Default::default()).collect(),
         }
     }
 
@@ -391,7 +394,11 @@ impl<'a> Stability<'a> {
         border: Option<&(DMatrix<f64>, DMatrix<f64>)>,
         (scale, with_residual): (f64, bool),
     ) -> Option<SparseBlock> {
-        let (pattern, values) = b.restrict_tangent_sparse(layout, eval)?;
+        let buffer = self.buffers[mu]
+            .lock()
+            .map(|mut kept| std::mem::take(&mut *kept))
+            .unwrap_or_default();
+        let (pattern, values) = b.restrict_tangent_sparse_into(layout, eval, buffer)?;
         let m = b.dim();
         let paired = b.is_complex();
         // Border columns: zero-E first (rigid and held span, zero-C constraints), then
@@ -499,7 +506,9 @@ impl<'a> Stability<'a> {
             });
             (values, diagonal.clone())
         } else {
-            Self::with_border(&pattern, &values, (&constrained, &d_cols), &d_block)
+            let bordered = Self::with_border(&pattern, &values, (&constrained, &d_cols), &d_block);
+            self.recycle(mu, values);
+            bordered
         };
         Some(SparseBlock {
             bordered: BorderedBlock {
@@ -514,6 +523,13 @@ impl<'a> Stability<'a> {
             held: if paired { deflated / 2 } else { deflated }.saturating_sub(rigid_modes),
             rigid_residual,
         })
+    }
+
+    /// Keeps `values` as block `mu`'s buffer for its next restriction.
+    fn recycle(&self, mu: usize, values: Vec<f64>) {
+        if let Ok(mut kept) = self.buffers[mu].lock() {
+            *kept = values;
+        }
     }
 
     /// The values of the block on `pattern` (`values`) bordered by the columns u (the
@@ -927,10 +943,11 @@ impl<'a> Stability<'a> {
                         let certified = |s: &BlockSpectrum| {
                             inertia_only || s.eigen_error.is_none() || m > DENSE_FALLBACK
                         };
-                        if let Some(spectrum) = self
+                        let spectrum = self
                             .block_sparse(mu, &block, scale, wanted, with_vectors)
-                            .filter(certified)
-                        {
+                            .filter(certified);
+                        self.recycle(mu, block.bordered.values);
+                        if let Some(spectrum) = spectrum {
                             return BlockSpectrum {
                                 irrep: ib.name.clone(),
                                 dim: ib.dim,

@@ -368,6 +368,20 @@ impl SparseBasis {
         layout: &Layout,
         eval: &Evaluation,
     ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
+        self.restrict_tangent_sparse_into(layout, eval, Vec::new())
+    }
+
+    /// As [`SparseBasis::restrict_tangent_sparse`], its values written into `buffer` (resized;
+    /// its earlier contents ignored) for a block with orbit-local form: a caller that restricts
+    /// at every path point keeps one buffer instead of a fresh allocation per point (one that
+    /// the allocator maps and the kernel zeroes anew while its size is above the allocator's
+    /// mapping threshold).
+    pub fn restrict_tangent_sparse_into(
+        &self,
+        layout: &Layout,
+        eval: &Evaluation,
+        buffer: Vec<f64>,
+    ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
         if self.seeds.is_none() && self.complex.is_none() {
             return None;
         }
@@ -402,7 +416,7 @@ impl SparseBasis {
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let columns: Vec<Vec<f64>> = match (&self.seeds, &self.complex) {
             (Some(seeds), _) => {
-                let mut values = self.seeded_lower(seeds, &pattern, layout, eval);
+                let mut values = self.seeded_lower(seeds, &pattern, layout, eval, buffer);
                 // Entries above the diagonal of orbits are the transposes of computed ones
                 // (below it, never overwritten here); on it both triangles are computed and
                 // agree up to round-off, and each pair takes their mean.
@@ -477,13 +491,16 @@ impl SparseBasis {
         pattern: &SymmetricPattern,
         layout: &Layout,
         eval: &Evaluation,
+        mut raw: Vec<f64>,
     ) -> Vec<f64> {
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
         let m = self.dim();
         let flat = seeds.flat_seeds();
         // Each orbit's columns are contiguous in the values: one slice per orbit, filled by
         // its task.
-        let mut raw = vec![0.0; pattern.nnz()];
+        // Every entry is written below (each orbit's columns, every row of them).
+        raw.clear();
+        raw.resize(pattern.nnz(), 0.0);
         let mut slices: Vec<(usize, &mut [f64])> = Vec::with_capacity(seeds.by_orbit.len());
         let mut rest: &mut [f64] = &mut raw;
         for (o, cols) in seeds.by_orbit.iter().enumerate() {
