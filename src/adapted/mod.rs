@@ -498,8 +498,8 @@ impl SparseBasis {
         let flat = seeds.flat_seeds();
         // Each orbit's columns are contiguous in the values: one slice per orbit, filled by
         // its task.
-        // Every entry is written below (each orbit's columns, every row of them).
-        raw.clear();
+        // Every entry is written below (each orbit's columns, every row of them): the
+        // buffer's earlier contents need no clearing.
         raw.resize(pattern.nnz(), 0.0);
         let mut slices: Vec<(usize, &mut [f64])> = Vec::with_capacity(seeds.by_orbit.len());
         let mut rest: &mut [f64] = &mut raw;

@@ -222,7 +222,7 @@ fn batched(
             let worst = residuals
                 .iter()
                 .zip(all.iter().zip(&sols))
-                .map(|(r, (rhs, sol))| r.amax() / (norm * sol.amax() + rhs.amax()).max(1e-300))
+                .map(|(r, (rhs, sol))| backward_error(r, rhs, sol, norm))
                 .fold(
                     0.0,
                     |w: f64, e| if e.is_nan() { f64::NAN } else { w.max(e) },
@@ -266,6 +266,12 @@ fn residual(
         r[m + i] -= bottom[i];
     }
     r
+}
+
+/// The normwise backward error ‖r‖∞ / (max|M_ij| ‖x‖∞ + ‖rhs‖∞) of a solution `sol` of
+/// M x = `rhs` with residual `r` (`norm` = max|M_ij|).
+fn backward_error(r: &DVector<f64>, rhs: &DVector<f64>, sol: &DVector<f64>, norm: f64) -> f64 {
+    r.amax() / (norm * sol.amax() + rhs.amax()).max(1e-300)
 }
 
 /// max|M_ij| of the bordered system M = [[A, B], [C, D]].
@@ -313,7 +319,7 @@ fn refined(
     }
     if near_singular {
         // The normwise backward error of the whole system, at round-off or refused.
-        let error = residual_of(&sol).amax() / (norm * sol.amax() + rhs.amax()).max(1e-300);
+        let error = backward_error(&residual_of(&sol), rhs, &sol, norm);
         // NaN (a non-finite solution) is refused too.
         if error.is_nan() || error > NEAR_SINGULAR_BACKWARD_ERROR {
             return None;
