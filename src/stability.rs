@@ -347,6 +347,18 @@ impl<'a> Stability<'a> {
         }
     }
 
+    /// Builds every block's sparse pattern now, in parallel (the first analysis builds
+    /// those not built yet): the blocks' structure, fixed for the mesh and the group, as the
+    /// layout's pattern is for the whole K. For an analysis that follows a path.
+    pub fn with_patterns(self) -> Self {
+        let layout = self.model.layout();
+        self.basis
+            .irreps
+            .par_iter()
+            .for_each(|ib| ib.first().prepare_pattern(layout));
+        self
+    }
+
     /// Blocks with more than `limit` columns are analysed by the inertia of a sparse LBLᵀ
     /// factorisation of the block, bordered by its rigid modes, constraints and rank-one
     /// terms (Haynsworth): the negative count is exact, no eigenvalues are computed. With
@@ -1050,7 +1062,8 @@ pub struct IrrepBlocks<'a> {
 
 impl<'a> IrrepBlocks<'a> {
     /// The blocks of `stability` at states of `model` with `constraints` active; modes'
-    /// isotropy under `action`.
+    /// isotropy under `action`. The blocks' patterns are built here
+    /// ([`Stability::with_patterns`]), before the first point.
     pub fn new(
         stability: Stability<'a>,
         model: &'a dyn Model,
@@ -1060,7 +1073,7 @@ impl<'a> IrrepBlocks<'a> {
         Self {
             eval: model.new_evaluation(),
             local: stability.new_evaluation(),
-            stability,
+            stability: stability.with_patterns(),
             constraints,
             action,
             model,

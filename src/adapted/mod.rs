@@ -75,11 +75,24 @@ pub struct SparseBasis {
     seeds: Option<Seeds>,
     /// The orbit-local form of a complex-type block's columns [u, v] (complex.rs).
     complex: Option<complex::ComplexSeeds>,
-    /// The sparsity pattern of Bᵀ K B (built on first use),
-    /// and for each stored entry the slot of its transpose.
-    pattern: std::sync::OnceLock<(Arc<SymmetricPattern>, Vec<u32>)>,
+    /// The sparsity pattern of Bᵀ K B and how its triangles are made symmetric (built on
+    /// first use, or by [`SparseBasis::prepare_pattern`]).
+    pattern: std::sync::OnceLock<(Arc<SymmetricPattern>, Mirror)>,
     /// Whether the basis is the identity (decided on first use).
     identity: std::sync::OnceLock<bool>,
+}
+
+/// How the restriction of the tangent onto a block pattern is made symmetric.
+#[derive(Debug, Clone)]
+enum Mirror {
+    /// The identity basis: K is taken as assembled.
+    Identity,
+    /// A seeded block: its entries below the diagonal of orbits are computed, those above
+    /// copied from their transposes ([`orbit::Seeds::mirror`]).
+    Orbits(orbit::OrbitRows),
+    /// A complex-type block: both triangles are computed, each entry averaged with its
+    /// transpose, whose slot this holds for every stored entry.
+    Transposes(Vec<u32>),
 }
 
 /// The size of an entry of `Seeds::rigid_maps` below which it is round-off: the maps are
@@ -371,32 +384,32 @@ impl SparseBasis {
         self.restrict_tangent_sparse_into(layout, eval, Vec::new())
     }
 
-    /// As [`SparseBasis::restrict_tangent_sparse`], its values written into `buffer` (resized;
-    /// its earlier contents ignored) for a block with orbit-local form: a caller that restricts
-    /// at every path point keeps one buffer instead of a fresh allocation per point (one that
-    /// the allocator maps and the kernel zeroes anew while its size is above the allocator's
-    /// mapping threshold).
-    pub fn restrict_tangent_sparse_into(
-        &self,
-        layout: &Layout,
-        eval: &Evaluation,
-        buffer: Vec<f64>,
-    ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
+    /// Builds the pattern of Bᵀ K B for `layout` now, where the block has an orbit-local
+    /// form (it is otherwise built by the first restriction): the structure of the block, as
+    /// the layout's pattern is K's.
+    pub fn prepare_pattern(&self, layout: &Layout) {
+        let _ = self.block_pattern(layout);
+    }
+
+    /// The pattern of Bᵀ K B and how its restriction is made symmetric (built on first use);
+    /// `None` without an orbit-local form.
+    fn block_pattern(&self, layout: &Layout) -> Option<&(Arc<SymmetricPattern>, Mirror)> {
         if self.seeds.is_none() && self.complex.is_none() {
             return None;
         }
-        if self.is_identity() {
-            let (pattern, _) = self
-                .pattern
-                .get_or_init(|| (Arc::new(layout.pattern().clone()), Vec::new()));
-            return Some((pattern.clone(), eval.tangent.clone()));
-        }
-        let (pattern, transpose) = self.pattern.get_or_init(|| {
-            let pattern = match (&self.seeds, &self.complex) {
-                (Some(seeds), _) => seeds.block_pattern(layout),
-                (None, Some(complex)) => complex.real_pattern(layout),
+        Some(self.pattern.get_or_init(|| {
+            if self.is_identity() {
+                return (Arc::new(layout.pattern().clone()), Mirror::Identity);
+            }
+            let complex = match (&self.seeds, &self.complex) {
+                (Some(seeds), _) => {
+                    let (pattern, rows) = seeds.block_pattern(layout);
+                    return (Arc::new(pattern), Mirror::Orbits(rows));
+                }
+                (None, Some(complex)) => complex,
                 (None, None) => unreachable!("checked above"),
             };
+            let pattern = complex.real_pattern(layout);
             // The transpose of entry (r, e) is (e, r): going through the columns in order,
             // column r meets its rows e in increasing order, one after the other.
             let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
@@ -410,33 +423,36 @@ impl SparseBasis {
                     next[r] += 1;
                 }
             }
-            (Arc::new(pattern), transpose)
-        });
+            (Arc::new(pattern), Mirror::Transposes(transpose))
+        }))
+    }
+
+    /// As [`SparseBasis::restrict_tangent_sparse`], its values written into `buffer` (resized;
+    /// its earlier contents ignored) for a block with orbit-local form: a caller that restricts
+    /// at every path point keeps one buffer instead of a fresh allocation per point (one that
+    /// the allocator maps and the kernel zeroes anew while its size is above the allocator's
+    /// mapping threshold).
+    pub fn restrict_tangent_sparse_into(
+        &self,
+        layout: &Layout,
+        eval: &Evaluation,
+        buffer: Vec<f64>,
+    ) -> Option<(Arc<SymmetricPattern>, Vec<f64>)> {
+        let (pattern, mirror) = self.block_pattern(layout)?;
         let pattern = pattern.clone();
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let columns: Vec<Vec<f64>> = match (&self.seeds, &self.complex) {
-            (Some(seeds), _) => {
-                let mut values = self.seeded_lower(seeds, &pattern, layout, eval, buffer);
-                // Entries above the diagonal of orbits are the transposes of computed ones
-                // (below it, never overwritten here); on it both triangles are computed and
-                // agree up to round-off, and each pair takes their mean.
-                for cols in &seeds.by_orbit {
-                    let (start, end) = (cols.start as usize, cols.end as usize);
-                    for p in col_ptr[start]..col_ptr[end] {
-                        let r = row_idx[p];
-                        let q = transpose[p] as usize;
-                        if r < start {
-                            values[p] = values[q];
-                        } else if r < end && p < q {
-                            let mean = 0.5 * (values[p] + values[q]);
-                            values[p] = mean;
-                            values[q] = mean;
-                        }
-                    }
-                }
+        let transpose = match mirror {
+            Mirror::Identity => return Some((pattern, eval.tangent.clone())),
+            Mirror::Orbits(rows) => {
+                let seeds = self.seeds.as_ref().expect("a seeded block");
+                let mut values = self.seeded_lower(seeds, rows, &pattern, layout, eval, buffer);
+                seeds.mirror(rows, pattern.col_ptr(), &mut values);
                 return Some((pattern, values));
             }
-            (None, Some(complex)) => {
+            Mirror::Transposes(transpose) => transpose,
+        };
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let columns: Vec<Vec<f64>> = match &self.complex {
+            Some(complex) => {
                 // Column e of H gives the real columns e and m + e of R.
                 let mc = complex.len();
                 let halves: Vec<(Vec<f64>, Vec<f64>)> = (0..mc)
@@ -470,7 +486,7 @@ impl SparseBasis {
                 let (u, v): (Vec<_>, Vec<_>) = halves.into_iter().unzip();
                 u.into_iter().chain(v).collect()
             }
-            (None, None) => unreachable!("checked above"),
+            None => unreachable!("a block with transposes is complex-type"),
         };
         // Symmetrise: the two triangles agree up to round-off.
         let raw: Vec<f64> = columns.concat();
@@ -482,24 +498,22 @@ impl SparseBasis {
         Some((pattern, values))
     }
 
-    /// The values of the sparse Bᵀ K B of a real seeded block on its `pattern`, on and below
-    /// the diagonal of orbits ([`Seeds::tangent_orbit_lower`]; the entries above it are left
-    /// zero), one rayon task per orbit.
+    /// The values of the sparse Bᵀ K B of a real seeded block on its `pattern` (laid out by
+    /// `rows`), on and below the diagonal of orbits ([`Seeds::tangent_orbit_lower`], each
+    /// orbit's columns written in place; the entries above it are left as they were), in
+    /// tasks of several orbits.
     fn seeded_lower(
         &self,
         seeds: &Seeds,
+        rows: &orbit::OrbitRows,
         pattern: &SymmetricPattern,
         layout: &Layout,
         eval: &Evaluation,
         mut raw: Vec<f64>,
     ) -> Vec<f64> {
-        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let m = self.dim();
-        let flat = seeds.flat_seeds();
+        let col_ptr = pattern.col_ptr();
         // Each orbit's columns are contiguous in the values: one slice per orbit, filled by
         // its task.
-        // Every entry is written below (each orbit's columns, every row of them): the
-        // buffer's earlier contents need no clearing.
         raw.resize(pattern.nnz(), 0.0);
         let mut slices: Vec<(usize, &mut [f64])> = Vec::with_capacity(seeds.by_orbit.len());
         let mut rest: &mut [f64] = &mut raw;
@@ -518,27 +532,9 @@ impl SparseBasis {
             .into_par_iter()
             .with_min_len(ORBITS_PER_TASK)
             .for_each_init(
-                || (OrbitScratch::new(seeds.d), Vec::new()),
-                |(scratch, dense), (o, part)| {
-                    let cols = seeds.by_orbit[o].clone();
-                    let (start, end) = (cols.start as usize, cols.end as usize);
-                    if start == end {
-                        return;
-                    }
-                    if dense.len() < (end - start) * m {
-                        dense.resize((end - start) * m, 0.0);
-                    }
-                    let dense = &mut dense[..(end - start) * m];
-                    seeds.tangent_orbit_lower(o, layout, &eval.tangent, &flat, scratch, dense);
-                    let mut at = 0;
-                    for (e, col) in (start..end).zip(dense.chunks_exact_mut(m)) {
-                        let rows = &row_idx[col_ptr[e]..col_ptr[e + 1]];
-                        for (x, &r) in part[at..at + rows.len()].iter_mut().zip(rows) {
-                            *x = col[r];
-                            col[r] = 0.0;
-                        }
-                        at += rows.len();
-                    }
+                || OrbitScratch::new(seeds.d),
+                |scratch, (o, part)| {
+                    seeds.tangent_orbit_lower(o, layout, &eval.tangent, rows, scratch, part);
                 },
             );
         raw

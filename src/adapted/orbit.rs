@@ -239,21 +239,22 @@ impl Seeds {
 
     /// The columns E = `by_orbit[o]` of Bᵀ K B at once, on or below the diagonal of orbits:
     /// only the rows f on orbits whose columns start at or after E's (the others are the
-    /// transposes of entries computed for those orbits' columns). Column e of E is added into
-    /// `out[e_local * m..][..m]`, m = `out.len() / |E|`.
+    /// transposes of entries computed for those orbits' columns). `out` is E's values on the
+    /// block pattern laid out by `rows` (the columns of E one after the other, each with the
+    /// rows of every orbit E meets); the entries above the diagonal of orbits are left as
+    /// they are ([`Seeds::mirror`] fills them).
     ///
     /// The formula of [`Seeds::tangent_column`] with its sums reordered: the columns of E
     /// share the representative i₀, so K's 3 × 3 blocks K_{j i₀} are gathered once, each
     /// A = R_g K_{j i₀} is formed once for all of E, and U_e = Σ_{(j, g)} Σ_b D_{·b}(g) A s_{e,b}
     /// is summed over every (j, g) that lands on the same orbit before the seeds s_f of that
     /// orbit are applied: (Bᵀ K B)_{fe} = (d/|G|) ⟨s_f, U_e⟩ over f's 3d seed components.
-    /// `flat` is the seeds as one slice (3d numbers per column).
     pub(super) fn tangent_orbit_lower(
         &self,
         o: usize,
         layout: &Layout,
         tangent: &[f64],
-        flat: &[f64],
+        rows: &OrbitRows,
         scratch: &mut OrbitScratch,
         out: &mut [f64],
     ) {
@@ -265,7 +266,7 @@ impl Seeds {
         let frame = &*self.frame;
         let d = self.d;
         let w3 = 3 * d;
-        let m = out.len() / ne;
+        let len = out.len() / ne;
         let coef = d as f64 / frame.order as f64;
         let i0 = self.rep[cols_e.start as usize] as usize;
         let OrbitScratch {
@@ -327,35 +328,46 @@ impl Seeds {
                 }
             }
         }
-        for (slot, &target) in targets.iter().enumerate() {
+        // Every orbit on or below E's diagonal, in E's rows: from its sums, or zero where no
+        // neighbour of i₀ lies on it.
+        for &(target, offset) in rows.of(o) {
             let cols_f = self.by_orbit[target as usize].clone();
+            if cols_f.start < cols_e.start {
+                continue;
+            }
+            let at = |le: usize| le * len + offset as usize;
+            let nf = cols_f.len();
+            let Some(slot) = targets.iter().position(|&x| x == target) else {
+                for le in 0..ne {
+                    out[at(le)..at(le) + nf].fill(0.0);
+                }
+                continue;
+            };
             let sum = &sums[slot * ne * w3..(slot + 1) * ne * w3];
             if self.unit_orbit[target as usize] {
                 // ⟨s_f, U_e⟩ = value_f · (U_e)_{k_f}.
                 let units = &self.unit[cols_f.start as usize..cols_f.end as usize];
                 for (le, u_e) in sum.chunks_exact(w3).enumerate() {
-                    let col =
-                        &mut out[le * m + cols_f.start as usize..le * m + cols_f.end as usize];
-                    for (x, unit) in col.iter_mut().zip(units) {
+                    for (x, unit) in out[at(le)..at(le) + nf].iter_mut().zip(units) {
                         let (k, value) = unit.expect("a unit orbit");
-                        *x += coef * value * u_e[k as usize];
+                        *x = coef * value * u_e[k as usize];
                     }
                 }
                 continue;
             }
-            let s_f = &flat[cols_f.start as usize * w3..cols_f.end as usize * w3];
+            let s_f = &self.seeds[cols_f.start as usize * d..cols_f.end as usize * d];
             for (le, u_e) in sum.chunks_exact(w3).enumerate() {
-                let col = &mut out[le * m + cols_f.start as usize..le * m + cols_f.end as usize];
-                for (x, s) in col.iter_mut().zip(s_f.chunks_exact(w3)) {
-                    *x += coef * s.iter().zip(u_e).map(|(a, b)| a * b).sum::<f64>();
+                for (x, s) in out[at(le)..at(le) + nf].iter_mut().zip(s_f.chunks_exact(d)) {
+                    // ⟨s_f, U_e⟩ over the 3d numbers in order.
+                    *x = coef
+                        * s.iter()
+                            .flat_map(|v| v.iter())
+                            .zip(u_e)
+                            .map(|(a, b)| a * b)
+                            .sum::<f64>();
                 }
             }
         }
-    }
-
-    /// The seeds as one slice, 3d numbers per column (for [`Seeds::tangent_orbit_lower`]).
-    pub(super) fn flat_seeds(&self) -> Vec<f64> {
-        self.seeds.iter().flat_map(|s| s.iter().copied()).collect()
     }
 
     /// The pattern of Bᵀ K B: column e meets every column on an orbit that holds a
@@ -366,7 +378,7 @@ impl Seeds {
     /// orbits (with columns in this block) expanded by their column ranges: the orbits met
     /// are found once per orbit, and each column's rows are the ranges of its orbit's
     /// neighbours in column order, already sorted and distinct.
-    pub(super) fn block_pattern(&self, layout: &Layout) -> SymmetricPattern {
+    pub(super) fn block_pattern(&self, layout: &Layout) -> (SymmetricPattern, OrbitRows) {
         let frame = &*self.frame;
         let pattern = layout.pattern();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
@@ -402,7 +414,62 @@ impl Seeds {
             }
             starts.push(rows.len());
         }
-        SymmetricPattern::from_sorted_columns(m, starts, rows)
+        let mut orbit_rows = OrbitRows {
+            ptr: Vec::with_capacity(orbits + 1),
+            met: Vec::new(),
+        };
+        orbit_rows.ptr.push(0);
+        for list in &met {
+            let mut offset = 0u32;
+            for &t in list {
+                orbit_rows.met.push((t, offset));
+                offset += self.by_orbit[t as usize].len() as u32;
+            }
+            orbit_rows.ptr.push(orbit_rows.met.len() as u32);
+        }
+        (
+            SymmetricPattern::from_sorted_columns(m, starts, rows),
+            orbit_rows,
+        )
+    }
+
+    /// Fills the entries of Bᵀ K B above the diagonal of orbits in `values` (on the pattern
+    /// of [`Seeds::block_pattern`], laid out by `rows`) from their transposes below it, and
+    /// replaces each pair of transposed entries in a diagonal orbit block (both computed,
+    /// equal up to round-off) by their mean.
+    pub(super) fn mirror(&self, rows: &OrbitRows, col_ptr: &[usize], values: &mut [f64]) {
+        for (o, cols_e) in self.by_orbit.iter().enumerate() {
+            let es = cols_e.start as usize;
+            for &(t, offset) in rows.of(o) {
+                let cols_f = &self.by_orbit[t as usize];
+                let fs = cols_f.start as usize;
+                if fs > es {
+                    continue;
+                }
+                let offset = offset as usize;
+                if fs == es {
+                    for le in 0..cols_e.len() {
+                        for lf in le + 1..cols_e.len() {
+                            let p = col_ptr[es + le] + offset + lf;
+                            let q = col_ptr[es + lf] + offset + le;
+                            let mean = 0.5 * (values[p] + values[q]);
+                            values[p] = mean;
+                            values[q] = mean;
+                        }
+                    }
+                    continue;
+                }
+                // Orbit t's columns come first: (f, e) is the transpose of (e, f), in column
+                // f at the offset of o's rows there.
+                let back = rows.offset(t as usize, o as u32);
+                for le in 0..cols_e.len() {
+                    let at = col_ptr[es + le] + offset;
+                    for lf in 0..cols_f.len() {
+                        values[at + lf] = values[col_ptr[fs + lf] + back + le];
+                    }
+                }
+            }
+        }
     }
 
     /// Partner a of column e, Σ_b P_{ab} s_{e,b}, summed over the whole group.
@@ -463,6 +530,36 @@ impl ColumnScratch {
             v: vec![Vector3::zeros(); d],
             u: vec![Vector3::zeros(); d],
         }
+    }
+}
+
+/// Where each orbit's rows sit in the columns of a block pattern of
+/// [`Seeds::block_pattern`]: every column of orbit o has the same rows, those of the orbits o
+/// meets in column order, so orbit t's rows start at the same offset in each of them.
+#[derive(Debug, Clone)]
+pub(super) struct OrbitRows {
+    /// Orbit o's entries are `met[ptr[o]..ptr[o + 1]]`: (orbit t, offset of t's rows).
+    ptr: Vec<u32>,
+    met: Vec<(u32, u32)>,
+}
+
+impl OrbitRows {
+    /// The orbits o meets, with the offsets of their rows in o's columns.
+    pub(super) fn of(&self, o: usize) -> &[(u32, u32)] {
+        &self.met[self.ptr[o] as usize..self.ptr[o + 1] as usize]
+    }
+
+    /// The offset of orbit t's rows in o's columns.
+    ///
+    /// # Panics
+    /// If o does not meet t.
+    fn offset(&self, o: usize, t: u32) -> usize {
+        let (_, offset) = self
+            .of(o)
+            .iter()
+            .find(|&&(x, _)| x == t)
+            .expect("the orbit graph is symmetric");
+        *offset as usize
     }
 }
 
@@ -615,7 +712,7 @@ mod tests {
             let Some(seeds) = &ib.first().seeds else {
                 continue;
             };
-            let fast = seeds.block_pattern(layout);
+            let (fast, _) = seeds.block_pattern(layout);
             let entries = seeds
                 .frame
                 .column_neighbours(layout, &seeds.rep, &seeds.by_orbit);
