@@ -75,7 +75,15 @@ impl BorderedBlock {
         sigma: f64,
         strict: bool,
     ) -> Result<usize, EigenError> {
-        match fact.factorize(&self.shifted(sigma)) {
+        // At σ = 0 the values themselves (no copy: a block's values are hundreds of kB).
+        let shifted;
+        let values = if sigma == 0.0 {
+            &self.values
+        } else {
+            shifted = self.shifted(sigma);
+            &shifted
+        };
+        match fact.factorize(values) {
             Ok(()) => {}
             Err(e @ FactorError::Singular { .. }) if strict => return Err(EigenError::Factor(e)),
             Err(FactorError::Singular { .. }) => {}

@@ -1,21 +1,21 @@
 //! Sparse symmetric-indefinite factorisation `P A Pᵀ = L B Lᵀ` with inertia.
 //!
 //! # faer functions used, and why
-//! - [`factorize_symbolic_cholesky`] with [`SymmetricOrdering::Amd`] (or `Custom`, see
-//!   below) and a supernodal threshold of `-∞` (always supernodal when `n > 0`): the
-//!   symbolic analysis (fill-reducing ordering, elimination tree, supernodes), done once per
-//!   pattern. The supernodal layout is
+//! - `amd::order` (or a custom order, see below): the fill-reducing ordering P, the one
+//!   faer's own symbolic analysis with [`SymmetricOrdering::Amd`] would take.
+//! - [`factorize_symbolic_cholesky`] of P A Pᵀ with [`SymmetricOrdering::Identity`] and a
+//!   supernodal threshold of `-∞` (always supernodal when `n > 0`): the symbolic analysis
+//!   (elimination tree, supernodes), done once per pattern. The supernodal layout is
 //!   forced because faer's pivoted factorisation only pivots on that path (on the simplicial
 //!   path `factorize_numeric_intranode_lblt` silently falls back to unpivoted `LDLᵀ`).
 //! - [`SymbolicCholesky::factorize_numeric_intranode_lblt`]: the numeric factorisation into
 //!   our own buffers, with Bunch–Kaufman pivoting (1×1 and 2×2 pivots) *within each
 //!   supernode's dense diagonal block*. It never fails by itself: a zero pivot gives
 //!   infinities, which [`SymmetricFactorization::factorize`] detects and reports.
-//! - The numeric factorisation works on P A Pᵀ (P the elimination order of the symbolic
-//!   analysis of A) gathered by us into the lower triangle of its own pattern, analysed a
-//!   second time with the identity ordering: faer would otherwise permute the whole matrix at
-//!   every numeric factorisation, a sizeable part of its cost for the small, fairly dense
-//!   blocks of the stability analysis.
+//! - The numeric factorisation works on P A Pᵀ gathered by us into the lower triangle of
+//!   its own pattern (built by a counting sort), analysed with the identity ordering: faer
+//!   would otherwise permute the whole matrix at every numeric factorisation, a sizeable
+//!   part of its cost for the small, fairly dense blocks of the stability analysis.
 //! - [`IntranodeLbltRef::solve_in_place_with_conj`]: the solve of the permuted system, which
 //!   applies the pivoting permutation; the elimination order is applied around it.
 //!
@@ -202,15 +202,14 @@ impl SymmetricFactorization {
             supernodal_flop_ratio_threshold: SupernodalThreshold(f64::NEG_INFINITY),
             ..Default::default()
         };
-        // The ordering (fill-reducing, and the elimination tree's postorder) from faer's
-        // analysis of A; the numeric factorisations then work on P A Pᵀ gathered by us, with
-        // an identity ordering (faer would otherwise permute the whole matrix at every
-        // factorisation, a sizeable part of it for the small, dense-ish blocks).
-        let order_fwd: Vec<usize> =
-            factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
-                .map_err(|e| FactorError::Symbolic(faer_error_name(e)))?
-                .perm()
-                .map_or_else(|| (0..n).collect(), |p| p.arrays().0.to_vec());
+        // The fill-reducing ordering of A (faer's AMD, which its own analysis would take);
+        // the numeric factorisations then work on P A Pᵀ gathered by us, with an identity
+        // ordering (faer would otherwise permute the whole matrix at every factorisation, a
+        // sizeable part of it for the small, dense-ish blocks).
+        let order_fwd: Vec<usize> = match ordering {
+            SymmetricOrdering::Custom(p) => p.arrays().0.to_vec(),
+            _ => amd_order(pattern, params.amd_params)?,
+        };
         let (permuted, gather) = permuted_lower(pattern, &order_fwd);
         // faer analyses the upper triangle of a matrix it is given unpermuted.
         let symbolic = factorize_symbolic_cholesky(
@@ -316,7 +315,12 @@ impl SymmetricFactorization {
         let mut scale = 0.0f64;
         for (x, &k) in self.permuted_values.iter_mut().zip(&self.gather) {
             *x = values[k];
-            scale = scale.max(x.abs());
+            // Not `f64::max`: its NaN rule keeps the loop from running ahead. A NaN is
+            // skipped here as there, and found among the pivots.
+            let a = x.abs();
+            if a > scale {
+                scale = a;
+            }
         }
         let _ = self.symbolic.factorize_numeric_intranode_lblt(
             &mut self.l_values,
@@ -555,38 +559,72 @@ fn permuted_lower(
         inv[i] = k;
     }
     let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-    // Entry (r, c) of A goes to (inv r, inv c); kept where inv r >= inv c, in column inv c.
+    // Entry (r, c) of A goes to (inv r, inv c); kept where inv r >= inv c, in column inv c,
+    // its value read from A's column c. The kept entries are bucketed by their row in B
+    // first, then appended to their columns going through the rows in increasing order:
+    // every column's rows come out sorted, without a comparison sort.
+    let mut by_row_ptr = vec![0usize; n + 1];
     let mut new_ptr = vec![0usize; n + 1];
-    for c in 0..n {
-        let count = row_idx[col_ptr[c]..col_ptr[c + 1]]
-            .iter()
-            .filter(|&&r| inv[r] >= inv[c])
-            .count();
-        new_ptr[inv[c] + 1] = count;
+    for (j, &c) in fwd.iter().enumerate() {
+        for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+            if inv[r] >= j {
+                by_row_ptr[inv[r] + 1] += 1;
+                new_ptr[j + 1] += 1;
+            }
+        }
     }
     for k in 0..n {
+        by_row_ptr[k + 1] += by_row_ptr[k];
         new_ptr[k + 1] += new_ptr[k];
     }
-    let mut entries: Vec<(usize, usize)> = Vec::with_capacity(new_ptr[n]);
-    let mut gather = vec![0usize; new_ptr[n]];
-    let mut rows = vec![0usize; new_ptr[n]];
+    let nnz = new_ptr[n];
+    // For each kept entry, by its row in B: (its column in B, its position in A).
+    let mut by_row = vec![(0usize, 0usize); nnz];
+    let mut next = by_row_ptr[..n].to_vec();
+    for (j, &c) in fwd.iter().enumerate() {
+        for p in col_ptr[c]..col_ptr[c + 1] {
+            let k = inv[row_idx[p]];
+            if k >= j {
+                by_row[next[k]] = (j, p);
+                next[k] += 1;
+            }
+        }
+    }
+    let mut next = new_ptr[..n].to_vec();
+    let mut gather = vec![0usize; nnz];
+    let mut rows = vec![0usize; nnz];
     for k in 0..n {
-        let c = fwd[k];
-        entries.clear();
-        entries.extend(
-            (col_ptr[c]..col_ptr[c + 1])
-                .filter(|&p| inv[row_idx[p]] >= k)
-                .map(|p| (inv[row_idx[p]], p)),
-        );
-        entries.sort_unstable();
-        for (slot, &(r, p)) in (new_ptr[k]..new_ptr[k + 1]).zip(&entries) {
-            rows[slot] = r;
-            gather[slot] = p;
+        for &(j, p) in &by_row[by_row_ptr[k]..by_row_ptr[k + 1]] {
+            rows[next[j]] = k;
+            gather[next[j]] = p;
+            next[j] += 1;
         }
     }
     // The column pointers are nondecreasing, the rows sorted and in range by construction.
     let symbolic = SymbolicSparseColMat::new_checked(n, n, new_ptr, None, rows);
     (symbolic, gather)
+}
+
+/// faer's AMD ordering (position k eliminates unknown `fwd[k]`) of a symmetric pattern
+/// stored in full with sorted rows.
+fn amd_order(
+    pattern: &SymmetricPattern,
+    control: faer::sparse::linalg::amd::Control,
+) -> Result<Vec<usize>, FactorError> {
+    use faer::sparse::linalg::amd;
+    let n = pattern.n();
+    let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+    let mut mem = MemBuffer::try_new(amd::order_scratch::<usize>(n, pattern.nnz()))
+        .map_err(|_| FactorError::Symbolic("out of memory"))?;
+    amd::order(
+        &mut fwd,
+        &mut inv,
+        pattern.symbolic(),
+        control,
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| FactorError::Symbolic(faer_error_name(e)))?;
+    Ok(fwd)
 }
 
 /// The transpose of an n × n sparsity pattern (rows sorted).
@@ -634,5 +672,96 @@ fn faer_error_name(e: faer::sparse::FaerError) -> &'static str {
         faer::sparse::FaerError::IndexOverflow => "index overflow",
         faer::sparse::FaerError::OutOfMemory => "out of memory",
         _ => "unknown faer error",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lower triangle of P A Pᵀ and its gather, built by a comparison sort per column.
+    fn permuted_lower_by_sorting(
+        pattern: &SymmetricPattern,
+        fwd: &[usize],
+    ) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+        let n = pattern.n();
+        let mut inv = vec![0; n];
+        for (k, &i) in fwd.iter().enumerate() {
+            inv[i] = k;
+        }
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let (mut ptr, mut rows, mut gather) = (vec![0], Vec::new(), Vec::new());
+        for (j, &c) in fwd.iter().enumerate() {
+            let mut entries: Vec<(usize, usize)> = (col_ptr[c]..col_ptr[c + 1])
+                .filter(|&p| inv[row_idx[p]] >= j)
+                .map(|p| (inv[row_idx[p]], p))
+                .collect();
+            entries.sort_unstable();
+            rows.extend(entries.iter().map(|&(r, _)| r));
+            gather.extend(entries.iter().map(|&(_, p)| p));
+            ptr.push(rows.len());
+        }
+        (ptr, rows, gather)
+    }
+
+    /// The ordering taken from faer's AMD directly is the one of faer's own symbolic
+    /// analysis, which computed it before along with what it was not used for.
+    #[test]
+    fn amd_order_is_the_symbolic_analysis_order() {
+        let grid = |w: usize| {
+            let n = w * w;
+            let entries = (0..n).flat_map(move |i| {
+                let (x, y) = (i % w, i / w);
+                let right = (x + 1 < w).then_some((i, i + 1));
+                let up = (y + 1 < w).then_some((i, i + w));
+                let diagonal = (x + 1 < w && y + 1 < w).then_some((i, i + w + 1));
+                [right, up, diagonal].into_iter().flatten()
+            });
+            SymmetricPattern::from_entries(n, entries)
+        };
+        for pattern in [grid(1), grid(2), grid(7), grid(20)] {
+            let params = CholeskySymbolicParams::default();
+            let faer_order: Vec<usize> = factorize_symbolic_cholesky(
+                pattern.symbolic(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                params,
+            )
+            .unwrap()
+            .perm()
+            .map_or_else(|| (0..pattern.n()).collect(), |p| p.arrays().0.to_vec());
+            assert_eq!(amd_order(&pattern, params.amd_params).unwrap(), faer_order);
+        }
+    }
+
+    /// The counting-sort construction of P A Pᵀ's lower triangle reads the same entries of A
+    /// into the same places as sorting each column, for random patterns and orders.
+    #[test]
+    fn permuted_lower_matches_sorting_each_column() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move |k: usize| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % k as u64) as usize
+        };
+        for n in [1, 2, 5, 17, 60] {
+            for _ in 0..20 {
+                let entries: Vec<(usize, usize)> = (0..3 * n)
+                    .map(|_| (next(n), next(n)))
+                    .chain((0..n).map(|i| (i, i)))
+                    .collect();
+                let pattern = SymmetricPattern::from_entries(n, entries);
+                let mut fwd: Vec<usize> = (0..n).collect();
+                for i in (1..n).rev() {
+                    fwd.swap(i, next(i + 1));
+                }
+                let (fast, gather) = permuted_lower(&pattern, &fwd);
+                let (ptr, rows, slow_gather) = permuted_lower_by_sorting(&pattern, &fwd);
+                assert_eq!(fast.col_ptr(), ptr.as_slice(), "n = {n}");
+                assert_eq!(fast.row_idx(), rows.as_slice(), "n = {n}");
+                assert_eq!(gather, slow_gather, "n = {n}");
+            }
+        }
     }
 }
