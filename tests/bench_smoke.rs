@@ -63,6 +63,12 @@ fn quick_bench_writes_finite_tables_and_a_plot() {
         let points: usize = row[col("stab_points")].parse().unwrap();
         assert_eq!(points, row[col("points")].parse::<usize>().unwrap());
         assert_eq!(row[col("index_mismatches")], "0", "row {i}\n{csv}");
+        // The blocks' own pass over the same states finds the path's index again.
+        assert_eq!(
+            row[col("index_mismatches_blocks_pass")],
+            "0",
+            "row {i}\n{csv}"
+        );
         assert_eq!(
             row[col("index_max")],
             "1",

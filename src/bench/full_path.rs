@@ -3,8 +3,10 @@
 //! ([`crate::linalg::eigen::nearest_eigenvalues`]) and, for small problems, every eigenvalue
 //! by a dense eigen-decomposition of K — against the index by irrep blocks of the same path.
 
+use crate::adapted::AdaptedBasis;
 use crate::linalg::{eigen, SymmetricFactorization};
 use crate::model::{Model, Request};
+use crate::stability::{Detail, Stability};
 use crate::study::mesh::MeshStudy;
 use std::time::{Duration, Instant};
 
@@ -65,6 +67,13 @@ pub struct FullPathStability {
     pub converged_min: usize,
     /// Dense eigenvalues of K at every point, when asked for.
     pub dense: Option<DensePath>,
+    /// The index by irrep blocks of the same states, timed as the index without symmetry
+    /// is: one pass over the states right before that one's, a fresh analysis (its
+    /// blocks' symbolic analyses included; the adapted basis and its patterns built before,
+    /// as K's pattern is with the model).
+    pub blocks_index: Duration,
+    /// The index by blocks at every point of that pass.
+    pub blocks_indices: Vec<usize>,
 }
 
 impl FullPathStability {
@@ -83,6 +92,36 @@ impl FullPathStability {
             + self.shift_invert_factorisation
             + self.lanczos
     }
+}
+
+/// The index by irrep blocks at every state, one pass timed as [`full_path_stability`]'s
+/// index without symmetry: a fresh [`Stability`] of a fresh adapted basis, whose patterns are
+/// built before the clock starts (K's pattern comes with the model), its blocks' symbolic
+/// analyses at the first state inside it. The time and the index at every state.
+fn blocks_index_pass(
+    study: &MeshStudy,
+    states: &[(Vec<f64>, Vec<f64>)],
+) -> Result<(Duration, Vec<usize>), String> {
+    let model = &study.model;
+    let adapted = AdaptedBasis::new(&study.action, model.layout()).map_err(|e| e.to_string())?;
+    let stability = Stability::new(model, &adapted).with_patterns();
+    let mut eval = stability.new_evaluation();
+    let mut indices = Vec::with_capacity(states.len());
+    let t = Instant::now();
+    for (u, params) in states {
+        let spectrum = stability
+            .analyse(
+                u,
+                params,
+                &study.constraints,
+                &mut eval,
+                None,
+                Detail::Inertia,
+            )
+            .map_err(|e| e.to_string())?;
+        indices.push(spectrum.index);
+    }
+    Ok((t.elapsed(), indices))
 }
 
 /// The negative count of the matrix `values` on `f`'s pattern, by factorising it. A pivot
@@ -124,6 +163,7 @@ pub fn full_path_stability(
         return Err("the study has constraints: its index is that of the bordered system".into());
     }
     let model = &study.model;
+    let (blocks_index, blocks_indices) = blocks_index_pass(study, states)?;
     let pattern = model.pattern();
     let t = Instant::now();
     let mut f = SymmetricFactorization::new(pattern).map_err(|e| e.to_string())?;
@@ -150,7 +190,22 @@ pub fn full_path_stability(
             zero_cluster: Vec::new(),
             lowest: Vec::new(),
         }),
+        blocks_index,
+        blocks_indices,
     };
+    let scale_of = |eval: &crate::model::Evaluation| {
+        eval.tangent
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(1e-300)
+    };
+    // The index alone, one pass over the states (as the blocks' pass above): what the
+    // eigenvalues below would otherwise put between two points is not in its time. K + τI
+    // is written into one kept buffer, its diagonal found once (as the blocks do).
+    let diagonal: Vec<usize> = (0..pattern.n())
+        .map(|i| pattern.position(i, i).expect("diagonal in pattern"))
+        .collect();
+    let mut plus_tau = vec![0.0; pattern.nnz()];
     for (u, params) in states {
         let t = Instant::now();
         model
@@ -160,18 +215,25 @@ pub fn full_path_stability(
         if !eval.rank_one.is_empty() {
             return Err("K has rank-one terms; the sparse inertia does not include them".into());
         }
-        let scale = eval
-            .tangent
-            .iter()
-            .fold(0.0f64, |m, v| m.max(v.abs()))
-            .max(1e-300);
-        let tau = FULL_INDEX_SHIFT * scale;
-        out.scales.push(scale);
+        let tau = FULL_INDEX_SHIFT * scale_of(&eval);
         // The index: inertia of K + τI.
         let t = Instant::now();
-        let index = negative_count(&mut f, &shifted(pattern, &eval.tangent, -tau)?)?;
+        plus_tau.copy_from_slice(&eval.tangent);
+        for &p in &diagonal {
+            plus_tau[p] += tau;
+        }
+        let index = negative_count(&mut f, &plus_tau)?;
         out.inertia += t.elapsed();
         out.indices.push(index);
+    }
+    // The checks and the eigenvalues, a second pass (its assembly not timed again).
+    for ((u, params), &index) in states.iter().zip(&out.indices) {
+        model
+            .evaluate(u, params, Request::ALL, &mut eval)
+            .map_err(|e| e.to_string())?;
+        let scale = scale_of(&eval);
+        let tau = FULL_INDEX_SHIFT * scale;
+        out.scales.push(scale);
         // The check (not timed): how many eigenvalues lie in (−τ, τ].
         let below = negative_count(&mut f, &shifted(pattern, &eval.tangent, tau)?)?;
         out.zero_cluster.push(below.saturating_sub(index));

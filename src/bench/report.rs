@@ -285,7 +285,7 @@ fn mismatches(a: &[usize], b: &[usize]) -> usize {
 pub fn balloon_csv(levels: &[BalloonLevel], paths: &[(usize, FullPathStability)]) -> String {
     let mut s = String::from(
         "frequency,elements,unknowns,symmetric_unknowns,points,evaluations,p_max,err_max,p_min,err_min,total_s,assembly_s,projection_s,continuation_s,adapted_basis_s,eigen_s,eigen_restrict_s,rest_s,order_max,order_min,richardson_max,richardson_max_err,richardson_min,richardson_min_err,\
-         stab_points,stab_blocks_s,stab_full_s,stab_full_index_only_s,stab_full_inertia_s,stab_full_shift_invert_s,stab_full_over_blocks,stab_dense_s,stab_dense_over_blocks,index_max,index_mismatches,index_mismatches_dense\n",
+         stab_points,stab_blocks_s,stab_full_s,stab_full_index_only_s,stab_full_inertia_s,stab_full_shift_invert_s,stab_full_over_blocks,stab_dense_s,stab_dense_over_blocks,index_max,index_mismatches,index_mismatches_dense,stab_blocks_index_s,stab_full_index_over_blocks_index,index_mismatches_blocks_pass\n",
     );
     for (i, l) in levels.iter().enumerate() {
         let prev = i.checked_sub(1).map(|j| &levels[j]);
@@ -326,7 +326,7 @@ pub fn balloon_csv(levels: &[BalloonLevel], paths: &[(usize, FullPathStability)]
                 let dense = full.dense.as_ref().map(|d| secs(d.build + d.eigen));
                 let _ = writeln!(
                     s,
-                    ",{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{}",
+                    ",{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{},{:e},{:e},{}",
                     full.points,
                     blocks,
                     secs(full.total()),
@@ -342,10 +342,13 @@ pub fn balloon_csv(levels: &[BalloonLevel], paths: &[(usize, FullPathStability)]
                         .as_ref()
                         .map_or_else(String::new, |d| mismatches(&l.indices, &d.indices)
                             .to_string()),
+                    secs(full.blocks_index),
+                    secs(full.index_only()) / secs(full.blocks_index),
+                    mismatches(&l.indices, &full.blocks_indices),
                 );
             }
             None => {
-                let _ = writeln!(s, "{}", ",".repeat(12));
+                let _ = writeln!(s, "{}", ",".repeat(15));
             }
         }
     }
@@ -517,6 +520,22 @@ pub fn path_tables(levels: &[BalloonLevel], paths: &[(usize, FullPathStability)]
             full.converged_min,
             full.lowest_count,
             secs(full.total().saturating_sub(full.symbolic)) / secs(l.spectra.unwrap_or_default()),
+        );
+        let in_path = l.index.unwrap_or_default();
+        let _ = writeln!(
+            md,
+            "  The index alone at the same states, one pass each right after the other: by \
+             blocks {} ms (a fresh analysis, its blocks' symbolic analyses included; index {}), \
+             without symmetry (ii′) {} ms: **{:.2}×**. Along the path, as `run` computes it \
+             between its steps: {} ms, {:.2}× (there the second core, idle during the \
+             path's serial solves, often wakes too late to share the blocks: BENCHMARKS.md \
+             §3.4).",
+            ms(full.blocks_index),
+            agree(&full.blocks_indices),
+            ms(full.index_only()),
+            secs(full.index_only()) / secs(full.blocks_index),
+            ms(in_path),
+            secs(full.index_only()) / secs(in_path),
         );
         if let Some(d) = &full.dense {
             let mut dz = d.zero_cluster.clone();
