@@ -74,7 +74,15 @@ pub struct FullPathStability {
     pub blocks_index: Duration,
     /// The index by blocks at every point of that pass.
     pub blocks_indices: Vec<usize>,
+    /// The same blocks' index at the same states once more, with the caller paused
+    /// [`PAUSE`] before each state (the analysis kept from the pass above, its
+    /// factorisations made): the cost of the index when the thread pool has been idle for a
+    /// while, as it is between a path's steps.
+    pub blocks_index_paused: Duration,
 }
+
+/// The pause before each state of [`FullPathStability::blocks_index_paused`].
+pub const PAUSE: Duration = Duration::from_millis(10);
 
 impl FullPathStability {
     /// The index alone without symmetry, all points: symbolic analysis, assembly and the
@@ -97,11 +105,12 @@ impl FullPathStability {
 /// The index by irrep blocks at every state, one pass timed as [`full_path_stability`]'s
 /// index without symmetry: a fresh [`Stability`] of a fresh adapted basis, whose patterns are
 /// built before the clock starts (K's pattern comes with the model), its blocks' symbolic
-/// analyses at the first state inside it. The time and the index at every state.
+/// analyses at the first state inside it. The time and the index at every state, then the
+/// time of a second pass with a [`PAUSE`] before each state (not timed).
 fn blocks_index_pass(
     study: &MeshStudy,
     states: &[(Vec<f64>, Vec<f64>)],
-) -> Result<(Duration, Vec<usize>), String> {
+) -> Result<(Duration, Vec<usize>, Duration), String> {
     let model = &study.model;
     let adapted = AdaptedBasis::new(&study.action, model.layout()).map_err(|e| e.to_string())?;
     let stability = Stability::new(model, &adapted).with_patterns();
@@ -121,7 +130,24 @@ fn blocks_index_pass(
             .map_err(|e| e.to_string())?;
         indices.push(spectrum.index);
     }
-    Ok((t.elapsed(), indices))
+    let time = t.elapsed();
+    let mut paused = Duration::ZERO;
+    for (u, params) in states {
+        std::thread::sleep(PAUSE);
+        let t = Instant::now();
+        stability
+            .analyse(
+                u,
+                params,
+                &study.constraints,
+                &mut eval,
+                None,
+                Detail::Inertia,
+            )
+            .map_err(|e| e.to_string())?;
+        paused += t.elapsed();
+    }
+    Ok((time, indices, paused))
 }
 
 /// The negative count of the matrix `values` on `f`'s pattern, by factorising it. A pivot
@@ -163,7 +189,7 @@ pub fn full_path_stability(
         return Err("the study has constraints: its index is that of the bordered system".into());
     }
     let model = &study.model;
-    let (blocks_index, blocks_indices) = blocks_index_pass(study, states)?;
+    let (blocks_index, blocks_indices, blocks_index_paused) = blocks_index_pass(study, states)?;
     let pattern = model.pattern();
     let t = Instant::now();
     let mut f = SymmetricFactorization::new(pattern).map_err(|e| e.to_string())?;
@@ -192,6 +218,7 @@ pub fn full_path_stability(
         }),
         blocks_index,
         blocks_indices,
+        blocks_index_paused,
     };
     let scale_of = |eval: &crate::model::Evaluation| {
         eval.tangent

@@ -527,15 +527,17 @@ pub fn path_tables(levels: &[BalloonLevel], paths: &[(usize, FullPathStability)]
             "  The index alone at the same states, one pass each right after the other: by \
              blocks {} ms (a fresh analysis, its blocks' symbolic analyses included; index {}), \
              without symmetry (ii′) {} ms: **{:.2}×**. Along the path, as `run` computes it \
-             between its steps: {} ms, {:.2}× (there the second core, idle during the \
-             path's serial solves, often wakes too late to share the blocks: BENCHMARKS.md \
-             §3.4).",
+             between its steps: {} ms, {:.2}×; the blocks' pass again with the thread pool \
+             left idle for {} ms before each state, as between the path's steps: {} ms \
+             (BENCHMARKS.md §3.4).",
             ms(full.blocks_index),
             agree(&full.blocks_indices),
             ms(full.index_only()),
             secs(full.index_only()) / secs(full.blocks_index),
             ms(in_path),
             secs(full.index_only()) / secs(in_path),
+            super::full_path::PAUSE.as_millis(),
+            ms(full.blocks_index_paused),
         );
         if let Some(d) = &full.dense {
             let mut dz = d.zero_cluster.clone();
