@@ -115,26 +115,7 @@ fn blocks_index_pass(
     let adapted = AdaptedBasis::new(&study.action, model.layout()).map_err(|e| e.to_string())?;
     let stability = Stability::new(model, &adapted).with_patterns();
     let mut eval = stability.new_evaluation();
-    let mut indices = Vec::with_capacity(states.len());
-    let t = Instant::now();
-    for (u, params) in states {
-        let spectrum = stability
-            .analyse(
-                u,
-                params,
-                &study.constraints,
-                &mut eval,
-                None,
-                Detail::Inertia,
-            )
-            .map_err(|e| e.to_string())?;
-        indices.push(spectrum.index);
-    }
-    let time = t.elapsed();
-    let mut paused = Duration::ZERO;
-    for (u, params) in states {
-        std::thread::sleep(PAUSE);
-        let t = Instant::now();
+    let mut index = |(u, params): &(Vec<f64>, Vec<f64>)| {
         stability
             .analyse(
                 u,
@@ -144,7 +125,20 @@ fn blocks_index_pass(
                 None,
                 Detail::Inertia,
             )
-            .map_err(|e| e.to_string())?;
+            .map(|spectrum| spectrum.index)
+            .map_err(|e| e.to_string())
+    };
+    let t = Instant::now();
+    let indices = states
+        .iter()
+        .map(&mut index)
+        .collect::<Result<Vec<_>, _>>()?;
+    let time = t.elapsed();
+    let mut paused = Duration::ZERO;
+    for state in states {
+        std::thread::sleep(PAUSE);
+        let t = Instant::now();
+        index(state)?;
         paused += t.elapsed();
     }
     Ok((time, indices, paused))
