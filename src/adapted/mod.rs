@@ -450,43 +450,44 @@ impl SparseBasis {
             }
             Mirror::Transposes(transpose) => transpose,
         };
+        let complex = self
+            .complex
+            .as_ref()
+            .expect("a block with transposes is complex-type");
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let columns: Vec<Vec<f64>> = match &self.complex {
-            Some(complex) => {
-                // Column e of H gives the real columns e and m + e of R.
-                let mc = complex.len();
-                let halves: Vec<(Vec<f64>, Vec<f64>)> = (0..mc)
-                    .into_par_iter()
-                    .map_init(
-                        || {
-                            (
-                                complex::HermitianScratch::default(),
-                                vec![nalgebra::Complex::new(0.0, 0.0); mc],
-                            )
-                        },
-                        |(scratch, h), e| {
-                            complex.hermitian_column(e, layout, &eval.tangent, scratch, h);
-                            let pick = |col: usize| -> Vec<f64> {
-                                row_idx[col_ptr[col]..col_ptr[col + 1]]
-                                    .iter()
-                                    .map(|&r| match (r < mc, col < mc) {
-                                        (true, true) | (false, false) => h[r % mc].re,
-                                        (true, false) => h[r].im,
-                                        (false, true) => -h[r - mc].im,
-                                    })
-                                    .collect()
-                            };
-                            let out = (pick(e), pick(mc + e));
-                            h.iter_mut()
-                                .for_each(|x| *x = nalgebra::Complex::new(0.0, 0.0));
-                            out
-                        },
-                    )
-                    .collect();
-                let (u, v): (Vec<_>, Vec<_>) = halves.into_iter().unzip();
-                u.into_iter().chain(v).collect()
-            }
-            None => unreachable!("a block with transposes is complex-type"),
+        // Column e of H gives the real columns e and m + e of R.
+        let columns: Vec<Vec<f64>> = {
+            let mc = complex.len();
+            let halves: Vec<(Vec<f64>, Vec<f64>)> = (0..mc)
+                .into_par_iter()
+                .map_init(
+                    || {
+                        (
+                            complex::HermitianScratch::default(),
+                            vec![nalgebra::Complex::new(0.0, 0.0); mc],
+                        )
+                    },
+                    |(scratch, h), e| {
+                        complex.hermitian_column(e, layout, &eval.tangent, scratch, h);
+                        let pick = |col: usize| -> Vec<f64> {
+                            row_idx[col_ptr[col]..col_ptr[col + 1]]
+                                .iter()
+                                .map(|&r| match (r < mc, col < mc) {
+                                    (true, true) | (false, false) => h[r % mc].re,
+                                    (true, false) => h[r].im,
+                                    (false, true) => -h[r - mc].im,
+                                })
+                                .collect()
+                        };
+                        let out = (pick(e), pick(mc + e));
+                        h.iter_mut()
+                            .for_each(|x| *x = nalgebra::Complex::new(0.0, 0.0));
+                        out
+                    },
+                )
+                .collect();
+            let (u, v): (Vec<_>, Vec<_>) = halves.into_iter().unzip();
+            u.into_iter().chain(v).collect()
         };
         // Symmetrise: the two triangles agree up to round-off.
         let raw: Vec<f64> = columns.concat();

@@ -704,6 +704,17 @@ mod tests {
     use crate::model::Layout;
     use meshes::generators::{disc, icosphere, DiscOptions, IcosphereOptions};
 
+    /// The unit icosphere of `frequency` and the layout of its free nodes.
+    fn icosphere_layout(frequency: usize) -> (meshes::SymmetricMesh, Layout) {
+        let sym = icosphere(&IcosphereOptions {
+            radius: 1.0,
+            frequency,
+        })
+        .expect("a valid icosphere");
+        let layout = Layout::new(sym.mesh.nodes.len(), sym.mesh.triangles.clone(), &[]);
+        (sym, layout)
+    }
+
     /// Every block's pattern, built from the graph of orbits, is the one from its columns'
     /// pairs (each column's neighbouring orbits, with the transposes added).
     fn same_patterns(action: &meshes::GroupAction, layout: &Layout) {
@@ -729,12 +740,7 @@ mod tests {
     #[test]
     fn free_orbits_have_unit_seeds_and_only_the_vector_irreps_hold_rigid_motions() {
         // Frequency 8: the first with nodes off every mirror plane.
-        let sym = icosphere(&IcosphereOptions {
-            radius: 1.0,
-            frequency: 8,
-        })
-        .unwrap();
-        let layout = Layout::new(sym.mesh.nodes.len(), sym.mesh.triangles.clone(), &[]);
+        let (sym, layout) = icosphere_layout(8);
         let basis = AdaptedBasis::new(&sym.action, &layout).unwrap();
         let order = sym.action.group().order();
         let x: Vec<nalgebra::Vector3<f64>> = sym.mesh.nodes.clone();
@@ -778,12 +784,7 @@ mod tests {
 
     #[test]
     fn block_pattern_from_the_orbit_graph() {
-        let sym = icosphere(&IcosphereOptions {
-            radius: 1.0,
-            frequency: 4,
-        })
-        .unwrap();
-        let layout = Layout::new(sym.mesh.nodes.len(), sym.mesh.triangles.clone(), &[]);
+        let (sym, layout) = icosphere_layout(4);
         same_patterns(&sym.action, &layout);
         // A clamped rim: orbits of fixed nodes hold no columns.
         let sym = disc(&DiscOptions {

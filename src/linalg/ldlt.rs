@@ -184,18 +184,6 @@ impl SymmetricFactorization {
         order: Option<&[usize]>,
     ) -> Result<Self, FactorError> {
         let n = pattern.n();
-        let inverse: Vec<usize>;
-        let ordering = match order {
-            None => SymmetricOrdering::Amd,
-            Some(fwd) => {
-                let mut inv = vec![0; n];
-                for (k, &i) in fwd.iter().enumerate() {
-                    inv[i] = k;
-                }
-                inverse = inv;
-                SymmetricOrdering::Custom(PermRef::new_checked(fwd, &inverse, n))
-            }
-        };
         let params = CholeskySymbolicParams {
             // Not `FORCE_SUPERNODAL` (= 0): faer compares `flops / nnz(L) > threshold`, which
             // picks the simplicial layout for a matrix without fill (e.g. diagonal, n = 1).
@@ -206,10 +194,20 @@ impl SymmetricFactorization {
         // the numeric factorisations then work on P A Pᵀ gathered by us, with an identity
         // ordering (faer would otherwise permute the whole matrix at every factorisation, a
         // sizeable part of it for the small, dense-ish blocks).
-        let order_fwd: Vec<usize> = match ordering {
-            SymmetricOrdering::Custom(p) => p.arrays().0.to_vec(),
-            _ => amd_order(pattern, params.amd_params)?,
+        let order_fwd: Vec<usize> = match order {
+            Some(fwd) => fwd.to_vec(),
+            None => amd_order(pattern, params.amd_params)?,
         };
+        debug_assert!(
+            {
+                let mut seen = vec![false; n];
+                order_fwd.len() == n
+                    && order_fwd
+                        .iter()
+                        .all(|&i| !std::mem::replace(&mut seen[i], true))
+            },
+            "an elimination order is a permutation"
+        );
         let (permuted, gather) = permuted_lower(pattern, &order_fwd);
         // faer analyses the upper triangle of a matrix it is given unpermuted.
         let symbolic = factorize_symbolic_cholesky(
